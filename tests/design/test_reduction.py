@@ -1,0 +1,90 @@
+"""Unit tests for toolbox.design._reduction (controller order reduction)."""
+
+import numpy as np
+import pytest
+import control as ct
+
+from toolbox.design import _reduction as R
+
+s = ct.tf("s")
+
+
+def fr(sys, w):
+    return np.asarray(ct.frequency_response(ct.ss(sys), w).complex).ravel()
+
+
+def hinf_err(a, b, w=np.logspace(-3, 7, 3000)):
+    return float(np.max(np.abs(fr(a, w) - fr(b, w))))
+
+
+def test_remove_cancellations_keeps_dc_or_hf():
+    K = 10 * (s + 1000) / (s + 1001) / (s + 5)
+    Kdc, acts = R.remove_cancellations(K, tol=1e-2, keep="dc")
+    assert Kdc.nstates == 1 and len(acts) == 1
+    assert ct.dcgain(Kdc) == pytest.approx(ct.dcgain(K), rel=1e-12)
+    Khf, _ = R.remove_cancellations(K, tol=1e-2, keep="hf")
+    assert abs(complex(Khf(1e6j))) == pytest.approx(abs(complex(K(1e6j))), rel=1e-3)
+    K2, acts2 = R.remove_cancellations(K, tol=1e-4)
+    assert K2.nstates == 2 and not acts2
+
+
+def test_replace_integrators_eq71_style():
+    K = 49.7 * (s + 214.3) / ((s + 0.0117) * (s + 3000))
+    Kr, acts = R.replace_integrators(K, tol=0.1)
+    p = np.sort(np.abs(Kr.poles()))
+    assert p[0] == 0.0 and p[1] == pytest.approx(3000.0)
+    # leading gain unchanged: identical above the old pole
+    assert abs(complex(Kr(100j))) == pytest.approx(abs(complex(K(100j))), rel=1e-5)
+    assert acts
+
+
+def test_stable_split_adds_up():
+    K = (s + 3) / (s * (s + 1) * (s + 50))
+    Ks, Ku = R.stable_split(K)
+    assert Ks.nstates == 2 and Ku.nstates == 1
+    w = np.logspace(-2, 3, 50)
+    assert np.allclose(fr(Ks, w) + fr(Ku, w), fr(K, w), rtol=1e-9)
+
+
+def test_balanced_truncation_bound_and_hsv():
+    rng = np.random.default_rng(0)
+    sys = ct.rss(8, 1, 1)
+    while np.any(sys.poles().real > -1e-3):
+        sys = ct.rss(8, 1, 1)
+    Kr, hsv, bound = R.balanced_truncation(sys, 3)
+    assert Kr.nstates == 3
+    assert np.all(np.diff(hsv) <= 1e-12 * hsv[0])
+    assert bound == pytest.approx(2 * hsv[3:].sum())
+    # the 2 * sum bound holds (grid estimate of the norm, 1 % slack for the grid)
+    assert hinf_err(sys, Kr, np.logspace(-4, 4, 4000)) <= 1.01 * bound + 1e-12
+
+
+def test_residualise_keeps_dc():
+    K = 5 * (s + 10) / ((s + 1) * (s + 1e5))
+    Kr, acts = R.residualise(K, fast=1e4)
+    assert Kr.nstates == 1 and acts
+    assert ct.dcgain(Kr) == pytest.approx(ct.dcgain(K), rel=1e-9)
+
+
+def test_reduce_controller_balanced_target_order_keeps_integrator():
+    K = 100 * (s + 200) / (s * (s + 2000) * (s + 3e5))
+    res = R.reduce_controller(K, order=2, cancel_tol=None)
+    assert res.order_before == 3 and res.order_after == 2
+    assert np.min(np.abs(res.K.poles())) < 1e-9          # integrator kept aside
+    assert res.error_bound is not None and res.hankel_sv is not None
+
+
+def test_compare_margins_flags_a_bad_reduction():
+    G = 1 / (0.6 + 2.8e-3 * s)
+    K = 50 * (s + 214.3) / (s * (s + 3000))
+    ok = R.compare_margins(G, K, K)
+    assert ok.ok
+    bad = R.compare_margins(G, K, 50 * (s + 214.3) / (s * (s + 300)))
+    assert not bad.ok and any("phase margin" in f for f in bad.flags)
+
+
+def test_loop_margins_static_error():
+    G = 1 / (s + 1)
+    m = R.loop_margins(G, 9.0)
+    assert m.static_error == pytest.approx(0.1)
+    assert R.loop_margins(G, 9.0 / s).static_error == 0.0

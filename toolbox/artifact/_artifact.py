@@ -1,0 +1,562 @@
+"""The controller artifact: the hinge between design and everything after it.
+
+A :class:`ControllerArtifact` holds, per current axis, the linear controller of
+the loop (error -> voltage) in continuous state space, its discretisation at
+the sample time and its zpk form, plus the two-input law ``[i_ref, i_meas] ->
+v`` that simulation and firmware actually run (it differs from the error
+controller for IP, ILQ and total-compensation structures, whose proportional
+action acts on the measurement). Decoupling and back-EMF compensation are
+nonlinear terms kept apart in :class:`Decoupling`.
+
+The JSON form (``controller.json``, schema ``cct.controller/1``) round-trips
+exactly: floats are written with ``repr`` precision and read back unchanged.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any, Mapping
+
+import control
+import numpy as np
+
+from ..errors import SpecError
+
+__all__ = [
+    "SCHEMA",
+    "StateSpaceData",
+    "Zpk",
+    "AxisController",
+    "Decoupling",
+    "ControllerArtifact",
+    "spec_sha256",
+]
+
+SCHEMA = "cct.controller/1"
+AXES = ("d", "q")
+DISCRETISATIONS = ("tustin", "zoh", "foh", "backward_diff", "euler", "native")
+
+
+def _matrix(value: Any, key: str, rows: int | None = None,
+            cols: int | None = None) -> np.ndarray:
+    """Read a JSON matrix (list of lists of finite numbers)."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise SpecError(key, "a matrix (list of lists of numbers)", value) from None
+    if arr.ndim == 1 and arr.size == 0:
+        arr = arr.reshape(0, 0 if cols is None else cols)
+    if arr.ndim != 2:
+        raise SpecError(key, "a matrix (list of lists of numbers)", value)
+    if not np.all(np.isfinite(arr)):
+        raise SpecError(key, "finite numbers only", value)
+    if rows is not None and arr.shape[0] != rows:
+        raise SpecError(key, f"{rows} rows", f"{arr.shape[0]} rows")
+    if cols is not None and arr.shape[1] != cols:
+        raise SpecError(key, f"{cols} columns", f"{arr.shape[1]} columns")
+    return arr
+
+
+def _list(arr: np.ndarray) -> list:
+    return [[float(x) for x in row] for row in np.atleast_2d(arr)] if arr.size else []
+
+
+@dataclass(frozen=True, eq=False)
+class StateSpaceData:
+    """State-space matrices, continuous (``dt is None``) or discrete.
+
+    Attributes
+    ----------
+    A, B, C, D : ndarray
+        System matrices (SI units: inputs A, outputs V).
+    dt : float or None
+        Sample time (s); ``None`` for a continuous system.
+    method : str or None
+        How the discrete system was obtained (``tustin``, ``zoh``, ...;
+        ``native`` for a design made in discrete time).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    dt: float | None = None
+    method: str | None = None
+
+    def __post_init__(self) -> None:
+        n = self.A.shape[0]
+        if self.A.shape != (n, n):
+            raise SpecError("A", "a square matrix", list(self.A.shape))
+        if self.B.shape[0] != n or self.C.shape[1] != n:
+            raise SpecError("B/C", f"{n} rows in B and {n} columns in C",
+                            [list(self.B.shape), list(self.C.shape)])
+        if self.D.shape != (self.C.shape[0], self.B.shape[1]):
+            raise SpecError("D", f"shape {(self.C.shape[0], self.B.shape[1])}",
+                            list(self.D.shape))
+
+    @property
+    def order(self) -> int:
+        return self.A.shape[0]
+
+    @classmethod
+    def from_statespace(cls, sys: control.StateSpace,
+                        method: str | None = None) -> "StateSpaceData":
+        """Wrap a python-control system (``sys.dt`` 0 or None means continuous)."""
+        dt = None if not sys.dt else float(sys.dt)
+        return cls(np.array(sys.A, float).reshape(sys.nstates, sys.nstates),
+                   np.array(sys.B, float).reshape(sys.nstates, sys.ninputs),
+                   np.array(sys.C, float).reshape(sys.noutputs, sys.nstates),
+                   np.array(sys.D, float).reshape(sys.noutputs, sys.ninputs),
+                   dt, method if dt else None)
+
+    def to_statespace(self) -> control.StateSpace:
+        """The python-control system (continuous when ``dt`` is None)."""
+        if self.dt is None:
+            return control.ss(self.A, self.B, self.C, self.D)
+        return control.ss(self.A, self.B, self.C, self.D, self.dt)
+
+    def to_json(self) -> dict:
+        out: dict[str, Any] = {"A": _list(self.A), "B": _list(self.B),
+                               "C": _list(self.C), "D": _list(self.D)}
+        if self.dt is not None:
+            out["dt"] = self.dt
+            out["method"] = self.method
+        return out
+
+    @classmethod
+    def from_json(cls, data: Any, key: str, discrete: bool) -> "StateSpaceData":
+        if not isinstance(data, Mapping):
+            raise SpecError(key, "an object with A, B, C, D", data)
+        allowed = {"A", "B", "C", "D"} | ({"dt", "method"} if discrete else set())
+        _no_unknown(data, allowed, key)
+        for name in ("A", "B", "C", "D"):
+            if name not in data:
+                raise SpecError(f"{key}.{name}", "a matrix (missing)")
+        A = _matrix(data["A"], f"{key}.A")
+        n = A.shape[0] if A.size else 0
+        A = A.reshape(n, n)
+        B = _matrix(data["B"], f"{key}.B")
+        C = _matrix(data["C"], f"{key}.C")
+        D = _matrix(data["D"], f"{key}.D")
+        if n == 0:
+            B = B.reshape(0, D.shape[1])
+            C = C.reshape(D.shape[0], 0)
+        dt = method = None
+        if discrete:
+            dt = data.get("dt")
+            if not isinstance(dt, (int, float)) or isinstance(dt, bool) or not dt > 0:
+                raise SpecError(f"{key}.dt", "a sample time > 0 (s)", dt)
+            method = data.get("method")
+            if method not in DISCRETISATIONS:
+                raise SpecError(f"{key}.method", f"one of {list(DISCRETISATIONS)}", method)
+            dt = float(dt)
+        try:
+            return cls(A, B, C, D, dt, method)
+        except SpecError as err:
+            raise err.under(key) from None
+
+
+@dataclass(frozen=True, eq=False)
+class Zpk:
+    """Zeros, poles (rad/s or z-plane) and gain of a SISO transfer function."""
+
+    zeros: np.ndarray
+    poles: np.ndarray
+    gain: float
+
+    @classmethod
+    def from_statespace(cls, sys: control.StateSpace) -> "Zpk":
+        tf = control.ss2tf(sys)
+        num = np.trim_zeros(np.atleast_1d(np.squeeze(tf.num[0][0])), "f")
+        den = np.trim_zeros(np.atleast_1d(np.squeeze(tf.den[0][0])), "f")
+        if num.size == 0:
+            return cls(np.zeros(0, complex), np.roots(den).astype(complex), 0.0)
+        gain = float(num[0] / den[0])
+        return cls(_sorted_roots(num), _sorted_roots(den), gain)
+
+    def to_json(self) -> dict:
+        return {"zeros": [[float(z.real), float(z.imag)] for z in self.zeros],
+                "poles": [[float(p.real), float(p.imag)] for p in self.poles],
+                "gain": float(self.gain)}
+
+    @classmethod
+    def from_json(cls, data: Any, key: str) -> "Zpk":
+        if not isinstance(data, Mapping):
+            raise SpecError(key, "an object with zeros, poles, gain", data)
+        _no_unknown(data, {"zeros", "poles", "gain"}, key)
+        roots = {}
+        for name in ("zeros", "poles"):
+            arr = _matrix(data.get(name, []), f"{key}.{name}", cols=2)
+            roots[name] = arr[:, 0] + 1j * arr[:, 1]
+        gain = data.get("gain")
+        if not isinstance(gain, (int, float)) or isinstance(gain, bool) or not math.isfinite(gain):
+            raise SpecError(f"{key}.gain", "a finite number", gain)
+        return cls(roots["zeros"], roots["poles"], float(gain))
+
+
+def _sorted_roots(poly: np.ndarray) -> np.ndarray:
+    roots = np.roots(poly).astype(complex)
+    return roots[np.lexsort((roots.imag, roots.real))]
+
+
+def _no_unknown(data: Mapping, allowed: set[str], key: str) -> None:
+    for name in data:
+        if name not in allowed:
+            raise SpecError(f"{key}.{name}" if key else name,
+                            f"one of {sorted(allowed)}", "unknown key")
+
+
+@dataclass(frozen=True, eq=False)
+class AxisController:
+    """The linear controller of one current loop.
+
+    Attributes
+    ----------
+    discrete : StateSpaceData
+        Error (A) -> voltage (V) controller at the sample time; what margins
+        on the sampled loop use.
+    continuous : StateSpaceData or None
+        Continuous-time error -> voltage controller (``None`` only for a
+        design made natively in discrete time with no continuous twin).
+    law : StateSpaceData
+        Discrete two-input law ``[i_ref, i_meas] -> v`` actually executed.
+        Its measurement channel equals minus the error controller.
+    antiwindup : ndarray or None
+        Back-calculation gain (n x 1): the law's state is corrected by
+        ``antiwindup * (v_saturated - v_unsaturated)``.
+    reduced : AxisController or None
+        Order-reduced twin, when an order reduction was asked.
+    """
+
+    discrete: StateSpaceData
+    continuous: StateSpaceData | None
+    law: StateSpaceData
+    antiwindup: np.ndarray | None = None
+    reduced: "AxisController | None" = None
+
+    def __post_init__(self) -> None:
+        if self.discrete.dt is None or self.law.dt is None:
+            raise SpecError("discrete", "a discrete system (dt > 0)")
+        if self.law.B.shape[1] != 2 or self.law.C.shape[0] != 1:
+            raise SpecError("law", "a two-input ([i_ref, i_meas]), one-output system",
+                            [self.law.B.shape[1], self.law.C.shape[0]])
+        if self.antiwindup is not None and self.antiwindup.shape != (self.law.order, 1):
+            raise SpecError("antiwindup", f"a {self.law.order} x 1 matrix",
+                            list(self.antiwindup.shape))
+
+    @property
+    def zpk(self) -> Zpk:
+        """Zeros, poles and gain of the continuous controller (discrete if none)."""
+        return Zpk.from_statespace((self.continuous or self.discrete).to_statespace())
+
+    @classmethod
+    def from_error_controller(cls, K: control.StateSpace | control.TransferFunction,
+                              sample_time: float, method: str = "tustin",
+                              prefilter_feedthrough: bool = True,
+                              antiwindup: bool = True,
+                              reduced: "AxisController | None" = None) -> "AxisController":
+        """Build an axis from a continuous one-degree-of-freedom controller.
+
+        The executed law is ``v = K (i_ref - i_meas)``; with ``antiwindup`` the
+        back-calculation gain is ``B_d D_d^{-1}`` (the state is updated as if the
+        controller had produced the saturated voltage, exact for PI controllers).
+        """
+        Kc = control.ss(K)
+        Kd = control.sample_system(Kc, sample_time, method=method)
+        law = control.ss(Kd.A, np.hstack([Kd.B, -Kd.B]), Kd.C,
+                         np.hstack([Kd.D, -Kd.D]), sample_time)
+        return cls.from_law(law, error_controller=Kc, sample_time=sample_time,
+                            method=method, antiwindup=antiwindup, reduced=reduced,
+                            discrete_error=Kd)
+
+    @classmethod
+    def from_law(cls, law: control.StateSpace, *, sample_time: float, method: str,
+                 error_controller: control.StateSpace | None = None,
+                 discrete_error: control.StateSpace | None = None,
+                 antiwindup: bool | np.ndarray = True,
+                 reduced: "AxisController | None" = None) -> "AxisController":
+        """Build an axis from a two-input law ``[i_ref, i_meas] -> v``.
+
+        ``law`` is continuous (``law.dt`` falsy, discretised with ``method``) or
+        discrete at ``sample_time`` (``method`` then says how it was obtained).
+        The error controller of the loop is minus the measurement channel.
+        """
+        if not law.dt:
+            law_c = control.ss(law)
+            law = control.sample_system(law_c, sample_time, method=method)
+            if error_controller is None:
+                error_controller = -law_c[0, 1]
+        law = control.ss(law)
+        if discrete_error is None:
+            discrete_error = -law[0, 1]
+        if isinstance(antiwindup, np.ndarray):
+            aw = antiwindup.reshape(law.nstates, 1)
+        elif antiwindup and law.nstates and abs(float(law.D[0, 1])) > 1e-12:
+            aw = np.asarray(law.B[:, 1:2] / law.D[0, 1], float)
+        else:
+            aw = None
+        return cls(
+            discrete=StateSpaceData.from_statespace(control.ss(discrete_error), method),
+            continuous=(None if error_controller is None
+                        else StateSpaceData.from_statespace(control.ss(error_controller))),
+            law=StateSpaceData.from_statespace(law, method),
+            antiwindup=aw,
+            reduced=reduced,
+        )
+
+    def to_statespace(self, discrete: bool = False) -> control.StateSpace:
+        """The error -> voltage controller as a python-control system."""
+        if discrete or self.continuous is None:
+            return self.discrete.to_statespace()
+        return self.continuous.to_statespace()
+
+    def to_json(self) -> dict:
+        out: dict[str, Any] = {}
+        if self.continuous is not None:
+            out["continuous"] = self.continuous.to_json()
+        out["discrete"] = self.discrete.to_json()
+        out["zpk"] = self.zpk.to_json()
+        out["law"] = self.law.to_json()
+        if self.antiwindup is not None:
+            out["antiwindup"] = _list(self.antiwindup)
+        if self.reduced is not None:
+            out["reduced"] = self.reduced.to_json()
+        return out
+
+    @classmethod
+    def from_json(cls, data: Any, key: str, nested: bool = False) -> "AxisController":
+        if not isinstance(data, Mapping):
+            raise SpecError(key, "an object (AXIS)", data)
+        allowed = {"continuous", "discrete", "zpk", "law", "antiwindup"}
+        if not nested:
+            allowed.add("reduced")
+        _no_unknown(data, allowed, key)
+        for name in ("discrete", "law"):
+            if name not in data:
+                raise SpecError(f"{key}.{name}", "a discrete system (missing)")
+        cont = (StateSpaceData.from_json(data["continuous"], f"{key}.continuous", False)
+                if "continuous" in data else None)
+        disc = StateSpaceData.from_json(data["discrete"], f"{key}.discrete", True)
+        law = StateSpaceData.from_json(data["law"], f"{key}.law", True)
+        aw = (_matrix(data["antiwindup"], f"{key}.antiwindup", law.order, 1)
+              if "antiwindup" in data else None)
+        if "zpk" in data:
+            Zpk.from_json(data["zpk"], f"{key}.zpk")  # validated; recomputed on use
+        reduced = (cls.from_json(data["reduced"], f"{key}.reduced", nested=True)
+                   if "reduced" in data else None)
+        try:
+            return cls(disc, cont, law, aw, reduced)
+        except SpecError as err:
+            raise err.under(key) from None
+
+
+@dataclass(frozen=True)
+class Decoupling:
+    """Nonlinear compensation terms added to the linear controllers' outputs.
+
+    ``v_d += -cross * w_m * Lq_c * i_q`` and
+    ``v_q += cross * w_m * Ld_c * i_d + emf * w_m * flux_c``, with the
+    measured electrical speed ``w_m = pole_pairs * Omega_m`` (rad/s).
+
+    Attributes
+    ----------
+    cross : bool
+        Cross-coupling compensation (the omega L i terms).
+    emf : bool
+        Back-EMF compensation (omega flux).
+    R_c, Ld_c, Lq_c, flux_c : float
+        Model parameters the controller uses (ohm, H, H, Wb); they may
+        differ from the plant's.
+    pole_pairs : int
+        Pole pairs used to convert measured mechanical speed.
+    """
+
+    cross: bool
+    emf: bool
+    R_c: float
+    Ld_c: float
+    Lq_c: float
+    flux_c: float
+    pole_pairs: int
+
+    def to_json(self) -> dict:
+        return {"cross": self.cross, "emf": self.emf, "R_c": self.R_c,
+                "Ld_c": self.Ld_c, "Lq_c": self.Lq_c, "flux_c": self.flux_c,
+                "pole_pairs": self.pole_pairs}
+
+    @classmethod
+    def from_json(cls, data: Any, key: str = "decoupling") -> "Decoupling":
+        if not isinstance(data, Mapping):
+            raise SpecError(key, "an object", data)
+        names = ("cross", "emf", "R_c", "Ld_c", "Lq_c", "flux_c", "pole_pairs")
+        _no_unknown(data, set(names), key)
+        for name in ("cross", "emf"):
+            if not isinstance(data.get(name), bool):
+                raise SpecError(f"{key}.{name}", "true or false", data.get(name))
+        for name in ("R_c", "Ld_c", "Lq_c", "flux_c"):
+            v = data.get(name)
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or v < 0:
+                raise SpecError(f"{key}.{name}", "a finite number >= 0", v)
+        pp = data.get("pole_pairs")
+        if not isinstance(pp, int) or isinstance(pp, bool) or pp < 1:
+            raise SpecError(f"{key}.pole_pairs", "an integer >= 1", pp)
+        return cls(data["cross"], data["emf"], float(data["R_c"]), float(data["Ld_c"]),
+                   float(data["Lq_c"]), float(data["flux_c"]), pp)
+
+
+def _jsonable(value: Any) -> Any:
+    """Plain-JSON copy of gains and margins (arrays to lists, complex to [re, im])."""
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (complex, np.complexfloating)):
+        return [float(value.real), float(value.imag)]
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return v if math.isfinite(v) else ("inf" if v > 0 else "-inf" if v < 0 else "nan")
+    return value
+
+
+def spec_sha256(spec: Mapping) -> str:
+    """SHA-256 of the canonical JSON form of a validated spec."""
+    text = json.dumps(_jsonable(spec), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+@dataclass(frozen=True, eq=False)
+class ControllerArtifact:
+    """Everything after design reads this; nothing after design re-runs design.
+
+    Attributes
+    ----------
+    method : str
+        Design method (``pi``, ``ip``, ``pi_lag``, ``tc``, ``tci``, ``ilq``,
+        ``lq``, ``hinf``, ``fcs_mpc``).
+    spec : dict
+        The validated spec (plain data) the design came from.
+    sample_time : float
+        Controller period (s).
+    delay_samples : int
+        Computation delay the design assumes (periods).
+    axes : dict
+        ``{"d": AxisController, "q": AxisController}``.
+    decoupling : Decoupling
+        Nonlinear compensation terms and controller-side model parameters.
+    gains : dict
+        Method-specific named gains (plain JSON data).
+    margins : dict
+        ``{"d": MARGINS, "q": MARGINS}`` once analysis ran (else empty).
+    provenance : dict
+        ``version``, ``spec_sha256``, ``created``, ``equations`` used.
+    """
+
+    method: str
+    spec: dict
+    sample_time: float
+    delay_samples: int
+    axes: dict[str, AxisController]
+    decoupling: Decoupling
+    gains: dict = field(default_factory=dict)
+    margins: dict = field(default_factory=dict)
+    provenance: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if set(self.axes) != set(AXES):
+            raise SpecError("axes", 'exactly the axes "d" and "q"', sorted(self.axes))
+        for name, axis in self.axes.items():
+            for sys in (axis.discrete, axis.law):
+                if not math.isclose(sys.dt, self.sample_time, rel_tol=1e-12):
+                    raise SpecError(f"axes.{name}", f"dt equal to sample_time {self.sample_time}",
+                                    sys.dt)
+
+    def with_margins(self, margins: dict) -> "ControllerArtifact":
+        """A copy carrying analysis results."""
+        return replace(self, margins=_jsonable(margins))
+
+    def to_json(self) -> dict:
+        return {
+            "schema": SCHEMA,
+            "method": self.method,
+            "spec": _jsonable(self.spec),
+            "sample_time": self.sample_time,
+            "delay_samples": self.delay_samples,
+            "axes": {name: self.axes[name].to_json() for name in AXES},
+            "decoupling": self.decoupling.to_json(),
+            "gains": _jsonable(self.gains),
+            "margins": _jsonable(self.margins),
+            "provenance": _jsonable(self.provenance),
+        }
+
+    def dumps(self) -> str:
+        """Deterministic JSON text (sorted keys are not used: field order is fixed)."""
+        return json.dumps(self.to_json(), indent=1, allow_nan=False) + "\n"
+
+    @classmethod
+    def from_json(cls, data: Any, file: str | None = None) -> "ControllerArtifact":
+        """Validate and load a controller.json document.
+
+        Raises
+        ------
+        SpecError
+            Wrong schema, missing or unknown keys, malformed matrices, sample
+            times that disagree; the message names ``file`` and the key.
+        """
+        try:
+            return cls._from_json(data)
+        except SpecError as err:
+            raise err.with_file(file) if file else err from None
+
+    @classmethod
+    def _from_json(cls, data: Any) -> "ControllerArtifact":
+        if not isinstance(data, Mapping):
+            raise SpecError("", "a JSON object", type(data).__name__)
+        if data.get("schema") != SCHEMA:
+            raise SpecError("schema", f'"{SCHEMA}"', data.get("schema"),
+                            hint="written by another version of the toolbox?")
+        allowed = {"schema", "method", "spec", "sample_time", "delay_samples", "axes",
+                   "decoupling", "gains", "margins", "provenance"}
+        _no_unknown(data, allowed, "")
+        for name in ("method", "sample_time", "axes", "decoupling"):
+            if name not in data:
+                raise SpecError(name, "a value (missing)")
+        if not isinstance(data["method"], str):
+            raise SpecError("method", "a method name", data["method"])
+        ts = data["sample_time"]
+        if not isinstance(ts, (int, float)) or isinstance(ts, bool) or not ts > 0:
+            raise SpecError("sample_time", "a number > 0 (s)", ts)
+        delay = data.get("delay_samples", 0)
+        if not isinstance(delay, int) or isinstance(delay, bool) or delay < 0:
+            raise SpecError("delay_samples", "an integer >= 0", delay)
+        axes_data = data["axes"]
+        if not isinstance(axes_data, Mapping) or set(axes_data) != set(AXES):
+            raise SpecError("axes", 'an object with the axes "d" and "q"',
+                            sorted(axes_data) if isinstance(axes_data, Mapping) else axes_data)
+        axes = {name: AxisController.from_json(axes_data[name], f"axes.{name}") for name in AXES}
+        for name in ("spec", "gains", "margins", "provenance"):
+            if not isinstance(data.get(name, {}), Mapping):
+                raise SpecError(name, "an object", data.get(name))
+        return cls(method=data["method"], spec=dict(data.get("spec", {})),
+                   sample_time=float(ts), delay_samples=delay, axes=axes,
+                   decoupling=Decoupling.from_json(data["decoupling"]),
+                   gains=dict(data.get("gains", {})), margins=dict(data.get("margins", {})),
+                   provenance=dict(data.get("provenance", {})))
+
+    @classmethod
+    def loads(cls, text: str, file: str | None = None) -> "ControllerArtifact":
+        """Parse controller.json text (see :meth:`from_json`)."""
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as err:
+            raise SpecError("", "valid JSON", f"{err.msg} at line {err.lineno}",
+                            file=file) from None
+        return cls.from_json(data, file)

@@ -1,0 +1,1032 @@
+"""H-infinity mixed-sensitivity synthesis by the Glover-Doyle Riccati formulae.
+
+All equation numbers refer to paper 003: A. Azaiz, Y. Ramdani, A. Meroufel,
+B. Belabbes, "H-infinity design of controllers ensuring the regulation of
+currents of the decoupled field orientation control applied to a PMS motor"
+(2007), which follows Glover & Doyle (1988) and Zhou, Doyle & Glover, *Robust
+and Optimal Control* (1995), ch. 17 (the general case with D11 != 0).
+
+Pipeline (a row of verbs):
+
+``augment_mixed_sensitivity`` (eq 35-40, 50-64) -> ``check_assumptions``
+(A1-A4) -> ``hinf_feasibility`` (Theorem 1, eq 10-22 after the normalisation
+of eq 65-67) -> ``central_controller`` (Theorem 2, eq 23-32) ->
+``gamma_iteration`` (bisection) -> ``synthesize`` (back-off, realisability,
+recomputed norm) -> ``weight_bound_check`` (eq 41-43).
+
+Damaged or wrong equations of the paper, re-derived here:
+
+* eq (28) prints ``C2hat = -D12hat (C2 + F12)``; the correct factor is
+  ``D21hat`` (Zhou-Doyle-Glover); in paper 003 both are 1 at gamma = 1, so
+  the printed numbers do not reveal it.
+* eq (30) prints a factor ``U12`` in ``C1hat``; it is not part of the
+  formula (the output rotation is undone on the plant side, not here).
+* eq (21) prints ``-(B1 Ds1^T - Y C^T)``; the sign is ``+`` (``L = -(B1
+  Ds1^T + Y C^T) Rnj^-1``).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+import scipy.linalg as sla
+import control as ct
+
+from toolbox.errors import SpecError
+
+__all__ = [
+    "PartitionedPlant", "augment_mixed_sensitivity", "check_assumptions",
+    "AssumptionReport", "balance_plant", "HinfFeasibility", "hinf_feasibility",
+    "central_controller", "gamma_iteration", "HinfResult", "synthesize",
+    "pole_limit", "effective_poles", "WeightBound", "weight_bound_check",
+]
+
+_GAMMA_KEY = "controller.hinf.gamma"
+
+
+# --------------------------------------------------------------------------
+# partitioned plant, eq (2) and (64)
+# --------------------------------------------------------------------------
+def _mat(x: Any) -> np.ndarray:
+    return np.atleast_2d(np.asarray(x, dtype=float))
+
+
+@dataclass(frozen=True)
+class PartitionedPlant:
+    r"""Generalised plant P of eq (2)/(64) of paper 003.
+
+    .. math::
+        \dot x = A x + B_1 w + B_2 u,\quad
+        z = C_1 x + D_{11} w + D_{12} u,\quad
+        y = C_2 x + D_{21} w + D_{22} u
+
+    Parameters
+    ----------
+    A, B1, B2, C1, C2, D11, D12, D21, D22 : array_like
+        Real blocks (float).  Empty blocks may be given with shape ``(k, 0)``
+        or ``(0, k)``.
+
+    Raises
+    ------
+    ValueError
+        A block has the wrong size; the message names the block, the size
+        expected and the size received.
+    """
+
+    A: np.ndarray
+    B1: np.ndarray
+    B2: np.ndarray
+    C1: np.ndarray
+    C2: np.ndarray
+    D11: np.ndarray
+    D12: np.ndarray
+    D21: np.ndarray
+    D22: np.ndarray
+    state_labels: tuple[str, ...] = field(default=(), compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "state_labels", tuple(self.state_labels))
+        for name in ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22"):
+            arr = np.asarray(getattr(self, name), dtype=float)
+            if arr.ndim < 2:
+                arr = arr.reshape(1, -1) if arr.size else arr.reshape(0, 0)
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"PartitionedPlant: block {name} has NaN or inf entries")
+            object.__setattr__(self, name, arr)
+        n = self.A.shape[0]
+        nw, nu = self.B1.shape[1], self.B2.shape[1]
+        nz, ny = self.C1.shape[0], self.C2.shape[0]
+        expect = {"A": (n, n), "B1": (n, nw), "B2": (n, nu), "C1": (nz, n),
+                  "C2": (ny, n), "D11": (nz, nw), "D12": (nz, nu),
+                  "D21": (ny, nw), "D22": (ny, nu)}
+        for name, shape in expect.items():
+            got = getattr(self, name).shape
+            if got != shape:
+                raise ValueError(f"PartitionedPlant: block {name} must be "
+                                 f"{shape[0]}x{shape[1]} (from A, B1, B2, C1, C2), "
+                                 f"got {got[0]}x{got[1]}")
+        if self.state_labels and len(self.state_labels) != n:
+            raise ValueError(f"PartitionedPlant: state_labels must have {n} entries, "
+                             f"got {len(self.state_labels)}")
+
+    @property
+    def nx(self) -> int:
+        """Number of states."""
+        return self.A.shape[0]
+
+    @property
+    def nw(self) -> int:
+        """Number of exogenous inputs w (m1)."""
+        return self.B1.shape[1]
+
+    @property
+    def nu(self) -> int:
+        """Number of control inputs u (m2)."""
+        return self.B2.shape[1]
+
+    @property
+    def nz(self) -> int:
+        """Number of performance outputs z (p1)."""
+        return self.C1.shape[0]
+
+    @property
+    def ny(self) -> int:
+        """Number of measurements y (p2)."""
+        return self.C2.shape[0]
+
+    def to_statespace(self) -> ct.StateSpace:
+        """Return P as a python-control StateSpace, inputs [w, u], outputs [z, y]."""
+        B = np.hstack([self.B1, self.B2])
+        C = np.vstack([self.C1, self.C2])
+        D = np.block([[self.D11, self.D12], [self.D21, self.D22]])
+        inputs = [f"w[{i}]" for i in range(self.nw)] + [f"u[{i}]" for i in range(self.nu)]
+        outputs = [f"z[{i}]" for i in range(self.nz)] + [f"y[{i}]" for i in range(self.ny)]
+        return ct.ss(self.A, B, C, D, inputs=inputs, outputs=outputs)
+
+    def replace(self, **blocks: Any) -> "PartitionedPlant":
+        """Return a copy with some blocks replaced."""
+        data = {k: getattr(self, k) for k in
+                ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22")}
+        data["state_labels"] = self.state_labels
+        data.update(blocks)
+        return PartitionedPlant(**data)
+
+
+def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A, B, C, D of a SISO system or a scalar gain."""
+    if isinstance(sys, (int, float, np.floating)):
+        return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(sys)]])
+    s = ct.ss(sys)
+    if s.ninputs != 1 or s.noutputs != 1:
+        raise ValueError(f"augment_mixed_sensitivity: expected a SISO system, "
+                         f"got {s.noutputs}x{s.ninputs}")
+    return (np.asarray(s.A, float), np.asarray(s.B, float),
+            np.asarray(s.C, float), np.asarray(s.D, float))
+
+
+def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
+                              w3: Any = None) -> PartitionedPlant:
+    r"""Build the S/KS/T augmented plant of eq (35)-(40), (50)-(64).
+
+    Signals: w = reference :math:`i_{ref}`, u = voltage, y = e = r - G u and
+    z = [w1 e, w2 u, w3 G u] (rows for absent weights are dropped).  State
+    ordering follows eq (55): x = [x_G, x_w1, x_w2, x_w3].  The closed loop
+    with u = K y is :math:`T_{zw} = [w_1 S;\ w_2 K S;\ w_3 T]`, eq (40).
+
+    Parameters
+    ----------
+    G : control.LTI
+        SISO plant, e.g. eq (34) :math:`G_q = 1/(r_s + L_q s)` (A/V).
+    w1, w2, w3 : control.LTI or float or None
+        Weights on S, KS, T; ``w2``/``w3`` may be ``None``.
+
+    Returns
+    -------
+    PartitionedPlant
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> s = ct.tf('s')
+    >>> P = augment_mixed_sensitivity(1 / (0.6 + 2.8e-3 * s),
+    ...                               (s + 177.3493) / 1.51 / (s + 0.0117), 0.5, None)
+    >>> P.nx, P.nz
+    (2, 2)
+    """
+    Ag, Bg, Cg, Dg = _ss_blocks(G)
+    ng = Ag.shape[0]
+    ws = [("w1", w1), ("w2", w2), ("w3", w3)]
+    mats = [_ss_blocks(w) if w is not None else None for _, w in ws]
+    sizes = [ng] + [m[0].shape[0] if m is not None else 0 for m in mats]
+    n = sum(sizes)
+    off = np.cumsum([0] + sizes)
+    A = np.zeros((n, n))
+    B1 = np.zeros((n, 1))
+    B2 = np.zeros((n, 1))
+    A[:ng, :ng] = Ag
+    B2[:ng] = Bg
+    # error e = r - (Cg xg + Dg u)
+    C_e = np.zeros((1, n)); C_e[:, :ng] = -Cg
+    De_w, De_u = np.array([[1.0]]), -Dg
+    # plant output yg = Cg xg + Dg u
+    C_g = np.zeros((1, n)); C_g[:, :ng] = Cg
+    inputs = {"w1": (C_e, De_w, De_u), "w2": (np.zeros((1, n)), np.zeros((1, 1)), np.eye(1)),
+              "w3": (C_g, np.zeros((1, 1)), Dg)}
+    C1_rows, D11_rows, D12_rows = [], [], []
+    for k, ((name, _), m) in enumerate(zip(ws, mats)):
+        if m is None:
+            continue
+        Aw, Bw, Cw, Dw = m
+        i0, i1 = off[k + 1], off[k + 2]
+        Cin, Dinw, Dinu = inputs[name]
+        A[i0:i1, i0:i1] = Aw
+        A[i0:i1, :] += Bw @ Cin
+        B1[i0:i1] += Bw @ Dinw
+        B2[i0:i1] += Bw @ Dinu
+        crow = Dw @ Cin
+        crow[:, i0:i1] += Cw
+        C1_rows.append(crow)
+        D11_rows.append(Dw @ Dinw)
+        D12_rows.append(Dw @ Dinu)
+    labels = ["G"] * ng
+    for (name, _), sz in zip(ws, sizes[1:]):
+        labels += [name] * sz
+    return PartitionedPlant(A=A, B1=B1, B2=B2, C1=np.vstack(C1_rows),
+                            C2=C_e, D11=np.vstack(D11_rows), D12=np.vstack(D12_rows),
+                            D21=De_w, D22=De_u, state_labels=tuple(labels))
+
+
+# --------------------------------------------------------------------------
+# assumptions A1-A4
+# --------------------------------------------------------------------------
+@dataclass
+class AssumptionReport:
+    """Outcome of :func:`check_assumptions`.
+
+    Attributes
+    ----------
+    ok : bool
+        All of A1-A4 hold.
+    problems : list of str
+        One plain-language message per violated assumption, with a remedy.
+    """
+
+    ok: bool
+    problems: list[str] = field(default_factory=list)
+
+    def raise_if_failed(self, key: str = "controller.hinf.weights") -> None:
+        """Raise :class:`SpecError` listing the problems, if any."""
+        if not self.ok:
+            raise SpecError(key, "weights for which assumptions A1-A4 of the "
+                            "H-infinity problem hold", "; ".join(self.problems))
+
+
+def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
+    ev = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
+    scale = max(1.0, float(np.max(np.abs(ev)))) if ev.size else 1.0
+    return ev[np.abs(ev.real) <= tol * scale]
+
+
+def _rank_defect(M: np.ndarray, tol: float) -> bool:
+    """True when the tall-or-square matrix M loses column rank."""
+    if M.shape[1] == 0:
+        return False
+    if M.shape[0] < M.shape[1]:
+        return True
+    sv = np.linalg.svd(M, compute_uv=False)
+    return bool(sv[-1] <= tol * max(sv[0], 1e-300))
+
+
+def _blame_mode(P: PartitionedPlant, lam: complex) -> str:
+    """Name the block (plant or weight) whose states own eigenvalue lam."""
+    if not P.state_labels:
+        return "a weight or the plant"
+    w, V = np.linalg.eig(P.A)
+    k = int(np.argmin(np.abs(w - lam)))
+    idx = int(np.argmax(np.abs(V[:, k])))
+    return P.state_labels[idx]
+
+
+def _where(lam: complex) -> str:
+    return "s = 0" if abs(lam) < 1e-12 else f"s = {complex(0, lam.imag):.4g}"
+
+
+def check_assumptions(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionReport:
+    """Check assumptions A1-A4 of paper 003 (Glover-Doyle) on P.
+
+    A1: (A, B2) stabilisable and (A, C2) detectable.  A2: D12 full column
+    rank and D21 full row rank (eq 65-67 then normalise them to [0; I] and
+    [0 I]).  A3/A4: [A - jwI, B2; C1, D12] full column rank and
+    [A - jwI, B1; C2, D21] full row rank for all w.  For a mixed-sensitivity
+    plant these can only fail at imaginary-axis modes of A (a weight or plant
+    pole on the axis), which is where they are tested, plus w = 0.
+
+    Parameters
+    ----------
+    P : PartitionedPlant
+    tol : float
+        Relative tolerance for "on the imaginary axis" and for rank tests.
+
+    Returns
+    -------
+    AssumptionReport
+        One message per failure, naming the assumption, the culprit and the
+        remedy, e.g. "w1 has a pole at s = 0: move it to a small negative
+        value".
+    """
+    problems: list[str] = []
+    n = P.nx
+    labels = P.state_labels
+    P, _ = balance_plant(P)            # rank tests on equilibrated data
+    P = P.replace(state_labels=labels)
+    modes = list(_imag_axis_modes(P.A, tol))
+    for lam in modes:
+        M = P.A - 1j * lam.imag * np.eye(n)
+        src, where = _blame_mode(P, lam), _where(lam)
+        if _rank_defect(np.hstack([M, P.B2]).conj().T, tol):
+            problems.append(f"A1 fails (not stabilisable): {src} has a pole at {where} "
+                            f"that u cannot move: move it to a small negative value")
+        if _rank_defect(np.vstack([M, P.C2]), tol):
+            problems.append(f"A1 fails (not detectable): {src} has a pole at {where} "
+                            f"that y does not see: move it to a small negative value "
+                            f"(e.g. 1e-4 times the crossover frequency)")
+    for lam in modes + [0j]:
+        M = P.A - 1j * lam.imag * np.eye(n)
+        where = _where(lam)
+        if _rank_defect(np.block([[M, P.B2], [P.C1, P.D12]]), tol):
+            problems.append(f"A3 fails: the weighted plant has an invariant zero at {where}: "
+                            f"move the pole or zero of w2/w3 (or of G) off the imaginary axis")
+        if _rank_defect(np.block([[M, P.B1], [P.C2, P.D21]]).conj().T, tol):
+            problems.append(f"A4 fails: {_blame_mode(P, lam) if modes else 'the plant'} "
+                            f"gives a rank loss at {where}: move its pole to a small "
+                            f"negative value")
+    if _rank_defect(P.D12, tol):
+        problems.append("A2 fails: D12 has not full column rank: give the control weight "
+                        "w2 a non-zero high-frequency gain (u must be weighted directly)")
+    if _rank_defect(P.D21.T, tol):
+        problems.append("A2 fails: D21 has not full row rank: the measurement must contain "
+                        "the exogenous input directly (y = r - G u gives D21 = 1)")
+    problems = list(dict.fromkeys(problems))
+    return AssumptionReport(ok=not problems, problems=problems)
+
+
+# --------------------------------------------------------------------------
+# scaling of badly conditioned data (C1 ~ 2.7e10 in eq 59)
+# --------------------------------------------------------------------------
+def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
+    """Diagonal state scaling x = T x_s that equilibrates P (powers of two).
+
+    Paper 003's q-axis data (eq 56-63) spans 1e-2 .. 2.7e10; the Riccati
+    solution X then spans 1 .. 1.4e14 (see the printed X).  A state
+    similarity changes neither the transfer matrix nor the H-infinity
+    problem; the controller found for the scaled plant is mapped back with
+    :func:`_unscale_controller` (exact, since T holds powers of two).
+
+    Parameters
+    ----------
+    P : PartitionedPlant
+
+    Returns
+    -------
+    Ps : PartitionedPlant
+        The scaled plant (A_s = T^-1 A T, B_s = T^-1 B, C_s = C T).
+    t : ndarray
+        The diagonal of T.
+    """
+    n = P.nx
+    if n == 0:
+        return P, np.ones(0)
+    B = np.hstack([P.B1, P.B2])
+    C = np.vstack([P.C1, P.C2])
+    m, p = B.shape[1], C.shape[0]
+    N = n + max(m, p)
+    M = np.zeros((N, N))
+    M[:n, :n] = P.A
+    M[:n, n:n + m] = B
+    M[n:n + p, :n] = C
+    _, (scale, _) = sla.matrix_balance(M, permute=False, separate=True)
+    t = 2.0 ** np.round(np.log2(scale[:n]))
+    Ps = P.replace(A=P.A * t[None, :] / t[:, None], B1=P.B1 / t[:, None],
+                   B2=P.B2 / t[:, None], C1=P.C1 * t[None, :], C2=P.C2 * t[None, :])
+    return Ps, t
+
+
+# --------------------------------------------------------------------------
+# normalisation eq (65)-(67)
+# --------------------------------------------------------------------------
+@dataclass
+class _Normalised:
+    P: PartitionedPlant          # normalised plant, D12 = [0; I], D21 = [0 I], D22 = 0
+    R12inv: np.ndarray           # u = R12inv u~
+    R21inv: np.ndarray           # y~ = R21inv y
+
+
+def _normalise(P: PartitionedPlant) -> _Normalised:
+    """Rotate/scale w, z, u, y so that D12 = [0; I] and D21 = [0 I] (eq 65-67).
+
+    Orthogonal rotations of z and w keep the norm of T_zw; the invertible
+    scalings of u and y are undone on the controller (K = R12^-1 K~ R21^-1).
+    D22 is set to zero here; it is restored by a loop shift in
+    :func:`central_controller`.
+    """
+    m2, p2 = P.nu, P.ny
+    U, s12, V12t = np.linalg.svd(P.D12)            # D12 = U [S;0] V^T
+    Uz = np.vstack([U[:, m2:].T, U[:, :m2].T])      # Uz D12 = [0; S V^T]
+    R12 = np.diag(s12) @ V12t
+    U21, s21, V21t = np.linalg.svd(P.D21)           # D21 = U [S 0] V^T
+    V = V21t.T
+    VwT = np.hstack([V[:, p2:], V[:, :p2]])         # D21 VwT = [0, U S]
+    R21 = U21 @ np.diag(s21)
+    R12inv, R21inv = np.linalg.inv(R12), np.linalg.inv(R21)
+    Pn = P.replace(B1=P.B1 @ VwT, B2=P.B2 @ R12inv, C1=Uz @ P.C1, C2=R21inv @ P.C2,
+                   D11=Uz @ P.D11 @ VwT, D12=Uz @ P.D12 @ R12inv,
+                   D21=R21inv @ P.D21 @ VwT, D22=np.zeros_like(P.D22))
+    return _Normalised(P=Pn, R12inv=R12inv, R21inv=R21inv)
+
+
+def _d11_blocks(Pn: PartitionedPlant) -> tuple[np.ndarray, ...]:
+    """D1111, D1112, D1121, D1122 of the normalised D11 (Theorem 1)."""
+    r, c = Pn.nz - Pn.nu, Pn.nw - Pn.ny
+    D = Pn.D11
+    return D[:r, :c], D[:r, c:], D[r:, :c], D[r:, c:]
+
+
+def _sigma_max(M: np.ndarray) -> float:
+    return float(np.linalg.norm(M, 2)) if M.size else 0.0
+
+
+# --------------------------------------------------------------------------
+# Riccati equations, eq (14)-(19)
+# --------------------------------------------------------------------------
+def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
+         s: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """Stabilising solution of a^T X + X a - (X b + s) r^-1 (b^T X + s^T) + q = 0.
+
+    Solved with scipy's ``solve_continuous_are`` (generalised Schur method on
+    the extended pencil, which does not invert the indefinite r); falls back to
+    the ordered real Schur form of the Hamiltonian (eq 16/17) when scipy
+    refuses.  Returns ``(X, "")`` or ``(None, reason)``.
+    """
+    n = a.shape[0]
+    try:
+        X = sla.solve_continuous_are(a, b, q, r, s=s)
+    except (np.linalg.LinAlgError, ValueError):
+        X = _ric_schur(a, b, q, r, s)
+        if X is None:
+            return None, ("the Hamiltonian has eigenvalues on the imaginary axis "
+                          "or no stabilising solution exists")
+    X = 0.5 * (X + X.T)
+    F = np.linalg.solve(r, b.T @ X + s.T)
+    ev = np.linalg.eigvals(a - b @ F)
+    if np.any(ev.real >= -1e-12 * max(1.0, float(np.max(np.abs(ev))))):
+        return None, "the solution is not stabilising"
+    return X, ""
+
+
+def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
+               s: np.ndarray) -> np.ndarray | None:
+    """Hamiltonian (eq 16) ordered-Schur solution, ``None`` if it does not exist."""
+    n = a.shape[0]
+    ri = np.linalg.inv(r)
+    E = a - b @ ri @ s.T
+    H = np.block([[E, -b @ ri @ b.T], [-(q - s @ ri @ s.T), -E.T]])
+    T, Z, sdim = sla.schur(H, output="real", sort="lhp")
+    if sdim != n:
+        return None
+    Z11, Z21 = Z[:n, :n], Z[n:, :n]
+    if np.linalg.cond(Z11) > 1e14:
+        return None
+    return Z21 @ np.linalg.inv(Z11)
+
+
+@dataclass
+class HinfFeasibility:
+    """Outcome of the tests of Theorem 1 of paper 003 at one gamma.
+
+    Attributes
+    ----------
+    gamma : float
+        The level tested.
+    feasible : bool
+        True when conditions (a) and (b) hold.
+    failed : str or None
+        ``None`` or one of ``"D11"`` (condition (a)), ``"X_not_stabilising"``,
+        ``"X_not_psd"``, ``"Y_not_stabilising"``, ``"Y_not_psd"``,
+        ``"rho"`` (rho(XY) >= gamma^2).
+    message : str
+        Plain-language explanation.
+    X, Y : ndarray or None
+        Riccati solutions of eq (18)-(19) in the coordinates of the plant
+        given (after undoing the internal balancing).
+    rho : float
+        Spectral radius of X Y (nan when not computed).
+    """
+
+    gamma: float
+    feasible: bool
+    failed: str | None
+    message: str
+    X: np.ndarray | None = None
+    Y: np.ndarray | None = None
+    rho: float = float("nan")
+    _work: Any = field(default=None, repr=False)
+
+
+def _psd(X: np.ndarray, tol: float = 1e-9) -> bool:
+    ev = np.linalg.eigvalsh(X)
+    return bool(ev.size == 0 or ev[0] >= -tol * max(1.0, float(np.max(np.abs(ev)))))
+
+
+def _feasibility_normalised(Pn: PartitionedPlant, gamma: float) -> HinfFeasibility:
+    """Theorem 1 on an already normalised, balanced plant."""
+    m1, m2, p1, p2, n = Pn.nw, Pn.nu, Pn.nz, Pn.ny, Pn.nx
+    D1111, D1112, D1121, _ = _d11_blocks(Pn)
+    bound = max(_sigma_max(np.hstack([D1111, D1112])), _sigma_max(np.vstack([D1111, D1121])))
+    if bound >= gamma:
+        return HinfFeasibility(gamma, False, "D11",
+                               f"condition (a) of Theorem 1 fails: max(sigma(D1111 D1112), "
+                               f"sigma(D1111; D1121)) = {bound:.6g} >= gamma = {gamma:.6g}")
+    B = np.hstack([Pn.B1, Pn.B2])                                   # eq (10)
+    C = np.vstack([Pn.C1, Pn.C2])                                   # eq (11)
+    D1s = np.hstack([Pn.D11, Pn.D12])                               # eq (12)
+    Ds1 = np.vstack([Pn.D11, Pn.D21])                               # eq (13)
+    Rnh = D1s.T @ D1s - sla.block_diag(gamma**2 * np.eye(m1), np.zeros((m2, m2)))  # (14)
+    Rnj = Ds1 @ Ds1.T - sla.block_diag(gamma**2 * np.eye(p1), np.zeros((p2, p2)))  # (15)
+    X, why = _ric(Pn.A, B, Pn.C1.T @ Pn.C1, Rnh, Pn.C1.T @ D1s)     # eq (16), (18)
+    if X is None:
+        return HinfFeasibility(gamma, False, "X_not_stabilising",
+                               f"the X Riccati equation (18) has no stabilising solution "
+                               f"at gamma = {gamma:.6g}: {why}")
+    if not _psd(X):
+        return HinfFeasibility(gamma, False, "X_not_psd",
+                               f"X of eq (18) is stabilising but not >= 0 at gamma = {gamma:.6g}",
+                               X=X)
+    Y, why = _ric(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Rnj, Pn.B1 @ Ds1.T)  # eq (17), (19)
+    if Y is None:
+        return HinfFeasibility(gamma, False, "Y_not_stabilising",
+                               f"the Y Riccati equation (19) has no stabilising solution "
+                               f"at gamma = {gamma:.6g}: {why}", X=X)
+    if not _psd(Y):
+        return HinfFeasibility(gamma, False, "Y_not_psd",
+                               f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
+                               X=X, Y=Y)
+    rho = float(np.max(np.abs(np.linalg.eigvals(X @ Y)))) if n else 0.0
+    if rho >= gamma**2:
+        return HinfFeasibility(gamma, False, "rho",
+                               f"rho(XY) = {rho:.6g} >= gamma^2 = {gamma**2:.6g}",
+                               X=X, Y=Y, rho=rho)
+    work = dict(B=B, C=C, D1s=D1s, Ds1=Ds1, Rnh=Rnh, Rnj=Rnj)
+    return HinfFeasibility(gamma, True, None, "conditions (a) and (b) of Theorem 1 hold",
+                           X=X, Y=Y, rho=rho, _work=work)
+
+
+@dataclass
+class _Prepared:
+    """Balanced and normalised copy of a plant, reused across gammas."""
+
+    P: PartitionedPlant
+    t: np.ndarray
+    norm: _Normalised
+
+
+def _prepare(P: PartitionedPlant) -> _Prepared:
+    if not isinstance(P, PartitionedPlant):
+        raise TypeError(f"expected a PartitionedPlant, got {type(P).__name__}")
+    report = check_assumptions(P)
+    report.raise_if_failed()
+    Ps, t = balance_plant(P)
+    return _Prepared(P=P, t=t, norm=_normalise(Ps))
+
+
+def _unscale_xy(res: HinfFeasibility, t: np.ndarray) -> HinfFeasibility:
+    """Map X, Y from balanced coordinates back to those of the given plant."""
+    if res.X is not None:
+        res.X = res.X / t[:, None] / t[None, :]
+    if res.Y is not None:
+        res.Y = res.Y * t[:, None] * t[None, :]
+    return res
+
+
+def hinf_feasibility(P: PartitionedPlant, gamma: float) -> HinfFeasibility:
+    """Test conditions (a) and (b) of Theorem 1 of paper 003 at ``gamma``.
+
+    The plant is balanced (:func:`balance_plant`) and normalised (eq 65-67);
+    then condition (a) on D11, the stabilising solutions X >= 0 and Y >= 0 of
+    eq (18)-(19) built from eq (10)-(17), and rho(XY) < gamma^2 are tested in
+    this order.
+
+    Parameters
+    ----------
+    P : PartitionedPlant
+        Generalised plant satisfying A1-A4.
+    gamma : float
+        Performance level, > 0.
+
+    Returns
+    -------
+    HinfFeasibility
+        ``failed`` names the first condition that fails.
+
+    Raises
+    ------
+    SpecError
+        ``gamma`` not a positive number, or A1-A4 violated.
+    """
+    gamma = _check_gamma(gamma)
+    prep = _prepare(P)
+    return _unscale_xy(_feasibility_normalised(prep.norm.P, gamma), prep.t)
+
+
+def _check_gamma(gamma: Any) -> float:
+    try:
+        g = float(gamma)
+    except (TypeError, ValueError):
+        raise SpecError(_GAMMA_KEY, 'a number > 0 or "optimal"', gamma) from None
+    if not np.isfinite(g) or g <= 0:
+        raise SpecError(_GAMMA_KEY, 'a number > 0 or "optimal"', gamma)
+    return g
+
+
+# --------------------------------------------------------------------------
+# central controller, Theorem 2, eq (20)-(32)
+# --------------------------------------------------------------------------
+def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.ndarray, ...]:
+    """Eq (20)-(32) of paper 003 (Zhou-Doyle-Glover general formulae)."""
+    g2 = res.gamma**2
+    w = res._work
+    X, Y = res.X, res.Y
+    m1, m2, p1, p2, n = Pn.nw, Pn.nu, Pn.nz, Pn.ny, Pn.nx
+    D1111, D1112, D1121, D1122 = _d11_blocks(Pn)
+    F = -np.linalg.solve(w["Rnh"], w["D1s"].T @ Pn.C1 + w["B"].T @ X)   # eq (20)
+    L = -np.linalg.solve(w["Rnj"].T, (Pn.B1 @ w["Ds1"].T + Y @ w["C"].T).T).T  # eq (21)
+    F12, F2 = F[m1 - p2:m1], F[m1:]
+    L12, L2 = L[:, p1 - m2:p1], L[:, p1:]
+    r = D1111.shape[0]
+    inv_a = np.linalg.inv(g2 * np.eye(r) - D1111 @ D1111.T) if r else np.zeros((0, 0))
+    inv_b = (np.linalg.inv(g2 * np.eye(D1111.shape[1]) - D1111.T @ D1111)
+             if D1111.shape[1] else np.zeros((0, 0)))
+    D11h = -D1121 @ D1111.T @ inv_a @ D1112 - D1122                   # eq (24)
+    T2 = np.eye(m2) - D1121 @ inv_b @ D1121.T                         # eq (25)
+    T3 = np.eye(p2) - D1112.T @ inv_a @ D1112                         # eq (26)
+    D12h = np.linalg.cholesky(T2)                                     # D12h D12h^T = T2
+    D21h = np.linalg.cholesky(T3).T                                   # D21h^T D21h = T3
+    Z = np.linalg.inv(np.eye(n) - Y @ X / g2)                         # eq (27)
+    B2h = Z @ (Pn.B2 + L12) @ D12h                                    # eq (27)
+    C2h = -D21h @ (Pn.C2 + F12)                                       # eq (28), D21h
+    B1h = -Z @ L2 + B2h @ np.linalg.solve(D12h, D11h)                 # eq (29)
+    C1h = F2 + D11h @ np.linalg.solve(D21h, C2h)                      # eq (30), no U12
+    Ah = Pn.A + w["B"] @ F + B1h @ np.linalg.solve(D21h, C2h)         # eq (31)
+    return Ah, B1h, C1h, D11h                                         # eq (32)
+
+
+def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
+    """Central H-infinity controller K = [Ahat, B1hat; C1hat, D11hat], eq (32).
+
+    Uses the general Glover-Doyle formulae (eq 20-31, D11 != 0 allowed) on
+    the balanced, normalised plant (eq 65-67), then undoes the u/y scalings,
+    the D22 loop shift and the state balancing.  Sign convention: u = K y,
+    with y = e = r - G u for :func:`augment_mixed_sensitivity`, so K maps the
+    current error (A) to the voltage (V).
+
+    Parameters
+    ----------
+    P : PartitionedPlant
+    gamma : float
+        Performance level; must be feasible.
+
+    Returns
+    -------
+    control.StateSpace
+        The controller, of the order of P.
+
+    Raises
+    ------
+    SpecError
+        ``gamma`` infeasible (key ``controller.hinf.gamma``): the message
+        names the condition of Theorem 1 that failed.
+    """
+    gamma = _check_gamma(gamma)
+    prep = _prepare(P)
+    res = _feasibility_normalised(prep.norm.P, gamma)
+    if not res.feasible:
+        raise SpecError(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
+    return _controller_from(prep, res)
+
+
+def _controller_from(prep: _Prepared, res: HinfFeasibility) -> ct.StateSpace:
+    Ah, Bh, Ch, Dh = _central_normalised(prep.norm.P, res)
+    # undo u = R12^-1 u~ and y~ = R21^-1 y
+    Bh, Ch, Dh = Bh @ prep.norm.R21inv, prep.norm.R12inv @ Ch, prep.norm.R12inv @ Dh @ prep.norm.R21inv
+    # undo the state balancing x = T x_s (controller states live in plant coordinates)
+    t = prep.t
+    Ah, Bh, Ch = Ah * t[:, None] / t[None, :], Bh * t[:, None], Ch / t[None, :]
+    K = ct.ss(Ah, Bh, Ch, Dh)
+    D22 = prep.P.D22
+    if np.any(D22 != 0):                           # loop shift: K = K0 (I + D22 K0)^-1
+        K = ct.feedback(K, ct.ss([], [], [], D22), sign=-1)
+    return K
+
+
+# --------------------------------------------------------------------------
+# gamma iteration
+# --------------------------------------------------------------------------
+def gamma_iteration(P: PartitionedPlant, tol: float = 1e-4,
+                    gamma_max: float | None = None) -> float:
+    """Smallest feasible gamma by bisection on Theorem 1 (relative tolerance).
+
+    The lower end of the bracket is the D11 bound of condition (a) (no
+    controller can do better); the upper end starts at max(1, 2 * lower)
+    and doubles until feasible.  Bisection stops when
+    ``(hi - lo) <= tol * hi``; the feasible end ``hi`` is returned, so the
+    result is feasible and at most ``tol`` (relative) above the optimum.
+
+    Parameters
+    ----------
+    P : PartitionedPlant
+    tol : float
+        Relative tolerance on gamma, default 1e-4.
+    gamma_max : float, optional
+        Give up above this level (default 1e8).
+
+    Returns
+    -------
+    float
+        gamma_opt (within ``tol``), dimensionless.
+
+    Raises
+    ------
+    SpecError
+        No feasible gamma up to ``gamma_max`` (key ``controller.hinf.gamma``).
+    """
+    prep = _prepare(P)
+    Pn = prep.norm.P
+    D1111, D1112, D1121, _ = _d11_blocks(Pn)
+    lo = max(_sigma_max(np.hstack([D1111, D1112])), _sigma_max(np.vstack([D1111, D1121])))
+    top = 1e8 if gamma_max is None else float(gamma_max)
+    hi = min(max(1.0, 2.0 * lo), top)
+    while not _feasibility_normalised(Pn, hi).feasible:
+        if hi >= top:
+            raise SpecError(_GAMMA_KEY, f"a problem feasible for some gamma <= {top:g}",
+                            hint="no controller reaches it: raise gamma_max or relax "
+                                 "the weights w1/w3")
+        lo, hi = hi, min(2.0 * hi, top)
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        if _feasibility_normalised(Pn, mid).feasible:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+# --------------------------------------------------------------------------
+# realisability of the controller at a sample time
+# --------------------------------------------------------------------------
+def pole_limit(sample_time: float, factor: float = 1.0) -> float:
+    """Largest controller pole magnitude realisable at ``sample_time`` (rad/s).
+
+    The limit is ``factor * pi / sample_time``, the Nyquist frequency: a
+    controller running every ``sample_time`` seconds cannot represent
+    dynamics faster than that (Tustin maps such a pole next to z = -1, ZOH
+    next to z = 0, and the discrete controller is then badly conditioned and
+    no longer behaves like the design).  For Ts = 1e-4 s this is 31 416 rad/s,
+    above the q-axis crossover (145 rad/s) by a factor of 200.
+
+    Parameters
+    ----------
+    sample_time : float
+        Controller period (s), > 0.
+    factor : float
+        Multiplier of the Nyquist frequency, default 1.
+
+    Returns
+    -------
+    float
+        Limit (rad/s).
+    """
+    if not (np.isfinite(sample_time) and sample_time > 0):
+        raise SpecError("drive.sample_time", "a number > 0 (s)", sample_time)
+    return float(factor * np.pi / sample_time)
+
+
+def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
+    """Poles of K that are not nearly cancelled by a zero.
+
+    A pole p counts as cancelled when a zero z has |z - p| <= cancel_tol * |p|
+    (default 1 %): the pair then changes |K| by at most about 1 % at every
+    frequency and can be removed without effect (see
+    :func:`toolbox.design._reduction.remove_cancellations`).  In paper 003,
+    eq (68), the pole 2.717e6 faces the zero 2.714e6 (0.1 % apart).
+
+    Parameters
+    ----------
+    K : control.LTI
+        SISO controller.
+    cancel_tol : float
+        Relative distance below which a pole-zero pair is a cancellation.
+
+    Returns
+    -------
+    ndarray of complex
+        The remaining poles (rad/s).
+    """
+    p = list(np.atleast_1d(K.poles()))
+    z = list(np.atleast_1d(K.zeros()))
+    keep = []
+    for pi in sorted(p, key=abs):
+        d = [abs(zi - pi) for zi in z]
+        if d and min(d) <= cancel_tol * max(abs(pi), 1e-300):
+            z.pop(int(np.argmin(d)))
+        else:
+            keep.append(pi)
+    return np.asarray(keep, dtype=complex)
+
+
+def _fastest(K: Any) -> float:
+    ep = effective_poles(K)
+    return float(np.max(np.abs(ep))) if ep.size else 0.0
+
+
+# --------------------------------------------------------------------------
+# synthesis with back-off and a posteriori checks
+# --------------------------------------------------------------------------
+@dataclass
+class HinfResult:
+    """Everything :func:`synthesize` found.
+
+    Attributes
+    ----------
+    K : control.StateSpace
+        Central controller, error (A) -> voltage (V).
+    gamma : float
+        Level the controller was designed for.
+    gamma_opt : float or None
+        Optimal level from :func:`gamma_iteration` (None for a fixed gamma).
+    backoff : float
+        Relative back-off finally used (0 for a fixed gamma).
+    X, Y : ndarray
+        Riccati solutions of eq (18)-(19) at ``gamma``.
+    closed_loop_norm : float
+        ||F_l(P, K)||_inf recomputed with python-control (LFT + ``norm``).
+    fastest_pole : float
+        Largest |pole| of K that is not nearly cancelled (rad/s).
+    pole_limit : float or None
+        Realisability limit used (rad/s), None without a sample time.
+    warnings : list of str
+        Every oddity found (also issued through ``warnings.warn``).
+    """
+
+    K: ct.StateSpace
+    gamma: float
+    gamma_opt: float | None
+    backoff: float
+    X: np.ndarray
+    Y: np.ndarray
+    closed_loop_norm: float
+    fastest_pole: float
+    pole_limit: float | None
+    warnings: list[str] = field(default_factory=list)
+
+
+def closed_loop(P: PartitionedPlant, K: Any) -> ct.StateSpace:
+    """Closed loop F_l(P, K) (w -> z) through python-control's LFT."""
+    return P.to_statespace().lft(ct.ss(K), nu=P.nu, ny=P.ny)
+
+
+def hinf_norm(sys: ct.StateSpace) -> float:
+    """H-infinity norm with python-control (slycot ab13dd), inf when unstable."""
+    if sys.nstates and np.any(np.real(sys.poles()) >= 0):
+        return float("inf")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return float(ct.norm(sys, p="inf"))
+
+
+def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal",
+               backoff: float = 0.05, sample_time: float | None = None,
+               tol: float = 1e-4, max_backoff: float = 2.0) -> HinfResult:
+    """Design the central H-infinity controller, refusing unrealisable ones.
+
+    With ``gamma="optimal"`` the optimum is found by :func:`gamma_iteration`
+    and the controller is designed at ``(1 + backoff) * gamma_opt``: at the
+    optimum itself the central controller of paper 003's q axis has a pole
+    that runs off to minus infinity (python-control's ``mixsyn`` returns one
+    near -6e9 .. -2e10 rad/s).  With a ``sample_time`` the back-off is then
+    doubled until no (non-cancelled) controller pole is faster than
+    :func:`pole_limit`; if ``max_backoff`` is reached a warning says so.
+    Finally the closed-loop norm is recomputed independently and a mismatch
+    with gamma is reported.
+
+    Parameters
+    ----------
+    P : PartitionedPlant
+    gamma : float or "optimal"
+        Fixed level (e.g. 1 as in paper 003 sect. 3.3) or "optimal".
+    backoff : float
+        Initial relative back-off for "optimal", >= 0 (default 0.05).
+    sample_time : float, optional
+        Controller period (s) for the realisability test.
+    tol : float
+        Relative tolerance of the gamma iteration.
+    max_backoff : float
+        Largest back-off tried.
+
+    Returns
+    -------
+    HinfResult
+
+    Raises
+    ------
+    SpecError
+        A fixed gamma below the optimum (key ``controller.hinf.gamma``; the
+        message names the failed condition and gives the best achievable
+        gamma), a bad ``backoff`` or violated assumptions A1-A4.
+    """
+    if not (isinstance(backoff, (int, float)) and np.isfinite(backoff) and backoff >= 0):
+        raise SpecError("controller.hinf.backoff", "a number >= 0", backoff)
+    prep = _prepare(P)
+    Pn = prep.norm.P
+    notes: list[str] = []
+    limit = pole_limit(sample_time) if sample_time is not None else None
+    if isinstance(gamma, str):
+        if gamma != "optimal":
+            raise SpecError(_GAMMA_KEY, 'a number > 0 or "optimal"', gamma)
+        gamma_opt = gamma_iteration(P, tol=tol)
+        b = float(backoff)
+        while True:
+            res = _feasibility_normalised(Pn, (1.0 + b) * gamma_opt)
+            K = _controller_from(prep, res) if res.feasible else None
+            ok = K is not None and (limit is None or _fastest(K) <= limit)
+            if ok or b >= max_backoff:
+                break
+            b = min(max(2.0 * b, 0.01), max_backoff)
+        if K is None:
+            raise SpecError(_GAMMA_KEY, "a feasible gamma", (1 + b) * gamma_opt,
+                            hint=res.message)
+    else:
+        g = _check_gamma(gamma)
+        res = _feasibility_normalised(Pn, g)
+        if not res.feasible:
+            best = gamma_iteration(P, tol=tol)
+            raise SpecError(_GAMMA_KEY, f"gamma >= the best achievable {best:.4g}", g,
+                            hint=f"{res.message}; set gamma above {best:.4g} or \"optimal\"")
+        K, gamma_opt, b = _controller_from(prep, res), None, 0.0
+    fast = _fastest(K)
+    if limit is not None and fast > limit:
+        notes.append(f"controller pole at |s| = {fast:.4g} rad/s exceeds the realisability "
+                     f"limit pi/Ts = {limit:.4g} rad/s"
+                     + (f" even with back-off {b:g}" if gamma_opt is not None else "")
+                     + ": raise gamma (back-off) or lower the high-frequency weights")
+    cl_norm = hinf_norm(closed_loop(P, K))
+    if not cl_norm <= res.gamma * (1 + 1e-6) + 1e-12:
+        notes.append(f"recomputed closed-loop norm {cl_norm:.6g} exceeds the design "
+                     f"gamma {res.gamma:.6g}: the Riccati solution is inaccurate")
+    for msg in notes:
+        warnings.warn(msg, RuntimeWarning, stacklevel=2)
+    prep_res = _unscale_xy(res, prep.t)
+    return HinfResult(K=K, gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
+                      X=prep_res.X, Y=prep_res.Y, closed_loop_norm=cl_norm,
+                      fastest_pole=fast, pole_limit=limit, warnings=notes)
+
+
+# --------------------------------------------------------------------------
+# weight bounds, eq (41)-(43)
+# --------------------------------------------------------------------------
+@dataclass
+class WeightBound:
+    """Worst ratio of a closed-loop function to its bound, eq (41)-(43).
+
+    Attributes
+    ----------
+    name : str
+        ``"S"``, ``"KS"`` or ``"T"``.
+    worst_ratio : float
+        max over the grid of |F(jw)| |w_i(jw)| (< 1 means the bound holds).
+    worst_freq : float
+        Frequency of the worst ratio (rad/s).
+    """
+
+    name: str
+    worst_ratio: float
+    worst_freq: float
+
+
+def _freqresp(sys: Any, w: np.ndarray) -> np.ndarray:
+    resp = ct.frequency_response(ct.ss(sys) if not np.isscalar(sys) else ct.ss([], [], [], sys), w)
+    return np.asarray(resp.complex).reshape(-1)
+
+
+def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
+                       freqs: np.ndarray | None = None) -> dict[str, WeightBound]:
+    """Check |S| < 1/|w1|, |KS| < 1/|w2|, |T| < 1/|w3| (eq 41-43 of paper 003).
+
+    Parameters
+    ----------
+    G, K : control.LTI
+        Plant (A/V) and controller (V/A).
+    w1, w2, w3 : control.LTI or float or None
+        Weights; ``None`` skips the function.
+    freqs : ndarray, optional
+        Grid (rad/s); default 4000 log-spaced points from 1e-4 to 1e9 rad/s,
+        which brackets every pole/zero of paper 003's weights (1e-2 .. 1e7).
+
+    Returns
+    -------
+    dict of str to WeightBound
+        Keys ``"S"``, ``"KS"``, ``"T"`` for the weights given.
+    """
+    w = np.logspace(-4, 9, 4000) if freqs is None else np.asarray(freqs, float)
+    g, k = _freqresp(G, w), _freqresp(K, w)
+    S = 1.0 / (1.0 + g * k)
+    funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (g * k * S, w3)}
+    out = {}
+    for name, (f, wt) in funcs.items():
+        if wt is None:
+            continue
+        r = np.abs(f * _freqresp(wt, w))
+        i = int(np.argmax(r))
+        out[name] = WeightBound(name, float(r[i]), float(w[i]))
+    return out

@@ -1,0 +1,41 @@
+"""Which module designs which method, and how its parameters are read.
+
+Each method module exposes ``read_cfg(method, table, motor, drive) -> Cfg``
+(validating ``[controller.<method>]``) and ``design(spec) -> ControllerArtifact``.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from ..errors import SpecError
+
+__all__ = ["METHOD_MODULES", "read_method_cfg", "design"]
+
+METHOD_MODULES = {
+    "pi": "pi", "ip": "pi", "pi_lag": "pi",
+    "tc": "total_comp", "tci": "total_comp",
+    "ilq": "ilq", "lq": "lq", "hinf": "hinf", "fcs_mpc": "fcs_mpc",
+}
+
+
+def _module(method: str):
+    if method not in METHOD_MODULES:
+        raise SpecError("controller.method", f"one of {sorted(METHOD_MODULES)}", method)
+    return importlib.import_module(f"{__package__}.{METHOD_MODULES[method]}")
+
+
+def read_method_cfg(method: str, table, motor, drive) -> Any:
+    """Validate ``[controller.<method>]`` into the method's ``*Cfg`` object."""
+    return _module(method).read_cfg(method, table, motor, drive)
+
+
+def design(spec) -> Any:
+    """Run the design method a validated spec asks for.
+
+    Returns
+    -------
+    ControllerArtifact
+    """
+    return _module(spec.controller.method).design(spec)

@@ -1,0 +1,131 @@
+"""Numeric plants generated from the symbolic derivation (not typed again).
+
+The sympy expressions of :func:`~toolbox.plant.derive_dq_model` are turned
+into numpy functions with ``lambdify``; the state matrix, input matrix and
+back-EMF disturbance are read off them by differentiation, so any change in
+the derivation flows through.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import control
+import numpy as np
+import sympy as sp
+
+from ._symbolic import SYMBOLS as S
+from ._symbolic import derive_dq_model
+
+__all__ = ["ElectricalPlant", "numeric_plant", "axis_plants", "linearise"]
+
+
+@lru_cache(maxsize=None)
+def _electrical_matrices(convention: str):
+    """Lambdified A(omega), B, e(omega) with di/dt = A i + B v + e."""
+    model = derive_dq_model(convention)
+    x = sp.Matrix([S["i_d"], S["i_q"]])
+    u = sp.Matrix([S["v_d"], S["v_q"]])
+    A = model.di_dt.jacobian(x)
+    B = model.di_dt.jacobian(u)
+    e = sp.simplify(model.di_dt - A * x - B * u)
+    args = (S["R"], S["L_d"], S["L_q"], S["psi_f"], S["omega"])
+    return tuple(sp.lambdify(args, m, "numpy") for m in (A, B, e))
+
+
+@dataclass(frozen=True)
+class ElectricalPlant:
+    """dq electrical model ``di/dt = A(omega) i + B v + e(omega)`` of a motor.
+
+    ``omega`` is the electrical speed ``p * Omega`` (rad/s); currents in A,
+    voltages in V. Built by :func:`numeric_plant`.
+    """
+
+    R: float
+    Ld: float
+    Lq: float
+    flux: float
+    pole_pairs: int
+    convention: str
+
+    def _args(self, omega: float) -> tuple:
+        return (self.R, self.Ld, self.Lq, self.flux, float(omega))
+
+    def A(self, omega: float = 0.0) -> np.ndarray:
+        """State matrix at electrical speed ``omega`` (1/s)."""
+        return np.array(_electrical_matrices(self.convention)[0](*self._args(omega)), float)
+
+    def B(self) -> np.ndarray:
+        """Input matrix diag(1/Ld, 1/Lq) (1/H)."""
+        return np.array(_electrical_matrices(self.convention)[1](*self._args(0.0)), float)
+
+    def emf(self, omega: float) -> np.ndarray:
+        """Back-EMF disturbance term of di/dt (A/s), ``[0, -omega flux/Lq]``."""
+        return np.array(_electrical_matrices(self.convention)[2](*self._args(omega)),
+                        float).reshape(2)
+
+    def statespace(self, omega: float = 0.0) -> control.StateSpace:
+        """Two-input two-output system v -> i at fixed electrical speed."""
+        return control.ss(self.A(omega), self.B(), np.eye(2), np.zeros((2, 2)))
+
+
+def numeric_plant(motor) -> ElectricalPlant:
+    """The numeric dq plant of a :class:`~toolbox.spec.Motor`."""
+    return ElectricalPlant(motor.R, motor.Ld, motor.Lq, motor.flux, motor.pole_pairs,
+                           motor.convention)
+
+
+def axis_plants(motor) -> dict[str, control.TransferFunction]:
+    """Decoupled per-axis plants ``1/(R + s L)`` (A/V), paper 003 eq (33)-(34).
+
+    Read off the diagonal of ``(sI - A(0))^{-1} B`` of the derived model.
+    """
+    plant = numeric_plant(motor)
+    sys = plant.statespace(0.0)
+    return {"d": control.ss2tf(sys[0, 0]), "q": control.ss2tf(sys[1, 1])}
+
+
+@lru_cache(maxsize=None)
+def _full_jacobians(convention: str):
+    model = derive_dq_model(convention)
+    f = model.state_equations()
+    x = sp.Matrix([S["i_d"], S["i_q"], S["Omega"]])
+    u = sp.Matrix([S["v_d"], S["v_q"], S["T_L"]])
+    args = (S["R"], S["L_d"], S["L_q"], S["psi_f"], S["p"], S["J"], S["F"],
+            *x, *u)
+    return (sp.lambdify(args, f.jacobian(x), "numpy"),
+            sp.lambdify(args, f.jacobian(u), "numpy"),
+            sp.lambdify(args, f, "numpy"))
+
+
+def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[control.StateSpace, np.ndarray]:
+    """Linearise the electromechanical model at an operating point.
+
+    States ``[i_d, i_q, Omega]`` (A, A, rad/s mechanical), inputs
+    ``[v_d, v_q, T_L]`` (V, V, N m), outputs the states. The operating-point
+    voltages are those that hold the currents constant; the load torque is
+    the one that holds the speed constant.
+
+    Returns
+    -------
+    sys : control.StateSpace
+        The small-signal model.
+    u0 : ndarray
+        Operating-point inputs ``[v_d0, v_q0, T_L0]``.
+    """
+    jx, ju, f = _full_jacobians(motor.convention)
+    model = derive_dq_model(motor.convention)
+    w = motor.pole_pairs * Omega0
+    subs = {S["R"]: motor.R, S["L_d"]: motor.Ld, S["L_q"]: motor.Lq,
+            S["psi_f"]: motor.flux, S["omega"]: w, S["i_d"]: i_d0, S["i_q"]: i_q0,
+            S["p"]: motor.pole_pairs, S["F"]: motor.friction, S["Omega"]: Omega0,
+            S["di_d"] if "di_d" in S else sp.Symbol("di_d", real=True): 0,
+            sp.Symbol("di_q", real=True): 0}
+    v0 = [float(model.voltage[k].subs(subs)) for k in range(2)]
+    T_L0 = float((model.torque - S["F"] * S["Omega"]).subs(subs))
+    point = (motor.R, motor.Ld, motor.Lq, motor.flux, motor.pole_pairs, motor.J,
+             motor.friction, i_d0, i_q0, Omega0, v0[0], v0[1], T_L0)
+    A = np.array(jx(*point), float)
+    B = np.array(ju(*point), float)
+    return control.ss(A, B, np.eye(3), np.zeros((3, 3))), np.array([*v0, T_L0])

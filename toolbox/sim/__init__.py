@@ -1,0 +1,11 @@
+"""Closed-loop verification: compiled PMSM simulation with sampling, delay and inverter."""
+
+from ._metrics import METRIC_NAMES, step_metrics
+from ._scenario import INVERTER_KINDS, SCENARIO_KINDS, Scenario
+from ._simulate import (AxisLaw, BatchResult, ControlLaw, DriveParams, FcsWeights,
+                        PlantParams, SimResult, SpeedLoop, discrete_pi, simulate,
+                        simulate_batch)
+
+__all__ = ["METRIC_NAMES", "step_metrics", "INVERTER_KINDS", "SCENARIO_KINDS", "Scenario",
+           "AxisLaw", "BatchResult", "ControlLaw", "DriveParams", "FcsWeights", "PlantParams",
+           "SimResult", "SpeedLoop", "discrete_pi", "simulate", "simulate_batch"]

@@ -1,0 +1,174 @@
+"""Typed readers for plain-data spec tables.
+
+Each reader takes the table, the field name and the dotted key path of the
+table, and either returns a validated value or raises :class:`SpecError`
+naming the key, what was expected and what was found. Nothing is evaluated
+as code: values are taken only as TOML/JSON gives them.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from typing import Any, Iterable, Mapping, Sequence
+
+from ..errors import SpecError
+
+__all__ = [
+    "Table",
+    "check_keys",
+    "as_table",
+]
+
+_MISSING = object()
+
+
+def _path(prefix: str, name: str) -> str:
+    return f"{prefix}.{name}" if prefix else name
+
+
+def check_keys(table: Mapping, allowed: Iterable[str], prefix: str) -> None:
+    """Refuse unknown keys, with a did-you-mean among ``allowed``."""
+    allowed = list(allowed)
+    for name in table:
+        if name not in allowed:
+            close = difflib.get_close_matches(str(name), allowed, n=1, cutoff=0.6)
+            hint = (f'did you mean "{close[0]}"?' if close
+                    else f"allowed keys: {', '.join(sorted(allowed))}")
+            raise SpecError(_path(prefix, str(name)), "no such key", hint=hint)
+
+
+def as_table(value: Any, key: str) -> Mapping:
+    if not isinstance(value, Mapping):
+        raise SpecError(key, "a table", value)
+    return value
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+class Table:
+    """A spec table being read; remembers its key path and refuses unknown keys.
+
+    Examples
+    --------
+    >>> t = Table({"R": 0.6}, "motor")
+    >>> t.number("R", positive=True)
+    0.6
+    """
+
+    def __init__(self, data: Any, prefix: str, allowed: Sequence[str] | None = None):
+        self.data = as_table(data if data is not None else {}, prefix)
+        self.prefix = prefix
+        if allowed is not None:
+            check_keys(self.data, allowed, prefix)
+
+    def key(self, name: str) -> str:
+        return _path(self.prefix, name)
+
+    def has(self, name: str) -> bool:
+        return name in self.data
+
+    def raw(self, name: str, default: Any = None) -> Any:
+        return self.data.get(name, default)
+
+    def _get(self, name: str, default: Any, expected: str) -> Any:
+        if name in self.data:
+            return self.data[name]
+        if default is _MISSING:
+            raise SpecError(self.key(name), f"{expected} (missing)")
+        return default
+
+    def number(self, name: str, default: Any = _MISSING, *, positive: bool = False,
+               nonnegative: bool = False, minimum: float | None = None,
+               maximum: float | None = None, negative: bool = False,
+               unit: str = "") -> Any:
+        """A finite real number with optional bounds."""
+        cond = []
+        if positive:
+            cond.append("> 0")
+        if nonnegative:
+            cond.append(">= 0")
+        if negative:
+            cond.append("< 0")
+        if minimum is not None:
+            cond.append(f">= {minimum:g}")
+        if maximum is not None:
+            cond.append(f"<= {maximum:g}")
+        expected = "a number" + (" " + " and ".join(cond) if cond else "") + (
+            f" ({unit})" if unit else "")
+        value = self._get(name, default, expected)
+        if value is default and name not in self.data:
+            return value
+        if not _is_number(value) or not math.isfinite(value):
+            raise SpecError(self.key(name), expected, value)
+        bad = ((positive and not value > 0) or (nonnegative and value < 0)
+               or (negative and not value < 0)
+               or (minimum is not None and value < minimum)
+               or (maximum is not None and value > maximum))
+        if bad:
+            raise SpecError(self.key(name), expected, value)
+        return float(value)
+
+    def integer(self, name: str, default: Any = _MISSING, *, minimum: int | None = None) -> Any:
+        expected = "an integer" + (f" >= {minimum}" if minimum is not None else "")
+        value = self._get(name, default, expected)
+        if value is default and name not in self.data:
+            return value
+        if not isinstance(value, int) or isinstance(value, bool) or (
+                minimum is not None and value < minimum):
+            raise SpecError(self.key(name), expected, value)
+        return value
+
+    def boolean(self, name: str, default: Any = _MISSING) -> Any:
+        value = self._get(name, default, "true or false")
+        if not isinstance(value, bool):
+            raise SpecError(self.key(name), "true or false", value)
+        return value
+
+    def string(self, name: str, default: Any = _MISSING, *,
+               choices: Sequence[str] | None = None) -> Any:
+        expected = ("one of " + ", ".join(f'"{c}"' for c in choices)) if choices else "a string"
+        value = self._get(name, default, expected)
+        if value is default and name not in self.data:
+            return value
+        if not isinstance(value, str) or (choices is not None and value not in choices):
+            hint = None
+            if isinstance(value, str) and choices:
+                close = difflib.get_close_matches(value, list(choices), n=1, cutoff=0.6)
+                hint = f'did you mean "{close[0]}"?' if close else None
+            raise SpecError(self.key(name), expected, value, hint=hint)
+        return value
+
+    def numbers(self, name: str, default: Any = _MISSING, *, length: int | None = None,
+                min_length: int = 0, unit: str = "") -> Any:
+        """A list of finite numbers."""
+        expected = (f"a list of {length} numbers" if length is not None
+                    else "a list of numbers") + (f" ({unit})" if unit else "")
+        value = self._get(name, default, expected)
+        if value is default and name not in self.data:
+            return value
+        if (not isinstance(value, (list, tuple))
+                or not all(_is_number(v) and math.isfinite(v) for v in value)
+                or (length is not None and len(value) != length)
+                or len(value) < min_length):
+            raise SpecError(self.key(name), expected, value)
+        return tuple(float(v) for v in value)
+
+    def per_axis(self, name: str, default: Any = _MISSING, **bounds: Any) -> Any:
+        """A number for both axes or a table ``{d = .., q = ..}``; returns ``(d, q)``."""
+        value = self._get(name, default, "a number or a table {d = .., q = ..}")
+        if value is default and name not in self.data:
+            return value
+        if isinstance(value, Mapping):
+            sub = Table(value, self.key(name), ("d", "q"))
+            return (sub.number("d", **bounds), sub.number("q", **bounds))
+        v = self.number(name, **bounds)
+        return (v, v)
+
+    def table(self, name: str, allowed: Sequence[str] | None = None,
+              required: bool = False) -> "Table":
+        if name not in self.data and required:
+            raise SpecError(self.key(name), "a table (missing)")
+        return Table(self.data.get(name, {}), self.key(name), allowed)

@@ -1,0 +1,179 @@
+"""TOML spec files -> validated :class:`~toolbox.spec.Spec` objects.
+
+Values are taken only as TOML gives them (``tomllib``); nothing is evaluated.
+Every error is a :class:`~toolbox.errors.SpecError` naming the file, the key
+path, what was expected and what was found.
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..errors import SpecError
+from ._catalog import CATALOG
+from ._fields import Table, check_keys
+from ._model import (METHODS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor,
+                     Requirements, Spec)
+
+__all__ = ["load_spec", "spec_from_dict"]
+
+TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario")
+MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
+              "convention", "rated_current", "max_current", "rated_speed")
+DRIVE_KEYS = ("vdc", "sample_time", "delay_samples", "switching_frequency",
+              "voltage_limit", "max_speed")
+
+
+def load_spec(path: str | Path) -> Spec:
+    """Read and validate a spec file.
+
+    Parameters
+    ----------
+    path : str or Path
+        TOML file (DESIGN.md format).
+
+    Returns
+    -------
+    Spec
+
+    Raises
+    ------
+    SpecError
+        Unreadable file, TOML syntax error, or any invalid value; the message
+        names the file and the key.
+    """
+    name = str(path)
+    try:
+        text = Path(path).read_bytes().decode("utf-8")
+    except OSError as err:
+        raise SpecError("", "a readable spec file", err.strerror, file=name) from None
+    except UnicodeDecodeError:
+        raise SpecError("", "a UTF-8 text file", "undecodable bytes", file=name) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SpecError("", "valid TOML", str(err), file=name) from None
+    return spec_from_dict(data, file=name)
+
+
+def spec_from_dict(data: Mapping[str, Any], file: str | None = None) -> Spec:
+    """Validate a spec given as plain data (the parsed TOML).
+
+    Examples
+    --------
+    >>> spec = spec_from_dict({"motor": {"catalog": "azaiz2007"},
+    ...                        "drive": {"vdc": 150, "sample_time": 1e-4},
+    ...                        "controller": {"method": "pi"}})
+    >>> spec.motor.Lq
+    0.0028
+    """
+    try:
+        return _spec(data, file)
+    except SpecError as err:
+        raise (err.with_file(file) if file else err) from None
+
+
+def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
+    top = Table(data, "", TOP_KEYS)
+    title = top.string("title", "")
+    motor, motor_raw = _motor(top.raw("motor"))
+    drive = _drive(top.raw("drive"))
+    controller = _controller(top.raw("controller"), motor, drive)
+    requirements = _requirements(top.raw("requirements"))
+    scenarios = _scenarios(top.raw("scenario", []), drive)
+    raw = copy.deepcopy(dict(data))
+    raw["motor"] = motor_raw
+    return Spec(title=title, motor=motor, drive=drive, controller=controller,
+                requirements=requirements, scenarios=scenarios, raw=raw, source=file)
+
+
+def _motor(value: Any) -> tuple[Motor, dict]:
+    if value is None:
+        raise SpecError("motor", "a [motor] table (missing)")
+    t = Table(value, "motor", MOTOR_KEYS)
+    merged: dict[str, Any] = {}
+    if t.has("catalog"):
+        name = t.string("catalog", choices=sorted(CATALOG))
+        merged.update(CATALOG[name])
+    merged.update(t.data)
+    t = Table(merged, "motor")
+    motor = Motor(
+        R=t.number("R", positive=True, unit="ohm"),
+        Ld=t.number("Ld", positive=True, unit="H"),
+        Lq=t.number("Lq", positive=True, unit="H"),
+        flux=t.number("flux", nonnegative=True, unit="Wb"),
+        pole_pairs=t.integer("pole_pairs", minimum=1),
+        J=t.number("J", positive=True, unit="kg m^2"),
+        friction=t.number("friction", 0.0, nonnegative=True, unit="N m s/rad"),
+        convention=t.string("convention", "amplitude", choices=("amplitude", "power")),
+        rated_current=t.number("rated_current", None, positive=True, unit="A"),
+        max_current=t.number("max_current", None, positive=True, unit="A"),
+        rated_speed=t.number("rated_speed", None, positive=True, unit="rad/s"),
+        catalog=t.raw("catalog"),
+    )
+    return motor, {k: v for k, v in merged.items() if v is not None}
+
+
+def _drive(value: Any) -> Drive:
+    if value is None:
+        raise SpecError("drive", "a [drive] table (missing)")
+    t = Table(value, "drive", DRIVE_KEYS)
+    drive = Drive(
+        vdc=t.number("vdc", positive=True, unit="V"),
+        sample_time=t.number("sample_time", positive=True, unit="s"),
+        delay_samples=t.integer("delay_samples", 1, minimum=0),
+        switching_frequency=t.number("switching_frequency", None, positive=True, unit="Hz"),
+        voltage_limit=t.string("voltage_limit", "circle", choices=("circle", "hexagon")),
+        max_speed=t.number("max_speed", None, positive=True, unit="rad/s"),
+    )
+    if drive.delay_samples > 10:
+        raise SpecError("drive.delay_samples", "at most 10 periods of computation delay",
+                        drive.delay_samples)
+    if drive.switching_frequency is not None:
+        half_periods = drive.sample_time * 2 * drive.switching_frequency
+        if half_periods < 1 - 1e-9 or abs(half_periods - round(half_periods)) > 1e-6:
+            raise SpecError(
+                "drive.sample_time",
+                "a whole number of half PWM periods (1/(2 switching_frequency) = "
+                f"{0.5 / drive.switching_frequency:g} s)", drive.sample_time,
+                hint="sample once or twice per carrier period")
+    return drive
+
+
+def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
+    if value is None:
+        raise SpecError("controller", "a [controller] table (missing)")
+    t = Table(value, "controller")
+    method = t.string("method", choices=METHODS)
+    check_keys(t.data, ("method", method), "controller")
+    from ..design import read_method_cfg  # the design package owns method parameters
+
+    cfg = read_method_cfg(method, t.table(method), motor=motor, drive=drive)
+    return ControllerChoice(method=method, cfg=cfg)
+
+
+def _requirements(value: Any) -> Requirements:
+    t = Table(value, "requirements", tuple(REQUIREMENT_KEYS))
+    bounds = {}
+    for key in t.data:
+        direction, quantity, unit = REQUIREMENT_KEYS[key]
+        bounds[key] = t.number(key, unit=unit,
+                               nonnegative=quantity not in ("gain_margin_db", "static_error"))
+    return Requirements(bounds)
+
+
+def _scenarios(value: Any, drive: Drive) -> tuple:
+    if not isinstance(value, list):
+        raise SpecError("scenario", "an array of tables [[scenario]]", value)
+    from ..sim import Scenario  # the simulation package owns scenario semantics
+
+    out = []
+    for k, item in enumerate(value):
+        scenario = Scenario.from_dict(item, key=f"scenario[{k}]", sample_time=drive.sample_time)
+        out.append(scenario)
+    return tuple(out)
+
+

@@ -1,0 +1,203 @@
+"""Validated spec objects: motor, drive, controller choice, requirements.
+
+Field names equal the TOML keys, so an attribute path is the key path used in
+error messages (``motor.Ld``). All quantities are SI.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+__all__ = ["Motor", "Drive", "ControllerChoice", "Requirements", "Spec",
+           "METHODS", "REQUIREMENT_KEYS"]
+
+#: Design methods the toolbox knows (DESIGN.md).
+METHODS = ("pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc")
+
+#: ``[requirements]`` keys: (direction, quantity, unit). ``min`` means the
+#: measured value must be >= the bound, ``max`` <= the bound.
+REQUIREMENT_KEYS: dict[str, tuple[str, str, str]] = {
+    "min_gain_margin_db": ("min", "gain_margin_db", "dB"),
+    "min_phase_margin_deg": ("min", "phase_margin_deg", "deg"),
+    "min_stability_margin": ("min", "stability_margin", "1"),
+    "min_disk_margin": ("min", "disk_margin", "1"),
+    "max_sensitivity_peak": ("max", "sensitivity_peak", "1"),
+    "min_bandwidth_rad_s": ("min", "bandwidth_rad_s", "rad/s"),
+    "max_static_error": ("max", "static_error", "1"),
+    "max_response_time": ("max", "response_time_5pct", "s"),
+    "max_rise_time": ("max", "rise_time", "s"),
+    "max_settling_time": ("max", "settling_time", "s"),
+    "max_overshoot_pct": ("max", "overshoot_pct", "%"),
+    "max_torque_mse": ("max", "torque_mse", "(N m)^2"),
+    "max_id_mse": ("max", "id_mse", "A^2"),
+    "max_commutations_per_s": ("max", "commutations_per_s", "1/s"),
+    "max_saturation_time": ("max", "saturation_time", "s"),
+}
+
+
+@dataclass(frozen=True)
+class Motor:
+    """Permanent-magnet synchronous motor.
+
+    Attributes
+    ----------
+    R : float
+        Stator resistance per phase (ohm).
+    Ld, Lq : float
+        d- and q-axis inductances (H).
+    flux : float
+        Permanent-magnet flux linkage in the chosen dq convention (Wb).
+    pole_pairs : int
+        Number of pole pairs.
+    J : float
+        Rotor (and load) inertia (kg m^2).
+    friction : float
+        Viscous friction (N m s/rad).
+    convention : str
+        dq transform the parameters refer to: ``amplitude`` (2/3, torque
+        factor 3/2) or ``power`` (sqrt(2/3), torque factor 1).
+    rated_current, max_current : float or None
+        dq current amplitude limits (A).
+    rated_speed : float or None
+        Rated mechanical speed (rad/s).
+    catalog : str or None
+        Catalog entry the defaults came from.
+    """
+
+    R: float
+    Ld: float
+    Lq: float
+    flux: float
+    pole_pairs: int
+    J: float
+    friction: float = 0.0
+    convention: str = "amplitude"
+    rated_current: float | None = None
+    max_current: float | None = None
+    rated_speed: float | None = None
+    catalog: str | None = None
+
+    @property
+    def torque_factor(self) -> float:
+        """3/2 for the amplitude-invariant convention, 1 for power-invariant."""
+        return 1.5 if self.convention == "amplitude" else 1.0
+
+    @property
+    def tau_d(self) -> float:
+        """d-axis electrical time constant Ld/R (s)."""
+        return self.Ld / self.R
+
+    @property
+    def tau_q(self) -> float:
+        """q-axis electrical time constant Lq/R (s)."""
+        return self.Lq / self.R
+
+    @property
+    def torque_constant(self) -> float:
+        """Torque per q current at i_d = 0 (N m/A)."""
+        return self.torque_factor * self.pole_pairs * self.flux
+
+    @property
+    def emf_constant(self) -> float:
+        """Back-EMF amplitude per mechanical speed, p * flux (V s/rad)."""
+        return self.pole_pairs * self.flux
+
+
+@dataclass(frozen=True)
+class Drive:
+    """Inverter and controller timing.
+
+    Attributes
+    ----------
+    vdc : float
+        DC-link voltage (V).
+    sample_time : float
+        Controller period (s).
+    delay_samples : int
+        Computation delay (controller periods).
+    switching_frequency : float or None
+        PWM carrier frequency (Hz); the sample time must be a whole number
+        of half carrier periods.
+    voltage_limit : str
+        ``circle`` (inscribed circle, linear modulation) or ``hexagon``.
+    max_speed : float or None
+        Highest mechanical speed the analysis grids cover (rad/s).
+    """
+
+    vdc: float
+    sample_time: float
+    delay_samples: int = 1
+    switching_frequency: float | None = None
+    voltage_limit: str = "circle"
+    max_speed: float | None = None
+
+    def max_voltage(self, convention: str) -> float:
+        """Largest dq voltage amplitude in linear modulation (V).
+
+        Inscribed circle of the SVM hexagon: vdc/sqrt(3) (amplitude-invariant)
+        or vdc/sqrt(2) (power-invariant, larger by sqrt(3/2)).
+        """
+        scale = 1.0 if convention == "amplitude" else math.sqrt(1.5)
+        return scale * self.vdc / math.sqrt(3.0)
+
+
+@dataclass(frozen=True)
+class ControllerChoice:
+    """The chosen method and its validated configuration object."""
+
+    method: str
+    cfg: Any
+
+
+@dataclass(frozen=True)
+class Requirements:
+    """Bounds verification checks (``None`` = not required)."""
+
+    bounds: dict = field(default_factory=dict)
+
+    def check(self, measured: dict) -> dict:
+        """Pass/fail of each bound against ``measured`` (quantity -> value)."""
+        out = {}
+        for key, bound in self.bounds.items():
+            direction, quantity, unit = REQUIREMENT_KEYS[key]
+            value = measured.get(quantity)
+            ok = (value is not None and math.isfinite(value)
+                  and (value >= bound if direction == "min" else value <= bound))
+            out[key] = {"quantity": quantity, "bound": bound, "value": value,
+                        "unit": unit, "pass": bool(ok)}
+        return out
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A validated spec file.
+
+    Attributes
+    ----------
+    title : str
+        Free text (escaped wherever it is shown).
+    motor : Motor
+    drive : Drive
+    controller : ControllerChoice
+    requirements : Requirements
+    scenarios : tuple
+        Validated scenarios (see :mod:`toolbox.sim`).
+    raw : dict
+        The resolved plain data (catalog defaults applied), for the artifact.
+    source : str or None
+        The file the spec came from.
+    """
+
+    title: str
+    motor: Motor
+    drive: Drive
+    controller: ControllerChoice
+    requirements: Requirements
+    scenarios: tuple = ()
+    raw: dict = field(default_factory=dict)
+    source: str | None = None
+
+    def motor_dict(self) -> dict:
+        return asdict(self.motor)
