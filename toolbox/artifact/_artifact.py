@@ -137,6 +137,8 @@ class StateSpaceData:
                 raise SpecError(f"{key}.{name}", "a matrix (missing)")
         A = _matrix(data["A"], f"{key}.A")
         n = A.shape[0] if A.size else 0
+        if A.size and A.shape != (n, n):
+            raise SpecError(f"{key}.A", "a square matrix", list(A.shape))
         A = A.reshape(n, n)
         B = _matrix(data["B"], f"{key}.B")
         C = _matrix(data["C"], f"{key}.C")

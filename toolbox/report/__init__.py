@@ -1,0 +1,440 @@
+"""Margin reports: one self-contained HTML file and a PDF with the same content.
+
+The report stage reads plain data only: a :class:`ReportData` bundle of what
+earlier stages produced (the validated spec, the controller artifact, and
+optionally margins, requirement checks, robustness and verification results,
+H-infinity weights). Nothing is re-designed; what is not given is shown as
+"not computed".
+
+Entry points
+------------
+:func:`write_html` (``ReportData -> str``) and :func:`write_pdf`
+(``ReportData -> bytes``, optionally written to a path). Both render the same
+content model, :func:`build_context`, made of plain strings, tables and inline
+SVG figures (:mod:`toolbox.report.plots`).
+
+Every string coming from a user (title, scenario names, free-text labels) is
+escaped for the output language: jinja2 autoescaping for HTML, typst string
+literals for the PDF. Figures never contain user strings.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+__all__ = ["ReportData", "build_context", "write_html", "write_pdf", "NOT_COMPUTED",
+           "METHOD_NAMES", "MARGIN_ROWS"]
+
+NOT_COMPUTED = "not computed"
+
+#: Long names of the design methods (DESIGN.md "The methods").
+METHOD_NAMES = {
+    "pi": "PI in dq (pole-zero cancellation)",
+    "ip": "IP in dq (proportional action on the measurement)",
+    "pi_lag": "PI with first-order lag",
+    "tc": "Total compensation (decoupling + pole placement)",
+    "tci": "Total compensation with integrators",
+    "ilq": "Inverse LQ (ILQ)",
+    "lq": "LQ servo via Riccati",
+    "hinf": "H-infinity mixed sensitivity",
+    "fcs_mpc": "Finite-control-set predictive control",
+}
+
+#: MARGINS keys (DESIGN.md) -> (label, unit).
+MARGIN_ROWS = {
+    "gain_margin_db": ("Gain margin", "dB"),
+    "gain_crossover_rad_s": ("Gain-margin frequency", "rad/s"),
+    "phase_margin_deg": ("Phase margin", "deg"),
+    "phase_crossover_rad_s": ("Phase-margin frequency", "rad/s"),
+    "disk_margin": ("Disk margin", "1"),
+    "stability_margin": ("Stability margin (1/max|S|)", "1"),
+    "sensitivity_peak": ("Sensitivity peak max|S|", "1"),
+    "bandwidth_rad_s": ("Closed-loop bandwidth", "rad/s"),
+    "static_error": ("Static error", "1"),
+}
+
+MOTOR_ROWS = (  # field, symbol, quantity, unit
+    ("R", "R", "Stator resistance", "ohm"),
+    ("Ld", "L_d", "d-axis inductance", "H"),
+    ("Lq", "L_q", "q-axis inductance", "H"),
+    ("flux", "psi_f", "PM flux linkage", "Wb"),
+    ("pole_pairs", "p", "Pole pairs", "1"),
+    ("J", "J", "Inertia", "kg m^2"),
+    ("friction", "F", "Viscous friction", "N m s/rad"),
+    ("convention", "", "dq convention", ""),
+    ("rated_current", "", "Rated current", "A"),
+    ("max_current", "", "Maximum current", "A"),
+    ("rated_speed", "", "Rated speed", "rad/s"),
+    ("catalog", "", "Catalog entry", ""),
+)
+
+DRIVE_ROWS = (
+    ("vdc", "DC-link voltage", "V"),
+    ("sample_time", "Controller period", "s"),
+    ("delay_samples", "Computation delay", "periods"),
+    ("switching_frequency", "Switching frequency", "Hz"),
+    ("voltage_limit", "Voltage limit", ""),
+    ("max_speed", "Maximum speed", "rad/s"),
+)
+
+
+@dataclass
+class ReportData:
+    """Everything a report shows (plain data; only the first three are required).
+
+    Attributes
+    ----------
+    title : str
+        Report title (free user text; escaped in every output).
+    spec : toolbox.spec.Spec
+        The validated spec (motor, drive, requirements).
+    artifact : toolbox.artifact.ControllerArtifact
+        The designed controller (axes, gains, provenance).
+    margins : dict or None
+        ``{"d": MARGINS, "q": MARGINS}`` with the DESIGN.md keys
+        (``gain_margin_db`` (dB), ``phase_margin_deg`` (deg), frequencies in
+        rad/s, dimensionless peaks). ``None``: taken from ``artifact.margins``
+        when that is non-empty, else shown as "not computed".
+    checks : list of dict or None
+        Requirement checks, each ``{key, quantity, bound, value, unit, pass}``
+        (as :meth:`toolbox.spec.Requirements.check` returns, with ``key``
+        added; an optional ``axis`` or ``scenario`` names where it was
+        measured).
+    robustness : dict or None
+        Robustness sweep summary: ``{"cases": [{"label": str, "params":
+        {name: factor}, "metrics": {quantity: value}, "pass": bool}],
+        "worst": [label, ...], "notes": str}``. Metrics use the MARGINS and
+        simulation metric names (units as there).
+    certificate : dict or None
+        Named analysis facts (e.g. ``{"gamma": 0.98, "weight bounds": "hold"}``)
+        shown as a table of strings.
+    scenarios : list of dict or None
+        Verification results, each ``{"name": str, "kind": str, "metrics":
+        {name: value}, "pass": bool, "traces": {"t": s, "id", "iq", "id_ref",
+        "iq_ref": A, "vd", "vq": V, ...} or None}``; a
+        :class:`toolbox.sim.SimResult` is accepted as ``traces``.
+    weights : dict or None
+        H-infinity weights per axis: ``{"d": {"w1": W, "w2": W, "w3": W,
+        "gamma": float}, "q": ...}``; each ``W`` is a python-control system or
+        ``{"num": [...], "den": [...]}`` (coefficients in s, highest power
+        first). The report plots ``gamma/|W_i|`` as the bound of S, KS and T.
+    generated : str or None
+        Report time stamp to print (ISO 8601); ``None`` prints none, which keeps
+        the output byte-identical for identical inputs.
+    """
+
+    title: str
+    spec: Any
+    artifact: Any
+    margins: dict | None = None
+    checks: list | None = None
+    robustness: dict | None = None
+    certificate: dict | None = None
+    scenarios: list | None = None
+    weights: dict | None = None
+    generated: str | None = None
+
+
+# ----------------------------------------------------------------- formatting
+
+def fmt(value: Any, digits: int = 4) -> str:
+    """Format a value for a table: numbers to ``digits`` significant digits.
+
+    ``None`` becomes "not computed"; infinities "inf"; booleans "yes"/"no".
+    """
+    if value is None:
+        return NOT_COMPUTED
+    if isinstance(value, (bool, np.bool_)):
+        return "yes" if value else "no"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return f"{v:.{digits}g}"
+    if isinstance(value, complex):
+        return f"{value.real:.{digits}g}{value.imag:+.{digits}g}j"
+    if isinstance(value, str):
+        return value
+    if isinstance(value, (list, tuple, np.ndarray)):
+        arr = np.asarray(value, dtype=object)
+        if arr.ndim <= 1:
+            return "[" + ", ".join(fmt(v, digits) for v in arr.tolist()) + "]"
+        return "[" + "; ".join(", ".join(fmt(v, digits) for v in row) for row in arr.tolist()) + "]"
+    if isinstance(value, Mapping):
+        return ", ".join(f"{k}: {fmt(v, digits)}" for k, v in value.items())
+    return str(value)
+
+
+def _poly_factors(roots: np.ndarray) -> str:
+    """``(s + a)(s^2 + b s + c)`` text for real / complex-pair roots (rad/s)."""
+    parts: list[str] = []
+    done = np.zeros(len(roots), bool)
+    for k, r in enumerate(roots):
+        if done[k]:
+            continue
+        done[k] = True
+        if abs(r.imag) <= 1e-9 * max(1.0, abs(r)):
+            a = -r.real
+            parts.append("s" if a == 0 else f"(s {'+' if a > 0 else '-'} {abs(a):.4g})")
+        else:
+            for j in range(k + 1, len(roots)):  # its conjugate
+                if not done[j] and abs(roots[j] - np.conj(r)) <= 1e-6 * abs(r):
+                    done[j] = True
+                    break
+            b, c = -2 * r.real, abs(r) ** 2
+            parts.append(f"(s^2 {'+' if b >= 0 else '-'} {abs(b):.4g} s + {c:.4g})")
+    return "".join(parts) if parts else "1"
+
+
+def zpk_text(zpk) -> str:
+    """``k (s + z1)... / ((s + p1)...)`` of a :class:`toolbox.artifact.Zpk`."""
+    num = _poly_factors(np.asarray(zpk.zeros, complex))
+    den = _poly_factors(np.asarray(zpk.poles, complex))
+    return f"{zpk.gain:.4g} {num} / {den}" if den != "1" else f"{zpk.gain:.4g} {num}"
+
+
+def _flatten(prefix: str, value: Any, out: list) -> None:
+    if isinstance(value, Mapping):
+        for k, v in value.items():
+            _flatten(f"{prefix}.{k}" if prefix else str(k), v, out)
+    else:
+        out.append((prefix, fmt(value)))
+
+
+# -------------------------------------------------------------- content model
+
+def _margins_of(data: ReportData) -> dict | None:
+    if data.margins:
+        return data.margins
+    art = getattr(data.artifact, "margins", None)
+    return dict(art) if art else None
+
+
+def _as_float(v: Any) -> float | None:
+    if v is None or isinstance(v, bool):
+        return None
+    if isinstance(v, str):  # artifact JSON writes "inf"
+        try:
+            return float(v)
+        except ValueError:
+            return None
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def _margin_table(margins: dict | None, checks: list | None) -> list[dict]:
+    """Rows: label, unit, d value, q value, requirement text, pass text."""
+    by_quantity: dict[str, list[dict]] = {}
+    for c in checks or []:
+        by_quantity.setdefault(c.get("quantity", ""), []).append(c)
+    rows = []
+    for key, (label, unit) in MARGIN_ROWS.items():
+        vals = {ax: (_as_float((margins or {}).get(ax, {}).get(key)) if margins else None)
+                for ax in ("d", "q")}
+        req = by_quantity.get(key, [])
+        bound = "; ".join(_bound_text(c) for c in req) if req else ""
+        status = ("pass" if all(c.get("pass") for c in req) else "fail") if req else ""
+        rows.append({"key": key, "label": label, "unit": unit,
+                     "d": fmt(vals["d"]), "q": fmt(vals["q"]),
+                     "requirement": bound, "status": status})
+    return rows
+
+
+def _bound_text(check: Mapping) -> str:
+    key = str(check.get("key", ""))
+    op = ">=" if key.startswith("min") else "<=" if key.startswith("max") else "vs"
+    return f"{op} {fmt(check.get('bound'))}"
+
+
+def _check_rows(checks: list | None) -> list[dict]:
+    rows = []
+    for c in checks or []:
+        where = c.get("axis") or c.get("scenario") or ""
+        rows.append({"key": str(c.get("key", "")), "quantity": str(c.get("quantity", "")),
+                     "where": str(where), "bound": _bound_text(c),
+                     "value": fmt(_as_float(c.get("value")) if c.get("value") is not None
+                                  else None),
+                     "unit": str(c.get("unit", "")),
+                     "status": "pass" if c.get("pass") else "fail"})
+    return rows
+
+
+def _equations(spec) -> list[dict]:
+    """Derived dq model as LaTeX, plain text and SVG (paper 000 eq (1)-(2), 003 eq (3)-(7))."""
+    import sympy as sp
+
+    from ..plant import derive_dq_model
+    from . import plots
+
+    model = derive_dq_model(spec.motor.convention)
+    di_d, di_q = sp.symbols("di_d di_q", real=True)
+    names = {di_d: r"\dot{i}_{d}", di_q: r"\dot{i}_{q}"}
+    items = [
+        ("Stator voltage, d axis", "v_{d}", model.voltage[0]),
+        ("Stator voltage, q axis", "v_{q}", model.voltage[1]),
+        ("Current dynamics, d axis", r"\frac{d i_{d}}{dt}", model.di_dt[0]),
+        ("Current dynamics, q axis", r"\frac{d i_{q}}{dt}", model.di_dt[1]),
+        ("Electromagnetic torque", "T_{e}", model.torque),
+        ("Mechanics", r"\frac{d \Omega}{dt}", model.dOmega_dt),
+    ]
+    out = []
+    for label, lhs, expr in items:
+        tex = f"{lhs} = {sp.latex(expr, symbol_names=names)}"
+        text = f"{sp.sstr(expr)}".replace("di_d", "d(i_d)/dt").replace("di_q", "d(i_q)/dt")
+        lhs_text = {"v_{d}": "v_d", "v_{q}": "v_q", "T_{e}": "T_e"}.get(
+            lhs, lhs.replace(r"\frac{d i_{d}}{dt}", "d(i_d)/dt")
+            .replace(r"\frac{d i_{q}}{dt}", "d(i_q)/dt").replace(r"\frac{d \Omega}{dt}", "d(Omega)/dt"))
+        out.append({"label": label, "latex": tex, "text": f"{lhs_text} = {text}",
+                    "svg": plots.equation_svg(tex)})
+    return out
+
+
+def _controller(artifact) -> dict:
+    axes = []
+    for name in ("d", "q"):
+        ax = artifact.axes[name]
+        row = {"axis": name, "order": ax.discrete.order, "zpk": zpk_text(ax.zpk),
+               "discretisation": ax.discrete.method or "",
+               "continuous": "yes" if ax.continuous is not None else "no (discrete design)",
+               "reduced": None, "reduced_order": None}
+        if ax.reduced is not None:
+            row["reduced"] = zpk_text(ax.reduced.zpk)
+            row["reduced_order"] = ax.reduced.discrete.order
+        axes.append(row)
+    gains: list = []
+    _flatten("", artifact.gains, gains)
+    dec = artifact.decoupling
+    decoupling = [("Cross-coupling compensation", "yes" if dec.cross else "no", ""),
+                  ("Back-EMF compensation", "yes" if dec.emf else "no", ""),
+                  ("R_c (controller model)", fmt(dec.R_c), "ohm"),
+                  ("Ld_c", fmt(dec.Ld_c), "H"), ("Lq_c", fmt(dec.Lq_c), "H"),
+                  ("flux_c", fmt(dec.flux_c), "Wb"), ("pole_pairs", str(dec.pole_pairs), "1")]
+    prov = artifact.provenance or {}
+    return {"method": artifact.method,
+            "method_name": METHOD_NAMES.get(artifact.method, artifact.method),
+            "sample_time": fmt(artifact.sample_time), "delay": artifact.delay_samples,
+            "equations": [str(e) for e in prov.get("equations", [])],
+            "gains": gains, "axes": axes, "decoupling": decoupling}
+
+
+def _scenarios(scenarios: Sequence | None) -> list[dict]:
+    from . import plots
+
+    out = []
+    for k, sc in enumerate(scenarios or []):
+        sc = dict(sc)
+        traces = plots.traces_dict(sc.get("traces"))
+        metrics = sc.get("metrics") or getattr(sc.get("traces"), "metrics", None) or {}
+        passed = sc.get("pass")
+        out.append({
+            "name": str(sc.get("name", f"scenario {k + 1}")),
+            "kind": str(sc.get("kind", "")),
+            "status": "" if passed is None else ("pass" if passed else "fail"),
+            "metrics": [(str(m), fmt(_as_float(v) if not isinstance(v, str) else v))
+                        for m, v in metrics.items()],
+            "svg": plots.scenario_svg(traces) if traces else None,
+        })
+    return out
+
+
+def _robustness(rob: Mapping | None) -> dict | None:
+    from . import plots
+
+    if not rob:
+        return None
+    cases = list(rob.get("cases", []))
+    worst = [str(w.get("label") if isinstance(w, Mapping) else w) for w in rob.get("worst", [])]
+    metric_names: list[str] = []
+    for c in cases:
+        for m in (c.get("metrics") or {}):
+            if m not in metric_names:
+                metric_names.append(str(m))
+    worst_rows = []
+    for c in cases:
+        if str(c.get("label")) in worst:
+            worst_rows.append({"label": str(c.get("label")), "params": fmt(c.get("params", {})),
+                               "metrics": fmt(c.get("metrics", {})),
+                               "status": "pass" if c.get("pass") else "fail"})
+    n_fail = sum(1 for c in cases if c.get("pass") is False)
+    return {"n_cases": len(cases), "n_fail": n_fail, "notes": str(rob.get("notes", "")),
+            "metrics": metric_names, "worst": worst_rows,
+            "svg": plots.robustness_svg(cases, worst) if cases else None}
+
+
+def _provenance(data: ReportData) -> list[tuple[str, str]]:
+    from ..design._common import toolbox_version
+
+    prov = dict(data.artifact.provenance or {})
+    rows = [(str(k), fmt(v)) for k, v in prov.items() if k != "equations"]
+    rows.append(("spec source", str(getattr(data.spec, "source", None) or "(in memory)")))
+    rows.append(("report toolbox version", toolbox_version()))
+    if data.generated:
+        rows.append(("report generated", str(data.generated)))
+    return rows
+
+
+def build_context(data: ReportData) -> dict:
+    """The report's content model (plain strings, row lists and SVG strings).
+
+    Parameters
+    ----------
+    data : ReportData
+
+    Returns
+    -------
+    dict
+        Keys ``title, motor, drive, requirements, equations, controller,
+        margins, checks, figures, robustness, certificate, scenarios,
+        provenance, margins_given``; the HTML and typst templates render it.
+        SVG strings are generated here (trusted); every other string is user
+        or derived text that the templates escape.
+    """
+    from . import plots
+
+    spec, art = data.spec, data.artifact
+    motor = spec.motor
+    motor_rows = [(q, s, fmt(getattr(motor, f)), u) for f, s, q, u in MOTOR_ROWS
+                  if getattr(motor, f) is not None]
+    drive_rows = [(q, fmt(getattr(spec.drive, f)), u) for f, q, u in DRIVE_ROWS
+                  if getattr(spec.drive, f) is not None]
+    drive_rows.append(("Max dq voltage (linear modulation)",
+                       fmt(spec.drive.max_voltage(motor.convention)), "V"))
+    from ..spec import REQUIREMENT_KEYS
+
+    req_rows = [(k, REQUIREMENT_KEYS[k][1], (">=" if REQUIREMENT_KEYS[k][0] == "min" else "<=")
+                 + " " + fmt(v), REQUIREMENT_KEYS[k][2])
+                for k, v in getattr(spec.requirements, "bounds", {}).items()]
+    margins = _margins_of(data)
+    loops = plots.loop_data(art, motor)
+    figures = plots.figures(loops, weights=data.weights)
+    return {
+        "title": str(data.title),
+        "motor": motor_rows, "drive": drive_rows, "requirements": req_rows,
+        "equations": _equations(spec),
+        "controller": _controller(art),
+        "margins_given": margins is not None,
+        "margins": _margin_table(margins, data.checks),
+        "checks": _check_rows(data.checks),
+        "checks_given": data.checks is not None,
+        "figures": figures,
+        "robustness": _robustness(data.robustness),
+        "certificate": ([(str(k), fmt(v)) for k, v in data.certificate.items()]
+                        if data.certificate else None),
+        "scenarios": _scenarios(data.scenarios) if data.scenarios is not None else None,
+        "provenance": _provenance(data),
+        "not_computed": NOT_COMPUTED,
+    }
+
+
+from .html import write_html  # noqa: E402  (the renderers use the model above)
+from .pdf import write_pdf  # noqa: E402

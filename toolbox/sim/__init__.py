@@ -9,3 +9,9 @@ from ._simulate import (AxisLaw, BatchResult, ControlLaw, DriveParams, FcsWeight
 __all__ = ["METRIC_NAMES", "step_metrics", "INVERTER_KINDS", "SCENARIO_KINDS", "Scenario",
            "AxisLaw", "BatchResult", "ControlLaw", "DriveParams", "FcsWeights", "PlantParams",
            "SimResult", "SpeedLoop", "discrete_pi", "simulate", "simulate_batch"]
+
+from ._verify import (VERIFY_SCHEMA, ScenarioOutcome, VerifyResult, control_law,
+                      default_scenarios, drive_params, plant_params, traces_of, verify)
+
+__all__ += ["VERIFY_SCHEMA", "ScenarioOutcome", "VerifyResult", "control_law",
+            "default_scenarios", "drive_params", "plant_params", "traces_of", "verify"]

@@ -43,6 +43,7 @@ SCENARIO_KINDS = ("current_step", "constant_acceleration", "unloaded_start",
 INVERTER_KINDS = ("average", "svm", "fcs_mpc")
 NOISE_KINDS = ("uniform", "gaussian")
 PLANT_KEYS = ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction")
+SPEED_LOOP_KEYS = ("kp", "ki", "kd", "sample_time", "iq_limit")
 
 
 @dataclass(frozen=True)
@@ -100,8 +101,15 @@ class Scenario:
         Return decimated traces (otherwise metrics only, flat memory).
     trace_step : float or None
         Trace sampling interval (s); ``None`` = every controller period.
+    name : str
+        Label shown in reports and verify.json (default: the kind).
+    speed_loop : mapping
+        Outer speed PID for ``load_step`` and ``speed_step``: ``kp`` (A s/rad),
+        ``ki`` (A/rad), ``kd`` (A s^2/rad), ``sample_time`` (s), ``iq_limit`` (A)
+        (papers 001 and 003).
     """
 
+    name: str = ""
     kind: str = "current_step"
     duration: float = 0.02
     id_ref: float = 0.0
@@ -131,11 +139,13 @@ class Scenario:
     plant_step: float = 1e-6
     keep_traces: bool = False
     trace_step: float | None = None
+    speed_loop: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         # freeze the mappings (hashable, immutable)
         object.__setattr__(self, "plant_values", _Frozen(self.plant_values))
         object.__setattr__(self, "plant_scale", _Frozen(self.plant_scale))
+        object.__setattr__(self, "speed_loop", _Frozen(self.speed_loop))
         self.validate()
 
     # ------------------------------------------------------------------ checks
@@ -183,6 +193,16 @@ class Scenario:
         if self.acceleration != 0 and self.kind != "constant_acceleration":
             raise err("acceleration", 'no acceleration unless kind = "constant_acceleration"',
                       self.acceleration, "the speed follows the mechanics for this kind")
+        for name, v in self.speed_loop.items():
+            if name not in SPEED_LOOP_KEYS:
+                raise err(f"speed_loop.{name}", "one of " + ", ".join(SPEED_LOOP_KEYS), name,
+                          _did_you_mean(name, SPEED_LOOP_KEYS))
+            if isinstance(v, bool) or not isinstance(v, (int, float)) \
+                    or not math.isfinite(v) or v < 0:
+                raise err(f"speed_loop.{name}", "a finite number >= 0", v)
+        if self.kind in ("load_step", "speed_step") and "kp" not in self.speed_loop:
+            raise err("speed_loop", "a table with at least kp (A s/rad) for kind "
+                      f'"{self.kind}"', dict(self.speed_loop))
         for table in ("plant_values", "plant_scale"):
             for name, v in getattr(self, table).items():
                 if name not in PLANT_KEYS:
@@ -226,8 +246,8 @@ class Scenario:
         return sc
 
 
-_STR_KEYS = {"kind", "noise", "inverter"}
-_MAP_KEYS = {"plant_values", "plant_scale"}
+_STR_KEYS = {"kind", "noise", "inverter", "name"}
+_MAP_KEYS = {"plant_values", "plant_scale", "speed_loop"}
 
 
 def _check_type(path: str, name: str, v: Any) -> Any:
@@ -239,7 +259,7 @@ def _check_type(path: str, name: str, v: Any) -> Any:
         return v
     if name in _MAP_KEYS:
         if not isinstance(v, Mapping):
-            raise SpecError(path, "a table of plant parameters", v)
+            raise SpecError(path, "a table", v)
         return dict(v)
     if name == "keep_traces":
         if not isinstance(v, bool):

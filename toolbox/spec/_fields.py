@@ -35,7 +35,8 @@ def check_keys(table: Mapping, allowed: Iterable[str], prefix: str) -> None:
             close = difflib.get_close_matches(str(name), allowed, n=1, cutoff=0.6)
             hint = (f'did you mean "{close[0]}"?' if close
                     else f"allowed keys: {', '.join(sorted(allowed))}")
-            raise SpecError(_path(prefix, str(name)), "no such key", hint=hint)
+            where = f"a known key of [{prefix}]" if prefix else "a known top-level key"
+            raise SpecError(_path(prefix, str(name)), where, hint=hint)
 
 
 def as_table(value: Any, key: str) -> Mapping:

@@ -159,9 +159,8 @@ def _requirements(value: Any) -> Requirements:
     t = Table(value, "requirements", tuple(REQUIREMENT_KEYS))
     bounds = {}
     for key in t.data:
-        direction, quantity, unit = REQUIREMENT_KEYS[key]
-        bounds[key] = t.number(key, unit=unit,
-                               nonnegative=quantity not in ("gain_margin_db", "static_error"))
+        unit = REQUIREMENT_KEYS[key][3]
+        bounds[key] = t.number(key, unit=unit, nonnegative=key != "min_gain_margin_db")
     return Requirements(bounds)
 
 

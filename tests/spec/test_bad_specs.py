@@ -1,0 +1,76 @@
+"""Bad spec files get one exact, located message each (DESIGN.md reliability rules).
+
+The messages are part of the user interface: a change here is a change users
+see, so the full text is pinned.
+"""
+
+from pathlib import Path
+
+import pytest
+
+from toolbox.errors import SpecError
+from toolbox.spec import load_spec
+
+BAD = Path(__file__).parent / "bad"
+
+CASES = [
+    ("code_injection.toml",
+     'motor.R: expected a number > 0 (ohm), got "__import__(\'os\').system(\'echo pwned\')"'),
+    ("delay_negative.toml",
+     'drive.delay_samples: expected an integer >= 0, got -1'),
+    ("inf_J.toml",
+     'motor.J: expected a number > 0 (kg m^2), got inf'),
+    ("motor_missing.toml",
+     'motor: expected a [motor] table (missing)'),
+    ("motor_typo.toml",
+     'motor.Lqq: expected a known key of [motor] (did you mean "Lq"?)'),
+    ("nan_flux.toml",
+     'motor.flux: expected a number >= 0 (Wb), got nan'),
+    ("negative_R.toml",
+     'motor.R: expected a number > 0 (ohm), got -0.6'),
+    ("other_method_table.toml",
+     'controller.pi: expected a known key of [controller] (allowed keys: hinf, method)'),
+    ("pole_pairs_float.toml",
+     'motor.pole_pairs: expected an integer >= 1, got 4.5'),
+    ("sample_time_zero.toml",
+     'drive.sample_time: expected a number > 0 (s), got 0'),
+    ("sample_vs_switching.toml",
+     'drive.sample_time: expected a whole number of half PWM periods (1/(2 switching_frequency) = 0.000166667 s), got 0.0001 (sample once or twice per carrier period)'),
+    ("string_number.toml",
+     'motor.R: expected a number > 0 (ohm), got "0.6"'),
+    ("toml_syntax.toml",
+     'expected valid TOML, got "Expected \']\' at the end of a table declaration (at line 1, column 7)"'),
+    ("unknown_catalog.toml",
+     'motor.catalog: expected one of "azaiz2007", "cormerais2002", "lepioufle1992", "takami2004", got "azaiz2008" (did you mean "azaiz2007"?)'),
+    ("unknown_method.toml",
+     'controller.method: expected one of "pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc", got "hinfinity" (did you mean "hinf"?)'),
+    ("unknown_top.toml",
+     'titel: expected a known top-level key (did you mean "title"?)'),
+    ("zero_L.toml",
+     'motor.Ld: expected a number > 0 (H), got 0.0'),
+]
+
+
+@pytest.mark.parametrize("name, message", CASES, ids=[c[0] for c in CASES])
+def test_bad_spec_message(name, message):
+    path = BAD / name
+    with pytest.raises(SpecError) as info:
+        load_spec(path)
+    assert str(info.value) == f"{path}: {message}"
+    assert info.value.file == str(path)
+
+
+def test_every_bad_file_has_a_case():
+    assert sorted(p.name for p in BAD.glob("*.toml")) == sorted(c[0] for c in CASES)
+
+
+def test_missing_file_is_a_spec_error(tmp_path):
+    with pytest.raises(SpecError, match="expected a readable spec file"):
+        load_spec(tmp_path / "nope.toml")
+
+
+def test_values_are_never_evaluated(tmp_path, capsys):
+    """A string that is Python code stays a string and is refused as a number."""
+    with pytest.raises(SpecError):
+        load_spec(BAD / "code_injection.toml")
+    assert "pwned" not in capsys.readouterr().out

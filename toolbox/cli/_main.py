@@ -1,0 +1,334 @@
+"""``cct``: one command per pipeline stage.
+
+Exit codes (DESIGN.md): 0 every requirement holds, 1 a requirement fails
+(outputs still written), 2 bad input (nothing written). Only
+:class:`~toolbox.errors.SpecError` is turned into exit 2; anything else is a
+bug and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from ..errors import SpecError
+
+EXIT_OK, EXIT_REQUIREMENT, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _spec_errors(func):
+    """Turn SpecError into a one-line message and exit code 2."""
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        try:
+            return func(*args, **kwargs)
+        except SpecError as err:
+            click.echo(f"cct: error: {err}", err=True)
+            sys.exit(EXIT_BAD_INPUT)
+
+    return wrapper
+
+
+def _progress(quiet: bool):
+    def show(stage: str) -> None:
+        if not quiet:
+            click.echo(f"  - {stage} ...", err=True)
+
+    return show
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="current-control-toolbox")
+def main() -> None:
+    """Current Control Toolbox: PMSM current-controller design from spec to
+    verified controller, report and C header.
+
+    \b
+    Example:
+      cct design designs/003_azaiz2007_hinf.toml --out out/003
+    """
+
+
+@main.command()
+@click.argument("spec", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the resolved spec as JSON.")
+@_spec_errors
+def check(spec: str, as_json: bool) -> None:
+    """Validate SPEC and print the resolved spec (catalog defaults applied).
+
+    \b
+    Example:
+      cct check designs/000_lepioufle1992_tc.toml
+    """
+    from ..spec import load_spec
+
+    s = load_spec(spec)
+    if as_json:
+        click.echo(json.dumps(s.raw, indent=1, sort_keys=True))
+        return
+    click.echo(f"{spec}: ok")
+    click.echo(f"title: {s.title}")
+    for section in ("motor", "drive", "controller", "requirements"):
+        table = s.raw.get(section)
+        if table:
+            click.echo(f"[{section}]")
+            for key, value in table.items():
+                click.echo(f"  {key} = {json.dumps(value)}")
+    click.echo(f"scenarios: {len(s.scenarios)}")
+
+
+@main.command()
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def motors(as_json: bool) -> None:
+    """List the motor catalog with key figures.
+
+    \b
+    Example:
+      cct motors
+    """
+    from ..spec import CATALOG, CATALOG_NOTES, Motor
+
+    rows = []
+    for name, values in CATALOG.items():
+        m = Motor(**values)
+        rows.append({"name": name, "source": CATALOG_NOTES[name], "R_ohm": m.R,
+                     "Ld_H": m.Ld, "Lq_H": m.Lq, "flux_Wb": m.flux,
+                     "pole_pairs": m.pole_pairs, "tau_d_ms": 1e3 * m.tau_d,
+                     "tau_q_ms": 1e3 * m.tau_q, "rated_current_A": m.rated_current,
+                     "torque_constant_Nm_per_A": m.torque_constant,
+                     "emf_constant_V_s_per_rad": m.emf_constant,
+                     "convention": m.convention})
+    if as_json:
+        click.echo(json.dumps(rows, indent=1))
+        return
+    click.echo(f"{'name':<15}{'R':>7}{'Ld':>9}{'Lq':>9}{'flux':>8}{'p':>3}"
+               f"{'tau_d':>8}{'tau_q':>8}{'I_rated':>9}{'k_T':>7}{'k_E':>7}  dq")
+    click.echo(f"{'':<15}{'ohm':>7}{'mH':>9}{'mH':>9}{'Wb':>8}{'':>3}"
+               f"{'ms':>8}{'ms':>8}{'A':>9}{'Nm/A':>7}{'Vs/rad':>7}")
+    for r in rows:
+        rated = f"{r['rated_current_A']:.1f}" if r["rated_current_A"] else "-"
+        click.echo(f"{r['name']:<15}{r['R_ohm']:>7.3g}{1e3 * r['Ld_H']:>9.4g}"
+                   f"{1e3 * r['Lq_H']:>9.4g}{r['flux_Wb']:>8.4g}{r['pole_pairs']:>3}"
+                   f"{r['tau_d_ms']:>8.3g}{r['tau_q_ms']:>8.3g}{rated:>9}"
+                   f"{r['torque_constant_Nm_per_A']:>7.3g}"
+                   f"{r['emf_constant_V_s_per_rad']:>7.3g}  {r['convention']}")
+    click.echo("")
+    for r in rows:
+        click.echo(f"{r['name']}: {r['source']}")
+
+
+@main.command()
+@click.argument("spec", type=click.Path(dir_okay=False))
+@click.option("--latex", "fmt", flag_value="latex", help="LaTeX align environment.")
+@click.option("--markdown", "fmt", flag_value="markdown", help="Markdown with math.")
+@_spec_errors
+def derive(spec: str, fmt: str | None) -> None:
+    """Print the dq model derived for the motor of SPEC.
+
+    \b
+    Example:
+      cct derive designs/000_lepioufle1992_tc.toml --markdown
+    """
+    from ..plant import describe_model
+    from ..spec import load_spec
+
+    click.echo(describe_model(load_spec(spec).motor, fmt or "text"), nl=False)
+
+
+@main.command()
+@click.argument("spec", type=click.Path(dir_okay=False))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Output directory.")
+@click.option("--only-controller", is_flag=True,
+              help="Write controller.json only (no analysis, verification, report, header).")
+@click.option("--quiet", "-q", is_flag=True, help="No progress display.")
+@_spec_errors
+def design(spec: str, out_dir: str, only_controller: bool, quiet: bool) -> None:
+    """Design the controller of SPEC and write controller.json, analysis.json,
+    verify.json, controller.h, report.html and report.pdf into OUT.
+
+    Exit 0 when every requirement holds, 1 when one fails (outputs written),
+    2 on bad input (nothing written).
+
+    \b
+    Example:
+      cct design designs/003_azaiz2007_hinf.toml --out out/003
+    """
+    from ..pipeline import build_outputs, write_outputs
+    from ..spec import load_spec
+
+    s = load_spec(spec)
+    full = not only_controller
+    out = build_outputs(s, analysis=full, verification=full, report=full, header=full,
+                        progress=_progress(quiet))
+    for path in write_outputs(out.files, out_dir):
+        if not quiet:
+            click.echo(f"wrote {path}", err=True)
+    _summary(out, quiet)
+    sys.exit(EXIT_OK if out.passed else EXIT_REQUIREMENT)
+
+
+def _summary(out, quiet: bool) -> None:
+    if quiet:
+        return
+    for axis, m in out.artifact.margins.items():
+        click.echo(f"{axis} axis: GM {m.get('gain_margin_db')} dB, PM "
+                   f"{m.get('phase_margin_deg')} deg, Mm {m.get('stability_margin')}")
+    failed = []
+    if out.analysis is not None:
+        failed += [k for k, c in out.analysis.get("requirements", {}).items() if not c["pass"]]
+    if out.verification is not None:
+        for sc in out.verification.scenarios:
+            failed += [f"{sc.name}: {k}" for k, c in sc.checks.items() if not c["pass"]]
+    click.echo("requirements: " + ("all pass" if not failed else "FAILED " + ", ".join(failed)))
+
+
+@main.command()
+@click.argument("out_dir", type=click.Path(file_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print verify.json to stdout.")
+@_spec_errors
+def verify(out_dir: str, as_json: bool) -> None:
+    """Re-run the closed-loop verification of the design in OUT_DIR and write
+    OUT_DIR/verify.json (exit 1 if a requirement fails).
+
+    \b
+    Example:
+      cct verify out/003
+    """
+    from ..pipeline import load_artifact, run_verification, spec_of_artifact, write_outputs
+
+    artifact = load_artifact(out_dir)
+    spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
+    result = run_verification(artifact, spec)
+    text = json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n"
+    write_outputs({"verify.json": text}, out_dir)
+    if as_json:
+        click.echo(text, nl=False)
+    else:
+        for sc in result.scenarios:
+            status = "pass" if sc.passed else "FAIL"
+            click.echo(f"{status}  {sc.name}: 5% response "
+                       f"{sc.metrics.get('response_time_5pct')} s, static error "
+                       f"{sc.metrics.get('static_error')}")
+    sys.exit(EXIT_OK if result.passed else EXIT_REQUIREMENT)
+
+
+@main.command()
+@click.argument("out_dir", type=click.Path(file_okay=False))
+@_spec_errors
+def report(out_dir: str) -> None:
+    """Regenerate report.html and report.pdf from the design in OUT_DIR
+    (reads controller.json, analysis.json and verify.json; no re-design).
+
+    \b
+    Example:
+      cct report out/003
+    """
+    from ..pipeline import DesignOutputs, analyse, load_artifact, run_verification
+    from ..pipeline import spec_of_artifact, write_outputs
+    from ..report import report_data, write_html, write_pdf
+
+    artifact = load_artifact(out_dir)
+    spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
+    artifact, analysis = analyse(artifact, spec)
+    out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
+                        verification=run_verification(artifact, spec))
+    data = report_data(out)
+    write_outputs({"report.html": write_html(data), "report.pdf": write_pdf(data)}, out_dir)
+
+
+@main.command()
+@click.argument("out_dir", type=click.Path(file_okay=False))
+@click.option("--format", "fmt", type=click.Choice(["c", "json"]), default="c",
+              show_default=True, help="C header or controller JSON.")
+@click.option("--output", "-o", type=click.Path(dir_okay=False),
+              help="File to write (default: OUT_DIR/controller.h or stdout for json).")
+@_spec_errors
+def export(out_dir: str, fmt: str, output: str | None) -> None:
+    """Export the controller of OUT_DIR as a C99 header or JSON.
+
+    \b
+    Example:
+      cct export out/003 --format c -o firmware/current_loop.h
+    """
+    from .._io import write_atomic
+    from ..pipeline import load_artifact, spec_of_artifact
+
+    artifact = load_artifact(out_dir)
+    if fmt == "json":
+        text = artifact.dumps()
+        if output:
+            write_atomic(output, text)
+        else:
+            click.echo(text, nl=False)
+        return
+    from ..export import write_header
+
+    spec = spec_of_artifact(artifact)
+    text = write_header(artifact, spec.motor, spec.drive)
+    write_atomic(output or Path(out_dir) / "controller.h", text)
+
+
+@main.command()
+@click.argument("specs", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--json", "json_path", type=click.Path(dir_okay=False),
+              help="Also write the table as JSON to this file.")
+@_spec_errors
+def compare(specs: tuple[str, ...], json_path: str | None) -> None:
+    """Design every SPEC and print margins and robustness side by side.
+
+    \b
+    Example:
+      cct compare designs/000_*.toml designs/003_azaiz2007_hinf.toml
+    """
+    from .._io import write_atomic
+    from ..analysis import compare_designs
+    from ..pipeline import design_spec
+    from ..spec import load_spec
+
+    loaded = [load_spec(s) for s in specs]
+    artifacts = [design_spec(s) for s in loaded]
+    rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive)
+    for spec_path, row in zip(specs, rows):
+        row["spec"] = spec_path
+    if json_path:
+        write_atomic(json_path, json.dumps(rows, indent=1, allow_nan=False) + "\n")
+    _print_table(rows)
+
+
+def _print_table(rows: list[dict]) -> None:
+    keys = [k for k in rows[0] if k not in ("spec",) and not isinstance(rows[0][k], (dict, list))]
+    click.echo(" | ".join(["spec"] + keys))
+    for row in rows:
+        click.echo(" | ".join([str(row.get("spec"))] + [_fmt(row.get(k)) for k in keys]))
+
+
+def _fmt(value) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+@main.command()
+@click.option("--designs", "designs_dir", default="designs", show_default=True,
+              type=click.Path(file_okay=False), help="Directory of spec files.")
+@click.option("--out", "out_dir", default="reports", show_default=True,
+              type=click.Path(file_okay=False), help="Gallery directory.")
+@_spec_errors
+def gallery(designs_dir: str, out_dir: str) -> None:
+    """Regenerate the report gallery: every spec in DESIGNS into OUT/<name>/.
+
+    \b
+    Example:
+      cct gallery
+    """
+    from ..pipeline import build_outputs, write_outputs
+    from ..spec import load_spec
+
+    for path in sorted(Path(designs_dir).glob("*.toml")):
+        click.echo(f"{path.name} ...", err=True)
+        out = build_outputs(load_spec(path))
+        write_outputs(out.files, Path(out_dir) / path.stem)

@@ -1,0 +1,402 @@
+"""PI, IP and PI-with-lag current controllers in the dq frame.
+
+Sources
+-------
+* Le Pioufle, Georgiou, Louis, J. Phys. III 2 (1992) (paper 000), sect. 2:
+  PI (Fig. 2a) and IP (Fig. 2b) in dq; closed loop eq (3); normalised gains
+  ``Kp = 3.5/256``, ``KI = 660/256`` scaled by the inverter voltage ``E`` and
+  the current-sensor gain ``k_i`` (appendix), i.e. ``v = E k_i (Kp e + KI int e)``.
+* Cormerais et al., IFAC 2002 (paper 002), eq (19)-(20): ``K = 10 R``,
+  ``Ti = L/R`` (pole-zero cancellation, first-order closed loop).
+* Takami, JPE 4-4 (2004) (paper 001), Fig. 2b: standard PI with a
+  first-order time lag ``1/(1 + T_d s)`` "acting as a filter on the two
+  current components" -- the lag filters the *measured* currents (feedback
+  path), not the error; the reference enters the PI unfiltered.
+
+Gain rules (``[controller.<method>] rule``), all in effective units
+(``Kp`` V/A, ``Ki`` V/(A s)), the loop being ``v = Kp e + Ki int e``:
+
+``cancellation``
+    ``Kp = L wc``, ``Ki = R wc``: the PI zero ``-Ki/Kp = -R/L`` cancels the
+    plant pole, the closed loop is ``wc/(s + wc)`` (``wc`` = closed-loop
+    bandwidth, rad/s; from a 5 % response time ``t5``: ``wc = ln(20)/t5``).
+``bandwidth``
+    The firmware rule of ODrive (``p_gain = L * current_control_bandwidth``,
+    ``i_gain = R * current_control_bandwidth``) and VESC (``kp = L/tc``,
+    ``ki = R/tc``, ``tc`` the time constant): same numbers as cancellation,
+    with ``wc`` read as the open-loop crossover ``|L(j wc)| = 1``.
+``symmetric_optimum``
+    As gym-electric-motor tunes its current PI: sum of small time constants
+    ``T_sigma = (delay_samples + 0.5) Ts`` (computation delay plus half a
+    sample for the zero-order hold), ``Kp = L/(a T_sigma)``,
+    ``Ti = a^2 T_sigma``, ``Ki = Kp/Ti`` (``a = 2`` by default).
+``complex_vector``
+    motulator's discrete complex-vector PI: continuous PI in the rotor frame
+    with bandwidth ``alpha_c`` and the delay compensated by rotating the
+    output by ``1.5 Ts omega``. Reproduced here per axis only:
+    ``Kp = alpha_c L``, ``Ki = alpha_c R`` with the cross-coupling moved to
+    the decoupling feedforward; the rotation angle factor ``1.5 Ts`` is
+    recorded in ``gains`` for the firmware. NOT reproduced: the complex
+    (cross-axis) integral state and motulator's two-degree-of-freedom
+    reference feedforward.
+``explicit``
+    ``Kp``, ``Ki`` (V/A, V/(A s)), or paper 000's normalised
+    ``Kp_normalised``, ``Ki_normalised`` with ``voltage_gain`` E (V, default
+    ``drive.vdc``) and ``sensor_gain`` k_i (1/A): ``Kp = E k_i Kp_n``,
+    ``Ki = E k_i Ki_n`` (000: 10.5 V/A and 1980 V/(A s)). For ``ip`` paper
+    000 says the integral gain is ``Kp KI`` (sect. 2, note on the IP
+    controller: its IP is ``v = E k_i Kp (KI int e - y)``), so with
+    normalised gains ``Ki = E k_i Kp_n Ki_n``.
+
+Structures (two-input laws ``[i_ref, i_meas] -> v``):
+
+* ``pi``: ``v = (Kp + Ki/s)(r - y)``.
+* ``ip``: ``v = Ki/s (r - y) - Kp y`` (same loop, no closed-loop zero).
+* ``pi_lag``: ``v = (Kp + Ki/s)(r - y_f)``, ``y_f = y/(1 + T_d s)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import control
+import numpy as np
+
+from ..artifact import AxisController, ControllerArtifact
+from ..errors import SpecError
+from ..spec._fields import Table
+from ._common import decoupling_from_motor, make_artifact
+
+__all__ = [
+    "PiCfg", "RULES", "read_cfg", "design", "design_pi", "pi_law",
+    "gains_cancellation", "gains_symmetric_optimum", "bandwidth_from_response_time",
+    "gains_from_normalised", "plant_RL",
+]
+
+RULES = ("cancellation", "bandwidth", "symmetric_optimum", "complex_vector", "explicit")
+STRUCTURES = ("pi", "ip", "pi_lag")
+DISCRETISATIONS = ("tustin", "zoh", "backward_diff", "euler")
+
+#: keys each rule reads (besides the common ones)
+_RULE_KEYS = {
+    "cancellation": ("bandwidth", "response_time"),
+    "bandwidth": ("bandwidth", "response_time"),
+    "complex_vector": ("bandwidth", "response_time"),
+    "symmetric_optimum": ("a",),
+    "explicit": ("Kp", "Ki", "Kp_normalised", "Ki_normalised", "voltage_gain", "sensor_gain"),
+}
+_COMMON_KEYS = ("rule", "decoupling", "discretisation")
+_ALL_RULE_KEYS = tuple(dict.fromkeys(k for keys in _RULE_KEYS.values() for k in keys))
+
+LN20 = math.log(20.0)
+
+
+@dataclass(frozen=True)
+class PiCfg:
+    """Validated ``[controller.pi|ip|pi_lag]``.
+
+    Attributes
+    ----------
+    structure : str
+        ``pi``, ``ip`` or ``pi_lag``.
+    rule : str
+        Gain rule (see module docstring).
+    Kp : tuple of float
+        Effective proportional gains (d, q) (V/A).
+    Ki : tuple of float
+        Effective integral gains (d, q) (V/(A s)).
+    decoupling : bool
+        Feedforward of cross-coupling and back-EMF (default true).
+    lag_time_constant : float or None
+        ``T_d`` of paper 001 Fig. 2b (s), ``pi_lag`` only.
+    discretisation : str
+        How the continuous law is discretised (default ``tustin``).
+    details : dict
+        Rule-specific values kept in the artifact's gains (bandwidth,
+        T_sigma, normalisation, ...).
+    """
+
+    structure: str
+    rule: str
+    Kp: tuple[float, float]
+    Ki: tuple[float, float]
+    decoupling: bool = True
+    lag_time_constant: float | None = None
+    discretisation: str = "tustin"
+    details: dict = field(default_factory=dict)
+
+
+def bandwidth_from_response_time(response_time: float) -> float:
+    """Bandwidth of a first-order loop with the given 5 % response time.
+
+    ``exp(-wc t5) = 0.05`` gives ``wc = ln(20)/t5`` (rad/s; ``t5`` in s).
+    """
+    return LN20 / response_time
+
+
+def gains_cancellation(L: float, R: float, bandwidth: float) -> tuple[float, float]:
+    """Pole-zero cancellation PI gains.
+
+    Parameters
+    ----------
+    L : float
+        Axis inductance (H).
+    R : float
+        Resistance (ohm).
+    bandwidth : float
+        Closed-loop bandwidth ``wc`` (rad/s).
+
+    Returns
+    -------
+    Kp : float
+        ``L wc`` (V/A).
+    Ki : float
+        ``R wc`` (V/(A s)); closed loop ``wc/(s + wc)``.
+    """
+    return L * bandwidth, R * bandwidth
+
+
+def gains_symmetric_optimum(L: float, T_sigma: float, a: float = 2.0) -> tuple[float, float]:
+    """Symmetric-optimum PI gains (gym-electric-motor's current PI tuning).
+
+    ``Kp = L/(a T_sigma)`` (V/A), ``Ti = a^2 T_sigma`` (s), ``Ki = Kp/Ti``
+    (V/(A s)); ``T_sigma`` (s) is the sum of the small time constants.
+    """
+    Kp = L / (a * T_sigma)
+    return Kp, Kp / (a * a * T_sigma)
+
+
+def gains_from_normalised(Kp_n: float, Ki_n: float, voltage_gain: float,
+                          sensor_gain: float, structure: str = "pi") -> tuple[float, float]:
+    """Effective gains from paper 000's normalised ones.
+
+    ``Kp = E k_i Kp_n`` (V/A) and ``Ki = E k_i Ki_n`` (V/(A s)) for a PI;
+    for 000's IP (``v = E k_i Kp_n (Ki_n int e - y)``) ``Ki = E k_i Kp_n Ki_n``.
+    ``voltage_gain`` E in V, ``sensor_gain`` k_i in 1/A (000: 150, 256/50).
+    """
+    scale = voltage_gain * sensor_gain
+    Ki = scale * Kp_n * Ki_n if structure == "ip" else scale * Ki_n
+    return scale * Kp_n, Ki
+
+
+def plant_RL(plant: Any) -> tuple[float, float]:
+    """``(R, L)`` of a first-order axis plant ``1/(R + L s)`` (python-control)."""
+    tf = control.tf(plant)
+    num = np.trim_zeros(np.atleast_1d(np.squeeze(tf.num[0][0])), "f")
+    den = np.trim_zeros(np.atleast_1d(np.squeeze(tf.den[0][0])), "f")
+    if num.size != 1 or den.size != 2:
+        raise SpecError("plant", "a first-order plant 1/(R + L s)", str(tf))
+    return float(den[1] / num[0]), float(den[0] / num[0])
+
+
+def pi_law(Kp: float, Ki: float, structure: str = "pi",
+           lag_time_constant: float | None = None) -> control.StateSpace:
+    """Continuous two-input law ``[i_ref, i_meas] -> v`` of one axis.
+
+    Parameters
+    ----------
+    Kp : float
+        Proportional gain (V/A).
+    Ki : float
+        Integral gain (V/(A s)).
+    structure : {"pi", "ip", "pi_lag"}
+        ``pi``: ``v = Kp e + Ki x``, ``x' = e``;
+        ``ip``: ``v = Ki x - Kp y``, ``x' = r - y``;
+        ``pi_lag``: ``y_f' = (y - y_f)/T_d``, ``x' = r - y_f``,
+        ``v = Kp (r - y_f) + Ki x``.
+    lag_time_constant : float, optional
+        ``T_d`` (s) for ``pi_lag``.
+
+    Returns
+    -------
+    control.StateSpace
+        Continuous, states ``[x]`` or ``[x, y_f]``.
+    """
+    if structure == "pi":
+        return control.ss([[0.0]], [[1.0, -1.0]], [[Ki]], [[Kp, -Kp]])
+    if structure == "ip":
+        return control.ss([[0.0]], [[1.0, -1.0]], [[Ki]], [[0.0, -Kp]])
+    if structure == "pi_lag":
+        if lag_time_constant is None or not lag_time_constant > 0:
+            raise SpecError("lag_time_constant", "a number > 0 (s)", lag_time_constant)
+        Td = lag_time_constant
+        return control.ss([[0.0, -1.0], [0.0, -1.0 / Td]], [[1.0, 0.0], [0.0, 1.0 / Td]],
+                          [[Ki, -Kp]], [[Kp, 0.0]])
+    raise SpecError("structure", f"one of {list(STRUCTURES)}", structure)
+
+
+def design_pi(Kp: tuple[float, float], Ki: tuple[float, float], sample_time: float, *,
+              structure: str = "pi", lag_time_constant: float | None = None,
+              method: str = "tustin") -> dict[str, AxisController]:
+    """Per-axis controllers for given gains.
+
+    Parameters
+    ----------
+    Kp, Ki : tuple of float
+        (d, q) gains (V/A, V/(A s)).
+    sample_time : float
+        Controller period (s).
+    structure, lag_time_constant
+        See :func:`pi_law`.
+    method : str
+        Discretisation of the law (``tustin``, ``zoh``, ``backward_diff``, ``euler``).
+
+    Returns
+    -------
+    dict
+        ``{"d": AxisController, "q": AxisController}``; the error controller
+        is ``Kp + Ki/s`` (times ``1/(1 + T_d s)`` for ``pi_lag``).
+    """
+    axes = {}
+    for k, name in enumerate(("d", "q")):
+        law = pi_law(Kp[k], Ki[k], structure, lag_time_constant)
+        axes[name] = AxisController.from_law(law, sample_time=sample_time, method=method)
+    return axes
+
+
+# ------------------------------------------------------------------ spec side
+def _reject_foreign(t: Table, rule: str, structure: str) -> None:
+    mine = set(_RULE_KEYS[rule])
+    for name in t.data:
+        if name in _ALL_RULE_KEYS and name not in mine:
+            raise SpecError(t.key(name), f'no such key with rule = "{rule}"',
+                            hint=f"keys of this rule: {', '.join(_RULE_KEYS[rule])}")
+
+
+def _bandwidth(t: Table) -> tuple[float, float]:
+    if t.has("bandwidth") and t.has("response_time"):
+        raise SpecError(t.key("response_time"), "either bandwidth or response_time, not both",
+                        t.raw("response_time"))
+    if t.has("response_time"):
+        t5 = t.per_axis("response_time", positive=True, unit="s")
+        return (bandwidth_from_response_time(t5[0]), bandwidth_from_response_time(t5[1]))
+    if not t.has("bandwidth"):
+        raise SpecError(t.key("bandwidth"), "a number > 0 (rad/s) or response_time (missing)")
+    return t.per_axis("bandwidth", positive=True, unit="rad/s")
+
+
+def _explicit(t: Table, structure: str, drive) -> tuple[tuple, tuple, dict]:
+    has_plain = t.has("Kp") or t.has("Ki")
+    has_norm = t.has("Kp_normalised") or t.has("Ki_normalised")
+    if has_plain and has_norm:
+        raise SpecError(t.key("Kp_normalised"), "either Kp/Ki or Kp_normalised/Ki_normalised",
+                        t.raw("Kp_normalised", t.raw("Ki_normalised")))
+    if has_norm:
+        Kp_n = t.per_axis("Kp_normalised", positive=True)
+        Ki_n = t.per_axis("Ki_normalised", positive=True)
+        E = t.number("voltage_gain", drive.vdc, positive=True, unit="V")
+        k_i = t.number("sensor_gain", positive=True, unit="1/A")
+        gains = [gains_from_normalised(Kp_n[k], Ki_n[k], E, k_i, structure) for k in (0, 1)]
+        details = {"Kp_normalised": _axes(Kp_n), "Ki_normalised": _axes(Ki_n),
+                   "voltage_gain": E, "sensor_gain": k_i}
+        return (gains[0][0], gains[1][0]), (gains[0][1], gains[1][1]), details
+    for name in ("voltage_gain", "sensor_gain"):
+        if t.has(name):
+            raise SpecError(t.key(name), "no such key without Kp_normalised/Ki_normalised")
+    Kp = t.per_axis("Kp", positive=True, unit="V/A")
+    Ki = t.per_axis("Ki", positive=True, unit="V/(A s)")
+    return Kp, Ki, {}
+
+
+def _axes(pair: tuple[float, float]) -> dict[str, float]:
+    return {"d": float(pair[0]), "q": float(pair[1])}
+
+
+def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
+    """Validate ``[controller.pi]`` / ``[controller.ip]`` / ``[controller.pi_lag]``.
+
+    Raises
+    ------
+    SpecError
+        Unknown key, key foreign to the chosen rule, non-positive bandwidth,
+        gains or lag time constant; the key path is ``controller.<method>.<key>``.
+    """
+    allowed = _COMMON_KEYS + _ALL_RULE_KEYS + (("lag_time_constant",) if method == "pi_lag" else ())
+    t = Table(table.data, table.prefix, allowed)
+    explicit_given = any(t.has(k) for k in ("Kp", "Ki", "Kp_normalised", "Ki_normalised"))
+    rule = t.string("rule", "explicit" if explicit_given else "cancellation", choices=RULES)
+    _reject_foreign(t, rule, method)
+    L = (motor.Ld, motor.Lq)
+    details: dict[str, Any] = {}
+    if rule in ("cancellation", "bandwidth", "complex_vector"):
+        wc = _bandwidth(t)
+        Kp = (L[0] * wc[0], L[1] * wc[1])
+        Ki = (motor.R * wc[0], motor.R * wc[1])
+        details["bandwidth_rad_s"] = _axes(wc)
+        if rule == "complex_vector":
+            details["delay_compensation_time"] = 1.5 * drive.sample_time
+            details["delay_compensation"] = "rotate v_dq by exp(j * delay_compensation_time * omega_e)"
+    elif rule == "symmetric_optimum":
+        a = t.number("a", 2.0, positive=True)
+        if a <= 1.0:
+            raise SpecError(t.key("a"), "a number > 1", a)
+        T_sigma = (drive.delay_samples + 0.5) * drive.sample_time
+        g = [gains_symmetric_optimum(L[k], T_sigma, a) for k in (0, 1)]
+        Kp, Ki = (g[0][0], g[1][0]), (g[0][1], g[1][1])
+        details.update(a=a, T_sigma=T_sigma, Ti=a * a * T_sigma)
+    else:
+        Kp, Ki, details = _explicit(t, method, drive)
+    lag = None
+    if method == "pi_lag":
+        lag = t.number("lag_time_constant", positive=True, unit="s")
+    return PiCfg(structure=method, rule=rule, Kp=tuple(map(float, Kp)),
+                 Ki=tuple(map(float, Ki)), decoupling=t.boolean("decoupling", True),
+                 lag_time_constant=lag,
+                 discretisation=t.string("discretisation", "tustin", choices=DISCRETISATIONS),
+                 details=details)
+
+
+def _gains(cfg: PiCfg, sample_time: float) -> dict[str, Any]:
+    Kp, Ki = cfg.Kp, cfg.Ki
+    gains: dict[str, Any] = {
+        "rule": cfg.rule, "structure": cfg.structure,
+        "Kp": _axes(Kp), "Ki": _axes(Ki),
+        "Ti": _axes((Kp[0] / Ki[0], Kp[1] / Ki[1])),
+        "Ki_per_sample": _axes((Ki[0] * sample_time, Ki[1] * sample_time)),
+        "decoupling": cfg.decoupling,
+        "discretisation": cfg.discretisation,
+    }
+    if cfg.lag_time_constant is not None:
+        gains["lag_time_constant"] = cfg.lag_time_constant
+    gains.update(cfg.details)
+    return gains
+
+
+_EQUATIONS = {
+    "pi": ["000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e)",
+           "002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation)"],
+    "ip": ["000 sect. 2, Fig. 2b: IP, v = Ki/s (r - y) - Kp y"],
+    "pi_lag": ["001 Fig. 2b: PI with first-order lag 1/(1 + T_d s) on the measured currents"],
+}
+_RULE_EQUATIONS = {
+    "cancellation": "Kp = L wc, Ki = R wc (closed loop wc/(s + wc), wc = ln(20)/t5)",
+    "bandwidth": "Kp = L wc, Ki = R wc (ODrive/VESC: wc = current-loop crossover)",
+    "symmetric_optimum": "Kp = L/(a T_sigma), Ti = a^2 T_sigma, T_sigma = (delay + 0.5) Ts",
+    "complex_vector": "Kp = alpha_c L, Ki = alpha_c R; delay compensation angle 1.5 Ts omega",
+    "explicit": "Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)",
+}
+
+
+def design(spec) -> ControllerArtifact:
+    """Design the PI / IP / PI-with-lag controller a spec asks for.
+
+    Parameters
+    ----------
+    spec : Spec
+        Validated spec with ``controller.method`` in ``pi``, ``ip``, ``pi_lag``.
+
+    Returns
+    -------
+    ControllerArtifact
+        Axes from :func:`design_pi`, decoupling from the motor (cross and
+        EMF on when ``decoupling = true``), gains and equations.
+    """
+    cfg: PiCfg = spec.controller.cfg
+    Ts = spec.drive.sample_time
+    axes = design_pi(cfg.Kp, cfg.Ki, Ts, structure=cfg.structure,
+                     lag_time_constant=cfg.lag_time_constant, method=cfg.discretisation)
+    dec = decoupling_from_motor(spec.motor, cross=cfg.decoupling, emf=cfg.decoupling)
+    equations = _EQUATIONS[cfg.structure] + [_RULE_EQUATIONS[cfg.rule]]
+    return make_artifact(spec, axes, dec, _gains(cfg, Ts), equations)

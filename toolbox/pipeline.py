@@ -1,0 +1,174 @@
+"""The whole job as plain function calls: spec -> design -> analysis -> verification
+-> report and header. The CLI is a thin layer over these functions.
+
+Every stage after design reads the controller artifact; nothing re-runs the
+design. Outputs are computed in memory first and written only when every
+stage succeeded (bad input writes nothing), each file atomically.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from ._io import write_atomic
+from .artifact import ControllerArtifact
+from .errors import SpecError
+from .spec import Spec, load_spec, spec_from_dict
+
+__all__ = ["DesignOutputs", "design_spec", "analyse", "run_verification", "build_outputs",
+           "write_outputs", "load_artifact", "spec_of_artifact", "OUTPUT_FILES"]
+
+OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h",
+                "report.html", "report.pdf")
+
+Progress = Callable[[str], None]
+
+
+def _quiet(_: str) -> None:
+    pass
+
+
+def design_spec(spec: Spec | str | Path | dict) -> ControllerArtifact:
+    """Design the controller a spec asks for (file path, dict or :class:`Spec`)."""
+    from .design import design
+
+    if isinstance(spec, (str, Path)):
+        spec = load_spec(spec)
+    elif isinstance(spec, dict):
+        spec = spec_from_dict(spec)
+    return design(spec)
+
+
+def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifact, dict]:
+    """Margins (into the artifact) and the full analysis document."""
+    from .analysis import analysis_report, compute_margins
+
+    margins = compute_margins(artifact, spec.motor, discrete=True)
+    artifact = artifact.with_margins({ax: m.to_json() for ax, m in margins.items()})
+    report = analysis_report(artifact, spec.motor, spec.drive)
+    checks = spec.requirements.check(_worst_margins(artifact.margins), "margins")
+    report["requirements"] = checks
+    return artifact, report
+
+
+def _worst_margins(margins: dict) -> dict:
+    """Worst value over the axes of each margin quantity (min or max by meaning)."""
+    worst: dict = {}
+    larger_is_worse = {"sensitivity_peak", "static_error"}
+    for axis in margins.values():
+        for key, value in axis.items():
+            if not isinstance(value, (int, float)):
+                continue
+            if key not in worst:
+                worst[key] = value
+            else:
+                worst[key] = max(worst[key], value) if key in larger_is_worse else min(
+                    worst[key], value)
+    return worst
+
+
+def run_verification(artifact: ControllerArtifact, spec: Spec,
+                     progress: Callable[[int, int], None] | None = None):
+    """Closed-loop simulation of every scenario (see :func:`toolbox.sim.verify`)."""
+    from .sim import verify
+
+    return verify(artifact, spec, progress=progress)
+
+
+@dataclass
+class DesignOutputs:
+    """Everything ``cct design`` produces, in memory."""
+
+    artifact: ControllerArtifact
+    spec: Spec
+    analysis: dict | None = None
+    verification: object | None = None
+    header: str | None = None
+    html: str | None = None
+    pdf: bytes | None = None
+    files: dict[str, str | bytes] = field(default_factory=dict)
+
+    @property
+    def passed(self) -> bool:
+        """Every requirement holds (margins and scenarios)."""
+        ok = True
+        if self.analysis is not None:
+            ok &= all(c["pass"] for c in self.analysis.get("requirements", {}).values())
+        if self.verification is not None:
+            ok &= self.verification.passed
+        return ok
+
+
+def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = True,
+                  report: bool = True, header: bool = True,
+                  progress: Progress = _quiet) -> DesignOutputs:
+    """Run the pipeline in memory (no files written).
+
+    Raises
+    ------
+    SpecError
+        Bad input or a design that cannot be exported; nothing is produced.
+    """
+    progress("design")
+    artifact = design_spec(spec)
+    out = DesignOutputs(artifact=artifact, spec=spec)
+    if analysis:
+        progress("analysis")
+        out.artifact, out.analysis = analyse(artifact, spec)
+    if verification:
+        progress("verification")
+        out.verification = run_verification(out.artifact, spec)
+    if header:
+        progress("firmware header")
+        from .export import write_header
+
+        out.header = write_header(out.artifact, spec.motor, spec.drive)
+    if report:
+        progress("report")
+        from .report import report_data, write_html, write_pdf
+
+        data = report_data(out)
+        out.html = write_html(data)
+        out.pdf = write_pdf(data)
+    out.files = _files(out)
+    return out
+
+
+def _files(out: DesignOutputs) -> dict[str, str | bytes]:
+    files: dict[str, str | bytes] = {"controller.json": out.artifact.dumps()}
+    if out.analysis is not None:
+        files["analysis.json"] = json.dumps(out.analysis, indent=1, allow_nan=False) + "\n"
+    if out.verification is not None:
+        files["verify.json"] = json.dumps(out.verification.to_json(), indent=1,
+                                          allow_nan=False) + "\n"
+    if out.header is not None:
+        files["controller.h"] = out.header
+    if out.html is not None:
+        files["report.html"] = out.html
+    if out.pdf is not None:
+        files["report.pdf"] = out.pdf
+    return files
+
+
+def write_outputs(files: dict[str, str | bytes], out_dir: str | Path) -> list[Path]:
+    """Write each output atomically into ``out_dir``."""
+    return [write_atomic(Path(out_dir) / name, data) for name, data in sorted(files.items())]
+
+
+def load_artifact(out_dir: str | Path) -> ControllerArtifact:
+    """Read ``out_dir/controller.json`` (validated)."""
+    path = Path(out_dir) / "controller.json"
+    try:
+        text = path.read_text("utf-8")
+    except OSError as err:
+        raise SpecError("", "a design directory with controller.json", err.strerror,
+                        file=str(path)) from None
+    return ControllerArtifact.loads(text, file=str(path))
+
+
+def spec_of_artifact(artifact: ControllerArtifact, file: str | None = None) -> Spec:
+    """The validated spec stored in an artifact (re-validated, not re-designed)."""
+    return spec_from_dict(artifact.spec, file=file)

@@ -1,0 +1,171 @@
+"""Verification: run a controller artifact through the spec's scenarios.
+
+Reads only the artifact (the executed discrete laws, decoupling and model
+parameters) and the spec's motor, drive, scenarios and requirements; nothing
+is re-designed here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ._scenario import Scenario
+from ._simulate import (AxisLaw, ControlLaw, DriveParams, FcsWeights, PlantParams,
+                        SimResult, SpeedLoop, simulate)
+
+__all__ = ["VERIFY_SCHEMA", "control_law", "plant_params", "drive_params",
+           "default_scenarios", "verify", "VerifyResult", "ScenarioOutcome", "traces_of"]
+
+VERIFY_SCHEMA = "cct.verify/1"
+
+
+def plant_params(motor) -> PlantParams:
+    """The simulated plant of a :class:`~toolbox.spec.Motor` (nominal values)."""
+    return PlantParams(R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
+                       pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
+                       torque_factor=motor.torque_factor)
+
+
+def drive_params(drive, inverter: str = "average") -> DriveParams:
+    """Simulator drive settings from a :class:`~toolbox.spec.Drive`."""
+    return DriveParams(vdc=drive.vdc, sample_time=drive.sample_time,
+                       delay_samples=drive.delay_samples, v_limit=drive.voltage_limit,
+                       inverter=inverter)
+
+
+def _axis_law(axis, reduced: bool) -> AxisLaw:
+    chosen = axis.reduced if reduced and axis.reduced is not None else axis
+    aw = None if chosen.antiwindup is None else chosen.antiwindup.reshape(-1)
+    law = chosen.law
+    return AxisLaw(law.A, law.B, law.C, law.D, aw)
+
+
+def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
+    """The simulator's :class:`ControlLaw` executing ``artifact``.
+
+    The executed law of each axis is the artifact's ``law`` (or its reduced
+    twin when the artifact's gains say ``executed = "reduced"``).
+    """
+    reduced = artifact.gains.get("executed") == "reduced"
+    dec = artifact.decoupling
+    fcs = None
+    if artifact.method == "fcs_mpc":
+        g = artifact.gains
+        fcs = FcsWeights(alpha=float(g["alpha"]), beta=float(g["beta"]),
+                         gamma=float(g["gamma"]))
+    return ControlLaw(d=_axis_law(artifact.axes["d"], reduced),
+                      q=_axis_law(artifact.axes["q"], reduced),
+                      sample_time=artifact.sample_time, R=dec.R_c, Ld=dec.Ld_c,
+                      Lq=dec.Lq_c, flux=dec.flux_c, cross=int(dec.cross), emf=int(dec.emf),
+                      speed_loop=speed_loop, fcs=fcs)
+
+
+def default_scenarios(motor) -> tuple[Scenario, ...]:
+    """Used when a spec has no ``[[scenario]]``: a q-current step to half the
+    rated current at standstill, 20 ms, and the same step during free
+    acceleration (unloaded start)."""
+    i_step = 0.5 * (motor.rated_current or 10.0)
+    return (Scenario(name="q step at standstill", kind="current_step", duration=0.02,
+                     iq_ref=i_step, step_time=0.001, keep_traces=True),
+            Scenario(name="q step, unloaded start", kind="unloaded_start", duration=0.02,
+                     iq_ref=i_step, step_time=0.001, keep_traces=True))
+
+
+def _speed_loop(scenario: Scenario, sample_time: float) -> SpeedLoop | None:
+    sl = dict(scenario.speed_loop)
+    if not sl:
+        return None
+    ts = sl.get("sample_time", sample_time)
+    ts = sample_time * max(1, round(ts / sample_time))
+    return SpeedLoop(kp=sl["kp"], ki=sl.get("ki", 0.0), kd=sl.get("kd", 0.0),
+                     sample_time=ts, iq_limit=sl.get("iq_limit", math.inf))
+
+
+@dataclass
+class ScenarioOutcome:
+    """One scenario's metrics and requirement checks."""
+
+    name: str
+    kind: str
+    metrics: dict
+    checks: dict
+    result: SimResult | None = None
+
+    @property
+    def passed(self) -> bool:
+        return all(c["pass"] for c in self.checks.values())
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "kind": self.kind, "passed": self.passed,
+                "metrics": {k: _finite_or_none(v) for k, v in self.metrics.items()},
+                "requirements": self.checks}
+
+
+@dataclass
+class VerifyResult:
+    """All scenario outcomes of a verification run."""
+
+    method: str
+    scenarios: list[ScenarioOutcome] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool:
+        return all(s.passed for s in self.scenarios)
+
+    def to_json(self) -> dict:
+        return {"schema": VERIFY_SCHEMA, "method": self.method, "passed": self.passed,
+                "scenarios": [s.to_json() for s in self.scenarios]}
+
+
+def _finite_or_none(v: float) -> float | None:
+    return float(v) if v is not None and math.isfinite(v) else None
+
+
+def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
+           keep_traces: bool = True) -> VerifyResult:
+    """Simulate ``artifact`` in every scenario of ``spec`` and check requirements.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The design to verify.
+    spec : Spec
+        Motor (the simulated plant, before per-scenario overrides), drive,
+        scenarios (defaults from :func:`default_scenarios` when none) and
+        requirements (the ``sim`` stage bounds).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each scenario.
+    keep_traces : bool
+        Keep the simulated traces (for reports) when the scenario asks.
+
+    Returns
+    -------
+    VerifyResult
+    """
+    scenarios = spec.scenarios or default_scenarios(spec.motor)
+    plant = plant_params(spec.motor)
+    inverter_default = "fcs_mpc" if artifact.method == "fcs_mpc" else "average"
+    out = VerifyResult(method=artifact.method)
+    for k, sc in enumerate(scenarios):
+        law = control_law(artifact, _speed_loop(sc, artifact.sample_time))
+        drive = drive_params(spec.drive, sc.inverter or inverter_default)
+        res = simulate(law, plant.with_overrides(dict(sc.plant_values), dict(sc.plant_scale)),
+                       sc, drive)
+        metrics = dict(res.metrics)
+        metrics["static_error_abs"] = abs(metrics.get("static_error", float("nan")))
+        checks = spec.requirements.check(metrics, "sim")
+        out.scenarios.append(ScenarioOutcome(sc.name or sc.kind, sc.kind, metrics, checks,
+                                             res if keep_traces else None))
+        if progress:
+            progress(k + 1, len(scenarios))
+    return out
+
+
+def traces_of(result: SimResult) -> dict[str, np.ndarray]:
+    """The non-empty traces of a simulation result (for reports)."""
+    names = ("t", "id", "iq", "vd", "vq", "speed", "torque", "id_ref", "iq_ref")
+    return {n: getattr(result, n) for n in names if getattr(result, n) is not None}
