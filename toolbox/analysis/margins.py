@@ -116,16 +116,52 @@ class Law:
 def axis_law(axis, discrete: bool) -> Law:
     """The law of an :class:`AxisController`.
 
-    Discrete: the executed two-input law. Continuous: the one-degree-of-
-    freedom law ``v = K (i_ref - i_meas)`` of the continuous error controller
-    (the continuous twin of the executed law is not stored); the discrete
-    error controller stands in when there is no continuous one.
+    Discrete: the executed two-input law. Continuous: for a one-degree-of-
+    freedom law (reference channel = minus measurement channel) the
+    continuous error controller as ``v = K (i_ref - i_meas)``; for a
+    two-degree-of-freedom law (IP, total compensation, ILQ) the continuous
+    twin of the executed law obtained by :func:`law_to_continuous` (the
+    artifact stores no continuous law). Without a continuous error controller
+    the discrete law is converted too.
     """
+    s = axis.law
     if discrete:
-        s = axis.law
         return Law(s.A, s.B, s.C, s.D, s.dt)
-    s = axis.continuous if axis.continuous is not None else axis.discrete
-    return Law(s.A, np.hstack([s.B, -s.B]), s.C, np.hstack([s.D, -s.D]), s.dt)
+    one_dof = (np.allclose(s.B[:, 0], -s.B[:, 1], rtol=1e-12, atol=0)
+               and np.isclose(s.D[0, 0], -s.D[0, 1], rtol=1e-12, atol=0))
+    if one_dof and axis.continuous is not None:
+        c = axis.continuous
+        return Law(c.A, np.hstack([c.B, -c.B]), c.C, np.hstack([c.D, -c.D]), None)
+    return law_to_continuous(Law(s.A, s.B, s.C, s.D, s.dt), s.method)
+
+
+def law_to_continuous(law: Law, method: str | None) -> Law:
+    """Continuous twin of a discrete law (inverse of its discretisation).
+
+    ``tustin``: inverse bilinear map, ``A_c = (2/T) E^-1 (A_d - I)``,
+    ``B_c = E^-1 B_d``, ``C_c = (4/T) C_d E^-1``, ``D_c = D_d - C_d E^-1 B_d``
+    with ``E = I + A_d`` (needs no pole at z = -1). Otherwise (``zoh``,
+    ``native``...): the ZOH inverse through the matrix logarithm of
+    ``[[A_d, B_d], [0, I]]`` (integrators allowed; needs no pole on the
+    negative real axis).
+    """
+    from scipy.linalg import logm
+
+    T = float(law.dt)
+    n, m = law.B.shape
+    if n == 0:
+        return Law(law.A, law.B, law.C, law.D, None)
+    if method == "tustin":
+        E = np.eye(n) + law.A
+        Ei = np.linalg.inv(E)
+        return Law((2 / T) * Ei @ (law.A - np.eye(n)), Ei @ law.B, (4 / T) * law.C @ Ei,
+                   law.D - law.C @ Ei @ law.B, None)
+    M = np.zeros((n + m, n + m))
+    M[:n, :n] = law.A
+    M[:n, n:] = law.B
+    M[n:, n:] = np.eye(m)
+    Lg = np.real(logm(M)) / T
+    return Law(Lg[:n, :n], Lg[:n, n:], law.C, law.D, None)
 
 
 def freqresp(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
@@ -229,3 +265,491 @@ def zoh_coupled(Ac: np.ndarray, Bc: np.ndarray, Ts: float) -> tuple[np.ndarray, 
     M[:, :n, n:] = Bc * Ts
     E = expm(M)
     return E[:, :n, :n], E[:, :n, n:]
+
+
+# --------------------------------------------------------------------------
+# per-axis loop model
+# --------------------------------------------------------------------------
+@dataclass(frozen=True)
+class AxisLoop:
+    """One current loop ready for evaluation.
+
+    Attributes
+    ----------
+    law : Law
+        Executed law (discrete) or one-degree-of-freedom continuous law.
+    plant : tuple
+        ``(A, B, C, D)`` of voltage -> current including the delay (state
+        space; a Pade approximant in continuous time).
+    discrete : bool
+    sample_time : float
+        Controller period (s).
+    R, L : float
+        Plant resistance (ohm) and inductance (H).
+    delay_samples : int
+    tau : float
+        Continuous delay (s) included in ``loop`` (0 if none).
+    w_max : float
+        Upper end of the frequency grid (rad/s): Nyquist in discrete time.
+    """
+
+    law: Law
+    plant: tuple
+    discrete: bool
+    sample_time: float
+    R: float
+    L: float
+    delay_samples: int
+    tau: float
+    w_max: float
+    exact_delay: bool
+
+    def loop(self, w: np.ndarray) -> np.ndarray:
+        """``L(j w)`` (dimensionless) at the frequencies ``w`` (rad/s)."""
+        w = np.atleast_1d(np.asarray(w, float))
+        x = np.exp(1j * w * self.sample_time) if self.discrete else 1j * w
+        K = freqresp(*self.law.error_controller(), x)[:, 0, 0]
+        if self.discrete:
+            a, b = zoh_axis(self.R, self.L, self.sample_time)
+            G = b / (x - a) * x ** (-self.delay_samples)
+        elif self.exact_delay or self.tau == 0:
+            G = np.exp(-1j * w * self.tau) / (self.R + 1j * w * self.L)
+        else:
+            G = freqresp(*self.plant, x)[:, 0, 0]
+        return K * G
+
+    def reference_loop(self) -> tuple[np.ndarray, ...]:
+        """Reference -> current closed loop (state space)."""
+        return closed_loop(self.law, self.plant)
+
+
+def make_axis_loop(axis, R: float, L: float, sample_time: float, delay_samples: int, *,
+                   discrete: bool = True, delay: str | None = None,
+                   pade_order: int = 3) -> AxisLoop:
+    """Assemble the loop of one axis (see the module docstring).
+
+    Parameters
+    ----------
+    axis : AxisController
+    R, L : float
+        Plant resistance (ohm) and inductance (H).
+    sample_time : float
+        Controller period (s).
+    delay_samples : int
+        Computation delay (periods).
+    discrete : bool
+        Sampled loop (executed law, ZOH plant, ``z^-d``) or continuous loop.
+    delay : {None, "exact", "pade"}
+        Continuous mode only: include ``tau = (d + 1/2) Ts`` as ``exp(-s tau)``
+        in the frequency response (``"exact"``) or as a Pade approximant of
+        order ``pade_order`` everywhere (``"pade"``).
+    """
+    if delay not in (None, "exact", "pade"):
+        raise ValueError(f"delay: expected None, 'exact' or 'pade', got {delay!r}")
+    law = axis_law(axis, discrete)
+    if discrete:
+        a, b = zoh_axis(R, L, sample_time)
+        plant = plant_chain(float(a), float(b), int(delay_samples), sample_time)
+        return AxisLoop(law, plant, True, sample_time, R, L, int(delay_samples), 0.0,
+                        math.pi / sample_time, False)
+    plant = (np.array([[-R / L]]), np.array([[1.0 / L]]), np.eye(1), np.zeros((1, 1)))
+    tau = 0.0
+    if delay is not None:
+        tau = (delay_samples + 0.5) * sample_time
+        plant = series(pade(tau, pade_order), plant)
+    w_max = 1e9 if delay != "exact" else min(1e9, 200.0 / tau)
+    return AxisLoop(law, plant, False, sample_time, R, L, int(delay_samples), tau, w_max,
+                    delay == "exact")
+
+
+# --------------------------------------------------------------------------
+# result
+# --------------------------------------------------------------------------
+@dataclass(frozen=True)
+class MarginsResult:
+    """Margins and linear step figures of one current loop.
+
+    The first nine attributes are the DESIGN.md MARGINS keys.
+
+    Attributes
+    ----------
+    gain_margin_db : float
+        Gain margin (dB) at the phase crossover; inf if the phase never
+        crosses -180 deg.
+    gain_crossover_rad_s : float
+        Frequency where ``|L| = 1`` (rad/s), where the phase margin is read.
+    phase_margin_deg : float
+        Phase margin (deg) at the gain crossover; inf without crossover.
+    phase_crossover_rad_s : float
+        Frequency where ``angle L = -180 deg`` (rad/s), where the gain margin
+        is read.
+    disk_margin : float
+        Balanced (skew 0) disk margin ``alpha = 1/||(S - T)/2||_inf``.
+    stability_margin : float
+        ``M_m = min_w |1 + L| = 1/||S||_inf`` (paper 003 sect. 3.3).
+    sensitivity_peak : float
+        ``||S||_inf`` (= 1/M_m).
+    bandwidth_rad_s : float
+        Closed-loop -3 dB bandwidth of the reference -> current response
+        (rad/s), relative to its DC gain.
+    static_error : float
+        Relative static error of the reference response ``|1 - T_ref(0)|``;
+        equals ``|1/(1 + L(0))|`` for one-degree-of-freedom laws, 0 with an
+        integrator.
+    stable : bool
+        Closed loop stable (if not, the margins are not guarantees).
+    domain : str
+        ``discrete`` or ``continuous`` (with ``delay`` mode).
+    delay_margin_s : float
+        Extra loop delay tolerated, ``min PM/w_gc`` over gain crossovers (s).
+    disk_gain_margin : tuple
+        Gain factors ``(low, high)`` guaranteed by the balanced disk margin.
+    disk_phase_margin_deg : float
+        Phase variation (deg) guaranteed by the balanced disk margin.
+    skewed_disk_margins : list of dict
+        ``{skew, alpha, gain_low, gain_high, phase_deg}`` for skews -1..1.
+    complementary_peak : float
+        ``||T||_inf`` of ``T = L/(1 + L)``.
+    gain_margins_db, phase_margins_deg : list
+        All crossings ``[value, frequency]`` found.
+    response_time_5pct, rise_time_10_90, settling_time_2pct : float
+        Linear step response figures (s), same definitions as the simulator
+        (:mod:`toolbox.sim`): band around the reference.
+    overshoot_pct : float
+        Step overshoot (%).
+    """
+
+    gain_margin_db: float
+    gain_crossover_rad_s: float
+    phase_margin_deg: float
+    phase_crossover_rad_s: float
+    disk_margin: float
+    stability_margin: float
+    sensitivity_peak: float
+    bandwidth_rad_s: float
+    static_error: float
+    stable: bool = True
+    domain: str = "discrete"
+    delay_margin_s: float = math.inf
+    disk_gain_margin: tuple = (0.0, math.inf)
+    disk_phase_margin_deg: float = 90.0
+    skewed_disk_margins: list = field(default_factory=list)
+    complementary_peak: float = math.nan
+    gain_margins_db: list = field(default_factory=list)
+    phase_margins_deg: list = field(default_factory=list)
+    response_time_5pct: float = math.nan
+    rise_time_10_90: float = math.nan
+    settling_time_2pct: float = math.nan
+    overshoot_pct: float = math.nan
+
+    def to_json(self, extras: bool = True) -> dict:
+        """JSON-ready dict: the MARGINS keys first, then (``extras``) the rest."""
+        data = asdict(self)
+        out = {k: data[k] for k in MARGIN_KEYS}
+        if extras:
+            out.update({k: v for k, v in data.items() if k not in MARGIN_KEYS})
+        return json_ready(out)
+
+
+# --------------------------------------------------------------------------
+# margin computation on a frequency grid with refinement
+# --------------------------------------------------------------------------
+def disk_variations(alpha: float, skew: float = 0.0) -> tuple[float, float, float]:
+    """Gain and phase variations guaranteed by a disk margin.
+
+    Parameters
+    ----------
+    alpha : float
+        Disk margin (dimensionless).
+    skew : float
+        Disk skew ``sigma`` (0 balanced, 1 for S, -1 for T).
+
+    Returns
+    -------
+    gain_low, gain_high : float
+        Real-axis intercepts of ``D(alpha, sigma)`` (gain factors).
+    phase_deg : float
+        Largest ``theta`` with ``exp(j theta)`` in the disk (deg), from
+        ``cos theta = (1 + g_low g_high)/(g_low + g_high)`` (90 deg when the
+        disk is a half plane, 180 when it contains the unit circle).
+    """
+    lo = max((1 - 0.5 * alpha * (1 - skew)) / (1 + 0.5 * alpha * (1 + skew)), 0.0)
+    den = 1 - 0.5 * alpha * (1 + skew)
+    hi = (1 + 0.5 * alpha * (1 - skew)) / den if den > 0 else math.inf
+    if not math.isfinite(hi):
+        return lo, hi, 90.0 if den == 0 else 180.0
+    c = (1 + lo * hi) / (lo + hi) if lo + hi != 0 else -2.0
+    phase = math.degrees(math.acos(c)) if abs(c) <= 1 else (180.0 if c < -1 else 0.0)
+    return float(lo), float(hi), phase
+
+
+def _grid(w_lo: float, w_hi: float, n: int, discrete: bool) -> np.ndarray:
+    w = np.logspace(math.log10(w_lo), math.log10(w_hi), n)
+    if discrete:
+        w[-1] = w_hi  # exact Nyquist point
+    return w
+
+
+def _roots_in_grid(fun, w: np.ndarray, vals: np.ndarray) -> list[float]:
+    """Refined zeros of ``fun`` at sign changes of ``vals`` on ``w``."""
+    out = []
+    idx = np.nonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) < 0)[0]
+    for i in idx:
+        try:
+            u = brentq(lambda lw: fun(math.exp(lw)), math.log(w[i]), math.log(w[i + 1]),
+                       xtol=1e-13, rtol=1e-13)
+        except ValueError:
+            continue
+        out.append(math.exp(u))
+    out += [float(w[i]) for i in np.nonzero(vals == 0)[0]]
+    return sorted(out)
+
+
+def _peak(fun, w: np.ndarray, vals: np.ndarray) -> tuple[float, float]:
+    """Maximum of ``fun`` (scalar of w) refined around the grid maximum."""
+    i = int(np.nanargmax(vals))
+    lo, hi = math.log(w[max(i - 1, 0)]), math.log(w[min(i + 1, len(w) - 1)])
+    best_w, best = float(w[i]), float(vals[i])
+    if hi > lo:
+        res = minimize_scalar(lambda lw: -fun(math.exp(lw)), bounds=(lo, hi),
+                              method="bounded", options={"xatol": 1e-10})
+        if -res.fun > best:
+            best_w, best = math.exp(res.x), float(-res.fun)
+    return best, best_w
+
+
+def _dc_gain(A, B, C, D, discrete: bool) -> float:
+    n = A.shape[0]
+    M = (np.eye(n) - A) if discrete else -A
+    return float((C @ np.linalg.solve(M, B) + D)[0, 0])
+
+
+def _has_integrator(law: Law, discrete: bool, tol: float = 1e-9) -> bool:
+    if law.n == 0:
+        return False
+    ev = np.linalg.eigvals(law.A)
+    return bool(np.any(np.abs(ev - 1) < tol) if discrete else np.any(np.abs(ev) < tol))
+
+
+def _step_response(loop: AxisLoop, A, B, C, D):
+    """Fine-grid step response of the reference loop: ``(t, y)`` or None."""
+    from ..sim._metrics import step_metrics  # noqa: F401  (same definitions)
+
+    Ts = loop.sample_time
+    if loop.discrete:
+        n_steps = 2000
+        while True:
+            x = np.zeros(A.shape[0])
+            X = np.empty((n_steps + 1, A.shape[0]))
+            Bv = B[:, 0]
+            for k in range(n_steps + 1):
+                X[k] = x
+                x = A @ x + Bv
+            # intersample: i(t_k + s) = e^{-R s/L} i_k + (1 - e^{-R s/L})/R u_k
+            nl = loop.law.n
+            i_k = X[:, nl]
+            if loop.delay_samples >= 1:
+                u_k = X[:, nl + 1]
+            else:
+                Ck, Dk = loop.law.C, loop.law.D
+                u_k = X[:, :nl] @ Ck[0] + Dk[0, 0] + Dk[0, 1] * i_k
+            m = 10
+            s = np.arange(m) * Ts / m
+            e = np.exp(-loop.R * s / loop.L)
+            y = (i_k[:, None] * e + u_k[:, None] * (1 - e) / loop.R).reshape(-1)
+            t = (np.arange(n_steps + 1)[:, None] * Ts + s).reshape(-1)
+            if _settled(y) or n_steps >= 32000:
+                return t, y
+            n_steps *= 2
+    t_end = 2000 * Ts
+    while True:
+        t = np.linspace(0.0, t_end, 8001)
+        h = t[1]
+        n = A.shape[0]
+        M = np.zeros((n + 1, n + 1))
+        M[:n, :n] = A * h
+        M[:n, n:] = B * h
+        E = expm(M)
+        x = np.zeros(n)
+        y = np.empty(t.size)
+        for k in range(t.size):
+            y[k] = C[0] @ x + D[0, 0]
+            x = E[:n, :n] @ x + E[:n, n]
+        if _settled(y) or t_end >= 3.2:
+            return t, y
+        t_end *= 2
+
+
+def _settled(y: np.ndarray) -> bool:
+    """Inside the 2 % band over the last 30 % of the window."""
+    tail = y[int(0.7 * y.size):]
+    return bool(np.all(np.abs(tail - 1.0) <= 0.02)) and np.all(np.isfinite(y))
+
+
+def _step_figures(loop: AxisLoop, cl) -> dict:
+    from ..sim._metrics import step_metrics
+
+    t, y = _step_response(loop, *cl)
+    figs = step_metrics(t, y, 0.0, 1.0, 0.0)
+    return {k: float(v) for k, v in figs.items()}
+
+
+def axis_margins(loop: AxisLoop, *, n_grid: int = 6000, w_min: float = 1e-3,
+                 step: bool = True) -> MarginsResult:
+    """Margins of one assembled loop (see :func:`compute_margins`).
+
+    Parameters
+    ----------
+    loop : AxisLoop
+        From :func:`make_axis_loop`.
+    n_grid : int
+        Points of the logarithmic grid from ``w_min`` to ``loop.w_max``.
+    w_min : float
+        Lowest frequency (rad/s).
+    step : bool
+        Also compute the linear step figures.
+    """
+    w = _grid(w_min, loop.w_max, n_grid, loop.discrete)
+    Lw = loop.loop(w)
+    L1 = lambda x: complex(loop.loop(np.array([x]))[0])  # noqa: E731
+    cl = loop.reference_loop()
+    A_cl = cl[0]
+    if loop.discrete or loop.tau == 0 or not loop.exact_delay:
+        stable = is_stable(A_cl, loop.discrete)
+    else:  # exact delay: Pade route for the closed-loop poles
+        stable = is_stable(make_axis_loop_from(loop).reference_loop()[0], False)
+
+    # gain crossovers (|L| = 1) -> phase margins
+    wgc = _roots_in_grid(lambda x: math.log(abs(L1(x))), w, np.log(np.abs(Lw)))
+    pms = []
+    for x in wgc:
+        pm = math.degrees(np.angle(-L1(x)))
+        pms.append([pm, x])
+    # phase crossovers (Im L = 0, Re L < 0) -> gain margins
+    wpc = _roots_in_grid(lambda x: L1(x).imag, w, Lw.imag)
+    if loop.discrete and abs(Lw[-1].imag) <= 1e-9 * abs(Lw[-1]) and loop.w_max not in wpc:
+        wpc.append(float(loop.w_max))
+    gms = []
+    for x in wpc:
+        Lx = L1(x)
+        if Lx.real < 0 and abs(Lx.imag) <= 1e-6 * abs(Lx):
+            gms.append([-20 * math.log10(abs(Lx)), x])
+    if gms:
+        gm_db, w_gm = min(gms, key=lambda g: abs(g[0]))
+    else:
+        gm_db, w_gm = math.inf, math.nan
+    if pms:
+        pm, w_pm = min(pms, key=lambda p: abs(p[0]))
+        delay_margin = min((math.radians(p) / x if p > 0 else 0.0) for p, x in pms)
+    else:
+        pm, w_pm, delay_margin = math.inf, math.nan, math.inf
+
+    S = lambda x: 1.0 / (1.0 + L1(x))  # noqa: E731
+    Sw = 1.0 / (1.0 + Lw)
+    Tw = Lw * Sw
+    s_peak, _ = _peak(lambda x: abs(S(x)), w, np.abs(Sw))
+    t_peak, _ = _peak(lambda x: abs(1 - S(x)), w, np.abs(Tw))
+    skewed = []
+    for sigma in (-1.0, -0.5, 0.0, 0.5, 1.0):
+        peak, _ = _peak(lambda x: abs(S(x) + 0.5 * (sigma - 1)), w,
+                        np.abs(Sw + 0.5 * (sigma - 1)))
+        alpha = 1.0 / peak
+        lo, hi, ph = disk_variations(alpha, sigma)
+        skewed.append({"skew": sigma, "alpha": alpha, "gain_low": lo, "gain_high": hi,
+                       "phase_deg": ph})
+    dm = next(d for d in skewed if d["skew"] == 0.0)
+
+    # bandwidth of the reference response (-3 dB w.r.t. DC)
+    if loop.discrete:
+        x = np.exp(1j * w * loop.sample_time)
+        Tref = np.abs(freqresp(*cl, x)[:, 0, 0])
+        Tref1 = lambda v: abs(freqresp(*cl, np.array([np.exp(1j * v * loop.sample_time)]))[0, 0, 0])  # noqa: E731
+    else:
+        Tref = np.abs(Tw)
+        Tref1 = lambda v: abs(1 - S(v))  # noqa: E731
+    dc = abs(_dc_gain(*cl, loop.discrete)) if stable else math.nan
+    bw = math.nan
+    if stable and dc > 0:
+        below = np.nonzero(Tref < dc / math.sqrt(2))[0]
+        if below.size:
+            i = below[0]
+            if i == 0:
+                bw = float(w[0])
+            else:
+                f = lambda v: Tref1(v) - dc / math.sqrt(2)  # noqa: E731
+                bw = math.exp(brentq(lambda lw: f(math.exp(lw)), math.log(w[i - 1]),
+                                     math.log(w[i])))
+        else:
+            bw = math.inf
+    if not stable:
+        ess = math.nan
+    elif _has_integrator(loop.law, loop.discrete):
+        ess = 0.0
+    else:
+        ess = abs(1.0 - _dc_gain(*cl, loop.discrete))
+
+    figs = {}
+    if step and stable:
+        cl_step = cl if not loop.exact_delay else make_axis_loop_from(loop).reference_loop()
+        figs = _step_figures(loop, cl_step)
+    return MarginsResult(
+        gain_margin_db=float(gm_db), gain_crossover_rad_s=float(w_pm),
+        phase_margin_deg=float(pm), phase_crossover_rad_s=float(w_gm),
+        disk_margin=float(dm["alpha"]), stability_margin=float(1.0 / s_peak),
+        sensitivity_peak=float(s_peak), bandwidth_rad_s=float(bw), static_error=float(ess),
+        stable=stable,
+        domain="discrete" if loop.discrete else (
+            "continuous" + ("" if loop.tau == 0 else
+                            "+exact_delay" if loop.exact_delay else "+pade_delay")),
+        delay_margin_s=float(delay_margin),
+        disk_gain_margin=(dm["gain_low"], dm["gain_high"]),
+        disk_phase_margin_deg=dm["phase_deg"], skewed_disk_margins=skewed,
+        complementary_peak=float(t_peak), gain_margins_db=gms, phase_margins_deg=pms,
+        **figs)
+
+
+def make_axis_loop_from(loop: AxisLoop, pade_order: int = 3) -> AxisLoop:
+    """The Pade twin of a continuous loop with an exact delay."""
+    return AxisLoop(loop.law, loop.plant, False, loop.sample_time, loop.R, loop.L,
+                    loop.delay_samples, loop.tau, loop.w_max, False)
+
+
+def compute_margins(artifact, motor, *, discrete: bool = True, delay: str | None = None,
+                    step: bool = True, n_grid: int = 6000) -> dict[str, MarginsResult]:
+    """Margins of the d and q current loops of an artifact on a motor.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The controller (its executed laws, sample time and delay).
+    motor : Motor
+        The plant (R in ohm, Ld/Lq in H); :func:`toolbox.plant.axis_plants`
+        gives the same ``1/(R + s L)``.
+    discrete : bool
+        True (default): sampled loop as executed (law measurement channel,
+        ZOH plant, ``z^-delay_samples``). False: continuous controller and
+        plant.
+    delay : {None, "exact", "pade"}
+        Continuous mode only; see :func:`make_axis_loop`.
+    step : bool
+        Compute the step figures (s, %) too.
+    n_grid : int
+        Frequency grid size.
+
+    Returns
+    -------
+    dict
+        ``{"d": MarginsResult, "q": MarginsResult}``.
+
+    Examples
+    --------
+    >>> m = compute_margins(artifact, motor)               # doctest: +SKIP
+    >>> m["q"].phase_margin_deg, m["q"].to_json()          # doctest: +SKIP
+    """
+    out = {}
+    for name, L in (("d", motor.Ld), ("q", motor.Lq)):
+        loop = make_axis_loop(artifact.axes[name], motor.R, L, artifact.sample_time,
+                              artifact.delay_samples, discrete=discrete,
+                              delay=None if discrete else delay)
+        out[name] = axis_margins(loop, n_grid=n_grid, step=step)
+    return out
