@@ -304,19 +304,31 @@ class AxisLoop:
     w_max: float
     exact_delay: bool
 
-    def loop(self, w: np.ndarray) -> np.ndarray:
-        """``L(j w)`` (dimensionless) at the frequencies ``w`` (rad/s)."""
+    def _x(self, w: np.ndarray) -> np.ndarray:
         w = np.atleast_1d(np.asarray(w, float))
-        x = np.exp(1j * w * self.sample_time) if self.discrete else 1j * w
-        K = freqresp(*self.law.error_controller(), x)[:, 0, 0]
+        return np.exp(1j * w * self.sample_time) if self.discrete else 1j * w
+
+    def plant_response(self, w: np.ndarray) -> np.ndarray:
+        """Plant with delay, voltage -> current (A/V), at ``w`` (rad/s)."""
+        w = np.atleast_1d(np.asarray(w, float))
+        x = self._x(w)
         if self.discrete:
             a, b = zoh_axis(self.R, self.L, self.sample_time)
-            G = b / (x - a) * x ** (-self.delay_samples)
-        elif self.exact_delay or self.tau == 0:
-            G = np.exp(-1j * w * self.tau) / (self.R + 1j * w * self.L)
-        else:
-            G = freqresp(*self.plant, x)[:, 0, 0]
-        return K * G
+            return b / (x - a) * x ** (-self.delay_samples)
+        if self.exact_delay or self.tau == 0:
+            return np.exp(-1j * w * self.tau) / (self.R + 1j * w * self.L)
+        return freqresp(*self.plant, x)[:, 0, 0]
+
+    def loop(self, w: np.ndarray) -> np.ndarray:
+        """``L(j w)`` (dimensionless) at the frequencies ``w`` (rad/s)."""
+        K = freqresp(*self.law.error_controller(), self._x(w))[:, 0, 0]
+        return K * self.plant_response(w)
+
+    def reference(self, w: np.ndarray) -> np.ndarray:
+        """Reference -> current response ``G K_r/(1 + L)`` at ``w`` (rad/s)."""
+        x = self._x(w)
+        Kr = freqresp(self.law.A, self.law.B[:, 0:1], self.law.C, self.law.D[:, 0:1], x)[:, 0, 0]
+        return self.plant_response(w) * Kr / (1.0 + self.loop(w))
 
     def reference_loop(self) -> tuple[np.ndarray, ...]:
         """Reference -> current closed loop (state space)."""
@@ -411,7 +423,8 @@ class MarginsResult:
     complementary_peak : float
         ``||T||_inf`` of ``T = L/(1 + L)``.
     gain_margins_db, phase_margins_deg : list
-        All crossings ``[value, frequency]`` found.
+        Crossings ``[value (dB or deg), frequency (rad/s)]`` found, the
+        eight lowest in frequency.
     response_time_5pct, rise_time_10_90, settling_time_2pct : float
         Linear step response figures (s), same definitions as the simulator
         (:mod:`toolbox.sim`): band around the reference.
@@ -660,13 +673,8 @@ def axis_margins(loop: AxisLoop, *, n_grid: int = 6000, w_min: float = 1e-3,
     dm = next(d for d in skewed if d["skew"] == 0.0)
 
     # bandwidth of the reference response (-3 dB w.r.t. DC)
-    if loop.discrete:
-        x = np.exp(1j * w * loop.sample_time)
-        Tref = np.abs(freqresp(*cl, x)[:, 0, 0])
-        Tref1 = lambda v: abs(freqresp(*cl, np.array([np.exp(1j * v * loop.sample_time)]))[0, 0, 0])  # noqa: E731
-    else:
-        Tref = np.abs(Tw)
-        Tref1 = lambda v: abs(1 - S(v))  # noqa: E731
+    Tref = np.abs(loop.reference(w))
+    Tref1 = lambda v: float(abs(loop.reference(np.array([v]))[0]))  # noqa: E731
     dc = abs(_dc_gain(*cl, loop.discrete)) if stable else math.nan
     bw = math.nan
     if stable and dc > 0:
@@ -687,6 +695,7 @@ def axis_margins(loop: AxisLoop, *, n_grid: int = 6000, w_min: float = 1e-3,
         ess = 0.0
     else:
         ess = abs(1.0 - _dc_gain(*cl, loop.discrete))
+        ess = 0.0 if ess < 1e-12 else ess   # rounding of an exact unit DC gain
 
     figs = {}
     if step and stable:
@@ -704,7 +713,8 @@ def axis_margins(loop: AxisLoop, *, n_grid: int = 6000, w_min: float = 1e-3,
         delay_margin_s=float(delay_margin),
         disk_gain_margin=(dm["gain_low"], dm["gain_high"]),
         disk_phase_margin_deg=dm["phase_deg"], skewed_disk_margins=skewed,
-        complementary_peak=float(t_peak), gain_margins_db=gms, phase_margins_deg=pms,
+        complementary_peak=float(t_peak), gain_margins_db=sorted(gms, key=lambda g: g[1])[:8],
+        phase_margins_deg=sorted(pms, key=lambda p: p[1])[:8],
         **figs)
 
 
@@ -753,3 +763,328 @@ def compute_margins(artifact, motor, *, discrete: bool = True, delay: str | None
                               delay=None if discrete else delay)
         out[name] = axis_margins(loop, n_grid=n_grid, step=step)
     return out
+
+
+# --------------------------------------------------------------------------
+# coupled dq loop at speed (shared with robustness.py)
+# --------------------------------------------------------------------------
+def coupled_plant(R, Ld, Lq, omega) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked ``A(omega)`` (N, 2, 2) and ``B`` (N, 2, 2) of the dq plant.
+
+    ``A = [[-R/Ld, omega Lq/Ld], [-omega Ld/Lq, -R/Lq]]``,
+    ``B = diag(1/Ld, 1/Lq)`` (paper 003 eq (3)-(4); equal to
+    :meth:`toolbox.plant.ElectricalPlant.A`, checked in the tests).
+    """
+    R, Ld, Lq, omega = np.broadcast_arrays(*(np.asarray(v, float) for v in (R, Ld, Lq, omega)))
+    R, Ld, Lq, omega = (v.reshape(-1) for v in (R, Ld, Lq, omega))
+    N = R.size
+    A = np.empty((N, 2, 2))
+    A[:, 0, 0] = -R / Ld
+    A[:, 0, 1] = omega * Lq / Ld
+    A[:, 1, 0] = -omega * Ld / Lq
+    A[:, 1, 1] = -R / Lq
+    B = np.zeros((N, 2, 2))
+    B[:, 0, 0] = 1 / Ld
+    B[:, 1, 1] = 1 / Lq
+    return A, B
+
+
+def decoupling_matrix(decoupling, omega_meas) -> np.ndarray:
+    """``W`` (N, 2, 2) with ``v += W i``: ``W = cross w_m [[0, -Lq_c], [Ld_c, 0]]``."""
+    wm = np.atleast_1d(np.asarray(omega_meas, float)).reshape(-1)
+    W = np.zeros((wm.size, 2, 2))
+    if decoupling.cross:
+        W[:, 0, 1] = -wm * decoupling.Lq_c
+        W[:, 1, 0] = wm * decoupling.Ld_c
+    return W
+
+
+@dataclass(frozen=True)
+class CoupledLoop:
+    """Stacked discrete closed loops of the coupled dq current control.
+
+    ``x+ = A x + B r + c`` with states ``[i_d, i_q, x_law_d, x_law_q,
+    q_1 .. q_d]`` (``q_j``: commanded dq voltages waiting in the delay line,
+    ``q_1`` is applied) and the dq current references ``r`` (A); ``c`` holds
+    the back-EMF and its (possibly wrong) compensation. ``A`` (N, n, n).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    c: np.ndarray
+
+    def spectral_radius(self) -> np.ndarray:
+        """Largest pole modulus of each closed loop (N,)."""
+        return np.max(np.abs(np.linalg.eigvals(self.A)), axis=-1)
+
+    def steady_currents(self, r) -> np.ndarray:
+        """Static dq currents (N, 2) for constant references ``r`` (A)."""
+        N, n, _ = self.A.shape
+        rhs = self.B @ np.asarray(r, float).reshape(2) + self.c
+        x = np.linalg.solve(np.eye(n) - self.A, rhs[..., None])[..., 0]
+        return x[:, :2]
+
+
+def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_samples: int, *,
+                        R, Ld, Lq, omega, omega_meas=None, flux=0.0) -> CoupledLoop:
+    """Vectorised closed loops of the executed dq control at fixed speeds.
+
+    Parameters
+    ----------
+    laws : dict
+        ``{"d": Law, "q": Law}`` discrete executed laws (:func:`axis_law`).
+    decoupling : Decoupling
+        Compensation terms and the controller's model parameters.
+    sample_time : float
+        Controller period (s).
+    delay_samples : int
+        Computation delay (periods).
+    R, Ld, Lq : array_like
+        True plant parameters (ohm, H, H), broadcast to N sets.
+    omega : array_like
+        True electrical speed (rad/s).
+    omega_meas : array_like, optional
+        Measured electrical speed used by the compensation (rad/s); default
+        ``omega`` (paper 000 eq (14)-(17) study its errors).
+    flux : array_like
+        True magnet flux (Wb), for the back-EMF term ``c``.
+
+    Returns
+    -------
+    CoupledLoop
+        The plant is ZOH-discretised at each speed (exact for constant speed).
+    """
+    Ts, d = sample_time, int(delay_samples)
+    omega_meas = omega if omega_meas is None else omega_meas
+    R, Ld, Lq, omega, omega_meas, flux = (
+        np.atleast_1d(v).astype(float).reshape(-1)
+        for v in np.broadcast_arrays(R, Ld, Lq, omega, omega_meas, flux))
+    N = R.size
+    Ac, Bc = coupled_plant(R, Ld, Lq, omega)
+    Phi, Gam = zoh_coupled(Ac, Bc, Ts)
+    W = decoupling_matrix(decoupling, omega_meas)
+    ld, lq = laws["d"], laws["q"]
+    nd, nq = ld.n, lq.n
+    nx = 2 + nd + nq
+    n = nx + 2 * d
+    # commanded voltage v = Kx x + Kr r + k0
+    Kx = np.zeros((N, 2, n))
+    Kx[:, :, :2] = W
+    Kx[:, 0, 0] += ld.D[0, 1]
+    Kx[:, 1, 1] += lq.D[0, 1]
+    Kx[:, 0, 2:2 + nd] = ld.C[0]
+    Kx[:, 1, 2 + nd:nx] = lq.C[0]
+    Kr = np.diag([ld.D[0, 0], lq.D[0, 0]])
+    k0 = np.zeros((N, 2))
+    if decoupling.emf:
+        k0[:, 1] = omega_meas * decoupling.flux_c
+    emf = np.zeros((N, 2))
+    emf[:, 1] = -omega * flux          # back-EMF as a voltage
+    A = np.zeros((N, n, n))
+    B = np.zeros((N, n, 2))
+    c = np.zeros((N, n))
+    A[:, :2, :2] = Phi
+    c[:, :2] = (Gam @ emf[..., None])[..., 0]
+    # law states
+    A[:, 2:2 + nd, 0] = ld.B[:, 1]
+    A[:, 2:2 + nd, 2:2 + nd] = ld.A
+    B[:, 2:2 + nd, 0] = ld.B[:, 0]
+    A[:, 2 + nd:nx, 1] = lq.B[:, 1]
+    A[:, 2 + nd:nx, 2 + nd:nx] = lq.A
+    B[:, 2 + nd:nx, 1] = lq.B[:, 0]
+    if d == 0:
+        A[:, :2, :] += Gam @ Kx
+        B[:, :2, :] += Gam @ Kr
+        c[:, :2] += (Gam @ k0[..., None])[..., 0]
+    else:
+        A[:, :2, nx:nx + 2] = Gam                       # q_1 applied
+        for j in range(d - 1):                          # q_j+ = q_{j+1}
+            A[:, nx + 2 * j:nx + 2 * j + 2, nx + 2 * j + 2:nx + 2 * j + 4] = np.eye(2)
+        last = slice(nx + 2 * (d - 1), nx + 2 * d)      # q_d+ = v
+        A[:, last, :] = Kx
+        B[:, last, :] = Kr
+        c[:, last] = k0
+    return CoupledLoop(A, B, c)
+
+
+@dataclass(frozen=True)
+class MimoMarginsResult:
+    """Multiloop (input) disk margins of the coupled dq loop over speed.
+
+    Attributes
+    ----------
+    speeds_rad_s : list
+        Electrical speeds analysed (rad/s).
+    disk_margin : list
+        Multiloop balanced disk margin at each speed (mu upper bound by
+        D-scaling; guaranteed), 0 where the closed loop is unstable.
+    disk_margin_unstructured : list
+        ``1/max_w sigma_max(S_i - I/2)`` at each speed (full-block bound).
+    stable : list of bool
+        Closed-loop stability at each speed (eigenvalues).
+    worst_speed_rad_s : float
+        Speed of the smallest multiloop disk margin (rad/s).
+    worst_disk_margin : float
+    worst_gain_margin : tuple
+        Simultaneous gain factors ``(low, high)`` tolerated in both channels
+        at the worst speed.
+    worst_phase_margin_deg : float
+        Simultaneous phase variation tolerated (deg) at the worst speed.
+    domain : str
+    """
+
+    speeds_rad_s: list
+    disk_margin: list
+    disk_margin_unstructured: list
+    stable: list
+    worst_speed_rad_s: float
+    worst_disk_margin: float
+    worst_gain_margin: tuple
+    worst_phase_margin_deg: float
+    domain: str = "discrete"
+
+    def to_json(self) -> dict:
+        return json_ready(asdict(self))
+
+
+def sigma_max_2x2(M: np.ndarray) -> np.ndarray:
+    """Largest singular value of stacked 2x2 complex matrices (closed form)."""
+    fro2 = np.sum(np.abs(M) ** 2, axis=(-2, -1))
+    det = M[..., 0, 0] * M[..., 1, 1] - M[..., 0, 1] * M[..., 1, 0]
+    disc = np.sqrt(np.maximum(fro2 ** 2 - 4 * np.abs(det) ** 2, 0.0))
+    return np.sqrt(0.5 * (fro2 + disc))
+
+
+def mu_upper_2x2(M: np.ndarray, n_scale: int = 121) -> np.ndarray:
+    """Upper bound of mu for two 1x1 complex blocks: ``min_d sigma_max(D M D^-1)``.
+
+    The minimum over a logarithmic grid of ``d`` (1e-6..1e6): every ``d``
+    gives a valid upper bound, so the grid only adds conservatism.
+    """
+    dsc = np.logspace(-6, 6, n_scale)
+    Ms = np.broadcast_to(M[..., None, :, :], M.shape[:-2] + (n_scale, 2, 2)).copy()
+    Ms[..., 0, 1] *= dsc
+    Ms[..., 1, 0] /= dsc
+    return np.min(sigma_max_2x2(Ms), axis=-1)
+
+
+def _electrical_max_speed(motor, drive) -> float:
+    mech = None
+    if drive is not None and getattr(drive, "max_speed", None):
+        mech = drive.max_speed
+    elif getattr(motor, "rated_speed", None):
+        mech = motor.rated_speed
+    elif drive is not None:
+        mech = drive.max_voltage(motor.convention) / (motor.pole_pairs * motor.flux)
+    else:
+        mech = 0.0
+    return float(mech) * motor.pole_pairs
+
+
+def mimo_loop_response(artifact, motor, omega: float, w: np.ndarray, *,
+                       discrete: bool = True, omega_meas: float | None = None) -> np.ndarray:
+    """Input loop ``L_i = (K - W) P`` (Nw, 2, 2) of the coupled dq loop.
+
+    ``P`` is the plant ``v -> i`` at electrical speed ``omega`` (ZOH with
+    ``z^-d`` in discrete time; ``exp(-s tau)``, ``tau = (d + 1/2) Ts``, in
+    continuous time), ``K = diag(K_d, K_q)`` the error controllers (executed
+    laws' measurement channels in discrete time) and ``W`` the decoupling
+    with the controller's model parameters and measured speed.
+    """
+    Ts, d = artifact.sample_time, artifact.delay_samples
+    w = np.atleast_1d(np.asarray(w, float))
+    Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
+    if discrete:
+        Phi, Gam = zoh_coupled(Ac, Bc, Ts)
+        x = np.exp(1j * w * Ts)
+        P = np.linalg.solve(x[:, None, None] * np.eye(2) - Phi[0], np.broadcast_to(Gam[0], (w.size, 2, 2)))
+        P = P * (x ** (-d))[:, None, None]
+    else:
+        x = 1j * w
+        P = np.linalg.solve(x[:, None, None] * np.eye(2) - Ac[0], np.broadcast_to(Bc[0], (w.size, 2, 2)))
+        P = P * np.exp(-1j * w * (d + 0.5) * Ts)[:, None, None]
+    C = np.zeros((w.size, 2, 2), complex)
+    for k, name in enumerate(AXES):
+        law = axis_law(artifact.axes[name], discrete)
+        C[:, k, k] = freqresp(*law.error_controller(), x)[:, 0, 0]
+    W = decoupling_matrix(artifact.decoupling, omega if omega_meas is None else omega_meas)[0]
+    return (C - W) @ P
+
+
+def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
+                      n_grid: int = 1500, discrete: bool = True,
+                      max_speed_rad_s: float | None = None) -> MimoMarginsResult:
+    """Balanced multiloop input disk margin of the coupled loop over speed.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        True plant (equal to the controller's model unless you pass another).
+    drive : Drive, optional
+        ``max_speed`` (mechanical, rad/s) sets the speed range; else
+        ``motor.rated_speed``; else the speed where the back-EMF reaches the
+        voltage limit.
+    n_speeds : int
+        Electrical speeds on ``linspace(-w_max, w_max)`` (odd: includes 0).
+    n_grid : int
+        Frequency points (log grid 1e-2 rad/s .. Nyquist, or 1e7 rad/s).
+    discrete : bool
+        Sampled loop (default) or continuous loop with ``exp(-s tau)``.
+    max_speed_rad_s : float, optional
+        Electrical speed range override (rad/s).
+
+    Returns
+    -------
+    MimoMarginsResult
+        Formula: ``alpha(omega) = 1/max_w mu_ub(S_i(jw) - I/2)`` with
+        ``S_i = (I + L_i)^-1`` (module docstring); the residual coupling
+        left by the delayed, sampled decoupling is in ``L_i``.
+    """
+    wmax = max_speed_rad_s if max_speed_rad_s is not None else _electrical_max_speed(motor, drive)
+    speeds = np.linspace(-wmax, wmax, n_speeds) if wmax > 0 else np.zeros(1)
+    Ts = artifact.sample_time
+    w_hi = math.pi / Ts if discrete else 1e7
+    w = _grid(1e-2, w_hi, n_grid, discrete)
+    if discrete:
+        w = w[:-1]  # z = -1 exactly can hit a Tustin controller's pole/zero
+    laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
+    dm, du, st = [], [], []
+    for om in speeds:
+        if discrete:
+            loop = coupled_closed_loop(laws, artifact.decoupling, Ts, artifact.delay_samples,
+                                       R=motor.R, Ld=motor.Ld, Lq=motor.Lq, omega=om)
+            stable = bool(loop.spectral_radius()[0] < 1 - 1e-9)
+        else:
+            stable = _continuous_coupled_stable(artifact, motor, om)
+        Li = mimo_loop_response(artifact, motor, om, w, discrete=discrete)
+        S = np.linalg.inv(np.eye(2) + Li)
+        M = S - 0.5 * np.eye(2)
+        a_mu = 1.0 / float(np.max(mu_upper_2x2(M))) if stable else 0.0
+        a_u = 1.0 / float(np.max(sigma_max_2x2(M))) if stable else 0.0
+        dm.append(a_mu)
+        du.append(a_u)
+        st.append(stable)
+    k = int(np.argmin(dm))
+    lo, hi, ph = disk_variations(dm[k], 0.0)
+    return MimoMarginsResult([float(x) for x in speeds], dm, du, st, float(speeds[k]), dm[k],
+                             (lo, hi), ph, "discrete" if discrete else "continuous+exact_delay")
+
+
+def _continuous_coupled_stable(artifact, motor, omega: float, pade_order: int = 3) -> bool:
+    """Closed-loop stability of the continuous coupled loop (Pade delay)."""
+    import control
+
+    Ts, d = artifact.sample_time, artifact.delay_samples
+    Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
+    P = control.ss(Ac[0], Bc[0], np.eye(2), np.zeros((2, 2)))
+    num, den = control.pade((d + 0.5) * Ts, pade_order)
+    Dl = control.ss(control.tf(num, den))
+    P = P * control.append(Dl, Dl)
+    Ks = []
+    for name in AXES:
+        law = axis_law(artifact.axes[name], False)
+        Ks.append(control.ss(*law.error_controller()))
+    C = control.append(*Ks) - control.ss([], [], [], decoupling_matrix(artifact.decoupling, omega)[0])
+    cl = control.feedback(P * C, np.eye(2))
+    return bool(np.all(np.real(cl.poles()) < 0))

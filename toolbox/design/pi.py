@@ -261,8 +261,8 @@ def _reject_foreign(t: Table, rule: str, structure: str) -> None:
     mine = set(_RULE_KEYS[rule])
     for name in t.data:
         if name in _ALL_RULE_KEYS and name not in mine:
-            raise SpecError(t.key(name), f'no such key with rule = "{rule}"',
-                            hint=f"keys of this rule: {', '.join(_RULE_KEYS[rule])}")
+            raise SpecError(t.key(name), f'only keys that rule = "{rule}" reads',
+                            hint=f"its keys: {', '.join(_RULE_KEYS[rule])}")
 
 
 def _bandwidth(t: Table) -> tuple[float, float]:
@@ -294,7 +294,8 @@ def _explicit(t: Table, structure: str, drive) -> tuple[tuple, tuple, dict]:
         return (gains[0][0], gains[1][0]), (gains[0][1], gains[1][1]), details
     for name in ("voltage_gain", "sensor_gain"):
         if t.has(name):
-            raise SpecError(t.key(name), "no such key without Kp_normalised/Ki_normalised")
+            raise SpecError(t.key(name), "Kp_normalised and Ki_normalised alongside it",
+                            hint="voltage_gain and sensor_gain scale the normalised gains")
     Kp = t.per_axis("Kp", positive=True, unit="V/A")
     Ki = t.per_axis("Ki", positive=True, unit="V/(A s)")
     return Kp, Ki, {}
@@ -314,6 +315,9 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
         gains or lag time constant; the key path is ``controller.<method>.<key>``.
     """
     allowed = _COMMON_KEYS + _ALL_RULE_KEYS + (("lag_time_constant",) if method == "pi_lag" else ())
+    if method != "pi_lag" and "lag_time_constant" in table.data:
+        raise SpecError(table.key("lag_time_constant"), 'method = "pi_lag" for a lag',
+                        hint="the PI with first-order lag of paper 001 Fig. 2b")
     t = Table(table.data, table.prefix, allowed)
     explicit_given = any(t.has(k) for k in ("Kp", "Ki", "Kp_normalised", "Ki_normalised"))
     rule = t.string("rule", "explicit" if explicit_given else "cancellation", choices=RULES)

@@ -47,9 +47,9 @@ METHOD_NAMES = {
 #: MARGINS keys (DESIGN.md) -> (label, unit).
 MARGIN_ROWS = {
     "gain_margin_db": ("Gain margin", "dB"),
-    "gain_crossover_rad_s": ("Gain-margin frequency", "rad/s"),
+    "gain_crossover_rad_s": ("Gain crossover frequency (|L| = 1)", "rad/s"),
     "phase_margin_deg": ("Phase margin", "deg"),
-    "phase_crossover_rad_s": ("Phase-margin frequency", "rad/s"),
+    "phase_crossover_rad_s": ("Phase crossover frequency (-180 deg)", "rad/s"),
     "disk_margin": ("Disk margin", "1"),
     "stability_margin": ("Stability margin (1/max|S|)", "1"),
     "sensitivity_peak": ("Sensitivity peak max|S|", "1"),
@@ -242,7 +242,7 @@ def _margin_table(margins: dict | None, checks: list | None) -> list[dict]:
         vals = {ax: (_as_float((margins or {}).get(ax, {}).get(key)) if margins else None)
                 for ax in ("d", "q")}
         req = by_quantity.get(key, [])
-        bound = "; ".join(_bound_text(c) for c in req) if req else ""
+        bound = "; ".join(dict.fromkeys(_bound_text(c) for c in req)) if req else ""
         status = ("pass" if all(c.get("pass") for c in req) else "fail") if req else ""
         rows.append({"key": key, "label": label, "unit": unit,
                      "d": fmt(vals["d"]), "q": fmt(vals["q"]),
@@ -411,9 +411,10 @@ def build_context(data: ReportData) -> dict:
                        fmt(spec.drive.max_voltage(motor.convention)), "V"))
     from ..spec import REQUIREMENT_KEYS
 
-    req_rows = [(k, REQUIREMENT_KEYS[k][1], (">=" if REQUIREMENT_KEYS[k][0] == "min" else "<=")
-                 + " " + fmt(v), REQUIREMENT_KEYS[k][2])
-                for k, v in getattr(spec.requirements, "bounds", {}).items()]
+    req_rows = []
+    for k, v in getattr(spec.requirements, "bounds", {}).items():
+        direction, quantity, unit = REQUIREMENT_KEYS[k][-3:]  # (.., direction, quantity, unit)
+        req_rows.append((k, quantity, (">=" if direction == "min" else "<=") + " " + fmt(v), unit))
     margins = _margins_of(data)
     loops = plots.loop_data(art, motor)
     figures = plots.figures(loops, weights=data.weights)

@@ -179,6 +179,7 @@ def bode_svg(loops: dict, prefix: str = "bode") -> str:
     """Bode diagram of ``L`` per axis, with the margins read off the curve marked."""
     fig = _figure(7.2, 4.6)
     ax_m, ax_p = fig.subplots(2, 1, sharex=True)
+    lines: list[tuple[str, str]] = []
     for name, lp in loops.items():
         w, L = lp["omega"], lp["L"]
         c = AXIS_COLORS[name]
@@ -187,18 +188,19 @@ def bode_svg(loops: dict, prefix: str = "bode") -> str:
         phase -= 360.0 * round(float(phase[0]) / 360.0 + 0.5) if phase[0] > 0 else 0.0
         ax_p.semilogx(w, phase, color=c, label=f"{name} axis")
         cr = crossings(w, L)
+        lines.append((c, f"{name} axis: " + (f"PM {cr['pm_deg']:.1f} deg at {cr['w_pm']:.3g} rad/s"
+                                            if cr["w_pm"] else "no gain crossover")
+                      + ("; " + f"GM {cr['gm_db']:.1f} dB at {cr['w_gm']:.3g} rad/s"
+                         if cr["w_gm"] else "; no phase crossover")))
         if cr["w_pm"]:
             ax_m.plot([cr["w_pm"]], [0.0], "o", color=c, ms=5)
             ph_at = np.interp(math.log(cr["w_pm"]), np.log(w), phase)
-            ax_p.vlines(cr["w_pm"], -180.0, ph_at, color=c, lw=2.2, alpha=0.8)
-            ax_p.annotate(f"PM {cr['pm_deg']:.1f} deg\nat {cr['w_pm']:.3g} rad/s",
-                          (cr["w_pm"], ph_at), textcoords="offset points",
-                          xytext=(6, -22 if name == "d" else -44), color=c, fontsize=8)
+            ax_p.vlines(cr["w_pm"], -180.0, ph_at, color=c, lw=2.2, alpha=0.7)
         if cr["w_gm"]:
-            ax_m.vlines(cr["w_gm"], -cr["gm_db"], 0.0, color=c, lw=2.2, alpha=0.8)
-            ax_m.annotate(f"GM {cr['gm_db']:.1f} dB\nat {cr['w_gm']:.3g} rad/s",
-                          (cr["w_gm"], -cr["gm_db"]), textcoords="offset points",
-                          xytext=(-95, -20 if name == "d" else 10), color=c, fontsize=8)
+            ax_m.vlines(cr["w_gm"], -cr["gm_db"], 0.0, color=c, lw=2.2, alpha=0.7)
+    for k, (c, text) in enumerate(lines):
+        ax_m.text(0.02, 0.05 + 0.11 * (len(lines) - 1 - k), text, transform=ax_m.transAxes,
+                  color=c, fontsize=8, bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1})
     ax_m.axhline(0.0, color="k", lw=0.8)
     ax_p.axhline(-180.0, color="k", lw=0.8)
     ax_m.set_ylabel("|L| (dB)")
@@ -352,7 +354,7 @@ def equation_svg(tex: str, prefix: str | None = None) -> str | None:
     prefix = prefix or "eq" + format(abs(hash_text(tex)) % 10**8, "08d")
     fig = _figure(9.0, 0.6)
     fig.set_layout_engine(None)
-    fig.text(0.01, 0.5, f"${tex}$", fontsize=13, va="center")
+    fig.text(0.01, 0.5, f"${tex}$", fontsize=17, va="center")
     try:
         return svg_from_figure(fig, prefix, tight=True)
     except ValueError:  # mathtext parse error

@@ -1,0 +1,366 @@
+"""LQ servo (LQI) current control via Riccati equations.
+
+Per axis (after decoupling) the plant is ``di/dt = a i + b u`` with
+``a = -R/L`` (1/s), ``b = 1/L`` (1/H) (paper 001 eq (1); paper 003 eq (33)-(34)).
+Integral action enters as the servo state ``z`` with ``z' = i_ref - i``.
+
+Continuous design (``domain = "continuous"``): CARE on ``x = [i, z]``,
+``u = -K x``; the executed law is discretised with Tustin.
+
+Discrete design (``domain = "discrete"``): at the sample time ``Ts`` with the
+computation delay of ``d = drive.delay_samples`` periods modelled as extra
+states (the previous inputs): ``x_k = [i_k, z_k, u_{k-1}, ..., u_{k-d}]``,
+
+    i_{k+1} = Phi i_k + Gamma u_{k-d},  z_{k+1} = z_k + Ts (i_ref,k - i_k),
+
+``Phi = exp(a Ts)``, ``Gamma = (Phi - 1) b / a`` (zero-order hold), DARE with
+``Q Ts``, ``R Ts`` (the sampled continuous cost; delayed inputs unweighted).
+The executed law keeps ``z`` and the input history as its states (native
+discrete design).
+
+Default weights (Bryson's rule): ``q_i = 1/i_max^2``, ``r = 1/v_max^2`` and
+``q_z = (w_b / i_max)^2`` (an integral error of ``i_max / w_b`` costs as much as
+``i_max``), with ``i_max`` = ``current_limit`` (default motor rated or max
+current), ``v_max`` = ``voltage_limit`` (default ``drive.max_voltage``) and
+``w_b`` = ``bandwidth`` (default ``pi / (10 Ts)``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import control
+import numpy as np
+import scipy.linalg as sla
+
+from ..artifact import AxisController, ControllerArtifact
+from ..errors import SpecError
+from ._common import decoupling_from_motor, make_artifact
+
+__all__ = ["LqCfg", "LqAxis", "bryson_weights", "lqi_continuous", "lqi_discrete",
+           "design_lq", "read_cfg", "design"]
+
+_KEY = "controller.lq"
+AXES = ("d", "q")
+
+
+@dataclass(frozen=True)
+class LqCfg:
+    """Validated ``[controller.lq]``.
+
+    Attributes
+    ----------
+    domain : str
+        ``"continuous"`` (CARE) or ``"discrete"`` (DARE with the delay).
+    Q : dict
+        Per axis diagonal ``(q_i, q_z)`` (1/A^2, 1/(A s)^2).
+    R : dict
+        Per axis input weight (1/V^2).
+    bandwidth, current_limit, voltage_limit : float
+        What the default weights were derived from (rad/s, A, V).
+    """
+
+    domain: str
+    Q: dict
+    R: dict
+    bandwidth: float
+    current_limit: float | None
+    voltage_limit: float
+
+
+def bryson_weights(current_limit: float, voltage_limit: float,
+                   bandwidth: float) -> tuple[tuple[float, float], float]:
+    """Bryson's-rule weights of the LQI servo.
+
+    Parameters
+    ----------
+    current_limit : float
+        Largest acceptable current error (A).
+    voltage_limit : float
+        Largest voltage (V).
+    bandwidth : float
+        Target bandwidth (rad/s) tying the integral weight.
+
+    Returns
+    -------
+    (q_i, q_z) : tuple of float
+        ``1/i_max^2`` (1/A^2) and ``(w_b/i_max)^2`` (1/(A s)^2).
+    r : float
+        ``1/v_max^2`` (1/V^2).
+    """
+    return (1.0 / current_limit ** 2, (bandwidth / current_limit) ** 2), 1.0 / voltage_limit ** 2
+
+
+def _check_weights(Q: tuple[float, float], R: float, axis: str) -> None:
+    q_i, q_z = Q
+    if not (math.isfinite(q_i) and math.isfinite(q_z) and q_i >= 0 and q_z > 0):
+        raise SpecError(f"{_KEY}.Q", f"[q_i, q_z] for the {axis} axis with q_i >= 0 and q_z > 0 "
+                        "(the integrator must be weighted for the Riccati solution to "
+                        "stabilise it)", list(Q))
+    if not (math.isfinite(R) and R > 0):
+        raise SpecError(f"{_KEY}.R", f"an input weight > 0 (1/V^2) for the {axis} axis "
+                        "(R must be positive definite)", R)
+
+
+@dataclass(frozen=True)
+class LqAxis:
+    """LQI design of one axis.
+
+    Attributes
+    ----------
+    K : ndarray (1, n)
+        State feedback ``u = -K x`` on ``[i, z, u_{k-1}, .., u_{k-d}]``
+        (continuous: ``[i, z]``).
+    A, B : ndarray
+        Augmented design model (continuous or discrete).
+    Q, R : ndarray
+        Weights used in the Riccati equation.
+    poles : ndarray
+        Closed-loop eigenvalues of ``A - B K`` (rad/s or z-plane).
+    domain : str
+    sample_time : float
+    delay_samples : int
+    """
+
+    K: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    poles: np.ndarray
+    domain: str
+    sample_time: float
+    delay_samples: int
+
+    def law(self) -> control.StateSpace:
+        """Two-input law ``[i_ref, i] -> u`` (continuous for the CARE design,
+        discrete at ``sample_time`` for the DARE design)."""
+        k = self.K.ravel()
+        if self.domain == "continuous":
+            # state z, z' = i_ref - i, u = -k_i i - k_z z
+            return control.ss([[0.0]], [[1.0, -1.0]], [[-k[1]]], [[0.0, -k[0]]])
+        d, ts = self.delay_samples, self.sample_time
+        n = 1 + d                                      # [z, u_{k-1}, ..., u_{k-d}]
+        C = -k[1:].reshape(1, n)                       # u = C xi - k_i i
+        D = np.array([[0.0, -k[0]]])
+        A = np.zeros((n, n))
+        B = np.zeros((n, 2))
+        A[0, 0] = 1.0
+        B[0] = [ts, -ts]
+        if d:
+            A[1] = C                                   # u_{k-1}^+ = u_k
+            B[1] = D
+            for j in range(2, n):
+                A[j, j - 1] = 1.0                      # shift register
+        return control.ss(A, B, C, D, ts)
+
+
+def lqi_continuous(a: float, b: float, Q: tuple[float, float], R: float) -> LqAxis:
+    """Continuous LQI (CARE) of ``di/dt = a i + b u`` with ``z' = i_ref - i``.
+
+    Parameters
+    ----------
+    a, b : float
+        Plant coefficients (1/s, 1/H).
+    Q : (float, float)
+        ``(q_i, q_z)`` diagonal state weight.
+    R : float
+        Input weight (1/V^2).
+
+    Returns
+    -------
+    LqAxis
+    """
+    A = np.array([[a, 0.0], [-1.0, 0.0]])
+    B = np.array([[b], [0.0]])
+    Qm, Rm = np.diag(Q), np.array([[R]])
+    P = sla.solve_continuous_are(A, B, Qm, Rm)
+    K = np.linalg.solve(Rm, B.T @ P)
+    return LqAxis(K, A, B, Qm, Rm, np.linalg.eigvals(A - B @ K), "continuous", 0.0, 0)
+
+
+def discrete_model(a: float, b: float, sample_time: float,
+                   delay_samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """ZOH servo model with the computation delay as input-history states.
+
+    Returns
+    -------
+    A, B : ndarray
+        On ``[i, z, u_{k-1}, ..., u_{k-d}]``.
+    """
+    ts, d = sample_time, delay_samples
+    phi = math.exp(a * ts)
+    gam = (phi - 1.0) / a * b if a != 0 else b * ts
+    n = 2 + d
+    A = np.zeros((n, n))
+    B = np.zeros((n, 1))
+    A[0, 0] = phi
+    A[1, 0], A[1, 1] = -ts, 1.0
+    if d == 0:
+        B[0, 0] = gam
+    else:
+        A[0, n - 1] = gam                              # the input applied now is u_{k-d}
+        B[2, 0] = 1.0
+        for j in range(3, n):
+            A[j, j - 1] = 1.0
+    return A, B
+
+
+def lqi_discrete(a: float, b: float, Q: tuple[float, float], R: float,
+                 sample_time: float, delay_samples: int = 1) -> LqAxis:
+    """Discrete LQI (DARE) at ``sample_time`` with ``delay_samples`` of delay.
+
+    Parameters
+    ----------
+    a, b : float
+        Plant coefficients (1/s, 1/H).
+    Q : (float, float)
+        ``(q_i, q_z)``; the cost is sampled as ``Q Ts`` (input history unweighted).
+    R : float
+        Input weight (1/V^2), used as ``R Ts``.
+    sample_time : float
+        Controller period (s).
+    delay_samples : int
+        Computation delay (periods), >= 0.
+
+    Returns
+    -------
+    LqAxis
+    """
+    A, B = discrete_model(a, b, sample_time, delay_samples)
+    n = A.shape[0]
+    Qm = np.zeros((n, n))
+    Qm[0, 0], Qm[1, 1] = Q
+    Qm *= sample_time
+    Rm = np.array([[R * sample_time]])
+    P = sla.solve_discrete_are(A, B, Qm, Rm)
+    K = np.linalg.solve(Rm + B.T @ P @ B, B.T @ P @ A)
+    return LqAxis(K, A, B, Qm, Rm, np.linalg.eigvals(A - B @ K), "discrete", sample_time,
+                  delay_samples)
+
+
+def design_lq(Ld: float, Lq: float, R: float, Q: dict, Rw: dict, sample_time: float, *,
+              domain: str = "discrete", delay_samples: int = 1) -> dict[str, LqAxis]:
+    """LQI design of both axes.
+
+    Parameters
+    ----------
+    Ld, Lq, R : float
+        Inductances (H) and resistance (ohm).
+    Q : dict
+        ``{"d": (q_i, q_z), "q": (q_i, q_z)}``.
+    Rw : dict
+        ``{"d": r, "q": r}`` (1/V^2).
+    sample_time : float
+        Controller period (s).
+    domain : {"continuous", "discrete"}
+    delay_samples : int
+        Computation delay (periods), discrete design only.
+
+    Returns
+    -------
+    dict of str to LqAxis
+
+    Examples
+    --------
+    >>> ax = design_lq(1.4e-3, 2.8e-3, 0.6, {"d": (1e-2, 1e5), "q": (1e-2, 1e5)},
+    ...                {"d": 1e-4, "q": 1e-4}, 1e-4)["q"]
+    >>> bool(np.all(np.abs(ax.poles) < 1))
+    True
+    """
+    out = {}
+    for ax, L in zip(AXES, (Ld, Lq)):
+        _check_weights(Q[ax], Rw[ax], ax)
+        a, b = -R / L, 1.0 / L
+        out[ax] = (lqi_continuous(a, b, Q[ax], Rw[ax]) if domain == "continuous"
+                   else lqi_discrete(a, b, Q[ax], Rw[ax], sample_time, delay_samples))
+    return out
+
+
+def read_cfg(method: str, table, motor, drive) -> LqCfg:
+    """Validate ``[controller.lq]``.
+
+    Keys: ``domain`` ("continuous" | "discrete", default "discrete"); ``Q``
+    (``[q_i, q_z]`` or ``{d = [..], q = [..]}``) and ``R`` (number or
+    ``{d =, q =}``) explicit, otherwise Bryson's rule from ``bandwidth``
+    (rad/s, default pi/(10 Ts)), ``current_limit`` (A, default
+    motor.rated_current or motor.max_current) and ``voltage_limit`` (V,
+    default drive.max_voltage).
+    """
+    from ..spec import Table
+
+    t = Table(table.data, table.prefix,
+              ("domain", "Q", "R", "bandwidth", "current_limit", "voltage_limit"))
+    domain = t.string("domain", "discrete", choices=("continuous", "discrete"))
+    bandwidth = t.number("bandwidth", math.pi / (10 * drive.sample_time), positive=True,
+                         unit="rad/s")
+    i_max = t.number("current_limit", motor.rated_current or motor.max_current,
+                     positive=True, unit="A")
+    v_max = t.number("voltage_limit", drive.max_voltage(motor.convention), positive=True,
+                     unit="V")
+    if i_max is None and not t.has("Q"):
+        raise SpecError(t.key("current_limit"), "a current limit (A) for Bryson's rule "
+                        "(missing: the motor gives neither rated_current nor max_current)")
+    if t.has("Q"):
+        Q = _read_q(t)
+    else:
+        Qb, _ = bryson_weights(i_max, v_max, bandwidth)
+        Q = {"d": Qb, "q": Qb}
+    if t.has("R"):
+        rd, rq = t.per_axis("R", positive=True, unit="1/V^2")
+        Rw = {"d": rd, "q": rq}
+    else:
+        r = 1.0 / v_max ** 2
+        Rw = {"d": r, "q": r}
+    for ax in AXES:
+        _check_weights(Q[ax], Rw[ax], ax)
+    return LqCfg(domain, Q, Rw, bandwidth, i_max, v_max)
+
+
+def _read_q(t) -> dict:
+    value = t.raw("Q")
+    if isinstance(value, dict):
+        from ..spec import Table
+
+        sub = Table(value, t.key("Q"), AXES)
+        return {ax: sub.numbers(ax, length=2) for ax in AXES}
+    q = t.numbers("Q", length=2)
+    return {"d": q, "q": q}
+
+
+def design(spec) -> ControllerArtifact:
+    """LQI artifact from a validated spec (method ``lq``).
+
+    Continuous domain: the law (integrator state) is discretised with Tustin
+    and the axis carries the continuous error controller ``k_i + (-k_z)/s``.
+    Discrete domain: the law is the native discrete controller (integrator and
+    input-history states); no continuous twin is given.
+    """
+    cfg: LqCfg = spec.controller.cfg
+    m, dr = spec.motor, spec.drive
+    ts = dr.sample_time
+    des = design_lq(m.Ld, m.Lq, m.R, cfg.Q, cfg.R, ts, domain=cfg.domain,
+                    delay_samples=dr.delay_samples)
+    axes = {}
+    for ax in AXES:
+        if cfg.domain == "continuous":
+            axes[ax] = AxisController.from_law(des[ax].law(), sample_time=ts, method="tustin")
+        else:
+            axes[ax] = AxisController.from_law(des[ax].law(), sample_time=ts, method="native")
+    gains: dict[str, Any] = {
+        "domain": cfg.domain,
+        "state": ("[i, integral(i_ref - i)]" if cfg.domain == "continuous" else
+                  "[i, Ts-sum(i_ref - i), u(k-1), .., u(k-d)]"),
+        "K": {ax: des[ax].K for ax in AXES},
+        "Q": {ax: list(cfg.Q[ax]) for ax in AXES},
+        "R": {ax: cfg.R[ax] for ax in AXES},
+        "closed_loop_poles": {ax: [complex(p) for p in des[ax].poles] for ax in AXES},
+        "bandwidth": cfg.bandwidth,
+        "current_limit": cfg.current_limit,
+        "voltage_limit": cfg.voltage_limit,
+        "delay_samples": dr.delay_samples if cfg.domain == "discrete" else 0,
+    }
+    eqs = ["001 eq (1)", "003 eq (33)-(34)"]
+    return make_artifact(spec, axes, decoupling_from_motor(m), gains, eqs)
