@@ -32,7 +32,13 @@ def _quiet(_: str) -> None:
 
 
 def design_spec(spec: Spec | str | Path | dict) -> ControllerArtifact:
-    """Design the controller a spec asks for (file path, dict or :class:`Spec`)."""
+    """Design the controller a spec asks for.
+
+    Parameters
+    ----------
+    spec : Spec, str, Path or dict
+        A validated spec, a spec file or the spec as plain data.
+    """
     from .design import design
 
     if isinstance(spec, (str, Path)):
@@ -43,7 +49,22 @@ def design_spec(spec: Spec | str | Path | dict) -> ControllerArtifact:
 
 
 def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifact, dict]:
-    """Margins (into the artifact) and the full analysis document."""
+    """Margins (into the artifact) and the full analysis document.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The design.
+    spec : Spec
+        Motor, drive and requirements (the ``margins`` stage bounds).
+
+    Returns
+    -------
+    artifact : ControllerArtifact
+        A copy with ``margins`` filled.
+    analysis : dict
+        JSON-ready analysis (``analysis.json``), with requirement checks.
+    """
     from .analysis import analysis_report, compute_margins
 
     margins = compute_margins(artifact, spec.motor, discrete=True)
@@ -72,7 +93,17 @@ def _worst_margins(margins: dict) -> dict:
 
 def run_verification(artifact: ControllerArtifact, spec: Spec,
                      progress: Callable[[int, int], None] | None = None):
-    """Closed-loop simulation of every scenario (see :func:`toolbox.sim.verify`)."""
+    """Closed-loop simulation of every scenario (see :func:`toolbox.sim.verify`).
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The design to simulate.
+    spec : Spec
+        Plant, drive, scenarios and requirements.
+    progress : callable, optional
+        ``progress(done, total)`` after each scenario.
+    """
     from .sim import verify
 
     return verify(artifact, spec, progress=progress)
@@ -106,6 +137,15 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
                   report: bool = True, header: bool = True,
                   progress: Progress = _quiet) -> DesignOutputs:
     """Run the pipeline in memory (no files written).
+
+    Parameters
+    ----------
+    spec : Spec
+        Validated spec.
+    analysis, verification, report, header : bool
+        Which stages after design to run (all by default).
+    progress : callable
+        Called with the name of each stage as it starts.
 
     Raises
     ------

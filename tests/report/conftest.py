@@ -132,3 +132,9 @@ def full_data() -> ReportData:
 def minimal_data() -> ReportData:
     spec = _spec("Minimal report")
     return ReportData(title="Minimal report", spec=spec, artifact=_artifact(spec))
+
+
+@pytest.fixture(scope="session")
+def hostile() -> str:
+    """A title that is HTML, shell and typst markup/code at once."""
+    return HOSTILE

@@ -11,7 +11,7 @@ import pytest
 from toolbox.report import build_context, write_html
 from toolbox.report.plots import crossings
 
-from .conftest import HOSTILE
+
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +29,7 @@ def test_no_external_resources(html):
     assert "http://" not in text and "https://" not in text
 
 
-def test_hostile_title_is_escaped(html):
+def test_hostile_title_is_escaped(html, hostile):
     assert "<script>alert(1)</script>" not in html
     escaped = "&lt;script&gt;alert(1)&lt;/script&gt; &amp; &#34;quotes&#34; &#39; ; rm -rf /"
     assert html.count(escaped) >= 3  # <title>, <h1>, scenario table/heading, certificate

@@ -27,7 +27,19 @@ def _module(method: str):
 
 
 def read_method_cfg(method: str, table, motor, drive) -> Any:
-    """Validate ``[controller.<method>]`` into the method's ``*Cfg`` object."""
+    """Validate ``[controller.<method>]`` into the method's ``*Cfg`` object.
+
+    Parameters
+    ----------
+    method : str
+        Design method name.
+    table : Table
+        The ``[controller.<method>]`` table.
+    motor : Motor
+        Validated motor (gains may derive from it).
+    drive : Drive
+        Validated drive (sample time, delay).
+    """
     return _module(method).read_cfg(method, table, motor, drive)
 
 

@@ -58,8 +58,9 @@ def l1_state_bound(F: np.ndarray, G: np.ndarray, amp: np.ndarray,
         aP = np.abs(P)
         if max(abs(np.linalg.eigvals(aP))) < 0.5:
             return np.linalg.solve(np.eye(n) - aP, S)
-        S = S + aP @ S
-        P = P @ P
+        with np.errstate(over="ignore", invalid="ignore"):
+            S = S + aP @ S
+            P = P @ P
         if not np.all(np.isfinite(P)) or not np.all(np.isfinite(S)):
             return None
     return None
@@ -149,7 +150,7 @@ def _quantise_row(c: np.ndarray, guard: int) -> tuple[np.ndarray, int] | None:
     return m, F
 
 
-def plan_fixed(reals: dict, aw_bound_ok: dict, *, I_MAX: float, W_MAX: float,
+def plan_fixed(reals: dict, *, I_MAX: float, W_MAX: float,
                V_MAX: float, dec_coeffs: dict) -> tuple[FixedPlan | None, str]:
     """Choose bases, state scales and Q31 coefficient sets.
 
@@ -157,8 +158,6 @@ def plan_fixed(reals: dict, aw_bound_ok: dict, *, I_MAX: float, W_MAX: float,
     ----------
     reals : dict
         ``{"d": Realisation, "q": Realisation}``.
-    aw_bound_ok : dict
-        Unused placeholder kept for symmetry (None).
     I_MAX, W_MAX, V_MAX : float
         Current range (A), mechanical speed range (rad/s), voltage limit (V).
     dec_coeffs : dict

@@ -71,7 +71,13 @@ class ElectricalPlant:
 
 
 def numeric_plant(motor) -> ElectricalPlant:
-    """The numeric dq plant of a :class:`~toolbox.spec.Motor`."""
+    """The numeric dq plant of a motor.
+
+    Parameters
+    ----------
+    motor : Motor
+        Parameters (R, Ld, Lq, flux, pole_pairs, convention).
+    """
     return ElectricalPlant(motor.R, motor.Ld, motor.Lq, motor.flux, motor.pole_pairs,
                            motor.convention)
 
@@ -80,6 +86,11 @@ def axis_plants(motor) -> dict[str, control.TransferFunction]:
     """Decoupled per-axis plants ``1/(R + s L)`` (A/V), paper 003 eq (33)-(34).
 
     Read off the diagonal of ``(sI - A(0))^{-1} B`` of the derived model.
+
+    Parameters
+    ----------
+    motor : Motor
+        Parameters of the plant.
     """
     plant = numeric_plant(motor)
     sys = plant.statespace(0.0)
@@ -106,6 +117,15 @@ def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[control.S
     ``[v_d, v_q, T_L]`` (V, V, N m), outputs the states. The operating-point
     voltages are those that hold the currents constant; the load torque is
     the one that holds the speed constant.
+
+    Parameters
+    ----------
+    motor : Motor
+        Motor parameters (SI).
+    i_d0, i_q0 : float
+        Operating-point currents (A).
+    Omega0 : float
+        Operating-point mechanical speed (rad/s).
 
     Returns
     -------

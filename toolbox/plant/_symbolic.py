@@ -44,6 +44,13 @@ _PHASES = (0, 2 * sp.pi / 3, -2 * sp.pi / 3)  # phase axes a, b, c (electrical r
 def park_matrix(th: sp.Expr, convention: str = "amplitude") -> sp.Matrix:
     """Park transform dq0 <- abc at electrical angle ``th``.
 
+    Parameters
+    ----------
+    th : sympy.Expr
+        Electrical angle of the d axis from phase a (rad).
+    convention : {"amplitude", "power"}
+        Scaling of the transform (see below).
+
     ``amplitude``: k = 2/3, zero row 1/2 (amplitude-invariant, used by papers
     000 and 003 and most drives). ``power``: k = sqrt(2/3), zero row
     1/sqrt(2) (power-invariant, paper 002 eq (2)-(3); the q row is

@@ -273,8 +273,18 @@ def discrete_pi(kp: float, ki: float, sample_time: float, antiwindup: bool = Tru
     """Discrete PI (forward-Euler integrator) as an :class:`AxisLaw`.
 
     ``v[k] = kp e[k] + ki x[k]``, ``x[k+1] = x[k] + Ts e[k]``, ``e = i_ref - i_meas``.
-    kp in V/A, ki in V/(A s). With ``antiwindup`` the back-calculation gain is
-    ``1/ki`` (the integral part absorbs exactly the clipped voltage).
+
+    Parameters
+    ----------
+    kp : float
+        Proportional gain (V/A).
+    ki : float
+        Integral gain (V/(A s)).
+    sample_time : float
+        Controller period Ts (s).
+    antiwindup : bool
+        Back-calculation gain ``1/ki`` (the integral part absorbs exactly the
+        clipped voltage).
     """
     Ts = sample_time
     aw = np.array([1.0 / ki]) if (antiwindup and ki != 0) else None

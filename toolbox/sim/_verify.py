@@ -24,14 +24,28 @@ VERIFY_SCHEMA = "cct.verify/1"
 
 
 def plant_params(motor) -> PlantParams:
-    """The simulated plant of a :class:`~toolbox.spec.Motor` (nominal values)."""
+    """The simulated plant of a motor (nominal values).
+
+    Parameters
+    ----------
+    motor : Motor
+        Validated motor.
+    """
     return PlantParams(R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
                        pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
                        torque_factor=motor.torque_factor)
 
 
 def drive_params(drive, inverter: str = "average") -> DriveParams:
-    """Simulator drive settings from a :class:`~toolbox.spec.Drive`."""
+    """Simulator drive settings.
+
+    Parameters
+    ----------
+    drive : Drive
+        Validated drive.
+    inverter : {"average", "svm", "fcs_mpc"}
+        Inverter model.
+    """
     return DriveParams(vdc=drive.vdc, sample_time=drive.sample_time,
                        delay_samples=drive.delay_samples, v_limit=drive.voltage_limit,
                        inverter=inverter)
@@ -49,6 +63,13 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
 
     The executed law of each axis is the artifact's ``law`` (or its reduced
     twin when the artifact's gains say ``executed = "reduced"``).
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The design.
+    speed_loop : SpeedLoop, optional
+        Outer speed loop of the scenario.
     """
     reduced = artifact.gains.get("executed") == "reduced"
     dec = artifact.decoupling
@@ -67,7 +88,13 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
 def default_scenarios(motor) -> tuple[Scenario, ...]:
     """Used when a spec has no ``[[scenario]]``: a q-current step to half the
     rated current at standstill, 20 ms, and the same step during free
-    acceleration (unloaded start)."""
+    acceleration (unloaded start).
+
+    Parameters
+    ----------
+    motor : Motor
+        Its rated current sets the step (10 A when unknown).
+    """
     i_step = 0.5 * (motor.rated_current or 10.0)
     return (Scenario(name="q step at standstill", kind="current_step", duration=0.02,
                      iq_ref=i_step, step_time=0.001, keep_traces=True),

@@ -28,7 +28,17 @@ def _path(prefix: str, name: str) -> str:
 
 
 def check_keys(table: Mapping, allowed: Iterable[str], prefix: str) -> None:
-    """Refuse unknown keys, with a did-you-mean among ``allowed``."""
+    """Refuse unknown keys, with a did-you-mean among ``allowed``.
+
+    Parameters
+    ----------
+    table : Mapping
+        The table read from the spec.
+    allowed : iterable of str
+        Known keys.
+    prefix : str
+        Dotted key path of the table (for the message).
+    """
     allowed = list(allowed)
     for name in table:
         if name not in allowed:

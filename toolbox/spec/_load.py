@@ -62,6 +62,13 @@ def load_spec(path: str | Path) -> Spec:
 def spec_from_dict(data: Mapping[str, Any], file: str | None = None) -> Spec:
     """Validate a spec given as plain data (the parsed TOML).
 
+    Parameters
+    ----------
+    data : Mapping
+        The spec tables.
+    file : str, optional
+        Where the data came from (named in error messages).
+
     Examples
     --------
     >>> spec = spec_from_dict({"motor": {"catalog": "azaiz2007"},
@@ -97,7 +104,7 @@ def _motor(value: Any) -> tuple[Motor, dict]:
     merged: dict[str, Any] = {}
     if t.has("catalog"):
         name = t.string("catalog", choices=sorted(CATALOG))
-        merged.update(CATALOG[name])
+        merged.update({k: v for k, v in CATALOG[name].items() if v is not None})
     merged.update(t.data)
     t = Table(merged, "motor")
     motor = Motor(
