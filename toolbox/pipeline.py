@@ -194,7 +194,15 @@ def _files(out: DesignOutputs) -> dict[str, str | bytes]:
 
 
 def write_outputs(files: dict[str, str | bytes], out_dir: str | Path) -> list[Path]:
-    """Write each output atomically into ``out_dir``."""
+    """Write each output atomically into ``out_dir``.
+
+    Parameters
+    ----------
+    files : dict
+        File name -> text or bytes.
+    out_dir : str or Path
+        Directory (created when missing).
+    """
     return [write_atomic(Path(out_dir) / name, data) for name, data in sorted(files.items())]
 
 

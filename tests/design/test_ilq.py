@@ -1,6 +1,5 @@
 """ILQ servo design (paper 001, Takami 2004): eq (2)-(4) and the inverse LQ weights."""
 
-import warnings
 
 import control as ct
 import numpy as np
@@ -8,7 +7,7 @@ import pytest
 
 from toolbox.artifact import ControllerArtifact
 from toolbox.design import design
-from toolbox.design.ilq import (design_ilq, ilq_axis, inverse_lq, inverse_lq_sdp,
+from toolbox.design.ilq import (design_ilq, ilq_axis, ilq_axis_from_plant, inverse_lq, inverse_lq_sdp,
                                 servo_matrices, sigma_bound)
 from toolbox.errors import SpecError
 from toolbox.plant import axis_plants
@@ -155,3 +154,13 @@ def test_artifact_gains_and_json_round_trip():
 def test_plain_api_both_axes():
     des = design_ilq(L, L, R, (-1000.0, -1000.0), (2500.0, 2500.0), TS)
     assert set(des.axes) == {"d", "q"} and des.gains()["sigma"] == {"d": 2500.0, "q": 2500.0}
+
+
+def test_python_control_plant_route():
+    """The plant API (python-control 1/(R + sL) from toolbox.plant) gives the same gains."""
+    G = axis_plants(art_motor())["q"]
+    ax = ilq_axis_from_plant(G, -1000.0, 2500.0)
+    ref = ilq_axis(R, L, -1000.0, 2500.0)
+    assert (ax.K_F, ax.K_I, ax.bound) == pytest.approx((ref.K_F, ref.K_I, ref.bound), rel=1e-9)
+    with pytest.raises(ValueError, match="first-order"):
+        ilq_axis_from_plant(G * G, -1000.0, 2500.0)

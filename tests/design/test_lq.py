@@ -8,7 +8,8 @@ import pytest
 
 from toolbox.artifact import ControllerArtifact
 from toolbox.design import design
-from toolbox.design.lq import bryson_weights, discrete_model, lqi_continuous, lqi_discrete
+from toolbox.design.lq import (bryson_weights, discrete_model, lqi_continuous, lqi_discrete,
+                               lqi_from_plant)
 from toolbox.errors import SpecError
 from toolbox.plant import axis_plants
 from toolbox.spec import spec_from_dict
@@ -129,3 +130,13 @@ def test_json_round_trip():
         art = design(spec(domain=dom))
         text = art.dumps()
         assert ControllerArtifact.loads(text).dumps() == text
+
+
+def test_python_control_plant_route():
+    """A python-control plant 1/(R + sL) gives the same gains as (a, b) (1e-12)."""
+    G = ct.tf([1], [LQ, R])
+    for dom in ("continuous", "discrete"):
+        ax = lqi_from_plant(G, (1e-2, 3e4), 1e-4, domain=dom, sample_time=TS)
+        ref = (lqi_continuous(A, B, (1e-2, 3e4), 1e-4) if dom == "continuous"
+               else lqi_discrete(A, B, (1e-2, 3e4), 1e-4, TS, 1))
+        assert ax.K == pytest.approx(ref.K, rel=1e-9)

@@ -1,5 +1,7 @@
 """Unit tests for toolbox.design.pi (PI, IP, PI with lag).
 
+The IP-with-cancellation-gains warning is tested once and silenced elsewhere.
+
 Sections: (1) gain rules against their formulas and the papers' numbers
 (000 appendix, 002 eq (19)-(20)), (2) law structures, (3) closed-loop poles by
 an independent route (plant from ``toolbox.plant.numeric_plant`` + the
@@ -22,6 +24,7 @@ from toolbox.plant import axis_plants, numeric_plant
 from toolbox.spec import spec_from_dict
 
 TS = 1e-4
+pytestmark = pytest.mark.filterwarnings("ignore:ip with rule")
 
 
 def make_spec(method, cfg, drive=None, motor=None):
@@ -37,7 +40,8 @@ def continuous_poles(art, motor, omega_e):
     dec = art.decoupling
     Dec = omega_e * dec.cross * np.array([[0.0, -dec.Lq_c], [dec.Ld_c, 0.0]])
     Ks = [art.axes[ax].to_statespace() for ax in "dq"]
-    Ac = block_diag(*[np.asarray(K.A) for K in Ks]) if sum(K.nstates for K in Ks) else np.zeros((0, 0))
+    n = sum(K.nstates for K in Ks)
+    Ac = block_diag(*[np.asarray(K.A) for K in Ks]) if n else np.zeros((0, 0))
     Bc = block_diag(*[np.asarray(K.B) for K in Ks]) if Ac.size else np.zeros((0, 2))
     Cc = block_diag(*[np.asarray(K.C) for K in Ks]) if Ac.size else np.zeros((2, 0))
     Dc = np.diag([float(np.asarray(K.D)[0, 0]) for K in Ks])
@@ -149,6 +153,40 @@ def test_complex_vector_records_delay_compensation():
     assert art.gains["delay_compensation_time"] == pytest.approx(1.5 * TS, rel=1e-15)
 
 
+def test_symmetric_optimum_reproduces_gem_control():
+    """gem-control (PIController._tune_current_controller, PController): p_gain =
+    L/(tau a), i_gain = p_gain/(tau a^2), tau = sample time, default a = 4."""
+    cfg = make_spec("pi", {"rule": "symmetric_optimum", "a": 4,
+                           "small_time_constant": TS}).controller.cfg
+    p_gain = 2.8e-3 / (TS * 4)
+    assert cfg.Kp[1] == pytest.approx(p_gain, rel=1e-14)
+    assert cfg.Ki[1] == pytest.approx(p_gain / (TS * 16), rel=1e-14)
+
+
+def test_complex_vector_2dof_motulator_gains_and_tracking():
+    """motulator complex-vector 2DOF: Kt = a_c L, Kp = (a_c + a_i) L - R,
+    Ki = a_c a_i L; reference tracking a_c/(s + a_c) on the decoupled axis
+    (checked on the continuous law and the derived axis plant to 1e-9)."""
+    a_c, a_i = 2000.0, 300.0
+    spec = make_spec("pi", {"rule": "complex_vector", "bandwidth": a_c,
+                            "integral_bandwidth": a_i})
+    cfg = spec.controller.cfg
+    assert cfg.Kt == pytest.approx((a_c * 1.4e-3, a_c * 2.8e-3), rel=1e-14)
+    assert cfg.Kp[1] == pytest.approx((a_c + a_i) * 2.8e-3 - 0.6, rel=1e-14)
+    assert cfg.Ki[0] == pytest.approx(a_c * a_i * 1.4e-3, rel=1e-14)
+    w = np.array([30.0, 700.0, 9000.0])
+    for k, ax in enumerate("dq"):
+        law = P.pi_law(cfg.Kp[k], cfg.Ki[k], "pi", Kt=cfg.Kt[k])
+        G = ct.frequency_response(axis_plants(spec.motor)[ax], w).complex.ravel()
+        Cr = ct.frequency_response(law[0, 0], w).complex.ravel()
+        Cy = ct.frequency_response(law[0, 1], w).complex.ravel()
+        T = G * Cr / (1 - G * Cy)
+        assert np.allclose(T, a_c / (1j * w + a_c), rtol=1e-9)
+    art = design(spec)
+    assert same_roots(continuous_poles(art, spec.motor, 800.0), [-a_c, -a_i] * 2, 1e-6 * a_c)
+    assert art.gains["Kt"]["q"] == pytest.approx(a_c * 2.8e-3, rel=1e-14)
+
+
 def test_paper_000_normalised_gains():
     """000 sect. 2 and appendix: Kp = 3.5/256, KI = 660/256, E = 150 V, k_i = 256/50."""
     art = design(make_spec("pi", {"Kp_normalised": 3.5 / 256, "Ki_normalised": 660 / 256,
@@ -187,6 +225,12 @@ def test_ip_law_has_no_proportional_action_on_reference():
     K = -law[0, 1]
     ref = 2.0 + 600.0 / (1j * w)
     assert np.allclose(ct.frequency_response(K, w).complex.ravel(), ref, rtol=1e-12)
+
+
+def test_ip_with_cancellation_gains_warns_about_slow_reference_response():
+    """IP reference response Ki/((L s + R)(s + wc)): the plant pole stays."""
+    with pytest.warns(UserWarning, match=r"L/R = 4\.67 ms"):
+        make_spec("ip", {"bandwidth": 1000})
 
 
 def test_pi_lag_filters_measurement_not_reference():
@@ -248,11 +292,28 @@ def test_pi_lag_closed_loop_poles():
     assert same_roots(continuous_poles(art, spec.motor, 600.0), expected, 1e-6 * 5000)
 
 
-@pytest.mark.parametrize("method,cfg", [
+ALL_RULES = [
     ("pi", {"bandwidth": 1000}), ("ip", {"bandwidth": 1000}),
     ("pi_lag", {"bandwidth": 1000, "lag_time_constant": 1e-4}),
     ("pi", {"rule": "symmetric_optimum"}),
-])
+    ("pi", {"rule": "complex_vector", "bandwidth": 1000, "integral_bandwidth": 200}),
+    ("ip", {"Kp_normalised": 3.5 / 256, "Ki_normalised": 660 / 256, "sensor_gain": 5.12}),
+]
+
+
+@pytest.mark.parametrize("method,cfg", ALL_RULES)
+def test_recorded_poles_equal_assembled_closed_loop(method, cfg):
+    """gains["poles"] (roots of the hand-derived characteristic polynomial)
+    = eig of the assembled loop (plant + decoupling + artifact controller) at
+    600 rad/s electrical; tolerance 1e-6 of the largest pole."""
+    spec = make_spec(method, cfg)
+    art = design(spec)
+    expected = np.concatenate([np.array(art.gains["poles"][ax]) @ [1, 1j] for ax in "dq"])
+    scale = np.max(np.abs(expected))
+    assert same_roots(continuous_poles(art, spec.motor, 600.0), expected, 1e-6 * scale)
+
+
+@pytest.mark.parametrize("method,cfg", ALL_RULES)
 @pytest.mark.parametrize("delay", [0, 1])
 def test_discrete_closed_loop_poles_two_routes(method, cfg, delay):
     """ZOH plant + the artifact's discrete law: state-matrix assembly vs
@@ -287,12 +348,16 @@ def test_discrete_poles_near_mapped_design_without_delay():
     ("ip", {"bandwidth": {"d": 100, "q": 0}},
      "controller.ip.bandwidth.q: expected a number > 0 (rad/s), got 0"),
     ("pi", {"bandwidth": 100, "response_time": 1e-3},
-     "controller.pi.response_time: expected either bandwidth or response_time, not both, got 0.001"),
+     "controller.pi.response_time: expected either bandwidth or response_time, not both, "
+     "got 0.001"),
     ("pi", {"rule": "cancellation"},
      "controller.pi.bandwidth: expected a number > 0 (rad/s) or response_time (missing)"),
     ("pi", {"rule": "symmetric_optimum", "bandwidth": 100},
      'controller.pi.bandwidth: expected only keys that rule = "symmetric_optimum" reads '
-     "(its keys: a)"),
+     "(its keys: a, small_time_constant)"),
+    ("ip", {"rule": "complex_vector", "bandwidth": 1000, "integral_bandwidth": 100},
+     'controller.ip.integral_bandwidth: expected method = "pi" for a 2DOF PI (the '
+     "two-degree-of-freedom complex-vector PI has its own reference feedforward)"),
     ("pi", {"rule": "symmetric_optimum", "a": 1},
      "controller.pi.a: expected a number > 1, got 1.0"),
     ("pi", {"rule": "cancelation", "bandwidth": 1},

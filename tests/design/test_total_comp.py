@@ -241,6 +241,8 @@ def test_tci_discrete_poles_two_routes(delay):
     ("tci", {"poles": {"d": [-100, -200], "q": [-300, 20]}},
      "controller.tci.poles.q: expected stable poles (negative real part, rad/s), got "
      "[-300, 20] (a pole at 20+0j makes the current loop unstable)"),
+    ("tci", {"poles": {"d": [-100, -200]}},
+     "controller.tci.poles.q: expected the poles of this axis (missing)"),
     ("tci", {"poles": [-100]},
      "controller.tci.poles: expected two real poles [s1, s2] or one complex pair "
      "[[re, im]] (rad/s), got [-100]"),

@@ -138,3 +138,30 @@ def minimal_data() -> ReportData:
 def hostile() -> str:
     """A title that is HTML, shell and typst markup/code at once."""
     return HOSTILE
+
+
+# Rendering takes seconds (matplotlib figures; the plant's sympy derivation on
+# first use), so each document is rendered once per session.
+
+@pytest.fixture(scope="session")
+def full_context(full_data) -> dict:
+    from toolbox.report import build_context
+
+    return build_context(full_data)
+
+
+@pytest.fixture(scope="session")
+def full_html(full_context) -> str:
+    from toolbox.report.html import render_html
+
+    return render_html(full_context)
+
+
+@pytest.fixture(scope="session")
+def full_pdf(full_context) -> bytes:
+    import typst
+
+    from toolbox.report.pdf import render_typst
+
+    source, images = render_typst(full_context)
+    return typst.compile(source.encode("utf-8"), format="pdf", sys_inputs=images)

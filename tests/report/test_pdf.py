@@ -9,15 +9,13 @@ import pytest
 
 pypdf = pytest.importorskip("pypdf")
 
-from toolbox.report import build_context, write_pdf  # noqa: E402
+from toolbox.report import write_pdf  # noqa: E402
 from toolbox.report.pdf import escape_markup, render_typst, typst_string  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def pdf_text(full_data, tmp_path_factory):
-    path = tmp_path_factory.mktemp("pdf") / "report.pdf"
-    data = write_pdf(full_data, path)
-    assert path.read_bytes() == data  # written atomically, same bytes
+def pdf_text(full_pdf):
+    data = full_pdf
     reader = pypdf.PdfReader(io.BytesIO(data))
     text = "\n".join(page.extract_text() for page in reader.pages)
     return data, reader, text
@@ -44,8 +42,11 @@ def test_pdf_text(pdf_text, hostile):
         assert _squash(needle) in flat, needle
 
 
-def test_pdf_minimal(minimal_data):
-    data = write_pdf(minimal_data)
+def test_pdf_minimal(minimal_data, tmp_path):
+    path = tmp_path / "report.pdf"
+    data = write_pdf(minimal_data, path)
+    assert path.read_bytes() == data
+    assert [p.name for p in tmp_path.iterdir()] == ["report.pdf"]  # no temporary left
     text = _squash("\n".join(p.extract_text() for p in pypdf.PdfReader(io.BytesIO(data)).pages))
     assert _squash("Margins: not computed") in text
     assert _squash("Verification: not computed") in text
@@ -57,9 +58,17 @@ def test_typst_string_escapes():
     assert escape_markup("#set *x*") == "\\#set \\*x\\*"
 
 
-def test_hostile_only_in_string_literals(full_data, hostile):
+def test_pdf_deterministic(full_context, full_pdf):
+    """Same content, same PDF bytes (document date unset)."""
+    import typst
+
+    source, images = render_typst(full_context)
+    assert typst.compile(source.encode("utf-8"), format="pdf", sys_inputs=images) == full_pdf
+
+
+def test_hostile_only_in_string_literals(full_context, hostile):
     """The raw hostile text never appears in the typst source outside a literal."""
-    source, images = render_typst(build_context(full_data))
+    source, images = render_typst(full_context)
     assert hostile not in source  # it contains a quote and a backslash: always escaped
     assert typst_string(hostile) in source
     assert all(v.lstrip().startswith("<svg") for v in images.values())

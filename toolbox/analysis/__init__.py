@@ -1,0 +1,127 @@
+"""Analysis stage: margins, robustness sweeps, stability certificates.
+
+* :mod:`.margins` - per-axis margins (continuous and sampled with delay) and
+  the multiloop disk margin of the coupled dq loop over speed;
+* :mod:`.robustness` - vectorised sweeps over parameter drift, speed-sensor
+  errors and delay;
+* :mod:`.certificate` - common quadratic Lyapunov function over a parameter
+  box (cvxpy + CLARABEL).
+
+:func:`analysis_report` assembles what the CLI writes to ``analysis.json``;
+:func:`margins_for_artifact` gives the MARGINS of controller.json (sampled
+loop with delay, as executed); :func:`compare_designs` the rows of
+``cct compare``. (They live here because the sub-package has no other
+public module for them.)
+"""
+
+from __future__ import annotations
+
+from .certificate import (CertificateResult, ParameterBox, certify,
+                          largest_certified_scale)
+from .margins import (MARGIN_KEYS, MarginsResult, MimoMarginsResult, compute_margins,
+                      disk_variations, json_ready, mimo_disk_margins)
+from .robustness import DEFAULT_RANGES, SweepResult, robustness_sweep
+
+__all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "compute_margins",
+           "disk_variations", "mimo_disk_margins", "DEFAULT_RANGES", "SweepResult",
+           "robustness_sweep", "CertificateResult", "ParameterBox", "certify",
+           "largest_certified_scale", "analysis_report", "margins_for_artifact",
+           "with_margins", "compare_designs", "ANALYSIS_SCHEMA"]
+
+ANALYSIS_SCHEMA = "cct.analysis/1"
+STEP_KEYS = ("response_time_5pct", "rise_time_10_90", "settling_time_2pct", "overshoot_pct")
+
+
+def margins_for_artifact(artifact, motor) -> dict:
+    """MARGINS per axis for controller.json: the sampled loop as executed
+    (law measurement channel, ZOH plant, ``z^-delay_samples``), with extras.
+
+    Returns ``{"d": {...}, "q": {...}}`` (JSON-ready).
+    """
+    return {ax: r.to_json() for ax, r in compute_margins(artifact, motor).items()}
+
+
+def with_margins(artifact, motor):
+    """A copy of ``artifact`` carrying :func:`margins_for_artifact`."""
+    return artifact.with_margins(margins_for_artifact(artifact, motor))
+
+
+def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
+                    certificate: bool = True, seed: int = 0) -> dict:
+    """Everything ``analysis.json`` holds (JSON-ready dict).
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        Nominal plant.
+    drive : Drive, optional
+        Speed range (``max_speed``, mechanical rad/s).
+    sweep_sets : int
+        Latin-hypercube sets of the robustness sweep.
+    certificate : bool
+        Run the quadratic-stability certificate (a few seconds).
+    seed : int
+        Sweep seed (deterministic output).
+
+    Returns
+    -------
+    dict
+        ``{"schema": "cct.analysis/1", "method", "sample_time", "delay_samples",
+        "margins": {"discrete": {d, q}, "continuous": {d, q},
+        "continuous_delay": {d, q}}, "mimo_at_speed": {...},
+        "sweep": {...}, "certificate": {...} or None}``; each margins entry is
+        :meth:`MarginsResult.to_json`.
+    """
+    out = {
+        "schema": ANALYSIS_SCHEMA,
+        "method": artifact.method,
+        "sample_time": artifact.sample_time,
+        "delay_samples": artifact.delay_samples,
+        "margins": {
+            "discrete": {k: v.to_json() for k, v in compute_margins(artifact, motor).items()},
+            "continuous": {k: v.to_json() for k, v in
+                           compute_margins(artifact, motor, discrete=False).items()},
+            "continuous_delay": {k: v.to_json() for k, v in
+                                 compute_margins(artifact, motor, discrete=False,
+                                                 delay="exact").items()},
+        },
+        "mimo_at_speed": mimo_disk_margins(artifact, motor, drive).to_json(),
+        "sweep": robustness_sweep(artifact, motor, n=sweep_sets, drive=drive,
+                                  seed=seed).to_json(),
+        "certificate": (largest_certified_scale(artifact, motor, drive).to_json()
+                        if certificate else None),
+    }
+    return json_ready(out)
+
+
+def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500,
+                    certificate: bool = True) -> list[dict]:
+    """Side-by-side rows for ``cct compare``.
+
+    Each row: ``method``, ``margins`` (per axis, the nine MARGINS keys of the
+    sampled loop), ``response_times`` (per axis, the four step figures, s and
+    %), ``worst_case`` (per axis, the smallest gain/phase/stability/disk
+    margins over the robustness sweep), ``n_unstable`` (sweep sets that lose
+    stability), ``mimo_worst_disk_margin`` and ``certificate``
+    (``{"certified_scale", "certified"}`` or None).
+    """
+    rows = []
+    for art in artifacts:
+        m = compute_margins(art, motor)
+        sw = robustness_sweep(art, motor, n=sweep_sets, drive=drive).to_json()
+        mimo = mimo_disk_margins(art, motor, drive)
+        cert = largest_certified_scale(art, motor, drive) if certificate else None
+        rows.append(json_ready({
+            "method": art.method,
+            "margins": {ax: r.to_json(extras=False) for ax, r in m.items()},
+            "response_times": {ax: {k: getattr(r, k) for k in STEP_KEYS} for ax, r in m.items()},
+            "worst_case": {ax: {k: v["value"] for k, v in sw["worst"][ax].items()}
+                           for ax in ("d", "q")},
+            "n_unstable": sw["n_unstable"],
+            "n_sets": sw["n_sets"],
+            "mimo_worst_disk_margin": mimo.worst_disk_margin,
+            "certificate": (None if cert is None else
+                            {"certified_scale": cert.scale, "certified": cert.certified}),
+        }))
+    return rows

@@ -54,8 +54,11 @@ import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import brentq, minimize_scalar
 
-__all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "compute_margins",
-           "axis_margins", "mimo_disk_margins", "disk_variations", "json_ready"]
+__all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "AxisLoop", "CoupledLoop",
+           "compute_margins", "make_axis_loop", "axis_margins", "mimo_disk_margins",
+           "mimo_loop_response", "coupled_closed_loop", "coupled_plant", "decoupling_matrix",
+           "disk_variations", "law_to_continuous", "mu_upper_2x2", "sigma_max_2x2",
+           "zoh_2x2", "json_ready"]
 
 #: The DESIGN.md MARGINS keys (controller.json), in contract order.
 MARGIN_KEYS = ("gain_margin_db", "gain_crossover_rad_s", "phase_margin_deg",
@@ -106,6 +109,7 @@ class Law:
 
     @property
     def n(self) -> int:
+        """Number of states."""
         return self.A.shape[0]
 
     def error_controller(self) -> tuple[np.ndarray, ...]:
@@ -622,6 +626,11 @@ def axis_margins(loop: AxisLoop, *, n_grid: int = 6000, w_min: float = 1e-3,
     step : bool
         Also compute the linear step figures.
     """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return _axis_margins(loop, n_grid, w_min, step)
+
+
+def _axis_margins(loop: AxisLoop, n_grid: int, w_min: float, step: bool) -> MarginsResult:
     w = _grid(w_min, loop.w_max, n_grid, loop.discrete)
     Lw = loop.loop(w)
     L1 = lambda x: complex(loop.loop(np.array([x]))[0])  # noqa: E731
@@ -799,6 +808,30 @@ def decoupling_matrix(decoupling, omega_meas) -> np.ndarray:
     return W
 
 
+def zoh_2x2(A: np.ndarray, B: np.ndarray, Ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-form ZOH of stacked 2x2 plants (fast twin of :func:`zoh_coupled`).
+
+    ``exp(A T) = exp(m T) [cosh(D T) I + T sinhc(D T) (A - m I)]`` with
+    ``m = tr A / 2``, ``D = sqrt(m^2 - det A)`` (complex) and
+    ``sinhc(x) = sinh(x)/x`` (series near 0); ``Gamma = A^-1 (Phi - I) B``,
+    valid because ``det A = R^2/(Ld Lq) + omega^2 > 0`` for the dq plant.
+    """
+    m = 0.5 * (A[:, 0, 0] + A[:, 1, 1])
+    det = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0]
+    D = np.sqrt((m * m - det).astype(complex))
+    x = D * Ts
+    small = np.abs(x) < 1e-3
+    xs = np.where(small, 1.0, x)
+    sinhc = np.where(small, 1 + x * x / 6 + x ** 4 / 120, np.sinh(xs) / xs)
+    e = np.exp(m * Ts)
+    c0 = np.real(e * np.cosh(x))
+    c1 = np.real(e * Ts * sinhc)
+    I = np.eye(2)
+    Phi = c0[:, None, None] * I + c1[:, None, None] * (A - m[:, None, None] * I)
+    Gam = np.linalg.solve(A, (Phi - I) @ B)
+    return Phi, Gam
+
+
 @dataclass(frozen=True)
 class CoupledLoop:
     """Stacked discrete closed loops of the coupled dq current control.
@@ -861,7 +894,7 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
         for v in np.broadcast_arrays(R, Ld, Lq, omega, omega_meas, flux))
     N = R.size
     Ac, Bc = coupled_plant(R, Ld, Lq, omega)
-    Phi, Gam = zoh_coupled(Ac, Bc, Ts)
+    Phi, Gam = zoh_2x2(Ac, Bc, Ts)
     W = decoupling_matrix(decoupling, omega_meas)
     ld, lq = laws["d"], laws["q"]
     nd, nq = ld.n, lq.n
@@ -944,6 +977,7 @@ class MimoMarginsResult:
     domain: str = "discrete"
 
     def to_json(self) -> dict:
+        """JSON-ready dict of all attributes (non-finite floats as strings)."""
         return json_ready(asdict(self))
 
 
@@ -955,17 +989,34 @@ def sigma_max_2x2(M: np.ndarray) -> np.ndarray:
     return np.sqrt(0.5 * (fro2 + disc))
 
 
-def mu_upper_2x2(M: np.ndarray, n_scale: int = 121) -> np.ndarray:
+def mu_upper_2x2(M: np.ndarray, n_scale: int = 49, n_refine: int = 40) -> np.ndarray:
     """Upper bound of mu for two 1x1 complex blocks: ``min_d sigma_max(D M D^-1)``.
 
-    The minimum over a logarithmic grid of ``d`` (1e-6..1e6): every ``d``
-    gives a valid upper bound, so the grid only adds conservatism.
+    ``D = diag(d, 1)``; a logarithmic grid of ``d`` (1e-6..1e6) then a
+    ternary search in ``log d`` around the best grid point (the scaled norm is
+    convex in ``log d``). Every ``d`` gives a valid upper bound, so an
+    unconverged search only adds conservatism.
     """
-    dsc = np.logspace(-6, 6, n_scale)
-    Ms = np.broadcast_to(M[..., None, :, :], M.shape[:-2] + (n_scale, 2, 2)).copy()
-    Ms[..., 0, 1] *= dsc
-    Ms[..., 1, 0] /= dsc
-    return np.min(sigma_max_2x2(Ms), axis=-1)
+    def scaled(logd):
+        dsc = np.exp(logd)
+        Ms = np.array(M, complex, copy=True)
+        Ms[..., 0, 1] = M[..., 0, 1] * dsc
+        Ms[..., 1, 0] = M[..., 1, 0] / dsc
+        return sigma_max_2x2(Ms)
+
+    grid = np.linspace(math.log(1e-6), math.log(1e6), n_scale)
+    vals = np.stack([scaled(np.full(M.shape[:-2], g)) for g in grid], axis=-1)
+    j = np.argmin(vals, axis=-1)
+    step = grid[1] - grid[0]
+    lo = grid[j] - step
+    hi = grid[j] + step
+    for _ in range(n_refine):
+        m1 = lo + (hi - lo) / 3
+        m2 = hi - (hi - lo) / 3
+        left = scaled(m1) < scaled(m2)
+        hi = np.where(left, m2, hi)
+        lo = np.where(left, lo, m1)
+    return np.minimum(np.min(vals, axis=-1), scaled(0.5 * (lo + hi)))
 
 
 def _electrical_max_speed(motor, drive) -> float:

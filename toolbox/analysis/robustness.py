@@ -160,9 +160,14 @@ class SweepResult:
     worst_spectral_radius : float
         Largest closed-loop pole modulus over all sets and speeds.
     worst : dict
-        Per axis and margin, ``{"value", "params"}``: the smallest margin
-        over the stable sets, recomputed exactly (refined grid) for the set
-        that gives it; ``params`` are the set's parameters.
+        Per axis and margin (``gain_margin_db``, ``phase_margin_deg``,
+        ``stability_margin``, ``disk_margin``), ``{"value", "grid_value",
+        "params"}``: the smallest single-axis margin (sampled loop with the
+        set's R, L and delay; speed-independent) over the sets whose coupled
+        loop is stable at every speed, recomputed exactly by
+        :func:`~toolbox.analysis.margins.axis_margins` (``value``) next to the
+        batch grid value; ``params`` are the set's parameters (factors,
+        offset in rad/s mechanical, delay in periods).
     static_error : dict
         ``{"reference_A", "worst_A", "params"}``: the largest static current
         error (A, vector norm) at the highest speed for the reference
@@ -182,6 +187,7 @@ class SweepResult:
     nominal: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
+        """JSON-ready dict of all attributes (non-finite floats as strings)."""
         return json_ready(asdict(self))
 
 
@@ -208,7 +214,8 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
     drive : Drive, optional
         Speed range (see :func:`toolbox.analysis.margins.mimo_disk_margins`).
     n_speeds : int
-        Electrical speeds ``linspace(-w_max, w_max)`` for the coupled loop.
+        Electrical speeds ``linspace(-w_max, w_max)`` for the coupled loop
+        (1: zero speed only).
     n_grid : int
         Frequency points of the per-axis grid (1 rad/s .. Nyquist).
     seed : int
@@ -252,7 +259,7 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
 
     # coupled closed loops at speed (vectorised per delay value)
     wmax = _electrical_max_speed(motor, drive)
-    speeds = np.linspace(-wmax, wmax, n_speeds) if wmax > 0 else np.zeros(1)
+    speeds = np.linspace(-wmax, wmax, n_speeds) if (wmax > 0 and n_speeds > 1) else np.zeros(1)
     laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
     rho = np.zeros(N)
     i_ref = i_ref or (0.0, motor.rated_current or 10.0)

@@ -199,6 +199,35 @@ class Zpk:
         return cls(roots["zeros"], roots["poles"], float(gain))
 
 
+def _antiwindup_gain(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: float,
+                     radius: float = 0.99) -> np.ndarray | None:
+    """Back-calculation gain ``aw`` so that the saturated controller
+    ``x+ = (A - aw C) x + ...`` is strictly stable.
+
+    Start from the self-conditioned choice ``aw = B/D`` (Hanus: while
+    saturated the state evolves on the controller's zeros; exact for a PI).
+    Tustin maps the zeros at infinity of a strictly proper controller to
+    z = -1, so any mode of ``A - aw C`` with ``|z| >= radius`` is moved to the
+    origin (deadbeat) by Ackermann's formula on the dual pair (A', C').
+    ``None`` when the law has no measurement feedthrough and no observable
+    state to correct.
+    """
+    n = A.shape[0]
+    aw = B / D if abs(D) > 1e-12 else np.zeros((n, 1))
+    poles = np.linalg.eigvals(A - aw @ C)
+    if np.all(np.abs(poles) < radius):
+        return aw
+    target = np.where(np.abs(poles) < radius, poles, 0.0)
+    try:
+        gain = control.acker(A.T, C.T, target)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    aw = np.asarray(gain, float).reshape(n, 1)
+    if not np.all(np.abs(np.linalg.eigvals(A - aw @ C)) < 1.0):
+        return None
+    return np.real(aw)
+
+
 def _sorted_roots(poly: np.ndarray) -> np.ndarray:
     roots = np.roots(poly).astype(complex)
     return roots[np.lexsort((roots.imag, roots.real))]
@@ -296,8 +325,9 @@ class AxisController:
             discrete_error = -law[0, 1]
         if isinstance(antiwindup, np.ndarray):
             aw = antiwindup.reshape(law.nstates, 1)
-        elif antiwindup and law.nstates and abs(float(law.D[0, 1])) > 1e-12:
-            aw = np.asarray(law.B[:, 1:2] / law.D[0, 1], float)
+        elif antiwindup and law.nstates:
+            aw = _antiwindup_gain(np.asarray(law.A, float), np.asarray(law.B[:, 1:2], float),
+                                  np.asarray(law.C, float), float(law.D[0, 1]))
         else:
             aw = None
         return cls(

@@ -42,7 +42,8 @@ from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ._common import decoupling_from_motor, make_artifact
 
-__all__ = ["IlqCfg", "IlqAxis", "IlqDesign", "sigma_bound", "ilq_axis", "servo_matrices",
+__all__ = ["IlqCfg", "IlqAxis", "IlqDesign", "sigma_bound", "ilq_axis", "ilq_axis_from_plant",
+           "first_order_coefficients", "servo_matrices",
            "inverse_lq", "inverse_lq_sdp", "design_ilq", "read_cfg", "design"]
 
 _KEY = "controller.ilq"
@@ -160,6 +161,15 @@ def inverse_lq_sdp(a: float, b: float, K_F: float, K_I: float,
     ``Q = K' R K - A' P - P A >= t S``, maximising ``t``, with the scaling
     ``S = R diag(K_F^2, K_I^2)``. The gains are LQ-optimal iff ``t >= 0``;
     the closed form gives ``t = min(1, 1 - bound/sigma)`` for the ILQ gains.
+
+    Parameters
+    ----------
+    a, b : float
+        Plant ``di/dt = a i + b u`` (1/s, 1/H).
+    K_F, K_I : float
+        Gains to test (V/A, V/(A s)).
+    R_weight : float
+        Input weight (1/V^2), > 0.
 
     Returns
     -------
@@ -281,6 +291,57 @@ def ilq_axis(R: float, L: float, s_star: float, sigma: float, *, axis: str = "q"
                    Q, Rw, P, err)
 
 
+def first_order_coefficients(G: Any) -> tuple[float, float]:
+    """``(a, b)`` of a first-order plant ``G(s) = b/(s - a)``, e.g. ``1/(R + s L)``.
+
+    Parameters
+    ----------
+    G : control.LTI
+        SISO, one state, no feedthrough (A/V).
+
+    Returns
+    -------
+    a : float
+        Plant pole (1/s), ``-R/L``.
+    b : float
+        Input gain (1/H), ``1/L``.
+
+    Raises
+    ------
+    ValueError
+        G is not a strictly proper first-order SISO system.
+    """
+    sys = control.ss(G)
+    if sys.ninputs != 1 or sys.noutputs != 1 or sys.nstates != 1 or abs(float(sys.D[0, 0])) > 0:
+        raise ValueError("first_order_coefficients: expected a strictly proper first-order "
+                         f"SISO plant b/(s - a), got {sys.nstates} states, "
+                         f"{sys.ninputs} inputs, {sys.noutputs} outputs")
+    return float(sys.A[0, 0]), float(sys.B[0, 0] * sys.C[0, 0])
+
+
+def ilq_axis_from_plant(G: Any, s_star: float, sigma: float, **options: Any) -> IlqAxis:
+    """ILQ design of one axis from a python-control plant ``1/(R + s L)``.
+
+    Parameters
+    ----------
+    G : control.LTI
+        First-order plant (A/V), e.g. ``axis_plants(motor)["q"]``.
+    s_star : float
+        Assigned pole (rad/s), < 0.
+    sigma : float
+        Tuning parameter (1/s).
+    **options
+        ``axis``, ``allow_non_optimal``, ``R_weight`` as for :func:`ilq_axis`.
+
+    Returns
+    -------
+    IlqAxis
+    """
+    a, b = first_order_coefficients(G)
+    L = 1.0 / b
+    return ilq_axis(-a * L, L, s_star, sigma, **options)
+
+
 @dataclass(frozen=True)
 class IlqDesign:
     """Both axes of an ILQ design.
@@ -364,6 +425,21 @@ def read_cfg(method: str, table, motor, drive) -> IlqCfg:
     ``sigma`` (number or {d=, q=}, 1/s) or ``sigma_factor`` (sigma = factor x
     eq (3) bound, > 1; default 2); ``allow_non_optimal`` (default false).
 
+    Parameters
+    ----------
+    method : str
+        The method name (``"ilq"``).
+    table : Table
+        The ``[controller.ilq]`` table being read (key paths for messages).
+    motor : Motor
+        Validated motor (SI units).
+    drive : Drive
+        Validated drive (sample time in s, voltages in V).
+
+    Returns
+    -------
+    IlqCfg
+
     Raises
     ------
     SpecError
@@ -408,6 +484,15 @@ def design(spec) -> ControllerArtifact:
     Tustin at ``drive.sample_time``; the axis error controller is
     ``K_F + K_I/s``. Decoupling: cross-coupling and back-EMF with the motor's
     nominal parameters (no resistance term: the ILQ law does not use r_1).
+
+    Parameters
+    ----------
+    spec : Spec
+        Validated spec with ``controller.method = "ilq"``.
+
+    Returns
+    -------
+    ControllerArtifact
     """
     cfg: IlqCfg = spec.controller.cfg
     m, ts = spec.motor, spec.drive.sample_time

@@ -40,6 +40,7 @@ from ..errors import SpecError
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["LqCfg", "LqAxis", "bryson_weights", "lqi_continuous", "lqi_discrete",
+           "lqi_from_plant", "discrete_model",
            "design_lq", "read_cfg", "design"]
 
 _KEY = "controller.lq"
@@ -241,6 +242,39 @@ def lqi_discrete(a: float, b: float, Q: tuple[float, float], R: float,
                   delay_samples)
 
 
+def lqi_from_plant(G: Any, Q: tuple[float, float], R: float, *, domain: str = "discrete",
+                   sample_time: float | None = None, delay_samples: int = 1) -> LqAxis:
+    """LQI design of one axis from a python-control plant ``1/(R + s L)``.
+
+    Parameters
+    ----------
+    G : control.LTI
+        First-order plant (A/V).
+    Q : (float, float)
+        ``(q_i, q_z)``.
+    R : float
+        Input weight (1/V^2).
+    domain : {"continuous", "discrete"}
+    sample_time : float, optional
+        Controller period (s), required for the discrete design.
+    delay_samples : int
+        Computation delay (periods), discrete design only.
+
+    Returns
+    -------
+    LqAxis
+    """
+    from .ilq import first_order_coefficients
+
+    a, b = first_order_coefficients(G)
+    _check_weights(Q, R, "plant")
+    if domain == "continuous":
+        return lqi_continuous(a, b, Q, R)
+    if sample_time is None:
+        raise ValueError("lqi_from_plant: the discrete design needs sample_time (s)")
+    return lqi_discrete(a, b, Q, R, sample_time, delay_samples)
+
+
 def design_lq(Ld: float, Lq: float, R: float, Q: dict, Rw: dict, sample_time: float, *,
               domain: str = "discrete", delay_samples: int = 1) -> dict[str, LqAxis]:
     """LQI design of both axes.
@@ -288,6 +322,21 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
     (rad/s, default pi/(10 Ts)), ``current_limit`` (A, default
     motor.rated_current or motor.max_current) and ``voltage_limit`` (V,
     default drive.max_voltage).
+
+    Parameters
+    ----------
+    method : str
+        The method name (``"lq"``).
+    table : Table
+        The ``[controller.lq]`` table being read (key paths for messages).
+    motor : Motor
+        Validated motor (SI units).
+    drive : Drive
+        Validated drive (sample time in s, voltages in V).
+
+    Returns
+    -------
+    LqCfg
     """
     from ..spec import Table
 
@@ -337,6 +386,15 @@ def design(spec) -> ControllerArtifact:
     and the axis carries the continuous error controller ``k_i + (-k_z)/s``.
     Discrete domain: the law is the native discrete controller (integrator and
     input-history states); no continuous twin is given.
+
+    Parameters
+    ----------
+    spec : Spec
+        Validated spec with ``controller.method = "lq"``.
+
+    Returns
+    -------
+    ControllerArtifact
     """
     cfg: LqCfg = spec.controller.cfg
     m, dr = spec.motor, spec.drive

@@ -21,24 +21,38 @@ Gain rules (``[controller.<method>] rule``), all in effective units
     plant pole, the closed loop is ``wc/(s + wc)`` (``wc`` = closed-loop
     bandwidth, rad/s; from a 5 % response time ``t5``: ``wc = ln(20)/t5``).
 ``bandwidth``
-    The firmware rule of ODrive (``p_gain = L * current_control_bandwidth``,
-    ``i_gain = R * current_control_bandwidth``) and VESC (``kp = L/tc``,
-    ``ki = R/tc``, ``tc`` the time constant): same numbers as cancellation,
-    with ``wc`` read as the open-loop crossover ``|L(j wc)| = 1``.
+    The firmware rule of ODrive (``Motor::update_current_controller_gains``:
+    ``p_gain = current_control_bandwidth * phase_inductance``,
+    ``i_gain = (phase_resistance/phase_inductance) * p_gain``, bandwidth in
+    rad/s; Tinymovr does the same) and VESC Tool (from a time constant
+    ``tc``, ``wc = 1/tc``): same numbers as cancellation, with ``wc`` read
+    as the open-loop crossover ``|L(j wc)| = 1``.
 ``symmetric_optimum``
-    As gym-electric-motor tunes its current PI: sum of small time constants
-    ``T_sigma = (delay_samples + 0.5) Ts`` (computation delay plus half a
-    sample for the zero-order hold), ``Kp = L/(a T_sigma)``,
-    ``Ti = a^2 T_sigma``, ``Ki = Kp/Ti`` (``a = 2`` by default).
+    Kessler's symmetric optimum as gym-electric-motor's controllers
+    (gem-control) tune the current PI: ``Kp = L/(a T_sigma)``,
+    ``Ti = a^2 T_sigma``, ``Ki = Kp/Ti``. Defaults here: ``a = 2`` and the
+    sum of small time constants ``T_sigma = (delay_samples + 0.5) Ts``
+    (computation delay plus half a sample for the zero-order hold).
+    gem-control itself uses ``T_sigma = tau`` (its sample time) and
+    ``a = 4``: set ``small_time_constant = Ts`` and ``a = 4`` to reproduce it.
 ``complex_vector``
-    motulator's discrete complex-vector PI: continuous PI in the rotor frame
-    with bandwidth ``alpha_c`` and the delay compensated by rotating the
-    output by ``1.5 Ts omega``. Reproduced here per axis only:
-    ``Kp = alpha_c L``, ``Ki = alpha_c R`` with the cross-coupling moved to
-    the decoupling feedforward; the rotation angle factor ``1.5 Ts`` is
-    recorded in ``gains`` for the firmware. NOT reproduced: the complex
-    (cross-axis) integral state and motulator's two-degree-of-freedom
-    reference feedforward.
+    motulator's synchronous-frame complex-vector PI (Briz 1999/2000): a
+    continuous design in rotor coordinates, bandwidth ``alpha_c``, delay
+    compensated by rotating the output voltage by ``1.5 Ts omega`` (Bae &
+    Sul 2003, motulator's PWM ``k_comp = 1.5``). Per-axis reproduction:
+    by default ``Kp = alpha_c L``, ``Ki = alpha_c R`` (cancellation), with
+    the cross-coupling moved to the decoupling feedforward. With
+    ``integral_bandwidth`` (``alpha_i``, method ``pi`` only) motulator's
+    two-degree-of-freedom gains: reference feedforward ``Kt = alpha_c L``,
+    ``Kp = (alpha_c + alpha_i) L - R``, ``Ki = alpha_c alpha_i L``, law
+    ``v = Kt r - Kp y + Ki int (r - y)``: reference tracking
+    ``alpha_c/(s + alpha_c)``, poles ``-alpha_c``, ``-alpha_i`` (motulator's
+    synchronous-machine controller takes ``R = 0``). The factor ``1.5 Ts``
+    is recorded in ``gains`` (``delay_compensation_time``) for the firmware.
+    NOT reproduced: the complex cross-axis integral term
+    ``j omega Kt (r - y)``, the flux-map state, the rotation itself (a
+    nonlinear step outside the linear per-axis law) and motulator's direct
+    discrete-time design.
 ``explicit``
     ``Kp``, ``Ki`` (V/A, V/(A s)), or paper 000's normalised
     ``Kp_normalised``, ``Ki_normalised`` with ``voltage_gain`` E (V, default
@@ -51,13 +65,16 @@ Gain rules (``[controller.<method>] rule``), all in effective units
 Structures (two-input laws ``[i_ref, i_meas] -> v``):
 
 * ``pi``: ``v = (Kp + Ki/s)(r - y)``.
-* ``ip``: ``v = Ki/s (r - y) - Kp y`` (same loop, no closed-loop zero).
+* ``ip``: ``v = Ki/s (r - y) - Kp y`` (same loop, no closed-loop zero;
+  with cancellation gains the reference response is
+  ``1/((1 + s L/R)(1 + s/wc))``, slow: a warning says so).
 * ``pi_lag``: ``v = (Kp + Ki/s)(r - y_f)``, ``y_f = y/(1 + T_d s)``.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -72,6 +89,7 @@ from ._common import decoupling_from_motor, make_artifact
 __all__ = [
     "PiCfg", "RULES", "read_cfg", "design", "design_pi", "pi_law",
     "gains_cancellation", "gains_symmetric_optimum", "bandwidth_from_response_time",
+    "gains_complex_vector_2dof", "closed_loop_poles",
     "gains_from_normalised", "plant_RL",
 ]
 
@@ -83,8 +101,8 @@ DISCRETISATIONS = ("tustin", "zoh", "backward_diff", "euler")
 _RULE_KEYS = {
     "cancellation": ("bandwidth", "response_time"),
     "bandwidth": ("bandwidth", "response_time"),
-    "complex_vector": ("bandwidth", "response_time"),
-    "symmetric_optimum": ("a",),
+    "complex_vector": ("bandwidth", "response_time", "integral_bandwidth"),
+    "symmetric_optimum": ("a", "small_time_constant"),
     "explicit": ("Kp", "Ki", "Kp_normalised", "Ki_normalised", "voltage_gain", "sensor_gain"),
 }
 _COMMON_KEYS = ("rule", "decoupling", "discretisation")
@@ -113,6 +131,9 @@ class PiCfg:
         ``T_d`` of paper 001 Fig. 2b (s), ``pi_lag`` only.
     discretisation : str
         How the continuous law is discretised (default ``tustin``).
+    Kt : tuple of float or None
+        Reference feedforward gains (V/A) of a two-degree-of-freedom PI
+        (``complex_vector`` with ``integral_bandwidth``); ``None``: ``Kt = Kp``.
     details : dict
         Rule-specific values kept in the artifact's gains (bandwidth,
         T_sigma, normalisation, ...).
@@ -125,13 +146,15 @@ class PiCfg:
     decoupling: bool = True
     lag_time_constant: float | None = None
     discretisation: str = "tustin"
+    Kt: tuple[float, float] | None = None
     details: dict = field(default_factory=dict)
 
 
 def bandwidth_from_response_time(response_time: float) -> float:
     """Bandwidth of a first-order loop with the given 5 % response time.
 
-    ``exp(-wc t5) = 0.05`` gives ``wc = ln(20)/t5`` (rad/s; ``t5`` in s).
+    ``exp(-wc t5) = 0.05`` gives ``wc = ln(20)/t5`` (rad/s) for
+    ``response_time`` ``t5`` (s).
     """
     return LN20 / response_time
 
@@ -168,13 +191,36 @@ def gains_symmetric_optimum(L: float, T_sigma: float, a: float = 2.0) -> tuple[f
     return Kp, Kp / (a * a * T_sigma)
 
 
+def gains_complex_vector_2dof(L: float, R: float, alpha_c: float,
+                              alpha_i: float) -> tuple[float, float, float]:
+    """motulator's complex-vector 2DOF PI gains, per axis.
+
+    Parameters
+    ----------
+    L : float
+        Axis inductance (H).
+    R : float
+        Resistance (ohm).
+    alpha_c, alpha_i : float
+        Reference-tracking and integral-action bandwidths (rad/s).
+
+    Returns
+    -------
+    Kt, Kp, Ki : float
+        ``alpha_c L`` (V/A), ``(alpha_c + alpha_i) L - R`` (V/A),
+        ``alpha_c alpha_i L`` (V/(A s)); closed loop ``alpha_c/(s + alpha_c)``.
+    """
+    return alpha_c * L, (alpha_c + alpha_i) * L - R, alpha_c * alpha_i * L
+
+
 def gains_from_normalised(Kp_n: float, Ki_n: float, voltage_gain: float,
                           sensor_gain: float, structure: str = "pi") -> tuple[float, float]:
     """Effective gains from paper 000's normalised ones.
 
     ``Kp = E k_i Kp_n`` (V/A) and ``Ki = E k_i Ki_n`` (V/(A s)) for a PI;
-    for 000's IP (``v = E k_i Kp_n (Ki_n int e - y)``) ``Ki = E k_i Kp_n Ki_n``.
-    ``voltage_gain`` E in V, ``sensor_gain`` k_i in 1/A (000: 150, 256/50).
+    for 000's IP (``structure = "ip"``, ``v = E k_i Kp_n (Ki_n int e - y)``)
+    ``Ki = E k_i Kp_n Ki_n``. ``voltage_gain`` E in V, ``sensor_gain`` k_i
+    in 1/A (000: 150, 256/50).
     """
     scale = voltage_gain * sensor_gain
     Ki = scale * Kp_n * Ki_n if structure == "ip" else scale * Ki_n
@@ -192,7 +238,8 @@ def plant_RL(plant: Any) -> tuple[float, float]:
 
 
 def pi_law(Kp: float, Ki: float, structure: str = "pi",
-           lag_time_constant: float | None = None) -> control.StateSpace:
+           lag_time_constant: float | None = None,
+           Kt: float | None = None) -> control.StateSpace:
     """Continuous two-input law ``[i_ref, i_meas] -> v`` of one axis.
 
     Parameters
@@ -208,6 +255,9 @@ def pi_law(Kp: float, Ki: float, structure: str = "pi",
         ``v = Kp (r - y_f) + Ki x``.
     lag_time_constant : float, optional
         ``T_d`` (s) for ``pi_lag``.
+    Kt : float, optional
+        Reference feedforward gain (V/A) of a 2DOF ``pi``:
+        ``v = Kt r - Kp y + Ki x`` (default ``Kt = Kp``).
 
     Returns
     -------
@@ -215,7 +265,7 @@ def pi_law(Kp: float, Ki: float, structure: str = "pi",
         Continuous, states ``[x]`` or ``[x, y_f]``.
     """
     if structure == "pi":
-        return control.ss([[0.0]], [[1.0, -1.0]], [[Ki]], [[Kp, -Kp]])
+        return control.ss([[0.0]], [[1.0, -1.0]], [[Ki]], [[Kp if Kt is None else Kt, -Kp]])
     if structure == "ip":
         return control.ss([[0.0]], [[1.0, -1.0]], [[Ki]], [[0.0, -Kp]])
     if structure == "pi_lag":
@@ -229,7 +279,8 @@ def pi_law(Kp: float, Ki: float, structure: str = "pi",
 
 def design_pi(Kp: tuple[float, float], Ki: tuple[float, float], sample_time: float, *,
               structure: str = "pi", lag_time_constant: float | None = None,
-              method: str = "tustin") -> dict[str, AxisController]:
+              method: str = "tustin",
+              Kt: tuple[float, float] | None = None) -> dict[str, AxisController]:
     """Per-axis controllers for given gains.
 
     Parameters
@@ -242,6 +293,8 @@ def design_pi(Kp: tuple[float, float], Ki: tuple[float, float], sample_time: flo
         See :func:`pi_law`.
     method : str
         Discretisation of the law (``tustin``, ``zoh``, ``backward_diff``, ``euler``).
+    Kt : tuple of float, optional
+        (d, q) reference feedforward gains (V/A) of a 2DOF ``pi``.
 
     Returns
     -------
@@ -251,7 +304,8 @@ def design_pi(Kp: tuple[float, float], Ki: tuple[float, float], sample_time: flo
     """
     axes = {}
     for k, name in enumerate(("d", "q")):
-        law = pi_law(Kp[k], Ki[k], structure, lag_time_constant)
+        law = pi_law(Kp[k], Ki[k], structure, lag_time_constant,
+                     None if Kt is None else Kt[k])
         axes[name] = AxisController.from_law(law, sample_time=sample_time, method=method)
     return axes
 
@@ -308,6 +362,21 @@ def _axes(pair: tuple[float, float]) -> dict[str, float]:
 def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
     """Validate ``[controller.pi]`` / ``[controller.ip]`` / ``[controller.pi_lag]``.
 
+    Parameters
+    ----------
+    method : {"pi", "ip", "pi_lag"}
+        The structure.
+    table : Table
+        The ``[controller.<method>]`` table.
+    motor : Motor
+        Supplies R, Ld, Lq for the gain rules.
+    drive : Drive
+        Supplies vdc (default ``voltage_gain``), sample time and delay.
+
+    Returns
+    -------
+    PiCfg
+
     Raises
     ------
     SpecError
@@ -324,6 +393,7 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
     _reject_foreign(t, rule, method)
     L = (motor.Ld, motor.Lq)
     details: dict[str, Any] = {}
+    Kt = None
     if rule in ("cancellation", "bandwidth", "complex_vector"):
         wc = _bandwidth(t)
         Kp = (L[0] * wc[0], L[1] * wc[1])
@@ -331,28 +401,68 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
         details["bandwidth_rad_s"] = _axes(wc)
         if rule == "complex_vector":
             details["delay_compensation_time"] = 1.5 * drive.sample_time
-            details["delay_compensation"] = "rotate v_dq by exp(j * delay_compensation_time * omega_e)"
+            details["delay_compensation"] = (
+                "rotate v_dq by exp(j * delay_compensation_time * omega_e)")
+            if t.has("integral_bandwidth"):
+                if method != "pi":
+                    raise SpecError(t.key("integral_bandwidth"), 'method = "pi" for a 2DOF PI',
+                                    hint="the two-degree-of-freedom complex-vector PI has its "
+                                         "own reference feedforward")
+                wi = t.per_axis("integral_bandwidth", positive=True, unit="rad/s")
+                g = [gains_complex_vector_2dof(L[k], motor.R, wc[k], wi[k]) for k in (0, 1)]
+                Kt = (g[0][0], g[1][0])
+                Kp, Ki = (g[0][1], g[1][1]), (g[0][2], g[1][2])
+                details["integral_bandwidth_rad_s"] = _axes(wi)
+                details["Kt"] = _axes(Kt)
+                if min(Kp) <= 0:
+                    raise SpecError(t.key("bandwidth"), "alpha_c + alpha_i > R/L (a positive Kp)",
+                                    t.raw("bandwidth"))
     elif rule == "symmetric_optimum":
         a = t.number("a", 2.0, positive=True)
         if a <= 1.0:
             raise SpecError(t.key("a"), "a number > 1", a)
-        T_sigma = (drive.delay_samples + 0.5) * drive.sample_time
+        T_sigma = t.number("small_time_constant", (drive.delay_samples + 0.5) * drive.sample_time,
+                           positive=True, unit="s")
         g = [gains_symmetric_optimum(L[k], T_sigma, a) for k in (0, 1)]
         Kp, Ki = (g[0][0], g[1][0]), (g[0][1], g[1][1])
         details.update(a=a, T_sigma=T_sigma, Ti=a * a * T_sigma)
     else:
         Kp, Ki, details = _explicit(t, method, drive)
+    if method == "ip" and rule in ("cancellation", "bandwidth", "complex_vector"):
+        warnings.warn(
+            f'ip with rule = "{rule}": the loop has the PI\'s poles (-R/L, -wc), but the '
+            "IP reference response has no zero to cancel -R/L, so it follows the plant "
+            f"time constant L/R = {1e3 * max(L) / motor.R:.3g} ms; give explicit Kp, Ki "
+            "for a faster IP", stacklevel=2)
     lag = None
     if method == "pi_lag":
         lag = t.number("lag_time_constant", positive=True, unit="s")
     return PiCfg(structure=method, rule=rule, Kp=tuple(map(float, Kp)),
+                 Kt=None if Kt is None else tuple(map(float, Kt)),
                  Ki=tuple(map(float, Ki)), decoupling=t.boolean("decoupling", True),
                  lag_time_constant=lag,
                  discretisation=t.string("discretisation", "tustin", choices=DISCRETISATIONS),
                  details=details)
 
 
-def _gains(cfg: PiCfg, sample_time: float) -> dict[str, Any]:
+def closed_loop_poles(L: float, R: float, Kp: float, Ki: float,
+                      lag_time_constant: float | None = None) -> np.ndarray:
+    """Nominal closed-loop poles (rad/s) of one decoupled axis ``1/(R + L s)``.
+
+    Roots of ``L s^2 + (R + Kp) s + Ki`` (PI, IP, 2DOF PI) or, with the
+    measurement lag ``T_d`` = ``lag_time_constant`` (s), of
+    ``T_d L s^3 + (L + R T_d) s^2 + (R + Kp) s + Ki``; ``L`` in H, ``R`` in
+    ohm, ``Kp`` in V/A, ``Ki`` in V/(A s).
+    """
+    if lag_time_constant is None:
+        poly = [L, R + Kp, Ki]
+    else:
+        Td = lag_time_constant
+        poly = [Td * L, L + R * Td, R + Kp, Ki]
+    return np.sort_complex(np.roots(poly).astype(complex))
+
+
+def _gains(cfg: PiCfg, sample_time: float, motor) -> dict[str, Any]:
     Kp, Ki = cfg.Kp, cfg.Ki
     gains: dict[str, Any] = {
         "rule": cfg.rule, "structure": cfg.structure,
@@ -361,6 +471,9 @@ def _gains(cfg: PiCfg, sample_time: float) -> dict[str, Any]:
         "Ki_per_sample": _axes((Ki[0] * sample_time, Ki[1] * sample_time)),
         "decoupling": cfg.decoupling,
         "discretisation": cfg.discretisation,
+        "poles": {ax: [[float(p.real), float(p.imag)] for p in
+                       closed_loop_poles(L, motor.R, Kp[k], Ki[k], cfg.lag_time_constant)]
+                  for k, (ax, L) in enumerate((("d", motor.Ld), ("q", motor.Lq)))},
     }
     if cfg.lag_time_constant is not None:
         gains["lag_time_constant"] = cfg.lag_time_constant
@@ -378,7 +491,9 @@ _RULE_EQUATIONS = {
     "cancellation": "Kp = L wc, Ki = R wc (closed loop wc/(s + wc), wc = ln(20)/t5)",
     "bandwidth": "Kp = L wc, Ki = R wc (ODrive/VESC: wc = current-loop crossover)",
     "symmetric_optimum": "Kp = L/(a T_sigma), Ti = a^2 T_sigma, T_sigma = (delay + 0.5) Ts",
-    "complex_vector": "Kp = alpha_c L, Ki = alpha_c R; delay compensation angle 1.5 Ts omega",
+    "complex_vector": ("Kp = alpha_c L, Ki = alpha_c R (or 2DOF: Kt = alpha_c L, "
+                       "Kp = (alpha_c + alpha_i) L - R, Ki = alpha_c alpha_i L); "
+                       "delay compensation angle 1.5 Ts omega"),
     "explicit": "Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)",
 }
 
@@ -400,7 +515,8 @@ def design(spec) -> ControllerArtifact:
     cfg: PiCfg = spec.controller.cfg
     Ts = spec.drive.sample_time
     axes = design_pi(cfg.Kp, cfg.Ki, Ts, structure=cfg.structure,
-                     lag_time_constant=cfg.lag_time_constant, method=cfg.discretisation)
+                     lag_time_constant=cfg.lag_time_constant, method=cfg.discretisation,
+                     Kt=cfg.Kt)
     dec = decoupling_from_motor(spec.motor, cross=cfg.decoupling, emf=cfg.decoupling)
     equations = _EQUATIONS[cfg.structure] + [_RULE_EQUATIONS[cfg.rule]]
-    return make_artifact(spec, axes, dec, _gains(cfg, Ts), equations)
+    return make_artifact(spec, axes, dec, _gains(cfg, Ts, spec.motor), equations)

@@ -31,7 +31,7 @@ import sympy as sp
 from ..plant import SYMBOLS as S
 from ..plant import derive_dq_model
 
-__all__ = ["SS_SYMBOLS", "pi_law_voltages", "pi_acceleration_derivative",
+__all__ = ["SS_SYMBOLS", "pi_law_voltages", "tc_law_voltages", "pi_acceleration_derivative",
            "pi_acceleration_steady_state", "tc_speed_error_steady_state",
            "tc_closed_loop_matrices", "tci_acceleration_steady_state",
            "pi_acceleration_values", "tc_speed_error_values", "tci_acceleration_values"]
@@ -65,8 +65,16 @@ def _closed_loop(convention: str, v: tuple[sp.Expr, sp.Expr]) -> sp.Matrix:
 def pi_law_voltages(structure: str = "pi") -> tuple[sp.Expr, sp.Expr]:
     """000 Fig. 2: dq voltages of the PI (or IP) with integral states ``z``.
 
-    ``pi``: ``v = E k_i (K_p e + K_I z)``; ``ip`` (000's IP, "P.I. without
-    zero"): ``v = E k_i K_p (K_I z - i)``; ``z' = e = i_ref - i`` (V).
+    Parameters
+    ----------
+    structure : {"pi", "ip"}
+        ``pi``: ``v = E k_i (K_p e + K_I z)``; ``ip`` (000's IP, "P.I.
+        without zero"): ``v = E k_i K_p (K_I z - i)``; ``z' = e = i_ref - i``.
+
+    Returns
+    -------
+    tuple of sympy.Expr
+        ``(v_d, v_q)`` (V).
     """
     if structure == "pi":
         return tuple(E * k_i * (K_p * (_ref[k] - _i[k]) + K_I * _z[k]) for k in (0, 1))
@@ -196,36 +204,89 @@ def _evaluate(sol: dict, subs: dict) -> tuple[float, float]:
     return tuple(float(sol[k].subs(subs)) for k in _i)
 
 
-def pi_acceleration_values(motor, Kp: float, Ki: float, gamma_: float, i_dref_: float,
-                           i_qref_: float, structure: str = "pi") -> tuple[float, float]:
-    """Numeric 000 eq (6)-(7): ``(i_d, i_q)`` (A) at acceleration ``gamma_`` (rad/s^2).
+def pi_acceleration_values(motor, Kp: float, Ki: float, acceleration: float, id_ref: float,
+                           iq_ref: float, structure: str = "pi") -> tuple[float, float]:
+    """Numeric 000 eq (6)-(7): steady currents of the PI in dq while accelerating.
 
-    ``Kp`` (V/A) and ``Ki`` (V/(A s)) are effective gains (``E k_i`` folded
-    in; for ``ip`` pass 000's ``E k_i Kp`` and ``KI`` (1/s)).
+    Parameters
+    ----------
+    motor : Motor
+        Plant parameters (R, Ld, Lq, flux, pole_pairs, convention).
+    Kp : float
+        Effective proportional gain ``E k_i Kp_n`` (V/A).
+    Ki : float
+        Effective integral gain ``E k_i KI_n`` (V/(A s)); for ``ip`` 000's
+        ``KI_n`` (1/s), the law being ``v = Kp (Ki int e - i)``.
+    acceleration : float
+        ``gamma = dOmega/dt`` (rad/s^2, mechanical).
+    id_ref, iq_ref : float
+        Current references (A).
+    structure : {"pi", "ip"}
+        Controller structure (000 Fig. 2a / 2b).
+
+    Returns
+    -------
+    tuple of float
+        ``(i_d, i_q)`` (A).
     """
     sol = pi_acceleration_steady_state(motor.convention, structure)
-    subs = {**_motor_subs(motor), E: 1, k_i: 1, K_p: Kp, K_I: Ki, gamma: gamma_,
-            i_dref: i_dref_, i_qref: i_qref_}
+    subs = {**_motor_subs(motor), E: 1, k_i: 1, K_p: Kp, K_I: Ki, gamma: acceleration,
+            i_dref: id_ref, i_qref: iq_ref}
     return _evaluate(sol, subs)
 
 
-def tc_speed_error_values(motor, K1: float, K2: float, Omega_: float, Omega_m_: float,
-                          i_dref_: float, i_qref_: float) -> tuple[float, float]:
-    """Numeric 000 eq (17): ``(i_d, i_q)`` (A) at speed ``Omega_`` measured as ``Omega_m_`` (rad/s)."""
+def tc_speed_error_values(motor, K1: float, K2: float, speed: float, measured_speed: float,
+                          id_ref: float, iq_ref: float) -> tuple[float, float]:
+    """Numeric 000 eq (16)-(17): total compensation steady currents with a speed error.
+
+    Parameters
+    ----------
+    motor : Motor
+        Plant parameters (the controller uses the same, nominal, values).
+    K1, K2 : float
+        Error-dynamics gains of eq (8) (1/s).
+    speed : float
+        True mechanical speed ``Omega`` (rad/s).
+    measured_speed : float
+        Speed the controller uses, ``Omega_m`` (rad/s).
+    id_ref, iq_ref : float
+        Current references (A).
+
+    Returns
+    -------
+    tuple of float
+        ``(i_d, i_q)`` (A).
+    """
     sol = tc_speed_error_steady_state(motor.convention)
-    subs = {**_motor_subs(motor), K_1: K1, K_2: K2, S["Omega"]: Omega_, Omega_m: Omega_m_,
-            i_dref: i_dref_, i_qref: i_qref_}
+    subs = {**_motor_subs(motor), K_1: K1, K_2: K2, S["Omega"]: speed,
+            Omega_m: measured_speed, i_dref: id_ref, i_qref: iq_ref}
     return _evaluate(sol, subs)
 
 
-def tci_acceleration_values(motor, K12: float, K22: float, gamma_: float, gain_error: float,
-                            i_dref_: float, i_qref_: float) -> tuple[float, float]:
-    """Numeric 000 eq (25)-(31) (derived form): ``(i_d, i_q)`` (A).
+def tci_acceleration_values(motor, K12: float, K22: float, acceleration: float,
+                            gain_error: float, id_ref: float, iq_ref: float) -> tuple[float, float]:
+    """Numeric 000 eq (25)-(31), derived form: total compensation with integrators.
 
-    ``K12``, ``K22`` in 1/s^2, ``gamma_`` in rad/s^2, ``gain_error`` is
-    lambda of eq (28) (dimensionless).
+    Parameters
+    ----------
+    motor : Motor
+        Plant parameters (the controller uses the same, nominal, values).
+    K12, K22 : float
+        Integral error gains of eq (18) (1/s^2), d and q.
+    acceleration : float
+        ``gamma`` (rad/s^2, mechanical).
+    gain_error : float
+        lambda of eq (28), ``Omega_m = (1 + lambda) Omega + Omega_0``
+        (dimensionless; the offset ``Omega_0`` does not matter).
+    id_ref, iq_ref : float
+        Current references (A).
+
+    Returns
+    -------
+    tuple of float
+        ``(i_d, i_q)`` (A).
     """
     sol = tci_acceleration_steady_state(motor.convention)
-    subs = {**_motor_subs(motor), K_12: K12, K_22: K22, gamma: gamma_, lam: gain_error,
-            i_dref: i_dref_, i_qref: i_qref_}
+    subs = {**_motor_subs(motor), K_12: K12, K_22: K22, gamma: acceleration,
+            lam: gain_error, i_dref: id_ref, i_qref: iq_ref}
     return _evaluate(sol, subs)

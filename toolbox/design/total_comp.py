@@ -95,7 +95,7 @@ class TotalCompCfg:
 
 # ------------------------------------------------------------------ plain API
 def gains_from_response_time(response_time: float) -> float:
-    """``K = ln(20)/t5`` (1/s): first-order error dynamics (8) reaching 5 % at ``t5`` (s)."""
+    """``K = ln(20)/t5`` (1/s): error dynamics (8) reach 5 % at ``response_time`` ``t5`` (s)."""
     return LN20 / response_time
 
 
@@ -231,10 +231,11 @@ def _tci_poles(t: Table) -> tuple[tuple, tuple, dict]:
     value = t.raw("poles")
     if isinstance(value, dict):
         sub = Table(value, t.key("poles"), ("d", "q"))
+        for ax in ("d", "q"):
+            if not sub.has(ax):
+                raise SpecError(sub.key(ax), "the poles of this axis (missing)")
         pd = _tci_pole_pair(sub, sub.key("d"), sub.raw("d"))
         pq = _tci_pole_pair(sub, sub.key("q"), sub.raw("q"))
-        if not (sub.has("d") and sub.has("q")):
-            raise SpecError(sub.key("q" if sub.has("d") else "d"), "poles for both axes (missing)")
     else:
         pd = pq = _tci_pole_pair(t, t.key("poles"), value)
     gd, gq = gains_from_poles(pd), gains_from_poles(pq)
@@ -305,6 +306,21 @@ def _read_tci(t: Table, model: dict, drive) -> tuple[tuple, tuple, dict]:
 def read_cfg(method: str, table: Table, motor, drive) -> TotalCompCfg:
     """Validate ``[controller.tc]`` or ``[controller.tci]``.
 
+    Parameters
+    ----------
+    method : {"tc", "tci"}
+        Without or with integrators.
+    table : Table
+        The ``[controller.<method>]`` table.
+    motor : Motor
+        Default controller-side model (``model`` overrides it).
+    drive : Drive
+        Supplies vdc (default ``voltage_gain`` with ``match_pi``).
+
+    Returns
+    -------
+    TotalCompCfg
+
     Raises
     ------
     SpecError
@@ -371,5 +387,6 @@ def design(spec) -> ControllerArtifact:
                "000 eq (19)-(20): total compensation with integrators",
                "000 eq (21): s^2 + K11 s + K12 = 0"]
         if "matched_Kp" in cfg.details:
-            eqs.append("000 eq (22)-(24): K21 = E k_i Kp/Lq, K22 = E k_i KI/Lq, K11 = K21, K12 = K22")
+            eqs.append("000 eq (22)-(24): K21 = E k_i Kp/Lq, K22 = E k_i KI/Lq, "
+                       "K11 = K21, K12 = K22")
     return make_artifact(spec, axes, dec, _gains(cfg), eqs)

@@ -1,0 +1,13 @@
+"""Firmware export: the controller artifact as a C99 header (``controller.h``).
+
+``write_header(artifact, motor=None, drive=None, *, name="cct") -> str`` and
+``check_exportable(artifact, ...)`` (refuses unstable or ill-conditioned
+controllers with :class:`toolbox.errors.SpecError`); see
+:mod:`toolbox.export.c_header` for the header layout and the rules.
+"""
+
+from .c_header import (ExportCheck, ReferenceLaw, check_exportable, reference_law,
+                       sanitise_comment, write_header)
+
+__all__ = ["write_header", "check_exportable", "ExportCheck", "ReferenceLaw",
+           "reference_law", "sanitise_comment"]

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["FixedAxis", "FixedPlan", "l1_state_bound", "plan_fixed",
+__all__ = ["FixedAxis", "FixedPlan", "l1_state_bound", "plan_fixed", "horizon_bound",
            "propagate_bound", "float32_local_errors", "fixed_local_errors"]
 
 U32 = 2.0 ** -24           # unit roundoff of IEEE float32
@@ -116,7 +116,7 @@ class FixedPlan:
     vmax_q31 : int
         ``V_MAX / V_BASE`` in Q31.
     guard : int
-        Guard bits of the mantissas.
+        Largest number of guard bits used by a coefficient set.
     """
 
     I_BASE: float
@@ -190,6 +190,7 @@ def plan_fixed(reals: dict, *, I_MAX: float, W_MAX: float,
                                      + D_MAX[ax]))
     V_BASE = _pow2_at_least(v_bound)
     axes = {}
+    guard_used = 0
     for ax, r in reals.items():
         n = r.order
         S = np.array([_pow2_at_least(v) for v in X[ax]]) if n else np.zeros(0)
@@ -201,6 +202,7 @@ def plan_fixed(reals: dict, *, I_MAX: float, W_MAX: float,
         Dn = r.D * I_BASE / V_BASE
         nterms = n + 3
         guard = max(1, math.ceil(math.log2(nterms)))
+        guard_used = max(guard_used, guard)
         rows, Aq, Bq, awq = [], np.zeros_like(An), np.zeros_like(Bn), np.zeros_like(awn)
         for i in range(n):
             row = np.concatenate([An[i], Bn[i], [awn[i]]])
@@ -228,7 +230,44 @@ def plan_fixed(reals: dict, *, I_MAX: float, W_MAX: float,
         dec[name] = (int(qr[0][0]), qr[1], value)
     vmax_q31 = int(math.floor(V_MAX / V_BASE * 2.0 ** 31))
     return FixedPlan(I_BASE, V_BASE, W_BASE, I_MAX, W_MAX, V_MAX, axes, dec,
-                     vmax_q31, 0), ""
+                     vmax_q31, guard_used), ""
+
+
+def horizon_bound(plan: FixedPlan, n: int) -> dict:
+    """Worst-case Q31 output error (V) over ``n`` periods from equal states.
+
+    Every input anywhere in its range (|u_n| <= I_MAX / I_BASE, states within
+    their bounds |x_n| <= 1, speed <= W_MAX), unsaturated; local errors as in
+    :func:`fixed_local_errors` with those worst-case magnitudes, propagated
+    by :func:`propagate_bound`.
+
+    Parameters
+    ----------
+    plan : FixedPlan
+        The Q31 plan.
+    n : int
+        Number of periods.
+
+    Returns
+    -------
+    dict
+        ``{"d": V, "q": V}``.
+    """
+    lsb = 2.0 ** -31
+    un = plan.I_MAX / plan.I_BASE
+    wn = plan.W_MAX / plan.W_BASE
+    dec_err = {"d": 0.0, "q": 0.0}
+    for name, ax, prod in (("dd", "d", wn * un), ("dq", "q", wn * un), ("de", "q", wn)):
+        m, F, val = plan.dec[name]
+        dec_err[ax] += abs(m / 2.0 ** F - val) * prod + abs(m / 2.0 ** F) * 0.5 * lsb + 0.5 * lsb
+    out = {}
+    for ax, fa in plan.axes.items():
+        k = fa.An.shape[0]
+        xn = np.ones((n, k))
+        u = np.full((n, 2), un)
+        dx, dy = fixed_local_errors(fa, xn, u, np.full(n, dec_err[ax]))
+        out[ax] = float(plan.V_BASE * propagate_bound(fa.Aq, fa.Cq, dx, dy).max())
+    return out
 
 
 def propagate_bound(A: np.ndarray, C: np.ndarray, delta_x: np.ndarray,

@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -57,7 +58,7 @@ from . import _fixed
 from ._sos import Realisation, realise_axis
 
 __all__ = ["write_header", "check_exportable", "ExportCheck", "sanitise_comment",
-           "realisations", "reference_law", "INTEGRATOR_TOL", "RING_RADIUS",
+           "realisations", "reference_law", "ReferenceLaw", "check_fixed", "INTEGRATOR_TOL", "RING_RADIUS",
            "DYNAMIC_RANGE"]
 
 AXES = ("d", "q")
@@ -68,6 +69,7 @@ DYNAMIC_RANGE = 2.0 ** 30
 POLE_REL_TOL = 1e-2
 POLE_ABS_RAD_S = 1e-2
 PI_METHODS = ("pi", "ip", "pi_lag")
+HORIZON = 0.02   # s, window of the reported quantisation error bound
 
 
 # ---------------------------------------------------------------------------
@@ -78,14 +80,26 @@ def sanitise_comment(text: Any, max_len: int = 200) -> str:
 
     Non-ASCII and control characters become ``\\uXXXX``/``\\xXX`` escapes,
     ``*/`` and ``/*`` are broken with a space, ``??`` (trigraph opener) is
-    written ``?-?``, backslashes are doubled (no line splicing), and the
-    text is cut to ``max_len`` characters.
+    written ``?-?``, a backslash becomes ``\\x5c`` (never a line splice), and
+    the text is cut to ``max_len`` characters.
+
+    Parameters
+    ----------
+    text : object
+        The user string (converted with ``str``).
+    max_len : int
+        Longest result (characters).
+
+    Returns
+    -------
+    str
+        Printable ASCII, safe inside ``/* ... */`` on one line.
     """
     out = []
     for ch in str(text):
         o = ord(ch)
         if ch == "\\":
-            out.append("\\\\")
+            out.append("\\x5c")
         elif 32 <= o < 127:
             out.append(ch)
         elif o < 256:
@@ -217,6 +231,12 @@ class ExportCheck:
         Why not (empty when available).
     fixed_pole_shift : dict
         Per axis, worst Q31 pole displacement / tolerance.
+    saturated_radius : dict
+        Per axis with anti-windup, spectral radius of ``A - aw C`` (the
+        state recursion while the voltage limit acts).
+    fixed_error_bound : dict
+        Per axis, worst-case |v_Q31 - v_exact| (V) over a 20 ms window from
+        equal states with every input anywhere in its range.
     v_max : float
         Voltage limit (V).
     """
@@ -227,17 +247,39 @@ class ExportCheck:
     fixed_reason: str = ""
     fixed_pole_shift: dict = field(default_factory=dict)
     v_max: float = math.inf
+    saturated_radius: dict = field(default_factory=dict)
+    fixed_error_bound: dict = field(default_factory=dict)
+
+    @property
+    def marginal_antiwindup(self) -> list[str]:
+        """Axes whose saturated recursion ``A - aw C`` is not strictly stable."""
+        return [ax for ax, r in self.saturated_radius.items() if r >= 1.0 - 1e-9]
 
 
 def _motor_drive(artifact, motor, drive):
     if motor is not None and drive is not None:
         return motor, drive
+    raw = artifact.spec or {}
     try:
         from ..spec import spec_from_dict
-        spec = spec_from_dict(artifact.spec)
+        spec = spec_from_dict(raw)
         return motor or spec.motor, drive or spec.drive
-    except Exception:  # noqa: BLE001 - a partial spec simply gives no motor data
-        return motor, drive
+    except SpecError:
+        pass
+    # the controller section may name a method this build cannot read: take
+    # the motor and drive tables alone
+    from ..spec import _load
+    if motor is None and isinstance(raw.get("motor"), dict):
+        try:
+            motor = _load._motor(raw["motor"])[0]
+        except SpecError:
+            motor = None
+    if drive is None and isinstance(raw.get("drive"), dict):
+        try:
+            drive = _load._drive(raw["drive"])
+        except SpecError:
+            drive = None
+    return motor, drive
 
 
 def _ranges(artifact, motor, drive, v_max: float) -> tuple[float, float]:
@@ -315,6 +357,16 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
         exact = np.linalg.eigvals(real.A) if real.order else np.zeros(0)
         shifts[ax] = _check_shift(exact, _rounded_poles_f32(real), ts, key, "float32")
     res = ExportCheck(reals, shifts, v_max=float(v_max))
+    for ax in AXES:
+        r = reals[ax]
+        if r.order and np.any(r.aw != 0):
+            F = r.A - np.outer(r.aw, r.C[0])
+            res.saturated_radius[ax] = float(max(abs(np.linalg.eigvals(F))))
+    if res.marginal_antiwindup:
+        warnings.warn(f"axes {res.marginal_antiwindup}: in voltage saturation the "
+                      "back-calculation recursion A - aw C is not strictly stable (spectral "
+                      f"radius {max(res.saturated_radius.values()):.9g}); the controller "
+                      "states can ring or drift while saturated", RuntimeWarning, stacklevel=2)
     i_max, w_max = _ranges(artifact, motor, drive, v_max)
     dec = artifact.decoupling
     p = dec.pole_pairs
@@ -325,12 +377,8 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
                                      dec_coeffs=dec_coeffs)
     if plan is not None:
         try:
-            for ax in AXES:
-                fa = plan.axes[ax]
-                exact = np.linalg.eigvals(fa.An) if fa.An.size else np.zeros(0)
-                rounded = np.linalg.eigvals(fa.Aq) if fa.Aq.size else np.zeros(0)
-                res.fixed_pole_shift[ax] = _check_shift(exact, rounded, ts,
-                                                        f"axes.{ax}.law", "Q31")
+            res.fixed_pole_shift = check_fixed(plan, ts)
+            res.fixed_error_bound = _fixed.horizon_bound(plan, round(HORIZON / ts))
         except SpecError as err:
             plan, reason = None, str(err)
     res.fixed, res.fixed_reason = plan, reason
@@ -338,6 +386,36 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
         raise SpecError("export.fixed_point", "a controller the Q31 variant can represent",
                         reason)
     return res
+
+
+def check_fixed(plan, sample_time: float) -> dict:
+    """Pole displacement of the Q31-quantised laws (refused beyond tolerance).
+
+    Parameters
+    ----------
+    plan : FixedPlan
+        Output of :func:`toolbox.export._fixed.plan_fixed`.
+    sample_time : float
+        Controller period (s).
+
+    Returns
+    -------
+    dict
+        Per axis, worst displacement / tolerance (<= 1).
+
+    Raises
+    ------
+    SpecError
+        Key ``axes.<axis>.law`` when quantisation moves a pole beyond
+        ``1 % (1 - |p|) + Ts * 0.01 rad/s`` or destabilises it.
+    """
+    out = {}
+    for ax in AXES:
+        fa = plan.axes[ax]
+        exact = np.linalg.eigvals(fa.An) if fa.An.size else np.zeros(0)
+        rounded = np.linalg.eigvals(fa.Aq) if fa.Aq.size else np.zeros(0)
+        out[ax] = _check_shift(exact, rounded, sample_time, f"axes.{ax}.law", "Q31")
+    return out
 
 
 def _law_zeros(law) -> np.ndarray:
@@ -353,11 +431,52 @@ def _law_zeros(law) -> np.ndarray:
 # ---------------------------------------------------------------------------
 # Python reference of the executed law (double precision)
 # ---------------------------------------------------------------------------
-def reference_law(artifact, inputs: np.ndarray, v_max: float) -> tuple[np.ndarray, np.ndarray]:
-    """Run the artifact's law in double precision, as the header specifies it.
+class ReferenceLaw:
+    """The executed law in double precision, one period at a time.
 
     Uses the artifact's own state-space law (not the exported realisation),
-    so it is an independent route to the same input-output map.
+    so it is an independent route to the header's input-output map: per axis
+    ``v = C x + D u``, decoupling, circle limit (radial scaling), then
+    ``x <- A x + B u + aw (v_sat - v_unsat)``.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        Controller.
+    v_max : float
+        Voltage-limit radius (V).
+    """
+
+    def __init__(self, artifact, v_max: float) -> None:
+        self.dec = artifact.decoupling
+        self.v_max = float(v_max)
+        self.laws = [artifact.axes[ax].law for ax in AXES]
+        self.aws = [np.zeros(l.order) if artifact.axes[ax].antiwindup is None
+                    else artifact.axes[ax].antiwindup.ravel()
+                    for l, ax in zip(self.laws, AXES)]
+        self.xs = [np.zeros(l.order) for l in self.laws]
+
+    def step(self, i_d_ref: float, i_q_ref: float, i_d: float, i_q: float,
+             omega_m: float) -> tuple[float, float, int]:
+        """One period: currents (A), mechanical speed (rad/s) -> (v_d, v_q (V), saturated)."""
+        dec = self.dec
+        u = [np.array([i_d_ref, i_d]), np.array([i_q_ref, i_q])]
+        v_lin = [float((l.C @ x + l.D @ uu)[0]) for l, x, uu in zip(self.laws, self.xs, u)]
+        w = dec.pole_pairs * omega_m
+        vd = v_lin[0] - dec.cross * w * dec.Lq_c * i_q
+        vq = v_lin[1] + dec.cross * w * dec.Ld_c * i_d + dec.emf * w * dec.flux_c
+        mag = math.hypot(vd, vq)
+        vds, vqs, sat = vd, vq, 0
+        if mag > self.v_max:
+            vds, vqs, sat = vd * self.v_max / mag, vq * self.v_max / mag, 1
+        dv = (vds - vd, vqs - vq)
+        self.xs = [l.A @ x + l.B @ uu + a * d
+                   for l, x, uu, a, d in zip(self.laws, self.xs, u, self.aws, dv)]
+        return vds, vqs, sat
+
+
+def reference_law(artifact, inputs: np.ndarray, v_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """Run :class:`ReferenceLaw` over an input sequence.
 
     Parameters
     ----------
@@ -373,27 +492,11 @@ def reference_law(artifact, inputs: np.ndarray, v_max: float) -> tuple[np.ndarra
     (ndarray, ndarray)
         (N, 2) voltages ``v_d, v_q`` (V) and (N,) saturation flags.
     """
-    dec = artifact.decoupling
-    laws = [artifact.axes[ax].law for ax in AXES]
-    aws = [np.zeros(l.order) if artifact.axes[ax].antiwindup is None
-           else artifact.axes[ax].antiwindup.ravel() for l, ax in zip(laws, AXES)]
-    xs = [np.zeros(l.order) for l in laws]
+    law = ReferenceLaw(artifact, v_max)
     out = np.zeros((len(inputs), 2))
     sat = np.zeros(len(inputs), dtype=int)
-    for k, (idr, iqr, i_d, i_q, Om) in enumerate(np.asarray(inputs, float)):
-        u = [np.array([idr, i_d]), np.array([iqr, i_q])]
-        v_lin = [float(l.C @ x + l.D @ uu) for l, x, uu in zip(laws, xs, u)]
-        w = dec.pole_pairs * Om
-        vd = v_lin[0] - dec.cross * w * dec.Lq_c * i_q
-        vq = v_lin[1] + dec.cross * w * dec.Ld_c * i_d + dec.emf * w * dec.flux_c
-        mag = math.hypot(vd, vq)
-        vds, vqs = vd, vq
-        if mag > v_max:
-            vds, vqs = vd * v_max / mag, vq * v_max / mag
-            sat[k] = 1
-        dv = (vds - vd, vqs - vq)
-        xs = [l.A @ x + l.B @ uu + a * d for l, x, uu, a, d in zip(laws, xs, u, aws, dv)]
-        out[k] = vds, vqs
+    for k, row in enumerate(np.asarray(inputs, float)):
+        out[k, 0], out[k, 1], sat[k] = law.step(*row)
     return out, sat
 
 
@@ -455,6 +558,26 @@ def _pi_gains(artifact, ax: str) -> tuple[float, float] | None:
     return None
 
 
+def _delay_comp_time(artifact) -> float | None:
+    """Delay-compensation time (s) the design assumes, or None.
+
+    ``gains["delay_compensation_time"]`` (s) when present; else
+    ``gains["delay_compensation"]``: a number is a multiple of Ts, any other
+    truthy value means the usual 1.5 Ts (one period of computation delay plus
+    half a period of PWM/ZOH delay).
+    """
+    g = artifact.gains or {}
+    v = g.get("delay_compensation_time")
+    if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0:
+        return float(v)
+    dc = g.get("delay_compensation")
+    if dc is None or dc is False or dc == 0:
+        return None
+    if isinstance(dc, (int, float)) and not isinstance(dc, bool):
+        return float(dc) * artifact.sample_time
+    return 1.5 * artifact.sample_time
+
+
 def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
                 title: str) -> None:
     prov = artifact.provenance or {}
@@ -477,12 +600,21 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
     t(f" *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),")
     t(" * then decoupling  v_d += -cross w_e Lq_c i_q,")
     t(" *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,")
-    t(" * then the circle limit |v| <= V_MAX (radial scaling) and back-calculation")
+    t(" * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of")
+    t(" * the SVM hexagon, also when the spec asks for the hexagon) and back-calculation")
     t(" * anti-windup x += aw (v_sat - v_unsat).")
     t(" * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:")
     t(" *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the")
     t(" *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.")
     t(" *   y = b0 x + s1; s1 = b1 x + a1 y + s2; s2 = b2 x + a2 y.")
+    if artifact.method == "fcs_mpc":
+        t(" * NOTE: method fcs_mpc chooses inverter switch states online; that predictive")
+        t(" *   law is not exported. This header runs the linear axis controllers stored")
+        t(" *   in the artifact (the SVM + PI baseline).")
+    for ax in check.marginal_antiwindup:
+        t(f" * WARNING ({ax} axis): in saturation the anti-windup recursion A - aw C has")
+        t(f" *   spectral radius {check.saturated_radius[ax]:.9g} >= 1 (not strictly stable):")
+        t(" *   states may ring at the Nyquist frequency or drift while the limit acts.")
     t(" */")
 
 
@@ -518,11 +650,12 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
     t(f"#define {P}DEC_LQ {_f(dec.Lq_c)} /* H */")
     t(f"#define {P}DEC_FLUX {_f(dec.flux_c)} /* Wb */")
     t(f"#define {P}POLE_PAIRS {int(dec.pole_pairs)} /* w_e = POLE_PAIRS * Omega_m */")
-    dc = (artifact.gains or {}).get("delay_compensation")
-    if dc is not None and dc is not False:
-        k = 1.5 if dc is True else float(dc)
-        t(f"#define {P}DELAY_COMP_TIME {_f(k * artifact.sample_time)} /* s ({k:g} Ts): "
-          f"rotate the output by angle = {P}DELAY_COMP_TIME * w_e (rad) */")
+    t_comp = _delay_comp_time(artifact)
+    if t_comp is not None:
+        k = t_comp / artifact.sample_time
+        t(f"#define {P}DELAY_COMP_TIME {_f(t_comp)} /* s ({k:g} Ts): the design assumes v_dq "
+          f"rotated by angle = {P}DELAY_COMP_TIME * w_e (rad) before the inverse Park transform "
+          f"(not applied inside {P.lower()}step) */")
     if artifact.method in PI_METHODS:
         for ax in AXES:
             g = _pi_gains(artifact, ax)
@@ -680,6 +813,10 @@ def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> No
     t(f" * Inputs up to I_MAX = {plan.I_MAX:.6g} A and W_MAX = {plan.W_MAX:.6g} rad/s (mechanical),")
     t(f" * voltage limit {plan.V_MAX:.6g} V: bases below are powers of two above rigorous")
     t(" * bounds of every signal and state, so no accumulator or word overflows.")
+    for ax in AXES:
+        if ax in check.fixed_error_bound:
+            t(f" * Quantisation error bound, {ax} axis: |v_q31 - v_exact| <= "
+              f"{check.fixed_error_bound[ax]:.3g} V over {HORIZON * 1e3:g} ms from equal states.")
     t(" */")
     t("#include <stdint.h>")
     t(f"#define {P}Q31_I_BASE {_f(plan.I_BASE)} /* A at full scale */")

@@ -26,7 +26,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["ReportData", "build_context", "write_html", "write_pdf", "NOT_COMPUTED",
+__all__ = ["ReportData", "build_context", "write_html", "write_pdf", "zpk_text", "fmt", "NOT_COMPUTED",
            "METHOD_NAMES", "MARGIN_ROWS"]
 
 NOT_COMPUTED = "not computed"
@@ -173,7 +173,7 @@ def fmt(value: Any, digits: int = 4) -> str:
     return str(value)
 
 
-def _poly_factors(roots: np.ndarray) -> str:
+def _poly_factors(roots: np.ndarray, var: str = "s") -> str:
     """``(s + a)(s^2 + b s + c)`` text for real / complex-pair roots (rad/s)."""
     parts: list[str] = []
     done = np.zeros(len(roots), bool)
@@ -183,22 +183,31 @@ def _poly_factors(roots: np.ndarray) -> str:
         done[k] = True
         if abs(r.imag) <= 1e-9 * max(1.0, abs(r)):
             a = -r.real
-            parts.append("s" if a == 0 else f"(s {'+' if a > 0 else '-'} {abs(a):.4g})")
+            parts.append(var if a == 0 else f"({var} {'+' if a > 0 else '-'} {abs(a):.4g})")
         else:
             for j in range(k + 1, len(roots)):  # its conjugate
                 if not done[j] and abs(roots[j] - np.conj(r)) <= 1e-6 * abs(r):
                     done[j] = True
                     break
             b, c = -2 * r.real, abs(r) ** 2
-            parts.append(f"(s^2 {'+' if b >= 0 else '-'} {abs(b):.4g} s + {c:.4g})")
+            parts.append(f"({var}^2 {'+' if b >= 0 else '-'} {abs(b):.4g} {var} + {c:.4g})")
     return "".join(parts) if parts else "1"
 
 
-def zpk_text(zpk) -> str:
-    """``k (s + z1)... / ((s + p1)...)`` of a :class:`toolbox.artifact.Zpk`."""
-    num = _poly_factors(np.asarray(zpk.zeros, complex))
-    den = _poly_factors(np.asarray(zpk.poles, complex))
-    return f"{zpk.gain:.4g} {num} / {den}" if den != "1" else f"{zpk.gain:.4g} {num}"
+def zpk_text(zpk, var: str = "s") -> str:
+    """``k (s + z1)... / ((s + p1)...)`` of a :class:`toolbox.artifact.Zpk`.
+
+    Parameters
+    ----------
+    zpk : Zpk
+        Zeros and poles (rad/s, or z-plane for a discrete-only design), gain.
+    var : str
+        ``"s"`` or ``"z"``.
+    """
+    num = _poly_factors(np.asarray(zpk.zeros, complex), var)
+    den = _poly_factors(np.asarray(zpk.poles, complex), var)
+    head = f"{zpk.gain:.4g}" if num == "1" else f"{zpk.gain:.4g} {num}"
+    return head if den == "1" else f"{head} / {den}"
 
 
 def _flatten(prefix: str, value: Any, out: list) -> None:
@@ -294,8 +303,9 @@ def _equations(spec) -> list[dict]:
         lhs_text = {"v_{d}": "v_d", "v_{q}": "v_q", "T_{e}": "T_e"}.get(
             lhs, lhs.replace(r"\frac{d i_{d}}{dt}", "d(i_d)/dt")
             .replace(r"\frac{d i_{q}}{dt}", "d(i_q)/dt").replace(r"\frac{d \Omega}{dt}", "d(Omega)/dt"))
+        shown = tex.replace(r"\frac", r"\dfrac")  # display-style fractions read better
         out.append({"label": label, "latex": tex, "text": f"{lhs_text} = {text}",
-                    "svg": plots.equation_svg(tex)})
+                    "svg": plots.equation_svg(shown)})
     return out
 
 
@@ -303,12 +313,14 @@ def _controller(artifact) -> dict:
     axes = []
     for name in ("d", "q"):
         ax = artifact.axes[name]
-        row = {"axis": name, "order": ax.discrete.order, "zpk": zpk_text(ax.zpk),
+        var = "s" if ax.continuous is not None else "z"
+        row = {"axis": name, "order": ax.discrete.order, "zpk": f"K({var}) = " + zpk_text(ax.zpk, var),
                "discretisation": ax.discrete.method or "",
                "continuous": "yes" if ax.continuous is not None else "no (discrete design)",
                "reduced": None, "reduced_order": None}
         if ax.reduced is not None:
-            row["reduced"] = zpk_text(ax.reduced.zpk)
+            rvar = "s" if ax.reduced.continuous is not None else "z"
+            row["reduced"] = f"K({rvar}) = " + zpk_text(ax.reduced.zpk, rvar)
             row["reduced_order"] = ax.reduced.discrete.order
         axes.append(row)
     gains: list = []
@@ -342,7 +354,7 @@ def _scenarios(scenarios: Sequence | None) -> list[dict]:
             "status": "" if passed is None else ("pass" if passed else "fail"),
             "metrics": [(str(m), fmt(_as_float(v) if not isinstance(v, str) else v))
                         for m, v in metrics.items()],
-            "svg": plots.scenario_svg(traces) if traces else None,
+            "svg": plots.scenario_svg(traces, prefix=f"sc{k}") if traces else None,
         })
     return out
 
@@ -417,7 +429,8 @@ def build_context(data: ReportData) -> dict:
         req_rows.append((k, quantity, (">=" if direction == "min" else "<=") + " " + fmt(v), unit))
     margins = _margins_of(data)
     loops = plots.loop_data(art, motor)
-    figures = plots.figures(loops, weights=data.weights)
+    traces = [plots.traces_dict(dict(sc).get("traces")) for sc in (data.scenarios or [])]
+    figures = plots.figures(loops, weights=data.weights, traces=traces)
     return {
         "title": str(data.title),
         "motor": motor_rows, "drive": drive_rows, "requirements": req_rows,

@@ -21,6 +21,7 @@ position, so user text is shown literally and never parsed as markup or code.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import jinja2
@@ -28,6 +29,11 @@ import jinja2
 __all__ = ["write_pdf", "render_typst", "typst_string", "escape_markup"]
 
 TEMPLATES = Path(__file__).parent / "templates"
+
+#: Figure widths in the PDF (square plots narrower so two fit a page).
+PDF_FIGURE_WIDTH = {"bode": "100%", "nyquist": "62%", "sensitivity": "92%", "step": "100%",
+                    "pzmap": "58%"}
+EQUATION_SCALE = 0.62
 
 _MARKUP_SPECIAL = set('\\#*_`$<>@[]=-+/~\'"{}')
 
@@ -84,15 +90,20 @@ def render_typst(context: dict) -> tuple[str, dict[str, str]]:
     figs = []
     for k, f in enumerate(ctx["figures"]):
         images[f"fig{k}"] = f["svg"]
-        figs.append({**f, "key": f"fig{k}"})
+        width = PDF_FIGURE_WIDTH.get(f["id"], "100%")
+        figs.append({**f, "key": f"fig{k}", "width": width})
     ctx["figures"] = figs
     eqs = []
     for k, e in enumerate(ctx["equations"]):
         key = None
+        width = "auto"
         if e.get("svg"):
             key = f"eq{k}"
             images[key] = e["svg"]
-        eqs.append({**e, "key": key})
+            m = re.search(r'width="([0-9.]+)pt"', e["svg"])
+            if m:  # mathtext at 17 pt, shown at about 10.5 pt in the PDF
+                width = f"{EQUATION_SCALE * float(m.group(1)):.1f}pt"
+        eqs.append({**e, "key": key, "width": width})
     ctx["equations"] = eqs
     if ctx.get("scenarios"):
         scs = []

@@ -282,13 +282,51 @@ def _step(closed: control.StateSpace, dt: float, n_max: int = 20000) -> tuple[np
     return t[:n], y[:n]
 
 
-def step_svg(loops: dict, prefix: str = "step") -> str:
-    """Linear unit-step response of the sampled closed loop T(z) per axis."""
+def _simulated_steps(traces: Sequence[dict] | None) -> list[tuple[str, int, np.ndarray, np.ndarray]]:
+    """Normalised simulated responses of scenarios whose reference is one step.
+
+    A trace qualifies on an axis when its reference goes from 0 to a constant
+    non-zero value once; the response is divided by that value and its time
+    is shifted to the step instant.
+    """
+    out = []
+    for k, tr in enumerate(traces or []):
+        if not tr:
+            continue
+        for axis in ("d", "q"):
+            ref, cur = tr.get(f"i{axis}_ref"), tr.get(f"i{axis}")
+            if ref is None or cur is None or ref.size < 3:
+                continue
+            final = float(ref[-1])
+            if final == 0.0:
+                continue
+            changes = np.nonzero(np.diff(ref) != 0)[0]
+            if changes.size > 1 or (changes.size == 0 and ref[0] != final):
+                continue
+            k0 = int(changes[0]) + 1 if changes.size else 0
+            if changes.size and ref[changes[0]] != 0.0:
+                continue
+            out.append((axis, k + 1, tr["t"][k0:] - tr["t"][k0], cur[k0:] / final))
+    return out
+
+
+def step_svg(loops: dict, traces: Sequence[dict] | None = None, prefix: str = "step") -> str:
+    """Linear unit-step response of the sampled closed loop T(z) per axis.
+
+    Simulated step responses (verification traces, normalised by the
+    reference) are overlaid, dashed, when given.
+    """
     fig = _figure(7.2, 3.4)
     ax = fig.subplots()
+    t_end = 0.0
     for name, lp in loops.items():
         t, y = _step(lp["closed"], lp["dt"])
-        ax.step(t * 1e3, y, where="post", color=AXIS_COLORS[name], label=f"{name} axis")
+        t_end = max(t_end, float(t[-1]))
+        ax.step(t * 1e3, y, where="post", color=AXIS_COLORS[name], label=f"{name} axis, linear")
+    for axis, k, t, y in _simulated_steps(traces):
+        keep = t <= t_end
+        ax.plot(t[keep] * 1e3, y[keep], color=AXIS_COLORS[axis], ls="--", lw=1.0,
+                label=f"{axis} axis, simulated (scenario {k})")
     ax.axhline(1.0, color="k", lw=0.8)
     ax.axhspan(0.95, 1.05, color="0.85", alpha=0.5, lw=0, label="+/- 5 % band")
     ax.set_xlabel("time (ms)")
@@ -321,8 +359,15 @@ def pzmap_svg(loops: dict, prefix: str = "pz") -> str:
     return svg_from_figure(fig, prefix)
 
 
-def figures(loops: dict, weights: dict | None = None) -> list[dict]:
-    """The loop figures of a report: ``[{"id", "title", "caption", "svg"}]``."""
+def figures(loops: dict, weights: dict | None = None,
+            traces: Sequence[dict] | None = None) -> list[dict]:
+    """The loop figures of a report: ``[{"id", "title", "caption", "svg"}]``.
+
+    ``traces`` are the verification scenarios' traces (``traces_dict`` form,
+    ``None`` entries allowed), in scenario order; single reference steps are
+    overlaid on the linear step response.
+    """
+    sim = _simulated_steps(traces)
     has_w = bool(weights) and any((weights or {}).get(a) for a in ("d", "q"))
     return [
         {"id": "bode", "title": "Bode diagram of the loop",
@@ -339,9 +384,11 @@ def figures(loops: dict, weights: dict | None = None) -> list[dict]:
                      "Weight bounds: not computed (no H-infinity weights given)."),
          "svg": sensitivity_svg(loops, weights)},
         {"id": "step", "title": "Step response (linear)",
-         "caption": "Unit step of the sampled linear closed loop T(z) = L/(1+L); simulated "
-                    "responses, when verification ran, are in the verification section.",
-         "svg": step_svg(loops)},
+         "caption": "Unit step of the sampled linear closed loop T(z) = L/(1+L)"
+                    + ("; dashed: simulated responses of the verification scenarios "
+                       "(numbered as in the verification section), divided by the reference."
+                       if sim else "; simulated step responses: not computed."),
+         "svg": step_svg(loops, traces)},
         {"id": "pzmap", "title": "Pole-zero map",
          "caption": "Closed-loop poles and zeros of T(z); all poles inside the unit circle "
                     "means the sampled loop is stable.",
@@ -432,6 +479,6 @@ def robustness_svg(cases: Sequence[Mapping], worst: Sequence[str], prefix: str =
             ax.plot(idx[is_worst], vals[is_worst], "o", mfc="none", mec="k", ms=10, label="worst")
         ax.set_ylabel(f"{m} ({METRIC_UNITS.get(m, '1')})", fontsize=8)
         ax.legend(loc="best", fontsize=7)
-    axs[-1].set_xlabel("sweep case (index, see table)")
+    axs[-1].set_xlabel("sweep case (index in the sweep)")
     axs[0].set_title("Robustness sweep")
     return svg_from_figure(fig, prefix)

@@ -77,6 +77,22 @@ def hinf_artifact() -> ControllerArtifact:
     return _artifact("hinf", axes, {"gamma": 1.0})
 
 
+def hinf_marginal_artifact() -> ControllerArtifact:
+    """Paper 003's controller with the plain self-conditioned vector B/D, whose
+    saturated recursion A - B C / D has a pole at z = -1 (the Tustin image of
+    the zero at infinity of a strictly proper K). The artifact's default
+    vector moves that mode to the origin; this one keeps it, to test the
+    export's guard."""
+    K = hinf_controller()
+    axes = {}
+    for ax in ("d", "q"):
+        base = AxisController.from_error_controller(K, TS)
+        law = base.law
+        aw = law.B[:, 1:2] / law.D[0, 1]
+        axes[ax] = AxisController(base.discrete, base.continuous, law, aw)
+    return _artifact("hinf", axes, {"gamma": 1.0})
+
+
 def unstable_artifact() -> ControllerArtifact:
     """A PI whose 'integrator' is an unstable pole at +50 rad/s (z = 1.005)."""
     s = ct.tf("s")
@@ -91,3 +107,25 @@ def ringing_artifact() -> ControllerArtifact:
     K = 2.0 * (s + 1e3) / (s / 5e6 + 1) / s * 50
     axes = {ax: AxisController.from_error_controller(K, TS) for ax in ("d", "q")}
     return _artifact("hinf", axes)
+
+
+def static_artifact() -> ControllerArtifact:
+    """Order-0 laws: a 1-DOF proportional gain (d) and total compensation
+    without integrator (q; paper 000 eq 11: v = Lq K1 (r - y) + R y)."""
+    K1 = 800.0
+    p = ct.ss([], [], [], [[2.0]])
+    tc = ct.ss(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)),
+               [[MOTOR.Lq * K1, -MOTOR.Lq * K1 + MOTOR.R]])
+    axes = {"d": AxisController.from_error_controller(p, TS),
+            "q": AxisController.from_law(tc, sample_time=TS, method="tustin")}
+    return _artifact("tc", axes, {"K1": K1})
+
+
+def odd_order_artifact() -> ControllerArtifact:
+    """Third-order 1-DOF law (PI x lead): SOS with a first-order stage."""
+    s = ct.tf("s")
+    K = (1.4 + 300.0 / s) * (s / 800.0 + 1) / (s / 4000.0 + 1)
+    Kd = (0.7 + 300.0 / s) * (s / 500.0 + 1) * (s / 900.0 + 1) / ((s / 3000.0 + 1) * (s / 5000.0 + 1))
+    axes = {"d": AxisController.from_error_controller(Kd, TS),
+            "q": AxisController.from_error_controller(K, TS)}
+    return _artifact("pi_lag", axes)

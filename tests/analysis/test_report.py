@@ -1,0 +1,50 @@
+"""analysis.json content, controller.json MARGINS and the compare rows."""
+
+import json
+
+from analysis_helpers import AZAIZ, DRIVE
+from toolbox.analysis import (MARGIN_KEYS, analysis_report, compare_designs,
+                              compute_margins, with_margins)
+from toolbox.artifact import ControllerArtifact
+
+
+def test_analysis_report_is_plain_json(pi):
+    """Strict JSON (no NaN/inf literals), the documented layout, and the discrete
+    margins equal compute_margins'."""
+    rep = analysis_report(pi, AZAIZ, DRIVE, sweep_sets=100)
+    text = json.dumps(rep, allow_nan=False)
+    assert json.loads(text) == rep
+    assert rep["schema"] == "cct.analysis/1" and rep["method"] == "pi"
+    assert set(rep["margins"]) == {"discrete", "continuous", "continuous_delay"}
+    for dom in rep["margins"].values():
+        for ax in "dq":
+            assert list(dom[ax])[:9] == list(MARGIN_KEYS)
+    m = compute_margins(pi, AZAIZ)["q"]
+    assert rep["margins"]["discrete"]["q"]["phase_margin_deg"] == m.phase_margin_deg
+    assert {"worst_disk_margin", "worst_speed_rad_s", "disk_margin"} <= set(rep["mimo_at_speed"])
+    assert {"n_unstable", "worst", "static_error"} <= set(rep["sweep"])
+    assert rep["certificate"]["certified"] in (True, False)
+
+
+def test_with_margins_round_trips(tc):
+    """MARGINS written into controller.json (sampled loop with delay) survive the
+    exact JSON round trip of the artifact; infinite values become "inf"."""
+    art = with_margins(tc, AZAIZ)
+    back = ControllerArtifact.loads(art.dumps())
+    assert back.margins == art.margins
+    assert set(MARGIN_KEYS) <= set(back.margins["q"])
+    assert back.margins["d"]["phase_margin_deg"] == "inf"       # |L| < 1 everywhere (d axis)
+
+
+def test_compare_rows(pi, tc):
+    """One row per design with margins, response times, sweep worst cases and
+    certificate; the PI (integrators) has zero static error, both rows serialise."""
+    rows = compare_designs([pi, tc], AZAIZ, DRIVE, sweep_sets=50, certificate=False)
+    assert [r["method"] for r in rows] == ["pi", "tc"]
+    for r in rows:
+        assert set(r["margins"]["q"]) == set(MARGIN_KEYS)
+        assert r["response_times"]["q"]["response_time_5pct"] > 0
+        assert set(r["worst_case"]["d"]) == {"gain_margin_db", "phase_margin_deg",
+                                             "stability_margin", "disk_margin"}
+        json.dumps(r, allow_nan=False)
+    assert rows[0]["margins"]["q"]["static_error"] == 0.0

@@ -1,0 +1,85 @@
+"""Open the HTML report in headless Chromium (Playwright, system browser).
+
+Fails on console errors, page errors, failed requests, any request that is
+not file://, SVGs or images of zero size, and a blank render (pixel variance
+of a screenshot). Needs /usr/bin/chromium (``.ci/browser-deps.sh`` installs
+the Debian package); never downloads a browser.
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+CHROMIUM = "/usr/bin/chromium"
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
+                                reason=f"{CHROMIUM} absent (run .ci/browser-deps.sh as root)")
+
+
+def _open(page_path, shot):
+    """Load ``page_path`` in Chromium; return what went wrong and what it saw."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    problems: list[str] = []
+    requests: list[str] = []
+    with sync_api.sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
+        try:
+            page = browser.new_page(viewport={"width": 1100, "height": 1400})
+            page.on("console", lambda m: problems.append(f"console {m.type}: {m.text}")
+                    if m.type in ("error", "warning") else None)
+            page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+            page.on("requestfailed", lambda r: problems.append(f"request failed: {r.url}"))
+            page.on("request", lambda r: requests.append(r.url))
+            page.on("dialog", lambda d: (problems.append(f"dialog: {d.message}"), d.dismiss()))
+            page.goto(page_path.as_uri(), wait_until="load")
+            sizes = page.evaluate(
+                "() => Array.from(document.querySelectorAll('svg, img')).map(e => {"
+                " const r = e.getBoundingClientRect(); return [r.width, r.height]; })")
+            title = page.evaluate("() => document.querySelector('h1').textContent")
+            n_scripts = page.evaluate("() => document.scripts.length")
+            page.screenshot(path=str(shot), full_page=True)
+        finally:
+            browser.close()
+    external = [u for u in requests if not u.startswith("file://")]
+    return problems, requests, external, sizes, title, n_scripts
+
+
+def test_report_renders_in_chromium(full_data, full_html, tmp_path):
+    page_path = tmp_path / "report.html"
+    page_path.write_text(full_html, encoding="utf-8")
+    shot = tmp_path / "report.png"
+    problems, requests, external, sizes, title, n_scripts = _open(page_path, shot)
+
+    assert not problems, problems
+    assert requests and not external, requests
+    assert len(sizes) == 13  # 6 equations, 5 loop figures, robustness, 1 scenario
+    assert all(w > 20 and h > 10 for w, h in sizes), sizes
+    assert title == full_data.title  # hostile title shown literally
+    assert n_scripts == 0
+
+    from PIL import Image, ImageStat
+
+    with Image.open(shot) as img:
+        gray = img.convert("L")
+        assert gray.size[1] > 3000  # a long page, not an error stub
+        assert ImageStat.Stat(gray).stddev[0] > 10  # not blank
+
+
+def test_checker_catches_bad_pages(tmp_path):
+    """Negative control: the checks above do fire on a script error, an external
+    request and an empty image (the network request is refused by routing to an
+    unroutable address and flags as external whatever its outcome)."""
+    page_path = tmp_path / "bad.html"
+    page_path.write_text(
+        "<!DOCTYPE html><html><body><h1>x</h1><script>undefined_fn()</script>"
+        '<img src="http://127.0.0.1:9/x.png"><svg width="0" height="0"></svg></body></html>',
+        encoding="utf-8")
+    problems, _, external, sizes, _, n_scripts = _open(page_path, tmp_path / "bad.png")
+    assert any("page error" in p for p in problems)
+    assert external == ["http://127.0.0.1:9/x.png"]
+    assert any(w == 0 or h == 0 for w, h in sizes)
+    assert n_scripts == 1

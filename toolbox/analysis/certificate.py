@@ -1,0 +1,286 @@
+"""Robust stability certificate by a common quadratic Lyapunov function.
+
+Model (continuous time, stated assumptions): the continuous controllers of
+both axes (the continuous twin of the executed law, as in
+:func:`toolbox.analysis.margins.axis_law`), the dq plant at constant
+electrical speed ``omega`` (paper 003 eq (3)-(4)) and the cross-coupling
+compensation of the artifact, ``v = u + W i``,
+``W = g omega [[0, -Lq_c], [Ld_c, 0]]`` (controller model parameters
+``Ld_c, Lq_c``; speed-sensor gain ``g``). Sampling and computation delay are
+not in this model (use the discrete margins and the sweep for them).
+Back-EMF and its compensation are exogenous constants and do not affect
+stability.
+
+Parameter dependence: the closed-loop matrix is **not** affine in
+``(R, Ld, Lq, omega)`` (``1/L`` and products appear), but it is affine in the
+six coordinates
+
+``theta = (1/Ld, 1/Lq, R/Ld, R/Lq, omega (Lq - g Lq_c)/Ld, omega (Ld - g Ld_c)/Lq)``:
+
+``di_d/dt = -theta_3 i_d + theta_5 i_q + theta_1 u_d``,
+``di_q/dt = -theta_4 i_q - theta_6 i_d + theta_2 u_q``.
+
+Each coordinate is multilinear in ``(R, 1/Ld or Ld, Lq, omega, g)`` and
+monotone in each, so its range over the parameter box is attained at the
+box's corners. The box in ``theta`` spanned by these ranges contains the
+image of the parameter box (it ignores the correlations between
+coordinates: conservative, never optimistic). ``A(theta)`` being affine, a
+common ``P`` with ``A_i' P + P A_i <= -2 alpha P`` at the 64 vertices holds
+on the whole ``theta`` box by convexity, hence on the parameter box:
+quadratic stability with decay rate ``alpha`` (1/s) for any (even slowly
+time-varying) parameters and speed in the box.
+
+The LMIs are solved with cvxpy + CLARABEL after a diagonal similarity
+(``scipy.linalg.matrix_balance`` of the nominal matrix), with ``P >= I`` and
+a margin ``eps`` on each vertex LMI, then checked a posteriori with numpy
+eigenvalues of the returned ``P`` (a certificate is only reported when that
+check passes).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import warnings
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy.linalg import matrix_balance
+
+from .margins import AXES, axis_law, json_ready, _electrical_max_speed
+
+__all__ = ["CertificateResult", "ParameterBox", "closed_loop_matrix", "point_matrices", "certify",
+           "largest_certified_scale"]
+
+
+@dataclass(frozen=True)
+class ParameterBox:
+    """Box of true plant parameters and speeds.
+
+    Attributes
+    ----------
+    R, Ld, Lq : tuple
+        ``(low, high)`` in ohm, H, H.
+    omega : tuple
+        Electrical speed range (rad/s).
+    speed_gain : tuple
+        Speed-sensor gain range (1).
+    """
+
+    R: tuple
+    Ld: tuple
+    Lq: tuple
+    omega: tuple
+    speed_gain: tuple = (1.0, 1.0)
+
+    @classmethod
+    def around(cls, motor, scale: float, *, R=(0.5, 2.0), L=(0.5, 2.0),
+               omega_max: float = 0.0, speed_gain=(1.0, 1.0)) -> "ParameterBox":
+        """Box interpolated from the nominal point (``scale`` 0) to the given
+        factor ranges and speed range (``scale`` 1)."""
+        def f(nom, lo_hi):
+            lo, hi = lo_hi
+            return (nom * (1 + scale * (lo - 1)), nom * (1 + scale * (hi - 1)))
+        return cls(f(motor.R, R), f(motor.Ld, L), f(motor.Lq, L),
+                   (-scale * omega_max, scale * omega_max),
+                   (1 + scale * (speed_gain[0] - 1), 1 + scale * (speed_gain[1] - 1)))
+
+    def corners(self) -> np.ndarray:
+        """All corners ``(R, Ld, Lq, omega, g)`` (32, 5)."""
+        return np.array(list(itertools.product(self.R, self.Ld, self.Lq, self.omega,
+                                               self.speed_gain)), float)
+
+    def sample(self, n: int, seed: int = 0) -> np.ndarray:
+        """``n`` uniform random points plus the corners (for checks)."""
+        rng = np.random.default_rng(seed)
+        lo = np.array([self.R[0], self.Ld[0], self.Lq[0], self.omega[0], self.speed_gain[0]])
+        hi = np.array([self.R[1], self.Ld[1], self.Lq[1], self.omega[1], self.speed_gain[1]])
+        return np.vstack([self.corners(), lo + rng.random((n, 5)) * (hi - lo)])
+
+
+def _theta(points: np.ndarray, dec) -> np.ndarray:
+    R, Ld, Lq, om, g = points.T
+    cross = 1.0 if dec.cross else 0.0
+    return np.stack([1 / Ld, 1 / Lq, R / Ld, R / Lq,
+                     om * (Lq - cross * g * dec.Lq_c) / Ld,
+                     om * (Ld - cross * g * dec.Ld_c) / Lq], axis=1)
+
+
+def _laws(artifact):
+    return [axis_law(artifact.axes[k], False) for k in AXES]
+
+
+def closed_loop_matrix(artifact, theta: np.ndarray) -> np.ndarray:
+    """Continuous closed-loop state matrix at coordinates ``theta`` (..., 6).
+
+    States ``[i_d, i_q, x_d, x_q]`` (controller states of each axis).
+    Affine in ``theta`` by construction (module docstring).
+    """
+    theta = np.atleast_2d(theta)
+    ld, lq = _laws(artifact)
+    nd, nq = ld.n, lq.n
+    n = 2 + nd + nq
+    N = theta.shape[0]
+    a_d, a_q, r_d, r_q, c_d, c_q = theta.T
+    A = np.zeros((N, n, n))
+    # u = C x + D_m i  (measurement channel of the law)
+    Ud = np.zeros((N, n))
+    Uq = np.zeros((N, n))
+    Ud[:, 0] = ld.D[0, 1]
+    Ud[:, 2:2 + nd] = ld.C[0]
+    Uq[:, 1] = lq.D[0, 1]
+    Uq[:, 2 + nd:] = lq.C[0]
+    A[:, 0, :] = a_d[:, None] * Ud
+    A[:, 0, 0] += -r_d
+    A[:, 0, 1] += c_d
+    A[:, 1, :] = a_q[:, None] * Uq
+    A[:, 1, 1] += -r_q
+    A[:, 1, 0] += -c_q
+    A[:, 2:2 + nd, 0] = ld.B[:, 1]
+    A[:, 2:2 + nd, 2:2 + nd] = ld.A
+    A[:, 2 + nd:, 1] = lq.B[:, 1]
+    A[:, 2 + nd:, 2 + nd:] = lq.A
+    return A
+
+
+def point_matrices(artifact, points: np.ndarray) -> np.ndarray:
+    """Closed-loop matrices at parameter points ``(R, Ld, Lq, omega, g)``."""
+    return closed_loop_matrix(artifact, _theta(np.atleast_2d(points), artifact.decoupling))
+
+
+@dataclass(frozen=True)
+class CertificateResult:
+    """Outcome of a quadratic-stability search.
+
+    Attributes
+    ----------
+    certified : bool
+        A common Lyapunov matrix was found and verified.
+    alpha : float
+        Decay rate certified (1/s): every trajectory decays at least as
+        ``exp(-alpha t)`` (in the P-norm).
+    box : dict
+        The parameter box (ohm, H, H, rad/s, 1).
+    n_vertices : int
+        Vertices of the theta box (64).
+    status : str
+        Solver status.
+    condition_P : float
+        Condition number of P (nan if none).
+    scale : float
+        Box scale factor (for :func:`largest_certified_scale`).
+    """
+
+    certified: bool
+    alpha: float
+    box: dict
+    n_vertices: int
+    status: str
+    condition_P: float
+    scale: float = math.nan
+
+    def to_json(self) -> dict:
+        """JSON-ready dict of all attributes (non-finite floats as strings)."""
+        return json_ready(asdict(self))
+
+
+def _vertices(artifact, box: ParameterBox) -> np.ndarray:
+    th = _theta(box.corners(), artifact.decoupling)
+    lo, hi = th.min(axis=0), th.max(axis=0)
+    V = np.array(list(itertools.product(*zip(lo, hi))), float)
+    return closed_loop_matrix(artifact, V)
+
+
+def _solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
+    import cvxpy as cp
+
+    n = As.shape[1]
+    P = cp.Variable((n, n), symmetric=True)
+    cons = [P >> np.eye(n)]
+    for A in As:
+        M = A.T @ P + P @ A + 2 * alpha * P
+        cons.append(0.5 * (M + M.T) << -eps * np.eye(n))
+    prob = cp.Problem(cp.Minimize(0), cons)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            prob.solve(solver=cp.CLARABEL)
+        except cp.error.SolverError as err:
+            return None, f"solver error: {err}"
+    if P.value is None or prob.status not in ("optimal", "optimal_inaccurate"):
+        return None, str(prob.status)
+    return np.array(P.value), str(prob.status)
+
+
+def _verified(As: np.ndarray, P: np.ndarray, alpha: float) -> bool:
+    P = 0.5 * (P + P.T)
+    if np.min(np.linalg.eigvalsh(P)) <= 0:
+        return False
+    M = np.transpose(As, (0, 2, 1)) @ P + P @ As + 2 * alpha * P
+    M = 0.5 * (M + np.transpose(M, (0, 2, 1)))
+    return bool(np.max(np.linalg.eigvalsh(M)) < 0)
+
+
+def certify(artifact, box: ParameterBox, *, alpha: float = 0.0) -> CertificateResult:
+    """Search a common quadratic Lyapunov function over a parameter box.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    box : ParameterBox
+        True-parameter and speed ranges.
+    alpha : float
+        Decay rate to certify (1/s); 0 for plain quadratic stability.
+
+    Returns
+    -------
+    CertificateResult
+    """
+    As = _vertices(artifact, box)
+    # diagonal similarity from the nominal (box-centre) matrix for conditioning
+    centre = closed_loop_matrix(artifact, np.mean(_theta(box.corners(), artifact.decoupling),
+                                                  axis=0))[0]
+    _, (scale_vec, _) = matrix_balance(centre, permute=False, separate=True)
+    T = np.diag(scale_vec)
+    Ti = np.diag(1 / scale_vec)
+    Ab = Ti @ As @ T
+    norm = max(1.0, float(np.max(np.abs(Ab))))
+    P, status = _solve(Ab / norm, alpha / norm)
+    ok = P is not None and _verified(Ab, P, alpha)
+    return CertificateResult(bool(ok), float(alpha), json_ready(asdict(box)), int(As.shape[0]),
+                             status, float(np.linalg.cond(P)) if P is not None else math.nan)
+
+
+def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5, 2.0),
+                            speed_gain=(1.0, 1.0), omega_max: float | None = None,
+                            alpha: float = 0.0, tol: float = 0.05,
+                            max_scale: float = 1.0) -> CertificateResult:
+    """Bisection on the box scale factor (0 nominal .. ``max_scale``).
+
+    The box at scale ``k`` is :meth:`ParameterBox.around` (parameter
+    deviations and speed range scaled by ``k``). Returns the certificate of
+    the largest certified scale (``scale`` attribute; 0 and
+    ``certified=False`` if even the nominal point fails).
+    """
+    wmax = _electrical_max_speed(motor, drive) if omega_max is None else omega_max
+
+    def at(k):
+        box = ParameterBox.around(motor, k, R=R, L=L, omega_max=wmax, speed_gain=speed_gain)
+        res = certify(artifact, box, alpha=alpha)
+        return CertificateResult(**{**asdict(res), "scale": k})
+
+    top = at(max_scale)
+    if top.certified:
+        return top
+    nominal = at(0.0)
+    if not nominal.certified:
+        return nominal
+    lo, hi, best = 0.0, max_scale, nominal
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        r = at(mid)
+        if r.certified:
+            lo, best = mid, r
+        else:
+            hi = mid
+    return best

@@ -1,0 +1,120 @@
+"""Boolean predictive control (finite-control-set MPC) of paper 002.
+
+G. Cormerais et al., "Optimal torque control of a synchronous machine"
+(IFAC 2002). At each period the inverter state (of 8) minimising criterion
+(23) (weights alpha on the torque error, beta on the i_d error, gamma on the
+number of commutations) is applied; the simulator does that itself
+(:class:`toolbox.sim.FcsWeights`). The design step only validates the weights
+and, so that margins can still be compared with the other methods, fills the
+axes with the paper's SVM baseline PI, eq (19)-(20): ``K = 10 R``,
+``Ti = L/R``, i.e. ``Kp = 10 R`` and ``Ki = Kp / Ti = 10 R^2 / L`` per axis.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import control as ct
+
+from ..artifact import AxisController, ControllerArtifact
+from ..errors import SpecError
+from ._common import decoupling_from_motor, make_artifact
+
+__all__ = ["FcsMpcCfg", "baseline_pi", "read_cfg", "design"]
+
+_KEY = "controller.fcs_mpc"
+
+
+@dataclass(frozen=True)
+class FcsMpcCfg:
+    """Validated ``[controller.fcs_mpc]``: weights of criterion (23) of paper 002.
+
+    Attributes
+    ----------
+    alpha : float
+        Weight of the squared torque error (1/(N m)^2), >= 0.
+    beta : float
+        Weight of the squared i_d error (1/A^2), >= 0.
+    gamma : float
+        Weight of the number of commutations, >= 0.
+    """
+
+    alpha: float = 1.0
+    beta: float = 1.0
+    gamma: float = 0.0
+
+
+def baseline_pi(R: float, L: float) -> tuple[float, float]:
+    """SVM baseline PI of paper 002 eq (19)-(20).
+
+    Parameters
+    ----------
+    R : float
+        Resistance (ohm).
+    L : float
+        Axis inductance (H).
+
+    Returns
+    -------
+    Kp, Ki : float
+        ``10 R`` (V/A) and ``10 R^2 / L`` (V/(A s)).
+    """
+    Kp = 10.0 * R
+    return Kp, Kp * R / L
+
+
+def read_cfg(method: str, table, motor, drive) -> FcsMpcCfg:
+    """Validate ``[controller.fcs_mpc]``: ``alpha``, ``beta``, ``gamma`` (all >= 0,
+    defaults 1, 1, 0) with ``alpha + beta > 0``.
+
+    Parameters
+    ----------
+    method : str
+        The method name (``"fcs_mpc"``).
+    table : Table
+        The ``[controller.fcs_mpc]`` table being read (key paths for messages).
+    motor : Motor
+        Validated motor (SI units).
+    drive : Drive
+        Validated drive (sample time in s, voltages in V).
+
+    Returns
+    -------
+    FcsMpcCfg
+    """
+    from ..spec import Table
+
+    t = Table(table.data, table.prefix, ("alpha", "beta", "gamma"))
+    alpha = t.number("alpha", 1.0, nonnegative=True)
+    beta = t.number("beta", 1.0, nonnegative=True)
+    gamma = t.number("gamma", 0.0, nonnegative=True)
+    if not alpha + beta > 0:
+        raise SpecError(t.key("alpha"), "alpha + beta > 0 (criterion (23) must weight the "
+                        "torque or the i_d error)", [alpha, beta])
+    return FcsMpcCfg(alpha, beta, gamma)
+
+
+def design(spec) -> ControllerArtifact:
+    """FCS-MPC artifact: weights in gains, the eq (19)-(20) PI on the axes.
+
+    Parameters
+    ----------
+    spec : Spec
+        Validated spec with ``controller.method = "fcs_mpc"``.
+
+    Returns
+    -------
+    ControllerArtifact
+    """
+    cfg: FcsMpcCfg = spec.controller.cfg
+    m, ts = spec.motor, spec.drive.sample_time
+    s = ct.tf("s")
+    axes, pis = {}, {}
+    for ax, L in (("d", m.Ld), ("q", m.Lq)):
+        Kp, Ki = baseline_pi(m.R, L)
+        pis[ax] = {"Kp": Kp, "Ki": Ki}
+        axes[ax] = AxisController.from_error_controller(Kp + Ki / s, ts, method="tustin")
+    gains = {"alpha": cfg.alpha, "beta": cfg.beta, "gamma": cfg.gamma,
+             "baseline": "002 eq (19)-(20)", "baseline_pi": pis}
+    return make_artifact(spec, axes, decoupling_from_motor(m), gains,
+                         ["002 eq (19)-(20)", "002 eq (23)"])

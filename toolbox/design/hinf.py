@@ -1,0 +1,414 @@
+"""H-infinity mixed-sensitivity current controllers (paper 003).
+
+A. Azaiz, Y. Ramdani, A. Meroufel, B. Belabbes, "H-infinity design of
+controllers ensuring the regulation of currents of the decoupled field
+orientation control applied to a PMS motor" (2007). Equation numbers refer to
+it. The numerics live in :mod:`toolbox.design._hinf` (augmented plant eq
+(35)-(40), (50)-(64); Riccati formulae eq (10)-(32), (65)-(67); gamma
+iteration with back-off), :mod:`._weights` (eq (44)-(49) and ``makeweight``)
+and :mod:`._reduction` (eq (71)-(72)); this module turns a spec into them and
+the result into a :class:`~toolbox.artifact.ControllerArtifact`.
+
+Per axis: ``G = axis_plants(motor)[axis]`` (eq (33)-(34)), weights from
+``[controller.hinf.weights.<axis>]``, synthesis at ``gamma`` (or the optimum
+with back-off, realisable at ``drive.sample_time``), weight-bound checks (41)-(43),
+then optionally order reduction with a margin comparison.
+
+Which controller runs: the axis keeps the full controller (``continuous``,
+``discrete``, ``zpk``) and the reduced one in ``reduced``. With
+``reduce_order`` given, the executed ``law`` is by default the reduced
+controller's (``executed = "reduced"``, recorded in ``gains["executed"]``):
+reduction is asked precisely to run a simpler controller. Set
+``executed = "full"`` to run the full one. The anti-windup (back-calculation)
+gain is chosen so that the saturated recursion is Schur
+(:func:`schur_antiwindup`).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, replace
+from typing import Any, Mapping
+
+import control as ct
+import numpy as np
+
+from ..artifact import AxisController, ControllerArtifact, Zpk
+from ..errors import SpecError
+from ..plant import axis_plants
+from ._common import decoupling_from_motor, make_artifact
+from ._hinf import augment_mixed_sensitivity, synthesize, weight_bound_check
+from ._reduction import compare_margins, loop_margins, reduce_controller
+from ._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
+
+__all__ = ["HinfCfg", "HinfAxisResult", "read_weight", "design_hinf_axis", "schur_antiwindup",
+           "read_cfg",
+           "design"]
+
+_KEY = "controller.hinf"
+AXES = ("d", "q")
+CFG_KEYS = ("gamma", "backoff", "reduce_order", "integrator_tol", "margin_loss",
+            "on_margin_loss", "executed", "weights")
+_FORMS = {"tf": ("num", "den"), "zpk": ("zeros", "poles", "gain"),
+          "makeweight": ("dc_gain", "crossover", "crossover_gain", "hf_gain", "order")}
+
+
+@dataclass(frozen=True)
+class HinfCfg:
+    """Validated ``[controller.hinf]``.
+
+    Attributes
+    ----------
+    gamma : float or "optimal"
+        Fixed level (dimensionless) or the optimum with back-off.
+    backoff : float
+        Relative back-off above gamma_opt (default 0.05).
+    reduce_order : int or None
+        Target controller order.
+    integrator_tol : float
+        Poles with |p| below this become integrators in the reduction (rad/s).
+    margin_loss : float
+        Largest relative loss of GM, PM or M_m accepted from the reduction.
+    on_margin_loss : str
+        ``"refuse"`` (SpecError) or ``"flag"`` (recorded in gains).
+    executed : str
+        ``"reduced"`` or ``"full"``: the controller the law runs.
+    weights : dict
+        ``{axis: {"w1": tf, "w2": tf or None, "w3": tf or None}}``.
+    """
+
+    gamma: float | str
+    backoff: float
+    reduce_order: int | None
+    integrator_tol: float
+    margin_loss: float
+    on_margin_loss: str
+    executed: str
+    weights: dict
+
+
+def _root(value: Any, key: str) -> complex:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return complex(value)
+    if (isinstance(value, (list, tuple)) and len(value) == 2
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+        return complex(value[0], value[1])
+    raise SpecError(key, "a number or a pair [re, im] (rad/s)", value)
+
+
+def read_weight(value: Any, key: str) -> ct.TransferFunction:
+    """A weight from spec data (paper 003 eq (44)-(49) style).
+
+    Parameters
+    ----------
+    value : number or mapping
+        A positive constant; ``{num = [..], den = [..]}`` (coefficients in s,
+        highest power first); ``{zeros = [..], poles = [..], gain = k}``
+        (roots as numbers or ``[re, im]``, rad/s); or ``{dc_gain =,
+        crossover =, crossover_gain =, hf_gain =, order =}`` (makeweight,
+        absolute gains, rad/s).
+    key : str
+        Dotted key for messages, e.g. ``controller.hinf.weights.q.w1``.
+
+    Returns
+    -------
+    control.TransferFunction
+
+    Raises
+    ------
+    SpecError
+        Unknown form, bad numbers, improper or unstable weight.
+    """
+    from ..spec import Table
+
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if not (math.isfinite(value) and value > 0):
+            raise SpecError(key, "a constant weight > 0", value)
+        return validate_weight(ct.tf([float(value)], [1.0]), key)
+    if not isinstance(value, Mapping):
+        raise SpecError(key, "a number or a table {num, den} | {zeros, poles, gain} | "
+                        "{dc_gain, crossover, crossover_gain, hf_gain, order}", value)
+    form = next((f for f, names in _FORMS.items() if names[0] in value), None)
+    if form is None:
+        raise SpecError(key, "one of the forms {num, den}, {zeros, poles, gain}, "
+                        "{dc_gain, crossover, crossover_gain, hf_gain, order}",
+                        sorted(value))
+    t = Table(value, key, _FORMS[form])
+    if form == "tf":
+        return weight_from_tf(t.numbers("num", min_length=1), t.numbers("den", min_length=1),
+                              key)
+    if form == "zpk":
+        roots = {}
+        for name in ("zeros", "poles"):
+            raw = t.raw(name, [])
+            if not isinstance(raw, (list, tuple)):
+                raise SpecError(t.key(name), "a list of roots", raw)
+            roots[name] = [_root(r, f"{t.key(name)}[{i}]") for i, r in enumerate(raw)]
+        return weight_from_zpk(roots["zeros"], roots["poles"], t.number("gain"), key)
+    return makeweight(t.number("dc_gain", positive=True), t.number("crossover", positive=True,
+                                                                   unit="rad/s"),
+                      t.number("crossover_gain", positive=True), t.number("hf_gain", positive=True),
+                      t.integer("order", 1, minimum=1), key)
+
+
+def read_cfg(method: str, table, motor, drive) -> HinfCfg:
+    """Validate ``[controller.hinf]`` and its weights.
+
+    Keys: ``gamma`` (number > 0 or "optimal", default 1), ``backoff`` (>= 0,
+    default 0.05), ``reduce_order`` (int >= 1, optional), ``integrator_tol``
+    (rad/s, default 0.1), ``margin_loss`` (0..1, default 0.1),
+    ``on_margin_loss`` ("refuse" | "flag", default "refuse"), ``executed``
+    ("reduced" | "full", default "reduced" when reduce_order is given),
+    ``[controller.hinf.weights.d|q]`` with ``w1`` (required), ``w2``, ``w3``.
+
+    Parameters
+    ----------
+    method : str
+        The method name (``"hinf"``).
+    table : Table
+        The ``[controller.hinf]`` table being read (key paths for messages).
+    motor : Motor
+        Validated motor (SI units).
+    drive : Drive
+        Validated drive (sample time in s, voltages in V).
+
+    Returns
+    -------
+    HinfCfg
+    """
+    from ..spec import Table
+
+    t = Table(table.data, table.prefix, CFG_KEYS)
+    gamma = t.raw("gamma", 1.0)
+    if isinstance(gamma, str):
+        if gamma != "optimal":
+            raise SpecError(t.key("gamma"), 'a number > 0 or "optimal"', gamma)
+    else:
+        gamma = t.number("gamma", 1.0, positive=True)
+    backoff = t.number("backoff", 0.05, nonnegative=True)
+    order = t.integer("reduce_order", None, minimum=1)
+    itol = t.number("integrator_tol", 0.1, positive=True, unit="rad/s")
+    loss = t.number("margin_loss", 0.1, nonnegative=True, maximum=1.0)
+    on_loss = t.string("on_margin_loss", "refuse", choices=("refuse", "flag"))
+    executed = t.string("executed", "reduced" if order is not None else "full",
+                        choices=("reduced", "full"))
+    if executed == "reduced" and order is None:
+        raise SpecError(t.key("executed"), '"full" unless reduce_order is given', executed)
+    wt = t.table("weights", AXES, required=True)
+    weights = {}
+    for ax in AXES:
+        sub = wt.table(ax, ("w1", "w2", "w3"), required=True)
+        if not sub.has("w1"):
+            raise SpecError(sub.key("w1"), "a sensitivity weight (missing)")
+        weights[ax] = {w: (read_weight(sub.raw(w), sub.key(w)) if sub.has(w) else None)
+                       for w in ("w1", "w2", "w3")}
+    return HinfCfg(gamma, backoff, order, itol, loss, on_loss, executed, weights)
+
+
+@dataclass
+class HinfAxisResult:
+    """One axis of an H-infinity design.
+
+    Attributes
+    ----------
+    G : control.TransferFunction
+        Plant (A/V).
+    K : control.StateSpace
+        Central controller (V/A).
+    Kr : control.StateSpace or None
+        Reduced controller.
+    synthesis : HinfResult
+    bounds : dict
+        Weight-bound worst ratios, eq (41)-(43).
+    reduction : ReductionResult or None
+    margins : MarginComparison or LoopMargins
+    """
+
+    G: Any
+    K: Any
+    Kr: Any
+    synthesis: Any
+    bounds: dict
+    reduction: Any
+    margins: Any
+
+
+def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
+                     gamma: float | str = 1.0, backoff: float = 0.05,
+                     sample_time: float | None = None, reduce_order: int | None = None,
+                     integrator_tol: float = 0.1, margin_loss: float = 0.1,
+                     on_margin_loss: str = "refuse", axis: str = "q") -> HinfAxisResult:
+    """Synthesize (and optionally reduce) the controller of one current loop.
+
+    Parameters
+    ----------
+    G : control.LTI
+        Plant, e.g. ``1/(R + s Lq)`` (A/V).
+    w1, w2, w3 : control.LTI or None
+        Weights on S, KS, T (eq 35-40).
+    gamma : float or "optimal"
+    backoff : float
+    sample_time : float, optional
+        Controller period (s), for the realisability test.
+    reduce_order : int, optional
+    integrator_tol : float
+        Near-zero poles below this become integrators (rad/s), eq (71)-(72).
+    margin_loss : float
+        Allowed relative margin loss of the reduction.
+    on_margin_loss : {"refuse", "flag"}
+    axis : str
+        Axis name for messages.
+
+    Returns
+    -------
+    HinfAxisResult
+
+    Raises
+    ------
+    SpecError
+        ``controller.hinf.gamma`` (infeasible, with the best achievable gamma),
+        ``controller.hinf.reduce_order`` (margins lost beyond ``margin_loss``).
+    """
+    P = augment_mixed_sensitivity(G, w1, w2, w3)
+    try:
+        with warnings.catch_warnings(record=True):
+            warnings.simplefilter("always")
+            res = synthesize(P, gamma, backoff=backoff, sample_time=sample_time)
+    except SpecError as err:
+        raise SpecError(err.key, err.expected, err.got if err.has_got else SpecError._MISSING,
+                        hint=f"{axis} axis: {err.hint}" if err.hint else f"{axis} axis") from None
+    bounds = weight_bound_check(G, res.K, w1, w2, w3)
+    red = Kr = None
+    if reduce_order is not None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            red = reduce_controller(res.K, order=reduce_order, integrator_tol=integrator_tol)
+        Kr = red.K
+        margins = compare_margins(G, res.K, Kr, max_loss=margin_loss)
+        if not margins.ok and on_margin_loss == "refuse":
+            raise SpecError(f"{_KEY}.reduce_order",
+                            f"an order whose {axis}-axis controller keeps GM, PM and M_m "
+                            f"within {100 * margin_loss:g} % of the full controller's",
+                            reduce_order,
+                            hint="; ".join(margins.flags) + '; raise reduce_order or set '
+                                 'on_margin_loss = "flag"')
+    else:
+        margins = loop_margins(G, res.K)
+    return HinfAxisResult(G, res.K, Kr, res, bounds, red, margins)
+
+
+def schur_antiwindup(axis: AxisController, radius: float = 0.99) -> np.ndarray | None:
+    """Back-calculation gain whose saturated recursion ``A - aw C`` is Schur.
+
+    The default gain ``B_y / D_y`` of :meth:`AxisController.from_law` makes
+    ``A - aw C`` have the discrete controller's zeros as eigenvalues; Tustin
+    puts one at z = -1 for every excess pole of ``K`` (here K is strictly
+    proper), so the saturated states would ring undamped. Eigenvalues with
+    ``|z| >= radius`` are moved to z = 0 (Ackermann on the dual pair), the
+    others are kept.
+
+    Parameters
+    ----------
+    axis : AxisController
+        Axis whose ``law`` is considered.
+    radius : float
+        Largest accepted eigenvalue magnitude (dimensionless), default 0.99.
+
+    Returns
+    -------
+    ndarray (n, 1) or None
+        The gain (1/V x state units); None when the law has no state or no
+        feedthrough from the measurement.
+    """
+    law = axis.law
+    Dy = float(law.D[0, 1])
+    if law.order == 0 or abs(Dy) < 1e-12:
+        return None
+    aw = law.B[:, 1:2] / Dy
+    eig = np.linalg.eigvals(law.A - aw @ law.C)
+    if np.max(np.abs(eig)) < radius:
+        return aw
+    want = np.where(np.abs(eig) < radius, eig, 0.0)
+    K = ct.acker(law.A.T, law.C.T, want)
+    return np.asarray(K, float).reshape(-1, 1)
+
+
+def _zpk_json(K: Any) -> dict:
+    return Zpk.from_statespace(ct.ss(K)).to_json()
+
+
+def _margins_json(m: Any) -> dict:
+    return dict(vars(m))
+
+
+def design(spec) -> ControllerArtifact:
+    """H-infinity artifact from a validated spec (method ``hinf``).
+
+    See the module docstring for which controller the law executes.
+
+    Parameters
+    ----------
+    spec : Spec
+        Validated spec with ``controller.method = "hinf"``.
+
+    Returns
+    -------
+    ControllerArtifact
+    """
+    cfg: HinfCfg = spec.controller.cfg
+    ts = spec.drive.sample_time
+    plants = axis_plants(spec.motor)
+    results = {ax: design_hinf_axis(plants[ax], **cfg.weights[ax], gamma=cfg.gamma,
+                                    backoff=cfg.backoff, sample_time=ts,
+                                    reduce_order=cfg.reduce_order,
+                                    integrator_tol=cfg.integrator_tol,
+                                    margin_loss=cfg.margin_loss,
+                                    on_margin_loss=cfg.on_margin_loss, axis=ax)
+               for ax in AXES}
+    axes = {}
+    for ax, r in results.items():
+        full = AxisController.from_error_controller(r.K, ts, method="tustin")
+        full = replace(full, antiwindup=schur_antiwindup(full))
+        if r.Kr is None:
+            axes[ax] = full
+            continue
+        red = AxisController.from_error_controller(r.Kr, ts, method="tustin")
+        red = replace(red, antiwindup=schur_antiwindup(red))
+        if cfg.executed == "reduced":
+            axes[ax] = replace(full, law=red.law, antiwindup=red.antiwindup, reduced=red)
+        else:
+            axes[ax] = replace(full, reduced=red)
+    gains = _gains(cfg, results)
+    eqs = ["003 eq (33)-(34)", "003 eq (35)-(40)", "003 eq (10)-(32)", "003 eq (65)-(67)",
+           "003 eq (41)-(43)"] + (["003 eq (71)-(72)"] if cfg.reduce_order else [])
+    return make_artifact(spec, axes, decoupling_from_motor(spec.motor), gains, eqs)
+
+
+def _gains(cfg: HinfCfg, results: dict) -> dict:
+    g: dict[str, Any] = {
+        "gamma": {ax: r.synthesis.gamma for ax, r in results.items()},
+        "gamma_opt": {ax: r.synthesis.gamma_opt for ax, r in results.items()},
+        "backoff": {ax: r.synthesis.backoff for ax, r in results.items()},
+        "closed_loop_norm": {ax: r.synthesis.closed_loop_norm for ax, r in results.items()},
+        "fastest_pole_rad_s": {ax: r.synthesis.fastest_pole for ax, r in results.items()},
+        "weight_bounds": {ax: {k: {"worst_ratio": v.worst_ratio, "worst_freq_rad_s": v.worst_freq}
+                               for k, v in r.bounds.items()} for ax, r in results.items()},
+        "zpk": {ax: _zpk_json(r.K) for ax, r in results.items()},
+        "executed": cfg.executed,
+        "warnings": {ax: list(r.synthesis.warnings) for ax, r in results.items()},
+    }
+    if cfg.reduce_order is not None:
+        g["reduction"] = {ax: {"order_before": r.reduction.order_before,
+                               "order_after": r.reduction.order_after,
+                               "error_bound": r.reduction.error_bound,
+                               "actions": list(r.reduction.actions),
+                               "margin_flags": list(r.margins.flags),
+                               "zpk": _zpk_json(r.Kr)}
+                          for ax, r in results.items()}
+        g["loop_margins"] = {ax: {"full": _margins_json(r.margins.full),
+                                  "reduced": _margins_json(r.margins.reduced)}
+                             for ax, r in results.items()}
+    else:
+        g["loop_margins"] = {ax: {"full": _margins_json(r.margins)} for ax, r in results.items()}
+    return g
