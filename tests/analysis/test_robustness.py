@@ -8,8 +8,6 @@
 * unstable sets are detected, and are really unstable (scalar route).
 """
 
-import math
-
 import numpy as np
 import pytest
 

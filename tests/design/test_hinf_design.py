@@ -155,7 +155,7 @@ def test_bad_hinf_input():
 
 def test_antiwindup_recursion_is_schur(art):
     """Tustin puts a zero of K at z = -1; the default back-calculation gain would
-    leave A - aw C with spectral radius 1. schur_antiwindup moves it to z = 0 and
+    leave A - aw C with spectral radius 1; the artifact's gain moves it to z = 0 and
     keeps the other zeros (0.958 on d, 0.979 on q: the PI-like zeros 428.6 and
     214.3 rad/s mapped by Tustin)."""
     for ax in ("d", "q"):

@@ -49,7 +49,8 @@ from scipy.linalg import matrix_balance
 
 from .margins import AXES, axis_law, json_ready, _electrical_max_speed
 
-__all__ = ["CertificateResult", "ParameterBox", "closed_loop_matrix", "point_matrices", "certify",
+__all__ = ["CertificateResult", "ParameterBox", "closed_loop_matrix",
+           "closed_loop_matrix_delay", "point_matrices", "certify",
            "largest_certified_scale"]
 
 
@@ -143,9 +144,75 @@ def closed_loop_matrix(artifact, theta: np.ndarray) -> np.ndarray:
     return A
 
 
-def point_matrices(artifact, points: np.ndarray) -> np.ndarray:
-    """Closed-loop matrices at parameter points ``(R, Ld, Lq, omega, g)``."""
-    return closed_loop_matrix(artifact, _theta(np.atleast_2d(points), artifact.decoupling))
+def _theta_delay(points: np.ndarray, dec) -> np.ndarray:
+    R, Ld, Lq, om, g = points.T
+    cross = 1.0 if dec.cross else 0.0
+    return np.stack([1 / Ld, 1 / Lq, R / Ld, R / Lq, om * Lq / Ld, om * Ld / Lq,
+                     cross * g * om / Ld, cross * g * om / Lq, cross * g * om], axis=1)
+
+
+def closed_loop_matrix_delay(artifact, theta: np.ndarray, tau: float) -> np.ndarray:
+    """Closed-loop matrix with a first-order Pade delay ``tau`` (s) per axis.
+
+    The commanded voltage ``v = u + W i`` (control law plus decoupling)
+    passes ``(1 - s tau/2)/(1 + s tau/2)``: states ``xi`` with
+    ``xi' = (2/tau)(v - xi)``, applied voltage ``2 xi - v``. Affine in the
+    nine coordinates ``theta = (1/Ld, 1/Lq, R/Ld, R/Lq, w Lq/Ld, w Ld/Lq,
+    g w/Ld, g w/Lq, g w)``; states ``[i_d, i_q, x_d, x_q, xi_d, xi_q]``.
+    """
+    theta = np.atleast_2d(theta)
+    dec = artifact.decoupling
+    ld, lq = _laws(artifact)
+    nd, nq = ld.n, lq.n
+    n = 4 + nd + nq
+    N = theta.shape[0]
+    a_d, a_q, r_d, r_q, e_d, e_q, f_d, f_q, h = theta.T
+    # commanded voltage rows (v = V x), W terms carry g w (coordinate h or f/a)
+    Ud = np.zeros((N, n))
+    Uq = np.zeros((N, n))
+    Ud[:, 0] = ld.D[0, 1]
+    Ud[:, 2:2 + nd] = ld.C[0]
+    Uq[:, 1] = lq.D[0, 1]
+    Uq[:, 2 + nd:2 + nd + nq] = lq.C[0]
+    ixd, ixq = 2 + nd + nq, 3 + nd + nq
+    A = np.zeros((N, n, n))
+    # plant: di_d = -r_d i_d + e_d i_q + a_d (2 xi_d - u_d) + f_d Lq_c i_q
+    A[:, 0, :] = -a_d[:, None] * Ud
+    A[:, 0, 0] += -r_d
+    A[:, 0, 1] += e_d + f_d * dec.Lq_c
+    A[:, 0, ixd] += 2 * a_d
+    #        di_q = -r_q i_q - e_q i_d + a_q (2 xi_q - u_q) - f_q Ld_c i_d
+    A[:, 1, :] = -a_q[:, None] * Uq
+    A[:, 1, 1] += -r_q
+    A[:, 1, 0] += -e_q - f_q * dec.Ld_c
+    A[:, 1, ixq] += 2 * a_q
+    A[:, 2:2 + nd, 0] = ld.B[:, 1]
+    A[:, 2:2 + nd, 2:2 + nd] = ld.A
+    A[:, 2 + nd:2 + nd + nq, 1] = lq.B[:, 1]
+    A[:, 2 + nd:2 + nd + nq, 2 + nd:2 + nd + nq] = lq.A
+    k = 2.0 / tau
+    A[:, ixd, :] = k * Ud
+    A[:, ixd, 1] += -k * h * dec.Lq_c
+    A[:, ixd, ixd] += -k
+    A[:, ixq, :] = k * Uq
+    A[:, ixq, 0] += k * h * dec.Ld_c
+    A[:, ixq, ixq] += -k
+    return A
+
+
+def point_matrices(artifact, points: np.ndarray, delay: bool = False) -> np.ndarray:
+    """Closed-loop matrices at parameter points ``(R, Ld, Lq, omega, g)``
+    (with ``delay``: the Pade-delay model of :func:`closed_loop_matrix_delay`,
+    ``tau = (delay_samples + 1/2) Ts``)."""
+    points = np.atleast_2d(points)
+    if delay:
+        return closed_loop_matrix_delay(artifact, _theta_delay(points, artifact.decoupling),
+                                        _tau(artifact))
+    return closed_loop_matrix(artifact, _theta(points, artifact.decoupling))
+
+
+def _tau(artifact) -> float:
+    return (artifact.delay_samples + 0.5) * artifact.sample_time
 
 
 @dataclass(frozen=True)
@@ -184,10 +251,15 @@ class CertificateResult:
         return json_ready(asdict(self))
 
 
-def _vertices(artifact, box: ParameterBox) -> np.ndarray:
-    th = _theta(box.corners(), artifact.decoupling)
+def _vertices(artifact, box: ParameterBox, delay: bool = False) -> np.ndarray:
+    f = _theta_delay if delay else _theta
+    th = f(box.corners(), artifact.decoupling)
     lo, hi = th.min(axis=0), th.max(axis=0)
-    V = np.array(list(itertools.product(*zip(lo, hi))), float)
+    # a coordinate that does not vary contributes one value, not two
+    V = np.array(list(itertools.product(*[(a,) if a == b else (a, b) for a, b in zip(lo, hi)])),
+                 float)
+    if delay:
+        return closed_loop_matrix_delay(artifact, V, _tau(artifact))
     return closed_loop_matrix(artifact, V)
 
 
@@ -221,7 +293,8 @@ def _verified(As: np.ndarray, P: np.ndarray, alpha: float) -> bool:
     return bool(np.max(np.linalg.eigvalsh(M)) < 0)
 
 
-def certify(artifact, box: ParameterBox, *, alpha: float = 0.0) -> CertificateResult:
+def certify(artifact, box: ParameterBox, *, alpha: float = 0.0,
+            delay: bool = False) -> CertificateResult:
     """Search a common quadratic Lyapunov function over a parameter box.
 
     Parameters
@@ -231,15 +304,18 @@ def certify(artifact, box: ParameterBox, *, alpha: float = 0.0) -> CertificateRe
         True-parameter and speed ranges.
     alpha : float
         Decay rate to certify (1/s); 0 for plain quadratic stability.
+    delay : bool
+        Include the sampling-plus-computation delay ``(d + 1/2) Ts`` as a
+        first-order Pade approximant in the loop (decoupling included):
+        nine affine coordinates, up to 512 vertices (slower).
 
     Returns
     -------
     CertificateResult
     """
-    As = _vertices(artifact, box)
-    # diagonal similarity from the nominal (box-centre) matrix for conditioning
-    centre = closed_loop_matrix(artifact, np.mean(_theta(box.corners(), artifact.decoupling),
-                                                  axis=0))[0]
+    As = _vertices(artifact, box, delay)
+    # diagonal similarity from the box-centre matrix for conditioning
+    centre = point_matrices(artifact, np.mean(box.corners(), axis=0), delay)[0]
     _, (scale_vec, _) = matrix_balance(centre, permute=False, separate=True)
     T = np.diag(scale_vec)
     Ti = np.diag(1 / scale_vec)
@@ -254,7 +330,7 @@ def certify(artifact, box: ParameterBox, *, alpha: float = 0.0) -> CertificateRe
 def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5, 2.0),
                             speed_gain=(1.0, 1.0), omega_max: float | None = None,
                             alpha: float = 0.0, tol: float = 0.05,
-                            max_scale: float = 1.0) -> CertificateResult:
+                            max_scale: float = 1.0, delay: bool = False) -> CertificateResult:
     """Bisection on the box scale factor (0 nominal .. ``max_scale``).
 
     The box at scale ``k`` is :meth:`ParameterBox.around` (parameter
@@ -266,7 +342,7 @@ def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5
 
     def at(k):
         box = ParameterBox.around(motor, k, R=R, L=L, omega_max=wmax, speed_gain=speed_gain)
-        res = certify(artifact, box, alpha=alpha)
+        res = certify(artifact, box, alpha=alpha, delay=delay)
         return CertificateResult(**{**asdict(res), "scale": k})
 
     top = at(max_scale)

@@ -46,7 +46,6 @@ unstructured ``1/max_w sigma_max(M)`` is reported next to it.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -550,8 +549,6 @@ def _has_integrator(law: Law, discrete: bool, tol: float = 1e-9) -> bool:
 
 def _step_response(loop: AxisLoop, A, B, C, D):
     """Fine-grid step response of the reference loop: ``(t, y)`` or None."""
-    from ..sim._metrics import step_metrics  # noqa: F401  (same definitions)
-
     Ts = loop.sample_time
     if loop.discrete:
         n_steps = 2000

@@ -20,8 +20,8 @@ Which controller runs: the axis keeps the full controller (``continuous``,
 controller's (``executed = "reduced"``, recorded in ``gains["executed"]``):
 reduction is asked precisely to run a simpler controller. Set
 ``executed = "full"`` to run the full one. The anti-windup (back-calculation)
-gain is chosen so that the saturated recursion is Schur
-(:func:`schur_antiwindup`).
+gain is the artifact's default, whose saturated recursion is Schur (Tustin's
+zero at z = -1 moved to the origin).
 """
 
 from __future__ import annotations
@@ -42,8 +42,7 @@ from ._hinf import augment_mixed_sensitivity, synthesize, weight_bound_check
 from ._reduction import compare_margins, loop_margins, reduce_controller
 from ._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
 
-__all__ = ["HinfCfg", "HinfAxisResult", "read_weight", "design_hinf_axis", "schur_antiwindup",
-           "read_cfg",
+__all__ = ["HinfCfg", "HinfAxisResult", "read_weight", "design_hinf_axis", "read_cfg",
            "design"]
 
 _KEY = "controller.hinf"
@@ -298,42 +297,6 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
     return HinfAxisResult(G, res.K, Kr, res, bounds, red, margins)
 
 
-def schur_antiwindup(axis: AxisController, radius: float = 0.99) -> np.ndarray | None:
-    """Back-calculation gain whose saturated recursion ``A - aw C`` is Schur.
-
-    The default gain ``B_y / D_y`` of :meth:`AxisController.from_law` makes
-    ``A - aw C`` have the discrete controller's zeros as eigenvalues; Tustin
-    puts one at z = -1 for every excess pole of ``K`` (here K is strictly
-    proper), so the saturated states would ring undamped. Eigenvalues with
-    ``|z| >= radius`` are moved to z = 0 (Ackermann on the dual pair), the
-    others are kept.
-
-    Parameters
-    ----------
-    axis : AxisController
-        Axis whose ``law`` is considered.
-    radius : float
-        Largest accepted eigenvalue magnitude (dimensionless), default 0.99.
-
-    Returns
-    -------
-    ndarray (n, 1) or None
-        The gain (1/V x state units); None when the law has no state or no
-        feedthrough from the measurement.
-    """
-    law = axis.law
-    Dy = float(law.D[0, 1])
-    if law.order == 0 or abs(Dy) < 1e-12:
-        return None
-    aw = law.B[:, 1:2] / Dy
-    eig = np.linalg.eigvals(law.A - aw @ law.C)
-    if np.max(np.abs(eig)) < radius:
-        return aw
-    want = np.where(np.abs(eig) < radius, eig, 0.0)
-    K = ct.acker(law.A.T, law.C.T, want)
-    return np.asarray(K, float).reshape(-1, 1)
-
-
 def _zpk_json(K: Any) -> dict:
     return Zpk.from_statespace(ct.ss(K)).to_json()
 
@@ -369,12 +332,10 @@ def design(spec) -> ControllerArtifact:
     axes = {}
     for ax, r in results.items():
         full = AxisController.from_error_controller(r.K, ts, method="tustin")
-        full = replace(full, antiwindup=schur_antiwindup(full))
         if r.Kr is None:
             axes[ax] = full
             continue
         red = AxisController.from_error_controller(r.Kr, ts, method="tustin")
-        red = replace(red, antiwindup=schur_antiwindup(red))
         if cfg.executed == "reduced":
             axes[ax] = replace(full, law=red.law, antiwindup=red.antiwindup, reduced=red)
         else:

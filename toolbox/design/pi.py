@@ -68,7 +68,8 @@ Structures (two-input laws ``[i_ref, i_meas] -> v``):
 * ``ip``: ``v = Ki/s (r - y) - Kp y`` (same loop, no closed-loop zero;
   with cancellation gains the reference response is
   ``1/((1 + s L/R)(1 + s/wc))``, slow: a warning says so).
-* ``pi_lag``: ``v = (Kp + Ki/s)(r - y_f)``, ``y_f = y/(1 + T_d s)``.
+* ``pi_lag``: ``v = (Kp + Ki/s)(r - y_f)``, ``y_f = y/(1 + T_d s)``. The
+  gain rules ignore the lag; ``gains["poles"]`` gives the resulting poles.
 """
 
 from __future__ import annotations
