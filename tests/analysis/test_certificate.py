@@ -76,3 +76,28 @@ def test_largest_box_and_decay_rate(pi):
     box1 = ParameterBox.around(AZAIZ, r1.scale, omega_max=920.0)
     assert np.max(np.linalg.eigvals(point_matrices(pi, box1.sample(500))).real) <= -200.0
     assert r1.to_json()["box"]["omega"][1] == pytest.approx(r1.scale * 920.0)
+
+
+def test_delay_model_and_certificate(pi):
+    """Pade-delay model (tau = 1.5 Ts, decoupling delayed too): poles equal those
+    of a python-control interconnection (1e-8); at box scale 0.3 (R, L x0.85..x1.3,
+    |w| <= 276 rad/s) the PI is certified with the delay and every sampled point
+    of that model is stable; at scale 1 the delayed model is not certified."""
+    p = np.array([0.5, 1.2e-3, 3e-3, 700.0, 1.05])
+    ours = np.sort_complex(np.linalg.eigvals(point_matrices(pi, p, delay=True)[0]))
+    R, Ld, Lq, om, g = p
+    A, B = M.coupled_plant(R, Ld, Lq, om)
+    num, den = ct.pade(1.5e-4, 1)
+    Dl = ct.ss(ct.tf(num, den))
+    Pd = ct.ss(A[0], B[0], np.eye(2), np.zeros((2, 2))) * ct.append(Dl, Dl)
+    W = g * om * np.array([[0, -pi.decoupling.Lq_c], [pi.decoupling.Ld_c, 0]])
+    Pw = ct.feedback(Pd, ct.ss([], [], [], W), sign=+1)
+    K = ct.append(*[pi.axes[k].continuous.to_statespace() for k in "dq"])
+    ref = np.sort_complex(ct.feedback(Pw * K, np.eye(2)).poles())
+    np.testing.assert_allclose(ours, ref, rtol=1e-8)
+    box = ParameterBox.around(AZAIZ, 0.3, omega_max=920.0)
+    res = certify(pi, box, delay=True)
+    assert res.certified and res.n_vertices == 512
+    ev = np.linalg.eigvals(point_matrices(pi, box.sample(1000), delay=True))
+    assert np.max(ev.real) < 0
+    assert not certify(pi, ParameterBox.around(AZAIZ, 1.0, omega_max=920.0), delay=True).certified

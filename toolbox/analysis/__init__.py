@@ -47,7 +47,8 @@ def with_margins(artifact, motor):
 
 
 def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
-                    certificate: bool = True, seed: int = 0) -> dict:
+                    certificate: bool = True, certificate_delay: bool = False,
+                    seed: int = 0) -> dict:
     """Everything ``analysis.json`` holds (JSON-ready dict).
 
     Parameters
@@ -60,7 +61,10 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
     sweep_sets : int
         Latin-hypercube sets of the robustness sweep.
     certificate : bool
-        Run the quadratic-stability certificate (a few seconds).
+        Run the quadratic-stability certificate (a few seconds): largest
+        certified scale of the box R, L x0.5..x2, |omega| <= max speed.
+    certificate_delay : bool
+        Certificate with the Pade delay model (512 vertices, slower).
     seed : int
         Sweep seed (deterministic output).
 
@@ -89,7 +93,8 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
         "mimo_at_speed": mimo_disk_margins(artifact, motor, drive).to_json(),
         "sweep": robustness_sweep(artifact, motor, n=sweep_sets, drive=drive,
                                   seed=seed).to_json(),
-        "certificate": (largest_certified_scale(artifact, motor, drive).to_json()
+        "certificate": (largest_certified_scale(artifact, motor, drive,
+                                                delay=certificate_delay).to_json()
                         if certificate else None),
     }
     return json_ready(out)

@@ -7,7 +7,8 @@ electrical speed ``omega`` (paper 003 eq (3)-(4)) and the cross-coupling
 compensation of the artifact, ``v = u + W i``,
 ``W = g omega [[0, -Lq_c], [Ld_c, 0]]`` (controller model parameters
 ``Ld_c, Lq_c``; speed-sensor gain ``g``). Sampling and computation delay are
-not in this model (use the discrete margins and the sweep for them).
+not in this model by default (use ``delay=True``, below, or the discrete
+margins and the sweep).
 Back-EMF and its compensation are exogenous constants and do not affect
 stability.
 
@@ -29,6 +30,14 @@ common ``P`` with ``A_i' P + P A_i <= -2 alpha P`` at the 64 vertices holds
 on the whole ``theta`` box by convexity, hence on the parameter box:
 quadratic stability with decay rate ``alpha`` (1/s) for any (even slowly
 time-varying) parameters and speed in the box.
+
+With ``delay=True`` the sampling-plus-computation delay ``(d + 1/2) Ts``
+enters as a first-order Pade approximant on the commanded voltage (control
+law and decoupling); the closed loop is then affine in nine coordinates
+``(1/Ld, 1/Lq, R/Ld, R/Lq, w Lq/Ld, w Ld/Lq, g w/Ld, g w/Lq, g w)`` (same
+corner argument; up to 512 vertices). This is still a continuous
+approximation of the sampled loop, which the robustness sweep evaluates
+exactly.
 
 The LMIs are solved with cvxpy + CLARABEL after a diagonal similarity
 (``scipy.linalg.matrix_balance`` of the nominal matrix), with ``P >= I`` and

@@ -294,6 +294,9 @@ class AxisLoop:
         Continuous delay (s) included in ``loop`` (0 if none).
     w_max : float
         Upper end of the frequency grid (rad/s): Nyquist in discrete time.
+    exact_delay : bool
+        Continuous loop with ``exp(-j w tau)`` in its frequency response
+        (``plant`` then holds the Pade twin used for poles and steps).
     """
 
     law: Law
@@ -636,7 +639,7 @@ def _axis_margins(loop: AxisLoop, n_grid: int, w_min: float, step: bool) -> Marg
     if loop.discrete or loop.tau == 0 or not loop.exact_delay:
         stable = is_stable(A_cl, loop.discrete)
     else:  # exact delay: Pade route for the closed-loop poles
-        stable = is_stable(make_axis_loop_from(loop).reference_loop()[0], False)
+        stable = is_stable(_pade_twin(loop).reference_loop()[0], False)
 
     # gain crossovers (|L| = 1) -> phase margins
     wgc = _roots_in_grid(lambda x: math.log(abs(L1(x))), w, np.log(np.abs(Lw)))
@@ -705,7 +708,7 @@ def _axis_margins(loop: AxisLoop, n_grid: int, w_min: float, step: bool) -> Marg
 
     figs = {}
     if step and stable:
-        cl_step = cl if not loop.exact_delay else make_axis_loop_from(loop).reference_loop()
+        cl_step = cl if not loop.exact_delay else _pade_twin(loop).reference_loop()
         figs = _step_figures(loop, cl_step)
     return MarginsResult(
         gain_margin_db=float(gm_db), gain_crossover_rad_s=float(w_pm),
@@ -724,7 +727,7 @@ def _axis_margins(loop: AxisLoop, n_grid: int, w_min: float, step: bool) -> Marg
         **figs)
 
 
-def make_axis_loop_from(loop: AxisLoop, pade_order: int = 3) -> AxisLoop:
+def _pade_twin(loop: AxisLoop) -> AxisLoop:
     """The Pade twin of a continuous loop with an exact delay."""
     return AxisLoop(loop.law, loop.plant, False, loop.sample_time, loop.R, loop.L,
                     loop.delay_samples, loop.tau, loop.w_max, False)

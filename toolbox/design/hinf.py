@@ -32,7 +32,6 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
 import control as ct
-import numpy as np
 
 from ..artifact import AxisController, ControllerArtifact, Zpk
 from ..errors import SpecError
