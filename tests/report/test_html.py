@@ -162,3 +162,15 @@ def test_discrete_only_axis_prints_in_z(full_data):
     rows = _controller(art)["axes"]
     assert all(r["zpk"].startswith("K(z) = 4.2 (z - ") and r["zpk"].endswith("/ (z - 1)")
                for r in rows), rows
+
+
+def test_zpk_text_snaps_roundoff_integrator():
+    """A pole at -1e-13 rad/s (round-off of an exact integrator, 003 eq (71)-(72))
+    prints as ``s``; 1e-12 relative to the largest root is far below any
+    physical pole of a current loop (> 1e-3 rad/s against < 1e8 rad/s)."""
+    from toolbox.artifact import Zpk
+    from toolbox.report import zpk_text
+
+    zpk = Zpk(np.array([-214.3 + 0j]), np.array([-1.025e-13 + 0j, -2397 - 600.5j, -2397 + 600.5j]),
+              49.64)
+    assert zpk_text(zpk) == "49.64 (s + 214.3) / s(s^2 + 4794 s + 6.106e+06)"  # 2397^2 + 600.5^2

@@ -176,6 +176,9 @@ def fmt(value: Any, digits: int = 4) -> str:
 def _poly_factors(roots: np.ndarray, var: str = "s") -> str:
     """``(s + a)(s^2 + b s + c)`` text for real / complex-pair roots (rad/s)."""
     parts: list[str] = []
+    scale = max(1.0, float(np.max(np.abs(roots)))) if len(roots) else 1.0
+    # a root within round-off of the origin is an integrator (e.g. 003 eq (71)-(72))
+    roots = np.where(np.abs(roots) < 1e-12 * scale, 0.0, roots)
     done = np.zeros(len(roots), bool)
     for k, r in enumerate(roots):
         if done[k]:
