@@ -174,3 +174,19 @@ def test_zpk_text_snaps_roundoff_integrator():
     zpk = Zpk(np.array([-214.3 + 0j]), np.array([-1.025e-13 + 0j, -2397 - 600.5j, -2397 + 600.5j]),
               49.64)
     assert zpk_text(zpk) == "49.64 (s + 214.3) / s(s^2 + 4794 s + 6.106e+06)"  # 2397^2 + 600.5^2
+
+
+def test_weights_default_to_the_hinf_spec():
+    """Without explicit weights, an hinf report plots the spec's weights (gamma from gains)."""
+    import types
+
+    from toolbox.report import ReportData, _weights_of
+
+    w = {"num": [25, 25000], "den": [1, 50000]}
+    spec = types.SimpleNamespace(raw={"controller": {"method": "hinf", "hinf": {
+        "weights": {"q": {"w1": w, "w2": w}, "d": {"w3": w}}}}})
+    art = types.SimpleNamespace(method="hinf", gains={"gamma": {"d": 1.2, "q": "optimal"}})
+    got = _weights_of(ReportData(title="t", spec=spec, artifact=art))
+    assert got == {"q": {"w1": w, "w2": w, "gamma": 1.0}, "d": {"w3": w, "gamma": 1.2}}
+    art.method = "pi"
+    assert _weights_of(ReportData(title="t", spec=spec, artifact=art)) is None

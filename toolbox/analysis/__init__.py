@@ -36,13 +36,31 @@ def margins_for_artifact(artifact, motor) -> dict:
     """MARGINS per axis for controller.json: the sampled loop as executed
     (law measurement channel, ZOH plant, ``z^-delay_samples``), with extras.
 
-    Returns ``{"d": {...}, "q": {...}}`` (JSON-ready).
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The design.
+    motor : Motor
+        Nominal plant.
+
+    Returns
+    -------
+    dict
+        ``{"d": {...}, "q": {...}}`` (JSON-ready).
     """
     return {ax: r.to_json() for ax, r in compute_margins(artifact, motor).items()}
 
 
 def with_margins(artifact, motor):
-    """A copy of ``artifact`` carrying :func:`margins_for_artifact`."""
+    """A copy of ``artifact`` carrying :func:`margins_for_artifact`.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The design.
+    motor : Motor
+        Nominal plant.
+    """
     return artifact.with_margins(margins_for_artifact(artifact, motor))
 
 
@@ -110,6 +128,19 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
     margins over the robustness sweep), ``n_unstable`` (sweep sets that lose
     stability), ``mimo_worst_disk_margin`` and ``certificate``
     (``{"certified_scale", "certified"}`` or None).
+
+    Parameters
+    ----------
+    artifacts : list of ControllerArtifact
+        The designs to compare (one motor).
+    motor : Motor
+        Nominal plant of all designs.
+    drive : Drive, optional
+        Speed range of the sweeps (``max_speed``).
+    sweep_sets : int
+        Parameter sets per robustness sweep.
+    certificate : bool
+        Also search the largest certified parameter box (slower).
     """
     rows = []
     for art in artifacts:

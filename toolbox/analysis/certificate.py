@@ -346,6 +346,29 @@ def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5
     deviations and speed range scaled by ``k``). Returns the certificate of
     the largest certified scale (``scale`` attribute; 0 and
     ``certified=False`` if even the nominal point fails).
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The design.
+    motor : Motor
+        Nominal plant (centre of the box).
+    drive : Drive, optional
+        Supplies the speed range when ``omega_max`` is None.
+    R, L : tuple of float
+        Multiplier ranges of the resistance and of both inductances at scale 1.
+    speed_gain : tuple of float
+        Speed-sensor gain range at scale 1.
+    omega_max : float, optional
+        Largest electrical speed (rad/s) at scale 1.
+    alpha : float
+        Required decay rate (1/s).
+    tol : float
+        Bisection tolerance on the scale.
+    max_scale : float
+        Largest scale tried.
+    delay : bool
+        Include a first-order Pade model of the computation delay.
     """
     wmax = _electrical_max_speed(motor, drive) if omega_max is None else omega_max
 

@@ -122,6 +122,8 @@ class ReportData:
         "gamma": float}, "q": ...}``; each ``W`` is a python-control system or
         ``{"num": [...], "den": [...]}`` (coefficients in s, highest power
         first). The report plots ``gamma/|W_i|`` as the bound of S, KS and T.
+        ``None``: for an ``hinf`` design, the spec's
+        ``[controller.hinf.weights.<axis>]`` with gamma from the artifact's gains.
     generated : str or None
         Report time stamp to print (ISO 8601); ``None`` prints none, which keeps
         the output byte-identical for identical inputs.
@@ -228,6 +230,32 @@ def _margins_of(data: ReportData) -> dict | None:
         return data.margins
     art = getattr(data.artifact, "margins", None)
     return dict(art) if art else None
+
+
+def _weights_of(data: ReportData) -> dict | None:
+    """``data.weights``, else the H-infinity weights of the spec (num/den in s).
+
+    gamma per axis comes from ``artifact.gains["gamma"]`` when numeric, else 1.
+    """
+    if data.weights:
+        return data.weights
+    raw = getattr(data.spec, "raw", {}) or {}
+    method = getattr(data.artifact, "method", "")
+    table = ((raw.get("controller") or {}).get(method) or {}).get("weights") if method == "hinf" else None
+    if not isinstance(table, Mapping):
+        return None
+    gammas = (getattr(data.artifact, "gains", {}) or {}).get("gamma", {})
+    out = {}
+    for axis in ("d", "q"):
+        wt = table.get(axis)
+        if not isinstance(wt, Mapping):
+            continue
+        ws = {k: wt[k] for k in ("w1", "w2", "w3")
+              if isinstance(wt.get(k), Mapping) and "num" in wt[k] and "den" in wt[k]}
+        g = gammas.get(axis) if isinstance(gammas, Mapping) else gammas
+        ws["gamma"] = float(g) if isinstance(g, (int, float)) and not isinstance(g, bool) else 1.0
+        out[axis] = ws
+    return out or None
 
 
 def _as_float(v: Any) -> float | None:
@@ -433,7 +461,7 @@ def build_context(data: ReportData) -> dict:
     margins = _margins_of(data)
     loops = plots.loop_data(art, motor)
     traces = [plots.traces_dict(dict(sc).get("traces")) for sc in (data.scenarios or [])]
-    figures = plots.figures(loops, weights=data.weights, traces=traces)
+    figures = plots.figures(loops, weights=_weights_of(data), traces=traces)
     return {
         "title": str(data.title),
         "motor": motor_rows, "drive": drive_rows, "requirements": req_rows,
