@@ -65,11 +65,11 @@ def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifac
     analysis : dict
         JSON-ready analysis (``analysis.json``), with requirement checks.
     """
-    from .analysis import analysis_report, compute_margins
+    from .analysis import analysis_report
 
-    margins = compute_margins(artifact, spec.motor, discrete=True)
-    artifact = artifact.with_margins({ax: m.to_json() for ax, m in margins.items()})
     report = analysis_report(artifact, spec.motor, spec.drive)
+    # MARGINS of controller.json: the sampled loop as executed (DESIGN.md)
+    artifact = artifact.with_margins(report["margins"]["discrete"])
     checks = spec.requirements.check(_worst_margins(artifact.margins), "margins")
     report["requirements"] = checks
     return artifact, report
