@@ -200,9 +200,6 @@ class Scenario:
             if isinstance(v, bool) or not isinstance(v, (int, float)) \
                     or not math.isfinite(v) or v < 0:
                 raise err(f"speed_loop.{name}", "a finite number >= 0", v)
-        if self.kind in ("load_step", "speed_step") and "kp" not in self.speed_loop:
-            raise err("speed_loop", "a table with at least kp (A s/rad) for kind "
-                      f'"{self.kind}"', dict(self.speed_loop))
         for table in ("plant_values", "plant_scale"):
             for name, v in getattr(self, table).items():
                 if name not in PLANT_KEYS:

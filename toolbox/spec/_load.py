@@ -178,7 +178,11 @@ def _scenarios(value: Any, drive: Drive) -> tuple:
 
     out = []
     for k, item in enumerate(value):
-        scenario = Scenario.from_dict(item, key=f"scenario[{k}]", sample_time=drive.sample_time)
+        key = f"scenario[{k}]"
+        scenario = Scenario.from_dict(item, key=key, sample_time=drive.sample_time)
+        if scenario.kind in ("load_step", "speed_step") and "kp" not in scenario.speed_loop:
+            raise SpecError(f"{key}.speed_loop", "a table with at least kp (A s/rad) for kind "
+                            f'"{scenario.kind}"', dict(scenario.speed_loop))
         out.append(scenario)
     return tuple(out)
 
