@@ -18,7 +18,7 @@ from .artifact import ControllerArtifact
 from .errors import SpecError
 from .spec import Spec, load_spec, spec_from_dict
 
-__all__ = ["DesignOutputs", "design_spec", "analyse", "run_verification", "build_outputs",
+__all__ = ["DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
            "write_outputs", "load_artifact", "spec_of_artifact", "OUTPUT_FILES"]
 
 OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h",
@@ -168,13 +168,80 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
         out.header = write_header(out.artifact, spec.motor, spec.drive)
     if report:
         progress("report")
-        from .report import report_data, write_html, write_pdf
+        from .report import write_html, write_pdf
 
         data = report_data(out)
         out.html = write_html(data)
         out.pdf = write_pdf(data)
     out.files = _files(out)
     return out
+
+
+def report_data(out: DesignOutputs):
+    """The :class:`~toolbox.report.ReportData` of a pipeline run (plain data).
+
+    Parameters
+    ----------
+    out : DesignOutputs
+        Artifact, spec and whatever analysis and verification produced.
+    """
+    from .report import ReportData
+
+    checks = []
+    if out.analysis is not None:
+        checks += [{"key": k, **c} for k, c in out.analysis.get("requirements", {}).items()]
+    scenarios = None
+    if out.verification is not None:
+        scenarios = []
+        for sc in out.verification.scenarios:
+            checks += [{"key": k, "scenario": sc.name, **c} for k, c in sc.checks.items()]
+            scenarios.append({"name": sc.name, "kind": sc.kind, "metrics": sc.metrics,
+                              "pass": sc.passed, "traces": sc.result})
+    robustness = certificate = None
+    if out.analysis is not None:
+        robustness = _robustness_summary(out.analysis.get("sweep") or {})
+        certificate = _certificate_facts(out.analysis)
+    return ReportData(title=out.spec.title or (out.spec.source or "untitled"), spec=out.spec,
+                      artifact=out.artifact, margins=out.artifact.margins or None,
+                      checks=checks, robustness=robustness, certificate=certificate,
+                      scenarios=scenarios)
+
+
+def _robustness_summary(sweep: dict) -> dict | None:
+    if not sweep:
+        return None
+    stable = sweep.get("n_unstable", 0) == 0
+    cases = []
+    for axis, worst in sorted(sweep.get("worst", {}).items()):
+        for quantity, entry in worst.items():
+            cases.append({"label": f"{axis} axis: worst {quantity}",
+                          "params": entry.get("params", {}),
+                          "metrics": {quantity: entry.get("value")}, "pass": stable})
+    cases += [{"label": f"unstable set {k + 1}", "params": {
+        n: v for n, v in ex.items() if n != "spectral_radius"},
+        "metrics": {"spectral_radius": ex.get("spectral_radius")}, "pass": False}
+        for k, ex in enumerate(sweep.get("unstable_examples", []))]
+    notes = (f"{sweep.get('n_sets')} parameter sets over {sweep.get('ranges')}, at speeds "
+             f"{sweep.get('speeds_rad_s')} rad/s (electrical): {sweep.get('n_unstable')} "
+             f"unstable, worst closed-loop spectral radius "
+             f"{sweep.get('worst_spectral_radius', float('nan')):.4g}.")
+    return {"cases": cases, "worst": [c["label"] for c in cases if not c["pass"]],
+            "notes": notes}
+
+
+def _certificate_facts(analysis: dict) -> dict:
+    facts = {}
+    cert = analysis.get("certificate")
+    if cert:
+        facts["quadratic stability"] = "certified" if cert.get("certified") else "not certified"
+        facts["largest certified box scale"] = cert.get("scale")
+        for name, (lo, hi) in (cert.get("box") or {}).items():
+            facts[f"box {name}"] = f"{lo:.4g} .. {hi:.4g}"
+    mimo = analysis.get("mimo_at_speed") or {}
+    if mimo:
+        facts["MIMO disk margin, worst speed (rad/s)"] = mimo.get("worst_speed_rad_s")
+        facts["MIMO disk margin, worst value"] = mimo.get("worst_disk_margin")
+    return facts
 
 
 def _files(out: DesignOutputs) -> dict[str, str | bytes]:

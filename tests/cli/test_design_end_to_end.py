@@ -71,7 +71,7 @@ def test_verify_report_export_read_the_artifact(tc_design, tmp_path):
 
 def test_failed_requirement_exits_1_with_outputs(tmp_path):
     spec = (DESIGNS / "000_lepioufle1992_tc.toml").read_text().replace(
-        "min_phase_margin_deg = 45", "min_phase_margin_deg = 89.9")
+        "min_phase_margin_deg = 45", "min_phase_margin_deg = 170")
     path = tmp_path / "strict.toml"
     path.write_text(spec)
     res = run("design", path, "--out", tmp_path / "o", "-q")

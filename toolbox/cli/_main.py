@@ -177,8 +177,9 @@ def _summary(out, quiet: bool) -> None:
     if quiet:
         return
     for axis, m in out.artifact.margins.items():
-        click.echo(f"{axis} axis: GM {m.get('gain_margin_db')} dB, PM "
-                   f"{m.get('phase_margin_deg')} deg, Mm {m.get('stability_margin')}")
+        click.echo(f"{axis} axis (sampled loop): GM {_fmt(m.get('gain_margin_db'))} dB, "
+                   f"PM {_fmt(m.get('phase_margin_deg'))} deg, "
+                   f"Mm {_fmt(m.get('stability_margin'))}")
     failed = []
     if out.analysis is not None:
         failed += [k for k, c in out.analysis.get("requirements", {}).items() if not c["pass"]]
@@ -229,9 +230,9 @@ def report(out_dir: str) -> None:
     Example:
       cct report out/003
     """
-    from ..pipeline import DesignOutputs, analyse, load_artifact, run_verification
-    from ..pipeline import spec_of_artifact, write_outputs
-    from ..report import report_data, write_html, write_pdf
+    from ..pipeline import (DesignOutputs, analyse, load_artifact, report_data,
+                            run_verification, spec_of_artifact, write_outputs)
+    from ..report import write_html, write_pdf
 
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
