@@ -233,7 +233,8 @@ def _certificate_facts(analysis: dict) -> dict:
     facts = {}
     cert = analysis.get("certificate")
     if cert:
-        facts["quadratic stability"] = "certified" if cert.get("certified") else "not certified"
+        facts["quadratic stability (continuous loop, no delay)"] = (
+            "certified" if cert.get("certified") else "not certified")
         facts["largest certified box scale"] = cert.get("scale")
         for name, (lo, hi) in (cert.get("box") or {}).items():
             facts[f"box {name}"] = f"{lo:.4g} .. {hi:.4g}"

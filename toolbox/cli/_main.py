@@ -332,4 +332,12 @@ def gallery(designs_dir: str, out_dir: str) -> None:
     for path in sorted(Path(designs_dir).glob("*.toml")):
         click.echo(f"{path.name} ...", err=True)
         out = build_outputs(load_spec(path))
-        write_outputs(out.files, Path(out_dir) / path.stem)
+        write_outputs({**out.files, **_figures(out.html or "")}, Path(out_dir) / path.stem)
+
+
+def _figures(html: str) -> dict[str, str]:
+    """The report's inline SVG figures as files ``fig-<name>.svg`` (for the README)."""
+    import re
+
+    found = re.findall(r'<figure id="(fig-[a-z0-9-]+)">.*?(<svg.*?</svg>)', html, flags=re.S)
+    return {f"{name}.svg": svg + "\n" for name, svg in found}
