@@ -4,7 +4,7 @@
  * method:      fcs_mpc
  * version:     0.1.0
  * spec sha256: 764735388f07add1db7a6690e4c806ddc8b3258a48198ac21af4b984d8d15319
- * created:     2026-11-21T23:55:09+00:00
+ * created:     2026-11-22T00:01:09+00:00
  * equations:   002 eq (19)-(20); 002 eq (23)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

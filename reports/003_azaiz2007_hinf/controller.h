@@ -3,8 +3,8 @@
  * title:       Azaiz 2007 (paper 003): H-infinity current control, gamma = 1, third order
  * method:      hinf
  * version:     0.1.0
- * spec sha256: ea58edd0af9dbe6fb77eebc51d19849f654c86fac35e5090e5d98e1e3bac73c4
- * created:     2026-11-21T23:55:22+00:00
+ * spec sha256: 725ca7e47e8fb783e32a98f3530d9f7f87e8372a8e40b66b26c2473ca062b79f
+ * created:     2026-11-22T00:01:19+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

@@ -3,8 +3,8 @@
  * title:       Azaiz 2007 (paper 003): H-infinity current control at the optimal gamma (5 % back-off)
  * method:      hinf
  * version:     0.1.0
- * spec sha256: ff04d4cc35abf2a0af84f4b1a31b168732a75850c833c76b24bcf4b2a4607c4f
- * created:     2026-11-21T23:55:32+00:00
+ * spec sha256: fe6722ab3d8aaf89f7f3af7cde13d4df131e24c702653ac07366c33f1f6f30b5
+ * created:     2026-11-22T00:01:29+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

@@ -17,11 +17,13 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
 import control
 import numpy as np
+from scipy.signal import BadCoefficients
 
 from ..errors import SpecError
 
@@ -171,7 +173,11 @@ class Zpk:
 
     @classmethod
     def from_statespace(cls, sys: control.StateSpace) -> "Zpk":
-        tf = control.ss2tf(sys)
+        with warnings.catch_warnings():
+            # scipy warns when a numerator's leading coefficients are tiny
+            # relative to the others, which is normal for wide-band controllers
+            warnings.simplefilter("ignore", BadCoefficients)
+            tf = control.ss2tf(sys)
         num = np.trim_zeros(np.atleast_1d(np.squeeze(tf.num[0][0])), "f")
         den = np.trim_zeros(np.atleast_1d(np.squeeze(tf.den[0][0])), "f")
         if num.size == 0:
