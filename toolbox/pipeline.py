@@ -26,6 +26,12 @@ OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h
 
 Progress = Callable[[str], None]
 
+#: Methods whose executed law is not a linear controller the header can hold.
+NO_HEADER_METHODS = {
+    "fcs_mpc": "the predictive switching law (paper 002 criterion (23)) is not exported "
+               "to C yet; the artifact's axes hold only the baseline PI for comparison",
+}
+
 
 def _quiet(_: str) -> None:
     pass
@@ -68,27 +74,19 @@ def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifac
     from .analysis import analysis_report
 
     report = analysis_report(artifact, spec.motor, spec.drive)
+    margins = report["margins"]["discrete"]
+    unstable = [axis for axis, m in margins.items() if m.get("stable") is False]
+    if unstable:
+        raise SpecError(f"controller.{artifact.method}",
+                        f"parameters giving a stable sampled loop (ZOH, "
+                        f"{artifact.delay_samples} period(s) of computation delay)",
+                        f"an unstable {' and '.join(unstable)} axis",
+                        hint="slow the design down or shorten the sample time; "
+                             "nothing is exported")
     # MARGINS of controller.json: the sampled loop as executed (DESIGN.md)
-    artifact = artifact.with_margins(report["margins"]["discrete"])
-    checks = spec.requirements.check(_worst_margins(artifact.margins), "margins")
-    report["requirements"] = checks
+    artifact = artifact.with_margins(margins)
+    report["requirements"] = spec.requirements.check_margins(artifact.margins)
     return artifact, report
-
-
-def _worst_margins(margins: dict) -> dict:
-    """Worst value over the axes of each margin quantity (min or max by meaning)."""
-    worst: dict = {}
-    larger_is_worse = {"sensitivity_peak", "static_error"}
-    for axis in margins.values():
-        for key, value in axis.items():
-            if not isinstance(value, (int, float)):
-                continue
-            if key not in worst:
-                worst[key] = value
-            else:
-                worst[key] = max(worst[key], value) if key in larger_is_worse else min(
-                    worst[key], value)
-    return worst
 
 
 def run_verification(artifact: ControllerArtifact, spec: Spec,
@@ -152,6 +150,14 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
     SpecError
         Bad input or a design that cannot be exported; nothing is produced.
     """
+    try:
+        return _build(spec, analysis, verification, report, header, progress)
+    except SpecError as err:
+        raise (err.with_file(spec.source) if spec.source and not err.file else err) from None
+
+
+def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header: bool,
+           progress: Progress) -> DesignOutputs:
     progress("design")
     artifact = design_spec(spec)
     out = DesignOutputs(artifact=artifact, spec=spec)
@@ -161,7 +167,9 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
     if verification:
         progress("verification")
         out.verification = run_verification(out.artifact, spec)
-    if header:
+    if header and artifact.method in NO_HEADER_METHODS:
+        progress(f"firmware header skipped: {NO_HEADER_METHODS[artifact.method]}")
+    elif header:
         progress("firmware header")
         from .export import write_header
 
@@ -210,13 +218,12 @@ def report_data(out: DesignOutputs):
 def _robustness_summary(sweep: dict) -> dict | None:
     if not sweep:
         return None
-    stable = sweep.get("n_unstable", 0) == 0
     cases = []
     for axis, worst in sorted(sweep.get("worst", {}).items()):
         for quantity, entry in worst.items():
             cases.append({"label": f"{axis} axis: worst {quantity}",
                           "params": entry.get("params", {}),
-                          "metrics": {quantity: entry.get("value")}, "pass": stable})
+                          "metrics": {quantity: entry.get("value")}, "pass": True})
     cases += [{"label": f"unstable set {k + 1}", "params": {
         n: v for n, v in ex.items() if n != "spectral_radius"},
         "metrics": {"spectral_radius": ex.get("spectral_radius")}, "pass": False}
@@ -240,7 +247,7 @@ def _certificate_facts(analysis: dict) -> dict:
             facts[f"box {name}"] = f"{lo:.4g} .. {hi:.4g}"
     mimo = analysis.get("mimo_at_speed") or {}
     if mimo:
-        facts["MIMO disk margin, worst speed (rad/s)"] = mimo.get("worst_speed_rad_s")
+        facts["MIMO disk margin, worst electrical speed (rad/s)"] = mimo.get("worst_speed_rad_s")
         facts["MIMO disk margin, worst value"] = mimo.get("worst_disk_margin")
     return facts
 
@@ -271,7 +278,16 @@ def write_outputs(files: dict[str, str | bytes], out_dir: str | Path) -> list[Pa
     out_dir : str or Path
         Directory (created when missing).
     """
-    return [write_atomic(Path(out_dir) / name, data) for name, data in sorted(files.items())]
+    out = Path(out_dir)
+    try:
+        written = [write_atomic(out / name, data) for name, data in sorted(files.items())]
+        for name in OUTPUT_FILES:  # no stale file may contradict the new controller.json
+            if name not in files and "controller.json" in files:
+                (out / name).unlink(missing_ok=True)
+    except OSError as err:
+        raise SpecError("--out", "a writable directory", str(out),
+                        hint=err.strerror or str(err)) from None
+    return written
 
 
 def load_artifact(out_dir: str | Path) -> ControllerArtifact:

@@ -462,8 +462,8 @@ def test_reference_designs_export(design, tmp_path):
         from toolbox.pipeline import design_spec
         spec = load_spec(path)
         art = design_spec(spec)
-    except Exception as err:  # noqa: BLE001 - another stage's failure is not ours
-        pytest.skip(f"design stage unavailable: {type(err).__name__}: {err}")
+    except ImportError as err:
+        pytest.skip(f"design stage unavailable: {err}")
     chk = check_exportable(art, spec.motor, spec.drive)
     h = write_header(art, spec.motor, spec.drive)
     inp = C.test_inputs(i_step=2.0, speed=20.0)

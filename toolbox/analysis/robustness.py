@@ -46,7 +46,7 @@ DEFAULT_RANGES: dict[str, tuple] = {
     "flux": (0.8, 1.2, "scale"),
     "speed_gain": (0.9, 1.1, "scale"),
     "speed_offset": (-10.0, 10.0, "offset"),   # rad/s mechanical
-    "delay_samples": (1, 2, "int"),            # periods
+    "delay_samples": (0, 1, "int"),            # periods added to the design's delay
 }
 
 
@@ -229,6 +229,8 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
     SweepResult
     """
     rng = dict(DEFAULT_RANGES)
+    lo, hi, kind = rng["delay_samples"]  # default: the design's delay and one period more
+    rng["delay_samples"] = (artifact.delay_samples + lo, artifact.delay_samples + hi, kind)
     for k, v in (ranges or {}).items():
         if k not in DEFAULT_RANGES:
             raise ValueError(f"ranges: unknown parameter {k!r}; expected one of {list(DEFAULT_RANGES)}")

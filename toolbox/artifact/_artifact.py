@@ -292,7 +292,6 @@ class AxisController:
     @classmethod
     def from_error_controller(cls, K: control.StateSpace | control.TransferFunction,
                               sample_time: float, method: str = "tustin",
-                              prefilter_feedthrough: bool = True,
                               antiwindup: bool = True,
                               reduced: "AxisController | None" = None) -> "AxisController":
         """Build an axis from a continuous one-degree-of-freedom controller.

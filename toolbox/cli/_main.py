@@ -214,8 +214,11 @@ def verify(out_dir: str, as_json: bool) -> None:
         for sc in result.scenarios:
             status = "pass" if sc.passed else "FAIL"
             click.echo(f"{status}  {sc.name}: 5% response "
-                       f"{sc.metrics.get('response_time_5pct')} s, static error "
-                       f"{sc.metrics.get('static_error')}")
+                       f"{_fmt(sc.metrics.get('response_time_5pct'))} s, static error "
+                       f"{_fmt(sc.metrics.get('static_error'))}")
+        for key, check in result.margin_checks.items():
+            click.echo(f"{'pass' if check['pass'] else 'FAIL'}  {key}: "
+                       f"{_fmt(check['value'])} (bound {_fmt(check['bound'])})")
     sys.exit(EXIT_OK if result.passed else EXIT_REQUIREMENT)
 
 
@@ -223,8 +226,9 @@ def verify(out_dir: str, as_json: bool) -> None:
 @click.argument("out_dir", type=click.Path(file_okay=False))
 @_spec_errors
 def report(out_dir: str) -> None:
-    """Regenerate report.html and report.pdf from the design in OUT_DIR
-    (reads controller.json, analysis.json and verify.json; no re-design).
+    """Regenerate report.html and report.pdf (and analysis.json, verify.json)
+    from controller.json in OUT_DIR: analysis and simulation run again on the
+    stored controller; nothing is re-designed.
 
     \b
     Example:
@@ -240,7 +244,10 @@ def report(out_dir: str) -> None:
     out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
                         verification=run_verification(artifact, spec))
     data = report_data(out)
-    write_outputs({"report.html": write_html(data), "report.pdf": write_pdf(data)}, out_dir)
+    write_outputs({"report.html": write_html(data), "report.pdf": write_pdf(data),
+                   "analysis.json": json.dumps(analysis, indent=1, allow_nan=False) + "\n",
+                   "verify.json": json.dumps(out.verification.to_json(), indent=1,
+                                             allow_nan=False) + "\n"}, out_dir)
 
 
 @main.command()
@@ -269,7 +276,11 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
             click.echo(text, nl=False)
         return
     from ..export import write_header
+    from ..pipeline import NO_HEADER_METHODS
 
+    if artifact.method in NO_HEADER_METHODS:
+        raise SpecError("controller.method", "a method with a C export",
+                        artifact.method, hint=NO_HEADER_METHODS[artifact.method])
     spec = spec_of_artifact(artifact)
     text = write_header(artifact, spec.motor, spec.drive)
     write_atomic(output or Path(out_dir) / "controller.h", text)
@@ -293,6 +304,10 @@ def compare(specs: tuple[str, ...], json_path: str | None) -> None:
     from ..spec import load_spec
 
     loaded = [load_spec(s) for s in specs]
+    for s in loaded[1:]:
+        if s.motor != loaded[0].motor or s.drive != loaded[0].drive:
+            raise SpecError("motor", f"the motor and drive of {specs[0]} (compare designs "
+                            "for one motor)", "a different motor or drive", file=s.source)
     artifacts = [design_spec(s) for s in loaded]
     rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive)
     for spec_path, row in zip(specs, rows):

@@ -2,7 +2,7 @@
 
 G. Cormerais et al., "Optimal torque control of a synchronous machine"
 (IFAC 2002). At each period the inverter state (of 8) minimising criterion
-(23) (weights alpha on the torque error, beta on the i_d error, gamma on the
+(23) (weights alpha on the i_q (torque-producing current) error, beta on the i_d error, gamma on the
 number of commutations) is applied; the simulator does that itself
 (:class:`toolbox.sim.FcsWeights`). The design step only validates the weights
 and, so that margins can still be compared with the other methods, fills the
@@ -32,7 +32,7 @@ class FcsMpcCfg:
     Attributes
     ----------
     alpha : float
-        Weight of the squared torque error (1/(N m)^2), >= 0.
+        Weight of the squared i_q error of criterion (23) (1/A^2), >= 0.
     beta : float
         Weight of the squared i_d error (1/A^2), >= 0.
     gamma : float

@@ -37,7 +37,7 @@ from ..artifact import AxisController, ControllerArtifact, Zpk
 from ..errors import SpecError
 from ..plant import axis_plants
 from ._common import decoupling_from_motor, make_artifact
-from ._hinf import augment_mixed_sensitivity, synthesize, weight_bound_check
+from ._hinf import _fastest, augment_mixed_sensitivity, synthesize, weight_bound_check
 from ._reduction import compare_margins, loop_margins, reduce_controller
 from ._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
 
@@ -293,7 +293,22 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
                                  'on_margin_loss = "flag"')
     else:
         margins = loop_margins(G, res.K)
+    _refuse_unrealisable(res, Kr, gamma, axis)
     return HinfAxisResult(G, res.K, Kr, res, bounds, red, margins)
+
+
+def _refuse_unrealisable(res, Kr, gamma, axis: str) -> None:
+    """A controller pole faster than pi/Ts cannot run at the sample time (the
+    known trap of paper 003 at the exact optimal gamma): refuse it unless the
+    order reduction (the executed controller) removed that pole."""
+    if res.pole_limit is None or res.fastest_pole <= res.pole_limit:
+        return
+    if Kr is not None and _fastest(Kr) <= res.pole_limit:
+        return
+    raise SpecError(f"{_KEY}.gamma", "a gamma whose controller has no pole faster than "
+                    f"pi/Ts = {res.pole_limit:.4g} rad/s", gamma,
+                    hint=f"{axis} axis: fastest pole |s| = {res.fastest_pole:.4g} rad/s; "
+                         'raise gamma or use gamma = "optimal" (automatic back-off)')
 
 
 def _zpk_json(K: Any) -> dict:

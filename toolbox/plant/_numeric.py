@@ -106,8 +106,7 @@ def _full_jacobians(convention: str):
     args = (S["R"], S["L_d"], S["L_q"], S["psi_f"], S["p"], S["J"], S["F"],
             *x, *u)
     return (sp.lambdify(args, f.jacobian(x), "numpy"),
-            sp.lambdify(args, f.jacobian(u), "numpy"),
-            sp.lambdify(args, f, "numpy"))
+            sp.lambdify(args, f.jacobian(u), "numpy"))
 
 
 def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[control.StateSpace, np.ndarray]:
@@ -134,14 +133,13 @@ def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[control.S
     u0 : ndarray
         Operating-point inputs ``[v_d0, v_q0, T_L0]``.
     """
-    jx, ju, f = _full_jacobians(motor.convention)
+    jx, ju = _full_jacobians(motor.convention)
     model = derive_dq_model(motor.convention)
     w = motor.pole_pairs * Omega0
     subs = {S["R"]: motor.R, S["L_d"]: motor.Ld, S["L_q"]: motor.Lq,
             S["psi_f"]: motor.flux, S["omega"]: w, S["i_d"]: i_d0, S["i_q"]: i_q0,
             S["p"]: motor.pole_pairs, S["F"]: motor.friction, S["Omega"]: Omega0,
-            S["di_d"] if "di_d" in S else sp.Symbol("di_d", real=True): 0,
-            sp.Symbol("di_q", real=True): 0}
+            S["di_d"]: 0, S["di_q"]: 0}
     v0 = [float(model.voltage[k].subs(subs)) for k in range(2)]
     T_L0 = float((model.torque - S["F"] * S["Omega"]).subs(subs))
     point = (motor.R, motor.Ld, motor.Lq, motor.flux, motor.pole_pairs, motor.J,

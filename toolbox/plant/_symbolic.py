@@ -28,15 +28,16 @@ __all__ = ["SYMBOLS", "DqModel", "park_matrix", "derive_dq_model"]
 
 CONVENTIONS = ("amplitude", "power")
 
-t = sp.Symbol("t", real=True)
 R, L_s, L_0, L_2, psi_pm = sp.symbols("R L_sigma L_0 L_2 psi_pm", positive=True)
 L_d, L_q, psi_f, p, J, F = sp.symbols("L_d L_q psi_f p J F", positive=True)
 i_d, i_q, v_d, v_q, omega, Omega, theta, T_L = sp.symbols(
     "i_d i_q v_d v_q omega Omega theta T_L", real=True)
+di_d, di_q = sp.symbols("di_d di_q", real=True)  # current derivatives in ``voltage``
 
 #: Public symbols of the derived model (names as in the docstrings).
 SYMBOLS = dict(R=R, L_d=L_d, L_q=L_q, psi_f=psi_f, p=p, J=J, F=F, i_d=i_d, i_q=i_q,
-               v_d=v_d, v_q=v_q, omega=omega, Omega=Omega, theta=theta, T_L=T_L)
+               v_d=v_d, v_q=v_q, omega=omega, Omega=Omega, theta=theta, T_L=T_L,
+               di_d=di_d, di_q=di_q)
 
 _PHASES = (0, 2 * sp.pi / 3, -2 * sp.pi / 3)  # phase axes a, b, c (electrical rad)
 
@@ -166,7 +167,6 @@ def derive_dq_model(convention: str = "amplitude") -> DqModel:
     rot = _simplify_matrix(T * Tinv.diff(th))
 
     i_vec = sp.Matrix([i_d, i_q, 0])
-    di_d, di_q = sp.symbols("di_d di_q", real=True)
     psi = L_dq * i_vec + psi_dq_pm
     v = R * i_vec + L_dq * sp.Matrix([di_d, di_q, 0]) + omega * rot * psi
     v = v.applyfunc(_simplify)

@@ -11,7 +11,7 @@ __all__ = ["METRIC_NAMES", "step_metrics", "INVERTER_KINDS", "SCENARIO_KINDS", "
            "SimResult", "SpeedLoop", "discrete_pi", "simulate", "simulate_batch"]
 
 from ._verify import (VERIFY_SCHEMA, ScenarioOutcome, VerifyResult, control_law,
-                      default_scenarios, drive_params, plant_params, traces_of, verify)
+                      default_scenarios, drive_params, plant_params, verify)
 
 __all__ += ["VERIFY_SCHEMA", "ScenarioOutcome", "VerifyResult", "control_law",
-            "default_scenarios", "drive_params", "plant_params", "traces_of", "verify"]
+            "default_scenarios", "drive_params", "plant_params", "verify"]

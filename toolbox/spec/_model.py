@@ -32,6 +32,7 @@ REQUIREMENT_KEYS: dict[str, tuple[str, str, str, str]] = {
     "max_settling_time": ("sim", "max", "settling_time_2pct", "s"),
     "max_overshoot_pct": ("sim", "max", "overshoot_pct", "%"),
     "max_static_error_A": ("sim", "max", "static_error_abs", "A"),
+    "max_static_speed_error": ("sim", "max", "static_speed_error_abs", "rad/s"),
     "max_torque_mse": ("sim", "max", "mse_torque", "(N m)^2"),
     "max_id_mse": ("sim", "max", "mse_id", "A^2"),
     "max_commutations_per_s": ("sim", "max", "commutations_per_s", "1/s"),
@@ -158,6 +159,24 @@ class Requirements:
     """Bounds verification checks (``None`` = not required)."""
 
     bounds: dict = field(default_factory=dict)
+
+    def check_margins(self, margins: dict) -> dict:
+        """Pass/fail of the ``margins`` bounds against the worst axis of
+        ``margins`` (``{"d": MARGINS, "q": MARGINS}``, as in controller.json)."""
+        worst: dict = {}
+        for axis in margins.values():
+            for quantity, value in axis.items():
+                if value in ("inf", "-inf", "nan"):  # non-finite floats are strings in JSON
+                    value = float(value)
+                if isinstance(value, bool) or not isinstance(value, (int, float)):
+                    continue
+                if quantity not in worst:
+                    worst[quantity] = value
+                elif quantity in ("sensitivity_peak", "static_error"):  # larger is worse
+                    worst[quantity] = max(worst[quantity], value)
+                else:
+                    worst[quantity] = min(worst[quantity], value)
+        return self.check(worst, "margins")
 
     def check(self, measured: dict, stage: str) -> dict:
         """Pass/fail of the bounds of ``stage`` (``margins`` or ``sim``) against
