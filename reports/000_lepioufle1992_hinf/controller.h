@@ -4,7 +4,7 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: 6fffeea4f965e014c43f71059a37c20dace9a1068fa7f9475f71b1e3421abe82
- * created:     2026-11-22T00:00:08+00:00
+ * created:     2026-11-22T00:15:29+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

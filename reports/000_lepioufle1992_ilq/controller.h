@@ -4,7 +4,7 @@
  * method:      ilq
  * version:     0.1.0
  * spec sha256: cf8686fd7fb15927a44ec32ea647eff25dd610fa800e6ee1965fad48e70ea3cd
- * created:     2026-11-22T00:00:18+00:00
+ * created:     2026-11-22T00:15:42+00:00
  * equations:   001 eq (1); 001 eq (2); 001 eq (3); 001 eq (4); 001 Fig. 2(a)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

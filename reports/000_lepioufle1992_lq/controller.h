@@ -4,7 +4,7 @@
  * method:      lq
  * version:     0.1.0
  * spec sha256: 7cccec1680210b0e613dbfe3dcdab8658571c4d20613601f202dd1a88ad914ab
- * created:     2026-11-22T00:00:24+00:00
+ * created:     2026-11-22T00:15:53+00:00
  * equations:   001 eq (1); 003 eq (33)-(34)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

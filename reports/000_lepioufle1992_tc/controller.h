@@ -4,7 +4,7 @@
  * method:      tc
  * version:     0.1.0
  * spec sha256: bfbd2612ef9951308507a3387cd59aa74050331f6eaa224654826036fce3a2dc
- * created:     2026-11-22T00:00:38+00:00
+ * created:     2026-11-22T00:16:13+00:00
  * equations:   000 eq (8): de/dt = -K e; 000 eq (9)-(11): total compensation law; 000 eq (12): controller-side parameters R_c, L_dc, L_qc, psi_fc
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

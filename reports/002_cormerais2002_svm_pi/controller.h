@@ -4,7 +4,7 @@
  * method:      pi
  * version:     0.1.0
  * spec sha256: c2d359a3c9ca7ddd59150a1dd1450b8824ca1ecb0118674363d4512b3a5e5af0
- * created:     2026-11-22T00:01:14+00:00
+ * created:     2026-11-22T00:17:02+00:00
  * equations:   000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e); 002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation); Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

@@ -97,8 +97,9 @@ def test_infeasible_gamma_names_key_and_best():
     assert err.value.key == "controller.hinf.gamma"
     # d is feasible at 0.9 (gamma_opt 0.646), q is not (gamma_opt 0.952)
     assert str(err.value) == ('controller.hinf.gamma: expected gamma >= the best achievable '
-                              '0.9518, got 0.9 (q axis: X of eq (18) is stabilising but not '
-                              '>= 0 at gamma = 0.9; set gamma above 0.9518 or "optimal")')
+                              '0.9518 (both axes), got 0.9 (q axis: X of eq (18) is '
+                              'stabilising but not >= 0 at gamma = 0.9; best per axis: '
+                              'd 0.6463, q 0.9518; set gamma above 0.9518 or "optimal")')
 
 
 def test_executed_full_and_no_reduction():

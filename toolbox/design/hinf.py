@@ -37,7 +37,8 @@ from ..artifact import AxisController, ControllerArtifact, Zpk
 from ..errors import SpecError
 from ..plant import axis_plants
 from ._common import decoupling_from_motor, make_artifact
-from ._hinf import _fastest, augment_mixed_sensitivity, synthesize, weight_bound_check
+from ._hinf import (_fastest, augment_mixed_sensitivity, gamma_iteration, synthesize,
+                    weight_bound_check)
 from ._reduction import compare_margins, loop_margins, reduce_controller
 from ._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
 
@@ -336,13 +337,27 @@ def design(spec) -> ControllerArtifact:
     cfg: HinfCfg = spec.controller.cfg
     ts = spec.drive.sample_time
     plants = axis_plants(spec.motor)
-    results = {ax: design_hinf_axis(plants[ax], **cfg.weights[ax], gamma=cfg.gamma,
-                                    backoff=cfg.backoff, sample_time=ts,
-                                    reduce_order=cfg.reduce_order,
-                                    integrator_tol=cfg.integrator_tol,
-                                    margin_loss=cfg.margin_loss,
-                                    on_margin_loss=cfg.on_margin_loss, axis=ax)
-               for ax in AXES}
+    try:
+        results = {ax: design_hinf_axis(plants[ax], **cfg.weights[ax], gamma=cfg.gamma,
+                                        backoff=cfg.backoff, sample_time=ts,
+                                        reduce_order=cfg.reduce_order,
+                                        integrator_tol=cfg.integrator_tol,
+                                        margin_loss=cfg.margin_loss,
+                                        on_margin_loss=cfg.on_margin_loss, axis=ax)
+                   for ax in AXES}
+    except SpecError as err:
+        if err.key != f"{_KEY}.gamma" or not str(err.expected).startswith("gamma >="):
+            raise
+        # one gamma serves both axes: quote the best achievable for both
+        best = {ax: gamma_iteration(augment_mixed_sensitivity(plants[ax], **cfg.weights[ax]))
+                for ax in AXES}
+        worst = max(best.values())
+        failed = (err.hint or "").split("; set gamma")[0]  # which condition failed where
+        raise SpecError(f"{_KEY}.gamma", f"gamma >= the best achievable {worst:.4g} "
+                        "(both axes)", cfg.gamma,
+                        hint=f"{failed}; best per axis: "
+                        + ", ".join(f"{ax} {g:.4g}" for ax, g in best.items())
+                        + f'; set gamma above {worst:.4g} or "optimal"') from None
     axes = {}
     for ax, r in results.items():
         full = AxisController.from_error_controller(r.K, ts, method="tustin")

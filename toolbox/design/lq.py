@@ -177,9 +177,48 @@ def lqi_continuous(a: float, b: float, Q: tuple[float, float], R: float) -> LqAx
     A = np.array([[a, 0.0], [-1.0, 0.0]])
     B = np.array([[b], [0.0]])
     Qm, Rm = np.diag(Q), np.array([[R]])
-    P = sla.solve_continuous_are(A, B, Qm, Rm)
+    P = _riccati(sla.solve_continuous_are, A, B, Qm, Rm)
     K = np.linalg.solve(Rm, B.T @ P)
-    return LqAxis(K, A, B, Qm, Rm, np.linalg.eigvals(A - B @ K), "continuous", 0.0, 0)
+    poles = np.linalg.eigvals(A - B @ K)
+    _check_closed_loop(np.max(poles.real) < 0, poles)
+    return LqAxis(K, A, B, Qm, Rm, poles, "continuous", 0.0, 0)
+
+
+def _riccati(solver, A, B, Q, R, rtol: float = 1e-6) -> np.ndarray:
+    """Solve a CARE/DARE and check its residual relative to its largest term:
+    with extreme weight ratios the solvers return inaccurate solutions
+    silently, and a failure is a consequence of the spec's weights."""
+    try:
+        P = solver(A, B, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as err:
+        raise SpecError("controller.lq", "weights for which the Riccati equation has a "
+                        "stabilising solution", str(err),
+                        hint="check Q, R (or the Bryson limits) for extreme ratios") from None
+    if solver is sla.solve_continuous_are:
+        quad = P @ B @ np.linalg.solve(R, B.T @ P)
+        terms = (A.T @ P, P @ A, quad, Q)
+        residual = A.T @ P + P @ A - quad + Q
+    else:
+        quad = A.T @ P @ B @ np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
+        terms = (A.T @ P @ A, P, quad, Q)
+        residual = A.T @ P @ A - P - quad + Q
+    scale = max(np.linalg.norm(t) for t in terms)
+    if not np.linalg.norm(residual) <= rtol * scale:
+        raise SpecError("controller.lq.R", "weights for which the Riccati equation is solved "
+                        f"accurately (relative residual <= {rtol:g})",
+                        f"relative residual {np.linalg.norm(residual) / scale:.3g}",
+                        hint="bring Q and R closer in scale")
+    return P
+
+
+def _check_closed_loop(stable: bool, poles: np.ndarray) -> None:
+    """The Riccati gain must stabilise the model it was computed for; with
+    extreme weights the solvers lose accuracy silently, so check."""
+    if not stable:
+        raise SpecError("controller.lq.R", "weights giving a stabilising LQ gain",
+                        f"closed-loop poles {np.round(poles, 4).tolist()}",
+                        hint="the Riccati solution is inaccurate for these weights: "
+                             "bring Q and R closer in scale")
 
 
 def discrete_model(a: float, b: float, sample_time: float,
@@ -236,10 +275,11 @@ def lqi_discrete(a: float, b: float, Q: tuple[float, float], R: float,
     Qm[0, 0], Qm[1, 1] = Q
     Qm *= sample_time
     Rm = np.array([[R * sample_time]])
-    P = sla.solve_discrete_are(A, B, Qm, Rm)
+    P = _riccati(sla.solve_discrete_are, A, B, Qm, Rm)
     K = np.linalg.solve(Rm + B.T @ P @ B, B.T @ P @ A)
-    return LqAxis(K, A, B, Qm, Rm, np.linalg.eigvals(A - B @ K), "discrete", sample_time,
-                  delay_samples)
+    poles = np.linalg.eigvals(A - B @ K)
+    _check_closed_loop(np.max(np.abs(poles)) < 1, poles)
+    return LqAxis(K, A, B, Qm, Rm, poles, "discrete", sample_time, delay_samples)
 
 
 def lqi_from_plant(G: Any, Q: tuple[float, float], R: float, *, domain: str = "discrete",
