@@ -105,8 +105,7 @@ def _speed_loop(scenario: Scenario, sample_time: float) -> SpeedLoop | None:
     sl = dict(scenario.speed_loop)
     if not sl:
         return None
-    ts = sl.get("sample_time", sample_time)
-    ts = sample_time * max(1, round(ts / sample_time))
+    ts = sl.get("sample_time", sample_time)  # a whole multiple of Ts (checked at spec load)
     return SpeedLoop(kp=sl["kp"], ki=sl.get("ki", 0.0), kd=sl.get("kd", 0.0),
                      sample_time=ts, iq_limit=sl.get("iq_limit", math.inf))
 

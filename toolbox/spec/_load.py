@@ -90,7 +90,7 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     drive = _drive(top.raw("drive"))
     controller = _controller(top.raw("controller"), motor, drive)
     requirements = _requirements(top.raw("requirements"))
-    scenarios = _scenarios(top.raw("scenario", []), drive)
+    scenarios = _scenarios(top.raw("scenario", []), drive, controller.method)
     raw = copy.deepcopy(dict(data))
     raw["motor"] = motor_raw
     return Spec(title=title, motor=motor, drive=drive, controller=controller,
@@ -171,7 +171,11 @@ def _requirements(value: Any) -> Requirements:
     return Requirements(bounds)
 
 
-def _scenarios(value: Any, drive: Drive) -> tuple:
+#: Longest verification scenario (s): the plant is integrated at about 1 us.
+MAX_SCENARIO_DURATION = 60.0
+
+
+def _scenarios(value: Any, drive: Drive, method: str) -> tuple:
     if not isinstance(value, list):
         raise SpecError("scenario", "an array of tables [[scenario]]", value)
     from ..sim import Scenario  # the simulation package owns scenario semantics
@@ -183,6 +187,19 @@ def _scenarios(value: Any, drive: Drive) -> tuple:
         if scenario.kind in ("load_step", "speed_step") and "kp" not in scenario.speed_loop:
             raise SpecError(f"{key}.speed_loop", "a table with at least kp (A s/rad) for kind "
                             f'"{scenario.kind}"', dict(scenario.speed_loop))
+        ts_speed = scenario.speed_loop.get("sample_time")
+        if ts_speed is not None:
+            ratio = ts_speed / drive.sample_time
+            if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
+                raise SpecError(f"{key}.speed_loop.sample_time", "a whole multiple of "
+                                f"drive.sample_time ({drive.sample_time:g} s)", ts_speed)
+        if scenario.inverter == "fcs_mpc" and method != "fcs_mpc":
+            raise SpecError(f"{key}.inverter", '"average" or "svm"', "fcs_mpc",
+                            hint='predictive switching needs controller.method = "fcs_mpc"')
+        if scenario.duration > MAX_SCENARIO_DURATION:
+            raise SpecError(f"{key}.duration", f"at most {MAX_SCENARIO_DURATION:g} s",
+                            scenario.duration,
+                            hint="longer runs: call toolbox.sim.simulate directly")
         out.append(scenario)
     return tuple(out)
 
