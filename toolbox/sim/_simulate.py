@@ -18,6 +18,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from toolbox.errors import SpecError
+from toolbox.spec._model import inverter_radii
 
 from . import _kernel
 from ._metrics import METRIC_NAMES, metrics_dict
@@ -115,13 +116,11 @@ class DriveParams:
         """(hexagon vertex radius, circle radius) in V for a dq convention."""
         r_hex = self.hex_radius
         if r_hex is None:
-            if abs(torque_factor - 1.5) < 1e-12:
-                r_hex = 2.0 / 3.0 * self.vdc
-            elif abs(torque_factor - 1.0) < 1e-12:
-                r_hex = math.sqrt(2.0 / 3.0) * self.vdc
-            else:
+            conventions = {1.5: "amplitude", 1.0: "power"}
+            if torque_factor not in conventions:
                 raise SpecError("drive.hex_radius", "an explicit hexagon radius (V) for "
                                 "torque_factor other than 1.5 or 1", torque_factor)
+            r_hex = inverter_radii(self.vdc, conventions[torque_factor])[0]
         v_max = self.v_max if self.v_max is not None else r_hex * math.sqrt(3.0) / 2.0
         return r_hex, v_max
 

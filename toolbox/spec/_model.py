@@ -10,7 +10,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-__all__ = ["Motor", "Drive", "ControllerChoice", "Requirements", "Spec",
+__all__ = ["inverter_radii", "Motor", "Drive", "ControllerChoice", "Requirements", "Spec",
            "METHODS", "REQUIREMENT_KEYS"]
 
 #: Design methods the toolbox knows (DESIGN.md).
@@ -137,13 +137,32 @@ class Drive:
     max_speed: float | None = None
 
     def max_voltage(self, convention: str) -> float:
-        """Largest dq voltage amplitude in linear modulation (V).
+        """Largest dq voltage amplitude in linear modulation (V): the circle
+        inscribed in the SVM hexagon (see :func:`inverter_radii`)."""
+        return inverter_radii(self.vdc, convention)[1]
 
-        Inscribed circle of the SVM hexagon: vdc/sqrt(3) (amplitude-invariant)
-        or vdc/sqrt(2) (power-invariant, larger by sqrt(3/2)).
-        """
-        scale = 1.0 if convention == "amplitude" else math.sqrt(1.5)
-        return scale * self.vdc / math.sqrt(3.0)
+
+def inverter_radii(vdc: float, convention: str) -> tuple[float, float]:
+    """Voltage limits of a two-level inverter in the dq frame (V).
+
+    Parameters
+    ----------
+    vdc : float
+        DC-link voltage (V).
+    convention : {"amplitude", "power"}
+        dq transform: amplitude-invariant (2/3) or power-invariant (sqrt(2/3)).
+
+    Returns
+    -------
+    hexagon : float
+        Vertex radius of the SVM hexagon, the length of an active inverter
+        vector: 2/3 vdc (amplitude) or sqrt(2/3) vdc (power).
+    circle : float
+        Radius of the inscribed circle (linear modulation), sqrt(3)/2 of the
+        vertex radius: vdc/sqrt(3) or vdc/sqrt(2).
+    """
+    hexagon = (2.0 / 3.0 if convention == "amplitude" else math.sqrt(2.0 / 3.0)) * vdc
+    return hexagon, hexagon * math.sqrt(3.0) / 2.0
 
 
 @dataclass(frozen=True)
