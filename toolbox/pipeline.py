@@ -19,7 +19,8 @@ from .errors import SpecError
 from .spec import Spec, load_spec, spec_from_dict
 
 __all__ = ["DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
-           "write_outputs", "load_artifact", "spec_of_artifact", "OUTPUT_FILES"]
+           "write_outputs", "load_artifact", "load_analysis", "spec_of_artifact",
+           "OUTPUT_FILES"]
 
 OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h",
                 "report.html", "report.pdf")
@@ -299,6 +300,27 @@ def load_artifact(out_dir: str | Path) -> ControllerArtifact:
         raise SpecError("", "a design directory with controller.json", err.strerror,
                         file=str(path)) from None
     return ControllerArtifact.loads(text, file=str(path))
+
+
+def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | None:
+    """``out_dir/analysis.json`` when it belongs to ``artifact``, else None.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Design directory.
+    artifact : ControllerArtifact
+        The controller the analysis must describe (same method and sample time).
+    """
+    path = Path(out_dir) / "analysis.json"
+    try:
+        data = json.loads(path.read_text("utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return None
+    same = (isinstance(data, dict) and data.get("schema") == "cct.analysis/1"
+            and data.get("method") == artifact.method
+            and data.get("sample_time") == artifact.sample_time)
+    return data if same else None
 
 
 def spec_of_artifact(artifact: ControllerArtifact, file: str | None = None) -> Spec:

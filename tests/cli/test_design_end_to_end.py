@@ -92,3 +92,22 @@ def test_hostile_title_is_inert(tmp_path):
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in html
     header = (tmp_path / "o" / "controller.h").read_text()
     assert "*/ #error" not in header
+
+
+def test_report_reuses_stored_analysis(tc_design, tmp_path, monkeypatch):
+    """`cct report` reads analysis.json instead of analysing again (no stage
+    re-derives what an earlier one produced); without it, it analyses."""
+    import toolbox.pipeline
+
+    out, _ = tc_design
+    work = tmp_path / "d"
+    shutil.copytree(out, work)
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("analysis ran again")
+
+    monkeypatch.setattr(toolbox.pipeline, "analyse", forbidden)
+    assert run("report", work).exit_code == 0
+    (work / "analysis.json").unlink()
+    with pytest.raises(AssertionError, match="analysis ran again"):
+        run("report", work)

@@ -226,28 +226,32 @@ def verify(out_dir: str, as_json: bool) -> None:
 @click.argument("out_dir", type=click.Path(file_okay=False))
 @_spec_errors
 def report(out_dir: str) -> None:
-    """Regenerate report.html and report.pdf (and analysis.json, verify.json)
-    from controller.json in OUT_DIR: analysis and simulation run again on the
-    stored controller; nothing is re-designed.
+    """Regenerate report.html and report.pdf from the design in OUT_DIR.
+
+    Reads controller.json and analysis.json (analysing again only when
+    analysis.json is missing); the scenarios are simulated again because
+    their traces are not stored. Nothing is re-designed.
 
     \b
     Example:
       cct report out/003
     """
-    from ..pipeline import (DesignOutputs, analyse, load_artifact, report_data,
+    from ..pipeline import (DesignOutputs, analyse, load_analysis, load_artifact, report_data,
                             run_verification, spec_of_artifact, write_outputs)
     from ..report import write_html, write_pdf
 
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
-    artifact, analysis = analyse(artifact, spec)
+    files = {}
+    analysis = load_analysis(out_dir, artifact)
+    if analysis is None:
+        artifact, analysis = analyse(artifact, spec)
+        files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
     out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
                         verification=run_verification(artifact, spec))
     data = report_data(out)
-    write_outputs({"report.html": write_html(data), "report.pdf": write_pdf(data),
-                   "analysis.json": json.dumps(analysis, indent=1, allow_nan=False) + "\n",
-                   "verify.json": json.dumps(out.verification.to_json(), indent=1,
-                                             allow_nan=False) + "\n"}, out_dir)
+    files.update({"report.html": write_html(data), "report.pdf": write_pdf(data)})
+    write_outputs(files, out_dir)
 
 
 @main.command()
