@@ -67,16 +67,7 @@ def read_cfg(method: str, table, motor, drive) -> FcsMpcCfg:
     """Validate ``[controller.fcs_mpc]``: ``alpha``, ``beta``, ``gamma`` (all >= 0,
     defaults 1, 1, 0) with ``alpha + beta > 0``.
 
-    Parameters
-    ----------
-    method : str
-        The method name (``"fcs_mpc"``).
-    table : Table
-        The ``[controller.fcs_mpc]`` table being read (key paths for messages).
-    motor : Motor
-        Validated motor (SI units).
-    drive : Drive
-        Validated drive (sample time in s, voltages in V).
+    Parameters: as :func:`toolbox.design.read_method_cfg`.
 
     Returns
     -------

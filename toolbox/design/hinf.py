@@ -161,16 +161,7 @@ def read_cfg(method: str, table, motor, drive) -> HinfCfg:
     ("reduced" | "full", default "reduced" when reduce_order is given),
     ``[controller.hinf.weights.d|q]`` with ``w1`` (required), ``w2``, ``w3``.
 
-    Parameters
-    ----------
-    method : str
-        The method name (``"hinf"``).
-    table : Table
-        The ``[controller.hinf]`` table being read (key paths for messages).
-    motor : Motor
-        Validated motor (SI units).
-    drive : Drive
-        Validated drive (sample time in s, voltages in V).
+    Parameters: as :func:`toolbox.design.read_method_cfg`.
 
     Returns
     -------

@@ -425,16 +425,7 @@ def read_cfg(method: str, table, motor, drive) -> IlqCfg:
     ``sigma`` (number or {d=, q=}, 1/s) or ``sigma_factor`` (sigma = factor x
     eq (3) bound, > 1; default 2); ``allow_non_optimal`` (default false).
 
-    Parameters
-    ----------
-    method : str
-        The method name (``"ilq"``).
-    table : Table
-        The ``[controller.ilq]`` table being read (key paths for messages).
-    motor : Motor
-        Validated motor (SI units).
-    drive : Drive
-        Validated drive (sample time in s, voltages in V).
+    Parameters: as :func:`toolbox.design.read_method_cfg`.
 
     Returns
     -------

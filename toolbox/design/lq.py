@@ -363,16 +363,7 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
     motor.rated_current or motor.max_current) and ``voltage_limit`` (V,
     default drive.max_voltage).
 
-    Parameters
-    ----------
-    method : str
-        The method name (``"lq"``).
-    table : Table
-        The ``[controller.lq]`` table being read (key paths for messages).
-    motor : Motor
-        Validated motor (SI units).
-    drive : Drive
-        Validated drive (sample time in s, voltages in V).
+    Parameters: as :func:`toolbox.design.read_method_cfg`.
 
     Returns
     -------
