@@ -13,7 +13,8 @@ DESIGNS = Path(__file__).parents[2] / "designs"
 def test_compare_paper000_motor(tmp_path):
     """PI, total compensation with integrators and H-infinity on paper 000's motor:
     one row each, with sampled-loop margins and robustness; written as JSON too."""
-    specs = [DESIGNS / f"000_lepioufle1992_{m}.toml" for m in ("pi", "tci", "hinf")]
+    specs = [DESIGNS / "000_lepioufle1992_pi.toml", DESIGNS / "000_lepioufle1992_tci.toml",
+             DESIGNS / "compare" / "000_lepioufle1992_hinf.toml"]
     out = tmp_path / "compare.json"
     res = CliRunner().invoke(main, ["compare", *map(str, specs), "--json", str(out)],
                              catch_exceptions=False)

@@ -308,10 +308,12 @@ def compare(specs: tuple[str, ...], json_path: str | None) -> None:
     from ..spec import load_spec
 
     loaded = [load_spec(s) for s in specs]
-    for s in loaded[1:]:
-        if s.motor != loaded[0].motor or s.drive != loaded[0].drive:
-            raise SpecError("motor", f"the motor and drive of {specs[0]} (compare designs "
-                            "for one motor)", "a different motor or drive", file=s.source)
+    first = loaded[0]
+    for s in loaded[1:]:  # each artifact carries its own delay; the plant must be common
+        if (s.motor, s.drive.vdc, s.drive.sample_time) != (
+                first.motor, first.drive.vdc, first.drive.sample_time):
+            raise SpecError("motor", f"the motor, vdc and sample_time of {specs[0]} "
+                            "(compare designs for one drive)", "a different one", file=s.source)
     artifacts = [design_spec(s) for s in loaded]
     rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive)
     for spec_path, row in zip(specs, rows):
@@ -321,11 +323,32 @@ def compare(specs: tuple[str, ...], json_path: str | None) -> None:
     _print_table(rows)
 
 
+#: Columns of the compare table: (header, value of a row); worst axis throughout.
+_COLUMNS = (
+    ("method", lambda r: r["method"]),
+    ("GM dB", lambda r: _worst(r["margins"], "gain_margin_db", min)),
+    ("PM deg", lambda r: _worst(r["margins"], "phase_margin_deg", min)),
+    ("Mm", lambda r: _worst(r["margins"], "stability_margin", min)),
+    ("t5% ms", lambda r: 1e3 * _worst(r["response_times"], "response_time_5pct", max)),
+    ("OS %", lambda r: _worst(r["response_times"], "overshoot_pct", max)),
+    ("worst GM dB", lambda r: _worst(r["worst_case"], "gain_margin_db", min)),
+    ("unstable", lambda r: f"{r['n_unstable']}/{r['n_sets']}"),
+    ("MIMO disk", lambda r: r["mimo_worst_disk_margin"]),
+    ("cert. scale", lambda r: (r["certificate"] or {}).get("certified_scale")),
+)
+
+
+def _worst(per_axis: dict, key: str, pick) -> float:
+    values = [float(v[key]) for v in per_axis.values() if v.get(key) is not None]
+    return pick(values) if values else float("nan")
+
+
 def _print_table(rows: list[dict]) -> None:
-    keys = [k for k in rows[0] if k not in ("spec",) and not isinstance(rows[0][k], (dict, list))]
-    click.echo(" | ".join(["spec"] + keys))
-    for row in rows:
-        click.echo(" | ".join([str(row.get("spec"))] + [_fmt(row.get(k)) for k in keys]))
+    """Sampled-loop margins and step figures, robustness over the sweep."""
+    table = [[h for h, _ in _COLUMNS]] + [[_fmt(get(r)) for _, get in _COLUMNS] for r in rows]
+    widths = [max(len(line[k]) for line in table) for k in range(len(_COLUMNS))]
+    for spec, line in zip(["spec"] + [r["spec"] for r in rows], table):
+        click.echo("  ".join(c.rjust(w) for c, w in zip(line, widths)) + f"  {spec}")
 
 
 def _fmt(value) -> str:
