@@ -10,9 +10,10 @@ The pipeline as function calls::
 """
 
 from .artifact import ControllerArtifact
-from .errors import SpecError
+from .errors import ArtifactError, CctError, DesignInfeasible, ExportRefused, SpecError
 from .pipeline import analyse, build_outputs, design_spec, run_verification, write_outputs
 from .spec import Spec, load_spec, spec_from_dict
 
-__all__ = ["ControllerArtifact", "SpecError", "analyse", "build_outputs", "design_spec",
+__all__ = ["ArtifactError", "CctError", "ControllerArtifact", "DesignInfeasible",
+           "ExportRefused", "SpecError", "analyse", "build_outputs", "design_spec",
            "run_verification", "write_outputs", "Spec", "load_spec", "spec_from_dict"]

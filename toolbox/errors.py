@@ -1,15 +1,24 @@
-"""The one exception users see for bad input.
+"""The exceptions users see, under one base.
 
-Every input problem (spec file, method parameter, unreachable requirement) raises
-:class:`SpecError`; the CLI turns it into exit code 2 and writes nothing. Any other
-exception escaping the toolbox is a bug and keeps its traceback.
+:class:`CctError` is the base of every error the toolbox raises on purpose; the
+CLI turns any of them into exit code 2 and writes nothing. Any other exception
+escaping the toolbox is a bug and keeps its traceback.
+
+- :class:`SpecError`: bad input in a spec file or a method parameter.
+- :class:`DesignInfeasible`: the spec is valid but the method cannot meet it
+  (e.g. no H-infinity controller for the requested weights); a ``SpecError``
+  because the remedy is a change of the spec.
+- :class:`ArtifactError`: a ``controller.json`` (or ``analysis.json``) that is
+  malformed, tampered with or from an incompatible version.
+- :class:`ExportRefused`: a sound artifact that the requested firmware format
+  cannot represent (range, precision, unsupported law).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["SpecError"]
+__all__ = ["ArtifactError", "CctError", "DesignInfeasible", "ExportRefused", "SpecError"]
 
 
 def _show(value: Any) -> str:
@@ -18,8 +27,8 @@ def _show(value: Any) -> str:
     return repr(value)
 
 
-class SpecError(ValueError):
-    """Bad user input, located by file and dotted key path.
+class CctError(ValueError):
+    """An error the user can act on, located by file and dotted key path.
 
     Parameters
     ----------
@@ -37,7 +46,7 @@ class SpecError(ValueError):
 
     Examples
     --------
-    >>> str(SpecError("motor.R", "a number > 0", -1, file="designs/x.toml"))
+    >>> str(CctError("motor.R", "a number > 0", -1, file="designs/x.toml"))
     'designs/x.toml: motor.R: expected a number > 0, got -1'
     """
 
@@ -47,8 +56,8 @@ class SpecError(ValueError):
                  file: str | None = None, hint: str | None = None) -> None:
         self.key = key
         self.expected = expected
-        self.got = None if got is SpecError._MISSING else got
-        self.has_got = got is not SpecError._MISSING
+        self.got = None if got is CctError._MISSING else got
+        self.has_got = got is not CctError._MISSING
         self.file = file
         self.hint = hint
         super().__init__(self._text())
@@ -63,16 +72,31 @@ class SpecError(ValueError):
             text += f" ({self.hint})"
         return text
 
-    def with_file(self, file: str) -> "SpecError":
-        """Return the same error located in ``file``."""
-        err = SpecError(self.key, self.expected,
-                        self.got if self.has_got else SpecError._MISSING,
-                        file=file, hint=self.hint)
-        return err
+    def _copy(self, key: str, file: str | None) -> "CctError":
+        return type(self)(key, self.expected,
+                          self.got if self.has_got else CctError._MISSING,
+                          file=file, hint=self.hint)
 
-    def under(self, prefix: str) -> "SpecError":
-        """Return the same error with ``prefix`` prepended to the key path."""
-        key = f"{prefix}.{self.key}" if self.key else prefix
-        return SpecError(key, self.expected,
-                         self.got if self.has_got else SpecError._MISSING,
-                         file=self.file, hint=self.hint)
+    def with_file(self, file: str) -> "CctError":
+        """Return the same error (same class) located in ``file``."""
+        return self._copy(self.key, file)
+
+    def under(self, prefix: str) -> "CctError":
+        """Return the same error (same class) with ``prefix`` prepended to the key path."""
+        return self._copy(f"{prefix}.{self.key}" if self.key else prefix, self.file)
+
+
+class SpecError(CctError):
+    """Bad input in a spec file or a method parameter."""
+
+
+class DesignInfeasible(SpecError):
+    """A valid spec that the method cannot meet; the remedy is a spec change."""
+
+
+class ArtifactError(CctError):
+    """A malformed, tampered or incompatible controller.json / analysis.json."""
+
+
+class ExportRefused(CctError):
+    """A sound artifact that the requested firmware format cannot represent."""

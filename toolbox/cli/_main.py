@@ -2,8 +2,8 @@
 
 Exit codes (DESIGN.md): 0 every requirement holds, 1 a requirement fails
 (outputs still written), 2 bad input (nothing written). Only
-:class:`~toolbox.errors.SpecError` is turned into exit 2; anything else is a
-bug and keeps its traceback.
+:class:`~toolbox.errors.CctError` and its subclasses are turned into exit 2;
+anything else is a bug and keeps its traceback.
 """
 
 from __future__ import annotations
@@ -15,19 +15,19 @@ from pathlib import Path
 
 import click
 
-from ..errors import SpecError
+from ..errors import CctError, SpecError
 
 EXIT_OK, EXIT_REQUIREMENT, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def _spec_errors(func):
-    """Turn SpecError into a one-line message and exit code 2."""
+    """Turn any CctError into a one-line message and exit code 2."""
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         try:
             return func(*args, **kwargs)
-        except SpecError as err:
+        except CctError as err:
             click.echo(f"cct: error: {err}", err=True)
             sys.exit(EXIT_BAD_INPUT)
 
