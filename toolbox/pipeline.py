@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from ._io import write_atomic
+from ._io import check_text_depth, read_limited, write_set
 from .artifact import ControllerArtifact
-from .errors import SpecError
+from .errors import ArtifactError, CctError, SpecError
 from .spec import Spec, load_spec, spec_from_dict
 
 __all__ = ["DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
@@ -270,7 +270,8 @@ def _files(out: DesignOutputs) -> dict[str, str | bytes]:
 
 
 def write_outputs(files: dict[str, str | bytes], out_dir: str | Path) -> list[Path]:
-    """Write each output atomically into ``out_dir``.
+    """Write the outputs into ``out_dir`` as one set (see :func:`toolbox._io.write_set`):
+    a crash or Ctrl-C leaves the old set or the new one, never a mix.
 
     Parameters
     ----------
@@ -280,25 +281,28 @@ def write_outputs(files: dict[str, str | bytes], out_dir: str | Path) -> list[Pa
         Directory (created when missing).
     """
     out = Path(out_dir)
+    # a new controller.json supersedes every output of the old design: none
+    # of them may survive next to it (a stale report contradicting the design)
+    drop = OUTPUT_FILES if "controller.json" in files else ()
     try:
-        written = [write_atomic(out / name, data) for name, data in sorted(files.items())]
-        for name in OUTPUT_FILES:  # no stale file may contradict the new controller.json
-            if name not in files and "controller.json" in files:
-                (out / name).unlink(missing_ok=True)
+        return write_set(files, out, drop=drop)
     except OSError as err:
         raise SpecError("--out", "a writable directory", str(out),
                         hint=err.strerror or str(err)) from None
-    return written
 
 
 def load_artifact(out_dir: str | Path) -> ControllerArtifact:
     """Read ``out_dir/controller.json`` (validated)."""
     path = Path(out_dir) / "controller.json"
+    if not path.exists() and not path.is_symlink():
+        raise ArtifactError("", "a design directory with controller.json",
+                            "No such file or directory", file=str(path))
+    raw = read_limited(path, ArtifactError, what="controller.json file")
     try:
-        text = path.read_text("utf-8")
-    except OSError as err:
-        raise SpecError("", "a design directory with controller.json", err.strerror,
-                        file=str(path)) from None
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ArtifactError("", "a UTF-8 text file", "undecodable bytes",
+                            file=str(path)) from None
     return ControllerArtifact.loads(text, file=str(path))
 
 
@@ -313,16 +317,67 @@ def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | N
         The controller the analysis must describe (same method and sample time).
     """
     path = Path(out_dir) / "analysis.json"
-    try:
-        data = json.loads(path.read_text("utf-8"))
-    except (OSError, json.JSONDecodeError):
+    if not path.exists():
         return None
+    name = str(path)
+    raw = read_limited(path, ArtifactError, what="analysis.json file")
+    try:
+        text = raw.decode("utf-8")
+        check_text_depth(text, ArtifactError, file=name)  # json recurses
+        data = json.loads(text)
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        return None  # unreadable: analyse again rather than trust it
     same = (isinstance(data, dict) and data.get("schema") == "cct.analysis/1"
             and data.get("method") == artifact.method
             and data.get("sample_time") == artifact.sample_time)
-    return data if same else None
+    if not same:
+        return None
+    _check_analysis(data, name)
+    return data
+
+
+def _check_analysis(data: dict, file: str) -> None:
+    """The parts of analysis.json that the report reads have the right shape."""
+    for key in ("requirements", "sweep", "certificate", "mimo_at_speed", "margins"):
+        if data.get(key) is not None and not isinstance(data[key], dict):
+            raise ArtifactError(key, "an object", type(data[key]).__name__, file=file)
+    for key, check in (data.get("requirements") or {}).items():
+        where = f"requirements.{key}"
+        if not isinstance(check, dict):
+            raise ArtifactError(where, "an object with quantity, bound, value, unit, pass",
+                                type(check).__name__, file=file)
+        if not isinstance(check.get("pass"), bool):
+            raise ArtifactError(f"{where}.pass", "true or false", check.get("pass"), file=file)
+        for name in ("bound", "value"):
+            v = check.get(name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+                raise ArtifactError(f"{where}.{name}", "a number or null", v, file=file)
 
 
 def spec_of_artifact(artifact: ControllerArtifact, file: str | None = None) -> Spec:
-    """The validated spec stored in an artifact (re-validated, not re-designed)."""
-    return spec_from_dict(artifact.spec, file=file)
+    """The validated spec stored in an artifact (re-validated, not re-designed).
+
+    Raises
+    ------
+    ArtifactError
+        The stored spec is invalid; the key path is the one inside
+        controller.json (``spec.motor.R``).
+    """
+    try:
+        return spec_from_dict(artifact.spec, file=file)
+    except SpecError as err:
+        raise _as_artifact_error(err, file) from None
+
+
+def _as_artifact_error(err: SpecError, file: str | None) -> ArtifactError:
+    from .spec import SpecErrors
+
+    if isinstance(err, SpecErrors):
+        first = err.errors[0]
+        hint = f"and {len(err.errors) - 1} more error(s) in the stored spec"
+        return ArtifactError(f"spec.{first.key}" if first.key else "spec", first.expected,
+                             first.got if first.has_got else CctError._MISSING,
+                             file=file, hint=hint)
+    return ArtifactError(f"spec.{err.key}" if err.key else "spec", err.expected,
+                         err.got if err.has_got else CctError._MISSING, file=file,
+                         hint=err.hint)

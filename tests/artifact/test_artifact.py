@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from toolbox.artifact import AxisController, ControllerArtifact, Decoupling
-from toolbox.errors import SpecError
+from toolbox.errors import ArtifactError
 
 TS = 1e-4
 
@@ -82,11 +82,11 @@ def test_python_control_conversion():
 def test_bad_content_is_refused(mutate, message):
     data = json.loads(make_artifact().dumps())
     mutate(data)
-    with pytest.raises(SpecError) as info:
+    with pytest.raises(ArtifactError) as info:
         ControllerArtifact.from_json(data, file="out/controller.json")
     assert str(info.value) == f"out/controller.json: {message}"
 
 
 def test_invalid_json_text():
-    with pytest.raises(SpecError, match="controller.json: expected valid JSON"):
+    with pytest.raises(ArtifactError, match="controller.json: expected valid JSON"):
         ControllerArtifact.loads("{", file="controller.json")

@@ -25,7 +25,8 @@ import control
 import numpy as np
 from scipy.signal import BadCoefficients
 
-from ..errors import SpecError
+from .._io import check_data_depth, check_text_depth
+from ..errors import ArtifactError
 
 __all__ = [
     "SCHEMA",
@@ -48,17 +49,17 @@ def _matrix(value: Any, key: str, rows: int | None = None,
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise SpecError(key, "a matrix (list of lists of numbers)", value) from None
+        raise ArtifactError(key, "a matrix (list of lists of numbers)", value) from None
     if arr.ndim == 1 and arr.size == 0:
         arr = arr.reshape(0, 0 if cols is None else cols)
     if arr.ndim != 2:
-        raise SpecError(key, "a matrix (list of lists of numbers)", value)
+        raise ArtifactError(key, "a matrix (list of lists of numbers)", value)
     if not np.all(np.isfinite(arr)):
-        raise SpecError(key, "finite numbers only", value)
+        raise ArtifactError(key, "finite numbers only", value)
     if rows is not None and arr.shape[0] != rows:
-        raise SpecError(key, f"{rows} rows", f"{arr.shape[0]} rows")
+        raise ArtifactError(key, f"{rows} rows", f"{arr.shape[0]} rows")
     if cols is not None and arr.shape[1] != cols:
-        raise SpecError(key, f"{cols} columns", f"{arr.shape[1]} columns")
+        raise ArtifactError(key, f"{cols} columns", f"{arr.shape[1]} columns")
     return arr
 
 
@@ -91,12 +92,12 @@ class StateSpaceData:
     def __post_init__(self) -> None:
         n = self.A.shape[0]
         if self.A.shape != (n, n):
-            raise SpecError("A", "a square matrix", list(self.A.shape))
+            raise ArtifactError("A", "a square matrix", list(self.A.shape))
         if self.B.shape[0] != n or self.C.shape[1] != n:
-            raise SpecError("B/C", f"{n} rows in B and {n} columns in C",
+            raise ArtifactError("B/C", f"{n} rows in B and {n} columns in C",
                             [list(self.B.shape), list(self.C.shape)])
         if self.D.shape != (self.C.shape[0], self.B.shape[1]):
-            raise SpecError("D", f"shape {(self.C.shape[0], self.B.shape[1])}",
+            raise ArtifactError("D", f"shape {(self.C.shape[0], self.B.shape[1])}",
                             list(self.D.shape))
 
     @property
@@ -131,16 +132,16 @@ class StateSpaceData:
     @classmethod
     def from_json(cls, data: Any, key: str, discrete: bool) -> "StateSpaceData":
         if not isinstance(data, Mapping):
-            raise SpecError(key, "an object with A, B, C, D", data)
+            raise ArtifactError(key, "an object with A, B, C, D", data)
         allowed = {"A", "B", "C", "D"} | ({"dt", "method"} if discrete else set())
         _no_unknown(data, allowed, key)
         for name in ("A", "B", "C", "D"):
             if name not in data:
-                raise SpecError(f"{key}.{name}", "a matrix (missing)")
+                raise ArtifactError(f"{key}.{name}", "a matrix (missing)")
         A = _matrix(data["A"], f"{key}.A")
         n = A.shape[0] if A.size else 0
         if A.size and A.shape != (n, n):
-            raise SpecError(f"{key}.A", "a square matrix", list(A.shape))
+            raise ArtifactError(f"{key}.A", "a square matrix", list(A.shape))
         A = A.reshape(n, n)
         B = _matrix(data["B"], f"{key}.B")
         C = _matrix(data["C"], f"{key}.C")
@@ -152,14 +153,14 @@ class StateSpaceData:
         if discrete:
             dt = data.get("dt")
             if not isinstance(dt, (int, float)) or isinstance(dt, bool) or not dt > 0:
-                raise SpecError(f"{key}.dt", "a sample time > 0 (s)", dt)
+                raise ArtifactError(f"{key}.dt", "a sample time > 0 (s)", dt)
             method = data.get("method")
             if method not in DISCRETISATIONS:
-                raise SpecError(f"{key}.method", f"one of {list(DISCRETISATIONS)}", method)
+                raise ArtifactError(f"{key}.method", f"one of {list(DISCRETISATIONS)}", method)
             dt = float(dt)
         try:
             return cls(A, B, C, D, dt, method)
-        except SpecError as err:
+        except ArtifactError as err:
             raise err.under(key) from None
 
 
@@ -193,7 +194,7 @@ class Zpk:
     @classmethod
     def from_json(cls, data: Any, key: str) -> "Zpk":
         if not isinstance(data, Mapping):
-            raise SpecError(key, "an object with zeros, poles, gain", data)
+            raise ArtifactError(key, "an object with zeros, poles, gain", data)
         _no_unknown(data, {"zeros", "poles", "gain"}, key)
         roots = {}
         for name in ("zeros", "poles"):
@@ -201,7 +202,7 @@ class Zpk:
             roots[name] = arr[:, 0] + 1j * arr[:, 1]
         gain = data.get("gain")
         if not isinstance(gain, (int, float)) or isinstance(gain, bool) or not math.isfinite(gain):
-            raise SpecError(f"{key}.gain", "a finite number", gain)
+            raise ArtifactError(f"{key}.gain", "a finite number", gain)
         return cls(roots["zeros"], roots["poles"], float(gain))
 
 
@@ -242,7 +243,7 @@ def _sorted_roots(poly: np.ndarray) -> np.ndarray:
 def _no_unknown(data: Mapping, allowed: set[str], key: str) -> None:
     for name in data:
         if name not in allowed:
-            raise SpecError(f"{key}.{name}" if key else name,
+            raise ArtifactError(f"{key}.{name}" if key else name,
                             f"one of {sorted(allowed)}", "unknown key")
 
 
@@ -276,12 +277,12 @@ class AxisController:
 
     def __post_init__(self) -> None:
         if self.discrete.dt is None or self.law.dt is None:
-            raise SpecError("discrete", "a discrete system (dt > 0)")
+            raise ArtifactError("discrete", "a discrete system (dt > 0)")
         if self.law.B.shape[1] != 2 or self.law.C.shape[0] != 1:
-            raise SpecError("law", "a two-input ([i_ref, i_meas]), one-output system",
+            raise ArtifactError("law", "a two-input ([i_ref, i_meas]), one-output system",
                             [self.law.B.shape[1], self.law.C.shape[0]])
         if self.antiwindup is not None and self.antiwindup.shape != (self.law.order, 1):
-            raise SpecError("antiwindup", f"a {self.law.order} x 1 matrix",
+            raise ArtifactError("antiwindup", f"a {self.law.order} x 1 matrix",
                             list(self.antiwindup.shape))
 
     @property
@@ -366,14 +367,14 @@ class AxisController:
     @classmethod
     def from_json(cls, data: Any, key: str, nested: bool = False) -> "AxisController":
         if not isinstance(data, Mapping):
-            raise SpecError(key, "an object (AXIS)", data)
+            raise ArtifactError(key, "an object (AXIS)", data)
         allowed = {"continuous", "discrete", "zpk", "law", "antiwindup"}
         if not nested:
             allowed.add("reduced")
         _no_unknown(data, allowed, key)
         for name in ("discrete", "law"):
             if name not in data:
-                raise SpecError(f"{key}.{name}", "a discrete system (missing)")
+                raise ArtifactError(f"{key}.{name}", "a discrete system (missing)")
         cont = (StateSpaceData.from_json(data["continuous"], f"{key}.continuous", False)
                 if "continuous" in data else None)
         disc = StateSpaceData.from_json(data["discrete"], f"{key}.discrete", True)
@@ -386,7 +387,7 @@ class AxisController:
                    if "reduced" in data else None)
         try:
             return cls(disc, cont, law, aw, reduced)
-        except SpecError as err:
+        except ArtifactError as err:
             raise err.under(key) from None
 
 
@@ -427,21 +428,51 @@ class Decoupling:
     @classmethod
     def from_json(cls, data: Any, key: str = "decoupling") -> "Decoupling":
         if not isinstance(data, Mapping):
-            raise SpecError(key, "an object", data)
+            raise ArtifactError(key, "an object", data)
         names = ("cross", "emf", "R_c", "Ld_c", "Lq_c", "flux_c", "pole_pairs")
         _no_unknown(data, set(names), key)
         for name in ("cross", "emf"):
             if not isinstance(data.get(name), bool):
-                raise SpecError(f"{key}.{name}", "true or false", data.get(name))
+                raise ArtifactError(f"{key}.{name}", "true or false", data.get(name))
         for name in ("R_c", "Ld_c", "Lq_c", "flux_c"):
             v = data.get(name)
             if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or v < 0:
-                raise SpecError(f"{key}.{name}", "a finite number >= 0", v)
+                raise ArtifactError(f"{key}.{name}", "a finite number >= 0", v)
         pp = data.get("pole_pairs")
         if not isinstance(pp, int) or isinstance(pp, bool) or pp < 1:
-            raise SpecError(f"{key}.pole_pairs", "an integer >= 1", pp)
+            raise ArtifactError(f"{key}.pole_pairs", "an integer >= 1", pp)
         return cls(data["cross"], data["emf"], float(data["R_c"]), float(data["Ld_c"]),
                    float(data["Lq_c"]), float(data["flux_c"]), pp)
+
+
+#: Gains that the executed law reads, per method (key -> what it must be).
+_LAW_GAINS = {"fcs_mpc": ("alpha", "beta", "gamma")}
+
+
+def _check_margins(margins: Mapping) -> None:
+    """``{"d": MARGINS, "q": MARGINS}`` with numbers (or "inf"/"-inf"/"nan",
+    how JSON stores non-finite floats), booleans or null as values."""
+    for axis, values in margins.items():
+        if axis not in AXES:
+            raise ArtifactError(f"margins.{axis}", 'one of the axes "d", "q"', "unknown key")
+        if not isinstance(values, Mapping):
+            raise ArtifactError(f"margins.{axis}", "an object (MARGINS)", values)
+        for name, v in values.items():
+            ok = (v is None or isinstance(v, (bool, int, float))
+                  or v in ("inf", "-inf", "nan"))
+            if not ok:
+                raise ArtifactError(f"margins.{axis}.{name}",
+                                    'a number, "inf", "-inf", "nan", true, false or null', v)
+
+
+def _check_gains(method: str, gains: Mapping) -> None:
+    """The gains the executed law reads exist and are finite numbers >= 0."""
+    for name in _LAW_GAINS.get(method, ()):
+        v = gains.get(name)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
+                math.isfinite(v) and v >= 0):
+            raise ArtifactError(f"gains.{name}", f"a finite number >= 0 (the {method} law "
+                                "reads it)", v if name in gains else "nothing (missing)")
 
 
 def _jsonable(value: Any) -> Any:
@@ -509,11 +540,11 @@ class ControllerArtifact:
 
     def __post_init__(self) -> None:
         if set(self.axes) != set(AXES):
-            raise SpecError("axes", 'exactly the axes "d" and "q"', sorted(self.axes))
+            raise ArtifactError("axes", 'exactly the axes "d" and "q"', sorted(self.axes))
         for name, axis in self.axes.items():
             for sys in (axis.discrete, axis.law):
                 if not math.isclose(sys.dt, self.sample_time, rel_tol=1e-12):
-                    raise SpecError(f"axes.{name}", f"dt equal to sample_time {self.sample_time}",
+                    raise ArtifactError(f"axes.{name}", f"dt equal to sample_time {self.sample_time}",
                                     sys.dt)
 
     def with_margins(self, margins: dict) -> "ControllerArtifact":
@@ -544,44 +575,51 @@ class ControllerArtifact:
 
         Raises
         ------
-        SpecError
+        ArtifactError
             Wrong schema, missing or unknown keys, malformed matrices, sample
             times that disagree; the message names ``file`` and the key.
         """
         try:
+            check_data_depth(data, ArtifactError)  # copies and readers below recurse
             return cls._from_json(data)
-        except SpecError as err:
+        except ArtifactError as err:
             raise err.with_file(file) if file else err from None
 
     @classmethod
     def _from_json(cls, data: Any) -> "ControllerArtifact":
         if not isinstance(data, Mapping):
-            raise SpecError("", "a JSON object", type(data).__name__)
+            raise ArtifactError("", "a JSON object", type(data).__name__)
         if data.get("schema") != SCHEMA:
-            raise SpecError("schema", f'"{SCHEMA}"', data.get("schema"),
+            raise ArtifactError("schema", f'"{SCHEMA}"', data.get("schema"),
                             hint="written by another version of the toolbox?")
         allowed = {"schema", "method", "spec", "sample_time", "delay_samples", "axes",
                    "decoupling", "gains", "margins", "provenance"}
         _no_unknown(data, allowed, "")
         for name in ("method", "sample_time", "axes", "decoupling"):
             if name not in data:
-                raise SpecError(name, "a value (missing)")
+                raise ArtifactError(name, "a value (missing)")
         if not isinstance(data["method"], str):
-            raise SpecError("method", "a method name", data["method"])
+            raise ArtifactError("method", "a method name", data["method"])
+        from ..spec._model import METHODS  # lazy: the spec package imports the design registry
+
+        if data["method"] not in METHODS:
+            raise ArtifactError("method", "one of " + ", ".join(METHODS), data["method"])
         ts = data["sample_time"]
         if not isinstance(ts, (int, float)) or isinstance(ts, bool) or not ts > 0:
-            raise SpecError("sample_time", "a number > 0 (s)", ts)
+            raise ArtifactError("sample_time", "a number > 0 (s)", ts)
         delay = data.get("delay_samples", 0)
         if not isinstance(delay, int) or isinstance(delay, bool) or delay < 0:
-            raise SpecError("delay_samples", "an integer >= 0", delay)
+            raise ArtifactError("delay_samples", "an integer >= 0", delay)
         axes_data = data["axes"]
         if not isinstance(axes_data, Mapping) or set(axes_data) != set(AXES):
-            raise SpecError("axes", 'an object with the axes "d" and "q"',
+            raise ArtifactError("axes", 'an object with the axes "d" and "q"',
                             sorted(axes_data) if isinstance(axes_data, Mapping) else axes_data)
         axes = {name: AxisController.from_json(axes_data[name], f"axes.{name}") for name in AXES}
         for name in ("spec", "gains", "margins", "provenance"):
             if not isinstance(data.get(name, {}), Mapping):
-                raise SpecError(name, "an object", data.get(name))
+                raise ArtifactError(name, "an object", data.get(name))
+        _check_margins(data.get("margins", {}))
+        _check_gains(data["method"], data.get("gains", {}))
         return cls(method=data["method"], spec=dict(data.get("spec", {})),
                    sample_time=float(ts), delay_samples=delay, axes=axes,
                    decoupling=Decoupling.from_json(data["decoupling"]),
@@ -591,9 +629,10 @@ class ControllerArtifact:
     @classmethod
     def loads(cls, text: str, file: str | None = None) -> "ControllerArtifact":
         """Parse controller.json text (see :meth:`from_json`)."""
+        check_text_depth(text, ArtifactError, file=file)  # json recurses: bound depth first
         try:
             data = json.loads(text)
         except json.JSONDecodeError as err:
-            raise SpecError("", "valid JSON", f"{err.msg} at line {err.lineno}",
+            raise ArtifactError("", "valid JSON", f"{err.msg} at line {err.lineno}",
                             file=file) from None
         return cls.from_json(data, file)

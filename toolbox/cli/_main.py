@@ -17,7 +17,7 @@ import click
 
 from ..errors import CctError, SpecError
 
-EXIT_OK, EXIT_REQUIREMENT, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_REQUIREMENT, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def _spec_errors(func):
@@ -30,8 +30,24 @@ def _spec_errors(func):
         except CctError as err:
             click.echo(f"cct: error: {err}", err=True)
             sys.exit(EXIT_BAD_INPUT)
+        except KeyboardInterrupt:
+            # outputs are swapped in as a set, so an interrupt leaves the old
+            # set or the new one; 130 = 128 + SIGINT, as shells report it
+            click.echo("cct: interrupted (no output half-written)", err=True)
+            sys.exit(EXIT_INTERRUPTED)
 
     return wrapper
+
+
+def _write_file(path: str | Path, data: str | bytes, option: str) -> None:
+    """Write one output file atomically; an unusable path is bad input (exit 2)."""
+    from .._io import write_atomic
+
+    try:
+        write_atomic(path, data)
+    except OSError as err:
+        raise SpecError(option, "a writable file path (its directory must be creatable)",
+                        str(path), hint=err.strerror or str(err)) from None
 
 
 def _progress(quiet: bool):
@@ -268,14 +284,13 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
     Example:
       cct export out/003 --format c -o firmware/current_loop.h
     """
-    from .._io import write_atomic
     from ..pipeline import load_artifact, spec_of_artifact
 
     artifact = load_artifact(out_dir)
     if fmt == "json":
         text = artifact.dumps()
         if output:
-            write_atomic(output, text)
+            _write_file(output, text, "--output")
         else:
             click.echo(text, nl=False)
         return
@@ -285,9 +300,9 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
     if artifact.method in NO_HEADER_METHODS:
         raise SpecError("controller.method", "a method with a C export",
                         artifact.method, hint=NO_HEADER_METHODS[artifact.method])
-    spec = spec_of_artifact(artifact)
+    spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
     text = write_header(artifact, spec.motor, spec.drive)
-    write_atomic(output or Path(out_dir) / "controller.h", text)
+    _write_file(output or Path(out_dir) / "controller.h", text, "--output")
 
 
 @main.command()
@@ -302,7 +317,6 @@ def compare(specs: tuple[str, ...], json_path: str | None) -> None:
     Example:
       cct compare designs/000_*.toml designs/003_azaiz2007_hinf.toml
     """
-    from .._io import write_atomic
     from ..analysis import compare_designs
     from ..pipeline import design_spec
     from ..spec import load_spec
@@ -319,7 +333,7 @@ def compare(specs: tuple[str, ...], json_path: str | None) -> None:
     for spec_path, row in zip(specs, rows):
         row["spec"] = spec_path
     if json_path:
-        write_atomic(json_path, json.dumps(rows, indent=1, allow_nan=False) + "\n")
+        _write_file(json_path, json.dumps(rows, indent=1, allow_nan=False) + "\n", "--json")
     _print_table(rows)
 
 

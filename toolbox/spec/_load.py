@@ -12,6 +12,7 @@ import tomllib
 from pathlib import Path
 from typing import Any, Mapping
 
+from .._io import check_data_depth, check_text_depth, read_limited
 from ..errors import SpecError
 from ._catalog import CATALOG
 from ._fields import Table, check_keys
@@ -46,12 +47,12 @@ def load_spec(path: str | Path) -> Spec:
         names the file and the key.
     """
     name = str(path)
+    raw = read_limited(path, SpecError, what="spec file")
     try:
-        text = Path(path).read_bytes().decode("utf-8")
-    except OSError as err:
-        raise SpecError("", "a readable spec file", err.strerror, file=name) from None
+        text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise SpecError("", "a UTF-8 text file", "undecodable bytes", file=name) from None
+    check_text_depth(text, SpecError, file=name)  # tomllib recurses: bound depth first
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -78,6 +79,7 @@ def spec_from_dict(data: Mapping[str, Any], file: str | None = None) -> Spec:
     0.0028
     """
     try:
+        check_data_depth(data, SpecError)  # deepcopy and the readers recurse
         return _spec(data, file)
     except SpecError as err:
         raise (err.with_file(file) if file else err) from None
