@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import difflib
 import math
-from typing import Any, Iterable, Mapping, Sequence
+from contextlib import contextmanager
+from typing import Any, Iterable, Iterator, Mapping, Sequence
 
 from ..errors import SpecError
 
@@ -18,6 +19,8 @@ __all__ = [
     "Table",
     "check_keys",
     "as_table",
+    "SpecErrors",
+    "Collector",
 ]
 
 _MISSING = object()
@@ -183,3 +186,85 @@ class Table:
         if name not in self.data and required:
             raise SpecError(self.key(name), "a table (missing)")
         return Table(self.data.get(name, {}), self.key(name), allowed)
+
+
+class SpecErrors(SpecError):
+    """Several spec errors reported at once (one line each).
+
+    The first error gives ``key``, ``expected`` and ``got`` (so code that
+    reads one error still works); ``errors`` holds all of them.
+
+    Examples
+    --------
+    >>> err = SpecErrors([SpecError("motor.R", "a number > 0", -1),
+    ...                   SpecError("drive.vdc", "a number > 0", 0)], file="x.toml")
+    >>> print(err)
+    x.toml: 2 errors:
+      motor.R: expected a number > 0, got -1
+      drive.vdc: expected a number > 0, got 0
+    """
+
+    def __init__(self, errors: Sequence[SpecError], file: str | None = None) -> None:
+        if not errors:
+            raise ValueError("SpecErrors needs at least one error")
+        self.errors = [e.with_file(file) if file else e for e in errors]
+        first = self.errors[0]
+        super().__init__(first.key, first.expected,
+                         first.got if first.has_got else SpecError._MISSING,
+                         file=file, hint=first.hint)
+
+    def _text(self) -> str:
+        where = f"{self.file}: " if self.file else ""
+        lines = [f"{where}{len(self.errors)} errors:"]
+        for err in self.errors:
+            located = err.with_file("") if err.file else err  # the file is named once
+            lines.append(f"  {located}")
+        return "\n".join(lines)
+
+    def with_file(self, file: str) -> "SpecErrors":
+        return SpecErrors([e.with_file(file) for e in self.errors], file=file)
+
+    def under(self, prefix: str) -> "SpecErrors":
+        return SpecErrors([e.under(prefix) for e in self.errors], file=self.file)
+
+
+class Collector:
+    """Gather the spec errors of independent checks and raise them together.
+
+    Examples
+    --------
+    >>> c = Collector()
+    >>> with c.check():
+    ...     raise SpecError("motor.R", "a number > 0", -1)
+    >>> c.failed
+    True
+    >>> c.raise_if_any()
+    Traceback (most recent call last):
+    ...
+    toolbox.errors.SpecError: motor.R: expected a number > 0, got -1
+    """
+
+    def __init__(self) -> None:
+        self.errors: list[SpecError] = []
+
+    @property
+    def failed(self) -> bool:
+        return bool(self.errors)
+
+    def add(self, err: SpecError) -> None:
+        self.errors.extend(err.errors if isinstance(err, SpecErrors) else [err])
+
+    @contextmanager
+    def check(self) -> Iterator[None]:
+        """Run a block; a :class:`SpecError` in it is recorded, not raised."""
+        try:
+            yield
+        except SpecError as err:
+            self.add(err)
+
+    def raise_if_any(self) -> None:
+        """Raise the one error as it is, or :class:`SpecErrors` for several."""
+        if len(self.errors) == 1:
+            raise self.errors[0]
+        if self.errors:
+            raise SpecErrors(self.errors)

@@ -10,12 +10,14 @@ from __future__ import annotations
 import copy
 import tomllib
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from .._io import check_data_depth, check_text_depth, read_limited
 from ..errors import SpecError
 from ._catalog import CATALOG
-from ._fields import Table, check_keys
+from ._bounds import (check_drive, check_motor, check_motor_drive, check_scenario_count,
+                      check_work)
+from ._fields import Collector, Table, check_keys
 from ._model import (METHODS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor,
                      Requirements, Spec)
 
@@ -86,17 +88,48 @@ def spec_from_dict(data: Mapping[str, Any], file: str | None = None) -> Spec:
 
 
 def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
+    """Read every section, collecting independent errors so that one run
+    reports all of them (a section that depends on another is read only
+    when that one is valid)."""
     top = Table(data, "", TOP_KEYS)
-    title = top.string("title", "")
-    motor, motor_raw = _motor(top.raw("motor"))
-    drive = _drive(top.raw("drive"))
-    controller = _controller(top.raw("controller"), motor, drive)
-    requirements = _requirements(top.raw("requirements"))
-    scenarios = _scenarios(top.raw("scenario", []), drive, controller.method)
+    errors = Collector()
+    title = ""
+    with errors.check():
+        title = top.string("title", "")
+    motor = motor_raw = drive = controller = None
+    with errors.check():
+        motor, motor_raw = _motor(top.raw("motor"))
+    with errors.check():
+        drive = _drive(top.raw("drive"))
+    if motor is not None:
+        check_motor(motor, errors)
+    if drive is not None:
+        check_drive(drive, errors)
+    if motor is not None and drive is not None and not errors.failed:
+        check_motor_drive(motor, drive, errors)
+    if not errors.failed:  # method parameters are read against a plausible motor
+        with errors.check():
+            controller = _controller(top.raw("controller"), motor, drive)
+    requirements = None
+    with errors.check():
+        requirements = _requirements(top.raw("requirements"))
+    scenarios: tuple = ()
+    if drive is not None and controller is not None:
+        with errors.check():
+            scenarios = _scenarios(top.raw("scenario", []), drive, controller.method)
+        check_work(scenarios, drive.sample_time, errors)
+    errors.raise_if_any()
     raw = copy.deepcopy(dict(data))
     raw["motor"] = motor_raw
     return Spec(title=title, motor=motor, drive=drive, controller=controller,
                 requirements=requirements, scenarios=scenarios, raw=raw, source=file)
+
+
+def _collect(errors: Collector, read: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """``read(*args, **kwargs)``, or None with its SpecError recorded."""
+    with errors.check():
+        return read(*args, **kwargs)
+    return None
 
 
 def _motor(value: Any) -> tuple[Motor, dict]:
@@ -109,20 +142,27 @@ def _motor(value: Any) -> tuple[Motor, dict]:
         merged.update({k: v for k, v in CATALOG[name].items() if v is not None})
     merged.update(t.data)
     t = Table(merged, "motor")
-    motor = Motor(
-        R=t.number("R", positive=True, unit="ohm"),
-        Ld=t.number("Ld", positive=True, unit="H"),
-        Lq=t.number("Lq", positive=True, unit="H"),
-        flux=t.number("flux", nonnegative=True, unit="Wb"),
-        pole_pairs=t.integer("pole_pairs", minimum=1),
-        J=t.number("J", positive=True, unit="kg m^2"),
-        friction=t.number("friction", 0.0, nonnegative=True, unit="N m s/rad"),
-        convention=t.string("convention", "amplitude", choices=("amplitude", "power")),
-        rated_current=t.number("rated_current", None, positive=True, unit="A"),
-        max_current=t.number("max_current", None, positive=True, unit="A"),
-        rated_speed=t.number("rated_speed", None, positive=True, unit="rad/s"),
-        catalog=t.raw("catalog"),
+    errors = Collector()
+    fields = dict(
+        R=_collect(errors, t.number, "R", positive=True, unit="ohm"),
+        Ld=_collect(errors, t.number, "Ld", positive=True, unit="H"),
+        Lq=_collect(errors, t.number, "Lq", positive=True, unit="H"),
+        flux=_collect(errors, t.number, "flux", nonnegative=True, unit="Wb"),
+        pole_pairs=_collect(errors, t.integer, "pole_pairs", minimum=1),
+        J=_collect(errors, t.number, "J", positive=True, unit="kg m^2"),
+        friction=_collect(errors, t.number, "friction", 0.0, nonnegative=True,
+                          unit="N m s/rad"),
+        convention=_collect(errors, t.string, "convention", "amplitude",
+                            choices=("amplitude", "power")),
+        rated_current=_collect(errors, t.number, "rated_current", None, positive=True,
+                               unit="A"),
+        max_current=_collect(errors, t.number, "max_current", None, positive=True, unit="A"),
+        rated_speed=_collect(errors, t.number, "rated_speed", None, positive=True,
+                             unit="rad/s"),
     )
+    if errors.failed:
+        errors.raise_if_any()
+    motor = Motor(**fields, catalog=t.raw("catalog"))
     return motor, {k: v for k, v in merged.items() if v is not None}
 
 
@@ -130,14 +170,20 @@ def _drive(value: Any) -> Drive:
     if value is None:
         raise SpecError("drive", "a [drive] table (missing)")
     t = Table(value, "drive", DRIVE_KEYS)
-    drive = Drive(
-        vdc=t.number("vdc", positive=True, unit="V"),
-        sample_time=t.number("sample_time", positive=True, unit="s"),
-        delay_samples=t.integer("delay_samples", 1, minimum=0),
-        switching_frequency=t.number("switching_frequency", None, positive=True, unit="Hz"),
-        voltage_limit=t.string("voltage_limit", "circle", choices=("circle", "hexagon")),
-        max_speed=t.number("max_speed", None, positive=True, unit="rad/s"),
+    errors = Collector()
+    fields = dict(
+        vdc=_collect(errors, t.number, "vdc", positive=True, unit="V"),
+        sample_time=_collect(errors, t.number, "sample_time", positive=True, unit="s"),
+        delay_samples=_collect(errors, t.integer, "delay_samples", 1, minimum=0),
+        switching_frequency=_collect(errors, t.number, "switching_frequency", None,
+                                     positive=True, unit="Hz"),
+        voltage_limit=_collect(errors, t.string, "voltage_limit", "circle",
+                               choices=("circle", "hexagon")),
+        max_speed=_collect(errors, t.number, "max_speed", None, positive=True, unit="rad/s"),
     )
+    if errors.failed:
+        errors.raise_if_any()
+    drive = Drive(**fields)
     if drive.delay_samples > 10:
         raise SpecError("drive.delay_samples", "at most 10 periods of computation delay",
                         drive.delay_samples)
@@ -180,6 +226,7 @@ MAX_SCENARIO_DURATION = 60.0
 def _scenarios(value: Any, drive: Drive, method: str) -> tuple:
     if not isinstance(value, list):
         raise SpecError("scenario", "an array of tables [[scenario]]", value)
+    check_scenario_count(len(value))  # before reading 10,000 tables
     from ..sim import Scenario  # the simulation package owns scenario semantics
 
     out = []
