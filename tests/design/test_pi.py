@@ -359,7 +359,7 @@ def test_discrete_poles_near_mapped_design_without_delay():
      'controller.ip.integral_bandwidth: expected method = "pi" for a 2DOF PI (the '
      "two-degree-of-freedom complex-vector PI has its own reference feedforward)"),
     ("pi", {"rule": "symmetric_optimum", "a": 1},
-     "controller.pi.a: expected a number > 1, got 1.0"),
+     "controller.pi.a: expected a number > 1 and <= 100, got 1.0"),
     ("pi", {"rule": "cancelation", "bandwidth": 1},
      'controller.pi.rule: expected one of "cancellation", "bandwidth", "symmetric_optimum", '
      '"complex_vector", "explicit", got "cancelation" (did you mean "cancellation"?)'),

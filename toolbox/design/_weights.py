@@ -18,6 +18,9 @@ import control as ct
 
 from toolbox.errors import SpecError
 
+#: Highest makeweight order (see :func:`makeweight`).
+MAX_MAKEWEIGHT_ORDER = 10
+
 __all__ = ["weight_from_tf", "weight_from_zpk", "makeweight", "validate_weight"]
 
 _DEFAULT_KEY = "controller.hinf.weights"
@@ -210,8 +213,9 @@ def makeweight(dc_gain: float, crossover_freq: float, crossover_gain: float,
     for name, v in vals.items():
         if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
             raise SpecError(f"{key}.{name}", "a finite number > 0", v)
-    if not (isinstance(order, (int, np.integer)) and order >= 1):
-        raise SpecError(f"{key}.order", "an integer >= 1", order)
+    if not (isinstance(order, (int, np.integer)) and 1 <= order <= MAX_MAKEWEIGHT_ORDER):
+        # the n-th power of a first-order filter is numerically flat beyond 10
+        raise SpecError(f"{key}.order", f"an integer >= 1 and <= {MAX_MAKEWEIGHT_ORDER}", order)
     lo, hi = sorted((dc_gain, hf_gain))
     if not lo < crossover_gain < hi:
         raise SpecError(f"{key}.crossover_gain",

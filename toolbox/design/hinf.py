@@ -135,20 +135,37 @@ def read_weight(value: Any, key: str) -> ct.TransferFunction:
                         sorted(value))
     t = Table(value, key, _FORMS[form])
     if form == "tf":
-        return weight_from_tf(t.numbers("num", min_length=1), t.numbers("den", min_length=1),
-                              key)
+        # order <= MAX_WEIGHT_ORDER: at most that many + 1 coefficients
+        n = MAX_WEIGHT_ORDER + 1
+        return weight_from_tf(t.numbers("num", min_length=1, max_length=n),
+                              t.numbers("den", min_length=1, max_length=n), key)
     if form == "zpk":
         roots = {}
         for name in ("zeros", "poles"):
             raw = t.raw(name, [])
             if not isinstance(raw, (list, tuple)):
                 raise SpecError(t.key(name), "a list of roots", raw)
+            if len(raw) > MAX_WEIGHT_ORDER:
+                raise SpecError(t.key(name), f"at most {MAX_WEIGHT_ORDER} roots",
+                                f"{len(raw)} roots")
             roots[name] = [_root(r, f"{t.key(name)}[{i}]") for i, r in enumerate(raw)]
         return weight_from_zpk(roots["zeros"], roots["poles"], t.number("gain"), key)
     return makeweight(t.number("dc_gain", positive=True), t.number("crossover", positive=True,
                                                                    unit="rad/s"),
                       t.number("crossover_gain", positive=True), t.number("hf_gain", positive=True),
-                      t.integer("order", 1, minimum=1), key)
+                      t.integer("order", 1, minimum=1, maximum=MAX_MAKEWEIGHT_ORDER), key)
+
+
+#: Parameter bounds. A weight of order 20 per channel already gives a
+#: generalised plant of order > 60 per axis; beyond it the Riccati solutions
+#: lose all accuracy. makeweight's n-th power of a first-order filter is
+#: numerically flat beyond order 10. gamma above 1e4 means the weights
+#: impose nothing (the S/KS/T bounds are 1e4 times the weights), and a
+#: back-off of 10 already designs at 11 gamma_opt.
+MAX_WEIGHT_ORDER = 20
+MAX_MAKEWEIGHT_ORDER = 10
+MAX_GAMMA = 1e4
+MAX_BACKOFF = 10.0
 
 
 def read_cfg(method: str, table, motor, drive) -> HinfCfg:
@@ -175,8 +192,8 @@ def read_cfg(method: str, table, motor, drive) -> HinfCfg:
         if gamma != "optimal":
             raise SpecError(t.key("gamma"), 'a number > 0 or "optimal"', gamma)
     else:
-        gamma = t.number("gamma", 1.0, positive=True)
-    backoff = t.number("backoff", 0.05, nonnegative=True)
+        gamma = t.number("gamma", 1.0, positive=True, maximum=MAX_GAMMA)
+    backoff = t.number("backoff", 0.05, nonnegative=True, maximum=MAX_BACKOFF)
     order = t.integer("reduce_order", None, minimum=1)
     itol = t.number("integrator_tol", 0.1, positive=True, unit="rad/s")
     loss = t.number("margin_loss", 0.1, nonnegative=True, maximum=1.0)

@@ -456,9 +456,14 @@ def read_cfg(method: str, table, motor, drive) -> IlqCfg:
     if t.has("sigma") and t.has("sigma_factor"):
         raise SpecError(t.key("sigma"), "either sigma or sigma_factor, not both")
     if t.has("sigma"):
-        sigma = t.per_axis("sigma", positive=True, unit="1/s")
+        # sigma Ts is the discrete loop gain scale (paper 001's case: 0.25);
+        # above 100 per sample period the sampled loop is far unstable
+        sigma = t.per_axis("sigma", positive=True, maximum=100.0 / drive.sample_time,
+                           unit="1/s")
     else:
-        factor = t.number("sigma_factor", 2.0, positive=True)
+        # sigma is the closed-loop speed scale; 1000 x the optimality bound is
+        # far past any loop the sampling can realise
+        factor = t.number("sigma_factor", 2.0, positive=True, maximum=1e3)
         if min(bounds) <= 0:
             raise SpecError(t.key("sigma_factor"), "an eq (3) bound > 0 on both axes to scale "
                             "(the bound is 0 when a <= s*)", factor, hint="give sigma instead")

@@ -419,9 +419,11 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
                     raise SpecError(t.key("bandwidth"), "alpha_c + alpha_i > R/L (a positive Kp)",
                                     t.raw("bandwidth"))
     elif rule == "symmetric_optimum":
-        a = t.number("a", 2.0, positive=True)
-        if a <= 1.0:
-            raise SpecError(t.key("a"), "a number > 1", a)
+        # a = 1 gives Ti = T_sigma (no phase margin); a = 100 already a PM of
+        # 89 deg with Kp = L/(100 T_sigma): beyond it the integral action is nil
+        a = t.number("a", 2.0)
+        if not 1.0 < a <= 100.0:
+            raise SpecError(t.key("a"), "a number > 1 and <= 100", a)
         T_sigma = t.number("small_time_constant", (drive.delay_samples + 0.5) * drive.sample_time,
                            positive=True, unit="s")
         g = [gains_symmetric_optimum(L[k], T_sigma, a) for k in (0, 1)]

@@ -125,13 +125,18 @@ class Table:
             raise SpecError(self.key(name), expected, value)
         return float(value)
 
-    def integer(self, name: str, default: Any = _MISSING, *, minimum: int | None = None) -> Any:
-        expected = "an integer" + (f" >= {minimum}" if minimum is not None else "")
+    def integer(self, name: str, default: Any = _MISSING, *, minimum: int | None = None,
+                maximum: int | None = None) -> Any:
+        """An integer with optional bounds (a float such as 4.5 or 1e6 is refused)."""
+        cond = ([f">= {minimum}"] if minimum is not None else []) + (
+            [f"<= {maximum}"] if maximum is not None else [])
+        expected = "an integer" + (" " + " and ".join(cond) if cond else "")
         value = self._get(name, default, expected)
         if value is default and name not in self.data:
             return value
         if not isinstance(value, int) or isinstance(value, bool) or (
-                minimum is not None and value < minimum):
+                minimum is not None and value < minimum) or (
+                maximum is not None and value > maximum):
             raise SpecError(self.key(name), expected, value)
         return value
 
@@ -156,13 +161,17 @@ class Table:
         return value
 
     def numbers(self, name: str, default: Any = _MISSING, *, length: int | None = None,
-                min_length: int = 0, unit: str = "") -> Any:
-        """A list of finite numbers."""
+                min_length: int = 0, max_length: int | None = None, unit: str = "") -> Any:
+        """A list of finite numbers (at most ``max_length`` of them)."""
         expected = (f"a list of {length} numbers" if length is not None
                     else "a list of numbers") + (f" ({unit})" if unit else "")
         value = self._get(name, default, expected)
         if value is default and name not in self.data:
             return value
+        if (max_length is not None and isinstance(value, (list, tuple))
+                and len(value) > max_length):  # before looking at each entry
+            raise SpecError(self.key(name), f"a list of at most {max_length} numbers"
+                            + (f" ({unit})" if unit else ""), f"{len(value)} numbers")
         if (not isinstance(value, (list, tuple))
                 or not all(_is_number(v) and math.isfinite(v) for v in value)
                 or (length is not None and len(value) != length)
