@@ -62,8 +62,8 @@ def test_fcs_gain_wrong_type(fcs_json):
 @pytest.mark.parametrize("margins, message", [
     ({"d": 5}, "margins.d: expected an object (MARGINS), got 5"),
     ({"d": {"gain_margin_db": [1, 2]}},
-     'margins.d.gain_margin_db: expected a number, "inf", "-inf", "nan", true, false or '
-     'null, got [1, 2]'),
+     'margins.d.gain_margin_db: expected a number, "inf", "-inf", "nan" or null, got [1, 2]'),
+    ({"q": {"stable": "yes"}}, 'margins.q.stable: expected true, false or null, got "yes"'),
     ({"x": {}}, 'margins.x: expected one of the axes "d", "q", got "unknown key"'),
 ])
 def test_margins_wrong_type(pi_json, margins, message):
@@ -75,7 +75,8 @@ def test_margins_wrong_type(pi_json, margins, message):
 def test_margins_as_written_are_accepted(pi_json):
     data = json.loads(pi_json)
     data["margins"] = {"d": {"gain_margin_db": "inf", "stable": True, "bandwidth_rad_s": None,
-                             "phase_margin_deg": 60.0}}
+                             "phase_margin_deg": 60.0, "domain": "discrete",
+                             "gain_margins_db": [[28.8, 10712.5]]}}
     assert ControllerArtifact.from_json(data).margins["d"]["gain_margin_db"] == "inf"
 
 

@@ -449,20 +449,31 @@ class Decoupling:
 _LAW_GAINS = {"fcs_mpc": ("alpha", "beta", "gamma")}
 
 
+#: The MARGINS keys of DESIGN.md: numbers (non-finite ones as the strings
+#: "inf", "-inf", "nan") or null. Other keys (lists of crossings, skewed disk
+#: margins, "domain") are free-form analysis details.
+MARGIN_NUMBERS = ("gain_margin_db", "gain_crossover_rad_s", "phase_margin_deg",
+                  "phase_crossover_rad_s", "disk_margin", "stability_margin",
+                  "sensitivity_peak", "bandwidth_rad_s", "static_error")
+
+
 def _check_margins(margins: Mapping) -> None:
-    """``{"d": MARGINS, "q": MARGINS}`` with numbers (or "inf"/"-inf"/"nan",
-    how JSON stores non-finite floats), booleans or null as values."""
+    """``{"d": MARGINS, "q": MARGINS}``: objects whose MARGINS keys are numbers."""
     for axis, values in margins.items():
         if axis not in AXES:
             raise ArtifactError(f"margins.{axis}", 'one of the axes "d", "q"', "unknown key")
         if not isinstance(values, Mapping):
             raise ArtifactError(f"margins.{axis}", "an object (MARGINS)", values)
-        for name, v in values.items():
-            ok = (v is None or isinstance(v, (bool, int, float))
+        for name in MARGIN_NUMBERS:
+            v = values.get(name)
+            ok = (v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
                   or v in ("inf", "-inf", "nan"))
             if not ok:
                 raise ArtifactError(f"margins.{axis}.{name}",
-                                    'a number, "inf", "-inf", "nan", true, false or null', v)
+                                    'a number, "inf", "-inf", "nan" or null', v)
+        if "stable" in values and not isinstance(values["stable"], (bool, type(None))):
+            raise ArtifactError(f"margins.{axis}.stable", "true, false or null",
+                                values["stable"])
 
 
 def _check_gains(method: str, gains: Mapping) -> None:
