@@ -213,6 +213,10 @@ def write_set(files: Mapping[str, str | bytes], out_dir: str | Path, *,
     (restored by the next run if a kill falls between them). Temporaries of
     earlier interrupted runs are removed first (:func:`remove_stale`).
 
+    A directory that is the user's own rather than a design directory (the
+    working directory, or one with subdirectories or many files) is never
+    swapped; its files are written by :func:`_write_in_place` instead.
+
     Parameters
     ----------
     files : Mapping
@@ -231,11 +235,14 @@ def write_set(files: Mapping[str, str | bytes], out_dir: str | Path, *,
     out = Path(out_dir)
     if out.is_symlink():  # swap the directory the link points to, keep the link
         out = out.resolve()
+    out = Path(os.path.abspath(out))  # "." and ".." have no name to swap
     parent = out.parent
     parent.mkdir(parents=True, exist_ok=True)
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(20, "Not a directory", str(out))
     remove_stale(out, set(files) | set(drop))
+    if out.exists() and not _swappable(out):
+        return _write_in_place(files, out, drop)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.stage.", dir=parent))
     try:
         os.chmod(stage, 0o777 & ~_umask())  # mkdtemp makes 0700; as mkdir would
@@ -251,6 +258,53 @@ def write_set(files: Mapping[str, str | bytes], out_dir: str | Path, *,
     return [out / name for name in sorted(files)]
 
 
+#: A directory with more entries than this, or with subdirectories, is the
+#: user's own (a project root, the home directory): it is never swapped.
+MAX_CARRY_OVER = 64
+
+
+def _swappable(out: Path) -> bool:
+    """Whether ``out`` may be replaced by a swapped-in directory: not the
+    working directory or one of its parents (the shell would be left in a
+    deleted directory), and holding only a few plain files."""
+    cwd = Path.cwd()
+    if out == cwd or out in cwd.parents:
+        return False
+    entries = list(out.iterdir())
+    return len(entries) <= MAX_CARRY_OVER and not any(
+        e.is_dir() and not e.is_symlink() for e in entries)
+
+
+def _write_in_place(files: Mapping[str, str | bytes], out: Path,
+                    drop: Collection[str]) -> list[Path]:
+    """Fallback for a directory that is not swapped (see :func:`_swappable`):
+    every file is written and fsynced to a temporary first, superseded
+    outputs are removed, then the temporaries are renamed in, controller.json
+    last (readers key on it). A kill can only fall in the short rename loop;
+    the temporaries it leaves are removed by the next run."""
+    temps: dict[str, str] = {}
+    try:
+        for name, data in sorted(files.items()):
+            fd, tmp = tempfile.mkstemp(prefix=f".{name}.", dir=out)
+            temps[name] = tmp
+            os.chmod(tmp, 0o666 & ~_umask())
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data.encode("utf-8") if isinstance(data, str) else data)
+                fh.flush()
+                os.fsync(fh.fileno())
+        for name in drop:
+            if name not in files:
+                (out / name).unlink(missing_ok=True)
+        for name in sorted(temps, key=lambda n: n == "controller.json"):
+            os.replace(temps.pop(name), out / name)
+    except BaseException:
+        for tmp in temps.values():
+            Path(tmp).unlink(missing_ok=True)
+        raise
+    _fsync_dir(out)
+    return [out / name for name in sorted(files)]
+
+
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
@@ -258,14 +312,12 @@ def _umask() -> int:
 
 
 def _carry_over(out: Path, stage: Path, skip: set[str]) -> None:
-    """Hard-link (or copy) the files of ``out`` not in ``skip`` into ``stage``."""
+    """Hard-link (or copy) the files of ``out`` not in ``skip`` into ``stage``
+    (``out`` holds no subdirectories: see :func:`_swappable`)."""
     for entry in out.iterdir():
         if entry.name in skip or _is_temporary(entry.name, skip):
             continue
         target = stage / entry.name
-        if entry.is_dir() and not entry.is_symlink():
-            shutil.copytree(entry, target, symlinks=True)
-            continue
         try:
             os.link(entry, target, follow_symlinks=False)
         except OSError:

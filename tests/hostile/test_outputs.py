@@ -212,3 +212,23 @@ def test_cct_design_sigint_exits_130_and_writes_nothing(tmp_path):
     assert "cct: interrupted (no output half-written)" in err
     assert "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["spec.toml"]
+
+
+def test_working_directory_is_written_in_place(tmp_path, monkeypatch):
+    """``--out .``: the directory the shell is in is never swapped away."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "report.html").write_text("old")
+    write_outputs({"controller.json": "new"}, ".")
+    assert Path.cwd() == tmp_path and tmp_path.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["controller.json"]
+
+
+def test_directory_with_subdirectories_is_written_in_place(tmp_path):
+    out = tmp_path / "project"
+    (out / "src").mkdir(parents=True)
+    (out / "src" / "main.c").write_text("int main(void) { return 0; }\n")
+    inode = out.stat().st_ino
+    write_outputs({n: "new" for n in OUTPUT_FILES}, out)
+    assert out.stat().st_ino == inode  # same directory, not a swapped-in copy
+    assert (out / "src" / "main.c").exists()
+    assert sorted(p.name for p in out.iterdir()) == sorted([*OUTPUT_FILES, "src"])
