@@ -129,8 +129,12 @@ def _check_regular(info: os.stat_result, name: str, error: type[CctError], what:
 # One token of TOML or JSON text. Strings and comments are skipped whole so
 # that brackets and dots inside them do not count; key-like runs (bare keys,
 # numbers) continue a dotted chain, anything else ends it.
+# An unterminated string runs to the end of its line (or of the text for a
+# multi-line one): every string alternative always matches, so the scan never
+# backtracks and stays linear (a failed match at each quote was quadratic).
 _TOKEN = re.compile(r'''
-    (?P<string>"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|'[^'\n]*')
+    (?P<string>"""(?:[^\\]|\\.)*?(?:"""|\Z)|\'\'\'.*?(?:\'\'\'|\Z)
+             |"(?:[^"\\\n]|\\.)*(?:"|(?=\n)|\Z)|'[^'\n]*(?:'|(?=\n)|\Z))
   | (?P<comment>\#[^\n]*)
   | (?P<open>[\[{])
   | (?P<close>[\]}])

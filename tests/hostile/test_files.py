@@ -161,3 +161,16 @@ def test_oversized_controller_json(tmp_path):
 def test_python_m_toolbox_cli_runs():
     res = cct_subprocess("--help", timeout=60)
     assert res.returncode == 0 and "Usage: cct" in res.stdout
+
+
+@pytest.mark.parametrize("text", [
+    '"' + '\\"' * (MAX_INPUT_BYTES // 2),            # one unterminated string of escapes
+    '"""' + "x" * (MAX_INPUT_BYTES - 3),             # unterminated multi-line string
+    ("'" * 7 + "\n") * (MAX_INPUT_BYTES // 8),
+], ids=["escaped_quotes", "open_multiline", "quote_runs"])
+def test_nesting_scan_is_linear_on_pathological_strings(text):
+    """A scan that re-tried each quote went quadratic (16 kB took 4 s); the
+    1 MiB cap then takes well under a second, 3 s allows a slow CI machine."""
+    start = time.monotonic()
+    check_text_depth(text, SpecError)
+    assert time.monotonic() - start < 3.0
