@@ -52,7 +52,7 @@ def to_toml(data: dict) -> str:
         if isinstance(v, str):
             return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
         if isinstance(v, float):
-            return repr(v).replace("inf", "inf").replace("nan", "nan")
+            return repr(v)  # inf, -inf and nan are TOML floats too
         if isinstance(v, (list, tuple)):
             return "[" + ", ".join(value(x) for x in v) + "]"
         if isinstance(v, dict):
