@@ -15,10 +15,10 @@ from typing import Callable
 
 from ._io import write_atomic
 from .artifact import ControllerArtifact
-from .errors import SpecError
+from .errors import CctError, ExportRefused, SpecError
 from .spec import Spec, load_spec, spec_from_dict
 
-__all__ = ["DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
+__all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
            "write_outputs", "load_artifact", "load_analysis", "spec_of_artifact",
            "OUTPUT_FILES"]
 
@@ -74,24 +74,58 @@ def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifac
     """
     from .analysis import analysis_report
 
+    from .analysis.executed import INFORMATIONAL_METHODS, loop_stability
+
     report = analysis_report(artifact, spec.motor, spec.drive)
     margins = report["margins"]["discrete"]
-    unstable = [axis for axis, m in margins.items() if m.get("stable") is False]
-    if unstable:
-        raise SpecError(f"controller.{artifact.method}",
-                        f"parameters giving a stable sampled loop (ZOH, "
-                        f"{artifact.delay_samples} period(s) of computation delay)",
-                        f"an unstable {' and '.join(unstable)} axis",
-                        hint="slow the design down or shorten the sample time; "
-                             "nothing is exported")
+    # an unstable loop is a design that exists but fails (exit 1, outputs written,
+    # no controller.h), not bad input: the report must show the user why
+    report["stability"] = loop_stability(artifact, spec.motor)
     # MARGINS of controller.json: the sampled loop as executed (DESIGN.md)
     artifact = artifact.with_margins(margins)
-    report["requirements"] = spec.requirements.check_margins(artifact.margins)
+    checks = spec.requirements.check_margins(artifact.margins)
+    if artifact.method in INFORMATIONAL_METHODS:
+        # the baseline PI does not run: its margins never decide (issue 10)
+        report["requirements"] = {}
+        report["informational_requirements"] = checks
+    else:
+        report["requirements"] = checks
     return artifact, report
 
 
+def unstable_axes(analysis: dict | None) -> list[str]:
+    """Axes whose executed sampled loop is unstable, per ``analysis["stability"]``."""
+    stability = (analysis or {}).get("stability") or {}
+    return [ax for ax, s in sorted(stability.items()) if s.get("stable") is False]
+
+
+def refuse_unstable_export(artifact: ControllerArtifact, motor, file: str | None = None) -> None:
+    """Raise :class:`ExportRefused` when the executed sampled loop is unstable.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        Nominal plant the stability is judged on.
+    file : str, optional
+        The controller.json named in the message.
+    """
+    from .analysis.executed import loop_stability
+
+    stability = loop_stability(artifact, motor)
+    unstable = [ax for ax, s in sorted(stability.items()) if s["stable"] is False]
+    if unstable:
+        rho = ", ".join(f"{ax} {stability[ax]['spectral_radius']:.6g}" for ax in unstable)
+        raise ExportRefused(f"axes.{unstable[0]}.law",
+                            "a law whose sampled loop (ZOH plant, computation delay) is stable",
+                            f"closed-loop spectral radius {rho}", file=file,
+                            hint="no firmware header is written for an unstable loop; slow "
+                                 "the design down or shorten the sample time")
+
+
 def run_verification(artifact: ControllerArtifact, spec: Spec,
-                     progress: Callable[[int, int], None] | None = None):
+                     progress: Callable[[int, int], None] | None = None,
+                     file: str | None = None):
     """Closed-loop simulation of every scenario (see :func:`toolbox.sim.verify`).
 
     Parameters
@@ -102,10 +136,12 @@ def run_verification(artifact: ControllerArtifact, spec: Spec,
         Plant, drive, scenarios and requirements.
     progress : callable, optional
         ``progress(done, total)`` after each scenario.
+    file : str, optional
+        The controller.json the artifact came from (named in warnings).
     """
     from .sim import verify
 
-    return verify(artifact, spec, progress=progress)
+    return verify(artifact, spec, progress=progress, file=file)
 
 
 @dataclass
@@ -120,13 +156,24 @@ class DesignOutputs:
     html: str | None = None
     pdf: bytes | None = None
     files: dict[str, str | bytes] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+    header_refused: str | None = None
+
+    @property
+    def notice(self) -> str | None:
+        """:data:`toolbox.sim.NO_REQUIREMENTS` when the spec has no requirements."""
+        from .sim import NO_REQUIREMENTS
+
+        return None if self.spec.requirements.bounds else NO_REQUIREMENTS
 
     @property
     def passed(self) -> bool:
-        """Every requirement holds (margins and scenarios)."""
+        """Every requirement and default check holds (margins, stability, scenarios)."""
         ok = True
         if self.analysis is not None:
             ok &= all(c["pass"] for c in self.analysis.get("requirements", {}).values())
+            ok &= not unstable_axes(self.analysis)
+        ok &= self.header_refused is None
         if self.verification is not None:
             ok &= self.verification.passed
         return ok
@@ -153,7 +200,7 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
     """
     try:
         return _build(spec, analysis, verification, report, header, progress)
-    except SpecError as err:
+    except CctError as err:
         raise (err.with_file(spec.source) if spec.source and not err.file else err) from None
 
 
@@ -174,7 +221,16 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
         progress("firmware header")
         from .export import write_header
 
-        out.header = write_header(out.artifact, spec.motor, spec.drive)
+        try:
+            refuse_unstable_export(out.artifact, spec.motor)
+        except ExportRefused as err:
+            # a design that exists but must not reach firmware: everything else is
+            # still written so the report shows why (exit 1 through `passed`)
+            out.header_refused = str(err)
+            out.warnings.append(f"controller.h not written: {err}")
+            progress(f"firmware header refused: {err}")
+        else:
+            out.header = write_header(out.artifact, spec.motor, spec.drive)
     if report:
         progress("report")
         from .report import write_html, write_pdf
@@ -210,10 +266,15 @@ def report_data(out: DesignOutputs):
     if out.analysis is not None:
         robustness = _robustness_summary(out.analysis.get("sweep") or {})
         certificate = _certificate_facts(out.analysis)
+    warnings = list(out.warnings)
+    if out.verification is not None:
+        checks += [{"key": k, **c} for k, c in out.verification.margin_checks.items()
+                   if k.startswith("default.")]
+        warnings += [w for w in out.verification.warnings if w not in warnings]
     return ReportData(title=out.spec.title or (out.spec.source or "untitled"), spec=out.spec,
                       artifact=out.artifact, margins=out.artifact.margins or None,
                       checks=checks, robustness=robustness, certificate=certificate,
-                      scenarios=scenarios)
+                      scenarios=scenarios, notice=out.notice, warnings=warnings)
 
 
 def _robustness_summary(sweep: dict) -> dict | None:

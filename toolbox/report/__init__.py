@@ -127,6 +127,12 @@ class ReportData:
     generated : str or None
         Report time stamp to print (ISO 8601); ``None`` prints none, which keeps
         the output byte-identical for identical inputs.
+    notice : str or None
+        One line shown above the checks, e.g. "no requirements given; default
+        checks only".
+    warnings : list of str or None
+        Lines shown with the notice (stored numbers that disagree with the
+        recomputed ones, a refused header).
     """
 
     title: str
@@ -139,6 +145,8 @@ class ReportData:
     scenarios: list | None = None
     weights: dict | None = None
     generated: str | None = None
+    notice: str | None = None
+    warnings: list | None = None
 
 
 # ----------------------------------------------------------------- formatting
@@ -478,6 +486,7 @@ def build_context(data: ReportData) -> dict:
         "scenarios": _scenarios(data.scenarios) if data.scenarios is not None else None,
         "provenance": _provenance(data),
         "not_computed": NOT_COMPUTED,
+        "notice": [str(x) for x in ([data.notice] if data.notice else []) + list(data.warnings or [])],
     }
 
 
