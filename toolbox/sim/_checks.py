@@ -8,10 +8,15 @@ did. Every scenario now gets these checks, derived from the spec alone:
     The stepped current reaches its reference: it stays within a band
     ``tol = max(0.05 |delta|, floor)`` around the final reference from a time
     after the step no later than ``t_bound`` (see :func:`reach_time_bound`).
-    ``floor = max(0.01 I_scale, 2 current_quantum, 3 current_noise)``: 1 % of
-    the current scale is the accuracy of a typical drive current sensor, and
-    quantisation and noise cannot be tracked below their own size, so no band
-    narrower than that is demanded of a small step.
+    ``floor = max(0.01 I_scale, 2 current_quantum, 3 current_noise, ripple)``:
+    1 % of the current scale is the accuracy of a typical drive current
+    sensor, and quantisation and noise cannot be tracked below their own size,
+    so no band narrower than that is demanded of a small step. ``ripple`` is
+    zero for the average and SVM inverters (symmetric PWM samples the current
+    at the centre of its ripple) and ``r_hex Ts / (2 L)`` for the predictive
+    switching inverter, which holds one of the eight voltage vectors (length
+    ``r_hex``) for a whole period: the current moves by up to ``r_hex Ts / L``
+    per period and the best vector can still leave half of that.
 ``default.bounded_current``
     Nothing diverges: the peak current magnitude ``|i_dq|`` (with traces) or
     the RMS tracking error ``sqrt(mse_id + mse_iq)`` (without) stays under
@@ -285,7 +290,7 @@ def _record(quantity: str, value, bound, unit: str, ok: bool, reason: str | None
 
 def default_checks(scenario, metrics: dict, result, *, plant, motor, v_max: float,
                    delay_samples: int, sample_time: float, linear: dict,
-                   flux_c: float) -> dict[str, dict]:
+                   flux_c: float, ripple: float = 0.0) -> dict[str, dict]:
     """The ``default.*`` checks of one scenario (see the module docstring).
 
     Parameters
@@ -308,6 +313,9 @@ def default_checks(scenario, metrics: dict, result, *, plant, motor, v_max: floa
         ``{"d": LinearFigures, "q": LinearFigures}`` of the executed loop.
     flux_c : float
         Controller model flux (Wb).
+    ripple : float
+        Current ripple the inverter leaves at the sampling instants (A);
+        see the module docstring.
 
     Returns
     -------
@@ -329,7 +337,8 @@ def default_checks(scenario, metrics: dict, result, *, plant, motor, v_max: floa
     out = {}
     if facts.axis is not None:
         out["default.reach"] = _reach(facts, scenario, metrics, result, traces, plant, v_max,
-                                      delay_samples, sample_time, linear[facts.axis], i_scale)
+                                      delay_samples, sample_time, linear[facts.axis], i_scale,
+                                      ripple)
     out["default.bounded_current"] = _bounded_current(metrics, result, traces, i_scale)
     out["default.bounded_speed"] = _bounded_speed(scenario, metrics, result, traces, plant,
                                                   motor, v_max, facts)
@@ -338,10 +347,10 @@ def default_checks(scenario, metrics: dict, result, *, plant, motor, v_max: floa
 
 
 def _reach(facts, scenario, metrics, result, traces, plant, v_max, delay_samples,
-           sample_time, linear, i_scale) -> dict:
+           sample_time, linear, i_scale, ripple) -> dict:
     delta = facts.yf - facts.y0
     floor = max(SENSOR_ACCURACY * i_scale, 2.0 * scenario.current_quantum,
-                3.0 * scenario.current_noise)
+                3.0 * scenario.current_noise, ripple)
     tol = max(REACH_BAND * abs(delta), floor)
     t_bound, problem, parts = reach_time_bound(facts, scenario, plant, v_max, delay_samples,
                                                sample_time, linear,
