@@ -272,13 +272,14 @@ def report(out_dir: str) -> None:
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=file)
+    # verified first, on the artifact as stored: its margins are compared, not trusted
+    verification = run_verification(artifact, spec, file=file)
     files = {}
     analysis = load_analysis(out_dir, artifact)
     if analysis is None:
         artifact, analysis = analyse(artifact, spec)
         files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
     # the report shows margins and stability of the executed law, not stored numbers
-    verification = run_verification(artifact, spec, file=file)
     artifact = artifact.with_margins({ax: m.to_json() for ax, m in
                                       recompute_margins(artifact, spec.motor).items()})
     analysis = {**analysis, "stability": loop_stability(artifact, spec.motor)}
