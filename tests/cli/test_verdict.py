@@ -156,3 +156,16 @@ def test_compare_exits_1_when_a_design_fails(tmp_path, unstable_design):
     assert [r["passed"] for r in rows] == [True, False]
     assert any("default.stable" in f for f in rows[1]["failures"])
     assert f"FAIL  {spec}: default.stable" in res.output
+
+
+def test_gallery_exits_1_when_a_design_fails(tmp_path, unstable_design):
+    """Every design's outputs are written; the failing one is named; exit 1."""
+    spec, _, _ = unstable_design
+    designs = tmp_path / "designs"
+    designs.mkdir()
+    (designs / "fast.toml").write_text(spec.read_text())
+    res = run("gallery", "--designs", designs, "--out", tmp_path / "reports")
+    assert res.exit_code == 1, res.output
+    assert "FAIL  fast.toml" in res.output
+    assert (tmp_path / "reports" / "fast" / "report.html").exists()
+    assert not (tmp_path / "reports" / "fast" / "controller.h").exists()
