@@ -169,3 +169,11 @@ def test_gallery_exits_1_when_a_design_fails(tmp_path, unstable_design):
     assert "FAIL  fast.toml" in res.output
     assert (tmp_path / "reports" / "fast" / "report.html").exists()
     assert not (tmp_path / "reports" / "fast" / "controller.h").exists()
+
+
+def test_report_says_why_a_check_failed(unstable_design):
+    """The report's check table carries the reason of each failure."""
+    _, out, _ = unstable_design
+    html = (out / "report.html").read_text()
+    assert "default.stable" in html
+    assert "the executed sampled loop of the d and q axis is unstable" in html

@@ -308,7 +308,9 @@ def _check_rows(checks: list | None) -> list[dict]:
     rows = []
     for c in checks or []:
         where = c.get("axis") or c.get("scenario") or ""
-        rows.append({"key": str(c.get("key", "")), "quantity": str(c.get("quantity", "")),
+        # a failing check says why (issue 10: a verdict the user can follow)
+        why = f" ({c['reason']})" if not c.get("pass") and c.get("reason") else ""
+        rows.append({"key": str(c.get("key", "")), "quantity": str(c.get("quantity", "")) + why,
                      "where": str(where), "bound": _bound_text(c),
                      "value": fmt(_as_float(c.get("value")) if c.get("value") is not None
                                   else None),
