@@ -185,8 +185,10 @@ def axis_responses(loop: AxisLoop, *, weights: Mapping | None = None, gamma: flo
         "T_db", "KS_db", "weight_bounds", "step": {"t", "y"}, "pz"}``,
         numbers rounded to 6 significant digits.
     """
-    w = np.logspace(math.log10(w_min), math.log10(loop.w_max), n_points)
-    w[-1] = loop.w_max  # exactly the Nyquist frequency in discrete time
+    # evaluate at the rounded frequencies that are stored, so that each stored
+    # value is the response at its stored frequency (the last one is the
+    # Nyquist frequency to 6 digits)
+    w = np.asarray(round_sig(np.logspace(math.log10(w_min), math.log10(loop.w_max), n_points)))
     x = np.exp(1j * w * loop.sample_time) if loop.discrete else 1j * w
     K = freqresp(*loop.law.error_controller(), x)[:, 0, 0]
     L = loop.loop(w)
@@ -196,7 +198,7 @@ def axis_responses(loop: AxisLoop, *, weights: Mapping | None = None, gamma: flo
     # starts near -90 deg and -180 deg is the critical line, as in the margins
     phase -= 360.0 * math.floor((float(phase[0]) + 270.0) / 360.0)
     return {
-        "omega": round_sig(w),
+        "omega": w.tolist(),
         "loop": {"mag_db": round_sig(_db(L)), "phase_deg": round_sig(phase),
                  "re": round_sig(L.real), "im": round_sig(L.imag)},
         "S_db": round_sig(_db(S)), "T_db": round_sig(_db(L * S)), "KS_db": round_sig(_db(K * S)),
