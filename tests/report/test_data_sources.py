@@ -169,3 +169,19 @@ def test_load_analysis_without_responses_is_refused(tmp_path, full_data):
     assert "re-run `cct design" in text
     (tmp_path / "analysis.json").write_text(json.dumps(full_data.analysis))
     assert load_analysis(tmp_path, art)["responses"] == full_data.analysis["responses"]
+
+
+def test_cct_report_refuses_old_analysis(tmp_path, full_data):
+    """`cct report` on a directory whose analysis.json predates `responses`: exit 2,
+    the message says to re-run cct design, and no report is written."""
+    from click.testing import CliRunner
+
+    from toolbox.cli import main
+
+    (tmp_path / "controller.json").write_text(full_data.artifact.dumps())
+    old = {k: v for k, v in full_data.analysis.items() if k != "responses"}
+    (tmp_path / "analysis.json").write_text(json.dumps(old))
+    result = CliRunner().invoke(main, ["report", str(tmp_path)])
+    assert result.exit_code == 2, result.output
+    assert "responses" in result.output and "re-run `cct design" in result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["analysis.json", "controller.json"]

@@ -22,6 +22,12 @@ reduction is asked precisely to run a simpler controller. Set
 ``executed = "full"`` to run the full one. The anti-windup (back-calculation)
 gain is the artifact's default, whose saturated recursion is Schur (Tustin's
 zero at z = -1 moved to the origin).
+
+The validated weights of each axis are recorded in ``gains["weights"]`` as
+``{"w1" | "w2" | "w3": {"num", "den"} or None}`` (continuous, coefficients in
+s, highest power first), whatever their spec form (constant, num/den, zpk,
+makeweight): analysis draws the bounds of eq (41)-(43) from them and nothing
+after design re-reads the spec's weight tables.
 """
 
 from __future__ import annotations
