@@ -31,7 +31,7 @@ def pi_responses(pi):
 
 
 def test_layout_json_and_rounding(pi_responses):
-    """Strict JSON, both axes, N_POINTS frequencies ending at Nyquist, 6 digits."""
+    """Strict JSON, both axes, N_POINTS frequencies ending just below Nyquist, 6 digits."""
     r = pi_responses
     assert json.loads(json.dumps(r, allow_nan=False)) == r
     assert r["schema"] == "cct.responses/1" and r["domain"] == "discrete"
@@ -39,7 +39,7 @@ def test_layout_json_and_rounding(pi_responses):
         a = r[ax]
         w = np.array(a["omega"])
         assert w.size == N_POINTS and np.all(np.diff(w) > 0)
-        assert w[-1] == pytest.approx(math.pi / 1e-4, rel=REL6)
+        assert w[-1] == pytest.approx(0.999 * math.pi / 1e-4, rel=REL6)
         for key in ("mag_db", "phase_deg", "re", "im"):
             assert len(a["loop"][key]) == N_POINTS
         for v in a["loop"]["mag_db"] + a["S_db"] + a["step"]["y"]:

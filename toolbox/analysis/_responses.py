@@ -6,8 +6,8 @@ law ``v = K_r i_ref + K_m i_meas`` (sampled, with the computation delay
 ``z^-d``) on the zero-order-hold plant ``1/(R + s L)`` (paper 003 eq
 (33)-(34)), assembled by :func:`toolbox.analysis.margins.make_axis_loop`.
 
-Per axis, on ``n_points`` log-spaced frequencies up to the Nyquist frequency
-``pi/T_s``:
+Per axis, on ``n_points`` log-spaced frequencies up to 0.999 times the
+Nyquist frequency ``pi/T_s``:
 
 * ``loop``: ``L = K G z^-d`` with ``K = -K_m`` (loop broken at the plant
   input), magnitude (dB), unwrapped phase (deg), real and imaginary parts
@@ -42,7 +42,8 @@ from scipy.linalg import eigvals
 # step computation).
 from .margins import AxisLoop, _step_response, freqresp, json_ready, make_axis_loop
 
-__all__ = ["RESPONSES_SCHEMA", "N_POINTS", "round_sig", "axis_responses", "loop_responses"]
+__all__ = ["RESPONSES_SCHEMA", "N_POINTS", "W_END_FRACTION", "round_sig", "axis_responses",
+           "loop_responses"]
 
 #: Version of the ``responses`` block layout inside analysis.json.
 RESPONSES_SCHEMA = "cct.responses/1"
@@ -53,6 +54,8 @@ STEP_POINTS = 400
 #: Lowest frequency of the grid (rad/s): a decade or more below every current
 #: loop's crossover (hundreds to thousands of rad/s).
 W_MIN = 1.0
+#: Last grid frequency as a fraction of the Nyquist frequency (see axis_responses).
+W_END_FRACTION = 0.999
 AXES = ("d", "q")
 WEIGHT_FUNCTIONS = (("w1", "S"), ("w2", "KS"), ("w3", "T"))
 
@@ -154,7 +157,8 @@ def _weight_bounds(weights: Mapping | None, gamma: float, w: np.ndarray) -> dict
         if wt is None:
             out[fn] = None
             continue
-        W = np.polyval(np.asarray(wt["num"], float), s) / np.polyval(np.asarray(wt["den"], float), s)
+        num, den = np.asarray(wt["num"], float), np.asarray(wt["den"], float)
+        W = np.polyval(num, s) / np.polyval(den, s)
         out[fn] = round_sig(_db(gamma / np.abs(W)))
     return out
 
@@ -174,7 +178,8 @@ def axis_responses(loop: AxisLoop, *, weights: Mapping | None = None, gamma: flo
     gamma : float
         H-infinity level the design reached on this axis (dimensionless).
     n_points : int
-        Frequency points, log-spaced from ``w_min`` to ``loop.w_max``.
+        Frequency points, log-spaced from ``w_min`` to ``loop.w_max`` (times
+        ``W_END_FRACTION`` in discrete time).
     w_min : float
         Lowest frequency (rad/s).
 
@@ -186,9 +191,11 @@ def axis_responses(loop: AxisLoop, *, weights: Mapping | None = None, gamma: flo
         numbers rounded to 6 significant digits.
     """
     # evaluate at the rounded frequencies that are stored, so that each stored
-    # value is the response at its stored frequency (the last one is the
-    # Nyquist frequency to 6 digits)
-    w = np.asarray(round_sig(np.logspace(math.log10(w_min), math.log10(loop.w_max), n_points)))
+    # value is the response at its stored frequency. The grid stops at
+    # W_END_FRACTION of Nyquist: Tustin controllers have a zero at z = -1, so
+    # |L| -> 0 (-inf dB) exactly at pi/Ts and would flatten every plot's scale.
+    w_hi = loop.w_max * (W_END_FRACTION if loop.discrete else 1.0)
+    w = np.asarray(round_sig(np.logspace(math.log10(w_min), math.log10(w_hi), n_points)))
     x = np.exp(1j * w * loop.sample_time) if loop.discrete else 1j * w
     K = freqresp(*loop.law.error_controller(), x)[:, 0, 0]
     L = loop.loop(w)

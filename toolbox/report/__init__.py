@@ -27,7 +27,7 @@ literals for the PDF. Figures never contain user strings.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import numpy as np
