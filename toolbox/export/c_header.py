@@ -55,6 +55,7 @@ import numpy as np
 
 from ..errors import SpecError
 from . import _fixed
+from ._minimal import MinimalLaw, minimal_law
 from ._sos import Realisation, realise_axis
 
 __all__ = ["write_header", "check_exportable", "ExportCheck", "sanitise_comment",
@@ -204,15 +205,26 @@ def _rounded_poles_f32(real: Realisation) -> np.ndarray:
     return np.linalg.eigvals(real.A.astype(np.float32).astype(float))
 
 
-def realisations(artifact) -> dict[str, Realisation]:
-    """The executed realisation of each axis (SOS or state space)."""
+def minimal_laws(artifact) -> dict[str, MinimalLaw]:
+    """Each axis law without round-off entries and unreachable states.
+
+    See :mod:`toolbox.export._minimal`: the result equals the artifact's law
+    (anti-windup channel included) within 1e-7 on the unit circle, else it is
+    the artifact's law unchanged.
+    """
     out = {}
     for ax in AXES:
         law = artifact.axes[ax].law
         aw = artifact.axes[ax].antiwindup
-        out[ax] = realise_axis(law.A, law.B, law.C, law.D,
-                               None if aw is None else aw.ravel())
+        out[ax] = minimal_law(law.A, law.B, law.C, law.D,
+                              None if aw is None else aw.ravel(), artifact.sample_time)
     return out
+
+
+def realisations(artifact) -> dict[str, Realisation]:
+    """The executed realisation of each axis (SOS or state space) of the minimal law."""
+    return {ax: realise_axis(m.A, m.B, m.C, m.D, m.aw)
+            for ax, m in minimal_laws(artifact).items()}
 
 
 @dataclass
@@ -337,14 +349,17 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
                             hint="pass drive= or keep [drive] in the artifact's spec")
         v_max = drive.max_voltage(motor.convention if motor is not None else "amplitude")
     ts = artifact.sample_time
-    reals = realisations(artifact)
+    for ax in AXES:
+        law = artifact.axes[ax].law
+        if not all(np.all(np.isfinite(m)) for m in (law.A, law.B, law.C, law.D)):
+            raise SpecError(f"axes.{ax}.law", "finite coefficients")
+    mins = minimal_laws(artifact)
+    reals = {ax: realise_axis(m.A, m.B, m.C, m.D, m.aw) for ax, m in mins.items()}
     shifts = {}
     for ax in AXES:
         key = f"axes.{ax}.law"
-        law = artifact.axes[ax].law
-        if not all(np.all(np.isfinite(m)) for m in (law.A, law.B, law.C, law.D)):
-            raise SpecError(key, "finite coefficients")
-        poles = np.linalg.eigvals(law.A) if law.order else np.zeros(0)
+        law = mins[ax]
+        poles = np.linalg.eigvals(law.A) if law.A.shape[0] else np.zeros(0)
         zeros = _law_zeros(law)
         _check_poles(poles, zeros, key)
         real = reals[ax]
@@ -421,7 +436,7 @@ def check_fixed(plan, sample_time: float) -> dict:
 def _law_zeros(law) -> np.ndarray:
     """Transmission zeros of the reference channel (the error channel for 1-DOF laws)."""
     import scipy.signal
-    if law.order == 0:
+    if law.A.shape[0] == 0:
         return np.zeros(0)
     z, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, :1], law.C, law.D[:, :1])
     z2, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, 1:], law.C, law.D[:, 1:])
