@@ -30,7 +30,7 @@ import re
 import numpy as np
 import pytest
 
-from toolbox.errors import SpecError
+from toolbox.errors import ExportRefused, SpecError
 from toolbox.export import check_exportable, write_header
 from toolbox.export.c_header import ReferenceLaw, reference_law, sanitise_comment
 
@@ -253,7 +253,7 @@ def test_hinf_fixed_point_refused_with_reason(tmp_path):
     the header says why under #error, and compiling it with CCT_FIXED_POINT
     fails while the float path compiles."""
     art = A.hinf_marginal_artifact()
-    with pytest.raises(SpecError, match="export.fixed_point"):
+    with pytest.raises(ExportRefused, match="export.fixed_point"):
         check_exportable(art, A.MOTOR, A.DRIVE, fixed_point=True)
     with pytest.warns(RuntimeWarning):
         h = write_header(art, A.MOTOR, A.DRIVE)
@@ -367,16 +367,16 @@ def test_custom_prefix_compiles(tmp_path):
 # ---------------------------------------------------------------- refusals
 def test_refuses_unstable_law():
     """A pole at z = 1.005 (continuous +50 rad/s) is refused, naming the key."""
-    with pytest.raises(SpecError) as err:
+    with pytest.raises(ExportRefused) as err:
         write_header(A.unstable_artifact(), A.MOTOR, A.DRIVE)
-    assert err.value.key == "axes.d.law"
-    assert "stable discrete law" in str(err.value) and "1.005" in str(err.value)
+    assert err.value.key == "controller.pi" and "d-axis" in str(err.value)
+    assert "stable discrete d-axis law" in str(err.value) and "1.005" in str(err.value)
 
 
 def test_refuses_uncancelled_nyquist_pole():
     """A pole at 5e6 rad/s (Tustin z = -0.992) with no cancelling zero is refused;
     paper 003's pole at 2.717e6 (z = -0.98539) next to its zero at 2.714e6 passes."""
-    with pytest.raises(SpecError, match="near z = -1"):
+    with pytest.raises(ExportRefused, match="near z = -1"):
         check_exportable(A.ringing_artifact(), A.MOTOR, A.DRIVE)
     check_exportable(A.hinf_artifact(), A.MOTOR, A.DRIVE)
 
@@ -391,12 +391,12 @@ def test_refuses_rounding_sensitive_law():
     law = ct.ss(K.A, np.hstack([K.B, -K.B]), K.C, np.hstack([K.D, -K.D]), A.TS)
     ax = AxisController.from_law(law, sample_time=A.TS, method="native")
     art = A._artifact("hinf", {"d": ax, "q": ax})
-    with pytest.raises(SpecError, match="float32 coefficient rounding"):
+    with pytest.raises(ExportRefused, match="float32 coefficient rounding"):
         check_exportable(art, A.MOTOR, A.DRIVE)
 
 
 def test_refuses_without_voltage_limit():
-    with pytest.raises(SpecError, match="drive"):
+    with pytest.raises(ExportRefused, match="drive"):
         check_exportable(A.pi_artifact(), None, None)
 
 
@@ -423,7 +423,7 @@ def test_q31_quantisation_refusal():
     plan, why = _fixed.plan_fixed({"d": real, "q": real}, I_MAX=20.0, W_MAX=400.0,
                                   V_MAX=86.6, dec_coeffs={"dd": -0.01, "dq": 0.01, "de": 0.5})
     assert plan is not None, why
-    with pytest.raises(SpecError, match="Q31 coefficient rounding"):
+    with pytest.raises(ExportRefused, match="Q31 coefficient rounding"):
         check_fixed(plan, A.TS)
     chk = check_exportable(A.pi_artifact(), A.MOTOR, A.DRIVE)
     assert max(chk.fixed_pole_shift.values()) <= 1.0
