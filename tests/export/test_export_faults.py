@@ -193,3 +193,23 @@ def test_status_api_documented():
     for words in ("out->status", "CCT_STATUS_BAD_INPUT", "CCT_STATUS_BAD_STATE",
                   "last good output", "state"):
         assert words in top
+
+
+def test_cli_export_names_the_design_file(tmp_path):
+    """`cct export DIR` refusing a controller names DIR/controller.json, the key
+    and what was expected; exit 2 and no header written."""
+    import toolbox
+    from click.testing import CliRunner
+    from toolbox.cli import main
+    data = {"motor": {"catalog": "azaiz2007"}, "drive": {"vdc": 1e39, "sample_time": 1e-4},
+            "controller": {"method": "pi", "pi": {"bandwidth": 500}}}
+    art = toolbox.design_spec(toolbox.spec_from_dict(data))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "controller.json").write_text(art.dumps())
+    res = CliRunner().invoke(main, ["export", str(out), "--format", "c"])
+    assert res.exit_code == 2, res.output
+    msg = res.output.strip().splitlines()[-1]
+    assert msg.startswith(f"cct: error: {out / 'controller.json'}: drive.vdc: expected ")
+    assert "float32" in msg
+    assert not (out / "controller.h").exists()

@@ -1261,7 +1261,7 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
 
 
 def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
-                 title: str | None = None) -> str:
+                 title: str | None = None, source: str | None = None) -> str:
     """The C99 header text of a controller artifact.
 
     Parameters
@@ -1277,6 +1277,9 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
     title : str, optional
         Title for the provenance comment (default: ``artifact.spec["title"]``);
         sanitised by :func:`sanitise_comment`.
+    source : str, optional
+        The design file the artifact came from (``DIR/controller.json``);
+        every refusal names it.
 
     Returns
     -------
@@ -1288,6 +1291,15 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
     SpecError
         Refused controller (see :func:`check_exportable`), bad ``name``.
     """
+    try:
+        return _write_header(artifact, motor, drive, name, title)
+    except CctError as err:
+        if source and not err.file:
+            raise err.with_file(str(source)) from None
+        raise
+
+
+def _write_header(artifact, motor, drive, name: str, title: str | None) -> str:
     if not isinstance(name, str) or not _IDENT.match(name):
         raise SpecError("export.name", "a C identifier of at most 31 characters", name)
     motor, drive = _motor_drive(artifact, motor, drive)
