@@ -64,8 +64,19 @@ void sil_step(const float *u, float *v)
 """
 
 
+def require_gcc() -> str:
+    """gcc's path; fails (never skips) when it is missing: the export tests
+    exist to compile the header, and CI installs gcc."""
+    if GCC is None:
+        import pytest
+        pytest.fail("gcc not found on PATH: tests/export compile controller.h with gcc "
+                    "(install it: apt-get install gcc; CI installs it)", pytrace=False)
+    return GCC
+
+
 def compile_driver(header: str, tmp: Path, fixed: bool = False, source: str = DRIVER,
                    ) -> subprocess.CompletedProcess:
+    require_gcc()
     tmp.mkdir(parents=True, exist_ok=True)
     (tmp / "controller.h").write_text(header)
     (tmp / "driver.c").write_text(source)
@@ -96,6 +107,7 @@ def run_fixed(header: str, tmp: Path, q_inputs: np.ndarray) -> tuple[np.ndarray,
 
 
 def build_sil(header: str, tmp: Path) -> ctypes.CDLL:
+    require_gcc()
     tmp.mkdir(parents=True, exist_ok=True)
     (tmp / "controller.h").write_text(header)
     (tmp / "sil.c").write_text(SIL)
