@@ -1,27 +1,42 @@
 """Firmware export: the controller artifact as a C99 header (``controller.h``).
 
 The header is self-contained (header-only, include guards, no dynamic
-memory, only ``sqrtf`` from libm) and implements the whole current-control
-law of the artifact in one ``static inline`` step function:
+memory, only ``sqrtf`` from libm; ``sinf``/``cosf`` too for the hexagon) and
+implements the whole current-control law of the artifact in one
+``static inline`` step function:
 
 1. per axis, the discrete two-input law ``[i_ref, i_meas] -> v`` of
-   :class:`toolbox.artifact.AxisController` (``law``), as CMSIS-DSP style
+   :class:`toolbox.artifact.AxisController` (``law``), realised minimally
+   with round-off treated as zero (:mod:`toolbox.export._minimal`), as CMSIS-DSP style
    second-order sections when the law is one-degree-of-freedom
    (``v = K (i_ref - i_meas)``), else in state-space form;
 2. the decoupling of :class:`toolbox.artifact.Decoupling`:
    ``v_d += -cross w_m Lq_c i_q``, ``v_q += cross w_m Ld_c i_d + emf w_m flux_c``
    with ``w_m = pole_pairs Omega_m``;
-3. the voltage limit (circle of radius ``drive.max_voltage(convention)``,
-   radial scaling as in the toolbox simulator);
+3. the voltage limit of ``drive.voltage_limit``, radial scaling as in the
+   toolbox simulator (:mod:`toolbox.sim._kernel`): the circle of radius
+   ``drive.max_voltage(convention)``, or the SVM hexagon with that apothem
+   seen at the electrical angle ``theta_e + w_e Ts (delay + 1/2)`` (the header
+   then takes the input ``theta_e``);
 4. back-calculation anti-windup ``x += aw (v_sat - v_unsat)`` with the
    artifact's vector mapped into the executed coordinates.
+
+Faults (float path): a non-finite input, or a non-finite result, repeats the
+last good output, leaves the state unchanged and sets ``out.status`` (1 and 2;
+0 otherwise). :class:`ReferenceLaw` is the same law in double precision.
+
+Every emitted constant is range-checked first (float32 range and normal
+numbers, integer ranges of C); out of range, the export is refused with
+:class:`toolbox.errors.ExportRefused` naming the spec key responsible
+(``drive.vdc``, ``motor.R``, ...), so the header never holds ``inff``/``nan``.
 
 A fixed-point variant (``#define CCT_FIXED_POINT`` before including) adds
 ``cct_step_q31`` with Q31 signals and int64 accumulators; see
 :mod:`toolbox.export._fixed` for the scaling rules.
 
 Exportability rules (:func:`check_exportable`) -- a controller is refused with
-:class:`toolbox.errors.SpecError` (key ``axes.<d|q>.law``) when:
+:class:`toolbox.errors.ExportRefused` (key ``controller.<method>``, the
+message names the axis) when:
 
 * **unstable**: a pole of the discrete law has ``|z| >= 1``, other than one
   simple integrator exactly at ``z = 1`` (``|z - 1| <= 1e-9``) per axis;
@@ -40,7 +55,9 @@ Exportability rules (:func:`check_exportable`) -- a controller is refused with
   controller pole at 0.0117 rad/s lies 1.2e-6 inside the unit circle).
 
 The fixed-point variant is additionally refused (the header then carries an
-``#error`` under ``CCT_FIXED_POINT``) when no finite state bound exists.
+``#error`` under ``CCT_FIXED_POINT``) when no finite state bound exists, when
+one of its constants is out of range, and for ``voltage_limit = "hexagon"``
+(not implemented in Q31).
 """
 
 from __future__ import annotations
@@ -335,7 +352,7 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
         voltage limit ``drive.max_voltage(motor.convention)`` (V) and the
         fixed-point input ranges come from them.
     fixed_point : bool
-        Also require the Q31 variant to be available (else SpecError).
+        Also require the Q31 variant to be available (else ExportRefused).
     v_max : float, optional
         Override of the voltage-limit radius (V).
     limit : {"circle", "hexagon"}, optional
@@ -348,10 +365,11 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
 
     Raises
     ------
-    SpecError
-        Key ``axes.<axis>.law`` for an unstable or ill-conditioned law (rules
-        in the module docstring), ``export.fixed_point`` when the Q31 variant
-        is asked for but impossible, ``drive`` when no voltage limit is known.
+    ExportRefused
+        Key ``controller.<method>`` for an unstable or ill-conditioned law
+        (rules in the module docstring), ``export.fixed_point`` (or
+        ``drive.voltage_limit`` for the hexagon) when the Q31 variant is asked
+        for but impossible, ``drive`` when no voltage limit is known.
     """
     motor, drive = _motor_drive(artifact, motor, drive)
     if v_max is None:
@@ -433,6 +451,8 @@ def check_fixed(plan, sample_time: float, key: str = "controller") -> dict:
         Output of :func:`toolbox.export._fixed.plan_fixed`.
     sample_time : float
         Controller period (s).
+    key : str
+        Spec key named in the refusal.
 
     Returns
     -------
@@ -441,8 +461,8 @@ def check_fixed(plan, sample_time: float, key: str = "controller") -> dict:
 
     Raises
     ------
-    SpecError
-        Key ``axes.<axis>.law`` when quantisation moves a pole beyond
+    ExportRefused
+        Key ``key`` when quantisation moves a pole beyond
         ``1 % (1 - |p|) + Ts * 0.01 rad/s`` or destabilises it.
     """
     out = {}
@@ -1288,8 +1308,12 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
 
     Raises
     ------
+    ExportRefused
+        Refused controller (see :func:`check_exportable`) or a constant out of
+        range (float32, C integer ranges), naming the spec key; with the
+        ``source`` file when given.
     SpecError
-        Refused controller (see :func:`check_exportable`), bad ``name``.
+        Bad ``name``.
     """
     try:
         return _write_header(artifact, motor, drive, name, title)
