@@ -213,3 +213,23 @@ def test_cli_export_names_the_design_file(tmp_path):
     assert msg.startswith(f"cct: error: {out / 'controller.json'}: drive.vdc: expected ")
     assert "float32" in msg
     assert not (out / "controller.h").exists()
+
+
+def test_nan_detected_under_fast_math(tmp_path):
+    """Firmware is often built with -ffast-math, under which gcc may fold
+    isfinite() to 1; the header tests the IEEE bits instead, so a NaN input is
+    still reported (status 1) and the output stays finite."""
+    h = write_header(A.pi_artifact(), A.MOTOR, A.DRIVE)
+    tmp_path.mkdir(exist_ok=True)
+    (tmp_path / "controller.h").write_text(h)
+    (tmp_path / "driver.c").write_text(DRIVER_STATUS)
+    exe = tmp_path / "drv"
+    cmd = [C.require_gcc(), *C.CFLAGS, "-ffast-math", "-I", str(tmp_path),
+           str(tmp_path / "driver.c"), "-o", str(exe), "-lm"]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr
+    out = subprocess.run([str(exe)], input="0 1 0 0.5 10\n0 nan 0 0.5 10\n0 1 0 0.5 10\n",
+                         capture_output=True, text=True, timeout=60, check=True).stdout
+    rows = np.array([[float(x) for x in ln.split()] for ln in out.strip().splitlines()])
+    assert list(rows[:, 3]) == [0, 1, 0] and np.all(np.isfinite(rows[:, :2]))
+    np.testing.assert_array_equal(rows[1, :2], rows[0, :2])
