@@ -66,6 +66,7 @@ import math
 import re
 import warnings
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -610,6 +611,8 @@ def reference_law(artifact, inputs: np.ndarray, v_max: float, limit: str = "circ
 # C text
 # ---------------------------------------------------------------------------
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,30}$")
+TEMPLATES = Path(__file__).parent / "templates"
+_ENV = None
 
 
 F32_MAX = float(np.finfo(np.float32).max)
@@ -862,60 +865,24 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
                 t(f"#define {P}{A}_TI {_f(kp / ki, gk, f'{ax}-axis TI') if ki else '0.0f'} /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */")
 
 
-def _axis_float(t: _Text, real: Realisation, N: str, P: str, ax: str, key: str) -> None:
-    A = ax.upper()
-    n = real.order
+def _axis_context(real: Realisation, ax: str, key: str) -> dict:
+    """Template data of one axis linear law (numbers formatted and range-checked)."""
     what = f"{ax}-axis law coefficient"
-    t(f"/* {ax} axis linear law: returns v (V); updates the state to A x + B u */")
-    t(f"static inline float {N}_{ax}_linear(float *x, float r, float y)")
-    t("{")
+    n = real.order
+    ctx: dict[str, Any] = {"ax": ax, "A": ax.upper(), "form": real.form, "n": n}
     if real.form == "sos":
         co = real.cmsis_coefficients()
-        m = co.shape[0]
-        t(f"    /* {m} stage(s) {{b0, b1, b2, a1, a2}} (a1, a2 negated, CMSIS df2T), gain {P}{A}_GAIN */")
-        if m == 0:
-            t("    (void)x;")
-            t(f"    return {_f(real.gain, key, what)} * (r - y);")
-        else:
-            t(f"    static const float c[{5 * m}] = {{")
-            for row in co:
-                t(f"        {_farr(row, key, what)},")
-            t("    };")
-            t("    float in = r - y;")
-            t("    unsigned k;")
-            t(f"    for (k = 0u; k < {m}u; ++k) {{")
-            t("        const float *s = &c[5u * k];")
-            t("        const float out = s[0] * in + x[2u * k];")
-            t("        x[2u * k] = s[1] * in + s[3] * out + x[2u * k + 1u];")
-            t("        x[2u * k + 1u] = s[2] * in + s[4] * out;")
-            t("        in = out;")
-            t("    }")
-            t(f"    return {P}{A}_GAIN * in;")
-    else:
-        if n == 0:
-            t("    (void)x;")
-            t(f"    return {_f(real.D[0, 0], key, what)} * r + {_f(real.D[0, 1], key, what)} * y;")
-        else:
-            t(f"    static const float a[{n * n}] = {{ {_farr(real.A.ravel(), key, what)} }};")
-            t(f"    static const float b[{2 * n}] = {{ {_farr(real.B.ravel(), key, what)} }};")
-            t(f"    static const float c[{n}] = {{ {_farr(real.C.ravel(), key, what)} }};")
-            t(f"    float xn[{n}];")
-            t(f"    float v = {_f(real.D[0, 0], key, what)} * r + {_f(real.D[0, 1], key, what)} * y;")
-            t("    unsigned i, j;")
-            t(f"    for (i = 0u; i < {n}u; ++i) {{")
-            t("        float acc = b[2u * i] * r + b[2u * i + 1u] * y;")
-            t(f"        for (j = 0u; j < {n}u; ++j) {{")
-            t(f"            acc += a[{n}u * i + j] * x[j];")
-            t("        }")
-            t("        v += c[i] * x[i];")
-            t("        xn[i] = acc;")
-            t("    }")
-            t(f"    for (i = 0u; i < {n}u; ++i) {{")
-            t("        x[i] = xn[i];")
-            t("    }")
-            t("    return v;")
-    t("}")
-    t("")
+        ctx["m"] = co.shape[0]
+        ctx["rows"] = [_farr(row, key, what) for row in co]
+        if co.shape[0] == 0:
+            ctx["gain"] = _f(real.gain, key, what)
+        return ctx
+    ctx["d0"] = _f(real.D[0, 0], key, what)
+    ctx["d1"] = _f(real.D[0, 1], key, what)
+    if n:
+        ctx.update(a=_farr(real.A.ravel(), key, what), b=_farr(real.B.ravel(), key, what),
+                   c=_farr(real.C.ravel(), key, what))
+    return ctx
 
 
 def _aw_lines(real: Realisation, field_: str, dv: str, key: str) -> list[str]:
@@ -926,167 +893,38 @@ def _aw_lines(real: Realisation, field_: str, dv: str, key: str) -> list[str]:
     return out
 
 
-def _float_io(t: _Text, reals: dict, N: str, hexagon: bool) -> tuple[int, int]:
-    """Input, output and state types of the float path; returns the state sizes."""
-    nd = max(reals["d"].order, 1)
-    nq = max(reals["q"].order, 1)
-    t("/* inputs: currents in A, measured MECHANICAL speed in rad/s */")
-    t("typedef struct {")
-    t("    float i_d_ref; /* A */")
-    t("    float i_q_ref; /* A */")
-    t("    float i_d;     /* measured, A */")
-    t("    float i_q;     /* measured, A */")
-    t("    float omega_m; /* measured mechanical speed, rad/s */")
-    if hexagon:
-        t("    float theta_e; /* measured ELECTRICAL rotor angle at the sampling instant, rad */")
-    t(f"}} {N}_input_t;")
-    t("")
-    t(f"#define {N.upper()}_STATUS_OK 0         /* the law ran */")
-    t(f"#define {N.upper()}_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */")
-    t(f"#define {N.upper()}_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */")
-    t("")
-    t("typedef struct {")
-    t("    float v_d;     /* V, to apply next period */")
-    t("    float v_q;     /* V */")
-    t("    int saturated; /* 1 when the voltage limit acted */")
-    t(f"    int status;    /* {N.upper()}_STATUS_* */")
-    t(f"}} {N}_output_t;")
-    t("")
-    t(f"/* controller states ({reals['d'].form} d axis: {reals['d'].order}, "
-      f"{reals['q'].form} q axis: {reals['q'].order}; arrays have at least one element)")
-    t(" * and the last good output, held when a period fails */")
-    t("typedef struct {")
-    t(f"    float d[{nd}];")
-    t(f"    float q[{nq}];")
-    t("    float v_d_hold; /* V */")
-    t("    float v_q_hold; /* V */")
-    t(f"}} {N}_state_t;")
-    t("")
-    return nd, nq
+def _render(template: str, **context: Any) -> list[str]:
+    """Lines of ``templates/<template>`` rendered with ``context``."""
+    return _environment().get_template(template).render(**context).split("\n")
 
 
-def _float_helpers(t: _Text, N: str, nd: int, nq: int) -> None:
-    t(f"static inline void {N}_init({N}_state_t *s)")
-    t("{")
-    t("    unsigned i;")
-    t(f"    for (i = 0u; i < {nd}u; ++i) {{ s->d[i] = 0.0f; }}")
-    t(f"    for (i = 0u; i < {nq}u; ++i) {{ s->q[i] = 0.0f; }}")
-    t("    s->v_d_hold = 0.0f;")
-    t("    s->v_q_hold = 0.0f;")
-    t("}")
-    t("")
-    t("/* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that")
-    t(" * -ffast-math / -ffinite-math-only cannot remove the test (isfinite() may be). */")
-    t(f"static inline int {N}_finite(float v)")
-    t("{")
-    t("    union { float f; uint32_t u; } b;")
-    t("    b.f = v;")
-    t("    return (b.u & 0x7f800000u) != 0x7f800000u;")
-    t("}")
-    t("")
-    t(f"static inline int {N}_state_finite(const {N}_state_t *s)")
-    t("{")
-    t("    unsigned i;")
-    t("    int ok = 1;")
-    t(f"    for (i = 0u; i < {nd}u; ++i) {{ ok &= {N}_finite(s->d[i]); }}")
-    t(f"    for (i = 0u; i < {nq}u; ++i) {{ ok &= {N}_finite(s->q[i]); }}")
-    t("    return ok;")
-    t("}")
-    t("")
-    t(f"static inline void {N}_hold(const {N}_state_t *s, {N}_output_t *out, int status)")
-    t("{")
-    t("    out->v_d = s->v_d_hold;")
-    t("    out->v_q = s->v_q_hold;")
-    t("    out->saturated = 0;")
-    t("    out->status = status;")
-    t("}")
-    t("")
-
-
-def _limit_lines(t: _Text, P: str, hexagon: bool) -> None:
-    """The voltage limit: (vd, vq) -> (vds, vqs), out->saturated (as the simulator)."""
-    t("    float vds = vd;")
-    t("    float vqs = vq;")
-    t("    int saturated = 0;")
-    if not hexagon:
-        t("    const float mag2 = vd * vd + vq * vq;")
-        t(f"    if (mag2 > {P}V_MAX * {P}V_MAX) {{")
-        t(f"        const float k = {P}V_MAX / sqrtf(mag2);")
-        t("        vds = vd * k;")
-        t("        vqs = vq * k;")
-        t("        saturated = 1;")
-        t("    }")
-        return
-    t("    /* SVM hexagon in the stationary frame at the angle of the middle of the")
-    t("     * application period (as the toolbox simulator): theta_e + w_e Ts (DELAY + 1/2) */")
-    t(f"    const float th = in->theta_e + w * {P}SAMPLE_TIME * ((float){P}DELAY_SAMPLES + 0.5f);")
-    t("    const float c = cosf(th);")
-    t("    const float sn = sinf(th);")
-    t("    const float va = vd * c - vq * sn;")
-    t("    const float vb = vd * sn + vq * c;")
-    t("    /* largest projection on the edge normals (30, 90, 150 deg); the edges lie")
-    t("     * at the apothem r_hex sqrt(3)/2 = V_MAX from the centre */")
-    t("    const float p1 = 0.866025404f * va + 0.5f * vb;")
-    t("    const float p3 = -0.866025404f * va + 0.5f * vb;")
-    t("    float pm = vb < 0.0f ? -vb : vb;")
-    t("    if (p1 > pm) { pm = p1; }")
-    t("    if (-p1 > pm) { pm = -p1; }")
-    t("    if (p3 > pm) { pm = p3; }")
-    t("    if (-p3 > pm) { pm = -p3; }")
-    t(f"    if (pm > {P}V_MAX) {{")
-    t(f"        const float k = {P}V_MAX / pm;")
-    t("        vds = vd * k;")
-    t("        vqs = vq * k;")
-    t("        saturated = 1;")
-    t("    }")
+def _environment():
+    """The jinja2 environment of the C templates (no autoescape: C, not HTML;
+    every user string is sanitised by :func:`sanitise_comment` before)."""
+    global _ENV
+    if _ENV is None:
+        import jinja2
+        _ENV = jinja2.Environment(
+            loader=jinja2.FileSystemLoader(str(TEMPLATES)), autoescape=False,
+            trim_blocks=True, lstrip_blocks=True, undefined=jinja2.StrictUndefined)
+    return _ENV
 
 
 def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: bool) -> None:
-    nd, nq = _float_io(t, reals, N, hexagon)
-    _float_helpers(t, N, nd, nq)
-    for ax in AXES:
-        _axis_float(t, reals[ax], N, P, ax, key)
+    """The float path (templates/float.c.j2)."""
     inputs = ["i_d_ref", "i_q_ref", "i_d", "i_q", "omega_m"] + (["theta_e"] if hexagon else [])
-    t("/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).")
-    t(f" * out->status: {N.upper()}_STATUS_OK, or _BAD_INPUT / _BAD_STATE with the last good")
-    t(" * output repeated and the state left as it was (see the top of this file). */")
-    t(f"static inline void {N}_step({N}_state_t *s, const {N}_input_t *in, {N}_output_t *out)")
-    t("{")
-    t(f"    {N}_state_t nx;")
     checks = [f"{N}_finite(in->{v})" for v in inputs]
-    t(f"    if (!({checks[0]} && {checks[1]}")
-    for i in range(2, len(checks), 2):
-        pair = " && ".join(checks[i:i + 2])
-        t(f"          && {pair}" + (")) {" if i + 2 >= len(checks) else ""))
-    t(f"        {N}_hold(s, out, {N.upper()}_STATUS_BAD_INPUT);")
-    t("        return;")
-    t("    }")
-    t("    nx = *s;")
-    t(f"    const float w = (float){P}POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */")
-    t(f"    const float vd_lin = {N}_d_linear(nx.d, in->i_d_ref, in->i_d);")
-    t(f"    const float vq_lin = {N}_q_linear(nx.q, in->i_q_ref, in->i_q);")
-    t(f"    const float vd = vd_lin - (float){P}DEC_CROSS * w * {P}DEC_LQ * in->i_q;")
-    t(f"    const float vq = vq_lin + (float){P}DEC_CROSS * w * {P}DEC_LD * in->i_d")
-    t(f"                   + (float){P}DEC_EMF * w * {P}DEC_FLUX;")
-    _limit_lines(t, P, hexagon)
-    lines = _aw_lines(reals["d"], "d", "(vds - vd)", key) + \
+    aw = _aw_lines(reals["d"], "d", "(vds - vd)", key) + \
         _aw_lines(reals["q"], "q", "(vqs - vq)", key)
-    if lines:
-        t("    /* back-calculation anti-windup */")
-        for ln in lines:
-            t(ln.replace("s->", "nx."))
-    t(f"    if (!({N}_finite(vds) && {N}_finite(vqs) && {N}_state_finite(&nx))) {{")
-    t(f"        {N}_hold(s, out, {N.upper()}_STATUS_BAD_STATE);")
-    t("        return;")
-    t("    }")
-    t("    nx.v_d_hold = vds;")
-    t("    nx.v_q_hold = vqs;")
-    t("    *s = nx;")
-    t("    out->v_d = vds;")
-    t("    out->v_q = vqs;")
-    t("    out->saturated = saturated;")
-    t(f"    out->status = {N.upper()}_STATUS_OK;")
-    t("}")
+    t.lines.extend(_render(
+        "float.c.j2", N=N, P=P, U=N.upper(), hexagon=hexagon,
+        nd=max(reals["d"].order, 1), nq=max(reals["q"].order, 1),
+        form_d=reals["d"].form, order_d=reals["d"].order,
+        form_q=reals["q"].form, order_q=reals["q"].order,
+        axes=[_axis_context(reals[ax], ax, key) for ax in AXES],
+        checks=checks,
+        check_pairs=[" && ".join(checks[i:i + 2]) for i in range(2, len(checks), 2)],
+        aw=[ln.strip().replace("s->", "nx.") for ln in aw]))
 
 
 def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
