@@ -26,10 +26,7 @@ import pytest
 from toolbox.errors import ExportRefused
 from toolbox.export import check_exportable, write_header
 from toolbox.export.c_header import ReferenceLaw, reference_law
-from toolbox.sim import simulate
-from toolbox.sim._scenario import Scenario
-from toolbox.sim._simulate import DriveParams
-from toolbox.sim._verify import control_law, plant_params
+from toolbox.sim import DriveParams, Scenario, control_law, plant_params, simulate
 
 import export_artifacts as A
 import export_c_helpers as C

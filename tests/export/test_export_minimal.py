@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import warnings
 
-import control as ct
 import numpy as np
 import pytest
 
