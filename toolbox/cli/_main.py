@@ -287,7 +287,9 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
         raise SpecError("controller.method", "a method with a C export",
                         artifact.method, hint=NO_HEADER_METHODS[artifact.method])
     spec = spec_of_artifact(artifact)
-    text = write_header(artifact, spec.motor, spec.drive)
+    # refusals name the design file the controller came from
+    text = write_header(artifact, spec.motor, spec.drive,
+                        source=str(Path(out_dir) / "controller.json"))
     write_atomic(output or Path(out_dir) / "controller.h", text)
 
 
