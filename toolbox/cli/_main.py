@@ -256,7 +256,8 @@ def report(out_dir: str) -> None:
     """Regenerate report.html and report.pdf from the design in OUT_DIR.
 
     Reads controller.json and analysis.json (analysing again only when
-    analysis.json is missing); the scenarios are simulated again because
+    analysis.json is missing; one from an older toolbox without the figure
+    data is refused: re-run cct design); the scenarios are simulated again because
     their traces are not stored. Nothing is re-designed.
 
     \b
@@ -265,7 +266,7 @@ def report(out_dir: str) -> None:
     """
     from ..pipeline import (DesignOutputs, analyse, load_analysis, load_artifact, report_data,
                             run_verification, spec_of_artifact, write_outputs)
-    from ..report import write_html, write_pdf
+    from ..report import build_context, write_html, write_pdf
 
     from ..analysis.executed import loop_stability, recompute_margins
 
@@ -279,14 +280,18 @@ def report(out_dir: str) -> None:
     if analysis is None:
         artifact, analysis = analyse(artifact, spec)
         files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
-    # the report shows margins and stability of the executed law, not stored numbers
-    artifact = artifact.with_margins({ax: m.to_json() for ax, m in
-                                      recompute_margins(artifact, spec.motor).items()})
-    analysis = {**analysis, "stability": loop_stability(artifact, spec.motor)}
+    # the report shows margins, margin checks and stability of the executed law,
+    # not the stored numbers (the stored response figures are drawn as they are)
+    fresh = {ax: m.to_json() for ax, m in recompute_margins(artifact, spec.motor).items()}
+    artifact = artifact.with_margins(fresh)
+    analysis = {**analysis, "margins": {**(analysis.get("margins") or {}), "discrete": fresh},
+                "stability": loop_stability(artifact, spec.motor),
+                "requirements": {k: c for k, c in verification.margin_checks.items()
+                                 if not k.startswith("default.")}}
     out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
                         verification=verification)
-    data = report_data(out)
-    files.update({"report.html": write_html(data), "report.pdf": write_pdf(data)})
+    context = build_context(report_data(out))  # figures drawn once for both
+    files.update({"report.html": write_html(context), "report.pdf": write_pdf(context)})
     write_outputs(files, out_dir)
     _notices(out.notice, verification.warnings)
     sys.exit(EXIT_OK if out.passed else EXIT_REQUIREMENT)
@@ -328,7 +333,8 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
     file = str(Path(out_dir) / "controller.json")
     spec = spec_of_artifact(artifact, file=file)
     refuse_unstable_export(artifact, spec.motor, file=file)
-    text = write_header(artifact, spec.motor, spec.drive)
+    # refusals name the design file the controller came from
+    text = write_header(artifact, spec.motor, spec.drive, source=file)
     write_atomic(output or Path(out_dir) / "controller.h", text)
 
 
