@@ -193,3 +193,49 @@ def test_fcs_mpc_baseline_margins_are_informational():
     assert res.informational["min_gain_margin_db"]["pass"] is False
     assert all(s["stable"] is None for s in res.stability.values())
     assert any("informational for fcs_mpc" in w for w in res.warnings)
+
+
+def _synthetic(metrics, scenario=None):
+    """default_checks on given metrics, no traces (the simulator's fallback)."""
+    from toolbox.sim._checks import default_checks
+
+    spec = _spec([scenario or STEP])
+    plant = plant_params(spec.motor)
+    lin = {ax: LinearFigures(1000.0, 0.003) for ax in "dq"}
+    return default_checks(spec.scenarios[0], metrics, None, plant=plant, motor=spec.motor,
+                          v_max=150 / math.sqrt(3), delay_samples=1, sample_time=1e-4,
+                          linear=lin, flux_c=spec.motor.flux)
+
+
+GOOD = {"response_time_5pct": 0.004, "rise_time_10_90": 0.002, "settling_time_2pct": 0.005,
+        "overshoot_pct": 0.0, "static_error": 0.0, "final_value": 5.0, "mse_id": 0.01,
+        "mse_iq": 0.5, "final_speed": 0.0}
+
+
+def test_bounded_checks_fail_on_divergence():
+    """Each bounded check can fail: an RMS current error of 1e3 A (5 x the
+    current scale is 25 A here), a speed of 1e5 rad/s (the bound is twice the
+    larger of the no-load speed 86.6 / (4 x 0.12) = 180 rad/s and the
+    catalog's rated speed), a NaN error; the sound metrics pass all four."""
+    assert all(c["pass"] for c in _synthetic(GOOD).values())
+    bad = _synthetic({**GOOD, "mse_iq": 1e6, "final_speed": 1e5})
+    assert not bad["default.bounded_current"]["pass"]
+    assert "oscillates or diverges" in bad["default.bounded_current"]["reason"]
+    speed = bad["default.bounded_speed"]
+    plausible = max(150 / math.sqrt(3) / (4 * 0.12), _spec([STEP]).motor.rated_speed or 0.0)
+    assert not speed["pass"] and speed["bound"] == pytest.approx(2 * plausible, rel=1e-12)
+    nan = _synthetic({**GOOD, "mse_id": float("nan")})
+    assert nan["default.bounded_current"]["value"] is None
+    assert "not finite" in nan["default.bounded_current"]["reason"]
+    assert nan["default.finite"]["failed_metrics"] == ["mse_id"]
+
+
+def test_step_metrics_not_applicable_without_a_step():
+    """A scenario that does not step its current has no reach check, and its
+    NaN step metrics are not applicable (not failures)."""
+    flat = {**STEP, "iq_ref": 0.0}
+    checks = _synthetic({**GOOD, "response_time_5pct": float("nan"),
+                         "rise_time_10_90": float("nan"),
+                         "settling_time_2pct": float("nan")}, flat)
+    assert "default.reach" not in checks
+    assert checks["default.finite"]["pass"]

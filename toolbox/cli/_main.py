@@ -185,7 +185,8 @@ def _summary(out, quiet: bool) -> None:
     warnings = list(out.warnings)
     if out.verification is not None:
         warnings += out.verification.warnings
-    _notices(out.notice, warnings)
+    # the notice describes what was checked: nothing is checked without verification
+    _notices(out.notice if out.verification is not None else None, warnings)
     if quiet:
         return
     for axis, m in out.artifact.margins.items():
