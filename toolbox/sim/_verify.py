@@ -231,7 +231,10 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     Margins and stability are recomputed from the executed law (the numbers
     stored in the artifact are only compared, see
     :mod:`toolbox.analysis.executed`); every scenario gets the default checks
-    of :mod:`toolbox.sim._checks` besides the spec's requirements.
+    of :mod:`toolbox.sim._checks` besides the spec's requirements. In
+    verify.json both sit under each scenario's ``requirements`` (the
+    ``default.*`` keys), ``default.stable`` under ``margin_requirements``;
+    every failing record has a ``reason`` and no value is NaN.
 
     Parameters
     ----------
