@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from toolbox.design._hinf import augment_mixed_sensitivity, central_controller, synthesize  # noqa: E402
+from toolbox.design._hinf_riccati import augment_mixed_sensitivity, central_controller, synthesize  # noqa: E402
 from toolbox.design._reduction import reduce_controller  # noqa: E402
 
 G = control.tf([1.0], [2.8e-3, 0.6])

@@ -2,6 +2,9 @@
 
 Each method module exposes ``read_cfg(method, table, motor, drive) -> Cfg``
 (validating ``[controller.<method>]``) and ``design(spec) -> ControllerArtifact``.
+Importing this package registers every method's ``read_cfg`` with the spec
+stage (:func:`toolbox.spec.register_method_reader`), so that ``toolbox.spec``
+validates method parameters without importing ``toolbox.design``.
 """
 
 from __future__ import annotations
@@ -10,6 +13,7 @@ import importlib
 from typing import Any
 
 from ..errors import SpecError
+from ..spec import register_method_reader
 
 __all__ = ["METHOD_MODULES", "read_method_cfg", "design"]
 
@@ -51,3 +55,12 @@ def design(spec) -> Any:
     ControllerArtifact
     """
     return _module(spec.controller.method).design(spec)
+
+
+def _register_readers() -> None:
+    """Register every method's ``read_cfg`` with the spec stage."""
+    for method in METHOD_MODULES:
+        register_method_reader(method, _module(method).read_cfg)
+
+
+_register_readers()

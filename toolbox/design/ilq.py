@@ -40,6 +40,7 @@ import scipy.linalg as sla
 
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
+from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["IlqCfg", "IlqAxis", "IlqDesign", "sigma_bound", "ilq_axis", "ilq_axis_from_plant",
@@ -437,8 +438,6 @@ def read_cfg(method: str, table, motor, drive) -> IlqCfg:
         Unknown keys, missing poles, non-negative poles, sigma <= 0, sigma at or
         below the eq (3) bound (unless ``allow_non_optimal``).
     """
-    from ..spec import Table
-
     t = Table(table.data, table.prefix,
               ("poles", "s1", "s2", "sigma", "sigma_factor", "allow_non_optimal"))
     if t.has("poles") and (t.has("s1") or t.has("s2")):

@@ -37,6 +37,7 @@ import scipy.linalg as sla
 
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
+from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["LqCfg", "LqAxis", "bryson_weights", "lqi_continuous", "lqi_discrete",
@@ -369,8 +370,6 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
     -------
     LqCfg
     """
-    from ..spec import Table
-
     t = Table(table.data, table.prefix,
               ("domain", "Q", "R", "bandwidth", "current_limit", "voltage_limit"))
     domain = t.string("domain", "discrete", choices=("continuous", "discrete"))
@@ -402,8 +401,6 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
 def _read_q(t) -> dict:
     value = t.raw("Q")
     if isinstance(value, dict):
-        from ..spec import Table
-
         sub = Table(value, t.key("Q"), AXES)
         return {ax: sub.numbers(ax, length=2) for ax in AXES}
     q = t.numbers("Q", length=2)

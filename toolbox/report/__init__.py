@@ -415,7 +415,7 @@ def _robustness(rob: Mapping | None) -> dict | None:
 
 
 def _provenance(data: ReportData) -> list[tuple[str, str]]:
-    from ..design._common import toolbox_version
+    from .._version import toolbox_version
 
     prov = dict(data.artifact.provenance or {})
     rows = [(str(k), fmt(v)) for k, v in prov.items() if k != "equations"]
