@@ -84,7 +84,7 @@ def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifac
                         f"an unstable {' and '.join(unstable)} axis",
                         hint="slow the design down or shorten the sample time; "
                              "nothing is exported")
-    # MARGINS of controller.json: the sampled loop as executed (DESIGN.md)
+    # MARGINS of controller.json: the sampled loop as executed (toolbox/ARCHITECTURE.md "controller.json")
     artifact = artifact.with_margins(margins)
     report["requirements"] = spec.requirements.check_margins(artifact.margins)
     return artifact, report

@@ -31,7 +31,7 @@ __all__ = ["ReportData", "build_context", "write_html", "write_pdf", "zpk_text",
 
 NOT_COMPUTED = "not computed"
 
-#: Long names of the design methods (DESIGN.md "The methods").
+#: Long names of the design methods (toolbox/ARCHITECTURE.md "Spec file").
 METHOD_NAMES = {
     "pi": "PI in dq (pole-zero cancellation)",
     "ip": "IP in dq (proportional action on the measurement)",
@@ -44,7 +44,7 @@ METHOD_NAMES = {
     "fcs_mpc": "Finite-control-set predictive control",
 }
 
-#: MARGINS keys (DESIGN.md) -> (label, unit).
+#: MARGINS keys (toolbox/ARCHITECTURE.md "controller.json") -> (label, unit).
 MARGIN_ROWS = {
     "gain_margin_db": ("Gain margin", "dB"),
     "gain_crossover_rad_s": ("Gain crossover frequency (|L| = 1)", "rad/s"),
@@ -95,7 +95,7 @@ class ReportData:
     artifact : toolbox.artifact.ControllerArtifact
         The designed controller (axes, gains, provenance).
     margins : dict or None
-        ``{"d": MARGINS, "q": MARGINS}`` with the DESIGN.md keys
+        ``{"d": MARGINS, "q": MARGINS}`` with the MARGINS keys of toolbox/ARCHITECTURE.md
         (``gain_margin_db`` (dB), ``phase_margin_deg`` (deg), frequencies in
         rad/s, dimensionless peaks). ``None``: taken from ``artifact.margins``
         when that is non-empty, else shown as "not computed".
