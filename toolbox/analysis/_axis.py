@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
+from ..plant import axis_coefficients
 from ._json import json_ready
 from ._laws import Law, axis_law
 from ._siso import MARGIN_KEYS, frequency_margins, log_grid
@@ -134,7 +135,8 @@ def make_axis_loop(axis, R: float, L: float, sample_time: float, delay_samples: 
         plant = plant_chain(float(a), float(b), int(delay_samples), sample_time)
         return AxisLoop(law, plant, True, sample_time, R, L, int(delay_samples), 0.0,
                         math.pi / sample_time, False)
-    plant = (np.array([[-R / L]]), np.array([[1.0 / L]]), np.eye(1), np.zeros((1, 1)))
+    a_c, b_c = axis_coefficients(R, L)
+    plant = (np.array([[a_c]]), np.array([[b_c]]), np.eye(1), np.zeros((1, 1)))
     tau = 0.0
     if delay is not None:
         tau = (delay_samples + 0.5) * sample_time

@@ -13,30 +13,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..plant import dq_matrices
 from ._statespace import zoh_2x2
 
 __all__ = ["coupled_plant", "decoupling_matrix", "CoupledLoop", "coupled_closed_loop"]
 
 
 def coupled_plant(R, Ld, Lq, omega) -> tuple[np.ndarray, np.ndarray]:
-    """Stacked ``A(omega)`` (N, 2, 2) and ``B`` (N, 2, 2) of the dq plant.
-
-    ``A = [[-R/Ld, omega Lq/Ld], [-omega Ld/Lq, -R/Lq]]``,
-    ``B = diag(1/Ld, 1/Lq)`` (paper 003 eq (3)-(4); equal to
-    :meth:`toolbox.plant.ElectricalPlant.A`, checked in the tests).
-    """
-    R, Ld, Lq, omega = np.broadcast_arrays(*(np.asarray(v, float) for v in (R, Ld, Lq, omega)))
-    R, Ld, Lq, omega = (v.reshape(-1) for v in (R, Ld, Lq, omega))
-    N = R.size
-    A = np.empty((N, 2, 2))
-    A[:, 0, 0] = -R / Ld
-    A[:, 0, 1] = omega * Lq / Ld
-    A[:, 1, 0] = -omega * Ld / Lq
-    A[:, 1, 1] = -R / Lq
-    B = np.zeros((N, 2, 2))
-    B[:, 0, 0] = 1 / Ld
-    B[:, 1, 1] = 1 / Lq
-    return A, B
+    """Stacked ``A(omega)`` (N, 2, 2) and ``B`` (N, 2, 2) of the dq plant:
+    :func:`toolbox.plant.dq_matrices` (the one closed form of the model)."""
+    return dq_matrices(R, Ld, Lq, omega)
 
 
 def decoupling_matrix(decoupling, omega_meas) -> np.ndarray:

@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import expm
 
+from ..plant import zoh_first_order
+
 if TYPE_CHECKING:
     from ._laws import Law
 
@@ -34,12 +36,9 @@ def freqresp(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 
 
 def zoh_axis(R, L, Ts) -> tuple[np.ndarray, np.ndarray]:
-    """ZOH discretisation of ``1/(R + s L)``: ``(a, b)`` (broadcasts)."""
-    R = np.asarray(R, float)
-    L = np.asarray(L, float)
-    a = np.exp(-R * Ts / L)
-    b = -np.expm1(-R * Ts / L) / R
-    return a, b
+    """ZOH discretisation of ``1/(R + s L)``: ``(a, b)`` (broadcasts);
+    :func:`toolbox.plant.zoh_first_order`."""
+    return zoh_first_order(R, L, Ts)
 
 
 def plant_chain(a: float, b: float, d: int, Ts: float) -> tuple[np.ndarray, ...]:

@@ -37,6 +37,7 @@ import scipy.linalg as sla
 
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
+from ..plant import axis_coefficients
 from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 
@@ -348,7 +349,7 @@ def design_lq(Ld: float, Lq: float, R: float, Q: dict, Rw: dict, sample_time: fl
     out = {}
     for ax, L in zip(AXES, (Ld, Lq)):
         _check_weights(Q[ax], Rw[ax], ax)
-        a, b = -R / L, 1.0 / L
+        a, b = axis_coefficients(R, L)
         out[ax] = (lqi_continuous(a, b, Q[ax], Rw[ax]) if domain == "continuous"
                    else lqi_discrete(a, b, Q[ax], Rw[ax], sample_time, delay_samples))
     return out
