@@ -13,7 +13,7 @@ import importlib
 from typing import Any
 
 from ..errors import SpecError
-from ..spec import register_method_reader
+from ..spec import read_method_cfg, register_method_reader  # re-exported: one route
 
 __all__ = ["METHOD_MODULES", "read_method_cfg", "design"]
 
@@ -28,23 +28,6 @@ def _module(method: str):
     if method not in METHOD_MODULES:
         raise SpecError("controller.method", f"one of {sorted(METHOD_MODULES)}", method)
     return importlib.import_module(f"{__package__}.{METHOD_MODULES[method]}")
-
-
-def read_method_cfg(method: str, table, motor, drive) -> Any:
-    """Validate ``[controller.<method>]`` into the method's ``*Cfg`` object.
-
-    Parameters
-    ----------
-    method : str
-        Design method name.
-    table : Table
-        The ``[controller.<method>]`` table.
-    motor : Motor
-        Validated motor (gains may derive from it).
-    drive : Drive
-        Validated drive (sample time, delay).
-    """
-    return _module(method).read_cfg(method, table, motor, drive)
 
 
 def design(spec) -> Any:
