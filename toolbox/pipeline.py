@@ -15,7 +15,7 @@ from typing import Callable
 
 from ._io import write_atomic
 from .artifact import ControllerArtifact
-from .errors import SpecError
+from .errors import ArtifactError, SpecError
 from .spec import Spec, load_spec, spec_from_dict
 
 __all__ = ["DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
@@ -177,17 +177,20 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
         out.header = write_header(out.artifact, spec.motor, spec.drive)
     if report:
         progress("report")
-        from .report import write_html, write_pdf
+        from .report import build_context, write_html, write_pdf
 
-        data = report_data(out)
-        out.html = write_html(data)
-        out.pdf = write_pdf(data)
+        context = build_context(report_data(out))  # figures drawn once for both
+        out.html = write_html(context)
+        out.pdf = write_pdf(context)
     out.files = _files(out)
     return out
 
 
 def report_data(out: DesignOutputs):
     """The :class:`~toolbox.report.ReportData` of a pipeline run (plain data).
+
+    The report gets ``analysis.json`` and ``verify.json`` as the dicts that
+    are written, plus the simulated traces (not stored in verify.json).
 
     Parameters
     ----------
@@ -196,61 +199,13 @@ def report_data(out: DesignOutputs):
     """
     from .report import ReportData
 
-    checks = []
-    if out.analysis is not None:
-        checks += [{"key": k, **c} for k, c in out.analysis.get("requirements", {}).items()]
-    scenarios = None
+    verification = traces = None
     if out.verification is not None:
-        scenarios = []
-        for sc in out.verification.scenarios:
-            checks += [{"key": k, "scenario": sc.name, **c} for k, c in sc.checks.items()]
-            scenarios.append({"name": sc.name, "kind": sc.kind, "metrics": sc.metrics,
-                              "pass": sc.passed, "traces": sc.result})
-    robustness = certificate = None
-    if out.analysis is not None:
-        robustness = _robustness_summary(out.analysis.get("sweep") or {})
-        certificate = _certificate_facts(out.analysis)
+        verification = out.verification.to_json()
+        traces = [sc.result for sc in out.verification.scenarios]
     return ReportData(title=out.spec.title or (out.spec.source or "untitled"), spec=out.spec,
-                      artifact=out.artifact, margins=out.artifact.margins or None,
-                      checks=checks, robustness=robustness, certificate=certificate,
-                      scenarios=scenarios)
-
-
-def _robustness_summary(sweep: dict) -> dict | None:
-    if not sweep:
-        return None
-    cases = []
-    for axis, worst in sorted(sweep.get("worst", {}).items()):
-        for quantity, entry in worst.items():
-            cases.append({"label": f"{axis} axis: worst {quantity}",
-                          "params": entry.get("params", {}),
-                          "metrics": {quantity: entry.get("value")}, "pass": True})
-    cases += [{"label": f"unstable set {k + 1}", "params": {
-        n: v for n, v in ex.items() if n != "spectral_radius"},
-        "metrics": {"spectral_radius": ex.get("spectral_radius")}, "pass": False}
-        for k, ex in enumerate(sweep.get("unstable_examples", []))]
-    notes = (f"{sweep.get('n_sets')} parameter sets over {sweep.get('ranges')}, at speeds "
-             f"{sweep.get('speeds_rad_s')} rad/s (electrical): {sweep.get('n_unstable')} "
-             f"unstable, worst closed-loop spectral radius "
-             f"{sweep.get('worst_spectral_radius', float('nan')):.4g}.")
-    return {"cases": cases, "worst": [c["label"] for c in cases if not c["pass"]],
-            "notes": notes}
-
-
-def _certificate_facts(analysis: dict) -> dict:
-    facts = {}
-    cert = analysis.get("certificate")
-    if cert:
-        facts["quadratic stability (continuous loop, no delay)"] = (
-            "certified" if cert.get("certified") else "not certified")
-        facts["largest certified box scale"] = cert.get("scale")
-        for name, (lo, hi) in (cert.get("box") or {}).items():
-            facts[f"box {name}"] = f"{lo:.4g} .. {hi:.4g}"
-    mimo = analysis.get("mimo_at_speed") or {}
-    if mimo:
-        facts["MIMO disk margin, worst electrical speed (rad/s)"] = mimo.get("worst_speed_rad_s")
-        facts["MIMO disk margin, worst value"] = mimo.get("worst_disk_margin")
-    return facts
+                      artifact=out.artifact, analysis=out.analysis,
+                      verification=verification, traces=traces)
 
 
 def _files(out: DesignOutputs) -> dict[str, str | bytes]:
@@ -311,6 +266,13 @@ def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | N
         Design directory.
     artifact : ControllerArtifact
         The controller the analysis must describe (same method and sample time).
+
+    Raises
+    ------
+    ArtifactError
+        The analysis belongs to ``artifact`` but holds no ``responses`` (the
+        figure data the report draws; written by ``cct design`` since schema
+        cct.analysis/1 gained it): the report cannot be drawn from it.
     """
     path = Path(out_dir) / "analysis.json"
     try:
@@ -320,7 +282,16 @@ def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | N
     same = (isinstance(data, dict) and data.get("schema") == "cct.analysis/1"
             and data.get("method") == artifact.method
             and data.get("sample_time") == artifact.sample_time)
-    return data if same else None
+    if not same:
+        return None
+    if not isinstance(data.get("responses"), dict):
+        raise ArtifactError("responses", "the response data the report draws "
+                            "(Bode, Nyquist, S/T/KS, step, pole-zero per axis)",
+                            "no 'responses' key" if "responses" not in data
+                            else data["responses"], file=str(path),
+                            hint=f"written by an older toolbox; re-run `cct design SPEC "
+                                 f"--out {out_dir}` to regenerate it")
+    return data
 
 
 def spec_of_artifact(artifact: ControllerArtifact, file: str | None = None) -> Spec:

@@ -15,6 +15,7 @@ is what every other stage calls for a margin.
 
 from __future__ import annotations
 
+from ._responses import loop_responses
 from .certificate import (CertificateResult, ParameterBox, certify,
                           largest_certified_scale)
 from .margins import (MARGIN_KEYS, FrequencyMargins, MarginsResult, MimoMarginsResult,
@@ -59,7 +60,9 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
     dict
         ``{"schema": "cct.analysis/1", "method", "sample_time", "delay_samples",
         "margins": {"discrete": {d, q}, "continuous": {d, q},
-        "continuous_delay": {d, q}}, "mimo_at_speed": {...},
+        "continuous_delay": {d, q}}, "responses": {...} (figure data of
+        the executed loops, :func:`toolbox.analysis._responses.loop_responses`),
+        "mimo_at_speed": {...},
         "sweep": {...}, "certificate": {...} or None}``; each margins entry is
         :meth:`MarginsResult.to_json`.
     """
@@ -76,6 +79,7 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
                                  compute_margins(artifact, motor, discrete=False,
                                                  delay="exact").items()},
         },
+        "responses": loop_responses(artifact, motor),
         "mimo_at_speed": mimo_disk_margins(artifact, motor, drive).to_json(),
         "sweep": robustness_sweep(artifact, motor, n=sweep_sets, drive=drive,
                                   seed=seed).to_json(),

@@ -230,7 +230,8 @@ def report(out_dir: str) -> None:
     """Regenerate report.html and report.pdf from the design in OUT_DIR.
 
     Reads controller.json and analysis.json (analysing again only when
-    analysis.json is missing); the scenarios are simulated again because
+    analysis.json is missing; one from an older toolbox without the figure
+    data is refused: re-run cct design); the scenarios are simulated again because
     their traces are not stored. Nothing is re-designed.
 
     \b
@@ -239,7 +240,7 @@ def report(out_dir: str) -> None:
     """
     from ..pipeline import (DesignOutputs, analyse, load_analysis, load_artifact, report_data,
                             run_verification, spec_of_artifact, write_outputs)
-    from ..report import write_html, write_pdf
+    from ..report import build_context, write_html, write_pdf
 
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
@@ -250,8 +251,8 @@ def report(out_dir: str) -> None:
         files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
     out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
                         verification=run_verification(artifact, spec))
-    data = report_data(out)
-    files.update({"report.html": write_html(data), "report.pdf": write_pdf(data)})
+    context = build_context(report_data(out))  # figures drawn once for both
+    files.update({"report.html": write_html(context), "report.pdf": write_pdf(context)})
     write_outputs(files, out_dir)
 
 
@@ -287,7 +288,9 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
         raise SpecError("controller.method", "a method with a C export",
                         artifact.method, hint=NO_HEADER_METHODS[artifact.method])
     spec = spec_of_artifact(artifact)
-    text = write_header(artifact, spec.motor, spec.drive)
+    # refusals name the design file the controller came from
+    text = write_header(artifact, spec.motor, spec.drive,
+                        source=str(Path(out_dir) / "controller.json"))
     write_atomic(output or Path(out_dir) / "controller.h", text)
 
 

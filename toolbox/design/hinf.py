@@ -22,6 +22,12 @@ reduction is asked precisely to run a simpler controller. Set
 ``executed = "full"`` to run the full one. The anti-windup (back-calculation)
 gain is the artifact's default, whose saturated recursion is Schur (Tustin's
 zero at z = -1 moved to the origin).
+
+The validated weights of each axis are recorded in ``gains["weights"]`` as
+``{"w1" | "w2" | "w3": {"num", "den"} or None}`` (continuous, coefficients in
+s, highest power first), whatever their spec form (constant, num/den, zpk,
+makeweight): analysis draws the bounds of eq (41)-(43) from them and nothing
+after design re-reads the spec's weight tables.
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
 import control as ct
+import numpy as np
 
 from ..artifact import AxisController, ControllerArtifact, Zpk
 from ..errors import DesignInfeasible, SpecError
@@ -312,6 +319,20 @@ def _zpk_json(K: Any) -> dict:
     return Zpk.from_statespace(ct.ss(K)).to_json()
 
 
+def _weight_json(W: Any) -> dict | None:
+    """``{"num", "den"}`` (coefficients in s, highest power first) of a validated weight.
+
+    Every spec form (constant, ``num/den``, ``zeros/poles/gain``, ``makeweight``)
+    is a transfer function once read, so the artifact records one form and
+    later stages (analysis' weight bounds, eq (41)-(43)) never re-read the spec.
+    """
+    if W is None:
+        return None
+    tf = ct.tf(W)
+    return {"num": [float(c) for c in np.atleast_1d(tf.num[0][0])],
+            "den": [float(c) for c in np.atleast_1d(tf.den[0][0])]}
+
+
 def _margins_json(m: Any) -> dict:
     return dict(vars(m))
 
@@ -380,6 +401,9 @@ def _gains(cfg: HinfCfg, results: dict) -> dict:
                                for k, v in r.bounds.items()} for ax, r in results.items()},
         "zpk": {ax: _zpk_json(r.K) for ax, r in results.items()},
         "executed": cfg.executed,
+        # the validated weights, continuous (003 eq (44)-(49) or makeweight)
+        "weights": {ax: {k: _weight_json(W) for k, W in cfg.weights[ax].items()}
+                    for ax in results},
         "warnings": {ax: list(r.synthesis.warnings) for ax, r in results.items()},
     }
     if cfg.reduce_order is not None:
