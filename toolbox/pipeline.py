@@ -80,7 +80,7 @@ def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifac
     # an unstable loop is a design that exists but fails (exit 1, outputs written,
     # no controller.h), not bad input: the report must show the user why
     report["stability"] = loop_stability(artifact, spec.motor)
-    # MARGINS of controller.json: the sampled loop as executed (DESIGN.md)
+    # MARGINS of controller.json: the sampled loop as executed (toolbox/ARCHITECTURE.md "controller.json")
     artifact = artifact.with_margins(margins)
     checks = spec.requirements.check_margins(artifact.margins)
     if artifact.method in INFORMATIONAL_METHODS:

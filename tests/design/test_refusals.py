@@ -1,5 +1,5 @@
 """Designs the toolbox must not hand to a user are refused with SpecError
-(exit 2), naming the spec key and the remedy (DESIGN.md reliability rules)."""
+(exit 2), naming the spec key and the remedy (toolbox/ARCHITECTURE.md "Reliability rules")."""
 
 import tomllib
 from pathlib import Path

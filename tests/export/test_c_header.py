@@ -1,4 +1,4 @@
-"""Firmware export (DESIGN.md "controller.h"): compile, run, compare.
+"""Firmware export (toolbox/ARCHITECTURE.md "controller.h"): compile, run, compare.
 
 Three controllers built directly (tests/export/export_artifacts.py): a PI per axis
 (one-DOF: second-order sections), IP + total compensation with integrator

@@ -102,7 +102,7 @@ def test_figures_hold_no_user_text(full_context):
 
 
 def test_zpk_text_paper_003_controller():
-    """K_q of paper 003 (DESIGN.md reference numbers) prints as its factors."""
+    """K_q of paper 003 (reference numbers of tests/papers/test_003_hinf.py) prints as its factors."""
     import control
 
     from toolbox.artifact import Zpk

@@ -1,5 +1,5 @@
 """Verification reads the artifact and the spec's scenarios; requirements decide
-pass/fail (DESIGN.md exit codes)."""
+pass/fail (toolbox/ARCHITECTURE.md "Errors and exit codes")."""
 
 import json
 import math

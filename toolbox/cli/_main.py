@@ -1,7 +1,8 @@
 """``cct``: one command per pipeline stage.
 
-Exit codes (DESIGN.md): 0 every requirement holds, 1 a requirement fails
-(outputs still written), 2 bad input (nothing written). Only
+Exit codes (toolbox/ARCHITECTURE.md "Errors and exit codes"): 0 every
+requirement holds, 1 a requirement fails (outputs still written), 2 bad input
+(nothing written). Only
 :class:`~toolbox.errors.CctError` and its subclasses are turned into exit 2;
 anything else is a bug and keeps its traceback.
 """

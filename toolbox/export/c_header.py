@@ -44,7 +44,7 @@ message names the axis) when:
   image of a continuous pole faster than ~12 x the Nyquist frequency) that
   no zero cancels to within 1 % of its distance to the unit circle (the pair
   then changes |K| by at most 1 % at any frequency, the rule of
-  :func:`toolbox.design._hinf.effective_poles` transposed to z);
+  :func:`toolbox.design._hinf_riccati.effective_poles` transposed to z);
 * **coefficient dynamic range** of one coefficient set (SOS stage or state
   row) above ``2**30`` (beyond Q31 resolution even with per-set scaling);
 * **rounding sensitivity**: rounding the executed coefficients to float32
@@ -307,15 +307,15 @@ def _motor_drive(artifact, motor, drive):
         pass
     # the controller section may name a method this build cannot read: take
     # the motor and drive tables alone
-    from ..spec import _load
+    from ..spec import drive_from_dict, motor_from_dict
     if motor is None and isinstance(raw.get("motor"), dict):
         try:
-            motor = _load._motor(raw["motor"])[0]
+            motor = motor_from_dict(raw["motor"])
         except SpecError:
             motor = None
     if drive is None and isinstance(raw.get("drive"), dict):
         try:
-            drive = _load._drive(raw["drive"])
+            drive = drive_from_dict(raw["drive"])
         except SpecError:
             drive = None
     return motor, drive

@@ -39,7 +39,7 @@ __all__ = ["ReportData", "build_context", "write_html", "write_pdf", "zpk_text",
 
 NOT_COMPUTED = "not computed"
 
-#: Long names of the design methods (DESIGN.md "The methods").
+#: Long names of the design methods (toolbox/ARCHITECTURE.md "Spec file").
 METHOD_NAMES = {
     "pi": "PI in dq (pole-zero cancellation)",
     "ip": "IP in dq (proportional action on the measurement)",
@@ -52,7 +52,7 @@ METHOD_NAMES = {
     "fcs_mpc": "Finite-control-set predictive control",
 }
 
-#: MARGINS keys (DESIGN.md) -> (label, unit).
+#: MARGINS keys (toolbox/ARCHITECTURE.md "controller.json") -> (label, unit).
 MARGIN_ROWS = {
     "gain_margin_db": ("Gain margin", "dB"),
     "gain_crossover_rad_s": ("Gain crossover frequency (|L| = 1)", "rad/s"),
@@ -483,7 +483,7 @@ def _robustness(rob: Mapping | None) -> dict | None:
 
 
 def _provenance(data: ReportData) -> list[tuple[str, str]]:
-    from ..design._common import toolbox_version
+    from .._version import toolbox_version
 
     prov = dict(data.artifact.provenance or {})
     rows = [(str(k), fmt(v)) for k, v in prov.items() if k != "equations"]

@@ -18,7 +18,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from toolbox.errors import SpecError
-from toolbox.spec._model import inverter_radii
+from toolbox.spec import inverter_radii
 
 from . import _kernel
 from ._metrics import METRIC_NAMES, metrics_dict
