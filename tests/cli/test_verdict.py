@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 import toolbox
-from toolbox.analysis import margins_for_artifact
+from toolbox.analysis import compute_margins
 from toolbox.cli import main
 
 DESIGNS = Path(__file__).parents[2] / "designs"
@@ -34,7 +34,8 @@ def design_dir(tmp_path: Path, text: str, name: str = "d") -> Path:
     spec_path.write_text(text)
     spec = toolbox.load_spec(spec_path)
     art = toolbox.design_spec(spec)
-    art = art.with_margins(margins_for_artifact(art, spec.motor))
+    art = art.with_margins({ax: m.to_json()
+                            for ax, m in compute_margins(art, spec.motor).items()})
     out = tmp_path / name
     out.mkdir()
     (out / "controller.json").write_text(art.dumps())
