@@ -242,14 +242,15 @@ def _relocated(z: complex, sample_time: float | None, method: str | None) -> com
     voltage into the state than Hanus's conditioning does.
     """
     r = abs(z)
-    if r > 1.0 + 1.0 / _AW_SLOW_SAMPLES:
+    mirrored = r > 1.0 + 1.0 / _AW_SLOW_SAMPLES
+    if mirrored:
         z = z / r ** 2
         r = abs(z)
     if r >= math.exp(-1.0 / _AW_SLOW_SAMPLES):
         return 0.0
     if method == "tustin" and z.real < 0.0 and sample_time:
         return _continuous_image(z, sample_time, method)
-    return None
+    return z if mirrored else None
 
 
 def _antiwindup_gain(A: np.ndarray, B_r: np.ndarray, C: np.ndarray, D_r: float,
