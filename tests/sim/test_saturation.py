@@ -341,3 +341,16 @@ def test_tustin_zero_at_infinity_and_unstable_zero_relocated():
     aw = _antiwindup_gain(L.A, L.B[:, :1], L.C, float(L.D[0, 0]), sample_time=TS,
                           method="tustin")
     np.testing.assert_allclose(aw, ax.antiwindup, rtol=1e-9, atol=1e-15)
+
+
+def test_tustin_fast_zero_mapped_to_its_exact_sampling():
+    """A PI zero beyond 2/Ts lands on Tustin's negative real axis (a = 3/Ts:
+    z = (1 - 1.5)/(1 + 1.5) = -0.2), where the saturated state would
+    alternate in sign; it goes to exp(-a Ts) = exp(-3) = 0.0498 instead."""
+    a = 3.0 / TS
+    ax = _axis(_pi_law(1.0, a))
+    L = ax.law
+    (z_hanus,) = np.linalg.eigvals(L.A - (L.B[:, :1] / L.D[0, 0]) @ L.C)
+    assert z_hanus == pytest.approx(-0.2, abs=1e-12)
+    (z,) = np.linalg.eigvals(L.A - ax.antiwindup @ L.C)
+    assert z == pytest.approx(math.exp(-3.0), abs=1e-12)
