@@ -13,6 +13,7 @@ from .artifact import ControllerArtifact
 from .errors import ArtifactError, CctError, DesignInfeasible, ExportRefused, SpecError
 from .pipeline import analyse, build_outputs, design_spec, run_verification, write_outputs
 from .spec import Spec, load_spec, spec_from_dict
+from . import design as _design  # noqa: F401  registers the methods' parameter readers with spec
 
 __all__ = ["ArtifactError", "CctError", "ControllerArtifact", "DesignInfeasible",
            "ExportRefused", "SpecError", "analyse", "build_outputs", "design_spec",

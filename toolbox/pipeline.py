@@ -15,10 +15,10 @@ from typing import Callable
 
 from ._io import check_text_depth, read_limited, write_set
 from .artifact import ControllerArtifact
-from .errors import ArtifactError, CctError, SpecError
+from .errors import ArtifactError, CctError, ExportRefused, SpecError
 from .spec import Spec, load_spec, spec_from_dict
 
-__all__ = ["DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
+__all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
            "write_outputs", "load_artifact", "load_analysis", "spec_of_artifact",
            "OUTPUT_FILES"]
 
@@ -73,25 +73,58 @@ def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifac
         JSON-ready analysis (``analysis.json``), with requirement checks.
     """
     from .analysis import analysis_report
+    from .analysis.executed import INFORMATIONAL_METHODS, loop_stability
 
     report = analysis_report(artifact, spec.motor, spec.drive)
     margins = report["margins"]["discrete"]
-    unstable = [axis for axis, m in margins.items() if m.get("stable") is False]
-    if unstable:
-        raise SpecError(f"controller.{artifact.method}",
-                        f"parameters giving a stable sampled loop (ZOH, "
-                        f"{artifact.delay_samples} period(s) of computation delay)",
-                        f"an unstable {' and '.join(unstable)} axis",
-                        hint="slow the design down or shorten the sample time; "
-                             "nothing is exported")
-    # MARGINS of controller.json: the sampled loop as executed (DESIGN.md)
+    # an unstable loop is a design that exists but fails (exit 1, outputs written,
+    # no controller.h), not bad input: the report must show the user why
+    report["stability"] = loop_stability(artifact, spec.motor)
+    # MARGINS of controller.json: the sampled loop as executed (toolbox/ARCHITECTURE.md "controller.json")
     artifact = artifact.with_margins(margins)
-    report["requirements"] = spec.requirements.check_margins(artifact.margins)
+    checks = spec.requirements.check_margins(artifact.margins)
+    if artifact.method in INFORMATIONAL_METHODS:
+        # the baseline PI does not run: its margins never decide (issue 10)
+        report["requirements"] = {}
+        report["informational_requirements"] = checks
+    else:
+        report["requirements"] = checks
     return artifact, report
 
 
+def unstable_axes(analysis: dict | None) -> list[str]:
+    """Axes whose executed sampled loop is unstable, per ``analysis["stability"]``."""
+    stability = (analysis or {}).get("stability") or {}
+    return [ax for ax, s in sorted(stability.items()) if s.get("stable") is False]
+
+
+def refuse_unstable_export(artifact: ControllerArtifact, motor, file: str | None = None) -> None:
+    """Raise :class:`ExportRefused` when the executed sampled loop is unstable.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        Nominal plant the stability is judged on.
+    file : str, optional
+        The controller.json named in the message.
+    """
+    from .analysis.executed import loop_stability
+
+    stability = loop_stability(artifact, motor)
+    unstable = [ax for ax, s in sorted(stability.items()) if s["stable"] is False]
+    if unstable:
+        rho = ", ".join(f"{ax} {stability[ax]['spectral_radius']:.6g}" for ax in unstable)
+        raise ExportRefused(f"axes.{unstable[0]}.law",
+                            "a law whose sampled loop (ZOH plant, computation delay) is stable",
+                            f"closed-loop spectral radius {rho}", file=file,
+                            hint="no firmware header is written for an unstable loop; slow "
+                                 "the design down or shorten the sample time")
+
+
 def run_verification(artifact: ControllerArtifact, spec: Spec,
-                     progress: Callable[[int, int], None] | None = None):
+                     progress: Callable[[int, int], None] | None = None,
+                     file: str | None = None):
     """Closed-loop simulation of every scenario (see :func:`toolbox.sim.verify`).
 
     Parameters
@@ -102,10 +135,12 @@ def run_verification(artifact: ControllerArtifact, spec: Spec,
         Plant, drive, scenarios and requirements.
     progress : callable, optional
         ``progress(done, total)`` after each scenario.
+    file : str, optional
+        The controller.json the artifact came from (named in warnings).
     """
     from .sim import verify
 
-    return verify(artifact, spec, progress=progress)
+    return verify(artifact, spec, progress=progress, file=file)
 
 
 @dataclass
@@ -120,13 +155,24 @@ class DesignOutputs:
     html: str | None = None
     pdf: bytes | None = None
     files: dict[str, str | bytes] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+    header_refused: str | None = None
+
+    @property
+    def notice(self) -> str | None:
+        """:data:`toolbox.sim.NO_REQUIREMENTS` when the spec has no requirements."""
+        from .sim import NO_REQUIREMENTS
+
+        return None if self.spec.requirements.bounds else NO_REQUIREMENTS
 
     @property
     def passed(self) -> bool:
-        """Every requirement holds (margins and scenarios)."""
+        """Every requirement and default check holds (margins, stability, scenarios)."""
         ok = True
         if self.analysis is not None:
             ok &= all(c["pass"] for c in self.analysis.get("requirements", {}).values())
+            ok &= not unstable_axes(self.analysis)
+        ok &= self.header_refused is None
         if self.verification is not None:
             ok &= self.verification.passed
         return ok
@@ -153,7 +199,7 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
     """
     try:
         return _build(spec, analysis, verification, report, header, progress)
-    except SpecError as err:
+    except CctError as err:
         raise (err.with_file(spec.source) if spec.source and not err.file else err) from None
 
 
@@ -174,20 +220,32 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
         progress("firmware header")
         from .export import write_header
 
-        out.header = write_header(out.artifact, spec.motor, spec.drive)
+        try:
+            refuse_unstable_export(out.artifact, spec.motor)
+        except ExportRefused as err:
+            # a design that exists but must not reach firmware: everything else is
+            # still written so the report shows why (exit 1 through `passed`)
+            out.header_refused = str(err)
+            out.warnings.append(f"controller.h not written: {err}")
+            progress(f"firmware header refused: {err}")
+        else:
+            out.header = write_header(out.artifact, spec.motor, spec.drive)
     if report:
         progress("report")
-        from .report import write_html, write_pdf
+        from .report import build_context, write_html, write_pdf
 
-        data = report_data(out)
-        out.html = write_html(data)
-        out.pdf = write_pdf(data)
+        context = build_context(report_data(out))  # figures drawn once for both
+        out.html = write_html(context)
+        out.pdf = write_pdf(context)
     out.files = _files(out)
     return out
 
 
 def report_data(out: DesignOutputs):
     """The :class:`~toolbox.report.ReportData` of a pipeline run (plain data).
+
+    The report gets ``analysis.json`` and ``verify.json`` as the dicts that
+    are written, plus the simulated traces (not stored in verify.json).
 
     Parameters
     ----------
@@ -196,61 +254,17 @@ def report_data(out: DesignOutputs):
     """
     from .report import ReportData
 
-    checks = []
-    if out.analysis is not None:
-        checks += [{"key": k, **c} for k, c in out.analysis.get("requirements", {}).items()]
-    scenarios = None
+    verification = traces = None
     if out.verification is not None:
-        scenarios = []
-        for sc in out.verification.scenarios:
-            checks += [{"key": k, "scenario": sc.name, **c} for k, c in sc.checks.items()]
-            scenarios.append({"name": sc.name, "kind": sc.kind, "metrics": sc.metrics,
-                              "pass": sc.passed, "traces": sc.result})
-    robustness = certificate = None
-    if out.analysis is not None:
-        robustness = _robustness_summary(out.analysis.get("sweep") or {})
-        certificate = _certificate_facts(out.analysis)
+        verification = out.verification.to_json()
+        traces = [sc.result for sc in out.verification.scenarios]
+    warnings = list(out.warnings)
+    if out.verification is not None:
+        warnings += [w for w in out.verification.warnings if w not in warnings]
     return ReportData(title=out.spec.title or (out.spec.source or "untitled"), spec=out.spec,
-                      artifact=out.artifact, margins=out.artifact.margins or None,
-                      checks=checks, robustness=robustness, certificate=certificate,
-                      scenarios=scenarios)
-
-
-def _robustness_summary(sweep: dict) -> dict | None:
-    if not sweep:
-        return None
-    cases = []
-    for axis, worst in sorted(sweep.get("worst", {}).items()):
-        for quantity, entry in worst.items():
-            cases.append({"label": f"{axis} axis: worst {quantity}",
-                          "params": entry.get("params", {}),
-                          "metrics": {quantity: entry.get("value")}, "pass": True})
-    cases += [{"label": f"unstable set {k + 1}", "params": {
-        n: v for n, v in ex.items() if n != "spectral_radius"},
-        "metrics": {"spectral_radius": ex.get("spectral_radius")}, "pass": False}
-        for k, ex in enumerate(sweep.get("unstable_examples", []))]
-    notes = (f"{sweep.get('n_sets')} parameter sets over {sweep.get('ranges')}, at speeds "
-             f"{sweep.get('speeds_rad_s')} rad/s (electrical): {sweep.get('n_unstable')} "
-             f"unstable, worst closed-loop spectral radius "
-             f"{sweep.get('worst_spectral_radius', float('nan')):.4g}.")
-    return {"cases": cases, "worst": [c["label"] for c in cases if not c["pass"]],
-            "notes": notes}
-
-
-def _certificate_facts(analysis: dict) -> dict:
-    facts = {}
-    cert = analysis.get("certificate")
-    if cert:
-        facts["quadratic stability (continuous loop, no delay)"] = (
-            "certified" if cert.get("certified") else "not certified")
-        facts["largest certified box scale"] = cert.get("scale")
-        for name, (lo, hi) in (cert.get("box") or {}).items():
-            facts[f"box {name}"] = f"{lo:.4g} .. {hi:.4g}"
-    mimo = analysis.get("mimo_at_speed") or {}
-    if mimo:
-        facts["MIMO disk margin, worst electrical speed (rad/s)"] = mimo.get("worst_speed_rad_s")
-        facts["MIMO disk margin, worst value"] = mimo.get("worst_disk_margin")
-    return facts
+                      artifact=out.artifact, analysis=out.analysis,
+                      verification=verification, traces=traces,
+                      notice=out.notice, warnings=warnings)
 
 
 def _files(out: DesignOutputs) -> dict[str, str | bytes]:
@@ -315,6 +329,13 @@ def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | N
         Design directory.
     artifact : ControllerArtifact
         The controller the analysis must describe (same method and sample time).
+
+    Raises
+    ------
+    ArtifactError
+        The analysis belongs to ``artifact`` but holds no ``responses`` (the
+        figure data the report draws; written by ``cct design`` since schema
+        cct.analysis/1 gained it): the report cannot be drawn from it.
     """
     path = Path(out_dir) / "analysis.json"
     if not path.exists():
@@ -333,6 +354,13 @@ def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | N
     if not same:
         return None
     _check_analysis(data, name)
+    if not isinstance(data.get("responses"), dict):
+        raise ArtifactError("responses", "the response data the report draws "
+                            "(Bode, Nyquist, S/T/KS, step, pole-zero per axis)",
+                            "no 'responses' key" if "responses" not in data
+                            else data["responses"], file=str(path),
+                            hint=f"written by an older toolbox; re-run `cct design SPEC "
+                                 f"--out {out_dir}` to regenerate it")
     return data
 
 

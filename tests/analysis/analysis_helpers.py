@@ -3,14 +3,14 @@
 * PI by pole-zero cancellation: Kp = L wc, Ki = R wc (paper 000 sect. 2 / 002 eq 19-20);
 * total compensation without integrators (paper 000 eq 11): v = L K (i_ref - i) + R i
   (+ decoupling and EMF compensation), a two-input law;
-* paper 003 central H-infinity controllers at gamma = 1 (eq 68, 70) from toolbox/design/_hinf.py.
+* paper 003 central H-infinity controllers at gamma = 1 (eq 68, 70) from toolbox/design/_hinf_riccati.py.
 Motor: paper 003 sect. 6 (amplitude-invariant), Ts = 1e-4 s, one period of delay.
 """
 import control as ct
 import numpy as np
 from toolbox.artifact import AxisController, ControllerArtifact, Decoupling
 from toolbox.spec import Motor, Drive
-from toolbox.design import _hinf as H
+from toolbox.design import _hinf_riccati as H
 from toolbox.design._weights import weight_from_tf
 
 AZAIZ = Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4, J=1.11e-3, friction=1.4e-3,

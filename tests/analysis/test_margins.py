@@ -69,7 +69,7 @@ def test_continuous_margins_match_python_control(hinf, axis):
 
 
 def test_margin_naming_matches_design_md(hinf):
-    """DESIGN.md: gain margin read at the phase crossover (angle L = -180 deg),
+    """toolbox/ARCHITECTURE.md "controller.json": gain margin read at the phase crossover (angle L = -180 deg),
     phase margin at the gain crossover (|L| = 1); to_json gives the nine keys."""
     loop = M.make_axis_loop(hinf.axes["q"], AZAIZ.R, AZAIZ.Lq, TS, 1)
     m = M.axis_margins(loop, step=False)

@@ -4,7 +4,7 @@ import json
 
 from analysis_helpers import AZAIZ, DRIVE
 from toolbox.analysis import (MARGIN_KEYS, analysis_report, compare_designs,
-                              compute_margins, with_margins)
+                              compute_margins)
 from toolbox.artifact import ControllerArtifact
 
 
@@ -23,13 +23,21 @@ def test_analysis_report_is_plain_json(pi):
     assert rep["margins"]["discrete"]["q"]["phase_margin_deg"] == m.phase_margin_deg
     assert {"worst_disk_margin", "worst_speed_rad_s", "disk_margin"} <= set(rep["mimo_at_speed"])
     assert {"n_unstable", "worst", "static_error"} <= set(rep["sweep"])
-    assert rep["certificate"]["certified"] in (True, False)
+    # The PI design with decoupling on its own motor is certified on about two
+    # thirds of the default box (R, L x0.5..x2, |omega| <= max speed): the
+    # bisection (tolerance 0.05 on the scale) ends at 0.65625 = 21/32. The band
+    # 0.6..0.72 allows one bisection step either way for solver noise at the
+    # boundary; a wrong LMI assembly or solver failure gives certified False
+    # (scale 0) or another scale, a skipped bisection gives 1.
+    cert = rep["certificate"]
+    assert cert["certified"] is True and 0.6 <= cert["scale"] <= 0.72, cert
 
 
-def test_with_margins_round_trips(tc):
-    """MARGINS written into controller.json (sampled loop with delay) survive the
-    exact JSON round trip of the artifact; infinite values become "inf"."""
-    art = with_margins(tc, AZAIZ)
+def test_margins_round_trip_through_the_artifact(tc):
+    """MARGINS written into controller.json as the pipeline does (sampled loop
+    with delay) survive the exact JSON round trip of the artifact; infinite
+    values become "inf"."""
+    art = tc.with_margins({ax: r.to_json() for ax, r in compute_margins(tc, AZAIZ).items()})
     back = ControllerArtifact.loads(art.dumps())
     assert back.margins == art.margins
     assert set(MARGIN_KEYS) <= set(back.margins["q"])

@@ -1,4 +1,4 @@
-"""Unit tests for toolbox.design._hinf, sectioned by algorithm step.
+"""Unit tests for toolbox.design._hinf_riccati, sectioned by algorithm step.
 
 (1) partitioned plant, (2) augmentation, (3) assumptions, (4) scaling and
 normalisation, (5) feasibility, (6) central controller vs SLICOT sb10fd,
@@ -10,7 +10,7 @@ import pytest
 import control as ct
 import slycot
 
-from toolbox.design import _hinf as H
+from toolbox.design import _hinf_riccati as H
 from toolbox.errors import SpecError
 
 s = ct.tf("s")

@@ -62,7 +62,7 @@ def ip_tc_artifact() -> ControllerArtifact:
 
 
 def hinf_controller() -> ct.StateSpace:
-    from toolbox.design import _hinf as H
+    from toolbox.design import _hinf_riccati as H
     from toolbox.design._weights import weight_from_tf
     G = ct.tf([1], [2.8e-3, 0.6])                          # paper 003 eq (34)
     w1 = weight_from_tf([1 / 1.51, 177.3493 / 1.51], [1, 0.0117])   # eq (44)

@@ -35,10 +35,15 @@ int main(void)
     }
 #else
     cct_state_t s;
-    cct_input_t in;
+    cct_input_t in = {0};
     cct_output_t out;
     cct_init(&s);
+#ifdef CCT_HEX
+    while (scanf("%f %f %f %f %f %f", &in.i_d_ref, &in.i_q_ref, &in.i_d, &in.i_q, &in.omega_m,
+                 &in.theta_e) == 6) {
+#else
     while (scanf("%f %f %f %f %f", &in.i_d_ref, &in.i_q_ref, &in.i_d, &in.i_q, &in.omega_m) == 5) {
+#endif
         cct_step(&s, &in, &out);
         printf("%.9e %.9e %d\n", (double)out.v_d, (double)out.v_q, out.saturated);
     }
@@ -55,7 +60,7 @@ void sil_step(const float *u, float *v);
 void sil_init(void) { cct_init(&st); }
 void sil_step(const float *u, float *v)
 {
-    cct_input_t in;
+    cct_input_t in = {0};
     cct_output_t o;
     in.i_d_ref = u[0]; in.i_q_ref = u[1]; in.i_d = u[2]; in.i_q = u[3]; in.omega_m = u[4];
     cct_step(&st, &in, &o);
@@ -64,19 +69,33 @@ void sil_step(const float *u, float *v)
 """
 
 
+def require_gcc() -> str:
+    """gcc's path; fails (never skips) when it is missing: the export tests
+    exist to compile the header, and CI installs gcc."""
+    if GCC is None:
+        import pytest
+        pytest.fail("gcc not found on PATH: tests/export compile controller.h with gcc "
+                    "(install it: apt-get install gcc; CI installs it)", pytrace=False)
+    return GCC
+
+
 def compile_driver(header: str, tmp: Path, fixed: bool = False, source: str = DRIVER,
-                   ) -> subprocess.CompletedProcess:
+                   hexagon: bool = False) -> subprocess.CompletedProcess:
+    require_gcc()
     tmp.mkdir(parents=True, exist_ok=True)
     (tmp / "controller.h").write_text(header)
     (tmp / "driver.c").write_text(source)
     exe = tmp / ("drv_q31" if fixed else "drv")
-    cmd = [GCC, *CFLAGS, *(["-DCCT_FIXED_POINT"] if fixed else []), "-I", str(tmp),
+    cmd = [GCC, *CFLAGS, *(["-DCCT_FIXED_POINT"] if fixed else []),
+           *(["-DCCT_HEX"] if hexagon else []), "-I", str(tmp),
            str(tmp / "driver.c"), "-o", str(exe), "-lm"]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=60)
 
 
 def run_float(header: str, tmp: Path, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    res = compile_driver(header, tmp)
+    """Outputs and saturation flags of the float header; inputs (N, 5), or
+    (N, 6) with theta_e for a hexagon header."""
+    res = compile_driver(header, tmp, hexagon=inputs.shape[1] == 6)
     assert res.returncode == 0, res.stderr
     text = "\n".join(" ".join(f"{v:.9e}" for v in row) for row in inputs) + "\n"
     out = subprocess.run([str(tmp / "drv")], input=text, capture_output=True, text=True,
@@ -96,6 +115,7 @@ def run_fixed(header: str, tmp: Path, q_inputs: np.ndarray) -> tuple[np.ndarray,
 
 
 def build_sil(header: str, tmp: Path) -> ctypes.CDLL:
+    require_gcc()
     tmp.mkdir(parents=True, exist_ok=True)
     (tmp / "controller.h").write_text(header)
     (tmp / "sil.c").write_text(SIL)

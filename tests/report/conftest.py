@@ -2,10 +2,13 @@
 
 The report consumes plain data only, so the fixture builds it here: a PI
 artifact by pole-zero cancellation (Kp = L wc, Ki = R wc, paper 000 sect. 2)
-through ``AxisController.from_error_controller``; margins from python-control's
-``stability_margins`` on the sampled loop (an independent route from the
-report's own curve reading); synthetic verification traces from the linear
-closed loop.
+through ``AxisController.from_error_controller``, carrying paper 003's
+H-infinity weights in ``gains["weights"]`` so that the weight bounds are drawn;
+its ``analysis.json`` from :func:`toolbox.analysis.analysis_report` (small
+sweep, no certificate); a synthetic ``verify.json`` with traces from the
+linear closed loop. ``python_control_margins`` gives python-control's
+``stability_margins`` of the sampled loop, an independent route to check the
+margins the figures mark.
 """
 
 from __future__ import annotations
@@ -44,9 +47,15 @@ def _spec(title: str):
                     raw={**data, "motor": dict(CATALOG["azaiz2007"])})
 
 
-def _artifact(spec):
+#: Paper 003's q-axis weights (num/den in s), recorded as an H-infinity design does.
+WEIGHTS = {"w1": {"num": [0.66225, 117.4499], "den": [1, 0.0117]},
+           "w2": {"num": [25, 25000], "den": [1, 50000]},
+           "w3": {"num": [1e4, 1.3568e6], "den": [1, 2.7135e6]}}
+
+
+def _artifact(spec, weights: bool = False):
     m, ts = spec.motor, spec.drive.sample_time
-    gains = {}
+    gains: dict = {"weights": {ax: dict(WEIGHTS) for ax in ("d", "q")}} if weights else {}
     axes = {}
     for name, L in (("d", m.Ld), ("q", m.Lq)):
         kp, ki = L * WC, m.R * WC
@@ -75,57 +84,56 @@ def _margins(art, motor):
     return out, L
 
 
-def _checks(spec, margins):
-    checks = []
-    for ax in ("d", "q"):
-        try:
-            result = spec.requirements.check(margins[ax], "margins")
-        except TypeError:  # older signature without the stage
-            result = spec.requirements.check(margins[ax])
-        for key, c in result.items():
-            checks.append({"key": key, **c, "axis": ax})
-    return checks
-
-
-def _scenarios(L):
+def _verification(L) -> tuple[dict, list]:
+    """A verify.json with two scenarios (one named by hostile text) and their traces."""
     T = control.feedback(L, 1)
     t = np.arange(300) * 1e-4
     y = np.asarray(control.step_response(T, T=t).outputs).reshape(-1)
     traces = {"t": t, "iq": 10 * y, "iq_ref": np.full_like(t, 10.0), "id": 0.02 * y,
               "id_ref": np.zeros_like(t), "vd": -2 * y, "vq": 20 * y + 3}
-    return [{"name": "q step 10 A", "kind": "step", "pass": True,
-             "metrics": {"response_time_5pct": 1.9e-3, "overshoot_pct": 2.1},
-             "traces": traces},
-            {"name": HOSTILE, "kind": "step", "pass": False, "metrics": {"overshoot_pct": 40.0},
-             "traces": None}]
+    verify = {"schema": "cct.verify/1", "method": "pi", "passed": False,
+              "margin_requirements": {},
+              "scenarios": [
+                  {"name": "q step 10 A", "kind": "step", "passed": True,
+                   "metrics": {"response_time_5pct": 1.9e-3, "overshoot_pct": 2.1},
+                   "requirements": {}},
+                  {"name": HOSTILE, "kind": "step", "passed": False,
+                   "metrics": {"overshoot_pct": 40.0},
+                   "requirements": {"max_overshoot_pct": {
+                       "quantity": "overshoot_pct", "bound": 20.0, "value": 40.0, "unit": "%",
+                       "pass": False}}}]}
+    return verify, [traces, None]
 
 
-def _robustness():
-    cases = []
-    for k, (fr, fl) in enumerate([(r, l) for r in (0.5, 1.0, 2.0) for l in (0.5, 1.0, 2.0)]):
-        pm = 80 - 25 * abs(np.log2(fl)) - 3 * abs(np.log2(fr))
-        cases.append({"label": f"R x{fr}, L x{fl}", "params": {"R": fr, "L": fl},
-                      "metrics": {"phase_margin_deg": pm, "gain_margin_db": 20 - 5 * np.log2(fl)},
-                      "pass": bool(pm >= 60)})
-    return {"cases": cases, "worst": ["R x2.0, L x2.0", "R x0.5, L x0.5"],
-            "notes": "Resistance and inductances scaled about nominal."}
+def _analysis(spec, art) -> dict:
+    """analysis.json of ``art`` (a 50-set sweep and no certificate keep it fast)."""
+    import json
+
+    from toolbox.analysis import analysis_report
+
+    rep = analysis_report(art, spec.motor, spec.drive, sweep_sets=50, certificate=False)
+    rep["requirements"] = spec.requirements.check_margins(
+        {ax: rep["margins"]["discrete"][ax] for ax in ("d", "q")})
+    return json.loads(json.dumps(rep))  # exactly what the file holds
+
+
+@pytest.fixture(scope="session")
+def python_control_margins():
+    """python-control's margins of the full fixture's sampled loops (independent route)."""
+    spec = _spec(HOSTILE)
+    return _margins(_artifact(spec), spec.motor)[0]
 
 
 @pytest.fixture(scope="session")
 def full_data() -> ReportData:
     spec = _spec(HOSTILE)
-    art = _artifact(spec)
-    margins, L = _margins(art, spec.motor)
-    art = art.with_margins(margins)
-    weights = {ax: {"w1": {"num": [0.66225, 117.4499], "den": [1, 0.0117]},
-                    "w2": control.tf([25, 25000], [1, 50000]),
-                    "w3": {"num": [1e4, 1.3568e6], "den": [1, 2.7135e6]}, "gamma": 1.0}
-               for ax in ("d", "q")}
-    return ReportData(title=HOSTILE, spec=spec, artifact=art, margins=margins,
-                      checks=_checks(spec, margins), robustness=_robustness(),
-                      certificate={"closed loop stable": True, "gamma": 0.98,
-                                   "note": HOSTILE},
-                      scenarios=_scenarios(L), weights=weights)
+    art = _artifact(spec, weights=True)
+    analysis = _analysis(spec, art)
+    art = art.with_margins(analysis["margins"]["discrete"])
+    _, L = _margins(art, spec.motor)
+    verify, traces = _verification(L)
+    return ReportData(title=HOSTILE, spec=spec, artifact=art, analysis=analysis,
+                      verification=verify, traces=traces)
 
 
 @pytest.fixture(scope="session")

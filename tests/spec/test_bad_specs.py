@@ -1,4 +1,4 @@
-"""Bad spec files get one exact, located message each (DESIGN.md reliability rules).
+"""Bad spec files get one exact, located message each (toolbox/ARCHITECTURE.md "Reliability rules").
 
 The messages are part of the user interface: a change here is a change users
 see, so the full text is pinned.

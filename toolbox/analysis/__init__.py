@@ -7,61 +7,30 @@
 * :mod:`.certificate` - common quadratic Lyapunov function over a parameter
   box (cvxpy + CLARABEL).
 
-:func:`analysis_report` assembles what the CLI writes to ``analysis.json``;
-:func:`margins_for_artifact` gives the MARGINS of controller.json (sampled
-loop with delay, as executed); :func:`compare_designs` the rows of
-``cct compare``. (They live here because the sub-package has no other
-public module for them.)
+:func:`analysis_report` assembles what the CLI writes to ``analysis.json``
+and :func:`compare_designs` the rows of ``cct compare``. The one margins API
+(:func:`lti_loop_margins`, :func:`frequency_margins`, :func:`grid_margins`)
+is what every other stage calls for a margin.
 """
 
 from __future__ import annotations
 
+from ._responses import loop_responses
 from .certificate import (CertificateResult, ParameterBox, certify,
                           largest_certified_scale)
-from .margins import (MARGIN_KEYS, MarginsResult, MimoMarginsResult, compute_margins,
-                      disk_variations, json_ready, mimo_disk_margins)
+from .margins import (MARGIN_KEYS, FrequencyMargins, MarginsResult, MimoMarginsResult,
+                      compute_margins, disk_variations, frequency_margins, grid_margins,
+                      json_ready, lti_loop_margins, mimo_disk_margins)
 from .robustness import DEFAULT_RANGES, SweepResult, robustness_sweep
 
 __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "compute_margins",
            "disk_variations", "mimo_disk_margins", "DEFAULT_RANGES", "SweepResult",
            "robustness_sweep", "CertificateResult", "ParameterBox", "certify",
-           "largest_certified_scale", "analysis_report", "margins_for_artifact",
-           "with_margins", "compare_designs", "ANALYSIS_SCHEMA"]
+           "largest_certified_scale", "analysis_report", "compare_designs", "ANALYSIS_SCHEMA",
+           "FrequencyMargins", "frequency_margins", "grid_margins", "lti_loop_margins"]
 
 ANALYSIS_SCHEMA = "cct.analysis/1"
 STEP_KEYS = ("response_time_5pct", "rise_time_10_90", "settling_time_2pct", "overshoot_pct")
-
-
-def margins_for_artifact(artifact, motor) -> dict:
-    """MARGINS per axis for controller.json: the sampled loop as executed
-    (law measurement channel, ZOH plant, ``z^-delay_samples``), with extras.
-
-    Parameters
-    ----------
-    artifact : ControllerArtifact
-        The design.
-    motor : Motor
-        Nominal plant.
-
-    Returns
-    -------
-    dict
-        ``{"d": {...}, "q": {...}}`` (JSON-ready).
-    """
-    return {ax: r.to_json() for ax, r in compute_margins(artifact, motor).items()}
-
-
-def with_margins(artifact, motor):
-    """A copy of ``artifact`` carrying :func:`margins_for_artifact`.
-
-    Parameters
-    ----------
-    artifact : ControllerArtifact
-        The design.
-    motor : Motor
-        Nominal plant.
-    """
-    return artifact.with_margins(margins_for_artifact(artifact, motor))
 
 
 def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
@@ -91,7 +60,9 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
     dict
         ``{"schema": "cct.analysis/1", "method", "sample_time", "delay_samples",
         "margins": {"discrete": {d, q}, "continuous": {d, q},
-        "continuous_delay": {d, q}}, "mimo_at_speed": {...},
+        "continuous_delay": {d, q}}, "responses": {...} (figure data of
+        the executed loops, :func:`toolbox.analysis._responses.loop_responses`),
+        "mimo_at_speed": {...},
         "sweep": {...}, "certificate": {...} or None}``; each margins entry is
         :meth:`MarginsResult.to_json`.
     """
@@ -108,6 +79,7 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
                                  compute_margins(artifact, motor, discrete=False,
                                                  delay="exact").items()},
         },
+        "responses": loop_responses(artifact, motor),
         "mimo_at_speed": mimo_disk_margins(artifact, motor, drive).to_json(),
         "sweep": robustness_sweep(artifact, motor, n=sweep_sets, drive=drive,
                                   seed=seed).to_json(),

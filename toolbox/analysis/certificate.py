@@ -56,7 +56,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.linalg import matrix_balance
 
-from .margins import AXES, axis_law, json_ready, _electrical_max_speed
+from ..plant import max_electrical_speed
+from .margins import AXES, axis_law, json_ready
 
 __all__ = ["CertificateResult", "ParameterBox", "closed_loop_matrix",
            "closed_loop_matrix_delay", "point_matrices", "certify",
@@ -370,7 +371,7 @@ def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5
     delay : bool
         Include a first-order Pade model of the computation delay.
     """
-    wmax = _electrical_max_speed(motor, drive) if omega_max is None else omega_max
+    wmax = max_electrical_speed(motor, drive) if omega_max is None else omega_max
 
     def at(k):
         box = ParameterBox.around(motor, k, R=R, L=L, omega_max=wmax, speed_gain=speed_gain)

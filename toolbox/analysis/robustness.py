@@ -31,8 +31,9 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
+from ..plant import max_electrical_speed
 from .margins import (AXES, axis_law, axis_margins, coupled_closed_loop, freqresp,
-                      json_ready, make_axis_loop, _electrical_max_speed, zoh_axis)
+                      grid_margins, json_ready, make_axis_loop, zoh_axis)
 
 __all__ = ["DEFAULT_RANGES", "SweepResult", "sample_parameters", "robustness_sweep",
            "batch_axis_margins"]
@@ -106,39 +107,13 @@ def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.nda
     dict
         ``gain_margin_db``, ``phase_margin_deg``, ``stability_margin``,
         ``disk_margin`` (N,) with linear interpolation between grid points
-        (the worst set is recomputed exactly afterwards).
+        (:func:`toolbox.analysis.margins.grid_margins`; the worst set is
+        recomputed exactly afterwards).
     """
     a, b = zoh_axis(R[:, None], L[:, None], Ts)
     Lw = K_fr[None, :] * b / (z[None, :] - a) * z[None, :] ** (-d[:, None].astype(float))
-    S = 1.0 / (1.0 + Lw)
-    sm = np.min(np.abs(1.0 + Lw), axis=1)
-    dm = 1.0 / np.max(np.abs(S - 0.5), axis=1)
-    # phase margins at |L| = 1 crossings (closest to instability)
-    lg = np.log(np.abs(Lw))
-    cr = np.sign(lg[:, :-1]) * np.sign(lg[:, 1:]) < 0
-    t = lg[:, :-1] / (lg[:, :-1] - lg[:, 1:])
-    Lc = Lw[:, :-1] + t * (Lw[:, 1:] - Lw[:, :-1])
-    pm = np.where(cr, np.degrees(np.angle(-Lc)), np.nan)
-    # gain margins at Im L = 0, Re L < 0
-    im = Lw.imag
-    cr2 = (np.sign(im[:, :-1]) * np.sign(im[:, 1:]) < 0)
-    t2 = im[:, :-1] / np.where(cr2, im[:, :-1] - im[:, 1:], 1.0)
-    re = Lw.real[:, :-1] + t2 * (Lw.real[:, 1:] - Lw.real[:, :-1])
-    cr2 &= re < 0
-    gm = np.where(cr2, -20 * np.log10(np.abs(np.where(cr2, re, 1.0))), np.nan)
-    # the Nyquist point is real: include it when negative
-    nyq = Lw[:, -1]
-    gm = np.hstack([gm, np.where(nyq.real < 0, -20 * np.log10(np.abs(nyq.real)), np.nan)[:, None]])
-    return {"gain_margin_db": _closest(gm), "phase_margin_deg": _closest(pm),
-            "stability_margin": sm, "disk_margin": dm}
-
-
-def _closest(x: np.ndarray) -> np.ndarray:
-    """Per row, the entry of smallest magnitude (inf for an all-NaN row)."""
-    mag = np.where(np.isnan(x), np.inf, np.abs(x))
-    j = np.argmin(mag, axis=1)
-    v = x[np.arange(x.shape[0]), j]
-    return np.where(np.isinf(mag[np.arange(x.shape[0]), j]), np.inf, v)
+    # the last grid point is the Nyquist frequency (robustness_sweep builds it so)
+    return grid_margins(w, Lw, nyquist=True)
 
 
 @dataclass(frozen=True)
@@ -260,7 +235,7 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
         margins[name] = batch_axis_margins(K_fr, z, w, R, L, Ts, d)
 
     # coupled closed loops at speed (vectorised per delay value)
-    wmax = _electrical_max_speed(motor, drive)
+    wmax = max_electrical_speed(motor, drive)
     speeds = np.linspace(-wmax, wmax, n_speeds) if (wmax > 0 and n_speeds > 1) else np.zeros(1)
     laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
     rho = np.zeros(N)

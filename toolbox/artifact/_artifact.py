@@ -206,33 +206,128 @@ class Zpk:
         return cls(roots["zeros"], roots["poles"], float(gain))
 
 
-def _antiwindup_gain(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: float,
-                     radius: float = 0.99) -> np.ndarray | None:
-    """Back-calculation gain ``aw`` so that the saturated controller
-    ``x+ = (A - aw C) x + ...`` is strictly stable.
+#: A mode of the saturated recursion slower than this many periods counts as
+#: on the unit circle (it would let the state drift: windup).
+_AW_SLOW_SAMPLES = 1e6
 
-    Start from the self-conditioned choice ``aw = B/D`` (Hanus: while
-    saturated the state evolves on the controller's zeros; exact for a PI).
-    Tustin maps the zeros at infinity of a strictly proper controller to
-    z = -1, so any mode of ``A - aw C`` with ``|z| >= radius`` is moved to the
-    origin (deadbeat) by Ackermann's formula on the dual pair (A', C').
-    ``None`` when the law has no measurement feedthrough and no observable
-    state to correct.
+
+def _continuous_image(z: complex, sample_time: float, method: str | None) -> complex:
+    """Discrete mode ``z`` -> ``exp(s Ts)`` of the continuous root it came from.
+
+    Tustin maps ``s = (2/Ts)(z - 1)/(z + 1)``; a real continuous zero beyond
+    ``-2/Ts`` lands on the negative real axis and a zero at infinity on
+    ``z = -1``, where the sampled recursion would alternate in sign. The exact
+    sampling of the same root, ``exp(s Ts)``, is the sensible location (0 for
+    a root at infinity).
+    """
+    if method != "tustin" or abs(z + 1.0) < 1e-12:
+        return 0.0
+    s = 2.0 / sample_time * (z - 1.0) / (z + 1.0)
+    if s.real >= 0.0:
+        return 0.0
+    return complex(np.exp(s * sample_time))
+
+
+def _relocated(z: complex, sample_time: float | None, method: str | None) -> complex | None:
+    """Where a bad mode of the saturated recursion goes (``None``: keep it).
+
+    * ``|z| > 1``: mirrored into the unit disc (``1/conj(z)``), the same time
+      constant but decaying;
+    * on or numerically near the circle (time constant above
+      :data:`_AW_SLOW_SAMPLES` periods): the origin, since a mode that does
+      not decay lets the state drift while saturated (windup);
+    * Tustin's modes with ``Re z < 0``: ``exp(s Ts)`` of their continuous root.
+
+    Stable slow modes are kept: they are the controller's own zeros (for a PI
+    the zero at ``-Ki/Kp``), and moving them would put more of the clipped
+    voltage into the state than Hanus's conditioning does.
+    """
+    r = abs(z)
+    mirrored = r > 1.0 + 1.0 / _AW_SLOW_SAMPLES
+    if mirrored:
+        z = z / r ** 2
+        r = abs(z)
+    if r >= math.exp(-1.0 / _AW_SLOW_SAMPLES):
+        return 0.0
+    if method == "tustin" and z.real < 0.0 and sample_time:
+        return _continuous_image(z, sample_time, method)
+    return z if mirrored else None
+
+
+def _antiwindup_gain(A: np.ndarray, B_r: np.ndarray, C: np.ndarray, D_r: float,
+                     B_y: np.ndarray | None = None, D_y: float = 0.0,
+                     sample_time: float | None = None,
+                     method: str | None = None) -> np.ndarray:
+    """Anti-windup gain ``aw`` of a law ``x+ = A x + B_r r + B_y y + aw (v_sat - v)``.
+
+    Conditioning technique of Hanus, Kinnaert and Henrotte (1987,
+    "Conditioning technique, a general anti-windup and bumpless transfer
+    method", Automatica 23(6), 729-739) on the **reference** channel:
+    ``aw = B_r / D_r``. Then ``x+ = A x + B_r r_c + B_y y`` with the realisable
+    reference ``r_c = r + (v_sat - v)/D_r``, the one for which the law's own
+    output (decoupling terms included) would have been exactly ``v_sat``.
+    While the voltage limits, the law's state therefore evolves as if it had
+    asked for what the inverter produced, and leaves saturation with no
+    stored excess. The reference channel, not the measurement or the error:
+    for 2-DOF laws (IP, TCI, ILQ, LQ) only the reference is free to be
+    re-interpreted (the measurement is what it is), and conditioning on the
+    measurement makes the integrator integrate a fictitious current, the
+    windup this avoids. For a 1-DOF law the two coincide. For a PI the state
+    is left almost frozen while saturated (mode at the controller's zero,
+    ``1 - Ts Ki/Kp``), not loaded with the whole clipped voltage.
+
+    While saturated the state obeys ``x+ = (A - aw C) x + ...``, whose poles
+    are the zeros of the reference channel. Bad ones are moved (see
+    :func:`_relocated`) by pole placement on the dual pair ``(A', C')``; the
+    good ones are kept. With no reference feedthrough (``D_r = 0``, e.g. the
+    IP structure) there is no realisable reference; the fallback ``aw = 0``
+    with the same relocation moves the integrators to the origin, i.e. the
+    integral state is reset to the value that reproduces ``v_sat`` (the
+    observer-like choice, stable and windup-free), other modes kept.
+
+    Parameters
+    ----------
+    A, C : ndarray
+        Law state and output matrices (n x n, 1 x n).
+    B_r : ndarray
+        Reference input column (n x 1); ``D_r`` its feedthrough (V/A).
+    B_y, D_y : ndarray, float, optional
+        Measurement column and feedthrough (unused in the gain; kept so that
+        callers pass the whole law).
+    sample_time : float, optional
+        Period (s), to map Tustin's fast modes back to ``exp(s Ts)``.
+    method : str, optional
+        Discretisation of the law (``tustin`` enables that mapping).
+
+    Returns
+    -------
+    ndarray
+        ``aw`` (n x 1). When the placement cannot move a bad mode (it is
+        unobservable from ``C``, so no correction through the output can),
+        the unrelocated conditioning gain.
     """
     n = A.shape[0]
-    aw = B / D if abs(D) > 1e-12 else np.zeros((n, 1))
+    # D_r is "zero" against the size of the dynamic path C B_r (both V/A)
+    scale = float(np.max(np.abs(C)) * np.max(np.abs(B_r))) if n else 0.0
+    if abs(D_r) > 1e-12 * scale and D_r != 0.0:
+        aw = B_r.reshape(n, 1) / D_r
+    else:
+        aw = np.zeros((n, 1))
     poles = np.linalg.eigvals(A - aw @ C)
-    if np.all(np.abs(poles) < radius):
-        return aw
-    target = np.where(np.abs(poles) < radius, poles, 0.0)
+    moved = [_relocated(complex(p), sample_time, method) for p in poles]
+    if all(m is None for m in moved):
+        return np.real(aw)
+    target = np.array([p if m is None else m for p, m in zip(poles, moved)])
+    # conjugate symmetry: a relocated complex pair maps to a conjugate pair
     try:
-        gain = control.acker(A.T, C.T, target)
+        gain = control.acker(A.T, C.T, np.sort_complex(target))
     except (ValueError, np.linalg.LinAlgError):
-        return None
-    aw = np.asarray(gain, float).reshape(n, 1)
-    if not np.all(np.abs(np.linalg.eigvals(A - aw @ C)) < 1.0):
-        return None
-    return np.real(aw)
+        return np.real(aw)
+    aw_new = np.real(np.asarray(gain, float).reshape(n, 1))
+    got = np.linalg.eigvals(A - aw_new @ C)
+    if not np.all(np.abs(got) < 1.0) or not np.all(np.isfinite(aw_new)):
+        return np.real(aw)  # a bad mode is unobservable, or acker lost the accuracy
+    return aw_new
 
 
 def _sorted_roots(poly: np.ndarray) -> np.ndarray:
@@ -263,8 +358,9 @@ class AxisController:
         Discrete two-input law ``[i_ref, i_meas] -> v`` actually executed.
         Its measurement channel equals minus the error controller.
     antiwindup : ndarray or None
-        Back-calculation gain (n x 1): the law's state is corrected by
-        ``antiwindup * (v_saturated - v_unsaturated)``.
+        Anti-windup gain (n x 1): the law's state is corrected by
+        ``antiwindup * (v_saturated - v_unsaturated)``. By default Hanus's
+        conditioning on the reference channel (see :func:`_antiwindup_gain`).
     reduced : AxisController or None
         Order-reduced twin, when an order reduction was asked.
     """
@@ -298,8 +394,9 @@ class AxisController:
         """Build an axis from a continuous one-degree-of-freedom controller.
 
         The executed law is ``v = K (i_ref - i_meas)``; with ``antiwindup`` the
-        back-calculation gain is ``B_d D_d^{-1}`` (the state is updated as if the
-        controller had produced the saturated voltage, exact for PI controllers).
+        gain is Hanus's conditioning ``B_d D_d^{-1}`` (the state is updated as
+        if the reference had been the one that produces the saturated voltage),
+        with bad saturated modes relocated (:func:`_antiwindup_gain`).
         """
         Kc = control.ss(K)
         Kd = control.sample_system(Kc, sample_time, method=method)
@@ -332,8 +429,10 @@ class AxisController:
         if isinstance(antiwindup, np.ndarray):
             aw = antiwindup.reshape(law.nstates, 1)
         elif antiwindup and law.nstates:
-            aw = _antiwindup_gain(np.asarray(law.A, float), np.asarray(law.B[:, 1:2], float),
-                                  np.asarray(law.C, float), float(law.D[0, 1]))
+            aw = _antiwindup_gain(np.asarray(law.A, float), np.asarray(law.B[:, 0:1], float),
+                                  np.asarray(law.C, float), float(law.D[0, 0]),
+                                  np.asarray(law.B[:, 1:2], float), float(law.D[0, 1]),
+                                  sample_time=sample_time, method=method)
         else:
             aw = None
         return cls(

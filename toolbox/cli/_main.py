@@ -1,7 +1,8 @@
 """``cct``: one command per pipeline stage.
 
-Exit codes (DESIGN.md): 0 every requirement holds, 1 a requirement fails
-(outputs still written), 2 bad input (nothing written). Only
+Exit codes (toolbox/ARCHITECTURE.md "Errors and exit codes"): 0 every
+requirement holds, 1 a requirement fails (outputs still written), 2 bad input
+(nothing written). Only
 :class:`~toolbox.errors.CctError` and its subclasses are turned into exit 2;
 anything else is a bug and keeps its traceback.
 """
@@ -189,7 +190,20 @@ def design(spec: str, out_dir: str, only_controller: bool, quiet: bool) -> None:
     sys.exit(EXIT_OK if out.passed else EXIT_REQUIREMENT)
 
 
+def _notices(notice: str | None, warnings: list[str]) -> None:
+    """The no-requirements notice and warnings, on stderr (stdout may be JSON)."""
+    if notice:
+        click.echo(f"cct: notice: {notice}", err=True)
+    for w in warnings:
+        click.echo(f"cct: warning: {w}", err=True)
+
+
 def _summary(out, quiet: bool) -> None:
+    warnings = list(out.warnings)
+    if out.verification is not None:
+        warnings += out.verification.warnings
+    # the notice describes what was checked: nothing is checked without verification
+    _notices(out.notice if out.verification is not None else None, warnings)
     if quiet:
         return
     for axis, m in out.artifact.margins.items():
@@ -200,8 +214,13 @@ def _summary(out, quiet: bool) -> None:
     if out.analysis is not None:
         failed += [k for k, c in out.analysis.get("requirements", {}).items() if not c["pass"]]
     if out.verification is not None:
+        failed += [k for k, c in out.verification.margin_checks.items() if not c["pass"]]
         for sc in out.verification.scenarios:
-            failed += [f"{sc.name}: {k}" for k, c in sc.checks.items() if not c["pass"]]
+            failed += [f"{sc.name}: {k} ({c.get('reason')})" for k, c in sc.checks.items()
+                       if not c["pass"]]
+    failed = list(dict.fromkeys(failed))
+    if out.header_refused:
+        failed.append("controller.h refused")
     click.echo("requirements: " + ("all pass" if not failed else "FAILED " + ", ".join(failed)))
 
 
@@ -219,22 +238,32 @@ def verify(out_dir: str, as_json: bool) -> None:
     """
     from ..pipeline import load_artifact, run_verification, spec_of_artifact, write_outputs
 
+    file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
-    spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
-    result = run_verification(artifact, spec)
+    spec = spec_of_artifact(artifact, file=file)
+    # margins and stability are recomputed from the executed law, never read back
+    result = run_verification(artifact, spec, file=file)
     text = json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n"
     write_outputs({"verify.json": text}, out_dir)
+    _notices(result.notice, result.warnings)
     if as_json:
         click.echo(text, nl=False)
     else:
+        for axis, s in result.stability.items():
+            verdict = {True: "stable", False: "UNSTABLE", None: "not analysed"}[s["stable"]]
+            click.echo(f"{axis} axis: {verdict} ({s['basis']})")
         for sc in result.scenarios:
             status = "pass" if sc.passed else "FAIL"
             click.echo(f"{status}  {sc.name}: 5% response "
                        f"{_fmt(sc.metrics.get('response_time_5pct'))} s, static error "
                        f"{_fmt(sc.metrics.get('static_error'))}")
+            for key, check in sc.checks.items():
+                if not check["pass"]:
+                    click.echo(f"      {key}: {check.get('reason')}")
         for key, check in result.margin_checks.items():
             click.echo(f"{'pass' if check['pass'] else 'FAIL'}  {key}: "
-                       f"{_fmt(check['value'])} (bound {_fmt(check['bound'])})")
+                       f"{_fmt(check['value'])} (bound {_fmt(check['bound'])})"
+                       + ("" if check["pass"] else f": {check.get('reason')}"))
     sys.exit(EXIT_OK if result.passed else EXIT_REQUIREMENT)
 
 
@@ -245,7 +274,8 @@ def report(out_dir: str) -> None:
     """Regenerate report.html and report.pdf from the design in OUT_DIR.
 
     Reads controller.json and analysis.json (analysing again only when
-    analysis.json is missing); the scenarios are simulated again because
+    analysis.json is missing; one from an older toolbox without the figure
+    data is refused: re-run cct design); the scenarios are simulated again because
     their traces are not stored. Nothing is re-designed.
 
     \b
@@ -254,20 +284,35 @@ def report(out_dir: str) -> None:
     """
     from ..pipeline import (DesignOutputs, analyse, load_analysis, load_artifact, report_data,
                             run_verification, spec_of_artifact, write_outputs)
-    from ..report import write_html, write_pdf
+    from ..report import build_context, write_html, write_pdf
 
+    from ..analysis.executed import loop_stability, recompute_margins
+
+    file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
-    spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
+    spec = spec_of_artifact(artifact, file=file)
+    # verified first, on the artifact as stored: its margins are compared, not trusted
+    verification = run_verification(artifact, spec, file=file)
     files = {}
     analysis = load_analysis(out_dir, artifact)
     if analysis is None:
         artifact, analysis = analyse(artifact, spec)
         files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
+    # the report shows margins, margin checks and stability of the executed law,
+    # not the stored numbers (the stored response figures are drawn as they are)
+    fresh = {ax: m.to_json() for ax, m in recompute_margins(artifact, spec.motor).items()}
+    artifact = artifact.with_margins(fresh)
+    analysis = {**analysis, "margins": {**(analysis.get("margins") or {}), "discrete": fresh},
+                "stability": loop_stability(artifact, spec.motor),
+                "requirements": {k: c for k, c in verification.margin_checks.items()
+                                 if not k.startswith("default.")}}
     out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
-                        verification=run_verification(artifact, spec))
-    data = report_data(out)
-    files.update({"report.html": write_html(data), "report.pdf": write_pdf(data)})
+                        verification=verification)
+    context = build_context(report_data(out))  # figures drawn once for both
+    files.update({"report.html": write_html(context), "report.pdf": write_pdf(context)})
     write_outputs(files, out_dir)
+    _notices(out.notice, verification.warnings)
+    sys.exit(EXIT_OK if out.passed else EXIT_REQUIREMENT)
 
 
 @main.command()
@@ -300,8 +345,13 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
     if artifact.method in NO_HEADER_METHODS:
         raise SpecError("controller.method", "a method with a C export",
                         artifact.method, hint=NO_HEADER_METHODS[artifact.method])
-    spec = spec_of_artifact(artifact, file=str(Path(out_dir) / "controller.json"))
-    text = write_header(artifact, spec.motor, spec.drive)
+    from ..pipeline import refuse_unstable_export
+
+    file = str(Path(out_dir) / "controller.json")
+    spec = spec_of_artifact(artifact, file=file)
+    refuse_unstable_export(artifact, spec.motor, file=file)
+    # refusals name the design file the controller came from
+    text = write_header(artifact, spec.motor, spec.drive, source=file)
     _write_file(output or Path(out_dir) / "controller.h", text, "--output")
 
 
@@ -313,12 +363,15 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
 def compare(specs: tuple[str, ...], json_path: str | None) -> None:
     """Design every SPEC and print margins and robustness side by side.
 
+    Each design is also verified (margins and stability of the executed law,
+    requirements and default checks); exit 1 when any design fails.
+
     \b
     Example:
       cct compare designs/000_*.toml designs/003_azaiz2007_hinf.toml
     """
     from ..analysis import compare_designs
-    from ..pipeline import design_spec
+    from ..pipeline import design_spec, run_verification
     from ..spec import load_spec
 
     loaded = [load_spec(s) for s in specs]
@@ -330,11 +383,30 @@ def compare(specs: tuple[str, ...], json_path: str | None) -> None:
                             "(compare designs for one drive)", "a different one", file=s.source)
     artifacts = [design_spec(s) for s in loaded]
     rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive)
-    for spec_path, row in zip(specs, rows):
+    failed = False
+    for spec_path, row, art, s in zip(specs, rows, artifacts, loaded):
         row["spec"] = spec_path
+        result = run_verification(art, s)
+        row["passed"] = result.passed
+        row["failures"] = _failures(result)
+        row["notice"] = result.notice
+        failed |= not result.passed
     if json_path:
         _write_file(json_path, json.dumps(rows, indent=1, allow_nan=False) + "\n", "--json")
     _print_table(rows)
+    for row in rows:
+        if not row["passed"]:
+            click.echo(f"FAIL  {row['spec']}: " + "; ".join(row["failures"]))
+    sys.exit(EXIT_REQUIREMENT if failed else EXIT_OK)
+
+
+def _failures(result) -> list[str]:
+    """``key: reason`` of every failing check of a verification."""
+    out = [f"{k}: {c.get('reason')}" for k, c in result.margin_checks.items() if not c["pass"]]
+    for sc in result.scenarios:
+        out += [f"{sc.name}: {k}: {c.get('reason')}" for k, c in sc.checks.items()
+                if not c["pass"]]
+    return out
 
 
 #: Columns of the compare table: (header, value of a row); worst axis throughout.
@@ -349,6 +421,7 @@ _COLUMNS = (
     ("unstable", lambda r: f"{r['n_unstable']}/{r['n_sets']}"),
     ("MIMO disk", lambda r: r["mimo_worst_disk_margin"]),
     ("cert. scale", lambda r: (r["certificate"] or {}).get("certified_scale")),
+    ("verdict", lambda r: "pass" if r.get("passed", True) else "FAIL"),
 )
 
 
@@ -378,6 +451,8 @@ def _fmt(value) -> str:
 def gallery(designs_dir: str, out_dir: str) -> None:
     """Regenerate the report gallery: every spec in DESIGNS into OUT/<name>/.
 
+    Every design's outputs are written; exit 1 when any design fails.
+
     \b
     Example:
       cct gallery
@@ -385,10 +460,16 @@ def gallery(designs_dir: str, out_dir: str) -> None:
     from ..pipeline import build_outputs, write_outputs
     from ..spec import load_spec
 
+    failed = []
     for path in sorted(Path(designs_dir).glob("*.toml")):
         click.echo(f"{path.name} ...", err=True)
         out = build_outputs(load_spec(path))
         write_outputs({**out.files, **_figures(out.html or "")}, Path(out_dir) / path.stem)
+        if not out.passed:
+            failed.append(path.name)
+    for name in failed:
+        click.echo(f"FAIL  {name}", err=True)
+    sys.exit(EXIT_REQUIREMENT if failed else EXIT_OK)
 
 
 def _figures(html: str) -> dict[str, str]:

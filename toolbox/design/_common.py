@@ -5,18 +5,10 @@ from __future__ import annotations
 from datetime import datetime, timezone
 from typing import Any
 
+from .._version import toolbox_version
 from ..artifact import AxisController, ControllerArtifact, Decoupling, spec_sha256
 
-__all__ = ["make_artifact", "decoupling_from_motor", "toolbox_version"]
-
-
-def toolbox_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("current-control-toolbox")
-    except PackageNotFoundError:  # running from a source tree
-        return "0+unknown"
+__all__ = ["make_artifact", "decoupling_from_motor"]
 
 
 def decoupling_from_motor(motor, *, cross: bool = True, emf: bool = True) -> Decoupling:

@@ -22,6 +22,8 @@ import scipy.linalg as sla
 import scipy.signal as sig
 import control as ct
 
+from ..analysis import lti_loop_margins
+
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
     "replace_integrators", "remove_cancellations", "stable_split",
@@ -384,8 +386,7 @@ class LoopMargins:
     gain_crossover_rad_s : float
         Frequency of the phase margin (rad/s).
     stability_margin : float
-        M_m = min |1 + L(jw)| = 1/||S||_inf, from ``stability_margins`` and
-        checked on a frequency grid (the smaller value is kept).
+        M_m = min |1 + L(jw)| = 1/||S||_inf (peak refined on the grid).
     static_error : float
         1/(1 + L(0)) (0 with an integrator).
     """
@@ -399,32 +400,31 @@ class LoopMargins:
 
 
 def loop_margins(G: Any, K: Any, freqs: np.ndarray | None = None) -> LoopMargins:
-    """Margins of L = G K with python-control ``stability_margins`` and a grid.
+    """Margins of L = G K from the toolbox's one margins API.
+
+    :func:`toolbox.analysis.lti_loop_margins` (refined crossings, the same
+    numbers as python-control ``stability_margins``) plus the static error.
 
     Parameters
     ----------
     G, K : control.LTI
         Plant (A/V) and controller (V/A).
     freqs : ndarray, optional
-        Grid for 1/||S||_inf (rad/s); default 5000 points 1e-3 .. 1e8 rad/s.
+        Frequency grid (rad/s); default that of
+        :func:`~toolbox.analysis.lti_loop_margins` (1e-3 .. 1e8 rad/s).
 
     Returns
     -------
     LoopMargins
     """
     L = _as_ss(G) * _as_ss(K)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        gm, pm, sm, wpc, wgc, wms = ct.stability_margins(L)
-    w = np.logspace(-3, 8, 5000) if freqs is None else np.asarray(freqs, float)
-    Lw = np.asarray(ct.frequency_response(L, w).complex).reshape(-1)
-    sm = float(min(sm, np.min(np.abs(1 + Lw))))
+    m = lti_loop_margins(L, None if freqs is None else np.asarray(freqs, float))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         dc = complex(L(0)) if not np.any(np.abs(L.poles()) < 1e-12) else np.inf
     ess = 0.0 if not np.isfinite(abs(dc)) else float(abs(1.0 / (1.0 + dc)))
-    gm_db = float(20 * np.log10(gm)) if np.isfinite(gm) and gm > 0 else float("inf")
-    return LoopMargins(gm_db, float(wpc), float(pm), float(wgc), sm, ess)
+    return LoopMargins(m.gain_margin_db, m.phase_crossover_rad_s, m.phase_margin_deg,
+                       m.gain_crossover_rad_s, m.stability_margin, ess)
 
 
 @dataclass

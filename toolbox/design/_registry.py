@@ -2,6 +2,9 @@
 
 Each method module exposes ``read_cfg(method, table, motor, drive) -> Cfg``
 (validating ``[controller.<method>]``) and ``design(spec) -> ControllerArtifact``.
+Importing this package registers every method's ``read_cfg`` with the spec
+stage (:func:`toolbox.spec.register_method_reader`), so that ``toolbox.spec``
+validates method parameters without importing ``toolbox.design``.
 """
 
 from __future__ import annotations
@@ -10,6 +13,7 @@ import importlib
 from typing import Any
 
 from ..errors import SpecError
+from ..spec import read_method_cfg, register_method_reader  # re-exported: one route
 
 __all__ = ["METHOD_MODULES", "read_method_cfg", "design"]
 
@@ -26,23 +30,6 @@ def _module(method: str):
     return importlib.import_module(f"{__package__}.{METHOD_MODULES[method]}")
 
 
-def read_method_cfg(method: str, table, motor, drive) -> Any:
-    """Validate ``[controller.<method>]`` into the method's ``*Cfg`` object.
-
-    Parameters
-    ----------
-    method : str
-        Design method name.
-    table : Table
-        The ``[controller.<method>]`` table.
-    motor : Motor
-        Validated motor (gains may derive from it).
-    drive : Drive
-        Validated drive (sample time, delay).
-    """
-    return _module(method).read_cfg(method, table, motor, drive)
-
-
 def design(spec) -> Any:
     """Run the design method a validated spec asks for.
 
@@ -51,3 +38,12 @@ def design(spec) -> Any:
     ControllerArtifact
     """
     return _module(spec.controller.method).design(spec)
+
+
+def _register_readers() -> None:
+    """Register every method's ``read_cfg`` with the spec stage."""
+    for method in METHOD_MODULES:
+        register_method_reader(method, _module(method).read_cfg)
+
+
+_register_readers()

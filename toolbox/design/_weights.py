@@ -56,7 +56,7 @@ def validate_weight(w: ct.TransferFunction, key: str = _DEFAULT_KEY,
         ``controller.hinf.weights.q.w1``.
     allow_integrator : bool
         Accept poles on the imaginary axis (they violate assumptions A3/A4 of
-        paper 003 later, where :func:`toolbox.design._hinf.check_assumptions`
+        paper 003 later, where :func:`toolbox.design._hinf_riccati.check_assumptions`
         gives the remedy).  Default ``False``.
 
     Returns

@@ -18,6 +18,7 @@ import control as ct
 
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
+from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["FcsMpcCfg", "baseline_pi", "read_cfg", "design"]
@@ -73,8 +74,6 @@ def read_cfg(method: str, table, motor, drive) -> FcsMpcCfg:
     -------
     FcsMpcCfg
     """
-    from ..spec import Table
-
     t = Table(table.data, table.prefix, ("alpha", "beta", "gamma"))
     alpha = t.number("alpha", 1.0, nonnegative=True)
     beta = t.number("beta", 1.0, nonnegative=True)

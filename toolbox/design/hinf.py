@@ -3,7 +3,7 @@
 A. Azaiz, Y. Ramdani, A. Meroufel, B. Belabbes, "H-infinity design of
 controllers ensuring the regulation of currents of the decoupled field
 orientation control applied to a PMS motor" (2007). Equation numbers refer to
-it. The numerics live in :mod:`toolbox.design._hinf` (augmented plant eq
+it. The numerics live in :mod:`toolbox.design._hinf_riccati` (augmented plant eq
 (35)-(40), (50)-(64); Riccati formulae eq (10)-(32), (65)-(67); gamma
 iteration with back-off), :mod:`._weights` (eq (44)-(49) and ``makeweight``)
 and :mod:`._reduction` (eq (71)-(72)); this module turns a spec into them and
@@ -22,6 +22,12 @@ reduction is asked precisely to run a simpler controller. Set
 ``executed = "full"`` to run the full one. The anti-windup (back-calculation)
 gain is the artifact's default, whose saturated recursion is Schur (Tustin's
 zero at z = -1 moved to the origin).
+
+The validated weights of each axis are recorded in ``gains["weights"]`` as
+``{"w1" | "w2" | "w3": {"num", "den"} or None}`` (continuous, coefficients in
+s, highest power first), whatever their spec form (constant, num/den, zpk,
+makeweight): analysis draws the bounds of eq (41)-(43) from them and nothing
+after design re-reads the spec's weight tables.
 """
 
 from __future__ import annotations
@@ -32,13 +38,15 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
 import control as ct
+import numpy as np
 
 from ..artifact import AxisController, ControllerArtifact, Zpk
-from ..errors import SpecError
+from ..errors import DesignInfeasible, SpecError
 from ..plant import axis_plants
+from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
-from ._hinf import (_fastest, augment_mixed_sensitivity, gamma_iteration, synthesize,
-                    weight_bound_check)
+from ._hinf_riccati import (GammaBelowOptimum, augment_mixed_sensitivity, fastest_pole_modulus,
+                            gamma_iteration, synthesize, weight_bound_check)
 from ._reduction import compare_margins, loop_margins, reduce_controller
 from ._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
 
@@ -119,8 +127,6 @@ def read_weight(value: Any, key: str) -> ct.TransferFunction:
     SpecError
         Unknown form, bad numbers, improper or unstable weight.
     """
-    from ..spec import Table
-
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         if not (math.isfinite(value) and value > 0):
             raise SpecError(key, "a constant weight > 0", value)
@@ -184,8 +190,6 @@ def read_cfg(method: str, table, motor, drive) -> HinfCfg:
     -------
     HinfCfg
     """
-    from ..spec import Table
-
     t = Table(table.data, table.prefix, CFG_KEYS)
     gamma = t.raw("gamma", 1.0)
     if isinstance(gamma, str):
@@ -283,8 +287,7 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
             warnings.simplefilter("always")
             res = synthesize(P, gamma, backoff=backoff, sample_time=sample_time)
     except SpecError as err:
-        raise SpecError(err.key, err.expected, err.got if err.has_got else SpecError._MISSING,
-                        hint=f"{axis} axis: {err.hint}" if err.hint else f"{axis} axis") from None
+        raise _on_axis(err, axis) from None
     bounds = weight_bound_check(G, res.K, w1, w2, w3)
     red = Kr = None
     if reduce_order is not None:
@@ -294,7 +297,7 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
         Kr = red.K
         margins = compare_margins(G, res.K, Kr, max_loss=margin_loss)
         if not margins.ok and on_margin_loss == "refuse":
-            raise SpecError(f"{_KEY}.reduce_order",
+            raise DesignInfeasible(f"{_KEY}.reduce_order",
                             f"an order whose {axis}-axis controller keeps GM, PM and M_m "
                             f"within {100 * margin_loss:g} % of the full controller's",
                             reduce_order,
@@ -306,15 +309,24 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
     return HinfAxisResult(G, res.K, Kr, res, bounds, red, margins)
 
 
+def _on_axis(err: SpecError, axis: str) -> SpecError:
+    """The same error (same class and data) with ``"<axis> axis"`` in its hint."""
+    new = err._copy(err.key, err.file)   # keeps the class and its data fields
+    new.hint = f"{axis} axis: {err.hint}" if err.hint else f"{axis} axis"
+    new.axis = axis
+    new.args = (new._text(),)             # the message is built at construction
+    return new
+
+
 def _refuse_unrealisable(res, Kr, gamma, axis: str) -> None:
     """A controller pole faster than pi/Ts cannot run at the sample time (the
     known trap of paper 003 at the exact optimal gamma): refuse it unless the
     order reduction (the executed controller) removed that pole."""
     if res.pole_limit is None or res.fastest_pole <= res.pole_limit:
         return
-    if Kr is not None and _fastest(Kr) <= res.pole_limit:
+    if Kr is not None and fastest_pole_modulus(Kr) <= res.pole_limit:
         return
-    raise SpecError(f"{_KEY}.gamma", "a gamma whose controller has no pole faster than "
+    raise DesignInfeasible(f"{_KEY}.gamma", "a gamma whose controller has no pole faster than "
                     f"pi/Ts = {res.pole_limit:.4g} rad/s", gamma,
                     hint=f"{axis} axis: fastest pole |s| = {res.fastest_pole:.4g} rad/s; "
                          'raise gamma or use gamma = "optimal" (automatic back-off)')
@@ -322,6 +334,20 @@ def _refuse_unrealisable(res, Kr, gamma, axis: str) -> None:
 
 def _zpk_json(K: Any) -> dict:
     return Zpk.from_statespace(ct.ss(K)).to_json()
+
+
+def _weight_json(W: Any) -> dict | None:
+    """``{"num", "den"}`` (coefficients in s, highest power first) of a validated weight.
+
+    Every spec form (constant, ``num/den``, ``zeros/poles/gain``, ``makeweight``)
+    is a transfer function once read, so the artifact records one form and
+    later stages (analysis' weight bounds, eq (41)-(43)) never re-read the spec.
+    """
+    if W is None:
+        return None
+    tf = ct.tf(W)
+    return {"num": [float(c) for c in np.atleast_1d(tf.num[0][0])],
+            "den": [float(c) for c in np.atleast_1d(tf.den[0][0])]}
 
 
 def _margins_json(m: Any) -> dict:
@@ -353,16 +379,14 @@ def design(spec) -> ControllerArtifact:
                                         margin_loss=cfg.margin_loss,
                                         on_margin_loss=cfg.on_margin_loss, axis=ax)
                    for ax in AXES}
-    except SpecError as err:
-        if err.key != f"{_KEY}.gamma" or not str(err.expected).startswith("gamma >="):
-            raise
+    except GammaBelowOptimum as err:
         # one gamma serves both axes: quote the best achievable for both
         best = {ax: gamma_iteration(augment_mixed_sensitivity(plants[ax], **cfg.weights[ax]))
                 for ax in AXES}
         worst = max(best.values())
-        failed = (err.hint or "").split("; set gamma")[0]  # which condition failed where
-        raise SpecError(f"{_KEY}.gamma", f"gamma >= the best achievable {worst:.4g} "
-                        "(both axes)", cfg.gamma,
+        failed = f"{err.axis} axis: {err.condition}"  # which condition failed where
+        raise DesignInfeasible(f"{_KEY}.gamma", f"gamma >= the best achievable {worst:.4g} "
+                               "(both axes)", cfg.gamma,
                         hint=f"{failed}; best per axis: "
                         + ", ".join(f"{ax} {g:.4g}" for ax, g in best.items())
                         + f'; set gamma above {worst:.4g} or "optimal"') from None
@@ -394,6 +418,9 @@ def _gains(cfg: HinfCfg, results: dict) -> dict:
                                for k, v in r.bounds.items()} for ax, r in results.items()},
         "zpk": {ax: _zpk_json(r.K) for ax, r in results.items()},
         "executed": cfg.executed,
+        # the validated weights, continuous (003 eq (44)-(49) or makeweight)
+        "weights": {ax: {k: _weight_json(W) for k, W in cfg.weights[ax].items()}
+                    for ax in results},
         "warnings": {ax: list(r.synthesis.warnings) for ax, r in results.items()},
     }
     if cfg.reduce_order is not None:

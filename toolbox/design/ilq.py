@@ -40,6 +40,8 @@ import scipy.linalg as sla
 
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
+from ..plant import axis_coefficients
+from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["IlqCfg", "IlqAxis", "IlqDesign", "sigma_bound", "ilq_axis", "ilq_axis_from_plant",
@@ -278,7 +280,7 @@ def ilq_axis(R: float, L: float, s_star: float, sigma: float, *, axis: str = "q"
                         f"(rad/s) for the {axis} axis", s_star)
     if not (math.isfinite(sigma) and sigma > 0):
         raise SpecError(f"{_KEY}.sigma", "a number > 0 (1/s)", sigma)
-    a, b = -R / L, 1.0 / L                                # eq (1)
+    a, b = axis_coefficients(R, L)                       # eq (1)
     bound = sigma_bound(a, s_star)                       # eq (3)
     optimal = _check_sigma(sigma, bound, axis, allow_non_optimal)
     K_F0, K_I0 = L, -L * s_star                          # eq (2)
@@ -437,8 +439,6 @@ def read_cfg(method: str, table, motor, drive) -> IlqCfg:
         Unknown keys, missing poles, non-negative poles, sigma <= 0, sigma at or
         below the eq (3) bound (unless ``allow_non_optimal``).
     """
-    from ..spec import Table
-
     t = Table(table.data, table.prefix,
               ("poles", "s1", "s2", "sigma", "sigma_factor", "allow_non_optimal"))
     if t.has("poles") and (t.has("s1") or t.has("s2")):
@@ -452,7 +452,8 @@ def read_cfg(method: str, table, motor, drive) -> IlqCfg:
         raise SpecError(t.key("poles"), "assigned poles s* < 0 (rad/s), a number or "
                         "{d = .., q = ..} (missing)")
     allow = t.boolean("allow_non_optimal", False)
-    bounds = tuple(sigma_bound(-motor.R / L, p) for L, p in zip((motor.Ld, motor.Lq), poles))
+    bounds = tuple(sigma_bound(axis_coefficients(motor.R, L)[0], p)
+                   for L, p in zip((motor.Ld, motor.Lq), poles))
     if t.has("sigma") and t.has("sigma_factor"):
         raise SpecError(t.key("sigma"), "either sigma or sigma_factor, not both")
     if t.has("sigma"):

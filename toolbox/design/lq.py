@@ -37,6 +37,8 @@ import scipy.linalg as sla
 
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
+from ..plant import axis_coefficients
+from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["LqCfg", "LqAxis", "bryson_weights", "lqi_continuous", "lqi_discrete",
@@ -347,7 +349,7 @@ def design_lq(Ld: float, Lq: float, R: float, Q: dict, Rw: dict, sample_time: fl
     out = {}
     for ax, L in zip(AXES, (Ld, Lq)):
         _check_weights(Q[ax], Rw[ax], ax)
-        a, b = -R / L, 1.0 / L
+        a, b = axis_coefficients(R, L)
         out[ax] = (lqi_continuous(a, b, Q[ax], Rw[ax]) if domain == "continuous"
                    else lqi_discrete(a, b, Q[ax], Rw[ax], sample_time, delay_samples))
     return out
@@ -369,8 +371,6 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
     -------
     LqCfg
     """
-    from ..spec import Table
-
     t = Table(table.data, table.prefix,
               ("domain", "Q", "R", "bandwidth", "current_limit", "voltage_limit"))
     domain = t.string("domain", "discrete", choices=("continuous", "discrete"))
@@ -402,8 +402,6 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
 def _read_q(t) -> dict:
     value = t.raw("Q")
     if isinstance(value, dict):
-        from ..spec import Table
-
         sub = Table(value, t.key("Q"), AXES)
         return {ax: sub.numbers(ax, length=2) for ax in AXES}
     q = t.numbers("Q", length=2)

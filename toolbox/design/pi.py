@@ -84,7 +84,7 @@ import numpy as np
 
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
-from ..spec._fields import Table
+from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = [

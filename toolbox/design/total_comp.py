@@ -41,7 +41,7 @@ import numpy as np
 
 from ..artifact import AxisController, ControllerArtifact, Decoupling
 from ..errors import SpecError
-from ..spec._fields import Table
+from ..spec import Table
 from ._common import make_artifact
 from .pi import DISCRETISATIONS, _explicit
 

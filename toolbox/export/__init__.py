@@ -2,7 +2,8 @@
 
 ``write_header(artifact, motor=None, drive=None, *, name="cct") -> str`` and
 ``check_exportable(artifact, ...)`` (refuses unstable or ill-conditioned
-controllers with :class:`toolbox.errors.SpecError`); see
+controllers, and constants out of float32/C ranges, with
+:class:`toolbox.errors.ExportRefused`); see
 :mod:`toolbox.export.c_header` for the header layout and the rules.
 """
 

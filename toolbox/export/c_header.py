@@ -1,27 +1,42 @@
 """Firmware export: the controller artifact as a C99 header (``controller.h``).
 
 The header is self-contained (header-only, include guards, no dynamic
-memory, only ``sqrtf`` from libm) and implements the whole current-control
-law of the artifact in one ``static inline`` step function:
+memory, only ``sqrtf`` from libm; ``sinf``/``cosf`` too for the hexagon) and
+implements the whole current-control law of the artifact in one
+``static inline`` step function:
 
 1. per axis, the discrete two-input law ``[i_ref, i_meas] -> v`` of
-   :class:`toolbox.artifact.AxisController` (``law``), as CMSIS-DSP style
+   :class:`toolbox.artifact.AxisController` (``law``), realised minimally
+   with round-off treated as zero (:mod:`toolbox.export._minimal`), as CMSIS-DSP style
    second-order sections when the law is one-degree-of-freedom
    (``v = K (i_ref - i_meas)``), else in state-space form;
 2. the decoupling of :class:`toolbox.artifact.Decoupling`:
    ``v_d += -cross w_m Lq_c i_q``, ``v_q += cross w_m Ld_c i_d + emf w_m flux_c``
    with ``w_m = pole_pairs Omega_m``;
-3. the voltage limit (circle of radius ``drive.max_voltage(convention)``,
-   radial scaling as in the toolbox simulator);
+3. the voltage limit of ``drive.voltage_limit``, radial scaling as in the
+   toolbox simulator (:mod:`toolbox.sim._kernel`): the circle of radius
+   ``drive.max_voltage(convention)``, or the SVM hexagon with that apothem
+   seen at the electrical angle ``theta_e + w_e Ts (delay + 1/2)`` (the header
+   then takes the input ``theta_e``);
 4. back-calculation anti-windup ``x += aw (v_sat - v_unsat)`` with the
    artifact's vector mapped into the executed coordinates.
+
+Faults (float path): a non-finite input, or a non-finite result, repeats the
+last good output, leaves the state unchanged and sets ``out.status`` (1 and 2;
+0 otherwise). :class:`ReferenceLaw` is the same law in double precision.
+
+Every emitted constant is range-checked first (float32 range and normal
+numbers, integer ranges of C); out of range, the export is refused with
+:class:`toolbox.errors.ExportRefused` naming the spec key responsible
+(``drive.vdc``, ``motor.R``, ...), so the header never holds ``inff``/``nan``.
 
 A fixed-point variant (``#define CCT_FIXED_POINT`` before including) adds
 ``cct_step_q31`` with Q31 signals and int64 accumulators; see
 :mod:`toolbox.export._fixed` for the scaling rules.
 
 Exportability rules (:func:`check_exportable`) -- a controller is refused with
-:class:`toolbox.errors.SpecError` (key ``axes.<d|q>.law``) when:
+:class:`toolbox.errors.ExportRefused` (key ``controller.<method>``, the
+message names the axis) when:
 
 * **unstable**: a pole of the discrete law has ``|z| >= 1``, other than one
   simple integrator exactly at ``z = 1`` (``|z - 1| <= 1e-9``) per axis;
@@ -29,7 +44,7 @@ Exportability rules (:func:`check_exportable`) -- a controller is refused with
   image of a continuous pole faster than ~12 x the Nyquist frequency) that
   no zero cancels to within 1 % of its distance to the unit circle (the pair
   then changes |K| by at most 1 % at any frequency, the rule of
-  :func:`toolbox.design._hinf.effective_poles` transposed to z);
+  :func:`toolbox.design._hinf_riccati.effective_poles` transposed to z);
 * **coefficient dynamic range** of one coefficient set (SOS stage or state
   row) above ``2**30`` (beyond Q31 resolution even with per-set scaling);
 * **rounding sensitivity**: rounding the executed coefficients to float32
@@ -40,7 +55,9 @@ Exportability rules (:func:`check_exportable`) -- a controller is refused with
   controller pole at 0.0117 rad/s lies 1.2e-6 inside the unit circle).
 
 The fixed-point variant is additionally refused (the header then carries an
-``#error`` under ``CCT_FIXED_POINT``) when no finite state bound exists.
+``#error`` under ``CCT_FIXED_POINT``) when no finite state bound exists, when
+one of its constants is out of range, and for ``voltage_limit = "hexagon"``
+(not implemented in Q31).
 """
 
 from __future__ import annotations
@@ -49,12 +66,14 @@ import math
 import re
 import warnings
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import SpecError
+from ..errors import CctError, ExportRefused, SpecError
 from . import _fixed
+from ._minimal import MinimalLaw, minimal_law
 from ._sos import Realisation, realise_axis
 
 __all__ = ["write_header", "check_exportable", "ExportCheck", "sanitise_comment",
@@ -126,19 +145,24 @@ def _fmt(z: complex) -> str:
     return f"{z.real:.9g}{z.imag:+.3g}j" if z.imag else f"{z.real:.9g}"
 
 
+def _law_key(artifact) -> str:
+    """The spec key of the controller parameters that made the law."""
+    return f"controller.{artifact.method}"
+
+
 def _is_integrator(p: complex) -> bool:
     return abs(p - 1.0) <= INTEGRATOR_TOL
 
 
-def _check_poles(poles: np.ndarray, zeros: np.ndarray, key: str) -> None:
+def _check_poles(poles: np.ndarray, zeros: np.ndarray, key: str, ax: str) -> None:
     poles = np.atleast_1d(np.asarray(poles, complex))
     n_int = int(sum(_is_integrator(p) for p in poles))
     if n_int > 1:
-        raise SpecError(key, "at most one integrator (pole at z = 1) per axis",
-                        f"{n_int} poles at z = 1")
+        raise ExportRefused(key, f"at most one integrator (pole at z = 1) in the {ax}-axis law",
+                            f"{n_int} poles at z = 1")
     for p in poles:
         if not _is_integrator(p) and abs(p) >= 1.0:
-            raise SpecError(key, "a stable discrete law (poles |z| < 1; one simple "
+            raise ExportRefused(key, f"a stable discrete {ax}-axis law (poles |z| < 1; one simple "
                             "integrator exactly at z = 1 is allowed)",
                             f"pole z = {_fmt(p)} with |z| = {abs(p):.9g}",
                             hint="the controller diverges on its own; refusing to export it")
@@ -149,7 +173,7 @@ def _check_poles(poles: np.ndarray, zeros: np.ndarray, key: str) -> None:
             if d and min(d) <= CANCEL_TOL * (1.0 - abs(p)):
                 zs.pop(int(np.argmin(d)))
                 continue
-            raise SpecError(key, f"no lightly damped pole near z = -1 (Re z < 0 and "
+            raise ExportRefused(key, f"no lightly damped pole of the {ax}-axis law near z = -1 (Re z < 0 and "
                             f"|z| > {RING_RADIUS}) unless a zero cancels it",
                             f"pole z = {_fmt(p)}",
                             hint="a controller pole far beyond the Nyquist frequency "
@@ -162,7 +186,7 @@ def _pole_tol(p: complex, ts: float) -> float:
 
 def _check_shift(exact: np.ndarray, rounded: np.ndarray, ts: float, key: str,
                  what: str) -> float:
-    """Worst pole displacement / tolerance; SpecError above 1 or if unstable."""
+    """Worst pole displacement / tolerance; ExportRefused above 1 or if unstable."""
     left = list(np.atleast_1d(rounded))
     worst = 0.0
     for p in sorted(np.atleast_1d(exact), key=lambda z: -abs(z)):
@@ -172,7 +196,7 @@ def _check_shift(exact: np.ndarray, rounded: np.ndarray, ts: float, key: str,
         worst = max(worst, abs(q - p) / tol)
         bad = abs(q) >= 1.0 and not (_is_integrator(p) and _is_integrator(q))
         if abs(q - p) > tol or bad:
-            raise SpecError(key, f"{what} coefficient rounding to move each pole by at "
+            raise ExportRefused(key, f"{what} coefficient rounding to move each pole by at "
                             f"most 1 % of (1 - |p|) + Ts x 0.01 rad/s ({tol:.3g}) and keep "
                             "it stable", f"pole {_fmt(p)} moves to {_fmt(q)}",
                             hint="the controller is too sensitive to coefficient rounding")
@@ -204,15 +228,26 @@ def _rounded_poles_f32(real: Realisation) -> np.ndarray:
     return np.linalg.eigvals(real.A.astype(np.float32).astype(float))
 
 
-def realisations(artifact) -> dict[str, Realisation]:
-    """The executed realisation of each axis (SOS or state space)."""
+def minimal_laws(artifact) -> dict[str, MinimalLaw]:
+    """Each axis law without round-off entries and unreachable states.
+
+    See :mod:`toolbox.export._minimal`: the result equals the artifact's law
+    (anti-windup channel included) within 1e-7 on the unit circle, else it is
+    the artifact's law unchanged.
+    """
     out = {}
     for ax in AXES:
         law = artifact.axes[ax].law
         aw = artifact.axes[ax].antiwindup
-        out[ax] = realise_axis(law.A, law.B, law.C, law.D,
-                               None if aw is None else aw.ravel())
+        out[ax] = minimal_law(law.A, law.B, law.C, law.D,
+                              None if aw is None else aw.ravel(), artifact.sample_time)
     return out
+
+
+def realisations(artifact) -> dict[str, Realisation]:
+    """The executed realisation of each axis (SOS or state space) of the minimal law."""
+    return {ax: realise_axis(m.A, m.B, m.C, m.D, m.aw)
+            for ax, m in minimal_laws(artifact).items()}
 
 
 @dataclass
@@ -238,7 +273,10 @@ class ExportCheck:
         Per axis, worst-case |v_Q31 - v_exact| (V) over a 20 ms window from
         equal states with every input anywhere in its range.
     v_max : float
-        Voltage limit (V).
+        Voltage limit (V): circle radius, or the hexagon's apothem (the
+        distance from the centre to an edge, r_hex sqrt(3)/2: the same number).
+    limit : str
+        ``"circle"`` or ``"hexagon"`` (``drive.voltage_limit``).
     """
 
     realisations: dict
@@ -247,6 +285,7 @@ class ExportCheck:
     fixed_reason: str = ""
     fixed_pole_shift: dict = field(default_factory=dict)
     v_max: float = math.inf
+    limit: str = "circle"
     saturated_radius: dict = field(default_factory=dict)
     fixed_error_bound: dict = field(default_factory=dict)
 
@@ -268,15 +307,15 @@ def _motor_drive(artifact, motor, drive):
         pass
     # the controller section may name a method this build cannot read: take
     # the motor and drive tables alone
-    from ..spec import _load
+    from ..spec import drive_from_dict, motor_from_dict
     if motor is None and isinstance(raw.get("motor"), dict):
         try:
-            motor = _load._motor(raw["motor"])[0]
+            motor = motor_from_dict(raw["motor"])
         except SpecError:
             motor = None
     if drive is None and isinstance(raw.get("drive"), dict):
         try:
-            drive = _load._drive(raw["drive"])
+            drive = drive_from_dict(raw["drive"])
         except SpecError:
             drive = None
     return motor, drive
@@ -302,7 +341,7 @@ def _ranges(artifact, motor, drive, v_max: float) -> tuple[float, float]:
 
 
 def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = False,
-                     v_max: float | None = None) -> ExportCheck:
+                     v_max: float | None = None, limit: str | None = None) -> ExportCheck:
     """Refuse controllers that must not reach firmware; plan the export.
 
     Parameters
@@ -314,9 +353,11 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
         voltage limit ``drive.max_voltage(motor.convention)`` (V) and the
         fixed-point input ranges come from them.
     fixed_point : bool
-        Also require the Q31 variant to be available (else SpecError).
+        Also require the Q31 variant to be available (else ExportRefused).
     v_max : float, optional
         Override of the voltage-limit radius (V).
+    limit : {"circle", "hexagon"}, optional
+        Voltage-limit shape (default ``drive.voltage_limit``, else circle).
 
     Returns
     -------
@@ -325,38 +366,47 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
 
     Raises
     ------
-    SpecError
-        Key ``axes.<axis>.law`` for an unstable or ill-conditioned law (rules
-        in the module docstring), ``export.fixed_point`` when the Q31 variant
-        is asked for but impossible, ``drive`` when no voltage limit is known.
+    ExportRefused
+        Key ``controller.<method>`` for an unstable or ill-conditioned law
+        (rules in the module docstring), ``export.fixed_point`` (or
+        ``drive.voltage_limit`` for the hexagon) when the Q31 variant is asked
+        for but impossible, ``drive`` when no voltage limit is known.
     """
     motor, drive = _motor_drive(artifact, motor, drive)
     if v_max is None:
         if drive is None:
-            raise SpecError("drive", "drive data (vdc) for the voltage limit",
+            raise ExportRefused("drive", "drive data (vdc) for the voltage limit",
                             hint="pass drive= or keep [drive] in the artifact's spec")
         v_max = drive.max_voltage(motor.convention if motor is not None else "amplitude")
+    if limit is None:
+        limit = getattr(drive, "voltage_limit", None) or "circle"
+    if limit not in ("circle", "hexagon"):
+        raise ExportRefused("drive.voltage_limit", '"circle" or "hexagon"', limit)
     ts = artifact.sample_time
-    reals = realisations(artifact)
-    shifts = {}
     for ax in AXES:
-        key = f"axes.{ax}.law"
         law = artifact.axes[ax].law
         if not all(np.all(np.isfinite(m)) for m in (law.A, law.B, law.C, law.D)):
-            raise SpecError(key, "finite coefficients")
-        poles = np.linalg.eigvals(law.A) if law.order else np.zeros(0)
+            raise ExportRefused(_law_key(artifact), f"finite coefficients in the {ax}-axis law")
+    mins = minimal_laws(artifact)
+    reals = {ax: realise_axis(m.A, m.B, m.C, m.D, m.aw) for ax, m in mins.items()}
+    shifts = {}
+    for ax in AXES:
+        key = _law_key(artifact)
+        law = mins[ax]
+        poles = np.linalg.eigvals(law.A) if law.A.shape[0] else np.zeros(0)
         zeros = _law_zeros(law)
-        _check_poles(poles, zeros, key)
+        _check_poles(poles, zeros, key, ax)
         real = reals[ax]
         for i, cs in enumerate(_coefficient_sets(real)):
             rng = _dynamic_range(cs)
             if rng > DYNAMIC_RANGE:
-                raise SpecError(key, f"coefficient dynamic range <= 2**30 per coefficient set",
+                raise ExportRefused(key, f"{ax}-axis law: coefficient dynamic range <= 2**30 "
+                                    "per coefficient set",
                                 f"{rng:.3g} in set {i}",
                                 hint="ill-conditioned realisation; reduce or rescale the controller")
         exact = np.linalg.eigvals(real.A) if real.order else np.zeros(0)
-        shifts[ax] = _check_shift(exact, _rounded_poles_f32(real), ts, key, "float32")
-    res = ExportCheck(reals, shifts, v_max=float(v_max))
+        shifts[ax] = _check_shift(exact, _rounded_poles_f32(real), ts, key, f"{ax}-axis float32")
+    res = ExportCheck(reals, shifts, v_max=float(v_max), limit=limit)
     for ax in AXES:
         r = reals[ax]
         if r.order and np.any(r.aw != 0):
@@ -373,22 +423,27 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
     dec_coeffs = {"dd": -float(dec.cross) * p * dec.Lq_c,
                   "dq": float(dec.cross) * p * dec.Ld_c,
                   "de": float(dec.emf) * p * dec.flux_c}
-    plan, reason = _fixed.plan_fixed(reals, I_MAX=i_max, W_MAX=w_max, V_MAX=v_max,
-                                     dec_coeffs=dec_coeffs)
+    if limit == "hexagon":
+        # the hexagon needs sin/cos of the electrical angle: not written in Q31
+        plan, reason = None, ('voltage_limit = "hexagon" is implemented in the float path '
+                              'only; the Q31 variant needs voltage_limit = "circle"')
+    else:
+        plan, reason = _fixed.plan_fixed(reals, I_MAX=i_max, W_MAX=w_max, V_MAX=v_max,
+                                         dec_coeffs=dec_coeffs)
     if plan is not None:
         try:
-            res.fixed_pole_shift = check_fixed(plan, ts)
+            res.fixed_pole_shift = check_fixed(plan, ts, _law_key(artifact))
             res.fixed_error_bound = _fixed.horizon_bound(plan, round(HORIZON / ts))
-        except SpecError as err:
+        except ExportRefused as err:
             plan, reason = None, str(err)
     res.fixed, res.fixed_reason = plan, reason
     if fixed_point and plan is None:
-        raise SpecError("export.fixed_point", "a controller the Q31 variant can represent",
+        raise ExportRefused("drive.voltage_limit" if limit == "hexagon" else "export.fixed_point", "a controller the Q31 variant can represent",
                         reason)
     return res
 
 
-def check_fixed(plan, sample_time: float) -> dict:
+def check_fixed(plan, sample_time: float, key: str = "controller") -> dict:
     """Pole displacement of the Q31-quantised laws (refused beyond tolerance).
 
     Parameters
@@ -397,6 +452,8 @@ def check_fixed(plan, sample_time: float) -> dict:
         Output of :func:`toolbox.export._fixed.plan_fixed`.
     sample_time : float
         Controller period (s).
+    key : str
+        Spec key named in the refusal.
 
     Returns
     -------
@@ -405,8 +462,8 @@ def check_fixed(plan, sample_time: float) -> dict:
 
     Raises
     ------
-    SpecError
-        Key ``axes.<axis>.law`` when quantisation moves a pole beyond
+    ExportRefused
+        Key ``key`` when quantisation moves a pole beyond
         ``1 % (1 - |p|) + Ts * 0.01 rad/s`` or destabilises it.
     """
     out = {}
@@ -414,14 +471,14 @@ def check_fixed(plan, sample_time: float) -> dict:
         fa = plan.axes[ax]
         exact = np.linalg.eigvals(fa.An) if fa.An.size else np.zeros(0)
         rounded = np.linalg.eigvals(fa.Aq) if fa.Aq.size else np.zeros(0)
-        out[ax] = _check_shift(exact, rounded, sample_time, f"axes.{ax}.law", "Q31")
+        out[ax] = _check_shift(exact, rounded, sample_time, key, f"{ax}-axis Q31")
     return out
 
 
 def _law_zeros(law) -> np.ndarray:
     """Transmission zeros of the reference channel (the error channel for 1-DOF laws)."""
     import scipy.signal
-    if law.order == 0:
+    if law.A.shape[0] == 0:
         return np.zeros(0)
     z, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, :1], law.C, law.D[:, :1])
     z2, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, 1:], law.C, law.D[:, 1:])
@@ -436,46 +493,93 @@ class ReferenceLaw:
 
     Uses the artifact's own state-space law (not the exported realisation),
     so it is an independent route to the header's input-output map: per axis
-    ``v = C x + D u``, decoupling, circle limit (radial scaling), then
-    ``x <- A x + B u + aw (v_sat - v_unsat)``.
+    ``v = C x + D u``, decoupling, the voltage limit, then
+    ``x <- A x + B u + aw (v_sat - v_unsat)``. The simulator kernel
+    (:mod:`toolbox.sim._kernel`) runs the same law; tests/export compare the
+    three (kernel, this class, the C header).
+
+    Voltage limit, as the simulator:
+
+    * ``"circle"``: radial scaling onto ``|v| <= v_max``;
+    * ``"hexagon"``: the SVM hexagon of apothem ``v_max`` (vertex radius
+      ``2 v_max / sqrt(3)``, vertices at 0, 60, ... deg in the stationary frame),
+      seen at the electrical angle ``theta_e + w_e Ts (delay + 1/2)`` (the middle
+      of the application period); radial scaling onto its edge.
+
+    Faults, as the header: a non-finite input returns the last good output
+    with ``status = 1`` and leaves the state unchanged; a non-finite result
+    (overflow) does the same with ``status = 2``; ``status = 0`` otherwise.
 
     Parameters
     ----------
     artifact : ControllerArtifact
         Controller.
     v_max : float
-        Voltage-limit radius (V).
+        Voltage-limit radius (V): the circle's radius or the hexagon's apothem.
+    limit : {"circle", "hexagon"}
+        Voltage-limit shape.
     """
 
-    def __init__(self, artifact, v_max: float) -> None:
+    def __init__(self, artifact, v_max: float, limit: str = "circle") -> None:
+        if limit not in ("circle", "hexagon"):
+            raise ExportRefused("drive.voltage_limit", '"circle" or "hexagon"', limit)
         self.dec = artifact.decoupling
         self.v_max = float(v_max)
+        self.limit = limit
+        self.ts = float(artifact.sample_time)
+        self.delay = int(artifact.delay_samples)
         self.laws = [artifact.axes[ax].law for ax in AXES]
         self.aws = [np.zeros(l.order) if artifact.axes[ax].antiwindup is None
                     else artifact.axes[ax].antiwindup.ravel()
                     for l, ax in zip(self.laws, AXES)]
         self.xs = [np.zeros(l.order) for l in self.laws]
+        self.hold = (0.0, 0.0)
+        self.status = 0
+
+    def _limit(self, vd: float, vq: float, w: float, theta_e: float) -> float:
+        """Scale factor k <= 1 applied to (vd, vq)."""
+        if self.limit == "circle":
+            mag = math.hypot(vd, vq)
+            return self.v_max / mag if mag > self.v_max else 1.0
+        th = theta_e + w * self.ts * (self.delay + 0.5)
+        c, sn = math.cos(th), math.sin(th)
+        va, vb = vd * c - vq * sn, vd * sn + vq * c
+        # largest projection on the edge normals at 30, 90 and 150 deg
+        h = math.sqrt(3.0) / 2.0
+        pm = max(abs(h * va + 0.5 * vb), abs(vb), abs(-h * va + 0.5 * vb))
+        return self.v_max / pm if pm > self.v_max else 1.0
 
     def step(self, i_d_ref: float, i_q_ref: float, i_d: float, i_q: float,
-             omega_m: float) -> tuple[float, float, int]:
-        """One period: currents (A), mechanical speed (rad/s) -> (v_d, v_q (V), saturated)."""
+             omega_m: float, theta_e: float = 0.0) -> tuple[float, float, int]:
+        """One period: currents (A), mechanical speed (rad/s), electrical angle
+        (rad, hexagon only) -> (v_d, v_q (V), saturated); sets ``self.status``."""
+        args = (i_d_ref, i_q_ref, i_d, i_q, omega_m) + ((theta_e,) if self.limit == "hexagon" else ())
+        if not all(math.isfinite(a) for a in args):
+            self.status = 1
+            return self.hold[0], self.hold[1], 0
         dec = self.dec
         u = [np.array([i_d_ref, i_d]), np.array([i_q_ref, i_q])]
-        v_lin = [float((l.C @ x + l.D @ uu)[0]) for l, x, uu in zip(self.laws, self.xs, u)]
-        w = dec.pole_pairs * omega_m
-        vd = v_lin[0] - dec.cross * w * dec.Lq_c * i_q
-        vq = v_lin[1] + dec.cross * w * dec.Ld_c * i_d + dec.emf * w * dec.flux_c
-        mag = math.hypot(vd, vq)
-        vds, vqs, sat = vd, vq, 0
-        if mag > self.v_max:
-            vds, vqs, sat = vd * self.v_max / mag, vq * self.v_max / mag, 1
-        dv = (vds - vd, vqs - vq)
-        self.xs = [l.A @ x + l.B @ uu + a * d
-                   for l, x, uu, a, d in zip(self.laws, self.xs, u, self.aws, dv)]
+        with np.errstate(all="ignore"):
+            v_lin = [float((l.C @ x + l.D @ uu)[0]) for l, x, uu in zip(self.laws, self.xs, u)]
+            w = dec.pole_pairs * omega_m
+            vd = v_lin[0] - dec.cross * w * dec.Lq_c * i_q
+            vq = v_lin[1] + dec.cross * w * dec.Ld_c * i_d + dec.emf * w * dec.flux_c
+            k = self._limit(vd, vq, w, theta_e) if math.isfinite(vd) and math.isfinite(vq) \
+                else math.nan
+            vds, vqs, sat = (vd * k, vq * k, 1) if k < 1.0 else (vd, vq, 0)
+            dv = (vds - vd, vqs - vq)
+            xs = [l.A @ x + l.B @ uu + a * d
+                  for l, x, uu, a, d in zip(self.laws, self.xs, u, self.aws, dv)]
+        if not (math.isfinite(vds) and math.isfinite(vqs)
+                and all(np.all(np.isfinite(x)) for x in xs)):
+            self.status = 2
+            return self.hold[0], self.hold[1], 0
+        self.xs, self.hold, self.status = xs, (vds, vqs), 0
         return vds, vqs, sat
 
 
-def reference_law(artifact, inputs: np.ndarray, v_max: float) -> tuple[np.ndarray, np.ndarray]:
+def reference_law(artifact, inputs: np.ndarray, v_max: float, limit: str = "circle",
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Run :class:`ReferenceLaw` over an input sequence.
 
     Parameters
@@ -483,16 +587,19 @@ def reference_law(artifact, inputs: np.ndarray, v_max: float) -> tuple[np.ndarra
     artifact : ControllerArtifact
         Controller.
     inputs : ndarray
-        (N, 5): ``i_d_ref, i_q_ref, i_d, i_q`` (A), ``Omega_m`` (rad/s).
+        (N, 5): ``i_d_ref, i_q_ref, i_d, i_q`` (A), ``Omega_m`` (rad/s); (N, 6)
+        with the electrical angle ``theta_e`` (rad) for the hexagon.
     v_max : float
         Voltage-limit radius (V).
+    limit : {"circle", "hexagon"}
+        Voltage-limit shape.
 
     Returns
     -------
     (ndarray, ndarray)
         (N, 2) voltages ``v_d, v_q`` (V) and (N,) saturation flags.
     """
-    law = ReferenceLaw(artifact, v_max)
+    law = ReferenceLaw(artifact, v_max, limit)
     out = np.zeros((len(inputs), 2))
     sat = np.zeros(len(inputs), dtype=int)
     for k, row in enumerate(np.asarray(inputs, float)):
@@ -504,18 +611,82 @@ def reference_law(artifact, inputs: np.ndarray, v_max: float) -> tuple[np.ndarra
 # C text
 # ---------------------------------------------------------------------------
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,30}$")
+TEMPLATES = Path(__file__).parent / "templates"
+_ENV = None
 
 
-def _f(v: float) -> str:
-    """A float literal (float32-rounded, 9 significant digits, always valid C)."""
-    v = float(np.float32(v))
-    if v == 0.0:
+F32_MAX = float(np.finfo(np.float32).max)
+F32_TINY = float(np.finfo(np.float32).tiny)       # smallest normal float32
+C_INT_MAX = 32767          # the C99 guaranteed range of int (INT_MAX >= 32767)
+C_INT32_MAX = 2 ** 31 - 1  # Q31 words and long constants
+
+
+def _f(v: float, key: str, what: str) -> str:
+    """A float literal (float32-rounded, 9 significant digits, always valid C).
+
+    Parameters
+    ----------
+    v : float
+        The value.
+    key : str
+        Spec key responsible for the value (named in the refusal).
+    what : str
+        The constant, in words (named in the refusal).
+
+    Raises
+    ------
+    ExportRefused
+        ``v`` is not finite, overflows float32 (|v| > 3.40e38, C would read
+        ``inff``) or is a non-zero value below the smallest normal float32
+        (1.18e-38; it would lose its precision or vanish).
+    """
+    try:
+        x = float(v)
+    except (TypeError, ValueError, OverflowError):
+        raise ExportRefused(key, f"{what}: a number", v) from None
+    with np.errstate(over="ignore"):
+        f32 = float(np.float32(x))
+    if not (math.isfinite(x) and math.isfinite(f32)):
+        raise ExportRefused(key, f"{what} within the float32 range (|x| <= {F32_MAX:.3g})", x,
+                            hint="controller.h would not compile or would compute inf/nan")
+    if f32 == 0.0 and x != 0.0 or 0.0 < abs(f32) < F32_TINY:
+        raise ExportRefused(key, f"{what} representable as a normal float32 (0 or |x| >= "
+                            f"{F32_TINY:.3g})", x, hint="it would vanish or lose precision")
+    if f32 == 0.0:
         return "0.0f"
-    return f"{v:.9e}f"
+    return f"{f32:.9e}f"
 
 
-def _farr(values) -> str:
-    return ", ".join(_f(v) for v in values)
+def _farr(values, key: str, what: str) -> str:
+    return ", ".join(_f(v, key, what) for v in values)
+
+
+def _int(v: Any, key: str, what: str, lo: int = -C_INT_MAX, hi: int = C_INT_MAX) -> int:
+    """An integer constant within ``[lo, hi]`` (default: the C99 ``int`` range).
+
+    Raises
+    ------
+    ExportRefused
+        ``v`` is not an integral number in range.
+    """
+    try:
+        ok = float(v) == int(v) and lo <= int(v) <= hi
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ExportRefused(key, f"{what}: an integer in [{lo}, {hi}]", v,
+                            hint="controller.h would not compile or would overflow")
+    return int(v)
+
+
+def _q31(v: Any, key: str, what: str) -> str:
+    """An int32 literal with the ``L`` suffix (long is at least 32 bits)."""
+    return f"{_int(v, key, what, -C_INT32_MAX, C_INT32_MAX)}L"
+
+
+def _shift(v: Any, key: str, what: str) -> str:
+    """An unsigned shift count of an int64 value (0..62)."""
+    return f"{_int(v, key, what, 0, 62)}u"
 
 
 class _Text:
@@ -600,9 +771,24 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
     t(f" *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),")
     t(" * then decoupling  v_d += -cross w_e Lq_c i_q,")
     t(" *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,")
-    t(" * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of")
-    t(" * the SVM hexagon, also when the spec asks for the hexagon) and back-calculation")
-    t(" * anti-windup x += aw (v_sat - v_unsat).")
+    if check.limit == "hexagon":
+        t(" * then the SVM hexagon limit (voltage_limit = \"hexagon\", as the toolbox")
+        t(" * simulator): the voltage is rotated to the stationary frame at the angle")
+        t(" * theta_e + w_e Ts (DELAY_SAMPLES + 1/2) (input theta_e: electrical angle at the")
+        t(" * sampling instant) and scaled radially onto the hexagon of apothem V_MAX, and")
+    else:
+        t(" * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of")
+        t(" * the SVM hexagon), and")
+    t(" * back-calculation anti-windup x += aw (v_sat - v_unsat).")
+    U = N.upper()
+    t(" * Faults: out->status is")
+    t(f" *   {U}_STATUS_OK (0)        the law ran;")
+    t(f" *   {U}_STATUS_BAD_INPUT (1) an input is inf or nan;")
+    t(f" *   {U}_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).")
+    t(" * On 1 and 2 the last good output is repeated (0 V before the first good")
+    t(" * period), saturated = 0, and the state is left exactly as it was: the next")
+    t(" * valid period continues as if the bad one had not happened. Finiteness is")
+    t(" * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.")
     t(" * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:")
     t(" *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the")
     t(" *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.")
@@ -620,40 +806,47 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
 
 def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> None:
     dec = artifact.decoupling
-    t(f"#define {P}SAMPLE_TIME {_f(artifact.sample_time)} /* controller period, s */")
-    t(f"#define {P}DELAY_SAMPLES {int(artifact.delay_samples)} /* computation delay the design assumed, periods */")
-    t(f"#define {P}V_MAX {_f(check.v_max)} /* voltage-limit circle radius, V */")
+    ts_ = _f(artifact.sample_time, "drive.sample_time", "controller period SAMPLE_TIME")
+    t(f"#define {P}SAMPLE_TIME {ts_} /* controller period, s */")
+    nd_ = _int(artifact.delay_samples, "drive.delay_samples", "DELAY_SAMPLES", 0)
+    t(f"#define {P}DELAY_SAMPLES {nd_} /* computation delay the design assumed, periods */")
+    vmax_ = _f(check.v_max, "drive.vdc", "voltage limit V_MAX")
+    if check.v_max ** 2 > F32_MAX:
+        # the step function compares |v|^2 with V_MAX^2 in float
+        raise ExportRefused("drive.vdc", f"a voltage limit whose square fits float32 "
+                            f"(V_MAX <= {math.sqrt(F32_MAX):.3g} V)", check.v_max)
+    t(f"#define {P}V_MAX {vmax_} /* voltage-limit {check.limit} radius, V */")
     if motor is not None:
         t(f"/* motor ({sanitise_comment(motor.convention)}-invariant dq convention) */")
-        t(f"#define {P}MOTOR_R {_f(motor.R)} /* stator resistance, ohm */")
-        t(f"#define {P}MOTOR_LD {_f(motor.Ld)} /* d-axis inductance, H */")
-        t(f"#define {P}MOTOR_LQ {_f(motor.Lq)} /* q-axis inductance, H */")
-        t(f"#define {P}MOTOR_FLUX {_f(motor.flux)} /* PM flux linkage, Wb */")
-        t(f"#define {P}MOTOR_POLE_PAIRS {int(motor.pole_pairs)} /* pole pairs */")
-        t(f"#define {P}MOTOR_J {_f(motor.J)} /* inertia, kg m^2 */")
-        t(f"#define {P}MOTOR_FRICTION {_f(motor.friction)} /* viscous friction, N m s/rad */")
+        t(f"#define {P}MOTOR_R {_f(motor.R, 'motor.R', 'MOTOR_R')} /* stator resistance, ohm */")
+        t(f"#define {P}MOTOR_LD {_f(motor.Ld, 'motor.Ld', 'MOTOR_LD')} /* d-axis inductance, H */")
+        t(f"#define {P}MOTOR_LQ {_f(motor.Lq, 'motor.Lq', 'MOTOR_LQ')} /* q-axis inductance, H */")
+        t(f"#define {P}MOTOR_FLUX {_f(motor.flux, 'motor.flux', 'MOTOR_FLUX')} /* PM flux linkage, Wb */")
+        t(f"#define {P}MOTOR_POLE_PAIRS {_int(motor.pole_pairs, 'motor.pole_pairs', 'MOTOR_POLE_PAIRS', 1)} /* pole pairs */")
+        t(f"#define {P}MOTOR_J {_f(motor.J, 'motor.J', 'MOTOR_J')} /* inertia, kg m^2 */")
+        t(f"#define {P}MOTOR_FRICTION {_f(motor.friction, 'motor.friction', 'MOTOR_FRICTION')} /* viscous friction, N m s/rad */")
         if motor.max_current:
-            t(f"#define {P}MOTOR_MAX_CURRENT {_f(motor.max_current)} /* dq current amplitude limit, A */")
+            t(f"#define {P}MOTOR_MAX_CURRENT {_f(motor.max_current, 'motor.max_current', 'MOTOR_MAX_CURRENT')} /* dq current amplitude limit, A */")
         if motor.rated_current:
-            t(f"#define {P}MOTOR_RATED_CURRENT {_f(motor.rated_current)} /* A */")
+            t(f"#define {P}MOTOR_RATED_CURRENT {_f(motor.rated_current, 'motor.rated_current', 'MOTOR_RATED_CURRENT')} /* A */")
         if motor.rated_speed:
-            t(f"#define {P}MOTOR_RATED_SPEED {_f(motor.rated_speed)} /* mechanical, rad/s */")
+            t(f"#define {P}MOTOR_RATED_SPEED {_f(motor.rated_speed, 'motor.rated_speed', 'MOTOR_RATED_SPEED')} /* mechanical, rad/s */")
     if drive is not None:
         t("/* drive */")
-        t(f"#define {P}DRIVE_VDC {_f(drive.vdc)} /* DC-link voltage, V */")
+        t(f"#define {P}DRIVE_VDC {_f(drive.vdc, 'drive.vdc', 'DRIVE_VDC')} /* DC-link voltage, V */")
         if drive.switching_frequency:
-            t(f"#define {P}DRIVE_SWITCHING_FREQUENCY {_f(drive.switching_frequency)} /* PWM carrier, Hz */")
+            t(f"#define {P}DRIVE_SWITCHING_FREQUENCY {_f(drive.switching_frequency, 'drive.switching_frequency', 'DRIVE_SWITCHING_FREQUENCY')} /* PWM carrier, Hz */")
     t("/* decoupling: controller-side model parameters */")
     t(f"#define {P}DEC_CROSS {int(bool(dec.cross))} /* 1: cross-coupling terms on */")
     t(f"#define {P}DEC_EMF {int(bool(dec.emf))} /* 1: back-EMF term on */")
-    t(f"#define {P}DEC_LD {_f(dec.Ld_c)} /* H */")
-    t(f"#define {P}DEC_LQ {_f(dec.Lq_c)} /* H */")
-    t(f"#define {P}DEC_FLUX {_f(dec.flux_c)} /* Wb */")
-    t(f"#define {P}POLE_PAIRS {int(dec.pole_pairs)} /* w_e = POLE_PAIRS * Omega_m */")
+    t(f"#define {P}DEC_LD {_f(dec.Ld_c, 'motor.Ld', 'decoupling DEC_LD')} /* H */")
+    t(f"#define {P}DEC_LQ {_f(dec.Lq_c, 'motor.Lq', 'decoupling DEC_LQ')} /* H */")
+    t(f"#define {P}DEC_FLUX {_f(dec.flux_c, 'motor.flux', 'decoupling DEC_FLUX')} /* Wb */")
+    t(f"#define {P}POLE_PAIRS {_int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)} /* w_e = POLE_PAIRS * Omega_m */")
     t_comp = _delay_comp_time(artifact)
     if t_comp is not None:
         k = t_comp / artifact.sample_time
-        t(f"#define {P}DELAY_COMP_TIME {_f(t_comp)} /* s ({k:g} Ts): the design assumes v_dq "
+        t(f"#define {P}DELAY_COMP_TIME {_f(t_comp, 'drive.sample_time', 'DELAY_COMP_TIME')} /* s ({k:g} Ts): the design assumes v_dq "
           f"rotated by angle = {P}DELAY_COMP_TIME * w_e (rad) before the inverse Park transform "
           f"(not applied inside {P.lower()}step) */")
     if artifact.method in PI_METHODS:
@@ -663,148 +856,103 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
                 continue
             kp, ki = g
             A = ax.upper()
+            gk = _law_key(artifact)
             t(f"/* {ax} axis PI gains (method {artifact.method}); the law below is what runs */")
-            t(f"#define {P}{A}_KP {_f(kp)} /* parallel proportional gain, V/A */")
-            t(f"#define {P}{A}_KI {_f(ki)} /* parallel integral gain, V/(A s) */")
-            t(f"#define {P}{A}_KI_TS {_f(ki * artifact.sample_time)} /* integral gain per sample Ki*Ts, V/A */")
+            t(f"#define {P}{A}_KP {_f(kp, gk, f'{ax}-axis KP')} /* parallel proportional gain, V/A */")
+            t(f"#define {P}{A}_KI {_f(ki, gk, f'{ax}-axis KI')} /* parallel integral gain, V/(A s) */")
+            t(f"#define {P}{A}_KI_TS {_f(ki * artifact.sample_time, gk, f'{ax}-axis KI_TS')} /* integral gain per sample Ki*Ts, V/A */")
             if kp:
-                t(f"#define {P}{A}_TI {_f(kp / ki) if ki else '0.0f'} /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */")
+                t(f"#define {P}{A}_TI {_f(kp / ki, gk, f'{ax}-axis TI') if ki else '0.0f'} /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */")
 
 
-def _axis_float(t: _Text, real: Realisation, N: str, P: str, ax: str) -> None:
-    A = ax.upper()
+def _axis_context(real: Realisation, ax: str, key: str) -> dict:
+    """Template data of one axis linear law (numbers formatted and range-checked)."""
+    what = f"{ax}-axis law coefficient"
     n = real.order
-    t(f"/* {ax} axis linear law: returns v (V); updates the state to A x + B u */")
-    t(f"static inline float {N}_{ax}_linear(float *x, float r, float y)")
-    t("{")
+    ctx: dict[str, Any] = {"ax": ax, "A": ax.upper(), "form": real.form, "n": n}
     if real.form == "sos":
         co = real.cmsis_coefficients()
-        m = co.shape[0]
-        t(f"    /* {m} stage(s) {{b0, b1, b2, a1, a2}} (a1, a2 negated, CMSIS df2T), gain {P}{A}_GAIN */")
-        if m == 0:
-            t("    (void)x;")
-            t(f"    return {_f(real.gain)} * (r - y);")
-        else:
-            t(f"    static const float c[{5 * m}] = {{")
-            for row in co:
-                t(f"        {_farr(row)},")
-            t("    };")
-            t("    float in = r - y;")
-            t("    unsigned k;")
-            t(f"    for (k = 0u; k < {m}u; ++k) {{")
-            t("        const float *s = &c[5u * k];")
-            t("        const float out = s[0] * in + x[2u * k];")
-            t("        x[2u * k] = s[1] * in + s[3] * out + x[2u * k + 1u];")
-            t("        x[2u * k + 1u] = s[2] * in + s[4] * out;")
-            t("        in = out;")
-            t("    }")
-            t(f"    return {P}{A}_GAIN * in;")
-    else:
-        if n == 0:
-            t("    (void)x;")
-            t(f"    return {_f(real.D[0, 0])} * r + {_f(real.D[0, 1])} * y;")
-        else:
-            t(f"    static const float a[{n * n}] = {{ {_farr(real.A.ravel())} }};")
-            t(f"    static const float b[{2 * n}] = {{ {_farr(real.B.ravel())} }};")
-            t(f"    static const float c[{n}] = {{ {_farr(real.C.ravel())} }};")
-            t(f"    float xn[{n}];")
-            t(f"    float v = {_f(real.D[0, 0])} * r + {_f(real.D[0, 1])} * y;")
-            t("    unsigned i, j;")
-            t(f"    for (i = 0u; i < {n}u; ++i) {{")
-            t("        float acc = b[2u * i] * r + b[2u * i + 1u] * y;")
-            t(f"        for (j = 0u; j < {n}u; ++j) {{")
-            t(f"            acc += a[{n}u * i + j] * x[j];")
-            t("        }")
-            t("        v += c[i] * x[i];")
-            t("        xn[i] = acc;")
-            t("    }")
-            t(f"    for (i = 0u; i < {n}u; ++i) {{")
-            t("        x[i] = xn[i];")
-            t("    }")
-            t("    return v;")
-    t("}")
-    t("")
+        ctx["m"] = co.shape[0]
+        ctx["rows"] = [_farr(row, key, what) for row in co]
+        if co.shape[0] == 0:
+            ctx["gain"] = _f(real.gain, key, what)
+        return ctx
+    ctx["d0"] = _f(real.D[0, 0], key, what)
+    ctx["d1"] = _f(real.D[0, 1], key, what)
+    if n:
+        ctx.update(a=_farr(real.A.ravel(), key, what), b=_farr(real.B.ravel(), key, what),
+                   c=_farr(real.C.ravel(), key, what))
+    return ctx
 
 
-def _aw_lines(real: Realisation, field_: str, dv: str) -> list[str]:
+def _aw_lines(real: Realisation, field_: str, dv: str, key: str) -> list[str]:
     out = []
     for i, a in enumerate(real.aw):
         if a != 0.0:
-            out.append(f"    s->{field_}[{i}] += {_f(a)} * {dv};")
+            out.append(f"    s->{field_}[{i}] += {_f(a, key, f'{field_}-axis anti-windup gain')} * {dv};")
     return out
 
 
-def _float_section(t: _Text, reals: dict, N: str, P: str) -> None:
-    nd = max(reals["d"].order, 1)
-    nq = max(reals["q"].order, 1)
-    t("/* inputs: currents in A, measured MECHANICAL speed in rad/s */")
-    t("typedef struct {")
-    t("    float i_d_ref; /* A */")
-    t("    float i_q_ref; /* A */")
-    t("    float i_d;     /* measured, A */")
-    t("    float i_q;     /* measured, A */")
-    t("    float omega_m; /* measured mechanical speed, rad/s */")
-    t(f"}} {N}_input_t;")
-    t("")
-    t("typedef struct {")
-    t("    float v_d;     /* V, to apply next period */")
-    t("    float v_q;     /* V */")
-    t("    int saturated; /* 1 when the voltage limit acted */")
-    t(f"}} {N}_output_t;")
-    t("")
-    t(f"/* controller states ({reals['d'].form} d axis: {reals['d'].order}, "
-      f"{reals['q'].form} q axis: {reals['q'].order}; arrays have at least one element) */")
-    t("typedef struct {")
-    t(f"    float d[{nd}];")
-    t(f"    float q[{nq}];")
-    t(f"}} {N}_state_t;")
-    t("")
-    t(f"static inline void {N}_init({N}_state_t *s)")
-    t("{")
-    t("    unsigned i;")
-    t(f"    for (i = 0u; i < {nd}u; ++i) {{ s->d[i] = 0.0f; }}")
-    t(f"    for (i = 0u; i < {nq}u; ++i) {{ s->q[i] = 0.0f; }}")
-    t("}")
-    t("")
-    for ax in AXES:
-        _axis_float(t, reals[ax], N, P, ax)
-    t(f"/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup) */")
-    t(f"static inline void {N}_step({N}_state_t *s, const {N}_input_t *in, {N}_output_t *out)")
-    t("{")
-    t(f"    const float w = (float){P}POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */")
-    t(f"    const float vd_lin = {N}_d_linear(s->d, in->i_d_ref, in->i_d);")
-    t(f"    const float vq_lin = {N}_q_linear(s->q, in->i_q_ref, in->i_q);")
-    t(f"    const float vd = vd_lin - (float){P}DEC_CROSS * w * {P}DEC_LQ * in->i_q;")
-    t(f"    const float vq = vq_lin + (float){P}DEC_CROSS * w * {P}DEC_LD * in->i_d")
-    t(f"                   + (float){P}DEC_EMF * w * {P}DEC_FLUX;")
-    t("    const float mag2 = vd * vd + vq * vq;")
-    t("    float vds = vd;")
-    t("    float vqs = vq;")
-    t("    out->saturated = 0;")
-    t(f"    if (mag2 > {P}V_MAX * {P}V_MAX) {{")
-    t(f"        const float k = {P}V_MAX / sqrtf(mag2);")
-    t("        vds = vd * k;")
-    t("        vqs = vq * k;")
-    t("        out->saturated = 1;")
-    t("    }")
-    lines = _aw_lines(reals["d"], "d", "(vds - vd)") + _aw_lines(reals["q"], "q", "(vqs - vq)")
-    if lines:
-        t("    /* back-calculation anti-windup */")
-        for ln in lines:
-            t(ln)
-    t("    out->v_d = vds;")
-    t("    out->v_q = vqs;")
-    t("}")
+def _render(template: str, **context: Any) -> list[str]:
+    """Lines of ``templates/<template>`` rendered with ``context``."""
+    return _environment().get_template(template).render(**context).split("\n")
+
+
+def _environment():
+    """The jinja2 environment of the C templates (no autoescape: C, not HTML;
+    every user string is sanitised by :func:`sanitise_comment` before)."""
+    global _ENV
+    if _ENV is None:
+        import jinja2
+        _ENV = jinja2.Environment(
+            loader=jinja2.FileSystemLoader(str(TEMPLATES)), autoescape=False,
+            trim_blocks=True, lstrip_blocks=True, undefined=jinja2.StrictUndefined)
+    return _ENV
+
+
+def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: bool) -> None:
+    """The float path (templates/float.c.j2)."""
+    inputs = ["i_d_ref", "i_q_ref", "i_d", "i_q", "omega_m"] + (["theta_e"] if hexagon else [])
+    checks = [f"{N}_finite(in->{v})" for v in inputs]
+    aw = _aw_lines(reals["d"], "d", "(vds - vd)", key) + \
+        _aw_lines(reals["q"], "q", "(vqs - vq)", key)
+    t.lines.extend(_render(
+        "float.c.j2", N=N, P=P, U=N.upper(), hexagon=hexagon,
+        nd=max(reals["d"].order, 1), nq=max(reals["q"].order, 1),
+        form_d=reals["d"].form, order_d=reals["d"].order,
+        form_q=reals["q"].form, order_q=reals["q"].order,
+        axes=[_axis_context(reals[ax], ax, key) for ax in AXES],
+        checks=checks,
+        check_pairs=[" && ".join(checks[i:i + 2]) for i in range(2, len(checks), 2)],
+        aw=[ln.strip().replace("s->", "nx.") for ln in aw]))
 
 
 def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
-    plan = check.fixed
+    """The Q31 variant under ``#ifdef CCT_FIXED_POINT``, or an ``#error`` saying why not.
+
+    A constant of the Q31 variant out of its range (e.g. a current base beyond
+    float32) makes the variant unavailable, not the float header.
+    """
     t("")
     t("#ifdef CCT_FIXED_POINT")
-    if plan is None:
-        t(f"#error \"fixed-point variant not available: {sanitise_comment(check.fixed_reason).replace(chr(34), chr(39))}\"")
-        t("#endif /* CCT_FIXED_POINT */")
-        return
+    reason = check.fixed_reason
+    if check.fixed is not None:
+        body = _Text()
+        try:
+            _fixed_body(body, check, N, P, artifact)
+        except ExportRefused as err:
+            reason = str(err)
+        else:
+            t.lines.extend(body.lines)
+            t("#endif /* CCT_FIXED_POINT */")
+            return
+    t(f"#error \"fixed-point variant not available: {sanitise_comment(reason).replace(chr(34), chr(39))}\"")
+    t("#endif /* CCT_FIXED_POINT */")
+
+
+def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
+    plan = check.fixed
+    key = _law_key(artifact)
     t("/*")
     t(" * Fixed point: Q31 words (value / 2^31), int64 accumulators, arithmetic")
     t(" * right shifts (as gcc and arm-none-eabi implement >> on negative values).")
@@ -819,17 +967,17 @@ def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> No
               f"{check.fixed_error_bound[ax]:.3g} V over {HORIZON * 1e3:g} ms from equal states.")
     t(" */")
     t("#include <stdint.h>")
-    t(f"#define {P}Q31_I_BASE {_f(plan.I_BASE)} /* A at full scale */")
-    t(f"#define {P}Q31_V_BASE {_f(plan.V_BASE)} /* V at full scale */")
-    t(f"#define {P}Q31_W_BASE {_f(plan.W_BASE)} /* mechanical rad/s at full scale */")
-    t(f"#define {P}Q31_V_MAX {plan.vmax_q31}L /* V_MAX / V_BASE in Q31 */")
+    t(f"#define {P}Q31_I_BASE {_f(plan.I_BASE, 'motor.max_current', 'Q31_I_BASE')} /* A at full scale */")
+    t(f"#define {P}Q31_V_BASE {_f(plan.V_BASE, 'drive.vdc', 'Q31_V_BASE')} /* V at full scale */")
+    t(f"#define {P}Q31_W_BASE {_f(plan.W_BASE, 'drive.max_speed', 'Q31_W_BASE')} /* mechanical rad/s at full scale */")
+    t(f"#define {P}Q31_V_MAX {_q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX')} /* V_MAX / V_BASE in Q31 */")
     for ax in AXES:
         fa = plan.axes[ax]
         for i, s in enumerate(fa.S):
-            t(f"#define {P}Q31_{ax.upper()}_X{i}_BASE {_f(s)} /* state {i} full scale */")
+            t(f"#define {P}Q31_{ax.upper()}_X{i}_BASE {_f(s, key, f'Q31 {ax}-axis state base')} /* state {i} full scale */")
     for name, (m, F, val) in plan.dec.items():
-        t(f"#define {P}Q31_DEC_{name.upper()} {m}L /* decoupling coefficient {val:.6g} p.u. = m / 2^shift */")
-        t(f"#define {P}Q31_DEC_{name.upper()}_SHIFT {F}u")
+        t(f"#define {P}Q31_DEC_{name.upper()} {_q31(m, 'motor', f'Q31 decoupling {name}')} /* decoupling coefficient {val:.6g} p.u. = m / 2^shift */")
+        t(f"#define {P}Q31_DEC_{name.upper()}_SHIFT {_shift(F, 'motor', f'Q31 decoupling {name} shift')}")
     if artifact.method in PI_METHODS:
         for ax in AXES:
             g = _pi_gains(artifact, ax)
@@ -841,138 +989,29 @@ def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> No
                 q = _fixed._quantise_row(np.array([val]), 1)
                 if q is None:
                     continue
-                t(f"#define {P}Q31_{ax.upper()}_{label}_GAIN {int(q[0][0])}L /* per-unit {label}: {val:.6g} */")
-                t(f"#define {P}Q31_{ax.upper()}_{label}_DIV_LOG2 {q[1]} /* divisor 2^{q[1]} */")
+                t(f"#define {P}Q31_{ax.upper()}_{label}_GAIN {_q31(q[0][0], key, f'Q31 {ax}-axis {label}')} /* per-unit {label}: {val:.6g} */")
+                t(f"#define {P}Q31_{ax.upper()}_{label}_DIV_LOG2 {_int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62)} /* divisor 2^{q[1]} */")
     t("")
-    t("typedef struct {")
-    t("    int32_t i_d_ref; /* Q31 of Q31_I_BASE */")
-    t("    int32_t i_q_ref;")
-    t("    int32_t i_d;")
-    t("    int32_t i_q;")
-    t("    int32_t omega_m; /* Q31 of Q31_W_BASE (mechanical) */")
-    t(f"}} {N}_input_q31_t;")
-    t("")
-    t("typedef struct {")
-    t("    int32_t v_d; /* Q31 of Q31_V_BASE */")
-    t("    int32_t v_q;")
-    t("    int saturated;")
-    t(f"}} {N}_output_q31_t;")
-    t("")
-    nd = max(plan.axes["d"].S.size, 1)
-    nq = max(plan.axes["q"].S.size, 1)
-    t("typedef struct {")
-    t(f"    int32_t d[{nd}];")
-    t(f"    int32_t q[{nq}];")
-    t(f"}} {N}_state_q31_t;")
-    t("")
-    t(f"static inline void {N}_init_q31({N}_state_q31_t *s)")
-    t("{")
-    t("    unsigned i;")
-    t(f"    for (i = 0u; i < {nd}u; ++i) {{ s->d[i] = 0; }}")
-    t(f"    for (i = 0u; i < {nq}u; ++i) {{ s->q[i] = 0; }}")
-    t("}")
-    t("")
-    t(f"static inline int32_t {N}_sat32(int64_t v)")
-    t("{")
-    t("    if (v > (int64_t)INT32_MAX) { return INT32_MAX; }")
-    t("    if (v < -(int64_t)INT32_MAX) { return -INT32_MAX; }")
-    t("    return (int32_t)v;")
-    t("}")
-    t("")
-    t(f"static inline int64_t {N}_shr(int64_t acc, unsigned f)")
-    t("{")
-    t("    return f ? (acc + ((int64_t)1 << (f - 1u))) >> f : acc;")
-    t("}")
-    t("")
-    t(f"static inline uint32_t {N}_isqrt64(uint64_t v)")
-    t("{")
-    t("    uint64_t r = 0u, bit = (uint64_t)1 << 62;")
-    t("    while (bit > v) { bit >>= 2; }")
-    t("    while (bit != 0u) {")
-    t("        if (v >= r + bit) { v -= r + bit; r = (r >> 1) + bit; } else { r >>= 1; }")
-    t("        bit >>= 2;")
-    t("    }")
-    t("    return (uint32_t)r;")
-    t("}")
-    t("")
+    axes = []
     for ax in AXES:
         fa = plan.axes[ax]
         n = fa.S.size
-        t(f"/* {ax} axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */")
-        t(f"static inline int64_t {N}_{ax}_linear_q31(int32_t *x, int32_t r, int32_t y)")
-        t("{")
-        mo, Fo = fa.out
-        t(f"    static const int32_t co[{n + 2}] = {{ {', '.join(f'{int(v)}L' for v in mo)} }};")
-        if n:
-            t(f"    static const int32_t ca[{n * (n + 3)}] = {{")
-            for m, F in fa.rows:
-                t(f"        {', '.join(f'{int(v)}L' for v in m)},")
-            t("    };")
-            t(f"    static const unsigned fa[{n}] = {{ {', '.join(f'{F}u' for _, F in fa.rows)} }};")
-            t(f"    int32_t xn[{n}];")
-            t("    unsigned i, j;")
-        t(f"    int64_t acc = (int64_t)co[{n}] * r + (int64_t)co[{n + 1}] * y;")
-        if n:
-            t(f"    for (j = 0u; j < {n}u; ++j) {{ acc += (int64_t)co[j] * x[j]; }}")
-        t(f"    acc = {N}_shr(acc, {Fo}u);")
-        if n:
-            t(f"    for (i = 0u; i < {n}u; ++i) {{")
-            t(f"        const int32_t *m = &ca[{n + 3}u * i];")
-            t(f"        int64_t a = (int64_t)m[{n}] * r + (int64_t)m[{n + 1}] * y;")
-            t(f"        for (j = 0u; j < {n}u; ++j) {{ a += (int64_t)m[j] * x[j]; }}")
-            t(f"        xn[i] = {N}_sat32({N}_shr(a, fa[i]));")
-            t("    }")
-            t(f"    for (i = 0u; i < {n}u; ++i) {{ x[i] = xn[i]; }}")
-        else:
-            t("    (void)x;")
-        t("    return acc;")
-        t("}")
-        t("")
-        t(f"static inline void {N}_{ax}_antiwindup_q31(int32_t *x, int64_t dv)")
-        t("{")
-        if n and any(m[n + 2] != 0 for m, _ in fa.rows):
-            t(f"    static const int32_t aw[{n}] = {{ {', '.join(f'{int(m[n + 2])}L' for m, _ in fa.rows)} }};")
-            t(f"    static const unsigned fa[{n}] = {{ {', '.join(f'{F}u' for _, F in fa.rows)} }};")
-            t("    unsigned i;")
-            t(f"    for (i = 0u; i < {n}u; ++i) {{")
-            t(f"        x[i] = {N}_sat32((int64_t)x[i] + {N}_shr((int64_t)aw[i] * dv, fa[i]));")
-            t("    }")
-        else:
-            t("    (void)x;")
-            t("    (void)dv;")
-        t("}")
-        t("")
-    t(f"static inline void {N}_step_q31({N}_state_q31_t *s, const {N}_input_q31_t *in, {N}_output_q31_t *out)")
-    t("{")
-    t(f"    const int64_t vd_lin = {N}_d_linear_q31(s->d, in->i_d_ref, in->i_d);")
-    t(f"    const int64_t vq_lin = {N}_q_linear_q31(s->q, in->i_q_ref, in->i_q);")
-    t(f"    const int64_t wiq = {N}_shr((int64_t)in->omega_m * in->i_q, 31u);")
-    t(f"    const int64_t wid = {N}_shr((int64_t)in->omega_m * in->i_d, 31u);")
-    t(f"    const int64_t vd = vd_lin + {N}_shr((int64_t){P}Q31_DEC_DD * wiq, {P}Q31_DEC_DD_SHIFT);")
-    t(f"    const int64_t vq = vq_lin + {N}_shr((int64_t){P}Q31_DEC_DQ * wid, {P}Q31_DEC_DQ_SHIFT)")
-    t(f"                     + {N}_shr((int64_t){P}Q31_DEC_DE * in->omega_m, {P}Q31_DEC_DE_SHIFT);")
-    t(f"    const int64_t vdc = {N}_sat32(vd);")
-    t(f"    const int64_t vqc = {N}_sat32(vq);")
-    t("    const uint64_t mag2 = (uint64_t)(vdc * vdc) + (uint64_t)(vqc * vqc);")
-    t("    int64_t vds = vdc;")
-    t("    int64_t vqs = vqc;")
-    t("    out->saturated = 0;")
-    t(f"    if (mag2 > (uint64_t){P}Q31_V_MAX * (uint64_t){P}Q31_V_MAX) {{")
-    t(f"        const int64_t mag = (int64_t){N}_isqrt64(mag2);")
-    t(f"        vds = (vdc * {P}Q31_V_MAX) / mag;")
-    t(f"        vqs = (vqc * {P}Q31_V_MAX) / mag;")
-    t("        out->saturated = 1;")
-    t("    }")
-    t(f"    {N}_d_antiwindup_q31(s->d, vds - vd);")
-    t(f"    {N}_q_antiwindup_q31(s->q, vqs - vq);")
-    t("    out->v_d = (int32_t)vds;")
-    t("    out->v_q = (int32_t)vqs;")
-    t("}")
-    t("#endif /* CCT_FIXED_POINT */")
+        shifts = ", ".join(_shift(F, key, f"Q31 {ax}-axis shift") for _, F in fa.rows)
+        has_aw = bool(n) and any(m[n + 2] != 0 for m, _ in fa.rows)
+        axes.append({
+            "ax": ax, "n": n, "fa": shifts,
+            "co": ", ".join(_q31(v, key, f"Q31 {ax}-axis output row") for v in fa.out[0]),
+            "Fo": _shift(fa.out[1], key, f"Q31 {ax}-axis output shift"),
+            "rows": [", ".join(_q31(v, key, f"Q31 {ax}-axis state row") for v in m)
+                     for m, _ in fa.rows],
+            "aw": ", ".join(_q31(m[n + 2], key, f"Q31 {ax}-axis anti-windup")
+                            for m, _ in fa.rows) if has_aw else ""})
+    t.lines.extend(_render("fixed.c.j2", N=N, P=P, axes=axes,
+                           nd=max(plan.axes["d"].S.size, 1), nq=max(plan.axes["q"].S.size, 1)))
 
 
 def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
-                 title: str | None = None) -> str:
+                 title: str | None = None, source: str | None = None) -> str:
     """The C99 header text of a controller artifact.
 
     Parameters
@@ -988,6 +1027,9 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
     title : str, optional
         Title for the provenance comment (default: ``artifact.spec["title"]``);
         sanitised by :func:`sanitise_comment`.
+    source : str, optional
+        The design file the artifact came from (``DIR/controller.json``);
+        every refusal names it.
 
     Returns
     -------
@@ -996,9 +1038,22 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
 
     Raises
     ------
+    ExportRefused
+        Refused controller (see :func:`check_exportable`) or a constant out of
+        range (float32, C integer ranges), naming the spec key; with the
+        ``source`` file when given.
     SpecError
-        Refused controller (see :func:`check_exportable`), bad ``name``.
+        Bad ``name``.
     """
+    try:
+        return _write_header(artifact, motor, drive, name, title)
+    except CctError as err:
+        if source and not err.file:
+            raise err.with_file(str(source)) from None
+        raise
+
+
+def _write_header(artifact, motor, drive, name: str, title: str | None) -> str:
     if not isinstance(name, str) or not _IDENT.match(name):
         raise SpecError("export.name", "a C identifier of at most 31 characters", name)
     motor, drive = _motor_drive(artifact, motor, drive)
@@ -1013,17 +1068,18 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
     t(f"#ifndef {guard}")
     t(f"#define {guard}")
     t("")
-    t("#include <math.h> /* sqrtf */")
+    t("#include <math.h> /* sqrtf" + (", sinf, cosf" if check.limit == "hexagon" else "") + " */")
+    t("#include <stdint.h> /* uint32_t */")
     t("")
     _defines(t, artifact, motor, drive, P, check)
     t("")
     for ax in AXES:
         r = check.realisations[ax]
         if r.form == "sos":
-            t(f"#define {P}{ax.upper()}_GAIN {_f(r.gain)} /* {ax} axis SOS output gain, V/A */")
+            t(f"#define {P}{ax.upper()}_GAIN {_f(r.gain, _law_key(artifact), f'{ax}-axis SOS gain')} /* {ax} axis SOS output gain, V/A */")
             t(f"#define {P}{ax.upper()}_NUM_STAGES {r.sos.shape[0]}")
     t("")
-    _float_section(t, check.realisations, N, P)
+    _float_section(t, check.realisations, N, P, _law_key(artifact), check.limit == "hexagon")
     _fixed_section(t, check, N, P, artifact)
     t("")
     t(f"#endif /* {guard} */")

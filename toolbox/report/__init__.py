@@ -1,17 +1,23 @@
 """Margin reports: one self-contained HTML file and a PDF with the same content.
 
 The report stage reads plain data only: a :class:`ReportData` bundle of what
-earlier stages produced (the validated spec, the controller artifact, and
-optionally margins, requirement checks, robustness and verification results,
-H-infinity weights). Nothing is re-designed; what is not given is shown as
-"not computed".
+earlier stages produced (the validated spec, the controller artifact,
+``analysis.json`` and ``verify.json`` as dicts, and the simulated traces).
+It re-designs nothing and computes no loop, margin or response: every figure
+draws numbers stored in ``analysis.json`` (``responses``, written by
+:mod:`toolbox.analysis._responses`), so a 2-DOF law's step is its executed
+reference response and the H-infinity weight bounds are those of the weights
+the design recorded. The package imports neither python-control nor
+``toolbox.analysis`` (a test checks it). What is not given is shown as "not
+computed".
 
 Entry points
 ------------
 :func:`write_html` (``ReportData -> str``) and :func:`write_pdf`
 (``ReportData -> bytes``, optionally written to a path). Both render the same
 content model, :func:`build_context`, made of plain strings, tables and inline
-SVG figures (:mod:`toolbox.report.plots`).
+SVG figures (:mod:`toolbox.report.plots`); both also accept that content
+model, so the figures are drawn once for the two documents.
 
 Every string coming from a user (title, scenario names, free-text labels) is
 escaped for the output language: jinja2 autoescaping for HTML, typst string
@@ -21,17 +27,19 @@ literals for the PDF. Figures never contain user strings.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+
+from . import plots
 
 __all__ = ["ReportData", "build_context", "write_html", "write_pdf", "zpk_text", "fmt", "NOT_COMPUTED",
            "METHOD_NAMES", "MARGIN_ROWS"]
 
 NOT_COMPUTED = "not computed"
 
-#: Long names of the design methods (DESIGN.md "The methods").
+#: Long names of the design methods (toolbox/ARCHITECTURE.md "Spec file").
 METHOD_NAMES = {
     "pi": "PI in dq (pole-zero cancellation)",
     "ip": "IP in dq (proportional action on the measurement)",
@@ -44,7 +52,7 @@ METHOD_NAMES = {
     "fcs_mpc": "Finite-control-set predictive control",
 }
 
-#: MARGINS keys (DESIGN.md) -> (label, unit).
+#: MARGINS keys (toolbox/ARCHITECTURE.md "controller.json") -> (label, unit).
 MARGIN_ROWS = {
     "gain_margin_db": ("Gain margin", "dB"),
     "gain_crossover_rad_s": ("Gain crossover frequency (|L| = 1)", "rad/s"),
@@ -86,6 +94,10 @@ DRIVE_ROWS = (
 class ReportData:
     """Everything a report shows (plain data; only the first three are required).
 
+    The report draws and tabulates what these hold and computes no loop,
+    margin or response itself: ``analysis`` is ``analysis.json`` and
+    ``verification`` is ``verify.json``, as written by ``cct design``.
+
     Attributes
     ----------
     title : str
@@ -94,51 +106,47 @@ class ReportData:
         The validated spec (motor, drive, requirements).
     artifact : toolbox.artifact.ControllerArtifact
         The designed controller (axes, gains, provenance).
-    margins : dict or None
-        ``{"d": MARGINS, "q": MARGINS}`` with the DESIGN.md keys
-        (``gain_margin_db`` (dB), ``phase_margin_deg`` (deg), frequencies in
-        rad/s, dimensionless peaks). ``None``: taken from ``artifact.margins``
-        when that is non-empty, else shown as "not computed".
-    checks : list of dict or None
-        Requirement checks, each ``{key, quantity, bound, value, unit, pass}``
-        (as :meth:`toolbox.spec.Requirements.check` returns, with ``key``
-        added; an optional ``axis`` or ``scenario`` names where it was
-        measured).
-    robustness : dict or None
-        Robustness sweep summary: ``{"cases": [{"label": str, "params":
-        {name: factor}, "metrics": {quantity: value}, "pass": bool}],
-        "worst": [label, ...], "notes": str}``. Metrics use the MARGINS and
-        simulation metric names (units as there).
-    certificate : dict or None
-        Named analysis facts (e.g. ``{"gamma": 0.98, "weight bounds": "hold"}``)
-        shown as a table of strings.
-    scenarios : list of dict or None
-        Verification results, each ``{"name": str, "kind": str, "metrics":
-        {name: value}, "pass": bool, "traces": {"t": s, "id", "iq", "id_ref",
-        "iq_ref": A, "vd", "vq": V, ...} or None}``; a
-        :class:`toolbox.sim.SimResult` is accepted as ``traces``.
-    weights : dict or None
-        H-infinity weights per axis: ``{"d": {"w1": W, "w2": W, "w3": W,
-        "gamma": float}, "q": ...}``; each ``W`` is a python-control system or
-        ``{"num": [...], "den": [...]}`` (coefficients in s, highest power
-        first). The report plots ``gamma/|W_i|`` as the bound of S, KS and T.
-        ``None``: for an ``hinf`` design, the spec's
-        ``[controller.hinf.weights.<axis>]`` with gamma from the artifact's gains.
+    analysis : dict or None
+        ``analysis.json``: ``margins.discrete`` (the MARGINS table, margin
+        markers and step figures), ``responses`` (every loop figure, see
+        :mod:`toolbox.analysis._responses`), ``requirements`` (margin checks),
+        ``sweep``, ``mimo_at_speed`` and ``certificate``. ``None``: margins
+        from ``artifact.margins`` when non-empty, everything else "not
+        computed".
+    verification : dict or None
+        ``verify.json``: per scenario ``name``, ``kind``, ``passed``,
+        ``metrics`` and ``requirements``; ``margin_requirements`` are used
+        when ``analysis`` is absent.
+    traces : list or None
+        Simulated traces per scenario of ``verification``, in its order
+        (``{"t": s, "id", "iq", "id_ref", "iq_ref": A, "vd", "vq": V, ...}``,
+        a :class:`toolbox.sim.SimResult`, or ``None``); they are not part of
+        verify.json, so a report without them shows no trace figure.
+    equations : list or None
+        The derived dq model as ``{"label", "latex", "text"}`` rows;
+        ``None`` derives it from ``spec.motor.convention`` (paper 000 eq
+        (1)-(2), 003 eq (3)-(7)).
     generated : str or None
         Report time stamp to print (ISO 8601); ``None`` prints none, which keeps
         the output byte-identical for identical inputs.
+    notice : str or None
+        One line shown above the checks, e.g. "no requirements given; default
+        checks only".
+    warnings : list of str or None
+        Lines shown with the notice (stored numbers that disagree with the
+        recomputed ones, a refused header).
     """
 
     title: str
     spec: Any
     artifact: Any
-    margins: dict | None = None
-    checks: list | None = None
-    robustness: dict | None = None
-    certificate: dict | None = None
-    scenarios: list | None = None
-    weights: dict | None = None
+    analysis: Mapping | None = None
+    verification: Mapping | None = None
+    traces: Sequence | None = None
+    equations: list | None = None
     generated: str | None = None
+    notice: str | None = None
+    warnings: list | None = None
 
 
 # ----------------------------------------------------------------- formatting
@@ -226,35 +234,83 @@ def _flatten(prefix: str, value: Any, out: list) -> None:
 # -------------------------------------------------------------- content model
 
 def _margins_of(data: ReportData) -> dict | None:
-    if data.margins:
-        return data.margins
+    """MARGINS per axis: ``analysis.margins.discrete``, else the artifact's."""
+    disc = ((data.analysis or {}).get("margins") or {}).get("discrete")
+    if disc:
+        return dict(disc)
     art = getattr(data.artifact, "margins", None)
     return dict(art) if art else None
 
 
-def _weights_of(data: ReportData) -> dict | None:
-    """``data.weights``, else the H-infinity weights of the spec (num/den in s).
+def _checks_of(data: ReportData) -> list | None:
+    """Requirement checks: the analysis' margin checks and each scenario's.
 
-    gamma per axis comes from ``artifact.gains["gamma"]`` when numeric, else 1.
+    verify.json repeats the margin checks (``margin_requirements``); they are
+    taken from there only when no analysis is given, so none is listed twice.
     """
-    if data.weights:
-        return data.weights
-    raw = getattr(data.spec, "raw", {}) or {}
-    method = getattr(data.artifact, "method", "")
-    table = ((raw.get("controller") or {}).get(method) or {}).get("weights") if method == "hinf" else None
-    if not isinstance(table, Mapping):
+    if data.analysis is None and data.verification is None:
         return None
-    gammas = (getattr(data.artifact, "gains", {}) or {}).get("gamma", {})
-    out = {}
-    for axis in ("d", "q"):
-        wt = table.get(axis)
-        if not isinstance(wt, Mapping):
-            continue
-        ws = {k: wt[k] for k in ("w1", "w2", "w3")
-              if isinstance(wt.get(k), Mapping) and "num" in wt[k] and "den" in wt[k]}
-        g = gammas.get(axis) if isinstance(gammas, Mapping) else gammas
-        ws["gamma"] = float(g) if isinstance(g, (int, float)) and not isinstance(g, bool) else 1.0
-        out[axis] = ws
+    checks: list[dict] = []
+    margin_checks = ((data.analysis or {}).get("requirements")
+                     if data.analysis is not None
+                     else (data.verification or {}).get("margin_requirements")) or {}
+    checks += [{"key": k, **c} for k, c in margin_checks.items()]
+    if data.analysis is not None:  # verification's own verdicts (default.stable)
+        checks += [{"key": k, **c} for k, c in
+                   ((data.verification or {}).get("margin_requirements") or {}).items()
+                   if k.startswith("default.")]
+    for sc in (data.verification or {}).get("scenarios", []):
+        checks += [{"key": k, "scenario": sc.get("name"), **c}
+                   for k, c in (sc.get("requirements") or {}).items()]
+    return checks
+
+
+def _robustness_of(analysis: Mapping | None) -> dict | None:
+    """Sweep summary cases from ``analysis.sweep``: worst cases and unstable sets."""
+    sweep = (analysis or {}).get("sweep") or {}
+    if not sweep:
+        return None
+    cases = []
+    for axis, worst in sorted(sweep.get("worst", {}).items()):
+        for quantity, entry in worst.items():
+            cases.append({"label": f"{axis} axis: worst {quantity}",
+                          "params": entry.get("params", {}),
+                          "metrics": {quantity: entry.get("value")}, "pass": True})
+    cases += [{"label": f"unstable set {k + 1}", "params": {
+        n: v for n, v in ex.items() if n != "spectral_radius"},
+        "metrics": {"spectral_radius": ex.get("spectral_radius")}, "pass": False}
+        for k, ex in enumerate(sweep.get("unstable_examples", []))]
+    worst_rho = _as_float(sweep.get("worst_spectral_radius"))
+    notes = (f"{sweep.get('n_sets')} parameter sets over {sweep.get('ranges')}, at speeds "
+             f"{sweep.get('speeds_rad_s')} rad/s (electrical): {sweep.get('n_unstable')} "
+             f"unstable, worst closed-loop spectral radius "
+             f"{fmt(worst_rho if worst_rho is not None else float('nan'))}.")
+    return {"cases": cases, "worst": [c["label"] for c in cases if not c["pass"]],
+            "notes": notes}
+
+
+def _certificate_of(analysis: Mapping | None) -> dict | None:
+    """Named facts of ``analysis.certificate`` and ``analysis.mimo_at_speed``."""
+    facts: dict[str, Any] = {}
+    cert = (analysis or {}).get("certificate")
+    if cert:
+        facts["quadratic stability (continuous loop, no delay)"] = (
+            "certified" if cert.get("certified") else "not certified")
+        facts["largest certified box scale"] = cert.get("scale")
+        for name, (lo, hi) in (cert.get("box") or {}).items():
+            facts[f"box {name}"] = f"{lo:.4g} .. {hi:.4g}"
+    mimo = (analysis or {}).get("mimo_at_speed") or {}
+    if mimo:
+        facts["MIMO disk margin, worst electrical speed (rad/s)"] = mimo.get("worst_speed_rad_s")
+        facts["MIMO disk margin, worst value"] = mimo.get("worst_disk_margin")
+    return facts or None
+
+
+def _step_of(analysis: Mapping | None) -> dict | None:
+    """Linear step figures per axis from ``analysis.margins.discrete`` (s and %)."""
+    disc = ((analysis or {}).get("margins") or {}).get("discrete") or {}
+    out = {ax: {k: disc[ax].get(k) for k in plots.STEP_FIGURES} for ax in ("d", "q")
+           if isinstance(disc.get(ax), Mapping)}
     return out or None
 
 
@@ -300,7 +356,9 @@ def _check_rows(checks: list | None) -> list[dict]:
     rows = []
     for c in checks or []:
         where = c.get("axis") or c.get("scenario") or ""
-        rows.append({"key": str(c.get("key", "")), "quantity": str(c.get("quantity", "")),
+        # a failing check says why (issue 10: a verdict the user can follow)
+        why = f" ({c['reason']})" if not c.get("pass") and c.get("reason") else ""
+        rows.append({"key": str(c.get("key", "")), "quantity": str(c.get("quantity", "")) + why,
                      "where": str(where), "bound": _bound_text(c),
                      "value": fmt(_as_float(c.get("value")) if c.get("value") is not None
                                   else None),
@@ -309,12 +367,19 @@ def _check_rows(checks: list | None) -> list[dict]:
     return rows
 
 
-def _equations(spec) -> list[dict]:
-    """Derived dq model as LaTeX, plain text and SVG (paper 000 eq (1)-(2), 003 eq (3)-(7))."""
+def _equations(spec, given: list | None = None) -> list[dict]:
+    """Derived dq model as LaTeX, plain text and SVG (paper 000 eq (1)-(2), 003 eq (3)-(7)).
+
+    ``given`` rows (``{"label", "latex", "text"}``) are rendered as they are;
+    otherwise the model is derived for the spec's dq convention.
+    """
+    if given is not None:
+        return [{"label": str(e["label"]), "latex": str(e["latex"]), "text": str(e["text"]),
+                 "svg": plots.equation_svg(str(e["latex"]).replace(r"\frac", r"\dfrac"))}
+                for e in given]
     import sympy as sp
 
     from ..plant import derive_dq_model
-    from . import plots
 
     model = derive_dq_model(spec.motor.convention)
     di_d, di_q = sp.symbols("di_d di_q", real=True)
@@ -370,29 +435,32 @@ def _controller(artifact) -> dict:
             "gains": gains, "axes": axes, "decoupling": decoupling}
 
 
-def _scenarios(scenarios: Sequence | None) -> list[dict]:
-    from . import plots
+def _scenario_traces(data: ReportData) -> list[dict | None]:
+    """The traces of each verification scenario (``traces_dict`` form), in order."""
+    n = len((data.verification or {}).get("scenarios", []))
+    given = list(data.traces or [])
+    return [plots.traces_dict(given[k]) if k < len(given) else None for k in range(n)]
 
+
+def _scenarios(verification: Mapping | None, traces: Sequence) -> list[dict]:
+    """Scenario rows of verify.json, each with its trace figure when traces are given."""
     out = []
-    for k, sc in enumerate(scenarios or []):
-        sc = dict(sc)
-        traces = plots.traces_dict(sc.get("traces"))
-        metrics = sc.get("metrics") or getattr(sc.get("traces"), "metrics", None) or {}
-        passed = sc.get("pass")
+    for k, sc in enumerate((verification or {}).get("scenarios", [])):
+        tr = traces[k] if k < len(traces) else None
+        metrics = sc.get("metrics") or {}
+        passed = sc.get("passed")
         out.append({
             "name": str(sc.get("name", f"scenario {k + 1}")),
             "kind": str(sc.get("kind", "")),
             "status": "" if passed is None else ("pass" if passed else "fail"),
             "metrics": [(str(m), fmt(_as_float(v) if not isinstance(v, str) else v))
                         for m, v in metrics.items()],
-            "svg": plots.scenario_svg(traces, prefix=f"sc{k}") if traces else None,
+            "svg": plots.scenario_svg(tr, prefix=f"sc{k}") if tr else None,
         })
     return out
 
 
 def _robustness(rob: Mapping | None) -> dict | None:
-    from . import plots
-
     if not rob:
         return None
     cases = list(rob.get("cases", []))
@@ -415,7 +483,7 @@ def _robustness(rob: Mapping | None) -> dict | None:
 
 
 def _provenance(data: ReportData) -> list[tuple[str, str]]:
-    from ..design._common import toolbox_version
+    from .._version import toolbox_version
 
     prov = dict(data.artifact.provenance or {})
     rows = [(str(k), fmt(v)) for k, v in prov.items() if k != "equations"]
@@ -437,13 +505,12 @@ def build_context(data: ReportData) -> dict:
     -------
     dict
         Keys ``title, motor, drive, requirements, equations, controller,
-        margins, checks, figures, robustness, certificate, scenarios,
+        margins, checks, figures, step, robustness, certificate, scenarios,
         provenance, margins_given``; the HTML and typst templates render it.
-        SVG strings are generated here (trusted); every other string is user
-        or derived text that the templates escape.
+        ``step`` holds the analysis' linear step figures per axis (numbers,
+        s and %). SVG strings are generated here (trusted); every other
+        string is user or derived text that the templates escape.
     """
-    from . import plots
-
     spec, art = data.spec, data.artifact
     motor = spec.motor
     motor_rows = [(q, s, fmt(getattr(motor, f)), u) for f, s, q, u in MOTOR_ROWS
@@ -459,25 +526,30 @@ def build_context(data: ReportData) -> dict:
         direction, quantity, unit = REQUIREMENT_KEYS[k][-3:]  # (.., direction, quantity, unit)
         req_rows.append((k, quantity, (">=" if direction == "min" else "<=") + " " + fmt(v), unit))
     margins = _margins_of(data)
-    loops = plots.loop_data(art, motor)
-    traces = [plots.traces_dict(dict(sc).get("traces")) for sc in (data.scenarios or [])]
-    figures = plots.figures(loops, weights=_weights_of(data), traces=traces)
+    checks = _checks_of(data)
+    traces = _scenario_traces(data)
+    responses = (data.analysis or {}).get("responses")
+    certificate = _certificate_of(data.analysis)
     return {
         "title": str(data.title),
         "motor": motor_rows, "drive": drive_rows, "requirements": req_rows,
-        "equations": _equations(spec),
+        "equations": _equations(spec, data.equations),
         "controller": _controller(art),
         "margins_given": margins is not None,
-        "margins": _margin_table(margins, data.checks),
-        "checks": _check_rows(data.checks),
-        "checks_given": data.checks is not None,
-        "figures": figures,
-        "robustness": _robustness(data.robustness),
-        "certificate": ([(str(k), fmt(v)) for k, v in data.certificate.items()]
-                        if data.certificate else None),
-        "scenarios": _scenarios(data.scenarios) if data.scenarios is not None else None,
+        "margins": _margin_table(margins, checks),
+        "checks": _check_rows(checks),
+        "checks_given": checks is not None,
+        "figures": plots.figures(responses, margins, traces),
+        "figures_given": bool(responses),
+        "step": _step_of(data.analysis),
+        "robustness": _robustness(_robustness_of(data.analysis)),
+        "certificate": ([(str(k), fmt(v)) for k, v in certificate.items()]
+                        if certificate else None),
+        "scenarios": (_scenarios(data.verification, traces)
+                      if data.verification is not None else None),
         "provenance": _provenance(data),
         "not_computed": NOT_COMPUTED,
+        "notice": [str(x) for x in ([data.notice] if data.notice else []) + list(data.warnings or [])],
     }
 
 

@@ -39,7 +39,9 @@ def write_html(data) -> str:
 
     Parameters
     ----------
-    data : toolbox.report.ReportData
+    data : toolbox.report.ReportData or dict
+        The report's data, or its content model from
+        :func:`toolbox.report.build_context` (to share figures with the PDF).
 
     Returns
     -------
@@ -51,4 +53,4 @@ def write_html(data) -> str:
     """
     from . import build_context
 
-    return render_html(build_context(data))
+    return render_html(data if isinstance(data, dict) else build_context(data))

@@ -128,7 +128,9 @@ def write_pdf(data, path: str | Path | None = None) -> bytes:
 
     Parameters
     ----------
-    data : toolbox.report.ReportData
+    data : toolbox.report.ReportData or dict
+        The report's data, or its content model from
+        :func:`toolbox.report.build_context` (to share figures with the HTML).
     path : str or Path, optional
         Where to write the PDF as well (written to a temporary file in the
         same directory, then renamed: atomic).
@@ -145,7 +147,7 @@ def write_pdf(data, path: str | Path | None = None) -> bytes:
 
     from . import build_context
 
-    source, images = render_typst(build_context(data))
+    source, images = render_typst(data if isinstance(data, dict) else build_context(data))
     pdf = typst.compile(source.encode("utf-8"), format="pdf", sys_inputs=images)
     if path is not None:
         target = Path(path)

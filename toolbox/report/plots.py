@@ -7,11 +7,12 @@ byte-identical SVG. The XML prologue, DOCTYPE and metadata block are removed
 (the SVG is inlined in HTML and holds no external reference), and element ids
 are prefixed per figure so several SVGs can share one HTML document.
 
-The loop analysed is the sampled one the controller runs: ``L(z) = K_d(z)
-G_zoh(z) z^{-n_d}`` per axis, with ``G(s) = 1/(R + s L)`` (paper 003 eq
-(33)-(34), :func:`toolbox.plant.axis_plants`) sampled with a zero-order hold and
-``n_d`` periods of computation delay. Frequencies are shown up to the Nyquist
-frequency ``pi/T_s`` (rad/s). Figures never contain user-supplied text.
+The loop figures draw the numbers of ``analysis.json["responses"]``
+(:mod:`toolbox.analysis._responses`: the executed law, sampled, with the
+computation delay, on the ZOH plant) and mark the margins of
+``analysis.json["margins"]["discrete"]``: nothing here computes a loop, so
+every curve is the loop whose margins are tabled. Figures never contain
+user-supplied text.
 """
 
 from __future__ import annotations
@@ -21,13 +22,12 @@ import math
 import re
 from typing import Any, Mapping, Sequence
 
-import control
 import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
-__all__ = ["loop_data", "figures", "equation_svg", "scenario_svg", "robustness_svg",
-           "traces_dict", "svg_from_figure", "crossings"]
+__all__ = ["figures", "equation_svg", "scenario_svg", "robustness_svg", "traces_dict",
+           "svg_from_figure", "STEP_FIGURES"]
 
 AXIS_COLORS = {"d": "#1f5fa8", "q": "#c23b22"}
 RC = {
@@ -97,107 +97,69 @@ def _figure(width_in: float, height_in: float) -> Figure:
         return Figure(figsize=(width_in, height_in), layout="constrained")
 
 
-# ------------------------------------------------------------------ loop data
+# --------------------------------------------------------------- stored data
 
-def _delay(n: int, dt: float) -> control.TransferFunction:
-    return control.tf([1.0], [1.0] + [0.0] * n, dt)
-
-
-def loop_data(artifact, motor, n_freq: int = 500) -> dict:
-    """Sampled loop of each axis and its closed-loop functions on a frequency grid.
-
-    Parameters
-    ----------
-    artifact : ControllerArtifact
-        Supplies ``K_d(z)`` per axis, the sample time (s) and delay (periods).
-    motor : Motor
-        Supplies ``G(s) = 1/(R + s L_{d,q})`` (A/V).
-    n_freq : int
-        Number of grid points, log-spaced from 1 rad/s (or lower, to include
-        a decade below the crossover) to the Nyquist frequency.
-
-    Returns
-    -------
-    dict
-        ``{axis: {"omega": rad/s, "L", "S", "T", "KS": complex arrays,
-        "closed": closed-loop T(z) (python-control), "dt": s}}``.
-    """
-    from ..plant import axis_plants
-
-    dt = float(artifact.sample_time)
-    plants = axis_plants(motor)
-    w_nyq = math.pi / dt
-    out = {}
-    for name in ("d", "q"):
-        K = control.ss(artifact.axes[name].to_statespace(discrete=True))
-        G = control.sample_system(control.ss(plants[name]), dt, method="zoh")
-        L = control.series(K, G, control.ss(_delay(artifact.delay_samples, dt)))
-        omega = np.logspace(0.0, math.log10(w_nyq * 0.999), n_freq)
-        z = np.exp(1j * omega * dt)
-        Lw = np.asarray(L(z), complex).reshape(-1)
-        Kw = np.asarray(K(z), complex).reshape(-1)
-        S = 1.0 / (1.0 + Lw)
-        out[name] = {"omega": omega, "L": Lw, "S": S, "T": Lw * S, "KS": Kw * S,
-                     "closed": control.feedback(L, 1), "dt": dt}
-    return out
+#: Step figures of ``margins.discrete`` shown with the step response: key -> (label, unit, scale).
+STEP_FIGURES = {
+    "overshoot_pct": ("overshoot", "%", 1.0),
+    "response_time_5pct": ("5 % time", "ms", 1e3),
+    "settling_time_2pct": ("2 % settling", "ms", 1e3),
+}
 
 
-def crossings(omega: np.ndarray, L: np.ndarray) -> dict:
-    """Margins read off a sampled frequency response (for figure markers).
+def _arr(values: Any) -> np.ndarray:
+    """Float array from stored JSON numbers (``"inf"``/``"nan"`` strings included)."""
+    return np.array([float(v) for v in values], float)
 
-    Returns
-    -------
-    dict
-        ``pm_deg``/``w_pm`` at the first |L| = 1 crossing and ``gm_db``/``w_gm``
-        at the first crossing of the negative real axis (``None`` if absent).
-        Linear interpolation between grid points (log frequency).
-    """
-    out: dict[str, float | None] = {"pm_deg": None, "w_pm": None, "gm_db": None, "w_gm": None}
-    mag = np.abs(L)
-    idx = np.nonzero((mag[:-1] >= 1.0) & (mag[1:] < 1.0))[0]
-    if idx.size:
-        k = idx[0]
-        f = (math.log(mag[k])) / (math.log(mag[k]) - math.log(mag[k + 1]))
-        w = math.exp(math.log(omega[k]) + f * (math.log(omega[k + 1]) - math.log(omega[k])))
-        ph = np.degrees(np.angle(L[k] + f * (L[k + 1] - L[k])))
-        out["pm_deg"], out["w_pm"] = float(ph % 360.0 - 180.0), w
-    im = L.imag
-    idx = np.nonzero((np.sign(im[:-1]) != np.sign(im[1:])) & (L.real[:-1] < 0))[0]
-    if idx.size:
-        k = idx[0]
-        f = im[k] / (im[k] - im[k + 1])
-        re_ = L.real[k] + f * (L.real[k + 1] - L.real[k])
-        if re_ < 0:
-            w = math.exp(math.log(omega[k]) + f * (math.log(omega[k + 1]) - math.log(omega[k])))
-            out["gm_db"], out["w_gm"] = float(-20 * math.log10(-re_)), w
-    return out
+
+def _num(value: Any) -> float | None:
+    """A stored scalar as float; ``None`` when absent or not finite."""
+    if value is None or isinstance(value, bool):
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+def _axes(responses: Mapping) -> list[str]:
+    return [a for a in ("d", "q") if isinstance(responses.get(a), Mapping)]
 
 
 # -------------------------------------------------------------------- figures
 
-def bode_svg(loops: dict, prefix: str = "bode") -> str:
-    """Bode diagram of ``L`` per axis, with the margins read off the curve marked."""
+def bode_svg(responses: Mapping, margins: Mapping | None, prefix: str = "bode") -> str:
+    """Bode diagram of the stored loop ``L`` per axis, margins marked.
+
+    The markers and the text are the analysis' margins (gain margin at the
+    phase crossover, phase margin at the gain crossover), not a reading of
+    the plotted grid.
+    """
     fig = _figure(7.2, 4.6)
     ax_m, ax_p = fig.subplots(2, 1, sharex=True)
     lines: list[tuple[str, str]] = []
-    for name, lp in loops.items():
-        w, L = lp["omega"], lp["L"]
+    for name in _axes(responses):
+        r = responses[name]
+        w, mag, phase = _arr(r["omega"]), _arr(r["loop"]["mag_db"]), _arr(r["loop"]["phase_deg"])
         c = AXIS_COLORS[name]
-        ax_m.semilogx(w, 20 * np.log10(np.abs(L)), color=c, label=f"{name} axis")
-        phase = np.degrees(np.unwrap(np.angle(L)))
-        phase -= 360.0 * round(float(phase[0]) / 360.0 + 0.5) if phase[0] > 0 else 0.0
+        ax_m.semilogx(w, mag, color=c, label=f"{name} axis")
         ax_p.semilogx(w, phase, color=c, label=f"{name} axis")
-        cr = crossings(w, L)
-        lines.append((c, f"{name} axis: " + (f"PM {cr['pm_deg']:.1f} deg at {cr['w_pm']:.3g} rad/s"
-                                            if cr["w_pm"] else "no gain crossover")
-                      + ("; " + f"GM {cr['gm_db']:.1f} dB at {cr['w_gm']:.3g} rad/s"
-                         if cr["w_gm"] else "; no phase crossover")))
-        if cr["w_pm"]:
-            ax_m.plot([cr["w_pm"]], [0.0], "o", color=c, ms=5)
-            ph_at = np.interp(math.log(cr["w_pm"]), np.log(w), phase)
-            ax_p.vlines(cr["w_pm"], -180.0, ph_at, color=c, lw=2.2, alpha=0.7)
-        if cr["w_gm"]:
-            ax_m.vlines(cr["w_gm"], -cr["gm_db"], 0.0, color=c, lw=2.2, alpha=0.7)
+        m = (margins or {}).get(name) or {}
+        pm, w_pm = _num(m.get("phase_margin_deg")), _num(m.get("gain_crossover_rad_s"))
+        gm, w_gm = _num(m.get("gain_margin_db")), _num(m.get("phase_crossover_rad_s"))
+        text = f"{name} axis: " + (f"PM {pm:.1f} deg at {w_pm:.3g} rad/s"
+                                   if pm is not None and w_pm else "no gain crossover")
+        text += (f"; GM {gm:.1f} dB at {w_gm:.3g} rad/s" if gm is not None and w_gm
+                 else "; no phase crossover")
+        lines.append((c, text))
+        if pm is not None and w_pm:
+            ax_m.plot([w_pm], [0.0], "o", color=c, ms=5)
+            ph_at = float(np.interp(math.log(w_pm), np.log(w), phase))
+            # the margin is the distance to the nearest odd multiple of -180 deg
+            ax_p.vlines(w_pm, ph_at - pm, ph_at, color=c, lw=2.2, alpha=0.7)
+        if gm is not None and w_gm:
+            ax_m.vlines(w_gm, -gm, 0.0, color=c, lw=2.2, alpha=0.7)
     for k, (c, text) in enumerate(lines):
         ax_m.text(0.02, 0.05 + 0.11 * (len(lines) - 1 - k), text, transform=ax_m.transAxes,
                   color=c, fontsize=8, bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1})
@@ -207,22 +169,25 @@ def bode_svg(loops: dict, prefix: str = "bode") -> str:
     ax_p.set_ylabel("phase of L (deg)")
     ax_p.set_xlabel("frequency (rad/s)")
     ax_m.legend(loc="upper right")
-    ax_m.set_title("Open loop L = K G (sampled, ZOH and computation delay)")
+    ax_m.set_title("Open loop L = K G (executed law, sampled, ZOH and computation delay)")
     return svg_from_figure(fig, prefix)
 
 
-def nyquist_svg(loops: dict, prefix: str = "nyq") -> str:
-    """Nyquist plot of ``L`` near the critical point, with the ``1/max|S|`` circle."""
+def nyquist_svg(responses: Mapping, margins: Mapping | None, prefix: str = "nyq") -> str:
+    """Nyquist plot of the stored ``L`` near -1, with the circle of radius ``1/max|S|``."""
     fig = _figure(5.6, 4.8)
     ax = fig.subplots()
     th = np.linspace(0, 2 * math.pi, 361)
-    for name, lp in loops.items():
-        L, c = lp["L"], AXIS_COLORS[name]
-        ax.plot(L.real, L.imag, color=c, label=f"{name} axis (w > 0)")
-        ax.plot(L.real, -L.imag, color=c, ls="--", lw=0.9)
-        r = 1.0 / float(np.max(np.abs(lp["S"])))
-        ax.plot(-1 + r * np.cos(th), r * np.sin(th), color=c, lw=0.8, ls=":",
-                label=f"{name}: 1/max|S| = {r:.2f}")
+    for name in _axes(responses):
+        r, c = responses[name], AXIS_COLORS[name]
+        re_, im = _arr(r["loop"]["re"]), _arr(r["loop"]["im"])
+        ax.plot(re_, im, color=c, label=f"{name} axis (w > 0)")
+        ax.plot(re_, -im, color=c, ls="--", lw=0.9)
+        rad = _num(((margins or {}).get(name) or {}).get("stability_margin"))
+        if rad is None:  # no margins given: the stored |S| peak
+            rad = float(10 ** (-np.nanmax(_arr(r["S_db"])) / 20))
+        ax.plot(-1 + rad * np.cos(th), rad * np.sin(th), color=c, lw=0.8, ls=":",
+                label=f"{name}: 1/max|S| = {rad:.2f}")
     ax.plot([-1], [0], "k+", ms=12, mew=2)
     ax.set_xlim(-3.0, 1.5)
     ax.set_ylim(-2.5, 2.5)
@@ -234,52 +199,32 @@ def nyquist_svg(loops: dict, prefix: str = "nyq") -> str:
     return svg_from_figure(fig, prefix)
 
 
-def _weight_response(W: Any, omega: np.ndarray) -> np.ndarray | None:
-    s = 1j * omega
-    if W is None:
-        return None
-    if isinstance(W, Mapping):
-        num = np.atleast_1d(np.asarray(W["num"], float))
-        den = np.atleast_1d(np.asarray(W["den"], float))
-        return np.polyval(num, s) / np.polyval(den, s)
-    if isinstance(W, (control.TransferFunction, control.StateSpace)):
-        return np.asarray(W(s), complex).reshape(-1)
-    return np.full(omega.shape, complex(float(W)))
+def has_weight_bounds(responses: Mapping | None) -> bool:
+    """Whether any axis of the stored responses carries H-infinity weight bounds."""
+    return any((responses or {}).get(a, {}).get("weight_bounds") for a in _axes(responses or {}))
 
 
-def sensitivity_svg(loops: dict, weights: dict | None, prefix: str = "sens") -> str:
-    """|S|, |KS|, |T| per axis, with ``gamma/|W_i|`` bounds when weights are given."""
+def sensitivity_svg(responses: Mapping, prefix: str = "sens") -> str:
+    """Stored |S|, |KS|, |T| per axis, with the stored ``gamma/|W_i|`` bounds when present."""
     fig = _figure(7.2, 6.4)
     axs = fig.subplots(3, 1, sharex=True)
     keys = (("S", "w1", "|S| (dB)", "sensitivity S = 1/(1+L)"),
             ("KS", "w2", "|KS| (dB, V/A)", "control sensitivity KS"),
             ("T", "w3", "|T| (dB)", "complementary sensitivity T = L/(1+L)"))
     for ax, (fn, wkey, ylabel, title) in zip(axs, keys):
-        for name, lp in loops.items():
-            c = AXIS_COLORS[name]
-            ax.semilogx(lp["omega"], 20 * np.log10(np.abs(lp[fn])), color=c, label=f"{name} axis")
-            wt = (weights or {}).get(name) or {}
-            resp = _weight_response(wt.get(wkey), lp["omega"])
-            if resp is not None:
-                gamma = float(wt.get("gamma", 1.0))
-                ax.semilogx(lp["omega"], 20 * np.log10(gamma / np.abs(resp)), color=c, ls="--",
-                            lw=1.0, label=f"{name}: gamma/|{wkey.upper()}|")
+        for name in _axes(responses):
+            r, c = responses[name], AXIS_COLORS[name]
+            w = _arr(r["omega"])
+            ax.semilogx(w, _arr(r[f"{fn}_db"]), color=c, label=f"{name} axis")
+            bound = (r.get("weight_bounds") or {}).get(fn)
+            if bound is not None:
+                ax.semilogx(w, _arr(bound), color=c, ls="--", lw=1.0,
+                            label=f"{name}: gamma/|{wkey.upper()}|")
         ax.set_ylabel(ylabel)
         ax.set_title(title, fontsize=9)
         ax.legend(loc="best", ncol=2)
     axs[-1].set_xlabel("frequency (rad/s)")
     return svg_from_figure(fig, prefix)
-
-
-def _step(closed: control.StateSpace, dt: float, n_max: int = 20000) -> tuple[np.ndarray, np.ndarray]:
-    t = np.arange(n_max) * dt
-    y = np.asarray(control.step_response(closed, T=t).outputs).reshape(-1)
-    final = y[-1]
-    band = 0.02 * max(abs(final), 1e-12)
-    outside = np.nonzero(np.abs(y - final) > band)[0]
-    k_settle = int(outside[-1]) + 1 if outside.size else 1
-    n = int(min(n_max, max(40, 3 * k_settle)))
-    return t[:n], y[:n]
 
 
 def _simulated_steps(traces: Sequence[dict] | None) -> list[tuple[str, int, np.ndarray, np.ndarray]]:
@@ -310,19 +255,31 @@ def _simulated_steps(traces: Sequence[dict] | None) -> list[tuple[str, int, np.n
     return out
 
 
-def step_svg(loops: dict, traces: Sequence[dict] | None = None, prefix: str = "step") -> str:
-    """Linear unit-step response of the sampled closed loop T(z) per axis.
+def step_text(margins: Mapping | None, axis: str) -> str:
+    """``overshoot 0.004 %, 5 % time 2.21 ms, ...`` of one axis from the analysis' margins."""
+    m = (margins or {}).get(axis) or {}
+    parts = []
+    for key, (label, unit, scale) in STEP_FIGURES.items():
+        v = _num(m.get(key))
+        parts.append(f"{label} {v * scale:.3g} {unit}" if v is not None else f"{label} n/a")
+    return ", ".join(parts)
 
-    Simulated step responses (verification traces, normalised by the
-    reference) are overlaid, dashed, when given.
+
+def step_svg(responses: Mapping, traces: Sequence[dict] | None = None,
+             prefix: str = "step") -> str:
+    """Stored reference step ``i_ref -> i`` of the executed loop per axis.
+
+    Simulated step responses (verification traces,
+    normalised by the reference) are overlaid, dashed, when given.
     """
     fig = _figure(7.2, 3.4)
     ax = fig.subplots()
     t_end = 0.0
-    for name, lp in loops.items():
-        t, y = _step(lp["closed"], lp["dt"])
+    for name in _axes(responses):
+        st = responses[name]["step"]
+        t, y = _arr(st["t"]), _arr(st["y"])
         t_end = max(t_end, float(t[-1]))
-        ax.step(t * 1e3, y, where="post", color=AXIS_COLORS[name], label=f"{name} axis, linear")
+        ax.plot(t * 1e3, y, color=AXIS_COLORS[name], label=f"{name} axis, linear")
     for axis, k, t, y in _simulated_steps(traces):
         keep = t <= t_end
         ax.plot(t[keep] * 1e3, y[keep], color=AXIS_COLORS[axis], ls="--", lw=1.0,
@@ -331,68 +288,81 @@ def step_svg(loops: dict, traces: Sequence[dict] | None = None, prefix: str = "s
     ax.axhspan(0.95, 1.05, color="0.85", alpha=0.5, lw=0, label="+/- 5 % band")
     ax.set_xlabel("time (ms)")
     ax.set_ylabel("current / reference (A/A)")
-    ax.set_title("Linear step response of the sampled loop (unit reference step)")
-    ax.legend(loc="lower right")
+    ax.set_title("Linear reference step response of the executed loop (unit step)")
+    ax.legend(loc="lower right", fontsize=7)
     return svg_from_figure(fig, prefix)
 
 
-def pzmap_svg(loops: dict, prefix: str = "pz") -> str:
-    """Closed-loop poles (x) and zeros (o) of T(z) per axis, with the unit circle."""
+def pzmap_svg(responses: Mapping, prefix: str = "pz") -> str:
+    """Stored closed-loop poles (x) and zeros (o) of ``i_ref -> i`` per axis, unit circle."""
     fig = _figure(5.6, 5.0)
     ax = fig.subplots()
     th = np.linspace(0, 2 * math.pi, 361)
     ax.plot(np.cos(th), np.sin(th), color="0.4", lw=0.8)
-    for name, lp in loops.items():
-        c = AXIS_COLORS[name]
-        p = control.poles(lp["closed"])
-        z = control.zeros(lp["closed"])
-        ax.plot(p.real, p.imag, "x", color=c, ms=8, mew=1.6, label=f"{name} poles")
+    for name in _axes(responses):
+        c, pz = AXIS_COLORS[name], responses[name]["pz"]
+        p = np.array(pz["poles"], float).reshape(-1, 2)
+        z = np.array(pz["zeros"], float).reshape(-1, 2)
+        ax.plot(p[:, 0], p[:, 1], "x", color=c, ms=8, mew=1.6, label=f"{name} poles")
         if z.size:
-            ax.plot(z.real, z.imag, "o", color=c, mfc="none", ms=8, label=f"{name} zeros")
+            ax.plot(z[:, 0], z[:, 1], "o", color=c, mfc="none", ms=8, label=f"{name} zeros")
     ax.set_xlim(-1.2, 1.2)
     ax.set_ylim(-1.2, 1.2)
     ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel("Re z (1)")
     ax.set_ylabel("Im z (1)")
-    ax.set_title("Closed-loop pole-zero map (z-plane)")
+    ax.set_title("Closed-loop pole-zero map (z-plane, reference to current)")
     ax.legend(loc="lower left", fontsize=7)
     return svg_from_figure(fig, prefix)
 
 
-def figures(loops: dict, weights: dict | None = None,
+def figures(responses: Mapping | None, margins: Mapping | None = None,
             traces: Sequence[dict] | None = None) -> list[dict]:
     """The loop figures of a report: ``[{"id", "title", "caption", "svg"}]``.
 
-    ``traces`` are the verification scenarios' traces (``traces_dict`` form,
-    ``None`` entries allowed), in scenario order; single reference steps are
-    overlaid on the linear step response.
+    Parameters
+    ----------
+    responses : mapping or None
+        ``analysis.json["responses"]``; ``None`` gives no figure (the
+        templates then say "not computed").
+    margins : mapping, optional
+        ``analysis.json["margins"]["discrete"]``: margin markers and step figures.
+    traces : sequence of dict, optional
+        Verification traces (``traces_dict`` form, ``None`` entries allowed)
+        in scenario order; single reference steps are overlaid on the step.
     """
+    if not responses:
+        return []
     sim = _simulated_steps(traces)
-    has_w = bool(weights) and any((weights or {}).get(a) for a in ("d", "q"))
+    has_w = has_weight_bounds(responses)
     return [
         {"id": "bode", "title": "Bode diagram of the loop",
-         "caption": "L = K G per axis (sampled loop with ZOH and computation delay, up to the "
-                    "Nyquist frequency). Dots: gain crossover; bars: phase and gain margins "
-                    "read off the plotted curves.",
-         "svg": bode_svg(loops)},
+         "caption": "L = K G per axis (the executed law's feedback channel, sampled loop with "
+                    "ZOH and computation delay, up to the Nyquist frequency). Dots: gain "
+                    "crossover; bars: phase and gain margins of the margin table.",
+         "svg": bode_svg(responses, margins)},
         {"id": "nyquist", "title": "Nyquist plot",
          "caption": "Solid: positive frequencies; dashed: mirror image. Dotted circles around "
                     "-1 have radius 1/max|S| (the stability margin).",
-         "svg": nyquist_svg(loops)},
+         "svg": nyquist_svg(responses, margins)},
         {"id": "sensitivity", "title": "Closed-loop functions",
-         "caption": ("Dashed: bounds gamma/|W_i| from the H-infinity weights." if has_w else
-                     "Weight bounds: not computed (no H-infinity weights given)."),
-         "svg": sensitivity_svg(loops, weights)},
+         "caption": ("Dashed: bounds gamma/|W_i| from the H-infinity weights recorded in the "
+                     "design (paper 003 eq (41)-(43))." if has_w else
+                     "Weight bounds: not computed (no H-infinity weights in the design)."),
+         "svg": sensitivity_svg(responses)},
         {"id": "step", "title": "Step response (linear)",
-         "caption": "Unit step of the sampled linear closed loop T(z) = L/(1+L)"
+         "caption": "Unit reference step i_ref -> i of the executed law (two-degree-of-freedom "
+                    "reference channel included, current between samples shown)"
+                    + "".join(f"; {a} axis: {step_text(margins, a)}" for a in _axes(responses)
+                              if margins)
                     + ("; dashed: simulated responses of the verification scenarios "
                        "(numbered as in the verification section), divided by the reference."
                        if sim else "; simulated step responses: not computed."),
-         "svg": step_svg(loops, traces)},
+         "svg": step_svg(responses, traces)},
         {"id": "pzmap", "title": "Pole-zero map",
-         "caption": "Closed-loop poles and zeros of T(z); all poles inside the unit circle "
-                    "means the sampled loop is stable.",
-         "svg": pzmap_svg(loops)},
+         "caption": "Closed-loop poles and zeros of i_ref -> i; all poles inside the unit "
+                    "circle means the sampled loop is stable.",
+         "svg": pzmap_svg(responses)},
     ]
 
 

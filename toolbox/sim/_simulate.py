@@ -18,7 +18,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from toolbox.errors import SpecError
-from toolbox.spec._model import inverter_radii
+from toolbox.spec import inverter_radii
 
 from . import _kernel
 from ._metrics import METRIC_NAMES, metrics_dict
@@ -282,11 +282,17 @@ def discrete_pi(kp: float, ki: float, sample_time: float, antiwindup: bool = Tru
     sample_time : float
         Controller period Ts (s).
     antiwindup : bool
-        Back-calculation gain ``1/ki`` (the integral part absorbs exactly the
-        clipped voltage).
+        Hanus's conditioning on the reference (Hanus, Kinnaert and Henrotte
+        1987, Automatica 23(6)): ``aw = B_r / D_r = Ts / kp``, i.e. the
+        integrator integrates the error of the reference that would have
+        produced the saturated voltage. While saturated the state decays
+        at the PI zero (``x+ = (1 - Ts ki/kp) x + ...``) instead of being
+        loaded with the whole clipped voltage (``aw = 1/ki``, deadbeat),
+        which left ``v`` at ``ki x ~ R i_ref`` after saturation and the
+        current crawling at the open-loop ``R/L`` (issue 10).
     """
     Ts = sample_time
-    aw = np.array([1.0 / ki]) if (antiwindup and ki != 0) else None
+    aw = np.array([Ts / kp]) if (antiwindup and kp != 0) else None
     return AxisLaw(np.array([[1.0]]), np.array([[Ts, -Ts]]), np.array([[ki]]),
                    np.array([[kp, -kp]]), aw)
 

@@ -7,17 +7,19 @@ is re-designed here.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Callable
 
 
+from ._checks import LinearFigures, default_checks, finalise_check
 from ._scenario import Scenario
 from ._simulate import (AxisLaw, ControlLaw, DriveParams, FcsWeights, PlantParams,
                         SimResult, SpeedLoop, simulate)
 
 __all__ = ["VERIFY_SCHEMA", "control_law", "plant_params", "drive_params",
-           "default_scenarios", "verify", "VerifyResult", "ScenarioOutcome"]
+           "default_scenarios", "verify", "VerifyResult", "ScenarioOutcome", "NO_REQUIREMENTS"]
 
 VERIFY_SCHEMA = "cct.verify/1"
 
@@ -112,7 +114,7 @@ def _speed_loop(scenario: Scenario, sample_time: float) -> SpeedLoop | None:
 
 @dataclass
 class ScenarioOutcome:
-    """One scenario's metrics and requirement checks."""
+    """One scenario's metrics and checks (requirements and ``default.*``)."""
 
     name: str
     kind: str
@@ -127,16 +129,39 @@ class ScenarioOutcome:
     def to_json(self) -> dict:
         return {"name": self.name, "kind": self.kind, "passed": self.passed,
                 "metrics": {k: _finite_or_none(v) for k, v in self.metrics.items()},
-                "requirements": self.checks}
+                "requirements": {k: finalise_check(c) for k, c in self.checks.items()}}
 
 
 @dataclass
 class VerifyResult:
-    """All scenario outcomes of a verification run."""
+    """All scenario outcomes of a verification run.
+
+    Attributes
+    ----------
+    method : str
+    scenarios : list of ScenarioOutcome
+    margin_checks : dict
+        Margin requirements on the margins recomputed from the executed law,
+        plus ``default.stable`` (the executed sampled loop of both axes).
+    stability : dict
+        Per axis ``{"stable", "spectral_radius", "basis"}``
+        (:func:`toolbox.analysis.executed.loop_stability`).
+    notice : str or None
+        :data:`NO_REQUIREMENTS` when the spec has no ``[requirements]``.
+    warnings : list of str
+        Stored numbers that disagree with the recomputed ones, informational
+        margin checks, and the like.
+    informational : dict
+        Checks shown but not deciding (fcs_mpc's baseline PI margins).
+    """
 
     method: str
     scenarios: list[ScenarioOutcome] = field(default_factory=list)
     margin_checks: dict = field(default_factory=dict)
+    stability: dict = field(default_factory=dict)
+    notice: str | None = None
+    warnings: list[str] = field(default_factory=list)
+    informational: dict = field(default_factory=dict)
 
     @property
     def passed(self) -> bool:
@@ -144,18 +169,72 @@ class VerifyResult:
                 and all(c["pass"] for c in self.margin_checks.values()))
 
     def to_json(self) -> dict:
-        return {"schema": VERIFY_SCHEMA, "method": self.method, "passed": self.passed,
-                "margin_requirements": self.margin_checks,
-                "scenarios": [s.to_json() for s in self.scenarios]}
+        out = {"schema": VERIFY_SCHEMA, "method": self.method, "passed": self.passed,
+               "notice": self.notice, "warnings": list(self.warnings),
+               "stability": self.stability,
+               "margin_requirements": {k: finalise_check(c)
+                                       for k, c in self.margin_checks.items()},
+               "scenarios": [s.to_json() for s in self.scenarios]}
+        if self.informational:
+            out["informational_margin_requirements"] = {
+                k: finalise_check(c) for k, c in self.informational.items()}
+        return out
+
+
+#: Longest run (controller periods) whose traces verification keeps for the
+#: default checks when the scenario does not ask for them: 10 values of 8 bytes
+#: a row, 16 MB. Longer runs fall back on the simulator's (stricter) 5 % time.
+MAX_CHECK_TRACE_ROWS = 200_000
+
+#: The notice of a spec without ``[requirements]`` (CLI, verify.json, report).
+NO_REQUIREMENTS = "no requirements given; default checks only"
 
 
 def _finite_or_none(v: float) -> float | None:
     return float(v) if v is not None and math.isfinite(v) else None
 
 
+def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict, list, dict]:
+    """Margin checks, stability, linear figures and warnings from the executed law."""
+    from ..analysis.executed import (INFORMATIONAL_METHODS, loop_stability,
+                                     margin_disagreements, recompute_margins)
+
+    margins = recompute_margins(artifact, spec.motor)
+    warnings = margin_disagreements(artifact.margins, margins, file)
+    stability = loop_stability(artifact, spec.motor)
+    fresh = {ax: m.to_json(extras=False) for ax, m in margins.items()}
+    checks = spec.requirements.check_margins(fresh)
+    informational = {}
+    if artifact.method in INFORMATIONAL_METHODS:
+        informational, checks = checks, {}
+        if informational:
+            warnings.append(f"margin requirements are informational for {artifact.method}: "
+                            f"{INFORMATIONAL_METHODS[artifact.method]}")
+    else:
+        unstable = [ax for ax, s in stability.items() if s["stable"] is False]
+        checks["default.stable"] = finalise_check({
+            "quantity": "largest closed-loop pole magnitude (executed sampled loop)",
+            "bound": 1.0, "value": max(s["spectral_radius"] for s in stability.values()),
+            "unit": "1", "pass": not unstable,
+            "reason": (f"the executed sampled loop of the {' and '.join(unstable)} axis is "
+                       "unstable (a closed-loop pole on or outside the unit circle)"
+                       if unstable else None)})
+    linear = {ax: LinearFigures(m.bandwidth_rad_s, m.response_time_5pct)
+              for ax, m in margins.items()}
+    return checks, stability, linear, warnings, informational
+
+
 def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
-           keep_traces: bool = True) -> VerifyResult:
-    """Simulate ``artifact`` in every scenario of ``spec`` and check requirements.
+           keep_traces: bool = True, file: str | None = None) -> VerifyResult:
+    """Simulate ``artifact`` in every scenario of ``spec`` and check it.
+
+    Margins and stability are recomputed from the executed law (the numbers
+    stored in the artifact are only compared, see
+    :mod:`toolbox.analysis.executed`); every scenario gets the default checks
+    of :mod:`toolbox.sim._checks` besides the spec's requirements. In
+    verify.json both sit under each scenario's ``requirements`` (the
+    ``default.*`` keys), ``default.stable`` under ``margin_requirements``;
+    every failing record has a ``reason`` and no value is NaN.
 
     Parameters
     ----------
@@ -169,6 +248,8 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
         Called as ``progress(done, total)`` after each scenario.
     keep_traces : bool
         Keep the simulated traces (for reports) when the scenario asks.
+    file : str, optional
+        The controller.json the artifact came from (named in warnings).
 
     Returns
     -------
@@ -177,14 +258,19 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     scenarios = spec.scenarios or default_scenarios(spec.motor)
     plant = plant_params(spec.motor)
     inverter_default = "fcs_mpc" if artifact.method == "fcs_mpc" else "average"
-    # margin bounds on the MARGINS stored by the analysis (exit codes as for design)
-    out = VerifyResult(method=artifact.method,
-                       margin_checks=(spec.requirements.check_margins(artifact.margins)
-                                      if artifact.margins else {}))
+    margin_checks, stability, linear, warnings, info = _margin_verdict(artifact, spec, file)
+    out = VerifyResult(method=artifact.method, margin_checks=margin_checks,
+                       stability=stability, warnings=warnings, informational=info,
+                       notice=None if spec.requirements.bounds else NO_REQUIREMENTS)
     for k, sc in enumerate(scenarios):
         law = control_law(artifact, _speed_loop(sc, artifact.sample_time))
         drive = drive_params(spec.drive, sc.inverter or inverter_default)
-        res = simulate(law, plant, sc, drive)  # simulate applies the scenario's overrides
+        # the reach check reads the traces at the controller instants (the kernel's 5 %
+        # time also sees the switching ripple inside a period); they are kept when small
+        rows = sc.duration / spec.drive.sample_time
+        run = (sc if sc.keep_traces or rows > MAX_CHECK_TRACE_ROWS
+               else dataclasses.replace(sc, keep_traces=True))
+        res = simulate(law, plant, run, drive)  # simulate applies the scenario's overrides
         metrics = dict(res.metrics)
         error = abs(metrics.get("static_error", float("nan")))
         speed_signal = sc.kind in ("speed_step", "load_step")
@@ -192,8 +278,19 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
         # a bound on a quantity this kind of scenario does not produce does not apply
         checks = {k: c for k, c in spec.requirements.check(metrics, "sim").items()
                   if c["quantity"] in metrics}
+        true_plant = plant.with_overrides(sc.plant_values, sc.plant_scale)
+        r_hex, v_max = drive.radii(plant.torque_factor)
+        # one vector held for a whole period (see toolbox.sim._checks)
+        ripple = (r_hex * drive.sample_time / (2.0 * min(true_plant.Ld, true_plant.Lq))
+                  if drive.inverter == "fcs_mpc" else 0.0)
+        checks.update(default_checks(
+            sc, metrics, res, plant=true_plant, motor=spec.motor, v_max=v_max,
+            delay_samples=spec.drive.delay_samples, sample_time=spec.drive.sample_time,
+            linear=linear, flux_c=artifact.decoupling.flux_c, ripple=ripple))
+        checks = {k: finalise_check(c) for k, c in checks.items()}
+        kept = res if sc.keep_traces else SimResult(metrics=res.metrics)
         out.scenarios.append(ScenarioOutcome(sc.name or sc.kind, sc.kind, metrics, checks,
-                                             res if keep_traces else None))
+                                             kept if keep_traces else None))
         if progress:
             progress(k + 1, len(scenarios))
     return out

@@ -18,10 +18,11 @@ from ._catalog import CATALOG
 from ._bounds import (check_drive, check_motor, check_motor_drive, check_scenario_count,
                       check_work)
 from ._fields import Collector, Table, check_keys
+from ._methods import read_method_cfg
 from ._model import (METHODS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor,
                      Requirements, Spec)
 
-__all__ = ["load_spec", "spec_from_dict"]
+__all__ = ["load_spec", "spec_from_dict", "motor_from_dict", "drive_from_dict"]
 
 TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario")
 MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
@@ -36,7 +37,7 @@ def load_spec(path: str | Path) -> Spec:
     Parameters
     ----------
     path : str or Path
-        TOML file (DESIGN.md format).
+        TOML file (format: README.md "Spec files", toolbox/ARCHITECTURE.md).
 
     Returns
     -------
@@ -204,8 +205,7 @@ def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
     t = Table(value, "controller")
     method = t.string("method", choices=METHODS)
     check_keys(t.data, ("method", method), "controller")
-    from ..design import read_method_cfg  # the design package owns method parameters
-
+    # the design methods register their readers (spec/_methods.py): spec stays data
     cfg = read_method_cfg(method, t.table(method), motor=motor, drive=drive)
     return ControllerChoice(method=method, cfg=cfg)
 
@@ -253,3 +253,33 @@ def _scenarios(value: Any, drive: Drive, method: str) -> tuple:
     return tuple(out)
 
 
+def motor_from_dict(table: Mapping[str, Any]) -> Motor:
+    """Validate a ``[motor]`` table alone (catalog defaults applied).
+
+    Parameters
+    ----------
+    table : mapping
+        The ``[motor]`` table of a spec.
+
+    Raises
+    ------
+    SpecError
+        Naming the ``motor.*`` key path.
+    """
+    return _motor(table)[0]
+
+
+def drive_from_dict(table: Mapping[str, Any]) -> Drive:
+    """Validate a ``[drive]`` table alone.
+
+    Parameters
+    ----------
+    table : mapping
+        The ``[drive]`` table of a spec.
+
+    Raises
+    ------
+    SpecError
+        Naming the ``drive.*`` key path.
+    """
+    return _drive(table)

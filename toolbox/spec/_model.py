@@ -13,7 +13,7 @@ from typing import Any
 __all__ = ["inverter_radii", "Motor", "Drive", "ControllerChoice", "Requirements", "Spec",
            "METHODS", "REQUIREMENT_KEYS"]
 
-#: Design methods the toolbox knows (DESIGN.md).
+#: Design methods the toolbox knows (toolbox/ARCHITECTURE.md "Spec file").
 METHODS = ("pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc")
 
 #: ``[requirements]`` keys: (stage, direction, quantity, unit). Stage

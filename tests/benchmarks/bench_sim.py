@@ -22,7 +22,7 @@ Routes:
 5. a batch of 10,000 closed-loop simulations of 20 ms (parameter sweep on
    R, Ld, Lq) on all cores, with a tqdm progress bar.
 
-Run: ``python benchmarks/bench_sim.py`` (from the repository root).
+Run: ``python tests/benchmarks/bench_sim.py`` (from the repository root).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 
 from toolbox.sim._scenario import Scenario  # noqa: E402
 from toolbox.sim._simulate import (ControlLaw, DriveParams, PlantParams,  # noqa: E402

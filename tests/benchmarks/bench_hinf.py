@@ -9,7 +9,7 @@ eq (34)). Routes, timed in one run on the same machine (best of N):
 3. ours, one central controller at fixed gamma = 1 vs one SLICOT ``sb10fd``
    call at gamma = 1 (the solver alone).
 
-Run: ``python benchmarks/bench_hinf.py`` from the repository root.
+Run: ``python tests/benchmarks/bench_hinf.py`` from the repository root.
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ import warnings
 import control
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 
-from toolbox.design._hinf import augment_mixed_sensitivity, central_controller, synthesize  # noqa: E402
+from toolbox.design._hinf_riccati import augment_mixed_sensitivity, central_controller, synthesize  # noqa: E402
 from toolbox.design._reduction import reduce_controller  # noqa: E402
 
 G = control.tf([1.0], [2.8e-3, 0.6])

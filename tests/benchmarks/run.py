@@ -1,5 +1,5 @@
 """All benchmarks in one run (same machine, same moment): H-infinity design and
-closed-loop simulation. ``python benchmarks/run.py`` from the repository root."""
+closed-loop simulation. ``python tests/benchmarks/run.py`` from the repository root."""
 
 from __future__ import annotations
 

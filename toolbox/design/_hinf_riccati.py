@@ -35,16 +35,44 @@ import numpy as np
 import scipy.linalg as sla
 import control as ct
 
-from toolbox.errors import SpecError
+from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
     "PartitionedPlant", "augment_mixed_sensitivity", "check_assumptions",
     "AssumptionReport", "balance_plant", "HinfFeasibility", "hinf_feasibility",
     "central_controller", "gamma_iteration", "HinfResult", "synthesize",
-    "pole_limit", "effective_poles", "WeightBound", "weight_bound_check",
+    "pole_limit", "effective_poles", "fastest_pole_modulus", "WeightBound",
+    "weight_bound_check", "GammaBelowOptimum",
 ]
 
 _GAMMA_KEY = "controller.hinf.gamma"
+
+
+class GammaBelowOptimum(DesignInfeasible):
+    """A fixed ``gamma`` below the best achievable one (Theorem 1 fails).
+
+    Carries the failed condition as data so callers branch on the class and
+    read :attr:`condition`, never on message text (issue 11 item 10).
+
+    Attributes
+    ----------
+    condition : str
+        The condition of Theorem 1 that failed (words, for the message).
+    best : float
+        Best achievable gamma of this problem (nan if unknown).
+    axis : str
+        ``"d"`` or ``"q"`` once :func:`toolbox.design.hinf.design_hinf_axis`
+        located it (empty before).
+    """
+
+    condition: str = ""
+    best: float = float("nan")
+    axis: str = ""
+
+    def _copy(self, key: str, file: str | None) -> "GammaBelowOptimum":
+        new = super()._copy(key, file)
+        new.condition, new.best = self.condition, self.best
+        return new
 
 
 # --------------------------------------------------------------------------
@@ -692,7 +720,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
     prep = _prepare(P)
     res = _feasibility_normalised(prep.norm.P, gamma)
     if not res.feasible:
-        raise SpecError(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
+        raise DesignInfeasible(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
     return _controller_from(prep, res)
 
 
@@ -749,7 +777,7 @@ def gamma_iteration(P: PartitionedPlant, tol: float = 1e-4,
     hi = min(max(1.0, 2.0 * lo), top)
     while not _feasibility_normalised(Pn, hi).feasible:
         if hi >= top:
-            raise SpecError(_GAMMA_KEY, f"a problem feasible for some gamma <= {top:g}",
+            raise DesignInfeasible(_GAMMA_KEY, f"a problem feasible for some gamma <= {top:g}",
                             hint="no controller reaches it: raise gamma_max or relax "
                                  "the weights w1/w3")
         lo, hi = hi, min(2.0 * hi, top)
@@ -825,7 +853,12 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
     return np.asarray(keep, dtype=complex)
 
 
-def _fastest(K: Any) -> float:
+def fastest_pole_modulus(K: Any) -> float:
+    """Largest ``|s|`` of the controller's effective poles (rad/s), 0 if none.
+
+    Compared with :func:`pole_limit` (``pi/Ts``) to decide whether ``K`` can
+    be discretised at the sample time (paper 003 sect. 4 trap at the optimum).
+    """
     ep = effective_poles(K)
     return float(np.max(np.abs(ep))) if ep.size else 0.0
 
@@ -939,22 +972,25 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
         while True:
             res = _feasibility_normalised(Pn, (1.0 + b) * gamma_opt)
             K = _controller_from(prep, res) if res.feasible else None
-            ok = K is not None and (limit is None or _fastest(K) <= limit)
+            ok = K is not None and (limit is None or fastest_pole_modulus(K) <= limit)
             if ok or b >= max_backoff:
                 break
             b = min(max(2.0 * b, 0.01), max_backoff)
         if K is None:
-            raise SpecError(_GAMMA_KEY, "a feasible gamma", (1 + b) * gamma_opt,
+            raise DesignInfeasible(_GAMMA_KEY, "a feasible gamma", (1 + b) * gamma_opt,
                             hint=res.message)
     else:
         g = _check_gamma(gamma)
         res = _feasibility_normalised(Pn, g)
         if not res.feasible:
             best = gamma_iteration(P, tol=tol)
-            raise SpecError(_GAMMA_KEY, f"gamma >= the best achievable {best:.4g}", g,
-                            hint=f"{res.message}; set gamma above {best:.4g} or \"optimal\"")
+            err = GammaBelowOptimum(_GAMMA_KEY, f"gamma >= the best achievable {best:.4g}", g,
+                                    hint=f"{res.message}; set gamma above {best:.4g} or "
+                                         "\"optimal\"")
+            err.condition, err.best = res.message, best
+            raise err
         K, gamma_opt, b = _controller_from(prep, res), None, 0.0
-    fast = _fastest(K)
+    fast = fastest_pole_modulus(K)
     if limit is not None and fast > limit:
         notes.append(f"controller pole at |s| = {fast:.4g} rad/s exceeds the realisability "
                      f"limit pi/Ts = {limit:.4g} rad/s"

@@ -1,0 +1,130 @@
+"""Layering and privacy rules of the package, checked on the source (AST).
+
+toolbox/ARCHITECTURE.md "Layers" and "Privacy rule":
+
+* ``toolbox.spec`` is data: it never imports ``toolbox.design`` (the design
+  methods register their parameter readers with the spec stage instead);
+* a private module or name (``_x``) of a package is used only inside that
+  package; other packages import the package's public face, which re-exports
+  the public names in ``__all__``.
+
+Every import statement counts, including those inside functions.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "toolbox"
+
+
+def _module_name(path: Path, root: Path = PACKAGE) -> str:
+    parts = path.relative_to(root.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imports(path: Path, root: Path = PACKAGE) -> list[tuple[int, str]]:
+    """``(line, dotted target)`` of every import in ``path``; ``from A import b``
+    yields ``A.b`` (b may be a module or a name: both are checked alike)."""
+    name = _module_name(path, root)
+    is_pkg = path.name == "__init__.py"
+    package = name if is_pkg else name.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - (node.level - 1)]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            out += [(node.lineno, f"{mod}.{a.name}") for a in node.names if a.name != "*"]
+    return out
+
+
+def _owner_of_private(target: str, root: Path = PACKAGE) -> str | None:
+    """Package owning the first private component of a ``toolbox.*`` target.
+
+    A private module ``toolbox.x._m`` belongs to ``toolbox.x``; a private name
+    ``_n`` of a module ``toolbox.x.m`` belongs to the module's package
+    ``toolbox.x`` too (siblings in one package may share helpers).
+    """
+    parts = target.split(".")
+    if parts[0] != "toolbox":
+        return None
+    for i, part in enumerate(parts[1:], start=1):
+        if part.startswith("_") and not part.startswith("__"):
+            prefix = parts[:i]
+            is_package = root.parent.joinpath(*prefix).is_dir()
+            return ".".join(prefix if is_package else prefix[:-1])
+    return None
+
+
+SOURCES = sorted(PACKAGE.rglob("*.py"))
+
+
+def test_sources_found():
+    """The walk sees the package (a wrong path would make every check vacuous)."""
+    names = {_module_name(p) for p in SOURCES}
+    assert {"toolbox.spec._load", "toolbox.design.hinf", "toolbox.analysis.margins"} <= names
+
+
+def test_spec_does_not_import_design():
+    """spec -> design would re-create the import cycle of issue 11 item 5."""
+    bad = [f"{_module_name(p)}:{line} imports {t}" for p in SOURCES
+           if _module_name(p).startswith("toolbox.spec")
+           for line, t in _imports(p) if t == "toolbox.design" or t.startswith("toolbox.design.")]
+    assert not bad, "\n".join(bad)
+
+
+def test_no_private_reach_ins():
+    """No module uses another package's private module or name."""
+    bad = []
+    for p in SOURCES:
+        me = _module_name(p)
+        for line, target in _imports(p):
+            owner = _owner_of_private(target)
+            if owner is not None and not (me == owner or me.startswith(owner + ".")):
+                bad.append(f"{me}:{line} imports {target} (private to {owner})")
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("source, expected", [
+    ("from ..spec._load import _motor\n", "toolbox.spec._load._motor"),
+    ("from ..analysis.margins import _electrical_max_speed\n",
+     "toolbox.analysis.margins._electrical_max_speed"),
+    ("import toolbox.design._common\n", "toolbox.design._common"),
+    ("from toolbox.design import _hinf_riccati as H\n", "toolbox.design._hinf_riccati"),
+])
+def test_checker_catches_reach_ins(tmp_path, source, expected):
+    """The checker flags the reach-ins issue 11 item 8 removed (so it can fail)."""
+    root = tmp_path / "toolbox"
+    for sub in ("export", "spec", "analysis", "design"):
+        (root / sub).mkdir(parents=True)
+    f = root / "export" / "c_header.py"
+    f.write_text(source)
+    (line, target), = _imports(f, root)
+    assert target == expected
+    owner = _owner_of_private(target, root)
+    assert owner is not None and not _module_name(f, root).startswith(owner + ".")
+
+
+def test_method_readers_registered():
+    """Every method the spec accepts has a reader registered by toolbox.design."""
+    import toolbox  # noqa: F401  (imports toolbox.design, which registers)
+    from toolbox.spec import METHODS, registered_methods
+    assert set(registered_methods()) == set(METHODS)
+
+
+def test_unregistered_method_is_a_located_spec_error():
+    """A method without a reader is refused naming controller.method and the remedy."""
+    from toolbox.errors import SpecError
+    from toolbox.spec import read_method_cfg
+    with pytest.raises(SpecError, match=r"controller\.method: expected a method with a "
+                                        r"registered parameter reader .*got \"nope\""):
+        read_method_cfg("nope", None, None, None)

@@ -1,0 +1,143 @@
+"""The coupled dq current loop at constant speed, as executed (stacked numpy).
+
+The plant ``A(omega) = [[-R/Ld, omega Lq/Ld], [-omega Ld/Lq, -R/Lq]]``,
+``B = diag(1/Ld, 1/Lq)`` (paper 003 eq (3)-(4)) is discretised exactly (ZOH)
+at each speed and closed with both executed laws, the decoupling (with the
+controller's model parameters and the measured speed) and the delay line.
+Shared by the MIMO margins and the robustness sweep.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..plant import dq_matrices
+from ._statespace import zoh_2x2
+
+__all__ = ["coupled_plant", "decoupling_matrix", "CoupledLoop", "coupled_closed_loop"]
+
+
+def coupled_plant(R, Ld, Lq, omega) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked ``A(omega)`` (N, 2, 2) and ``B`` (N, 2, 2) of the dq plant:
+    :func:`toolbox.plant.dq_matrices` (the one closed form of the model)."""
+    return dq_matrices(R, Ld, Lq, omega)
+
+
+def decoupling_matrix(decoupling, omega_meas) -> np.ndarray:
+    """``W`` (N, 2, 2) with ``v += W i``: ``W = cross w_m [[0, -Lq_c], [Ld_c, 0]]``."""
+    wm = np.atleast_1d(np.asarray(omega_meas, float)).reshape(-1)
+    W = np.zeros((wm.size, 2, 2))
+    if decoupling.cross:
+        W[:, 0, 1] = -wm * decoupling.Lq_c
+        W[:, 1, 0] = wm * decoupling.Ld_c
+    return W
+
+
+@dataclass(frozen=True)
+class CoupledLoop:
+    """Stacked discrete closed loops of the coupled dq current control.
+
+    ``x+ = A x + B r + c`` with states ``[i_d, i_q, x_law_d, x_law_q,
+    q_1 .. q_d]`` (``q_j``: commanded dq voltages waiting in the delay line,
+    ``q_1`` is applied) and the dq current references ``r`` (A); ``c`` holds
+    the back-EMF and its (possibly wrong) compensation. ``A`` (N, n, n).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    c: np.ndarray
+
+    def spectral_radius(self) -> np.ndarray:
+        """Largest pole modulus of each closed loop (N,)."""
+        return np.max(np.abs(np.linalg.eigvals(self.A)), axis=-1)
+
+    def steady_currents(self, r) -> np.ndarray:
+        """Static dq currents (N, 2) for constant references ``r`` (A)."""
+        N, n, _ = self.A.shape
+        rhs = self.B @ np.asarray(r, float).reshape(2) + self.c
+        x = np.linalg.solve(np.eye(n) - self.A, rhs[..., None])[..., 0]
+        return x[:, :2]
+
+
+def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_samples: int, *,
+                        R, Ld, Lq, omega, omega_meas=None, flux=0.0) -> CoupledLoop:
+    """Vectorised closed loops of the executed dq control at fixed speeds.
+
+    Parameters
+    ----------
+    laws : dict
+        ``{"d": Law, "q": Law}`` discrete executed laws (:func:`axis_law`).
+    decoupling : Decoupling
+        Compensation terms and the controller's model parameters.
+    sample_time : float
+        Controller period (s).
+    delay_samples : int
+        Computation delay (periods).
+    R, Ld, Lq : array_like
+        True plant parameters (ohm, H, H), broadcast to N sets.
+    omega : array_like
+        True electrical speed (rad/s).
+    omega_meas : array_like, optional
+        Measured electrical speed used by the compensation (rad/s); default
+        ``omega`` (paper 000 eq (14)-(17) study its errors).
+    flux : array_like
+        True magnet flux (Wb), for the back-EMF term ``c``.
+
+    Returns
+    -------
+    CoupledLoop
+        The plant is ZOH-discretised at each speed (exact for constant speed).
+    """
+    Ts, d = sample_time, int(delay_samples)
+    omega_meas = omega if omega_meas is None else omega_meas
+    R, Ld, Lq, omega, omega_meas, flux = (
+        np.atleast_1d(v).astype(float).reshape(-1)
+        for v in np.broadcast_arrays(R, Ld, Lq, omega, omega_meas, flux))
+    N = R.size
+    Ac, Bc = coupled_plant(R, Ld, Lq, omega)
+    Phi, Gam = zoh_2x2(Ac, Bc, Ts)
+    W = decoupling_matrix(decoupling, omega_meas)
+    ld, lq = laws["d"], laws["q"]
+    nd, nq = ld.n, lq.n
+    nx = 2 + nd + nq
+    n = nx + 2 * d
+    # commanded voltage v = Kx x + Kr r + k0
+    Kx = np.zeros((N, 2, n))
+    Kx[:, :, :2] = W
+    Kx[:, 0, 0] += ld.D[0, 1]
+    Kx[:, 1, 1] += lq.D[0, 1]
+    Kx[:, 0, 2:2 + nd] = ld.C[0]
+    Kx[:, 1, 2 + nd:nx] = lq.C[0]
+    Kr = np.diag([ld.D[0, 0], lq.D[0, 0]])
+    k0 = np.zeros((N, 2))
+    if decoupling.emf:
+        k0[:, 1] = omega_meas * decoupling.flux_c
+    emf = np.zeros((N, 2))
+    emf[:, 1] = -omega * flux          # back-EMF as a voltage
+    A = np.zeros((N, n, n))
+    B = np.zeros((N, n, 2))
+    c = np.zeros((N, n))
+    A[:, :2, :2] = Phi
+    c[:, :2] = (Gam @ emf[..., None])[..., 0]
+    # law states
+    A[:, 2:2 + nd, 0] = ld.B[:, 1]
+    A[:, 2:2 + nd, 2:2 + nd] = ld.A
+    B[:, 2:2 + nd, 0] = ld.B[:, 0]
+    A[:, 2 + nd:nx, 1] = lq.B[:, 1]
+    A[:, 2 + nd:nx, 2 + nd:nx] = lq.A
+    B[:, 2 + nd:nx, 1] = lq.B[:, 0]
+    if d == 0:
+        A[:, :2, :] += Gam @ Kx
+        B[:, :2, :] += Gam @ Kr
+        c[:, :2] += (Gam @ k0[..., None])[..., 0]
+    else:
+        A[:, :2, nx:nx + 2] = Gam                       # q_1 applied
+        for j in range(d - 1):                          # q_j+ = q_{j+1}
+            A[:, nx + 2 * j:nx + 2 * j + 2, nx + 2 * j + 2:nx + 2 * j + 4] = np.eye(2)
+        last = slice(nx + 2 * (d - 1), nx + 2 * d)      # q_d+ = v
+        A[:, last, :] = Kx
+        B[:, last, :] = Kr
+        c[:, last] = k0
+    return CoupledLoop(A, B, c)

@@ -1,0 +1,90 @@
+"""Executed control laws as matrices: the loops are built from what runs.
+
+An :class:`AxisController` stores the executed discrete law ``[i_ref, i_meas] -> v``;
+:func:`axis_law` reads it (or its continuous twin) into a :class:`Law`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["AXES", "Law", "axis_law", "law_to_continuous"]
+
+AXES = ("d", "q")
+
+
+@dataclass(frozen=True)
+class Law:
+    """Matrices of one axis' executed law ``[i_ref, i_meas] -> v``.
+
+    ``B[:, 0]``/``D[0, 0]`` act on the reference, ``B[:, 1]``/``D[0, 1]`` on
+    the measurement. ``dt`` None means continuous.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    dt: float | None
+
+    @property
+    def n(self) -> int:
+        """Number of states."""
+        return self.A.shape[0]
+
+    def error_controller(self) -> tuple[np.ndarray, ...]:
+        """``(A, B, C, D)`` of the error controller ``K = -K_m`` (V/A)."""
+        return self.A, -self.B[:, 1:2], self.C, -self.D[:, 1:2]
+
+
+def axis_law(axis, discrete: bool) -> Law:
+    """The law of an :class:`AxisController`.
+
+    Discrete: the executed two-input law. Continuous: for a one-degree-of-
+    freedom law (reference channel = minus measurement channel) the
+    continuous error controller as ``v = K (i_ref - i_meas)``; for a
+    two-degree-of-freedom law (IP, total compensation, ILQ) the continuous
+    twin of the executed law obtained by :func:`law_to_continuous` (the
+    artifact stores no continuous law). Without a continuous error controller
+    the discrete law is converted too.
+    """
+    s = axis.law
+    if discrete:
+        return Law(s.A, s.B, s.C, s.D, s.dt)
+    one_dof = (np.allclose(s.B[:, 0], -s.B[:, 1], rtol=1e-12, atol=0)
+               and np.isclose(s.D[0, 0], -s.D[0, 1], rtol=1e-12, atol=0))
+    if one_dof and axis.continuous is not None:
+        c = axis.continuous
+        return Law(c.A, np.hstack([c.B, -c.B]), c.C, np.hstack([c.D, -c.D]), None)
+    return law_to_continuous(Law(s.A, s.B, s.C, s.D, s.dt), s.method)
+
+
+def law_to_continuous(law: Law, method: str | None) -> Law:
+    """Continuous twin of a discrete law (inverse of its discretisation).
+
+    ``tustin``: inverse bilinear map, ``A_c = (2/T) E^-1 (A_d - I)``,
+    ``B_c = E^-1 B_d``, ``C_c = (4/T) C_d E^-1``, ``D_c = D_d - C_d E^-1 B_d``
+    with ``E = I + A_d`` (needs no pole at z = -1). Otherwise (``zoh``,
+    ``native``...): the ZOH inverse through the matrix logarithm of
+    ``[[A_d, B_d], [0, I]]`` (integrators allowed; needs no pole on the
+    negative real axis).
+    """
+    from scipy.linalg import logm
+
+    T = float(law.dt)
+    n, m = law.B.shape
+    if n == 0:
+        return Law(law.A, law.B, law.C, law.D, None)
+    if method == "tustin":
+        E = np.eye(n) + law.A
+        Ei = np.linalg.inv(E)
+        return Law((2 / T) * Ei @ (law.A - np.eye(n)), Ei @ law.B, (4 / T) * law.C @ Ei,
+                   law.D - law.C @ Ei @ law.B, None)
+    M = np.zeros((n + m, n + m))
+    M[:n, :n] = law.A
+    M[:n, n:] = law.B
+    M[n:, n:] = np.eye(m)
+    Lg = np.real(logm(M)) / T
+    return Law(Lg[:n, :n], Lg[:n, n:], law.C, law.D, None)

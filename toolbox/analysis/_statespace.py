@@ -1,0 +1,144 @@
+"""State-space algebra of the loop analyses (numpy, stacked where useful).
+
+Frequency responses, series connection, closed loop of a law with a plant,
+stability tests and zero-order-hold discretisations (single and stacked 2x2).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.linalg import expm
+
+from ..plant import zoh_first_order
+
+if TYPE_CHECKING:
+    from ._laws import Law
+
+__all__ = ["freqresp", "zoh_axis", "plant_chain", "pade", "series", "closed_loop", "is_stable",
+           "zoh_coupled", "zoh_2x2"]
+
+
+def freqresp(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+             x: np.ndarray) -> np.ndarray:
+    """``C (x I - A)^-1 B + D`` at the complex points ``x`` (s or z).
+
+    Returns an array of shape ``(len(x), p, m)``.
+    """
+    x = np.asarray(x, complex).reshape(-1)
+    n = A.shape[0]
+    p, m = D.shape
+    if n == 0:
+        return np.broadcast_to(D.astype(complex), (x.size, p, m)).copy()
+    M = x[:, None, None] * np.eye(n) - A
+    return C @ np.linalg.solve(M, np.broadcast_to(B.astype(complex), (x.size, n, m))) + D
+
+
+def zoh_axis(R, L, Ts) -> tuple[np.ndarray, np.ndarray]:
+    """ZOH discretisation of ``1/(R + s L)``: ``(a, b)`` (broadcasts);
+    :func:`toolbox.plant.zoh_first_order`."""
+    return zoh_first_order(R, L, Ts)
+
+
+def plant_chain(a: float, b: float, d: int, Ts: float) -> tuple[np.ndarray, ...]:
+    """State space of ``z^-d b/(z - a)``; the current is the first state."""
+    n = 1 + d
+    A = np.zeros((n, n))
+    B = np.zeros((n, 1))
+    C = np.zeros((1, n))
+    A[0, 0] = a
+    C[0, 0] = 1.0
+    if d == 0:
+        B[0, 0] = b
+    else:
+        A[0, 1] = b          # i+ = a i + b q1
+        for j in range(1, d):
+            A[j, j + 1] = 1.0  # q_j+ = q_{j+1}
+        B[d, 0] = 1.0        # q_d+ = v
+    return A, B, C, np.zeros((1, 1))
+
+
+def pade(tau: float, order: int) -> tuple[np.ndarray, ...]:
+    """State space of the ``order`` Pade approximation of ``exp(-s tau)``."""
+    import control
+
+    num, den = control.pade(tau, order)
+    sys = control.ss(control.tf(num, den))
+    return (np.array(sys.A, float), np.array(sys.B, float), np.array(sys.C, float),
+            np.array(sys.D, float))
+
+
+def series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:
+    """State space of ``second * first`` (signal passes ``first`` then ``second``)."""
+    A1, B1, C1, D1 = first
+    A2, B2, C2, D2 = second
+    n1, n2 = A1.shape[0], A2.shape[0]
+    A = np.block([[A1, np.zeros((n1, n2))], [B2 @ C1, A2]])
+    B = np.vstack([B1, B2 @ D1])
+    C = np.hstack([D2 @ C1, C2])
+    return A, B, C, D2 @ D1
+
+
+def closed_loop(law: Law, plant: tuple) -> tuple[np.ndarray, ...]:
+    """Reference -> current closed loop of a law and a strictly proper plant.
+
+    ``plant`` is ``(Ap, Bp, Cp, Dp)`` from voltage (V) to current (A) with
+    ``Dp = 0``. States ``[x_law, x_plant]``; returns ``(A, B, C, D)``.
+    """
+    Ap, Bp, Cp, Dp = plant
+    if np.any(Dp):
+        raise ValueError("plant must be strictly proper")
+    Ak, Bk, Ck, Dk = law.A, law.B, law.C, law.D
+    A = np.block([[Ak, Bk[:, 1:2] @ Cp],
+                  [Bp @ Ck, Ap + Bp @ Dk[:, 1:2] @ Cp]])
+    B = np.vstack([Bk[:, 0:1], Bp @ Dk[:, 0:1]])
+    C = np.hstack([np.zeros((1, law.n)), Cp])
+    return A, B, C, np.zeros((1, 1))
+
+
+def is_stable(A: np.ndarray, discrete: bool, tol: float = 1e-9) -> bool:
+    """Schur (discrete) or Hurwitz (continuous) test of a state matrix."""
+    if A.shape[0] == 0:
+        return True
+    ev = np.linalg.eigvals(A)
+    return bool(np.all(np.abs(ev) < 1 - tol) if discrete else np.all(ev.real < -tol))
+
+
+def zoh_coupled(Ac: np.ndarray, Bc: np.ndarray, Ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked ZOH discretisation: ``Ac`` (N, n, n), ``Bc`` (N, n, m).
+
+    Returns ``Phi = exp(A Ts)`` and ``Gamma = int_0^Ts exp(A t) dt B``
+    through the exponential of the augmented matrix ``[[A, B], [0, 0]] Ts``.
+    """
+    N, n, _ = Ac.shape
+    m = Bc.shape[2]
+    M = np.zeros((N, n + m, n + m))
+    M[:, :n, :n] = Ac * Ts
+    M[:, :n, n:] = Bc * Ts
+    E = expm(M)
+    return E[:, :n, :n], E[:, :n, n:]
+
+
+def zoh_2x2(A: np.ndarray, B: np.ndarray, Ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-form ZOH of stacked 2x2 plants (fast twin of :func:`zoh_coupled`).
+
+    ``exp(A T) = exp(m T) [cosh(D T) I + T sinhc(D T) (A - m I)]`` with
+    ``m = tr A / 2``, ``D = sqrt(m^2 - det A)`` (complex) and
+    ``sinhc(x) = sinh(x)/x`` (series near 0); ``Gamma = A^-1 (Phi - I) B``,
+    valid because ``det A = R^2/(Ld Lq) + omega^2 > 0`` for the dq plant.
+    """
+    m = 0.5 * (A[:, 0, 0] + A[:, 1, 1])
+    det = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] * A[:, 1, 0]
+    D = np.sqrt((m * m - det).astype(complex))
+    x = D * Ts
+    small = np.abs(x) < 1e-3
+    xs = np.where(small, 1.0, x)
+    sinhc = np.where(small, 1 + x * x / 6 + x ** 4 / 120, np.sinh(xs) / xs)
+    e = np.exp(m * Ts)
+    c0 = np.real(e * np.cosh(x))
+    c1 = np.real(e * Ts * sinhc)
+    I = np.eye(2)
+    Phi = c0[:, None, None] * I + c1[:, None, None] * (A - m[:, None, None] * I)
+    Gam = np.linalg.solve(A, (Phi - I) @ B)
+    return Phi, Gam

@@ -1,0 +1,158 @@
+"""Margins and stability of the law a controller.json actually executes,
+recomputed on demand (issue 10: never trust stored numbers).
+
+``cct verify`` and ``cct report`` read a controller.json that may have been
+edited by hand or by a tool. The ``margins`` stored in it are a cache of the
+analysis; the verdict must come from the executed law itself
+(``axes.<axis>.law``, or its reduced twin when ``gains.executed`` is
+``"reduced"``), analysed on the spec's nominal plant with ZOH and the
+computation delay, exactly as :func:`toolbox.analysis.compute_margins` does at
+design time.
+
+For ``fcs_mpc`` the executed law is the predictive switching of paper 002
+(criterion (23)), which has no linear loop: the stored axes hold only the
+SVM baseline PI (eq (19)-(20)). Its margins are informational and no
+stability verdict is computed from them; the simulation's ``default.bounded_*``
+checks judge the predictive loop.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from .margins import MARGIN_KEYS, compute_margins, make_axis_loop
+
+__all__ = ["INFORMATIONAL_METHODS", "executed_artifact", "recompute_margins", "loop_stability",
+           "margin_disagreements", "MARGIN_RTOL"]
+
+#: Methods whose stored axes are not what runs (their margins are informational).
+INFORMATIONAL_METHODS = {
+    "fcs_mpc": "the predictive switching law (paper 002 criterion (23)) does not run the "
+               "baseline PI of eq (19)-(20) whose margins are shown",
+}
+
+#: Relative tolerance between stored and recomputed margins. The same code on the
+#: same law gives bit-identical numbers up to JSON's 17 significant digits; 1e-6
+#: leaves room for a different BLAS while any edit of the law shows (a changed
+#: pole moves the margins by far more).
+MARGIN_RTOL = 1e-6
+
+
+def executed_artifact(artifact):
+    """A copy of ``artifact`` whose axes are the laws the simulator runs.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    """
+    if artifact.gains.get("executed") != "reduced":
+        return artifact
+    axes = {k: (a.reduced if a.reduced is not None else a) for k, a in artifact.axes.items()}
+    return replace(artifact, axes=axes)
+
+
+def recompute_margins(artifact, motor) -> dict:
+    """MarginsResult per axis of the executed sampled loop.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        Nominal plant.
+
+    Returns
+    -------
+    dict
+        ``{"d": MarginsResult, "q": MarginsResult}``.
+    """
+    return compute_margins(executed_artifact(artifact), motor)
+
+
+def loop_stability(artifact, motor) -> dict:
+    """Is the executed sampled loop of each axis stable?
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        Nominal plant.
+
+    Returns
+    -------
+    dict
+        Per axis ``{"stable": bool or None, "spectral_radius": float or None,
+        "basis": str}``: the largest closed-loop pole magnitude of the
+        reference -> current loop (law, ZOH plant, ``z^-delay``); ``None``
+        (not decided here) for methods whose stored axes do not run.
+    """
+    if artifact.method in INFORMATIONAL_METHODS:
+        return {ax: {"stable": None, "spectral_radius": None,
+                     "basis": f"not analysed: {INFORMATIONAL_METHODS[artifact.method]}; "
+                              "judged by the simulation's bounded checks"}
+                for ax in ("d", "q")}
+    art = executed_artifact(artifact)
+    out = {}
+    for ax, L in (("d", motor.Ld), ("q", motor.Lq)):
+        loop = make_axis_loop(art.axes[ax], motor.R, L, art.sample_time, art.delay_samples)
+        A_cl = loop.reference_loop()[0]
+        rho = float(np.max(np.abs(np.linalg.eigvals(A_cl)))) if A_cl.size else 0.0
+        out[ax] = {"stable": bool(rho < 1.0 - 1e-9), "spectral_radius": rho,
+                   "basis": f"executed sampled loop (axes.{ax}.law, ZOH plant, "
+                            f"{art.delay_samples} period(s) of delay)"}
+    return out
+
+
+def _number(value) -> float | None:
+    if isinstance(value, str) and value in ("inf", "-inf", "nan"):
+        return float(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return float(value)
+
+
+def _same(a: float, b: float) -> bool:
+    if math.isnan(a) or math.isnan(b):
+        return math.isnan(a) and math.isnan(b)
+    if math.isinf(a) or math.isinf(b):
+        return a == b
+    return abs(a - b) <= MARGIN_RTOL * max(abs(a), abs(b)) + 1e-12
+
+
+def margin_disagreements(stored: dict, recomputed: dict, file: str | None = None) -> list[str]:
+    """Warnings for stored MARGINS that differ from the recomputed ones.
+
+    Parameters
+    ----------
+    stored : dict
+        ``margins`` of controller.json (``{"d": {...}, "q": {...}}``, may be empty).
+    recomputed : dict
+        ``{"d": MarginsResult, "q": MarginsResult}``.
+    file : str, optional
+        The controller.json path, named in the messages.
+
+    Returns
+    -------
+    list of str
+        One message per disagreeing entry (empty when they agree).
+    """
+    where = f"{file}: " if file else ""
+    out = []
+    for ax, res in recomputed.items():
+        fresh = res.to_json(extras=False)
+        old = (stored or {}).get(ax)
+        if not isinstance(old, dict):
+            continue
+        for key in MARGIN_KEYS:
+            a, b = _number(old.get(key)), _number(fresh.get(key))
+            if a is None or b is None or _same(a, b):
+                continue
+            out.append(f"{where}margins.{ax}.{key}: stored {a:.4g} disagrees with "
+                       f"{b:.4g} recomputed from the executed law (axes.{ax}.law); "
+                       f"the recomputed value is used")
+        if old.get("stable") is not None and bool(old.get("stable")) != res.stable:
+            out.append(f"{where}margins.{ax}.stable: stored {old.get('stable')} disagrees "
+                       f"with {res.stable} recomputed from the executed law (axes.{ax}.law)")
+    return out
