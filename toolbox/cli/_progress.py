@@ -6,6 +6,11 @@ may carry JSON or the table) advancing over named steps. ``-q/--quiet``
 disables the bar only: result summaries, warnings and failures are printed
 by the commands themselves and are unaffected.
 
+On a terminal the bar is redrawn in place; when stderr is not a terminal
+(a log file, CI, a pipe) each step is one line ``  - [k/N] step ...``
+instead, so that logs hold no carriage-return animation and a reader of
+the stream sees a step as soon as it starts.
+
 :class:`StepBar` also implements the ``progress(stage)`` callback of
 :func:`toolbox.pipeline.build_outputs`: a call names the step that starts
 (the previous one is then complete); a call with a name that is not one of
@@ -39,12 +44,16 @@ class StepBar:
         Disable the bar (and the messages passed to it).
     desc : str, optional
         Prefix of the bar (e.g. the command).
+    tty : bool, optional
+        Draw a redrawn bar (True) or one line per step (False); default:
+        whether stderr is a terminal.
 
     Use as a context manager; leaving it completes and removes the bar so
     that the summary printed afterwards stands alone.
     """
 
-    def __init__(self, steps: Iterable[str], *, quiet: bool, desc: str = "cct") -> None:
+    def __init__(self, steps: Iterable[str], *, quiet: bool, desc: str = "cct",
+                 tty: bool | None = None) -> None:
         from tqdm import tqdm  # imported here: `cct --help` stays light
 
         self.steps = tuple(steps)
@@ -52,7 +61,10 @@ class StepBar:
         self._prefix = desc
         self._started = 0
         # sys.stderr looked up now, not at import: click's test runner swaps it
-        self._bar = tqdm(total=len(self.steps), file=sys.stderr, disable=quiet, leave=False,
+        self._stream = sys.stderr
+        self._lines = not (self._stream.isatty() if tty is None else tty)
+        self._bar = tqdm(total=len(self.steps), file=self._stream,
+                         disable=quiet or self._lines, leave=False,
                          unit="step", desc=desc, dynamic_ncols=True,
                          bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} "
                                     "steps [{elapsed}<{remaining}]")
@@ -65,12 +77,15 @@ class StepBar:
         if self._started:
             self._bar.update(1)
         self._started += 1
+        if self._lines and not self.quiet:
+            print(f"  - [{self._started}/{len(self.steps)}] {step} ...", file=self._stream,
+                  flush=True)
         self._bar.set_description_str(f"{self._prefix}: {step}")
 
     def message(self, text: str) -> None:
         """A line above the bar (stderr), unless quiet."""
         if not self.quiet:
-            self._bar.write(f"  - {text}", file=sys.stderr)
+            self._bar.write(f"  - {text}", file=self._stream)
 
     def close(self) -> None:
         """Complete and remove the bar."""
