@@ -160,11 +160,12 @@ def _check_groups(given: Mapping[str, Any], errors: Collector) -> None:
 
 
 def catalog_kept(catalog: Mapping[str, Any], user: Mapping[str, Any]) -> dict:
-    """The catalog values the user's table does not replace: giving any way of
-    a quantity (``R_ll``) replaces the catalog's model keys for it (``R``)."""
+    """The catalog values the user's table does not replace: a datasheet form
+    (``R_ll``) replaces the catalog's model keys for it (``R``); a model key
+    replaces only itself (``Ld`` alone keeps the catalog's ``Lq``)."""
     kept = dict(catalog)
     for _, model, alternatives in GROUPS:
-        if any(k in user for k in model + alternatives):
+        if any(k in user for k in alternatives):
             for k in model:
                 kept.pop(k, None)
     return kept
