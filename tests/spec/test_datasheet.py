@@ -265,6 +265,14 @@ def test_all_errors_at_once_one_each():
     assert "motor.R (missing)" not in text and "motor.flux" not in text  # no echoes
 
 
+def test_range_error_on_a_derived_value_names_the_given_key():
+    err = spec_error({"R_ll": "2e-9 ohm", "Ld": 1e-3, "Lq": 1e-3, "flux": 0.1,
+                      "pole_pairs": 4})
+    assert str(err) == ('motor.R_ll: expected a plausible stator resistance between 1e-06 '
+                        "and 10000 ohm for R (derived: R = R_ll / 2 (star: the line-to-line "
+                        'value spans two phases)), got R = 1e-09 from R_ll = "2e-9 ohm"')
+
+
 @pytest.mark.parametrize("value", ["9**9**9 ohm", "1 ohm; import os", "1e999 ohm",
                                    "x" * 200, "1 " + "ohm*" * 40 + "ohm"])
 def test_hostile_strings_are_spec_errors(value):

@@ -37,6 +37,7 @@ re-derives each with sympy from the three phase waveforms):
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
@@ -47,7 +48,7 @@ from ._units import KINDS, _Shown, looks_like_quantity, parse_quantity
 
 __all__ = ["Conversion", "GROUPS", "MOTOR_KINDS", "DRIVE_KINDS", "CONVENTION_TEXT",
            "resolve_motor", "resolve_drive", "convert_units", "catalog_kept",
-           "reported_keys"]
+           "reported_keys", "relocate"]
 
 CONVENTION_TEXT = {
     "amplitude": ("amplitude-invariant dq (2/3 Park): |i_dq| = peak phase current, "
@@ -146,17 +147,22 @@ def convert_units(table: Mapping[str, Any], kinds: Mapping[str, str], prefix: st
     return out, log
 
 
+def _as_written(value: Any) -> str:
+    """A spec value as TOML writes it (double-quoted strings)."""
+    return json.dumps(value) if isinstance(value, str) else repr(value)
+
+
 def _check_groups(given: Mapping[str, Any], errors: Collector) -> None:
     """At most one way to give each model quantity."""
     for what, model, alternatives in GROUPS:
         used = [k for k in model if k in given][:1] + [k for k in alternatives if k in given]
         if len(used) > 1:
             with errors.check():
-                both = ", ".join(f"{k} = {given[k]!r}" for k in used)
+                both = ", ".join(f"{k} = {_as_written(given[k])}" for k in used)
                 raise SpecError(f"motor.{used[1]}",
                                 f"only one of motor.{used[0]}, motor.{used[1]} "
                                 f"(equivalent ways to give {what})",
-                                _Shown(f"both ({both})"), hint=f"remove one of them")
+                                _Shown(f"both ({both})"), hint="remove one of them")
 
 
 def catalog_kept(catalog: Mapping[str, Any], user: Mapping[str, Any]) -> dict:
@@ -283,3 +289,34 @@ def resolve_drive(user: Mapping[str, Any], errors: Collector) -> tuple[dict, lis
                                  user["sample_frequency"]))
     merged.pop("sample_frequency", None)
     return merged, [c for c in log if c.key != "sample_frequency"]
+
+
+def relocate(err: SpecError, conversions: list[Conversion]) -> SpecError:
+    """Point an error on a derived model key at the key the user wrote.
+
+    A range check on ``motor.R`` is about ``R_ll`` when R was derived from it;
+    the message then names ``motor.R_ll`` (a key in the spec) and says how R
+    was obtained.
+
+    Parameters
+    ----------
+    err : SpecError
+        An error of a later check (ranges, time constants).
+    conversions : list of Conversion
+        The spec's conversion log.
+
+    Returns
+    -------
+    SpecError
+        ``err`` itself, or a copy naming the given key.
+    """
+    section, _, name = err.key.partition(".")
+    for conv in conversions:
+        sources = [k for k in conv.given if k != "pole_pairs"]
+        if conv.key != name or sources == [name] or not sources:
+            continue
+        shown = ", ".join(f"{k} = {_as_written(v)}" for k, v in conv.given.items())
+        return SpecError(f"{section}.{sources[0]}",
+                         f"{err.expected} for {name} (derived: {conv.formula})",
+                         _Shown(f"{name} = {conv.value:.6g} from {shown}"), hint=err.hint)
+    return err

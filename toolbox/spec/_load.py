@@ -15,7 +15,8 @@ from typing import Any, Callable, Mapping
 from .._io import check_data_depth, check_text_depth, read_limited
 from ..errors import SpecError
 from ._catalog import CATALOG
-from ._datasheet import catalog_kept, reported_keys, resolve_drive, resolve_motor
+from ._datasheet import (catalog_kept, relocate, reported_keys, resolve_drive,
+                         resolve_motor)
 from ._bounds import (check_drive, check_motor, check_motor_drive, check_scenario_count,
                       check_work)
 from ._fields import Collector, Table, check_keys
@@ -125,6 +126,8 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
         with errors.check():
             scenarios = _scenarios(top.raw("scenario", []), drive, controller.method)
         check_work(scenarios, drive.sample_time, errors)
+    # a range error on a derived value names the key the user wrote (R_ll, not R)
+    errors.errors = [relocate(e, conversions) for e in errors.errors]
     errors.raise_if_any()
     raw = copy.deepcopy(dict(data))
     raw["motor"] = motor_raw
