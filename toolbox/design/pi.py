@@ -69,7 +69,7 @@ Structures (two-input laws ``[i_ref, i_meas] -> v``):
   with cancellation gains the reference response is
   ``1/((1 + s L/R)(1 + s/wc))``, slow: a warning says so).
 * ``pi_lag``: ``v = (Kp + Ki/s)(r - y_f)``, ``y_f = y/(1 + T_d s)``. The
-  gain rules ignore the lag; ``gains["poles"]`` gives the resulting poles.
+  gain rules ignore the lag; ``design_parameters["poles"]`` gives the resulting poles.
 """
 
 from __future__ import annotations
@@ -136,7 +136,7 @@ class PiCfg:
         Reference feedforward gains (V/A) of a two-degree-of-freedom PI
         (``complex_vector`` with ``integral_bandwidth``); ``None``: ``Kt = Kp``.
     details : dict
-        Rule-specific values kept in the artifact's gains (bandwidth,
+        Rule-specific values kept in the artifact's design_parameters (bandwidth,
         T_sigma, normalisation, ...).
     """
 
