@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 
-from ._checks import LinearFigures, default_checks, finalise_check
+from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check
 from ._scenario import Scenario
 from ._simulate import (AxisLaw, ControlLaw, DriveParams, FcsWeights, PlantParams,
                         SimResult, SpeedLoop, simulate)
@@ -272,9 +272,12 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
                   if c["quantity"] in metrics}
         true_plant = plant.with_overrides(sc.plant_values, sc.plant_scale)
         r_hex, v_max = drive.radii(plant.torque_factor)
-        # one vector held for a whole period (see toolbox.sim._checks)
-        ripple = (r_hex * drive.sample_time / (2.0 * min(true_plant.Ld, true_plant.Lq))
-                  if drive.inverter == "fcs_mpc" else 0.0)
+        # one vector held for a whole period, and the switching penalty's dead band
+        ripple = 0.0
+        if drive.inverter == "fcs_mpc" and artifact.fcs is not None:
+            fcs, L_min = artifact.fcs, min(true_plant.Ld, true_plant.Lq)
+            ripple = {ax: fcs_ripple(r_hex, drive.sample_time, L_min, w, fcs.gamma)
+                      for ax, w in (("q", fcs.alpha), ("d", fcs.beta))}
         checks.update(default_checks(
             sc, metrics, res, plant=true_plant, motor=spec.motor, v_max=v_max,
             delay_samples=spec.drive.delay_samples, sample_time=spec.drive.sample_time,
