@@ -31,6 +31,14 @@ small ``@njit`` helpers (sensors, references, speed loop, law step with
 anti-windup and voltage limit, predictive choice, inverter and plant RK4);
 the plant state lives in local scalars, not in an array, so that LLVM keeps
 it in registers across the RK4 stages (issue 13).
+
+No ``fastmath``: allowing FMA contraction and reciprocal division
+(``{"contract", "arcp"}`` on the plant helpers) saved 5-8 % per step on the
+issue 13 benchmark, but it changes results in the last bits and makes them
+depend on whether the host CPU has FMA, while ``verify.json`` must be the same
+bytes on every machine (toolbox/ARCHITECTURE.md "Reliability rules"). The
+kernel has no NaN checks of its own; the flags that assume finite values
+("nnan", "ninf") would break the divergence detection of the metrics anyway.
 Metrics are accumulated online (see :mod:`toolbox.sim._metrics` for their
 definitions); traces are optional and decimated, so memory is flat in the
 simulated duration when only metrics are requested.
