@@ -17,6 +17,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from toolbox.artifact import FcsWeights  # typed in the artifact; re-exported here
 from toolbox.errors import SpecError
 from toolbox.spec import inverter_radii
 
@@ -204,15 +205,6 @@ class SpeedLoop:
     kd: float = 0.0
     sample_time: float = 1e-3
     iq_limit: float = math.inf
-
-
-@dataclass(frozen=True)
-class FcsWeights:
-    """Weights of paper 002 criterion (23): alpha (i_q), beta (i_d), gamma (commutations)."""
-
-    alpha: float = 1.0
-    beta: float = 1.0
-    gamma: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -50,18 +50,17 @@ def drive_params(drive, inverter: str = "average") -> DriveParams:
                        inverter=inverter)
 
 
-def _axis_law(axis, reduced: bool) -> AxisLaw:
-    chosen = axis.reduced if reduced and axis.reduced is not None else axis
-    aw = None if chosen.antiwindup is None else chosen.antiwindup.reshape(-1)
-    law = chosen.law
+def _axis_law(axis) -> AxisLaw:
+    aw = None if axis.antiwindup is None else axis.antiwindup.reshape(-1)
+    law = axis.law
     return AxisLaw(law.A, law.B, law.C, law.D, aw)
 
 
 def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
     """The simulator's :class:`ControlLaw` executing ``artifact``.
 
-    The executed law of each axis is the artifact's ``law`` (or its reduced
-    twin when the artifact's gains say ``executed = "reduced"``).
+    The executed law of each axis is the artifact's ``axes.<axis>.law``; the
+    predictive law of ``fcs_mpc`` reads the typed ``artifact.fcs`` weights.
 
     Parameters
     ----------
@@ -70,18 +69,11 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
     speed_loop : SpeedLoop, optional
         Outer speed loop of the scenario.
     """
-    reduced = artifact.gains.get("executed") == "reduced"
     dec = artifact.decoupling
-    fcs = None
-    if artifact.method == "fcs_mpc":
-        g = artifact.gains
-        fcs = FcsWeights(alpha=float(g["alpha"]), beta=float(g["beta"]),
-                         gamma=float(g["gamma"]))
-    return ControlLaw(d=_axis_law(artifact.axes["d"], reduced),
-                      q=_axis_law(artifact.axes["q"], reduced),
+    return ControlLaw(d=_axis_law(artifact.axes["d"]), q=_axis_law(artifact.axes["q"]),
                       sample_time=artifact.sample_time, R=dec.R_c, Ld=dec.Ld_c,
                       Lq=dec.Lq_c, flux=dec.flux_c, cross=int(dec.cross), emf=int(dec.emf),
-                      speed_loop=speed_loop, fcs=fcs)
+                      speed_loop=speed_loop, fcs=artifact.fcs)
 
 
 def default_scenarios(motor) -> tuple[Scenario, ...]:
