@@ -804,7 +804,7 @@ class ControllerArtifact:
                 raise ArtifactError(name, "a value (missing)")
         if not isinstance(data["method"], str):
             raise ArtifactError("method", "a method name", data["method"])
-        from ..spec._model import METHODS  # lazy: the spec package imports the design registry
+        from ..spec import METHODS  # lazy: the spec package imports the design registry
 
         if data["method"] not in METHODS:
             raise ArtifactError("method", "one of " + ", ".join(METHODS), data["method"])
