@@ -54,7 +54,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["fcs_ripple", "CURRENT_FACTOR", "SPEED_FACTOR", "REACH_BAND", "SENSOR_ACCURACY", "LinearFigures",
+from ..plant import steady_state_voltage
+
+__all__ = ["fcs_ripple", "CURRENT_FACTOR", "SPEED_FACTOR", "REACH_BAND", "SENSOR_ACCURACY",
+           "LinearFigures",
            "StepFacts", "step_facts", "reach_time_bound", "default_checks", "finalise_check",
            "STEP_METRICS"]
 
@@ -207,8 +210,8 @@ def reach_time_bound(facts: StepFacts, scenario, plant, v_max: float, delay_samp
         ``t_min``, ``t_linear``, ``t_delay`` (s) for the record.
     """
     w_e = plant.pole_pairs * _speed_extent(scenario, final_speed)
-    vd = plant.R * facts.id_f - w_e * plant.Lq * facts.iq_f
-    vq = plant.R * facts.iq_f + w_e * (plant.Ld * facts.id_f + plant.flux)
+    vd, vq = steady_state_voltage(plant.R, plant.Ld, plant.Lq, plant.flux, w_e,
+                                  facts.id_f, facts.iq_f)
     v_own, v_other, L = (vq, vd, plant.Lq) if facts.axis == "q" else (vd, vq, plant.Ld)
     headroom = math.sqrt(max(v_max ** 2 - v_other ** 2, 0.0)) - abs(v_own)
     t_delay = (delay_samples + 1) * sample_time

@@ -25,16 +25,14 @@ VERIFY_SCHEMA = "cct.verify/1"
 
 
 def plant_params(motor) -> PlantParams:
-    """The simulated plant of a motor (nominal values).
+    """The simulated plant of a motor (nominal values): :meth:`PlantParams.from_motor`.
 
     Parameters
     ----------
     motor : Motor
         Validated motor.
     """
-    return PlantParams(R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
-                       pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
-                       torque_factor=motor.torque_factor)
+    return PlantParams.from_motor(motor)
 
 
 def drive_params(drive, inverter: str = "average") -> DriveParams:
