@@ -17,12 +17,12 @@ from toolbox.plant import max_electrical_speed
 
 
 def _reference_scale(art, motor, drive, *, tol: float, alpha: float = 0.0) -> float:
-    """Bisection with an independent cvxpy problem per scale (no re-use, no warm start)."""
+    """Bisection with a constant-data cvxpy problem per scale (no re-use, no warm start)."""
     wmax = max_electrical_speed(motor, drive)
 
     def ok(k: float) -> bool:
         box = C.ParameterBox.around(motor, k, omega_max=wmax)
-        return C._certify(art, box, alpha, False, problems={}, guess=None)[0].certified
+        return C._certify(art, box, alpha, False, problems=None, guess=None)[0].certified
 
     if ok(1.0):
         return 1.0

@@ -314,10 +314,40 @@ class _Lmi:
         return np.array(self.P.value), status
 
 
+def _solve_once(As: np.ndarray, alpha: float, eps: float = 1e-6):
+    """Solve the vertex LMIs once, data as constants.
+
+    For a single solve this is cheaper than :class:`_Lmi`: canonicalising a
+    parametrised (DPP) problem costs about twice a constant one (512
+    vertices with ``delay=True``), which pays only when the problem is
+    re-solved, as in the bisection.
+    """
+    import cvxpy as cp
+
+    n = As.shape[1]
+    P = cp.Variable((n, n), symmetric=True)
+    cons = [P >> np.eye(n)]
+    for A in As:
+        M = A.T @ P + P @ A + 2 * alpha * P
+        cons.append(0.5 * (M + M.T) << -eps * np.eye(n))
+    prob = cp.Problem(cp.Minimize(0), cons)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            prob.solve(solver=cp.CLARABEL)
+        except cp.error.SolverError as err:
+            return None, f"solver error: {err}"
+    if P.value is None or prob.status not in ("optimal", "optimal_inaccurate"):
+        return None, str(prob.status)
+    return np.array(P.value), str(prob.status)
+
+
 def _solve(As: np.ndarray, alpha: float, problems: dict | None = None):
-    """Solve the vertex LMIs, re-using an assembled problem from ``problems``
-    (keyed by ``As.shape``) when given."""
-    problems = {} if problems is None else problems
+    """Solve the vertex LMIs: once with constant data when ``problems`` is
+    None, else with the assembled problem of ``problems`` (keyed by
+    ``As.shape``, built on first use)."""
+    if problems is None:
+        return _solve_once(As, alpha)
     lmi = problems.get(As.shape)
     if lmi is None:
         lmi = problems[As.shape] = _Lmi(As.shape[0], As.shape[1])
