@@ -4,8 +4,7 @@ recomputed on demand (issue 10: never trust stored numbers).
 ``cct verify`` and ``cct report`` read a controller.json that may have been
 edited by hand or by a tool. The ``margins`` stored in it are a cache of the
 analysis; the verdict must come from the executed law itself
-(``axes.<axis>.law``, or its reduced twin when ``gains.executed`` is
-``"reduced"``), analysed on the spec's nominal plant with ZOH and the
+(``axes.<axis>.law``, the one executed law of the axis), analysed on the spec's nominal plant with ZOH and the
 computation delay, exactly as :func:`toolbox.analysis.compute_margins` does at
 design time.
 
@@ -42,16 +41,18 @@ MARGIN_RTOL = 1e-6
 
 
 def executed_artifact(artifact):
-    """A copy of ``artifact`` whose axes are the laws the simulator runs.
+    """The artifact whose axes are the laws the simulator runs: ``artifact`` itself.
+
+    Since ``cct.controller/2`` each axis holds exactly one executed law
+    (``axes.<axis>.law``; a non-executed full-order or reduced controller sits
+    under ``full_order`` / ``reduced``), so there is nothing to select. Kept
+    so that callers state which view they analyse.
 
     Parameters
     ----------
     artifact : ControllerArtifact
     """
-    if artifact.gains.get("executed") != "reduced":
-        return artifact
-    axes = {k: (a.reduced if a.reduced is not None else a) for k, a in artifact.axes.items()}
-    return replace(artifact, axes=axes)
+    return artifact
 
 
 def recompute_margins(artifact, motor) -> dict:

@@ -76,27 +76,21 @@ def main() -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print the resolved spec as JSON.")
 @_spec_errors
 def check(spec: str, as_json: bool) -> None:
-    """Validate SPEC and print the resolved spec (catalog defaults applied).
+    """Validate SPEC and print the resolved spec as TOML (catalog and
+    defaults applied, datasheet values converted to per-phase dq values,
+    each with its formula and the dq convention as comments).
 
     \b
     Example:
       cct check designs/000_lepioufle1992_tc.toml
     """
-    from ..spec import load_spec
+    from ..spec import load_spec, spec_to_toml
 
     s = load_spec(spec)
     if as_json:
         click.echo(json.dumps(s.raw, indent=1, sort_keys=True))
         return
-    click.echo(f"{spec}: ok")
-    click.echo(f"title: {s.title}")
-    for section in ("motor", "drive", "controller", "requirements"):
-        table = s.raw.get(section)
-        if table:
-            click.echo(f"[{section}]")
-            for key, value in table.items():
-                click.echo(f"  {key} = {json.dumps(value)}")
-    click.echo(f"scenarios: {len(s.scenarios)}")
+    click.echo(spec_to_toml(s, spec), nl=False)
 
 
 @main.command()
