@@ -149,3 +149,46 @@ def _check(method: str, case, wc_ts: float) -> None:
 @example(case=KNOWN, wc_ts=2.5)
 def test_analysis_and_simulation_agree_on_stability(method, case, wc_ts):
     _check(method, case, wc_ts)
+
+
+def test_unstable_design_exits_1_through_the_cli(tmp_path):
+    """The verdict end to end: pi at wc Ts = 2.5 on the KNOWN motor (spectral
+    radius 1.58, the example above) is a design that exists but fails: exit 1,
+    verify.json written with passed = false and default.stable failing, and
+    no controller.h (an unstable loop is never exported)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from toolbox.cli import main
+
+    motor, drive = KNOWN
+    data = {"title": "unstable pi", "motor": motor, "drive": drive,
+            "controller": {"method": "pi", **_controller("pi", motor, drive["sample_time"], 2.5)},
+            "scenario": [{"name": "small q step", "kind": "current_step", "duration": 0.02,
+                          "iq_ref": 1.0, "step_time": 0.0}]}
+    spec = tmp_path / "spec.toml"
+    spec.write_text(_to_toml(data))
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["design", str(spec), "--out", str(out), "-q"])
+    assert res.exit_code == 1, res.output
+    verify = json.loads((out / "verify.json").read_text())
+    assert verify["passed"] is False
+    assert verify["margin_requirements"]["default.stable"]["pass"] is False
+    assert not (out / "controller.h").exists()
+
+
+def _to_toml(data: dict) -> str:
+    """Flat TOML of a spec dict (tables of numbers and strings, one scenario)."""
+    def value(v):
+        return f'"{v}"' if isinstance(v, str) else repr(v)
+
+    lines = [f"title = {value(data['title'])}"]
+    for table in ("motor", "drive"):
+        lines += [f"[{table}]"] + [f"{k} = {value(v)}" for k, v in data[table].items()]
+    method = data["controller"]["method"]
+    lines += ["[controller]", f"method = {value(method)}", f"[controller.{method}]"]
+    lines += [f"{k} = {value(v)}" for k, v in data["controller"][method].items()]
+    for sc in data["scenario"]:
+        lines += ["[[scenario]]"] + [f"{k} = {value(v)}" for k, v in sc.items()]
+    return "\n".join(lines) + "\n"
