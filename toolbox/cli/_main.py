@@ -281,7 +281,8 @@ def report(out_dir: str, quiet: bool) -> None:
                             run_verification, spec_of_artifact, write_outputs)
     from ..report import build_context, write_html, write_pdf
 
-    from ..analysis.executed import loop_stability, recompute_margins
+    from ..analysis import compute_margins
+    from ..analysis.executed import loop_stability
 
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
@@ -298,7 +299,7 @@ def report(out_dir: str, quiet: bool) -> None:
             files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
         # the report shows margins, margin checks and stability of the executed law,
         # not the stored numbers (the stored response figures are drawn as they are)
-        fresh = {ax: m.to_json() for ax, m in recompute_margins(artifact, spec.motor).items()}
+        fresh = {ax: m.to_json() for ax, m in compute_margins(artifact, spec.motor).items()}
         artifact = artifact.with_margins(fresh)
         analysis = {**analysis,
                     "margins": {**(analysis.get("margins") or {}), "discrete": fresh},

@@ -186,10 +186,10 @@ def _finite_or_none(v: float) -> float | None:
 
 def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict, list, dict]:
     """Margin checks, stability, linear figures and warnings from the executed law."""
-    from ..analysis.executed import (INFORMATIONAL_METHODS, loop_stability,
-                                     margin_disagreements, recompute_margins)
+    from ..analysis import compute_margins
+    from ..analysis.executed import INFORMATIONAL_METHODS, loop_stability, margin_disagreements
 
-    margins = recompute_margins(artifact, spec.motor)
+    margins = compute_margins(artifact, spec.motor)
     warnings = margin_disagreements(artifact.margins, margins, file)
     stability = loop_stability(artifact, spec.motor)
     fresh = {ax: m.to_json(extras=False) for ax, m in margins.items()}
