@@ -30,9 +30,12 @@ def step_response(loop: "AxisLoop", A, B, C, D) -> tuple[np.ndarray, np.ndarray]
             x = np.zeros(A.shape[0])
             X = np.empty((n_steps + 1, A.shape[0]))
             Bv = B[:, 0]
-            for k in range(n_steps + 1):
-                X[k] = x
-                x = A @ x + Bv
+            # an unstable loop's response overflows to inf/nan: expected, the step
+            # figures then read "not computable" (no numpy warning to leak to the CLI)
+            with np.errstate(over="ignore", invalid="ignore"):
+                for k in range(n_steps + 1):
+                    X[k] = x
+                    x = A @ x + Bv
             # intersample: i(t_k + s) = e^{-R s/L} i_k + (1 - e^{-R s/L})/R u_k
             nl = loop.law.n
             i_k = X[:, nl]

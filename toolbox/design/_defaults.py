@@ -108,10 +108,17 @@ def default_bandwidth(drive, *, zero: bool = False, extra_delay: float = 0.0,
 
 
 def largest_stable_pi_bandwidth(drive) -> float:
-    """Crossover at which the cancellation PI loop ``wc/s exp(-s T_eq)`` loses
-    stability (rad/s): ``wc T_eq = pi/2``, i.e. ``pi/(2 T_eq)``. Used in
-    error messages; the default is well below it (:func:`default_bandwidth`)."""
-    return math.pi / (2.0 * equivalent_delay(drive.sample_time, drive.delay_samples))
+    """Bandwidth at which the cancellation PI loop loses stability (rad/s).
+
+    With the plant pole cancelled, the sampled loop is the integrator
+    ``K z^-d/(z - 1)``, ``K = wc Ts``, ``d = delay_samples``; its
+    characteristic polynomial ``z^(d+1) - z^d + K`` has a root on the unit
+    circle at ``K = 2 sin(pi/(2 (2 d + 1)))`` (1 for one period of delay,
+    2 without delay). Used to suggest a bandwidth in error messages; the
+    default (:func:`default_bandwidth`) is about a third of it.
+    """
+    d = drive.delay_samples
+    return 2.0 * math.sin(math.pi / (2.0 * (2 * d + 1))) / drive.sample_time
 
 
 def current_scale(motor, drive) -> tuple[float, str]:

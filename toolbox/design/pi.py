@@ -444,6 +444,16 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
         Kp = (L[0] * wc[0], L[1] * wc[1])
         Ki = (motor.R * wc[0], motor.R * wc[1])
         details["bandwidth_rad_s"] = _axes(wc)
+        limit = _defaults.largest_stable_pi_bandwidth(drive)
+        if max(wc) >= limit:
+            # the design exists (exit 1, outputs written): say which bandwidth would do
+            key = t.key("bandwidth" if t.has("bandwidth") else "response_time")
+            details["design_warnings"] = [
+                f"{key}: {max(wc):.5g} rad/s is at or above the largest stable bandwidth "
+                f"{limit:.5g} rad/s of the sampled loop (2 sin(pi/(4 delay + 2))/Ts, "
+                f"delay_samples {drive.delay_samples}); {default_wc.value:.5g} rad/s keeps "
+                f"a phase margin of about {_defaults.TARGET_PM_DEG:g} deg (leave bandwidth "
+                "out for it)"]
         if rule == "complex_vector":
             details["delay_compensation_time"] = 1.5 * drive.sample_time
             details["delay_compensation"] = (
