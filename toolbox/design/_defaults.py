@@ -116,6 +116,16 @@ def largest_stable_pi_bandwidth(drive) -> float:
     circle at ``K = 2 sin(pi/(2 (2 d + 1)))`` (1 for one period of delay,
     2 without delay). Used to suggest a bandwidth in error messages; the
     default (:func:`default_bandwidth`) is about a third of it.
+
+    Parameters
+    ----------
+    drive : Drive
+        Sample time ``Ts`` and ``delay_samples``.
+
+    Returns
+    -------
+    float
+        ``2 sin(pi/(4 d + 2))/Ts`` (rad/s).
     """
     d = drive.delay_samples
     return 2.0 * math.sin(math.pi / (2.0 * (2 * d + 1))) / drive.sample_time
@@ -128,6 +138,13 @@ def current_scale(motor, drive) -> tuple[float, str]:
     the voltage allows: the largest step the default-bandwidth PI can make
     without leaving linear modulation, ``V_max/(R + wc L_max)`` (a step ``di``
     asks for ``wc L di`` at once, the resistance ``R i`` in steady state).
+
+    Parameters
+    ----------
+    motor : Motor
+        Rated and maximum current, R, Ld, Lq.
+    drive : Drive
+        Voltage, sample time and delay (for the default crossover).
 
     Returns
     -------
@@ -155,6 +172,13 @@ def speed_scale(motor, drive) -> tuple[float, str]:
     base speed ``V_max/(p flux)`` where the back-EMF alone uses the whole
     voltage; capped at that base speed (a scenario above it needs field
     weakening, which the current loops do not do).
+
+    Parameters
+    ----------
+    motor : Motor
+        Rated speed, pole pairs and flux.
+    drive : Drive
+        Voltage and ``max_speed``.
 
     Returns
     -------

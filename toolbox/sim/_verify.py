@@ -116,9 +116,10 @@ def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
                          iq_ref=i_step, step_time=0.001, keep_traces=True),
                 Scenario(name="q step, unloaded start", kind="unloaded_start", duration=0.02,
                          iq_ref=i_step, step_time=0.001, keep_traces=True))
-    from ..design._defaults import current_scale, default_bandwidth, speed_scale
-    i_scale, i_src = current_scale(motor, drive)
-    w_scale, w_src = speed_scale(motor, drive)
+    # lazy: toolbox.design imports the spec and plant stages, not needed without a drive
+    from ..design import current_scale, default_bandwidth, speed_scale
+    i_scale, _ = current_scale(motor, drive)
+    w_scale, _ = speed_scale(motor, drive)
     i_step = 0.5 * i_scale
     wc = default_bandwidth(drive, zero=True).value
     step_time = 0.001
