@@ -138,17 +138,18 @@ def hinf_mixed_forms():
 
 
 def test_design_records_weights_in_every_form(hinf_mixed_forms):
-    """gains["weights"] holds num/den (s) of each validated weight, whatever its spec form."""
+    """artifact.weights (typed) holds num/den (s) of each validated weight, whatever
+    its spec form, and the level gamma of the synthesis on that axis."""
     from toolbox.design.hinf import read_weight
 
     _, art = hinf_mixed_forms
     for ax in ("d", "q"):
-        rec = art.gains["weights"][ax]
-        assert set(rec) == {"w1", "w2", "w3"}
+        rec = art.weights[ax]
+        assert rec.gamma == art.design_parameters["gamma"][ax]
         for key, raw in (("w1", MAKEWEIGHT), ("w2", ZPK), ("w3", CONSTANT)):
             ref = read_weight(raw, key)
             for w in (1.0, 156.0, 1e5):
-                got = np.polyval(rec[key]["num"], 1j * w) / np.polyval(rec[key]["den"], 1j * w)
+                got = getattr(rec, key)(1j * w)
                 assert abs(got) == pytest.approx(abs(complex(ref(1j * w))), rel=1e-12)
 
 
@@ -161,7 +162,7 @@ def test_weight_bounds_for_makeweight_constant_zpk(hinf_mixed_forms):
     r = loop_responses(art, spec.motor)
     for ax in ("d", "q"):
         wb = r[ax]["weight_bounds"]
-        gamma = art.gains["gamma"][ax]
+        gamma = art.weights[ax].gamma
         assert wb["gamma"] == gamma and gamma > 0
         w = np.array(r[ax]["omega"])
         for fn, key, raw in (("S", "w1", MAKEWEIGHT), ("KS", "w2", ZPK), ("T", "w3", CONSTANT)):

@@ -22,7 +22,7 @@ def make_artifact() -> ControllerArtifact:
         method="pi", spec={"title": "t", "motor": {"R": 0.6}}, sample_time=TS,
         delay_samples=1, axes={"d": pi_d, "q": ip_q},
         decoupling=Decoupling(True, True, 0.6, 1.4e-3, 2.8e-3, 0.12, 4),
-        gains={"Kp": {"d": 2.8, "q": 5.6}, "Ki": np.float64(1200.0)},
+        design_parameters={"Kp": {"d": 2.8, "q": 5.6}, "Ki": np.float64(1200.0)},
         provenance={"version": "x", "spec_sha256": "0" * 64, "created": "now"})
 
 
@@ -62,22 +62,23 @@ def test_python_control_conversion():
 
 @pytest.mark.parametrize("mutate, message", [
     (lambda d: d.update(schema="cct.controller/0"),
-     'schema: expected "cct.controller/1", got "cct.controller/0" '
+     'schema: expected "cct.controller/2", got "cct.controller/0" '
      "(written by another version of the toolbox?)"),
     (lambda d: d["axes"].pop("q"),
      'axes: expected an object with the axes "d" and "q", got [\'d\']'),
     (lambda d: d["axes"]["d"]["law"].update(dt=2e-4),
-     "axes.d: expected dt equal to sample_time 0.0001, got 0.0002"),
-    (lambda d: d["axes"]["d"]["discrete"].update(method="magic"),
-     "axes.d.discrete.method: expected one of ['tustin', 'zoh', 'foh', 'backward_diff', "
+     "axes.d.law.dt: expected dt equal to sample_time 0.0001, got 0.0002"),
+    (lambda d: d["axes"]["d"]["law"].update(method="magic"),
+     "axes.d.law.method: expected one of ['tustin', 'zoh', 'foh', 'backward_diff', "
      "'euler', 'native'], got \"magic\""),
     (lambda d: d["axes"]["d"]["law"].update(A=[[1.0, 2.0]]),
      "axes.d.law.A: expected a square matrix, got [1, 2]"),
     (lambda d: d["decoupling"].update(Lq_c=-1),
      "decoupling.Lq_c: expected a finite number >= 0, got -1"),
     (lambda d: d.update(extra=1),
-     "extra: expected one of ['axes', 'decoupling', 'delay_samples', 'gains', 'margins', "
-     "'method', 'provenance', 'sample_time', 'schema', 'spec'], got \"unknown key\""),
+     "extra: expected one of ['axes', 'decoupling', 'delay_samples', 'design_parameters', "
+     "'fcs', 'margins', 'method', 'provenance', 'sample_time', 'schema', 'spec', 'weights'], "
+     "got \"unknown key\""),
 ])
 def test_bad_content_is_refused(mutate, message):
     data = json.loads(make_artifact().dumps())

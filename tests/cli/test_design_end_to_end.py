@@ -37,7 +37,7 @@ def test_design_writes_every_output(tc_design):
                  "report.html", "report.pdf"):
         assert (out / name).stat().st_size > 0, name
     artifact = json.loads((out / "controller.json").read_text())
-    assert artifact["schema"] == "cct.controller/1"
+    assert artifact["schema"] == "cct.controller/2"
     assert set(artifact["margins"]) == {"d", "q"}
     for key in ("gain_margin_db", "gain_crossover_rad_s", "phase_margin_deg",
                 "phase_crossover_rad_s", "disk_margin", "stability_margin",

@@ -42,6 +42,7 @@ def test_artifact_holds_eq19_20_pi():
     K = art.axes["q"].to_statespace()
     assert float(np.real(K(1e12j))) == pytest.approx(Kp, rel=1e-9)
     assert float(np.real(K(1.0) - K(2.0))) == pytest.approx(Ki / 2, rel=1e-9)
-    assert art.gains["baseline"] == "002 eq (19)-(20)" and art.gains["gamma"] == 0.01
+    assert art.design_parameters["baseline"] == "002 eq (19)-(20)"
+    assert art.fcs.gamma == 0.01 and "gamma" not in art.design_parameters
     text = art.dumps()
     assert ControllerArtifact.loads(text).dumps() == text

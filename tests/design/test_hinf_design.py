@@ -47,48 +47,54 @@ def art():
 
 def test_q_controller_matches_eq68(art):
     """K_q = 49.70 (s + 2.714e6)(s + 5e4)(s + 214.3) /
-    ((s + 2.717e6)(s + 0.01174)(s^2 + 4793 s + 6.104e6)), 0.5 %."""
-    z = art.axes["q"].zpk
+    ((s + 2.717e6)(s + 0.01174)(s^2 + 4793 s + 6.104e6)), 0.5 %: the full-order
+    design, kept (not executed) under full_order since the law runs eq (72)."""
+    z = art.axes["q"].full_order.zpk
     assert z.gain == pytest.approx(49.70, rel=5e-3)
     assert np.sort(-z.zeros.real) == pytest.approx([214.3, 5e4, 2.714e6], rel=5e-3)
     real = np.sort(-z.poles[np.abs(z.poles.imag) < 1e-9].real)
     assert real == pytest.approx([0.01174, 2.717e6], rel=5e-3)
     quad = np.real(np.poly(z.poles[np.abs(z.poles.imag) >= 1e-9]))[1:]
     assert quad == pytest.approx([4793, 6.104e6], rel=5e-3)
-    assert art.gains["gamma"]["q"] == 1.0
-    assert all(b["worst_ratio"] < 1 for b in art.gains["weight_bounds"]["q"].values())
+    assert art.design_parameters["gamma"]["q"] == 1.0
+    assert all(b["worst_ratio"] < 1 for b in art.design_parameters["weight_bounds"]["q"].values())
 
 
 @pytest.mark.parametrize("axis", ["d", "q"])
 def test_reduced_matches_eq71_72(art, axis):
     """Reduced to 3 states (cancellation + integrator); frequency response within
-    0.5 % of eq (71)/(72) from 1 to 1e5 rad/s; executed by the law."""
-    red = art.axes[axis].reduced
-    assert red is not None and red.continuous.order == 3
+    0.5 % of eq (71)/(72) from 1 to 1e5 rad/s; executed by the law: the axis
+    itself is the reduced controller (law, continuous twin and derived discrete
+    view all of order 3), the 4th-order design sits apart under full_order."""
+    red = art.axes[axis]
+    assert red.continuous.order == 3 and red.law.order == 3 and red.discrete.order == 3
     w = np.logspace(0, 5, 200)
     a = np.asarray(ct.frequency_response(red.to_statespace(), w).complex).ravel()
     b = np.asarray(ct.frequency_response(ct.ss(PAPER_KR[axis]), w).complex).ravel()
     assert float(np.max(np.abs(a - b) / np.abs(b))) < 5e-3
-    assert art.gains["executed"] == "reduced"
-    assert np.array_equal(art.axes[axis].law.A, red.law.A)
-    assert art.axes[axis].continuous.order == 4                  # full controller kept
-    assert art.gains["reduction"][axis]["margin_flags"] == []
+    assert red.reduced is None
+    assert red.full_order.continuous.order == 4 and red.full_order.law.order == 4
+    # the derived error -> voltage view is minus the law's measurement channel
+    assert np.array_equal(red.discrete.A, red.law.A)
+    assert np.array_equal(red.discrete.B, -red.law.B[:, 1:2])
+    assert art.design_parameters["reduction"][axis]["margin_flags"] == []
 
 
 def test_json_round_trip(art):
     text = art.dumps()
     back = ControllerArtifact.loads(text)
     assert back.dumps() == text
-    assert back.axes["q"].reduced.continuous.order == 3
+    assert back.axes["q"].continuous.order == 3
+    assert back.axes["q"].full_order.continuous.order == 4
 
 
 def test_optimal_spec_file():
     """gamma = "optimal": gamma_opt = 0.952 on q (paper 003 / sb10ad, 1e-3), designed
     at 1.05 gamma_opt, realisable at Ts (no pole beyond pi/Ts)."""
     a = design(load_spec(ROOT / "designs" / "003_azaiz2007_hinf_optimal.toml"))
-    assert a.gains["gamma_opt"]["q"] == pytest.approx(0.952, abs=1e-3)
-    assert a.gains["gamma"]["q"] == pytest.approx(1.05 * a.gains["gamma_opt"]["q"], rel=1e-9)
-    assert a.gains["fastest_pole_rad_s"]["q"] <= np.pi / 1e-4
+    assert a.design_parameters["gamma_opt"]["q"] == pytest.approx(0.952, abs=1e-3)
+    assert a.design_parameters["gamma"]["q"] == pytest.approx(1.05 * a.design_parameters["gamma_opt"]["q"], rel=1e-9)
+    assert a.design_parameters["fastest_pole_rad_s"]["q"] <= np.pi / 1e-4
 
 
 def test_infeasible_gamma_names_key_and_best():
@@ -104,11 +110,11 @@ def test_infeasible_gamma_names_key_and_best():
 
 def test_executed_full_and_no_reduction():
     a = design(spec(gamma=1.0, reduce_order=3, executed="full"))
-    assert a.gains["executed"] == "full"
-    assert a.axes["q"].law.order == 4 and a.axes["q"].reduced.law.order == 3
+    assert a.axes["q"].law.order == 4 and a.axes["q"].continuous.order == 4
+    assert a.axes["q"].reduced.law.order == 3 and a.axes["q"].full_order is None
     b = design(spec(gamma=1.0))
-    assert b.axes["q"].reduced is None and b.gains["executed"] == "full"
-    assert "reduction" not in b.gains
+    assert b.axes["q"].reduced is None and b.axes["q"].full_order is None
+    assert "reduction" not in b.design_parameters
 
 
 def test_margin_loss_refused_or_flagged():
@@ -118,7 +124,7 @@ def test_margin_loss_refused_or_flagged():
     assert err.value.key == "controller.hinf.reduce_order"
     assert "keeps GM, PM and M_m within 10 %" in str(err.value)
     a = design(spec(gamma=1.0, reduce_order=1, on_margin_loss="flag"))
-    assert a.gains["reduction"]["d"]["margin_flags"] or a.gains["reduction"]["q"]["margin_flags"]
+    assert a.design_parameters["reduction"]["d"]["margin_flags"] or a.design_parameters["reduction"]["q"]["margin_flags"]
 
 
 def test_weight_forms():
@@ -162,7 +168,7 @@ def test_antiwindup_recursion_is_schur(art):
     keeps the other zeros (0.958 on d, 0.979 on q: the PI-like zeros 428.6 and
     214.3 rad/s mapped by Tustin)."""
     for ax in ("d", "q"):
-        for axis in (art.axes[ax], art.axes[ax].reduced):
+        for axis in (art.axes[ax], art.axes[ax].full_order):
             law = axis.law
             rho = np.max(np.abs(np.linalg.eigvals(law.A - axis.antiwindup @ law.C)))
             assert rho < 0.99

@@ -113,7 +113,7 @@ def test_allow_non_optimal_warns_and_omits_weights():
     with pytest.warns(RuntimeWarning, match="not LQ-optimal"):
         sp = spec(poles=-1000.0, sigma=1000.0, allow_non_optimal=True)
     art = design(sp)
-    assert art.gains["optimal"] is False and "Q" not in art.gains
+    assert art.design_parameters["optimal"] is False and "Q" not in art.design_parameters
 
 
 def test_bad_parameters():
@@ -137,7 +137,7 @@ def test_sigma_factor_and_s1_s2():
 
 def test_artifact_gains_and_json_round_trip():
     art = design(spec(poles=-1000.0, sigma=2500.0))
-    g = art.gains
+    g = art.design_parameters
     assert g["K_F"][1][1] == pytest.approx(2500 * L) and g["optimal"] is True
     assert np.asarray(g["Q"]["q"]).shape == (2, 2)
     assert art.decoupling.cross and art.decoupling.emf

@@ -75,7 +75,7 @@ def test_artifact_law_closes_the_designed_loop(delay):
         G = ct.ss(G * ct.ss(ct.tf([1], [1] + [0] * delay, TS)))
     cl = closed_loop(G, art.axes["q"].law.to_statespace())
     got = cl.poles()
-    ref = np.asarray(art.gains["closed_loop_poles"]["q"], complex)
+    ref = np.asarray(art.design_parameters["closed_loop_poles"]["q"], complex)
     big = np.sort_complex(got[np.abs(got) > 1e-2])
     assert big == pytest.approx(np.sort_complex(ref[np.abs(ref) > 1e-2]), abs=1e-6)
     assert np.all(np.abs(got[np.abs(got) <= 1e-2]) < 1e-3)
@@ -87,7 +87,7 @@ def test_artifact_law_closes_the_designed_loop(delay):
 def test_continuous_artifact_tustin_and_error_controller():
     sp = spec(domain="continuous")
     art = design(sp)
-    k = np.asarray(art.gains["K"]["q"]).ravel()
+    k = np.asarray(art.design_parameters["K"]["q"]).ravel()
     C = art.axes["q"].to_statespace()            # k_i + (-k_z)/s
     assert float(np.real(C(1e9j))) == pytest.approx(k[0], rel=1e-6)
     assert art.axes["q"].discrete.method == "tustin"

@@ -130,8 +130,8 @@ def test_paper_002_eq_19_20_is_cancellation_with_10R():
     R, Ld, Lq = 0.6, 1.4e-3, 2.8e-3
     art = design(make_spec("pi", {"bandwidth": {"d": 10 * R / Ld, "q": 10 * R / Lq}}))
     for ax, L in (("d", Ld), ("q", Lq)):
-        assert art.gains["Kp"][ax] == pytest.approx(10 * R, rel=1e-14)
-        assert art.gains["Ti"][ax] == pytest.approx(L / R, rel=1e-14)
+        assert art.design_parameters["Kp"][ax] == pytest.approx(10 * R, rel=1e-14)
+        assert art.design_parameters["Ti"][ax] == pytest.approx(L / R, rel=1e-14)
 
 
 def test_symmetric_optimum_gym_electric_motor_formula():
@@ -148,9 +148,13 @@ def test_symmetric_optimum_gym_electric_motor_formula():
 
 def test_complex_vector_records_delay_compensation():
     art = design(make_spec("pi", {"rule": "complex_vector", "bandwidth": 2000}))
-    assert art.gains["Kp"]["q"] == pytest.approx(2.8e-3 * 2000, rel=1e-15)
-    assert art.gains["Ki"]["d"] == pytest.approx(0.6 * 2000, rel=1e-15)
-    assert art.gains["delay_compensation_time"] == pytest.approx(1.5 * TS, rel=1e-15)
+    assert art.design_parameters["Kp"]["q"] == pytest.approx(2.8e-3 * 2000, rel=1e-15)
+    assert art.design_parameters["Ki"]["d"] == pytest.approx(0.6 * 2000, rel=1e-15)
+    # executed (exported) compensation: typed, in the decoupling terms
+    assert art.decoupling.delay_compensation_time == pytest.approx(1.5 * TS, rel=1e-15)
+    assert "delay_compensation_time" not in art.design_parameters
+    plain = design(make_spec("pi", {"rule": "cancellation", "bandwidth": 2000}))
+    assert plain.decoupling.delay_compensation_time == 0.0
 
 
 def test_symmetric_optimum_reproduces_gem_control():
@@ -184,17 +188,17 @@ def test_complex_vector_2dof_motulator_gains_and_tracking():
         assert np.allclose(T, a_c / (1j * w + a_c), rtol=1e-9)
     art = design(spec)
     assert same_roots(continuous_poles(art, spec.motor, 800.0), [-a_c, -a_i] * 2, 1e-6 * a_c)
-    assert art.gains["Kt"]["q"] == pytest.approx(a_c * 2.8e-3, rel=1e-14)
+    assert art.design_parameters["Kt"]["q"] == pytest.approx(a_c * 2.8e-3, rel=1e-14)
 
 
 def test_paper_000_normalised_gains():
     """000 sect. 2 and appendix: Kp = 3.5/256, KI = 660/256, E = 150 V, k_i = 256/50."""
     art = design(make_spec("pi", {"Kp_normalised": 3.5 / 256, "Ki_normalised": 660 / 256,
                                   "sensor_gain": 256 / 50}))
-    assert art.gains["rule"] == "explicit"
-    assert art.gains["voltage_gain"] == 150.0  # defaults to drive.vdc = E
-    assert art.gains["Kp"] == pytest.approx({"d": 10.5, "q": 10.5}, rel=1e-14)
-    assert art.gains["Ki"] == pytest.approx({"d": 1980.0, "q": 1980.0}, rel=1e-14)
+    assert art.design_parameters["rule"] == "explicit"
+    assert art.design_parameters["voltage_gain"] == 150.0  # defaults to drive.vdc = E
+    assert art.design_parameters["Kp"] == pytest.approx({"d": 10.5, "q": 10.5}, rel=1e-14)
+    assert art.design_parameters["Ki"] == pytest.approx({"d": 1980.0, "q": 1980.0}, rel=1e-14)
 
 
 def test_paper_000_ip_uses_Kp_times_KI():
@@ -250,7 +254,7 @@ def test_artifact_equations_and_decoupling():
                                       "decoupling": False}))
     assert any("001 Fig. 2b" in e for e in art.provenance["equations"])
     assert art.decoupling.cross is False and art.decoupling.emf is False
-    assert art.gains["lag_time_constant"] == 1e-4
+    assert art.design_parameters["lag_time_constant"] == 1e-4
     art2 = design(make_spec("pi", {"bandwidth": 1000}))
     assert art2.decoupling.cross and art2.decoupling.emf
     assert art2.axes["q"].antiwindup is not None
@@ -287,7 +291,7 @@ def test_pi_lag_closed_loop_poles():
     art = design(spec)
     expected = []
     for ax, L in (("d", 1.4e-3), ("q", 2.8e-3)):
-        Kp, Ki = art.gains["Kp"][ax], art.gains["Ki"][ax]
+        Kp, Ki = art.design_parameters["Kp"][ax], art.design_parameters["Ki"][ax]
         expected += list(np.roots([Td * L, L + 0.6 * Td, 0.6 + Kp, Ki]))
     assert same_roots(continuous_poles(art, spec.motor, 600.0), expected, 1e-6 * 5000)
 
@@ -308,7 +312,7 @@ def test_recorded_poles_equal_assembled_closed_loop(method, cfg):
     600 rad/s electrical; tolerance 1e-6 of the largest pole."""
     spec = make_spec(method, cfg)
     art = design(spec)
-    expected = np.concatenate([np.array(art.gains["poles"][ax]) @ [1, 1j] for ax in "dq"])
+    expected = np.concatenate([np.array(art.design_parameters["poles"][ax]) @ [1, 1j] for ax in "dq"])
     scale = np.max(np.abs(expected))
     assert same_roots(continuous_poles(art, spec.motor, 600.0), expected, 1e-6 * scale)
 
@@ -391,7 +395,7 @@ def test_json_round_trip(method, cfg):
     art = design(make_spec(method, cfg))
     back = ControllerArtifact.loads(art.dumps())
     assert back.dumps() == art.dumps()
-    assert back.gains == art.gains
+    assert back.design_parameters == art.design_parameters
     for ax in "dq":
         assert np.array_equal(back.axes[ax].law.A, art.axes[ax].law.A)
         assert np.array_equal(back.axes[ax].law.D, art.axes[ax].law.D)

@@ -88,8 +88,8 @@ def same_roots(a, b, tol):
 # ---------------------------------------------------------------- (1) gains
 def test_tc_explicit_gains_and_poles():
     art = design(make_spec("tc", {"K1": 800, "K2": 900}))
-    assert (art.gains["K1"], art.gains["K2"]) == (800.0, 900.0)
-    assert art.gains["poles"] == {"d": [[-800.0, 0.0]], "q": [[-900.0, 0.0]]}
+    assert (art.design_parameters["K1"], art.design_parameters["K2"]) == (800.0, 900.0)
+    assert art.design_parameters["poles"] == {"d": [[-800.0, 0.0]], "q": [[-900.0, 0.0]]}
 
 
 def test_tc_from_response_time_is_ln20_over_t():
@@ -108,7 +108,7 @@ def test_tci_match_pi_paper_000_eq_22_24():
     """000 eq (23): K21 = E k_i Kp/Lq ~ 3750, K22 = E k_i KI/Lq ~ 707 100
     (printed to 4 significant figures: rel 1e-4); eq (24): K11 = K21, K12 = K22."""
     art = design(make_spec("tci", {"match_pi": True, **PI_000}))
-    g = art.gains
+    g = art.design_parameters
     assert g["K21"] == pytest.approx(3750.0, rel=1e-12)   # 10.5 / 2.8e-3 exactly
     assert g["K22"] == pytest.approx(707_100.0, rel=1e-4)  # 1980 / 2.8e-3 = 707 142.9
     assert (g["K11"], g["K12"]) == (g["K21"], g["K22"])
@@ -164,8 +164,8 @@ def test_tci_error_controller_is_pi_minus_resistance():
 def test_model_override_for_mismatch_studies():
     art = design(make_spec("tci", {"match_pi": True, **PI_000,
                                    "model": {"Lq": 3.0e-3, "flux": 0.13}}))
-    assert art.gains["model"] == {"R": R, "Ld": LD, "Lq": 3.0e-3, "flux": 0.13}
-    assert art.gains["K21"] == pytest.approx(10.5 / 3.0e-3, rel=1e-14)  # eq (23) with L_qc
+    assert art.design_parameters["model"] == {"R": R, "Ld": LD, "Lq": 3.0e-3, "flux": 0.13}
+    assert art.design_parameters["K21"] == pytest.approx(10.5 / 3.0e-3, rel=1e-14)  # eq (23) with L_qc
     assert art.decoupling.flux_c == 0.13
 
 
@@ -182,7 +182,7 @@ def test_continuous_closed_loop_poles_equal_designed(method, cfg):
     the largest pole (eig of a <= 4x4 matrix)."""
     spec = make_spec(method, cfg)
     art = design(spec)
-    expected = np.concatenate([np.array(art.gains["poles"][ax]) @ [1, 1j] for ax in "dq"])
+    expected = np.concatenate([np.array(art.design_parameters["poles"][ax]) @ [1, 1j] for ax in "dq"])
     scale = np.max(np.abs(expected))
     for omega in (0.0, 920.0):
         assert same_roots(continuous_poles(art, spec.motor, omega), expected, 1e-7 * scale)
@@ -285,7 +285,7 @@ def test_json_round_trip(method, cfg):
     art = design(make_spec(method, cfg))
     back = ControllerArtifact.loads(art.dumps())
     assert back.dumps() == art.dumps()
-    assert back.gains == art.gains
+    assert back.design_parameters == art.design_parameters
     for ax in "dq":
         assert np.array_equal(back.axes[ax].law.D, art.axes[ax].law.D)
 
@@ -302,7 +302,7 @@ def test_end_to_end_spec_from_dict():
     art = design(spec)
     assert art.method == "tci"
     assert "000 eq (22)-(24)" in " ".join(art.provenance["equations"])
-    assert art.gains["K21"] == pytest.approx(3750.0, rel=1e-12)
+    assert art.design_parameters["K21"] == pytest.approx(3750.0, rel=1e-12)
 
 
 def test_tc_sampled_response_time_vs_paper():

@@ -15,7 +15,8 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
-from toolbox.artifact import AxisController, ControllerArtifact, Decoupling
+from toolbox.artifact import (AxisController, AxisWeights, ControllerArtifact, Decoupling,
+                              TransferFunctionData)
 from toolbox.spec import Drive, Motor
 
 TS = 1e-4
@@ -26,15 +27,25 @@ DRIVE = Drive(vdc=150.0, sample_time=TS, delay_samples=1, max_speed=400.0)
 PROV = {"version": "test", "spec_sha256": "0" * 64, "created": "2026-01-01T00:00:00+00:00"}
 
 
-def _dec(motor=MOTOR) -> Decoupling:
+def _dec(motor=MOTOR, delay_compensation_time: float = 0.0) -> Decoupling:
     return Decoupling(cross=True, emf=True, R_c=motor.R, Ld_c=motor.Ld, Lq_c=motor.Lq,
-                      flux_c=motor.flux, pole_pairs=motor.pole_pairs)
+                      flux_c=motor.flux, pole_pairs=motor.pole_pairs,
+                      delay_compensation_time=delay_compensation_time)
 
 
-def _artifact(method, axes, gains=None, title="test controller") -> ControllerArtifact:
+#: An H-infinity artifact must carry its weights (the export does not read them):
+#: paper 003 eq (44)'s W1 on both axes.
+_W1 = TransferFunctionData(np.array([1 / 1.51, 177.3493 / 1.51]), np.array([1.0, 0.0117]))
+HINF_WEIGHTS = {ax: AxisWeights(gamma=1.0, w1=_W1) for ax in ("d", "q")}
+
+
+def _artifact(method, axes, params=None, title="test controller",
+              delay_compensation_time: float = 0.0) -> ControllerArtifact:
     return ControllerArtifact(method=method, spec={"title": title}, sample_time=TS,
-                              delay_samples=1, axes=axes, decoupling=_dec(),
-                              gains=gains or {}, provenance=dict(PROV))
+                              delay_samples=1, axes=axes,
+                              decoupling=_dec(delay_compensation_time=delay_compensation_time),
+                              weights=HINF_WEIGHTS if method == "hinf" else None,
+                              design_parameters=params or {}, provenance=dict(PROV))
 
 
 def pi_gains(wc=500.0):
@@ -46,8 +57,8 @@ def pi_artifact(wc=500.0, title="PI test") -> ControllerArtifact:
     g = pi_gains(wc)
     axes = {ax: AxisController.from_error_controller(kp + ki / s, TS) for ax, (kp, ki) in g.items()}
     return _artifact("pi", axes, {"Kp": {ax: g[ax][0] for ax in g},
-                                  "Ki": {ax: g[ax][1] for ax in g},
-                                  "delay_compensation": True}, title)
+                                  "Ki": {ax: g[ax][1] for ax in g}}, title,
+                     delay_compensation_time=1.5 * TS)
 
 
 def ip_tc_artifact() -> ControllerArtifact:
@@ -89,7 +100,7 @@ def hinf_marginal_artifact() -> ControllerArtifact:
         base = AxisController.from_error_controller(K, TS)
         law = base.law
         aw = law.B[:, 1:2] / law.D[0, 1]
-        axes[ax] = AxisController(base.discrete, base.continuous, law, aw)
+        axes[ax] = AxisController(law, base.continuous, aw)
     return _artifact("hinf", axes, {"gamma": 1.0})
 
 

@@ -75,9 +75,10 @@ def test_header_structure(case):
 
 
 def test_pi_gains_and_delay_compensation():
-    """PI gains in parallel (V/A, V/(A s)), per-sample and series forms, read from
-    artifact.gains; the same values are derived from the law when gains are absent
-    (exact within float32 printing, 1e-6)."""
+    """PI gains in parallel (V/A, V/(A s)), per-sample and series forms, derived
+    from the executed law (informational design parameters are not read: the
+    header is the same without them), exact within float32 printing (1e-6);
+    the delay compensation from the typed decoupling.delay_compensation_time."""
     art = A.pi_artifact()
     h = write_header(art, A.MOTOR, A.DRIVE)
     kp, ki = A.pi_gains()["q"]
@@ -88,13 +89,18 @@ def test_pi_gains_and_delay_compensation():
     assert val("CCT_Q_TI") == pytest.approx(kp / ki, rel=1e-6)
     assert val("CCT_DELAY_COMP_TIME") == pytest.approx(1.5 * A.TS, rel=1e-6)
     from dataclasses import replace
-    h2 = write_header(replace(art, gains={}), A.MOTOR, A.DRIVE)
+    # wrong informational numbers change nothing: the law is the source
+    bogus = {"Kp": {"d": 1.0, "q": 1.0}, "Ki": {"d": 1.0, "q": 1.0},
+             "delay_compensation_time": 9.0}
+    h1 = write_header(replace(art, design_parameters=bogus), A.MOTOR, A.DRIVE)
+    assert h1 == h
+    no_comp = replace(art, decoupling=replace(art.decoupling, delay_compensation_time=0.0))
+    h2 = write_header(no_comp, A.MOTOR, A.DRIVE)
     assert float(re.search(r"#define CCT_Q_KP (\S+)f", h2).group(1)) == pytest.approx(kp, rel=1e-6)
-    assert float(re.search(r"#define CCT_Q_KI (\S+)f", h2).group(1)) == pytest.approx(ki, rel=1e-6)
     assert "DELAY_COMP" not in h2
-    # the PI design module's keys: a time in s and a text description
-    h3 = write_header(replace(art, gains={"delay_compensation_time": 2e-4,
-                                          "delay_compensation": "rotate v_dq"}), A.MOTOR, A.DRIVE)
+    h3 = write_header(replace(art, decoupling=replace(art.decoupling,
+                                                      delay_compensation_time=2e-4)),
+                      A.MOTOR, A.DRIVE)
     assert float(re.search(r"#define CCT_DELAY_COMP_TIME (\S+)f", h3).group(1)) == \
         pytest.approx(2e-4, rel=1e-6)
     assert "CCT_Q31_Q_KP_GAIN" in h and "CCT_Q31_Q_KP_DIV_LOG2" in h        # MCSDK-style integer gains

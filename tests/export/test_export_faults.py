@@ -195,23 +195,32 @@ def test_status_api_documented():
         assert words in top
 
 
-def test_cli_export_names_the_design_file(tmp_path):
+@pytest.mark.parametrize("coefficient", [1e25, 1e39])
+def test_cli_export_names_the_design_file(tmp_path, coefficient):
     """`cct export DIR` refusing a controller names DIR/controller.json, the key
-    and what was expected; exit 2 and no header written."""
+    and what was expected; exit 2 and no header written.
+
+    The spec bounds refuse an absurd drive (vdc <= 1e5 V) before any design, so
+    the refusal is provoked by a tampered law: one reference-channel coefficient
+    set to an absurd value. The loop stays stable (B_r is outside the loop), so
+    it is the exportability check that refuses it; before the minimal
+    realisation guarded SLICOT, these values aborted the process in TB01PD."""
+    import json
     import toolbox
     from click.testing import CliRunner
     from toolbox.cli import main
-    data = {"motor": {"catalog": "azaiz2007"}, "drive": {"vdc": 1e39, "sample_time": 1e-4},
+    data = {"motor": {"catalog": "azaiz2007"}, "drive": {"vdc": 150, "sample_time": 1e-4},
             "controller": {"method": "pi", "pi": {"bandwidth": 500}}}
-    art = toolbox.design_spec(toolbox.spec_from_dict(data))
+    stored = json.loads(toolbox.design_spec(toolbox.spec_from_dict(data)).dumps())
+    stored["axes"]["q"]["law"]["B"][0][0] = coefficient
     out = tmp_path / "out"
     out.mkdir()
-    (out / "controller.json").write_text(art.dumps())
+    (out / "controller.json").write_text(json.dumps(stored))
     res = CliRunner().invoke(main, ["export", str(out), "--format", "c"])
     assert res.exit_code == 2, res.output
     msg = res.output.strip().splitlines()[-1]
-    assert msg.startswith(f"cct: error: {out / 'controller.json'}: drive.vdc: expected ")
-    assert "float32" in msg
+    assert msg.startswith(f"cct: error: {out / 'controller.json'}: controller.pi: expected ")
+    assert "dynamic range" in msg
     assert not (out / "controller.h").exists()
 
 

@@ -2,7 +2,7 @@
 file and the key path inside it, never a KeyError, AttributeError or
 TypeError from deeper code.
 
-Found by fuzzing: a fcs_mpc artifact without ``gains.alpha`` (KeyError 'alpha'
+Found by fuzzing: a fcs_mpc artifact without ``gains.alpha`` (now the typed ``fcs.alpha``) (KeyError 'alpha'
 in the verification), ``margins`` holding a number (AttributeError in the
 CLI summary), ``requirements`` of analysis.json holding a list (TypeError in
 the report), deep nesting (RecursionError in json).
@@ -41,21 +41,21 @@ def _refused(data, message: str) -> None:
 
 
 @pytest.mark.parametrize("name, message", [
-    ("alpha", 'gains.alpha: expected a finite number >= 0 (the fcs_mpc law reads it), '
+    ("alpha", 'fcs.alpha: expected a finite number >= 0 (the fcs_mpc law reads it), '
               'got "nothing (missing)"'),
-    ("gamma", 'gains.gamma: expected a finite number >= 0 (the fcs_mpc law reads it), '
+    ("gamma", 'fcs.gamma: expected a finite number >= 0 (the fcs_mpc law reads it), '
               'got "nothing (missing)"'),
 ])
 def test_fcs_gain_missing(fcs_json, name, message):
     data = json.loads(fcs_json)
-    del data["gains"][name]
+    del data["fcs"][name]
     _refused(data, message)
 
 
 def test_fcs_gain_wrong_type(fcs_json):
     data = json.loads(fcs_json)
-    data["gains"]["beta"] = "1"
-    _refused(data, 'gains.beta: expected a finite number >= 0 (the fcs_mpc law reads it), '
+    data["fcs"]["beta"] = "1"
+    _refused(data, 'fcs.beta: expected a finite number >= 0 (the fcs_mpc law reads it), '
                    'got "1"')
 
 
@@ -150,9 +150,9 @@ def test_cli_report_on_tampered_analysis_exits_2(tmp_path, pi_json):
 @pytest.mark.parametrize("command", ["verify", "report", "export"])
 def test_cli_on_tampered_controller_exits_2(tmp_path, fcs_json, command):
     data = json.loads(fcs_json)
-    del data["gains"]["alpha"]
+    del data["fcs"]["alpha"]
     (tmp_path / "controller.json").write_text(json.dumps(data))
     res = run_cli(command, tmp_path)
     assert res.exit_code == 2, res.output
-    assert f"cct: error: {tmp_path / 'controller.json'}: gains.alpha: expected" in res.output
+    assert f"cct: error: {tmp_path / 'controller.json'}: fcs.alpha: expected" in res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["controller.json"]

@@ -73,7 +73,7 @@ def test_ilq_less_sensitive_to_inductance_than_pi_with_lag():
     sp = ilq_spec()
     m = sp.motor
     art = design(sp)
-    assert art.gains["optimal"] and art.gains["sigma_bound"]["q"] == pytest.approx(1552.53, rel=1e-5)
+    assert art.design_parameters["optimal"] and art.design_parameters["sigma_bound"]["q"] == pytest.approx(1552.53, rel=1e-5)
     ilq_law = art.axes["q"].law.to_statespace()
     m_ilq, y_ilq = merit(ilq_law, m.Lq, m.R)
     m_pi, y_pi = merit(pi_lag_law(m.Lq, m.R), m.Lq, m.R)

@@ -3,7 +3,7 @@
 The report consumes plain data only, so the fixture builds it here: a PI
 artifact by pole-zero cancellation (Kp = L wc, Ki = R wc, paper 000 sect. 2)
 through ``AxisController.from_error_controller``, carrying paper 003's
-H-infinity weights in ``gains["weights"]`` so that the weight bounds are drawn;
+H-infinity weights in the typed ``artifact.weights`` so that the weight bounds are drawn;
 its ``analysis.json`` from :func:`toolbox.analysis.analysis_report` (small
 sweep, no certificate); a synthetic ``verify.json`` with traces from the
 linear closed loop. ``python_control_margins`` gives python-control's
@@ -19,7 +19,7 @@ import control
 import numpy as np
 import pytest
 
-from toolbox.artifact import AxisController
+from toolbox.artifact import AxisController, AxisWeights, TransferFunctionData
 from toolbox.design._common import decoupling_from_motor, make_artifact
 from toolbox.report import ReportData
 
@@ -55,14 +55,20 @@ WEIGHTS = {"w1": {"num": [0.66225, 117.4499], "den": [1, 0.0117]},
 
 def _artifact(spec, weights: bool = False):
     m, ts = spec.motor, spec.drive.sample_time
-    gains: dict = {"weights": {ax: dict(WEIGHTS) for ax in ("d", "q")}} if weights else {}
+    typed = None
+    if weights:
+        w = AxisWeights(gamma=1.0, **{k: TransferFunctionData(np.array(v["num"], float),
+                                                               np.array(v["den"], float))
+                                      for k, v in WEIGHTS.items()})
+        typed = {"d": w, "q": w}
+    params: dict = {}
     axes = {}
     for name, L in (("d", m.Ld), ("q", m.Lq)):
         kp, ki = L * WC, m.R * WC
-        gains[name] = {"Kp": kp, "Ki": ki}
+        params[name] = {"Kp": kp, "Ki": ki}
         axes[name] = AxisController.from_error_controller(control.tf([kp, ki], [1, 0]), ts)
-    art = make_artifact(spec, axes, decoupling_from_motor(m), gains,
-                        ["000 sect. 2 (PI by pole-zero cancellation)"])
+    art = make_artifact(spec, axes, decoupling_from_motor(m), params,
+                        ["000 sect. 2 (PI by pole-zero cancellation)"], weights=typed)
     prov = {**art.provenance, "created": "2026-01-01T00:00:00+00:00"}
     return dataclasses.replace(art, provenance=prov)
 

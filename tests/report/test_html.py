@@ -131,8 +131,14 @@ def test_reduced_controller_and_simresult(full_data):
     red = AxisController.from_error_controller(control.tf([4.0], [1.0, 0.0]), art.sample_time)
     axes = {k: dataclasses.replace(v, reduced=red) for k, v in art.axes.items()}
     ctl = _controller(dataclasses.replace(art, axes=axes))
-    assert [a["reduced"] for a in ctl["axes"]] == ["K(s) = 4 / s"] * 2
-    assert [a["reduced_order"] for a in ctl["axes"]] == [1, 1]
+    assert [a["alt"] for a in ctl["axes"]] == ["K(s) = 4 / s"] * 2
+    assert [a["alt_order"] for a in ctl["axes"]] == [1, 1]
+    assert [a["alt_label"] for a in ctl["axes"]] == ["reduced, not executed"] * 2
+    # the executed law runs the reduced controller: the full order is listed apart
+    axes = {k: dataclasses.replace(red, full_order=v) for k, v in art.axes.items()}
+    ctl = _controller(dataclasses.replace(art, axes=axes))
+    assert [(a["order"], a["alt_order"]) for a in ctl["axes"]] == [(1, 1)] * 2
+    assert [a["alt_label"] for a in ctl["axes"]] == ["full order, not executed"] * 2
     t = np.arange(50) * 1e-4
     sim = types.SimpleNamespace(metrics={"overshoot_pct": 1.0}, t=t, iq=np.ones(50),
                                 iq_ref=np.r_[0.0, np.full(49, 5.0)], id=None)

@@ -3,13 +3,14 @@
 import numpy as np
 
 from toolbox.sim._simulate import AxisLaw, ControlLaw, PlantParams
+from toolbox.spec import Motor
 
 # Le Pioufle 1992 (paper 000), appendix; power-invariant dq (torque factor 1)
-PAPER000 = PlantParams(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4,
-                       J=1.11e-3, friction=1.4e-3, torque_factor=1.0)
+PAPER000 = PlantParams.from_motor(Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4,
+                                        J=1.11e-3, friction=1.4e-3, convention="power"))
 # Cormerais 2002 (paper 002), section 3.2; power-invariant (eq 3)
-PAPER002 = PlantParams(R=0.02, Ld=112.6e-6, Lq=112.6e-6, flux=60.39e-3, pole_pairs=6,
-                       J=1.0, friction=0.0, torque_factor=1.0)
+PAPER002 = PlantParams.from_motor(Motor(R=0.02, Ld=112.6e-6, Lq=112.6e-6, flux=60.39e-3,
+                                        pole_pairs=6, J=1.0, friction=0.0, convention="power"))
 
 
 def tc_law(plant, K1, K2, Ts, **kw):

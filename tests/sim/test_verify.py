@@ -239,3 +239,35 @@ def test_step_metrics_not_applicable_without_a_step():
                          "settling_time_2pct": float("nan")}, flat)
     assert "default.reach" not in checks
     assert checks["default.finite"]["pass"]
+
+
+def test_fcs_mpc_reach_band_is_the_switching_penalty_dead_band():
+    """Paper 002's predictive law with switching penalty gamma = 35 (criterion
+    (23), alpha = 1) keeps its vector while ``alpha e^2 <= gamma n``: its q
+    current swings by several amperes around 99.35 A by design. The measured
+    swing exceeds the 5 % band (4.97 A), which the plain reach check would call
+    a failure, and stays inside the dead band plus half a vector's move per
+    period (fcs_ripple), which the check uses; with gamma = 0 the band is the
+    plain one again, so the allowance comes from gamma alone."""
+    from pathlib import Path
+
+    from toolbox.sim._checks import fcs_ripple
+    from toolbox.spec import load_spec
+
+    from dataclasses import replace
+
+    spec = load_spec(Path(__file__).parents[2] / "designs" / "002_cormerais2002_fcs_mpc.toml")
+    spec = replace(spec, scenarios=[replace(spec.scenarios[0], keep_traces=True)])
+    res = verify(design(spec), spec, keep_traces=True)
+    reach = res.scenarios[0].checks["default.reach"]
+    assert reach["pass"], reach
+    band = reach["tolerance_A"]
+    traces = res.scenarios[0].result
+    t, iq = np.asarray(traces.t), np.asarray(traces.iq)
+    settled = iq[t >= (spec.scenarios[0].step_time or 0.0) + reach["value"]]
+    swing = float(np.max(np.abs(settled - reach["reference_A"])))
+    assert swing > 0.05 * abs(reach["reference_A"]), swing       # the plain band fails it
+    assert swing <= band, (swing, band)
+    assert band >= math.sqrt(3 * 35.0) - 1e-12
+    assert math.isinf(fcs_ripple(8.0, 1e-4, 1e-3, 0.0, 35.0))     # unweighted axis
+    assert fcs_ripple(8.0, 1e-4, 1e-3, 1.0, 0.0) == pytest.approx(0.4, rel=1e-12)

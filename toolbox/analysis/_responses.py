@@ -15,7 +15,7 @@ Nyquist frequency ``pi/T_s``:
 * ``S``, ``T``, ``KS``: ``|1/(1 + L)|``, ``|L/(1 + L)|``, ``|K/(1 + L)|`` in dB
   (``KS`` in dB V/A);
 * ``weight_bounds``: for an H-infinity design, ``gamma/|W_i|`` (dB) of the
-  recorded weights ``gains["weights"]`` (paper 003 eq (41)-(43): the design
+  typed weights ``artifact.weights`` (paper 003 eq (41)-(43): the design
   guarantees ``|W_1 S|, |W_2 K S|, |W_3 T| < gamma``);
 * ``step``: the reference step ``i_ref -> i`` of the executed law (a
   two-degree-of-freedom law's reference channel included), with the
@@ -40,6 +40,7 @@ from scipy.linalg import eigvals
 # Names used from margins.py (kept public there, except _step_response: the
 # step helper whose figures margins.discrete reports; importing it keeps one
 # step computation).
+from ..artifact import AxisWeights
 from .margins import AxisLoop, _step_response, freqresp, json_ready, make_axis_loop
 
 __all__ = ["RESPONSES_SCHEMA", "N_POINTS", "W_END_FRACTION", "round_sig", "axis_responses",
@@ -146,24 +147,19 @@ def _pole_zero(loop: AxisLoop) -> dict:
             "zeros": _pairs(_zeros(A, B, C, D)) if A.size else []}
 
 
-def _weight_bounds(weights: Mapping | None, gamma: float, w: np.ndarray) -> dict | None:
-    """``gamma/|W_i(j w)|`` (dB) of the weights given as ``{"num", "den"}`` in s."""
-    if not weights:
+def _weight_bounds(weights: AxisWeights | None, w: np.ndarray) -> dict | None:
+    """``gamma/|W_i(j w)|`` (dB) of one axis' typed H-infinity weights (003 eq (41)-(43))."""
+    if weights is None:
         return None
-    out: dict[str, Any] = {"gamma": float(gamma)}
+    out: dict[str, Any] = {"gamma": float(weights.gamma)}
     s = 1j * w
     for wkey, fn in WEIGHT_FUNCTIONS:
-        wt = weights.get(wkey)
-        if wt is None:
-            out[fn] = None
-            continue
-        num, den = np.asarray(wt["num"], float), np.asarray(wt["den"], float)
-        W = np.polyval(num, s) / np.polyval(den, s)
-        out[fn] = round_sig(_db(gamma / np.abs(W)))
+        wt = getattr(weights, wkey)
+        out[fn] = None if wt is None else round_sig(_db(weights.gamma / np.abs(wt(s))))
     return out
 
 
-def axis_responses(loop: AxisLoop, *, weights: Mapping | None = None, gamma: float = 1.0,
+def axis_responses(loop: AxisLoop, *, weights: AxisWeights | None = None,
                    n_points: int = N_POINTS, w_min: float = W_MIN) -> dict:
     """Response data of one assembled loop (see the module docstring).
 
@@ -172,11 +168,9 @@ def axis_responses(loop: AxisLoop, *, weights: Mapping | None = None, gamma: flo
     loop : AxisLoop
         From :func:`toolbox.analysis.margins.make_axis_loop` (discrete: the
         executed law with ZOH plant and delay).
-    weights : mapping, optional
-        ``{"w1": {"num", "den"}, "w2": ..., "w3": ...}`` (continuous, s),
-        entries ``None`` when absent: the H-infinity weights of this axis.
-    gamma : float
-        H-infinity level the design reached on this axis (dimensionless).
+    weights : AxisWeights, optional
+        The H-infinity weights of this axis and the level ``gamma`` the
+        design reached (``artifact.weights[axis]``).
     n_points : int
         Frequency points, log-spaced from ``w_min`` to ``loop.w_max`` (times
         ``W_END_FRACTION`` in discrete time).
@@ -209,16 +203,10 @@ def axis_responses(loop: AxisLoop, *, weights: Mapping | None = None, gamma: flo
         "loop": {"mag_db": round_sig(_db(L)), "phase_deg": round_sig(phase),
                  "re": round_sig(L.real), "im": round_sig(L.imag)},
         "S_db": round_sig(_db(S)), "T_db": round_sig(_db(L * S)), "KS_db": round_sig(_db(K * S)),
-        "weight_bounds": _weight_bounds(weights, gamma, w),
+        "weight_bounds": _weight_bounds(weights, w),
         "step": _step(loop),
         "pz": _pole_zero(loop),
     }
-
-
-def _gamma(gains: Mapping, axis: str) -> float:
-    g = gains.get("gamma")
-    g = g.get(axis) if isinstance(g, Mapping) else g
-    return float(g) if isinstance(g, (int, float)) and not isinstance(g, bool) else 1.0
 
 
 def loop_responses(artifact, motor, *, n_points: int = N_POINTS) -> dict:
@@ -228,7 +216,7 @@ def loop_responses(artifact, motor, *, n_points: int = N_POINTS) -> dict:
     ----------
     artifact : ControllerArtifact
         The design: executed laws, sample time, delay; H-infinity weights
-        from ``gains["weights"]`` and levels from ``gains["gamma"]``.
+        and levels from the typed ``artifact.weights`` (None for other methods).
     motor : Motor
         Nominal plant (R in ohm, Ld/Lq in H).
     n_points : int
@@ -240,13 +228,11 @@ def loop_responses(artifact, motor, *, n_points: int = N_POINTS) -> dict:
         ``{"schema": "cct.responses/1", "domain": "discrete", "d": {...},
         "q": {...}}`` (JSON-ready), each axis as :func:`axis_responses`.
     """
-    gains = artifact.gains or {}
-    weights = gains.get("weights") if isinstance(gains.get("weights"), Mapping) else {}
     out: dict[str, Any] = {"schema": RESPONSES_SCHEMA, "domain": "discrete"}
     for name, L in (("d", motor.Ld), ("q", motor.Lq)):
         loop = make_axis_loop(artifact.axes[name], motor.R, L, artifact.sample_time,
                               artifact.delay_samples, discrete=True)
+        aw = None if artifact.weights is None else artifact.weights[name]
         with np.errstate(divide="ignore", invalid="ignore"):
-            out[name] = axis_responses(loop, weights=weights.get(name),
-                                       gamma=_gamma(gains, name), n_points=n_points)
+            out[name] = axis_responses(loop, weights=aw, n_points=n_points)
     return json_ready(out)

@@ -4,8 +4,7 @@ recomputed on demand (issue 10: never trust stored numbers).
 ``cct verify`` and ``cct report`` read a controller.json that may have been
 edited by hand or by a tool. The ``margins`` stored in it are a cache of the
 analysis; the verdict must come from the executed law itself
-(``axes.<axis>.law``, or its reduced twin when ``gains.executed`` is
-``"reduced"``), analysed on the spec's nominal plant with ZOH and the
+(``axes.<axis>.law``, the one executed law of the axis), analysed on the spec's nominal plant with ZOH and the
 computation delay, exactly as :func:`toolbox.analysis.compute_margins` does at
 design time.
 
@@ -23,9 +22,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from .margins import MARGIN_KEYS, compute_margins, make_axis_loop
+from .margins import MARGIN_KEYS, make_axis_loop
 
-__all__ = ["INFORMATIONAL_METHODS", "executed_artifact", "recompute_margins", "loop_stability",
+__all__ = ["INFORMATIONAL_METHODS", "loop_stability",
            "margin_disagreements", "MARGIN_RTOL"]
 
 #: Methods whose stored axes are not what runs (their margins are informational).
@@ -39,36 +38,6 @@ INFORMATIONAL_METHODS = {
 #: leaves room for a different BLAS while any edit of the law shows (a changed
 #: pole moves the margins by far more).
 MARGIN_RTOL = 1e-6
-
-
-def executed_artifact(artifact):
-    """A copy of ``artifact`` whose axes are the laws the simulator runs.
-
-    Parameters
-    ----------
-    artifact : ControllerArtifact
-    """
-    if artifact.gains.get("executed") != "reduced":
-        return artifact
-    axes = {k: (a.reduced if a.reduced is not None else a) for k, a in artifact.axes.items()}
-    return replace(artifact, axes=axes)
-
-
-def recompute_margins(artifact, motor) -> dict:
-    """MarginsResult per axis of the executed sampled loop.
-
-    Parameters
-    ----------
-    artifact : ControllerArtifact
-    motor : Motor
-        Nominal plant.
-
-    Returns
-    -------
-    dict
-        ``{"d": MarginsResult, "q": MarginsResult}``.
-    """
-    return compute_margins(executed_artifact(artifact), motor)
 
 
 def loop_stability(artifact, motor) -> dict:
@@ -93,15 +62,15 @@ def loop_stability(artifact, motor) -> dict:
                      "basis": f"not analysed: {INFORMATIONAL_METHODS[artifact.method]}; "
                               "judged by the simulation's bounded checks"}
                 for ax in ("d", "q")}
-    art = executed_artifact(artifact)
     out = {}
     for ax, L in (("d", motor.Ld), ("q", motor.Lq)):
-        loop = make_axis_loop(art.axes[ax], motor.R, L, art.sample_time, art.delay_samples)
+        loop = make_axis_loop(artifact.axes[ax], motor.R, L, artifact.sample_time,
+                              artifact.delay_samples)
         A_cl = loop.reference_loop()[0]
         rho = float(np.max(np.abs(np.linalg.eigvals(A_cl)))) if A_cl.size else 0.0
         out[ax] = {"stable": bool(rho < 1.0 - 1e-9), "spectral_radius": rho,
                    "basis": f"executed sampled loop (axes.{ax}.law, ZOH plant, "
-                            f"{art.delay_samples} period(s) of delay)"}
+                            f"{artifact.delay_samples} period(s) of delay)"}
     return out
 
 

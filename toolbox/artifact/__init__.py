@@ -2,6 +2,8 @@
 
 from ._artifact import (SCHEMA, AxisController, ControllerArtifact, Decoupling,
                         StateSpaceData, Zpk, spec_sha256)
+from ._fields import WEIGHT_NAMES, AxisWeights, FcsWeights, TransferFunctionData
 
-__all__ = ["SCHEMA", "AxisController", "ControllerArtifact", "Decoupling",
-           "StateSpaceData", "Zpk", "spec_sha256"]
+__all__ = ["SCHEMA", "AxisController", "AxisWeights", "ControllerArtifact", "Decoupling",
+           "FcsWeights", "StateSpaceData", "TransferFunctionData", "WEIGHT_NAMES", "Zpk",
+           "spec_sha256"]

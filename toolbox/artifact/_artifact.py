@@ -1,15 +1,20 @@
 """The controller artifact: the hinge between design and everything after it.
 
-A :class:`ControllerArtifact` holds, per current axis, the linear controller of
-the loop (error -> voltage) in continuous state space, its discretisation at
-the sample time and its zpk form, plus the two-input law ``[i_ref, i_meas] ->
-v`` that simulation and firmware actually run (it differs from the error
-controller for IP, ILQ and total-compensation structures, whose proportional
-action acts on the measurement). Decoupling and back-EMF compensation are
-nonlinear terms kept apart in :class:`Decoupling`.
+A :class:`ControllerArtifact` holds, per current axis, one executed law: the
+two-input law ``[i_ref, i_meas] -> v`` that simulation and firmware run (it
+differs from the error controller for IP, ILQ and total-compensation
+structures, whose proportional action acts on the measurement), its
+continuous-time twin (same order) and the views derived from it (the error
+-> voltage ``discrete`` controller, the zpk form). Decoupling, back-EMF and
+delay compensation are nonlinear terms kept apart in :class:`Decoupling`;
+method fields later stages execute or draw are typed (:class:`FcsWeights`,
+:class:`AxisWeights`); everything else is informational
+(``design_parameters``).
 
-The JSON form (``controller.json``, schema ``cct.controller/1``) round-trips
+The JSON form (``controller.json``, schema ``cct.controller/2``) round-trips
 exactly: floats are written with ``repr`` precision and read back unchanged.
+Files of schema ``cct.controller/1`` (untyped ``gains``) are refused with
+"re-run cct design".
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from scipy.signal import BadCoefficients
 
 from .._io import check_data_depth, check_text_depth
 from ..errors import ArtifactError
+from ._fields import AxisWeights, FcsWeights, TransferFunctionData
 
 __all__ = [
     "SCHEMA",
@@ -34,11 +40,16 @@ __all__ = [
     "Zpk",
     "AxisController",
     "Decoupling",
+    "FcsWeights",
+    "AxisWeights",
+    "TransferFunctionData",
     "ControllerArtifact",
     "spec_sha256",
 ]
 
-SCHEMA = "cct.controller/1"
+SCHEMA = "cct.controller/2"
+#: Schemas of older toolboxes: refused with "re-run cct design".
+OLD_SCHEMAS = ("cct.controller/1",)
 AXES = ("d", "q")
 DISCRETISATIONS = ("tustin", "zoh", "foh", "backward_diff", "euler", "native")
 
@@ -344,42 +355,79 @@ def _no_unknown(data: Mapping, allowed: set[str], key: str) -> None:
 
 @dataclass(frozen=True, eq=False)
 class AxisController:
-    """The linear controller of one current loop.
+    """The linear controller of one current loop: one executed law.
+
+    ``law`` is what the simulator and the firmware run; every other view of
+    the axis is derived from it (``discrete``, ``zpk``) or is its
+    continuous-time twin (``continuous``, same order). Controllers that are
+    *not* executed are kept apart under names that say so: ``full_order``
+    (the design before an order reduction, when the law runs the reduced
+    controller) and ``reduced`` (an order-reduced candidate, when the law runs
+    the full-order one).
 
     Attributes
     ----------
-    discrete : StateSpaceData
-        Error (A) -> voltage (V) controller at the sample time; what margins
-        on the sampled loop use.
-    continuous : StateSpaceData or None
-        Continuous-time error -> voltage controller (``None`` only for a
-        design made natively in discrete time with no continuous twin).
     law : StateSpaceData
         Discrete two-input law ``[i_ref, i_meas] -> v`` actually executed.
         Its measurement channel equals minus the error controller.
+    continuous : StateSpaceData or None
+        Continuous-time error -> voltage controller of the same law (same
+        order; ``None`` for a design made natively in discrete time).
     antiwindup : ndarray or None
         Anti-windup gain (n x 1): the law's state is corrected by
         ``antiwindup * (v_saturated - v_unsaturated)``. By default Hanus's
         conditioning on the reference channel (see :func:`_antiwindup_gain`).
     reduced : AxisController or None
-        Order-reduced twin, when an order reduction was asked.
+        Order-reduced candidate that is **not** executed (H-infinity with
+        ``executed = "full"``); informational.
+    full_order : AxisController or None
+        The full-order design before the order reduction, **not** executed
+        (H-infinity with ``executed = "reduced"``: ``law`` is the reduced
+        controller); informational.
     """
 
-    discrete: StateSpaceData
-    continuous: StateSpaceData | None
     law: StateSpaceData
+    continuous: StateSpaceData | None = None
     antiwindup: np.ndarray | None = None
     reduced: "AxisController | None" = None
+    full_order: "AxisController | None" = None
 
     def __post_init__(self) -> None:
-        if self.discrete.dt is None or self.law.dt is None:
-            raise ArtifactError("discrete", "a discrete system (dt > 0)")
+        if self.law.dt is None:
+            raise ArtifactError("law", "a discrete system (dt > 0)")
         if self.law.B.shape[1] != 2 or self.law.C.shape[0] != 1:
             raise ArtifactError("law", "a two-input ([i_ref, i_meas]), one-output system",
                             [self.law.B.shape[1], self.law.C.shape[0]])
         if self.antiwindup is not None and self.antiwindup.shape != (self.law.order, 1):
             raise ArtifactError("antiwindup", f"a {self.law.order} x 1 matrix",
                             list(self.antiwindup.shape))
+        if self.continuous is not None and self.continuous.order != self.law.order:
+            # the continuous twin of another controller (e.g. the unreduced
+            # design next to a reduced law) would make figures and margins
+            # describe a loop that does not run
+            raise ArtifactError("continuous", f"the continuous twin of the executed law "
+                                f"(order {self.law.order})", f"order {self.continuous.order}",
+                                hint="a controller that is not executed belongs under "
+                                "full_order or reduced")
+        if self.reduced is not None and self.full_order is not None:
+            raise ArtifactError("reduced", "either reduced (law runs the full-order "
+                                "controller) or full_order (law runs the reduced one), "
+                                "not both", "both")
+
+    @property
+    def discrete(self) -> StateSpaceData:
+        """Error (A) -> voltage (V) view of the executed law at the sample time.
+
+        Derived, never stored: minus the law's measurement channel, same
+        states and order as ``law`` (what margins on the sampled loop use).
+        """
+        law = self.law
+        return StateSpaceData(law.A, -law.B[:, 1:2], law.C, -law.D[:, 1:2], law.dt, law.method)
+
+    @property
+    def order(self) -> int:
+        """Order of the executed law."""
+        return self.law.order
 
     @property
     def zpk(self) -> Zpk:
@@ -389,8 +437,7 @@ class AxisController:
     @classmethod
     def from_error_controller(cls, K: control.StateSpace | control.TransferFunction,
                               sample_time: float, method: str = "tustin",
-                              antiwindup: bool = True,
-                              reduced: "AxisController | None" = None) -> "AxisController":
+                              antiwindup: bool = True) -> "AxisController":
         """Build an axis from a continuous one-degree-of-freedom controller.
 
         The executed law is ``v = K (i_ref - i_meas)``; with ``antiwindup`` the
@@ -403,15 +450,12 @@ class AxisController:
         law = control.ss(Kd.A, np.hstack([Kd.B, -Kd.B]), Kd.C,
                          np.hstack([Kd.D, -Kd.D]), sample_time)
         return cls.from_law(law, error_controller=Kc, sample_time=sample_time,
-                            method=method, antiwindup=antiwindup, reduced=reduced,
-                            discrete_error=Kd)
+                            method=method, antiwindup=antiwindup)
 
     @classmethod
     def from_law(cls, law: control.StateSpace, *, sample_time: float, method: str,
                  error_controller: control.StateSpace | None = None,
-                 discrete_error: control.StateSpace | None = None,
-                 antiwindup: bool | np.ndarray = True,
-                 reduced: "AxisController | None" = None) -> "AxisController":
+                 antiwindup: bool | np.ndarray = True) -> "AxisController":
         """Build an axis from a two-input law ``[i_ref, i_meas] -> v``.
 
         ``law`` is continuous (``law.dt`` falsy, discretised with ``method``) or
@@ -424,8 +468,6 @@ class AxisController:
             if error_controller is None:
                 error_controller = -law_c[0, 1]
         law = control.ss(law)
-        if discrete_error is None:
-            discrete_error = -law[0, 1]
         if isinstance(antiwindup, np.ndarray):
             aw = antiwindup.reshape(law.nstates, 1)
         elif antiwindup and law.nstates:
@@ -436,12 +478,10 @@ class AxisController:
         else:
             aw = None
         return cls(
-            discrete=StateSpaceData.from_statespace(control.ss(discrete_error), method),
+            law=StateSpaceData.from_statespace(law, method),
             continuous=(None if error_controller is None
                         else StateSpaceData.from_statespace(control.ss(error_controller))),
-            law=StateSpaceData.from_statespace(law, method),
             antiwindup=aw,
-            reduced=reduced,
         )
 
     def to_statespace(self, discrete: bool = False) -> control.StateSpace:
@@ -454,38 +494,43 @@ class AxisController:
         out: dict[str, Any] = {}
         if self.continuous is not None:
             out["continuous"] = self.continuous.to_json()
-        out["discrete"] = self.discrete.to_json()
         out["zpk"] = self.zpk.to_json()
         out["law"] = self.law.to_json()
         if self.antiwindup is not None:
             out["antiwindup"] = _list(self.antiwindup)
-        if self.reduced is not None:
-            out["reduced"] = self.reduced.to_json()
+        for name in ("reduced", "full_order"):
+            other = getattr(self, name)
+            if other is not None:
+                out[name] = other.to_json()
         return out
 
     @classmethod
     def from_json(cls, data: Any, key: str, nested: bool = False) -> "AxisController":
         if not isinstance(data, Mapping):
             raise ArtifactError(key, "an object (AXIS)", data)
-        allowed = {"continuous", "discrete", "zpk", "law", "antiwindup"}
+        allowed = {"continuous", "zpk", "law", "antiwindup"}
         if not nested:
-            allowed.add("reduced")
+            allowed |= {"reduced", "full_order"}
+        if "discrete" in data:
+            # schema 1 stored it separately (and for paper 003 it was the
+            # unreduced 4th-order design next to a 3rd-order law)
+            raise ArtifactError(f"{key}.discrete", "no stored discrete controller (it is "
+                                "derived from law)", "a stored one (cct.controller/1)",
+                                hint="re-run cct design on the spec")
         _no_unknown(data, allowed, key)
-        for name in ("discrete", "law"):
-            if name not in data:
-                raise ArtifactError(f"{key}.{name}", "a discrete system (missing)")
+        if "law" not in data:
+            raise ArtifactError(f"{key}.law", "a discrete system (missing)")
         cont = (StateSpaceData.from_json(data["continuous"], f"{key}.continuous", False)
                 if "continuous" in data else None)
-        disc = StateSpaceData.from_json(data["discrete"], f"{key}.discrete", True)
         law = StateSpaceData.from_json(data["law"], f"{key}.law", True)
         aw = (_matrix(data["antiwindup"], f"{key}.antiwindup", law.order, 1)
               if "antiwindup" in data else None)
         if "zpk" in data:
             Zpk.from_json(data["zpk"], f"{key}.zpk")  # validated; recomputed on use
-        reduced = (cls.from_json(data["reduced"], f"{key}.reduced", nested=True)
-                   if "reduced" in data else None)
+        others = {name: cls.from_json(data[name], f"{key}.{name}", nested=True)
+                  for name in ("reduced", "full_order") if name in data}
         try:
-            return cls(disc, cont, law, aw, reduced)
+            return cls(law, cont, aw, **others)
         except ArtifactError as err:
             raise err.under(key) from None
 
@@ -509,6 +554,12 @@ class Decoupling:
         differ from the plant's.
     pole_pairs : int
         Pole pairs used to convert measured mechanical speed.
+    delay_compensation_time : float
+        Delay-compensation time (s, >= 0; 0 = none): the law's ``v_dq`` is
+        rotated by ``delay_compensation_time * w_e`` before the inverse Park
+        transform (motulator's complex-vector PI: 1.5 Ts, one period of
+        computation delay plus half a period of PWM/ZOH delay). The firmware
+        header exports it.
     """
 
     cross: bool
@@ -518,17 +569,20 @@ class Decoupling:
     Lq_c: float
     flux_c: float
     pole_pairs: int
+    delay_compensation_time: float = 0.0
 
     def to_json(self) -> dict:
         return {"cross": self.cross, "emf": self.emf, "R_c": self.R_c,
                 "Ld_c": self.Ld_c, "Lq_c": self.Lq_c, "flux_c": self.flux_c,
-                "pole_pairs": self.pole_pairs}
+                "pole_pairs": self.pole_pairs,
+                "delay_compensation_time": self.delay_compensation_time}
 
     @classmethod
     def from_json(cls, data: Any, key: str = "decoupling") -> "Decoupling":
         if not isinstance(data, Mapping):
             raise ArtifactError(key, "an object", data)
-        names = ("cross", "emf", "R_c", "Ld_c", "Lq_c", "flux_c", "pole_pairs")
+        names = ("cross", "emf", "R_c", "Ld_c", "Lq_c", "flux_c", "pole_pairs",
+                 "delay_compensation_time")
         _no_unknown(data, set(names), key)
         for name in ("cross", "emf"):
             if not isinstance(data.get(name), bool):
@@ -540,12 +594,13 @@ class Decoupling:
         pp = data.get("pole_pairs")
         if not isinstance(pp, int) or isinstance(pp, bool) or pp < 1:
             raise ArtifactError(f"{key}.pole_pairs", "an integer >= 1", pp)
+        t_comp = data.get("delay_compensation_time", 0.0)
+        if not isinstance(t_comp, (int, float)) or isinstance(t_comp, bool) \
+                or not math.isfinite(t_comp) or t_comp < 0:
+            raise ArtifactError(f"{key}.delay_compensation_time", "a finite number >= 0 (s)",
+                                t_comp)
         return cls(data["cross"], data["emf"], float(data["R_c"]), float(data["Ld_c"]),
-                   float(data["Lq_c"]), float(data["flux_c"]), pp)
-
-
-#: Gains that the executed law reads, per method (key -> what it must be).
-_LAW_GAINS = {"fcs_mpc": ("alpha", "beta", "gamma")}
+                   float(data["Lq_c"]), float(data["flux_c"]), pp, float(t_comp))
 
 
 #: The MARGINS keys of DESIGN.md: numbers (non-finite ones as the strings
@@ -575,16 +630,6 @@ def _check_margins(margins: Mapping) -> None:
                                 values["stable"])
 
 
-def _check_gains(method: str, gains: Mapping) -> None:
-    """The gains the executed law reads exist and are finite numbers >= 0."""
-    for name in _LAW_GAINS.get(method, ()):
-        v = gains.get(name)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (
-                math.isfinite(v) and v >= 0):
-            raise ArtifactError(f"gains.{name}", f"a finite number >= 0 (the {method} law "
-                                "reads it)", v if name in gains else "nothing (missing)")
-
-
 def _jsonable(value: Any) -> Any:
     """Plain-JSON copy of gains and margins (arrays to lists, complex to [re, im])."""
     if isinstance(value, Mapping):
@@ -611,6 +656,28 @@ def spec_sha256(spec: Mapping) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+def _check_schema(schema: Any) -> None:
+    """The current schema, with a remedy for files of an older toolbox."""
+    if schema == SCHEMA:
+        return
+    if schema in OLD_SCHEMAS:
+        raise ArtifactError("schema", f'"{SCHEMA}"', schema,
+                            hint="written by an older toolbox whose gains dict later stages "
+                            "had to guess keys from; re-run cct design on the spec")
+    raise ArtifactError("schema", f'"{SCHEMA}"', schema,
+                        hint="written by another version of the toolbox?")
+
+
+def _weights_from_json(data: Any) -> dict[str, AxisWeights] | None:
+    """``{"d": AxisWeights, "q": AxisWeights}`` or ``None`` (JSON null or absent)."""
+    if data is None:
+        return None
+    if not isinstance(data, Mapping) or set(data) != set(AXES):
+        raise ArtifactError("weights", 'null or an object with the axes "d" and "q"',
+                            sorted(data) if isinstance(data, Mapping) else data)
+    return {ax: AxisWeights.from_json(data[ax], f"weights.{ax}") for ax in AXES}
+
+
 @dataclass(frozen=True, eq=False)
 class ControllerArtifact:
     """Everything after design reads this; nothing after design re-runs design.
@@ -627,13 +694,23 @@ class ControllerArtifact:
     delay_samples : int
         Computation delay the design assumes (periods).
     axes : dict
-        ``{"d": AxisController, "q": AxisController}``.
+        ``{"d": AxisController, "q": AxisController}``; each axis' ``law`` is
+        the one executed.
     decoupling : Decoupling
-        Nonlinear compensation terms and controller-side model parameters.
-    gains : dict
-        Method-specific named gains (plain JSON data).
+        Nonlinear compensation terms the law executes (cross-coupling,
+        back-EMF, delay-compensation rotation) and the controller-side model.
+    fcs : FcsWeights or None
+        Criterion (23) weights of the predictive law (``fcs_mpc`` only).
+    weights : dict or None
+        ``{"d": AxisWeights, "q": AxisWeights}``: validated H-infinity
+        weights and levels (required for ``hinf``; optional for other
+        methods, whose report then draws the bounds too).
+    design_parameters : dict
+        Informational method-specific numbers (plain JSON data) shown in the
+        report; no later stage branches on them.
     margins : dict
-        ``{"d": MARGINS, "q": MARGINS}`` once analysis ran (else empty).
+        ``{"d": MARGINS, "q": MARGINS}`` of the sampled executed loop once
+        analysis ran (else empty).
     provenance : dict
         ``version``, ``spec_sha256``, ``created``, ``equations`` used.
     """
@@ -644,7 +721,9 @@ class ControllerArtifact:
     delay_samples: int
     axes: dict[str, AxisController]
     decoupling: Decoupling
-    gains: dict = field(default_factory=dict)
+    fcs: FcsWeights | None = None
+    weights: dict[str, AxisWeights] | None = None
+    design_parameters: dict = field(default_factory=dict)
     margins: dict = field(default_factory=dict)
     provenance: dict = field(default_factory=dict)
 
@@ -652,10 +731,22 @@ class ControllerArtifact:
         if set(self.axes) != set(AXES):
             raise ArtifactError("axes", 'exactly the axes "d" and "q"', sorted(self.axes))
         for name, axis in self.axes.items():
-            for sys in (axis.discrete, axis.law):
-                if not math.isclose(sys.dt, self.sample_time, rel_tol=1e-12):
-                    raise ArtifactError(f"axes.{name}", f"dt equal to sample_time {self.sample_time}",
-                                    sys.dt)
+            if not math.isclose(axis.law.dt, self.sample_time, rel_tol=1e-12):
+                raise ArtifactError(f"axes.{name}.law.dt",
+                                    f"dt equal to sample_time {self.sample_time}", axis.law.dt)
+        if self.weights is not None and set(self.weights) != set(AXES):
+            raise ArtifactError("weights", 'exactly the axes "d" and "q"', sorted(self.weights))
+        if self.method == "fcs_mpc" and self.fcs is None:
+            raise ArtifactError("fcs", "an object {alpha, beta, gamma} (the fcs_mpc law "
+                                "executes criterion (23) with it)", "nothing (missing or null)")
+        if self.method != "fcs_mpc" and self.fcs is not None:
+            # a linear law would silently ignore them
+            raise ArtifactError("fcs", "null (only method fcs_mpc executes criterion (23) "
+                                "weights)", f"weights for method {self.method}")
+        if self.method == "hinf" and self.weights is None:
+            raise ArtifactError("weights", 'an object with the axes "d" and "q" (the '
+                                "H-infinity weights the bounds of 003 eq (41)-(43) are drawn "
+                                "from)", "nothing (missing or null)")
 
     def with_margins(self, margins: dict) -> "ControllerArtifact":
         """A copy carrying analysis results."""
@@ -670,7 +761,10 @@ class ControllerArtifact:
             "delay_samples": self.delay_samples,
             "axes": {name: self.axes[name].to_json() for name in AXES},
             "decoupling": self.decoupling.to_json(),
-            "gains": _jsonable(self.gains),
+            "fcs": None if self.fcs is None else self.fcs.to_json(),
+            "weights": (None if self.weights is None
+                        else {ax: self.weights[ax].to_json() for ax in AXES}),
+            "design_parameters": _jsonable(self.design_parameters),
             "margins": _jsonable(self.margins),
             "provenance": _jsonable(self.provenance),
         }
@@ -686,8 +780,9 @@ class ControllerArtifact:
         Raises
         ------
         ArtifactError
-            Wrong schema, missing or unknown keys, malformed matrices, sample
-            times that disagree; the message names ``file`` and the key.
+            Wrong or old schema, missing or unknown keys, malformed matrices or
+            typed fields, sample times that disagree; the message names
+            ``file`` and the key path.
         """
         try:
             check_data_depth(data, ArtifactError)  # copies and readers below recurse
@@ -699,18 +794,17 @@ class ControllerArtifact:
     def _from_json(cls, data: Any) -> "ControllerArtifact":
         if not isinstance(data, Mapping):
             raise ArtifactError("", "a JSON object", type(data).__name__)
-        if data.get("schema") != SCHEMA:
-            raise ArtifactError("schema", f'"{SCHEMA}"', data.get("schema"),
-                            hint="written by another version of the toolbox?")
+        _check_schema(data.get("schema"))
         allowed = {"schema", "method", "spec", "sample_time", "delay_samples", "axes",
-                   "decoupling", "gains", "margins", "provenance"}
+                   "decoupling", "fcs", "weights", "design_parameters", "margins",
+                   "provenance"}
         _no_unknown(data, allowed, "")
         for name in ("method", "sample_time", "axes", "decoupling"):
             if name not in data:
                 raise ArtifactError(name, "a value (missing)")
         if not isinstance(data["method"], str):
             raise ArtifactError("method", "a method name", data["method"])
-        from ..spec._model import METHODS  # lazy: the spec package imports the design registry
+        from ..spec import METHODS  # lazy: the spec package imports the design registry
 
         if data["method"] not in METHODS:
             raise ArtifactError("method", "one of " + ", ".join(METHODS), data["method"])
@@ -725,15 +819,17 @@ class ControllerArtifact:
             raise ArtifactError("axes", 'an object with the axes "d" and "q"',
                             sorted(axes_data) if isinstance(axes_data, Mapping) else axes_data)
         axes = {name: AxisController.from_json(axes_data[name], f"axes.{name}") for name in AXES}
-        for name in ("spec", "gains", "margins", "provenance"):
+        for name in ("spec", "design_parameters", "margins", "provenance"):
             if not isinstance(data.get(name, {}), Mapping):
                 raise ArtifactError(name, "an object", data.get(name))
         _check_margins(data.get("margins", {}))
-        _check_gains(data["method"], data.get("gains", {}))
+        fcs = None if data.get("fcs") is None else FcsWeights.from_json(data["fcs"], "fcs")
         return cls(method=data["method"], spec=dict(data.get("spec", {})),
                    sample_time=float(ts), delay_samples=delay, axes=axes,
                    decoupling=Decoupling.from_json(data["decoupling"]),
-                   gains=dict(data.get("gains", {})), margins=dict(data.get("margins", {})),
+                   fcs=fcs, weights=_weights_from_json(data.get("weights")),
+                   design_parameters=dict(data.get("design_parameters", {})),
+                   margins=dict(data.get("margins", {})),
                    provenance=dict(data.get("provenance", {})))
 
     @classmethod

@@ -76,27 +76,21 @@ def main() -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print the resolved spec as JSON.")
 @_spec_errors
 def check(spec: str, as_json: bool) -> None:
-    """Validate SPEC and print the resolved spec (catalog defaults applied).
+    """Validate SPEC and print the resolved spec as TOML (catalog and
+    defaults applied, datasheet values converted to per-phase dq values,
+    each with its formula and the dq convention as comments).
 
     \b
     Example:
       cct check designs/000_lepioufle1992_tc.toml
     """
-    from ..spec import load_spec
+    from ..spec import load_spec, spec_to_toml
 
     s = load_spec(spec)
     if as_json:
         click.echo(json.dumps(s.raw, indent=1, sort_keys=True))
         return
-    click.echo(f"{spec}: ok")
-    click.echo(f"title: {s.title}")
-    for section in ("motor", "drive", "controller", "requirements"):
-        table = s.raw.get(section)
-        if table:
-            click.echo(f"[{section}]")
-            for key, value in table.items():
-                click.echo(f"  {key} = {json.dumps(value)}")
-    click.echo(f"scenarios: {len(s.scenarios)}")
+    click.echo(spec_to_toml(s, spec), nl=False)
 
 
 @main.command()
@@ -286,7 +280,8 @@ def report(out_dir: str) -> None:
                             run_verification, spec_of_artifact, write_outputs)
     from ..report import build_context, write_html, write_pdf
 
-    from ..analysis.executed import loop_stability, recompute_margins
+    from ..analysis import compute_margins
+    from ..analysis.executed import loop_stability
 
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
@@ -300,7 +295,7 @@ def report(out_dir: str) -> None:
         files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
     # the report shows margins, margin checks and stability of the executed law,
     # not the stored numbers (the stored response figures are drawn as they are)
-    fresh = {ax: m.to_json() for ax, m in recompute_margins(artifact, spec.motor).items()}
+    fresh = {ax: m.to_json() for ax, m in compute_margins(artifact, spec.motor).items()}
     artifact = artifact.with_margins(fresh)
     analysis = {**analysis, "margins": {**(analysis.get("margins") or {}), "discrete": fresh},
                 "stability": loop_stability(artifact, spec.motor),

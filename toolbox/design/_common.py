@@ -6,23 +6,34 @@ from datetime import datetime, timezone
 from typing import Any
 
 from .._version import toolbox_version
-from ..artifact import AxisController, ControllerArtifact, Decoupling, spec_sha256
+from ..artifact import (AxisController, AxisWeights, ControllerArtifact, Decoupling,
+                        FcsWeights, spec_sha256)
 
 __all__ = ["make_artifact", "decoupling_from_motor"]
 
 
-def decoupling_from_motor(motor, *, cross: bool = True, emf: bool = True) -> Decoupling:
-    """Compensation terms using the motor's own (nominal) parameters."""
+def decoupling_from_motor(motor, *, cross: bool = True, emf: bool = True,
+                          delay_compensation_time: float = 0.0) -> Decoupling:
+    """Compensation terms using the motor's own (nominal) parameters.
+
+    ``delay_compensation_time`` (s, 0 = none) is the rotation of ``v_dq`` by
+    ``delay_compensation_time * w_e`` the law assumes (see :class:`Decoupling`).
+    """
     return Decoupling(cross=cross, emf=emf, R_c=motor.R, Ld_c=motor.Ld, Lq_c=motor.Lq,
-                      flux_c=motor.flux, pole_pairs=motor.pole_pairs)
+                      flux_c=motor.flux, pole_pairs=motor.pole_pairs,
+                      delay_compensation_time=delay_compensation_time)
 
 
 def make_artifact(spec, axes: dict[str, AxisController], decoupling: Decoupling,
-                  gains: dict[str, Any], equations: list[str]) -> ControllerArtifact:
+                  design_parameters: dict[str, Any], equations: list[str], *,
+                  fcs: FcsWeights | None = None,
+                  weights: dict[str, AxisWeights] | None = None) -> ControllerArtifact:
     """Assemble the artifact of a design made from ``spec``.
 
-    ``equations`` lists the source equations used (e.g. ``"000 eq (11)"``),
-    recorded in the provenance.
+    ``design_parameters`` are informational (shown in the report, never
+    branched on); what a later stage executes or draws goes in the typed
+    fields (``decoupling``, ``fcs``, ``weights``). ``equations`` lists the
+    source equations used (e.g. ``"000 eq (11)"``), recorded in the provenance.
     """
     return ControllerArtifact(
         method=spec.controller.method,
@@ -31,7 +42,9 @@ def make_artifact(spec, axes: dict[str, AxisController], decoupling: Decoupling,
         delay_samples=spec.drive.delay_samples,
         axes=axes,
         decoupling=decoupling,
-        gains=gains,
+        fcs=fcs,
+        weights=weights,
+        design_parameters=design_parameters,
         provenance={
             "version": toolbox_version(),
             "spec_sha256": spec_sha256(spec.raw),

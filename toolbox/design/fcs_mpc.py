@@ -4,7 +4,7 @@ G. Cormerais et al., "Optimal torque control of a synchronous machine"
 (IFAC 2002). At each period the inverter state (of 8) minimising criterion
 (23) (weights alpha on the i_q (torque-producing current) error, beta on the i_d error, gamma on the
 number of commutations) is applied; the simulator does that itself
-(:class:`toolbox.sim.FcsWeights`). The design step only validates the weights
+(:class:`toolbox.artifact.FcsWeights`, executed by the simulator). The design step only validates the weights
 and, so that margins can still be compared with the other methods, fills the
 axes with the paper's SVM baseline PI, eq (19)-(20): ``K = 10 R``,
 ``Ti = L/R``, i.e. ``Kp = 10 R`` and ``Ki = Kp / Ti = 10 R^2 / L`` per axis.
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import control as ct
 
-from ..artifact import AxisController, ControllerArtifact
+from ..artifact import AxisController, ControllerArtifact, FcsWeights
 from ..errors import SpecError
 from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
@@ -85,7 +85,7 @@ def read_cfg(method: str, table, motor, drive) -> FcsMpcCfg:
 
 
 def design(spec) -> ControllerArtifact:
-    """FCS-MPC artifact: weights in gains, the eq (19)-(20) PI on the axes.
+    """FCS-MPC artifact: criterion (23) weights in ``fcs``, the eq (19)-(20) PI on the axes.
 
     Parameters
     ----------
@@ -104,7 +104,7 @@ def design(spec) -> ControllerArtifact:
         Kp, Ki = baseline_pi(m.R, L)
         pis[ax] = {"Kp": Kp, "Ki": Ki}
         axes[ax] = AxisController.from_error_controller(Kp + Ki / s, ts, method="tustin")
-    gains = {"alpha": cfg.alpha, "beta": cfg.beta, "gamma": cfg.gamma,
-             "baseline": "002 eq (19)-(20)", "baseline_pi": pis}
-    return make_artifact(spec, axes, decoupling_from_motor(m), gains,
-                         ["002 eq (19)-(20)", "002 eq (23)"])
+    params = {"baseline": "002 eq (19)-(20)", "baseline_pi": pis}
+    return make_artifact(spec, axes, decoupling_from_motor(m), params,
+                         ["002 eq (19)-(20)", "002 eq (23)"],
+                         fcs=FcsWeights(alpha=cfg.alpha, beta=cfg.beta, gamma=cfg.gamma))

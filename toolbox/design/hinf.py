@@ -14,20 +14,26 @@ Per axis: ``G = axis_plants(motor)[axis]`` (eq (33)-(34)), weights from
 with back-off, realisable at ``drive.sample_time``), weight-bound checks (41)-(43),
 then optionally order reduction with a margin comparison.
 
-Which controller runs: the axis keeps the full controller (``continuous``,
-``discrete``, ``zpk``) and the reduced one in ``reduced``. With
-``reduce_order`` given, the executed ``law`` is by default the reduced
-controller's (``executed = "reduced"``, recorded in ``gains["executed"]``):
-reduction is asked precisely to run a simpler controller. Set
-``executed = "full"`` to run the full one. The anti-windup (back-calculation)
-gain is the artifact's default, whose saturated recursion is Schur (Tustin's
-zero at z = -1 moved to the origin).
+Which controller runs: each axis holds one executed law (``law``, its
+continuous twin ``continuous``, the derived ``discrete`` and ``zpk`` views).
+With ``reduce_order`` given, the executed law is by default the reduced
+controller's (``executed = "reduced"``): reduction is asked precisely to run
+a simpler controller, and the full-order design is kept, not executed, under
+``axes.<axis>.full_order``. With ``executed = "full"`` the axis runs the
+full-order controller and the reduced candidate is kept under
+``axes.<axis>.reduced``. Analysis, margins and figures are thus always those
+of the law that runs (003's 3rd-order reduced law, eq (71)-(72)). The
+anti-windup (back-calculation) gain is the artifact's default, whose
+saturated recursion is Schur (Tustin's zero at z = -1 moved to the origin).
 
-The validated weights of each axis are recorded in ``gains["weights"]`` as
-``{"w1" | "w2" | "w3": {"num", "den"} or None}`` (continuous, coefficients in
-s, highest power first), whatever their spec form (constant, num/den, zpk,
-makeweight): analysis draws the bounds of eq (41)-(43) from them and nothing
-after design re-reads the spec's weight tables.
+The validated weights of each axis and the level gamma are recorded in the
+typed ``artifact.weights`` (:class:`~toolbox.artifact.AxisWeights`: ``w1``,
+``w2``, ``w3`` as continuous ``{num, den}``, coefficients in s, highest power
+first, whatever their spec form: constant, num/den, zpk, makeweight):
+analysis draws the bounds of eq (41)-(43) from them and nothing after design
+re-reads the spec's weight tables. The reduction guard's continuous-loop
+margins are informational, under ``design_parameters.design_margins_continuous``
+(the headline margins are the artifact's ``margins``: the sampled executed loop).
 """
 
 from __future__ import annotations
@@ -40,7 +46,7 @@ from typing import Any, Mapping
 import control as ct
 import numpy as np
 
-from ..artifact import AxisController, ControllerArtifact, Zpk
+from ..artifact import AxisController, AxisWeights, ControllerArtifact, TransferFunctionData
 from ..errors import DesignInfeasible, SpecError
 from ..plant import axis_plants
 from ..spec import Table
@@ -79,7 +85,7 @@ class HinfCfg:
     margin_loss : float
         Largest relative loss of GM, PM or M_m accepted from the reduction.
     on_margin_loss : str
-        ``"refuse"`` (SpecError) or ``"flag"`` (recorded in gains).
+        ``"refuse"`` (SpecError) or ``"flag"`` (recorded in design_parameters.reduction).
     executed : str
         ``"reduced"`` or ``"full"``: the controller the law runs.
     weights : dict
@@ -382,12 +388,8 @@ def _refuse_unrealisable(res, Kr, gamma, axis: str) -> None:
                     hint=f"{axis} axis: fastest pole |s| = {res.fastest_pole:.4g} rad/s; {advice}")
 
 
-def _zpk_json(K: Any) -> dict:
-    return Zpk.from_statespace(ct.ss(K)).to_json()
-
-
-def _weight_json(W: Any) -> dict | None:
-    """``{"num", "den"}`` (coefficients in s, highest power first) of a validated weight.
+def _weight_data(W: Any) -> TransferFunctionData | None:
+    """``num/den`` (coefficients in s, highest power first) of a validated weight.
 
     Every spec form (constant, ``num/den``, ``zeros/poles/gain``, ``makeweight``)
     is a transfer function once read, so the artifact records one form and
@@ -396,8 +398,8 @@ def _weight_json(W: Any) -> dict | None:
     if W is None:
         return None
     tf = ct.tf(W)
-    return {"num": [float(c) for c in np.atleast_1d(tf.num[0][0])],
-            "den": [float(c) for c in np.atleast_1d(tf.den[0][0])]}
+    return TransferFunctionData(np.array(np.atleast_1d(tf.num[0][0]), float),
+                                np.array(np.atleast_1d(tf.den[0][0]), float))
 
 
 def _margins_json(m: Any) -> dict:
@@ -442,24 +444,35 @@ def design(spec) -> ControllerArtifact:
                         hint=f"{failed}; best per axis: "
                         + ", ".join(f"{ax} {g:.4g}" for ax, g in best.items())
                         + f'; set gamma above {worst:.4g} or "optimal"') from None
-    axes = {}
-    for ax, r in results.items():
-        full = AxisController.from_error_controller(r.K, ts, method="tustin")
-        if r.Kr is None:
-            axes[ax] = full
-            continue
-        red = AxisController.from_error_controller(r.Kr, ts, method="tustin")
-        if cfg.executed == "reduced":
-            axes[ax] = replace(full, law=red.law, antiwindup=red.antiwindup, reduced=red)
-        else:
-            axes[ax] = replace(full, reduced=red)
-    gains = _gains(cfg, results)
+    axes = {ax: _executed_axis(r, ts, cfg.executed) for ax, r in results.items()}
+    weights = {ax: AxisWeights(gamma=float(r.synthesis.gamma),
+                               **{k: _weight_data(W) for k, W in cfg.weights[ax].items()})
+               for ax, r in results.items()}
     eqs = ["003 eq (33)-(34)", "003 eq (35)-(40)", "003 eq (10)-(32)", "003 eq (65)-(67)",
            "003 eq (41)-(43)"] + (["003 eq (71)-(72)"] if cfg.reduce_order else [])
-    return make_artifact(spec, axes, decoupling_from_motor(spec.motor), gains, eqs)
+    return make_artifact(spec, axes, decoupling_from_motor(spec.motor),
+                         _design_parameters(cfg, results), eqs, weights=weights)
 
 
-def _gains(cfg: HinfCfg, results: dict) -> dict:
+def _executed_axis(r: Any, ts: float, executed: str) -> AxisController:
+    """One axis whose ``law`` is the executed controller; the other one kept apart.
+
+    ``executed = "reduced"``: the law, its continuous twin and antiwindup are
+    the reduced controller's (eq (71)-(72)); the full-order design goes to
+    ``full_order``. ``"full"``: the full-order law, the reduced candidate (if
+    any) in ``reduced``.
+    """
+    full = AxisController.from_error_controller(r.K, ts, method="tustin")
+    if r.Kr is None:
+        return full
+    red = AxisController.from_error_controller(r.Kr, ts, method="tustin")
+    if executed == "reduced":
+        return replace(red, full_order=full)
+    return replace(full, reduced=red)
+
+
+def _design_parameters(cfg: HinfCfg, results: dict) -> dict:
+    """Informational numbers of the synthesis (report only; nothing branches on them)."""
     g: dict[str, Any] = {
         "gamma": {ax: r.synthesis.gamma for ax, r in results.items()},
         "gamma_opt": {ax: r.synthesis.gamma_opt for ax, r in results.items()},
@@ -468,11 +481,6 @@ def _gains(cfg: HinfCfg, results: dict) -> dict:
         "fastest_pole_rad_s": {ax: r.synthesis.fastest_pole for ax, r in results.items()},
         "weight_bounds": {ax: {k: {"worst_ratio": v.worst_ratio, "worst_freq_rad_s": v.worst_freq}
                                for k, v in r.bounds.items()} for ax, r in results.items()},
-        "zpk": {ax: _zpk_json(r.K) for ax, r in results.items()},
-        "executed": cfg.executed,
-        # the validated weights, continuous (003 eq (44)-(49) or makeweight)
-        "weights": {ax: {k: _weight_json(W) for k, W in cfg.weights[ax].items()}
-                    for ax in results},
         "warnings": {ax: list(r.synthesis.warnings) for ax, r in results.items()},
     }
     if cfg.stated or cfg.defaults:
@@ -484,12 +492,12 @@ def _gains(cfg: HinfCfg, results: dict) -> dict:
                                "order_after": r.reduction.order_after,
                                "error_bound": r.reduction.error_bound,
                                "actions": list(r.reduction.actions),
-                               "margin_flags": list(r.margins.flags),
-                               "zpk": _zpk_json(r.Kr)}
+                               "margin_flags": list(r.margins.flags)}
                           for ax, r in results.items()}
-        g["loop_margins"] = {ax: {"full": _margins_json(r.margins.full),
-                                  "reduced": _margins_json(r.margins.reduced)}
-                             for ax, r in results.items()}
+        g["design_margins_continuous"] = {ax: {"full": _margins_json(r.margins.full),
+                                               "reduced": _margins_json(r.margins.reduced)}
+                                          for ax, r in results.items()}
     else:
-        g["loop_margins"] = {ax: {"full": _margins_json(r.margins)} for ax, r in results.items()}
+        g["design_margins_continuous"] = {ax: {"full": _margins_json(r.margins)}
+                                          for ax, r in results.items()}
     return g

@@ -48,7 +48,7 @@ Gain rules (``[controller.<method>] rule``), all in effective units
     ``v = Kt r - Kp y + Ki int (r - y)``: reference tracking
     ``alpha_c/(s + alpha_c)``, poles ``-alpha_c``, ``-alpha_i`` (motulator's
     synchronous-machine controller takes ``R = 0``). The factor ``1.5 Ts``
-    is recorded in ``gains`` (``delay_compensation_time``) for the firmware.
+    is recorded in the artifact's ``decoupling.delay_compensation_time`` for the firmware.
     NOT reproduced: the complex cross-axis integral term
     ``j omega Kt (r - y)``, the flux-map state, the rotation itself (a
     nonlinear step outside the linear per-axis law) and motulator's direct
@@ -69,7 +69,7 @@ Structures (two-input laws ``[i_ref, i_meas] -> v``):
   with cancellation gains the reference response is
   ``1/((1 + s L/R)(1 + s/wc))``, slow: a warning says so).
 * ``pi_lag``: ``v = (Kp + Ki/s)(r - y_f)``, ``y_f = y/(1 + T_d s)``. The
-  gain rules ignore the lag; ``gains["poles"]`` gives the resulting poles.
+  gain rules ignore the lag; ``design_parameters["poles"]`` gives the resulting poles.
 """
 
 from __future__ import annotations
@@ -137,7 +137,7 @@ class PiCfg:
         Reference feedforward gains (V/A) of a two-degree-of-freedom PI
         (``complex_vector`` with ``integral_bandwidth``); ``None``: ``Kt = Kp``.
     details : dict
-        Rule-specific values kept in the artifact's gains (bandwidth,
+        Rule-specific values kept in the artifact's design_parameters (bandwidth,
         T_sigma, normalisation, ...).
     """
 
@@ -455,9 +455,6 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
                 f"a phase margin of about {_defaults.TARGET_PM_DEG:g} deg (leave bandwidth "
                 "out for it)"]
         if rule == "complex_vector":
-            details["delay_compensation_time"] = 1.5 * drive.sample_time
-            details["delay_compensation"] = (
-                "rotate v_dq by exp(j * delay_compensation_time * omega_e)")
             if t.has("integral_bandwidth"):
                 if method != "pi":
                     raise SpecError(t.key("integral_bandwidth"), 'method = "pi" for a 2DOF PI',
@@ -574,6 +571,10 @@ def design(spec) -> ControllerArtifact:
     axes = design_pi(cfg.Kp, cfg.Ki, Ts, structure=cfg.structure,
                      lag_time_constant=cfg.lag_time_constant, method=cfg.discretisation,
                      Kt=cfg.Kt)
-    dec = decoupling_from_motor(spec.motor, cross=cfg.decoupling, emf=cfg.decoupling)
+    # motulator's complex-vector PI rotates v_dq by 1.5 Ts w_e (one period of
+    # computation delay plus half a period of PWM/ZOH delay): executed, so typed
+    t_comp = 1.5 * Ts if cfg.rule == "complex_vector" else 0.0
+    dec = decoupling_from_motor(spec.motor, cross=cfg.decoupling, emf=cfg.decoupling,
+                                delay_compensation_time=t_comp)
     equations = _EQUATIONS[cfg.structure] + [_RULE_EQUATIONS[cfg.rule]]
     return make_artifact(spec, axes, dec, _gains(cfg, Ts, spec.motor), equations)

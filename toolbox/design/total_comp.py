@@ -83,7 +83,7 @@ class TotalCompCfg:
     discretisation : str
         How the continuous law is discretised (``tustin`` default).
     details : dict
-        How the gains were obtained (kept in the artifact's gains).
+        How the gains were obtained (kept in the artifact's design_parameters).
     """
 
     method: str

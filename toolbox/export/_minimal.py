@@ -99,6 +99,13 @@ def _equivalent(orig: tuple, new: tuple) -> bool:
     return bool(np.all(np.abs(h1 - h0) <= EQUIV_RTOL * (np.abs(h0) + 1e-3 * scale) + 1e-300))
 
 
+#: Largest entry magnitude handed to the cleaning (float32 would overflow long before).
+CLEANABLE_MAX = 1e30
+#: Largest ||A|| of a discrete law worth realising minimally: a sound law's
+#: (balanced) state matrix has eigenvalues in the unit disc and entries of order 1.
+A_NORM_MAX = 1e6
+
+
 def _zero_small(M: np.ndarray) -> tuple[np.ndarray, int]:
     """M with entries below ROUNDOFF_REL x its 2-norm set to zero."""
     if M.size == 0:
@@ -119,22 +126,32 @@ def _balance(A, Bx, C):
 
 
 def _minreal(A, Bx, C, Dx, ts: float):
-    """control.minreal at a tolerance relative to the system norm, or None."""
+    """control.minreal on the law with unit-norm input and output maps, or None.
+
+    Controllability and observability do not depend on the scale of B and C
+    (nor on D), so they are normalised before SLICOT's TB01PD sees them: its
+    rank decisions then use a tolerance relative to A alone, and a tampered
+    law with huge entries cannot reach it (TB01PD aborts the process on
+    overflowing input instead of raising).
+    """
     import control as ct
     n = A.shape[0]
-    if n == 0:
+    norm_a = float(np.linalg.norm(A, 2)) if n else 0.0
+    if n == 0 or not np.isfinite(norm_a) or norm_a > A_NORM_MAX:
         return None
-    norm = float(np.linalg.norm(np.block([[A, Bx], [C, Dx]]), 2))
+    b_scale = float(np.linalg.norm(Bx, 2)) or 1.0
+    c_scale = float(np.linalg.norm(C, 2)) or 1.0
     with np.errstate(all="ignore"):
         try:
-            red = ct.minreal(ct.ss(A, Bx, C, Dx, ts), tol=ROUNDOFF_REL * norm, verbose=False)
+            red = ct.minreal(ct.ss(A, Bx / b_scale, C / c_scale, np.zeros_like(Dx), ts),
+                             tol=ROUNDOFF_REL * max(norm_a, 1.0), verbose=False)
         except Exception:        # slycot/numpy failures: keep the full law
             return None
     if red.nstates >= n:
         return None
     return (np.asarray(red.A, float).reshape(red.nstates, red.nstates),
-            np.asarray(red.B, float).reshape(red.nstates, Bx.shape[1]),
-            np.asarray(red.C, float).reshape(1, red.nstates), Dx)
+            np.asarray(red.B, float).reshape(red.nstates, Bx.shape[1]) * b_scale,
+            np.asarray(red.C, float).reshape(1, red.nstates) * c_scale, Dx)
 
 
 def minimal_law(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
@@ -166,7 +183,9 @@ def minimal_law(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     Bx = np.column_stack([B, aw])
     Dx = np.column_stack([D, [[0.0]]])
     original = MinimalLaw(A, B, C, D, aw)
-    if n == 0 or not all(np.all(np.isfinite(m)) for m in (A, Bx, C, D)):
+    if n == 0 or not all(np.all(np.abs(m) < CLEANABLE_MAX) for m in (A, Bx, C, D)):
+        # non-finite or absurd entries (tampered file): SLICOT's TB01PD is not
+        # defined on them (it aborts the process); the range check refuses the law
         return original
     Ab, Bb, Cb = _balance(A, Bx, C)
     Ac, z1 = _zero_small(Ab)

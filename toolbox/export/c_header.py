@@ -705,21 +705,14 @@ class _Text:
 
 
 def _pi_gains(artifact, ax: str) -> tuple[float, float] | None:
-    """Parallel-form (Kp V/A, Ki V/(A s)) of a PI-type axis, or None."""
-    g = artifact.gains or {}
+    """Parallel-form (Kp V/A, Ki V/(A s)) of a PI-type axis, or None.
 
-    def pick(name):
-        v = g.get(name)
-        if isinstance(v, dict):
-            v = v.get(ax)
-        elif isinstance(v, (list, tuple)) and len(v) == 2:
-            v = v[AXES.index(ax)]
-        return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
-
-    kp = pick("Kp") if pick("Kp") is not None else pick(f"Kp_{ax}")
-    ki = pick("Ki") if pick("Ki") is not None else pick(f"Ki_{ax}")
-    if kp is not None and ki is not None:
-        return kp, ki
+    Read from the executed law, never from informational design parameters:
+    the continuous error controller ``Kp + Ki/s`` (one state, an integrator)
+    when there is one, else the discrete one with the discretisation's
+    feedthrough correction. Laws of another structure (a lag, 2 states)
+    export no KP/KI defines; the law below them is what runs anyway.
+    """
     axc = artifact.axes[ax]
     if axc.continuous is not None and axc.continuous.order == 1 \
             and abs(axc.continuous.A[0, 0]) < 1e-12:
@@ -734,23 +727,12 @@ def _pi_gains(artifact, ax: str) -> tuple[float, float] | None:
 
 
 def _delay_comp_time(artifact) -> float | None:
-    """Delay-compensation time (s) the design assumes, or None.
+    """Delay-compensation time (s) the law assumes, or None.
 
-    ``gains["delay_compensation_time"]`` (s) when present; else
-    ``gains["delay_compensation"]``: a number is a multiple of Ts, any other
-    truthy value means the usual 1.5 Ts (one period of computation delay plus
-    half a period of PWM/ZOH delay).
+    The typed ``decoupling.delay_compensation_time`` (0 means none).
     """
-    g = artifact.gains or {}
-    v = g.get("delay_compensation_time")
-    if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0:
-        return float(v)
-    dc = g.get("delay_compensation")
-    if dc is None or dc is False or dc == 0:
-        return None
-    if isinstance(dc, (int, float)) and not isinstance(dc, bool):
-        return float(dc) * artifact.sample_time
-    return 1.5 * artifact.sample_time
+    t_comp = artifact.decoupling.delay_compensation_time
+    return float(t_comp) if t_comp > 0 else None
 
 
 def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["axis_coefficients", "zoh_first_order", "dq_matrices"]
+__all__ = ["axis_coefficients", "zoh_first_order", "dq_matrices", "steady_state_voltage"]
 
 
 def axis_coefficients(R, L):
@@ -91,3 +91,26 @@ def dq_matrices(R, Ld, Lq, omega) -> tuple[np.ndarray, np.ndarray]:
     B[:, 0, 0] = 1 / Ld
     B[:, 1, 1] = 1 / Lq
     return A, B
+
+
+def steady_state_voltage(R, Ld, Lq, flux, omega, i_d, i_q):
+    """dq voltage that holds constant currents at a constant speed.
+
+    The model with ``di/dt = 0``: ``v_d = R i_d - omega L_q i_q``,
+    ``v_q = R i_q + omega (L_d i_d + psi)`` (paper 003 eq (3)-(4)).
+
+    Parameters
+    ----------
+    R, Ld, Lq, flux : float or array_like
+        Resistance (ohm), inductances (H), magnet flux linkage (Wb).
+    omega : float or array_like
+        Electrical speed (rad/s).
+    i_d, i_q : float or array_like
+        The held currents (A).
+
+    Returns
+    -------
+    v_d, v_q : float or ndarray
+        Voltages (V); everything broadcasts.
+    """
+    return R * i_d - omega * Lq * i_q, R * i_q + omega * (Ld * i_d + flux)

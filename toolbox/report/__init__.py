@@ -105,7 +105,7 @@ class ReportData:
     spec : toolbox.spec.Spec
         The validated spec (motor, drive, requirements).
     artifact : toolbox.artifact.ControllerArtifact
-        The designed controller (axes, gains, provenance).
+        The designed controller (axes, typed fields, design parameters, provenance).
     analysis : dict or None
         ``analysis.json``: ``margins.discrete`` (the MARGINS table, margin
         markers and step figures), ``responses`` (every loop figure, see
@@ -405,34 +405,50 @@ def _equations(spec, given: list | None = None) -> list[dict]:
     return out
 
 
+#: Non-executed controllers an axis may carry: attribute -> label in the table.
+_NOT_EXECUTED = (("full_order", "full order, not executed"),
+                 ("reduced", "reduced, not executed"))
+
+
 def _controller(artifact) -> dict:
     axes = []
     for name in ("d", "q"):
         ax = artifact.axes[name]
         var = "s" if ax.continuous is not None else "z"
-        row = {"axis": name, "order": ax.discrete.order, "zpk": f"K({var}) = " + zpk_text(ax.zpk, var),
-               "discretisation": ax.discrete.method or "",
+        # the executed law's order and views (discrete is derived from law)
+        row = {"axis": name, "order": ax.order, "zpk": f"K({var}) = " + zpk_text(ax.zpk, var),
+               "discretisation": ax.law.method or "",
                "continuous": "yes" if ax.continuous is not None else "no (discrete design)",
-               "reduced": None, "reduced_order": None}
-        if ax.reduced is not None:
-            rvar = "s" if ax.reduced.continuous is not None else "z"
-            row["reduced"] = f"K({rvar}) = " + zpk_text(ax.reduced.zpk, rvar)
-            row["reduced_order"] = ax.reduced.discrete.order
+               "alt": None, "alt_label": None, "alt_order": None}
+        for attr, label in _NOT_EXECUTED:
+            other = getattr(ax, attr)
+            if other is not None:
+                ovar = "s" if other.continuous is not None else "z"
+                row.update(alt=f"K({ovar}) = " + zpk_text(other.zpk, ovar), alt_label=label,
+                           alt_order=other.order)
         axes.append(row)
-    gains: list = []
-    _flatten("", artifact.gains, gains)
+    params: list = []
+    _flatten("", artifact.design_parameters, params)
     dec = artifact.decoupling
     decoupling = [("Cross-coupling compensation", "yes" if dec.cross else "no", ""),
                   ("Back-EMF compensation", "yes" if dec.emf else "no", ""),
                   ("R_c (controller model)", fmt(dec.R_c), "ohm"),
                   ("Ld_c", fmt(dec.Ld_c), "H"), ("Lq_c", fmt(dec.Lq_c), "H"),
                   ("flux_c", fmt(dec.flux_c), "Wb"), ("pole_pairs", str(dec.pole_pairs), "1")]
+    if dec.delay_compensation_time:
+        decoupling.append(("Delay compensation (v_dq rotated by t w_e)",
+                           fmt(dec.delay_compensation_time), "s"))
+    if artifact.fcs is not None:
+        f = artifact.fcs
+        decoupling += [("Criterion (23) weight alpha (i_q error)", fmt(f.alpha), "1"),
+                       ("Criterion (23) weight beta (i_d error)", fmt(f.beta), "1"),
+                       ("Criterion (23) weight gamma (commutations)", fmt(f.gamma), "1")]
     prov = artifact.provenance or {}
     return {"method": artifact.method,
             "method_name": METHOD_NAMES.get(artifact.method, artifact.method),
             "sample_time": fmt(artifact.sample_time), "delay": artifact.delay_samples,
             "equations": [str(e) for e in prov.get("equations", [])],
-            "gains": gains, "axes": axes, "decoupling": decoupling}
+            "design_parameters": params, "axes": axes, "decoupling": decoupling}
 
 
 def _scenario_traces(data: ReportData) -> list[dict | None]:

@@ -16,7 +16,13 @@ did. Every scenario now gets these checks, derived from the spec alone:
     at the centre of its ripple) and ``r_hex Ts / (2 L)`` for the predictive
     switching inverter, which holds one of the eight voltage vectors (length
     ``r_hex``) for a whole period: the current moves by up to ``r_hex Ts / L``
-    per period and the best vector can still leave half of that.
+    per period and the best vector can still leave half of that. With a
+    switching penalty ``gamma`` in criterion (23) of paper 002 the law keeps
+    the present vector while ``w e^2 <= gamma n`` (``w`` the weight of the
+    axis' squared error, ``n`` the commutations the better vector costs, at
+    most 3): it tolerates, by design, a current error up to
+    ``sqrt(3 gamma / w)`` before it switches, and :func:`fcs_ripple` adds that
+    dead band to the per-period move.
 ``default.bounded_current``
     Nothing diverges: the peak current magnitude ``|i_dq|`` (with traces) or
     the RMS tracking error ``sqrt(mse_id + mse_iq)`` (without) stays under
@@ -48,7 +54,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CURRENT_FACTOR", "SPEED_FACTOR", "REACH_BAND", "SENSOR_ACCURACY", "LinearFigures",
+from ..plant import steady_state_voltage
+
+__all__ = ["fcs_ripple", "CURRENT_FACTOR", "SPEED_FACTOR", "REACH_BAND", "SENSOR_ACCURACY",
+           "LinearFigures",
            "StepFacts", "step_facts", "reach_time_bound", "default_checks", "finalise_check",
            "STEP_METRICS"]
 
@@ -201,8 +210,8 @@ def reach_time_bound(facts: StepFacts, scenario, plant, v_max: float, delay_samp
         ``t_min``, ``t_linear``, ``t_delay`` (s) for the record.
     """
     w_e = plant.pole_pairs * _speed_extent(scenario, final_speed)
-    vd = plant.R * facts.id_f - w_e * plant.Lq * facts.iq_f
-    vq = plant.R * facts.iq_f + w_e * (plant.Ld * facts.id_f + plant.flux)
+    vd, vq = steady_state_voltage(plant.R, plant.Ld, plant.Lq, plant.flux, w_e,
+                                  facts.id_f, facts.iq_f)
     v_own, v_other, L = (vq, vd, plant.Lq) if facts.axis == "q" else (vd, vq, plant.Ld)
     headroom = math.sqrt(max(v_max ** 2 - v_other ** 2, 0.0)) - abs(v_own)
     t_delay = (delay_samples + 1) * sample_time
@@ -313,9 +322,10 @@ def default_checks(scenario, metrics: dict, result, *, plant, motor, v_max: floa
         ``{"d": LinearFigures, "q": LinearFigures}`` of the executed loop.
     flux_c : float
         Controller model flux (Wb).
-    ripple : float
-        Current ripple the inverter leaves at the sampling instants (A);
-        see the module docstring.
+    ripple : float or dict
+        Current ripple the inverter leaves at the sampling instants (A), one
+        value or one per axis (``{"d": .., "q": ..}``); see the module
+        docstring and :func:`fcs_ripple`.
 
     Returns
     -------
@@ -346,9 +356,44 @@ def default_checks(scenario, metrics: dict, result, *, plant, motor, v_max: floa
     return out
 
 
+def fcs_ripple(r_hex: float, sample_time: float, L: float, weight: float,
+               gamma: float) -> float:
+    """Current error the predictive switching law leaves by design (A).
+
+    Half the per-period move of one held vector, ``r_hex Ts / (2 L)``, plus
+    the dead band of the switching penalty of criterion (23) (paper 002):
+    a switch costing ``n <= 3`` commutations is taken only once it lowers
+    ``w e^2`` by more than ``gamma n``, so errors up to ``sqrt(3 gamma / w)``
+    may persist. With ``w = 0`` the axis is not regulated (infinite).
+
+    Parameters
+    ----------
+    r_hex : float
+        Inscribed-hexagon voltage radius (V).
+    sample_time : float
+        Period (s).
+    L : float
+        Smallest inductance of the plant (H).
+    weight : float
+        Weight of the axis' squared current error in criterion (23) (1/A^2).
+    gamma : float
+        Switching penalty of criterion (23).
+
+    Examples
+    --------
+    >>> round(fcs_ripple(8.0, 1e-4, 1e-3, 1.0, 35.0), 3)
+    10.647
+    """
+    if weight <= 0:
+        return math.inf
+    return r_hex * sample_time / (2.0 * L) + math.sqrt(3.0 * gamma / weight)
+
+
 def _reach(facts, scenario, metrics, result, traces, plant, v_max, delay_samples,
            sample_time, linear, i_scale, ripple) -> dict:
     delta = facts.yf - facts.y0
+    if isinstance(ripple, dict):
+        ripple = ripple[facts.axis]
     floor = max(SENSOR_ACCURACY * i_scale, 2.0 * scenario.current_quantum,
                 3.0 * scenario.current_noise, ripple)
     tol = max(REACH_BAND * abs(delta), floor)

@@ -17,6 +17,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from toolbox.artifact import FcsWeights  # typed in the artifact; re-exported here
 from toolbox.errors import SpecError
 from toolbox.spec import inverter_radii
 
@@ -32,6 +33,11 @@ __all__ = ["PlantParams", "DriveParams", "AxisLaw", "SpeedLoop", "FcsWeights",
 @dataclass(frozen=True)
 class PlantParams:
     """True motor parameters of the simulated plant (SI).
+
+    A view of the spec's :class:`toolbox.spec.Motor` (the one parameter type,
+    as motulator keeps one): build it with :meth:`from_motor`, which is the
+    only place the motor's parameters and its dq convention (torque factor)
+    are converted for the simulator.
 
     Parameters
     ----------
@@ -61,6 +67,19 @@ class PlantParams:
     friction: float = 0.0
     torque_factor: float = 1.5
 
+    @classmethod
+    def from_motor(cls, motor) -> "PlantParams":
+        """The simulated plant of a motor (nominal values).
+
+        Parameters
+        ----------
+        motor : toolbox.spec.Motor
+            Validated motor; its ``convention`` sets ``torque_factor``.
+        """
+        return cls(R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
+                   pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
+                   torque_factor=motor.torque_factor)
+
     def with_overrides(self, values: Mapping[str, float] | None = None,
                        scale: Mapping[str, float] | None = None) -> "PlantParams":
         """Plant with some parameters replaced (``values``) then multiplied (``scale``)."""
@@ -71,9 +90,10 @@ class PlantParams:
         return replace(self, **kw)
 
     def as_array(self) -> np.ndarray:
-        """[R, Ld, Lq, flux, p, J, friction, torque_factor] for the kernel."""
-        return np.array([self.R, self.Ld, self.Lq, self.flux, self.pole_pairs, self.J,
-                         self.friction, self.torque_factor], dtype=float)
+        """The kernel's plant array (slots ``_kernel.LAYOUTS["P"]``)."""
+        return _packed("P", R=self.R, Ld=self.Ld, Lq=self.Lq, flux=self.flux,
+                       pole_pairs=self.pole_pairs, J=self.J, friction=self.friction,
+                       torque_factor=self.torque_factor)
 
 
 @dataclass(frozen=True)
@@ -188,15 +208,6 @@ class SpeedLoop:
 
 
 @dataclass(frozen=True)
-class FcsWeights:
-    """Weights of paper 002 criterion (23): alpha (i_q), beta (i_d), gamma (commutations)."""
-
-    alpha: float = 1.0
-    beta: float = 1.0
-    gamma: float = 0.0
-
-
-@dataclass(frozen=True)
 class ControlLaw:
     """The whole current-control law in plain arrays.
 
@@ -298,6 +309,21 @@ def discrete_pi(kp: float, ki: float, sample_time: float, antiwindup: bool = Tru
 
 
 # ----------------------------------------------------------------- packing
+def _packed(array: str, **values: float) -> np.ndarray:
+    """A kernel parameter array filled by slot name (``_kernel.LAYOUTS[array]``).
+
+    Every slot must be given: a slot added to the layout and forgotten here
+    is a bug caught at once, not a silent zero.
+    """
+    names = _kernel.LAYOUTS[array]
+    missing = set(names) - set(values)
+    unknown = set(values) - set(names)
+    if missing or unknown:  # internal inconsistency, not a user error
+        raise ValueError(f"kernel array {array}: missing slots {sorted(missing)}, "
+                         f"unknown slots {sorted(unknown)}")
+    return np.array([values[n] for n in names], dtype=float)
+
+
 def _pack_law(law: ControlLaw):
     axes = (law.d, law.q)
     n = max(1, max(np.atleast_2d(np.asarray(ax.A, float)).shape[0]
@@ -324,8 +350,9 @@ def _pack_law(law: ControlLaw):
         if not np.all(np.isfinite(arr)):
             raise SpecError("law", "finite controller matrices", "NaN or inf")
     f = law.fcs or FcsWeights()
-    LP = np.array([law.R, law.Ld, law.Lq, law.flux, float(law.cross), float(law.emf),
-                   f.alpha, f.beta, f.gamma])
+    LP = _packed("LP", R_c=law.R, Ld_c=law.Ld, Lq_c=law.Lq, flux_c=law.flux,
+                 cross=float(law.cross), emf=float(law.emf), alpha=f.alpha, beta=f.beta,
+                 gamma=f.gamma)
     return A, B, C, D, W, LP
 
 
@@ -354,63 +381,52 @@ def _pack(law: ControlLaw, plant: PlantParams, scenario: Scenario, drive: DriveP
     if inv_code == 1 and vl == 0:
         vl = 2  # SVM cannot exceed its hexagon: let the anti-windup know it
     r_hex, v_max = drive.radii(plant.torque_factor)
-    DP = np.array([Ts, drive.delay_samples, vl, v_max, r_hex, inv_code], float)
+    DP = _packed("DP", Ts=Ts, delay=drive.delay_samples, vlim=vl, v_max=v_max, r_hex=r_hex,
+                 inverter=inv_code)
 
     kind = scenario.kind
     sl = law.speed_loop
     if kind in ("speed_step", "load_step") and sl is None:
         raise SpecError("scenario.kind", "a law with a speed loop for kind "
                         f'"{kind}"', kind)
-    SP = np.zeros(6)
     if sl is not None and kind in ("speed_step", "load_step"):
         dec = sl.sample_time / Ts
         if abs(dec - round(dec)) > 1e-6 or round(dec) < 1:
             raise SpecError("law.speed_loop.sample_time", "an integer multiple of the "
                             f"current sample time ({Ts} s)", sl.sample_time)
-        SP[:] = [1.0, sl.kp, sl.ki, sl.kd, round(dec), sl.iq_limit]
+        SP = _packed("SP", enabled=1.0, kp=sl.kp, ki=sl.ki, kd=sl.kd, decim=round(dec),
+                     iq_limit=sl.iq_limit)
+    else:
+        SP = np.zeros(len(_kernel.LAYOUTS["SP"]))  # enabled = 0: no speed loop
 
     tf = plant.torque_factor
     iq1 = scenario.iq_ref
     if scenario.torque_ref is not None:
         iq1 = scenario.torque_ref / (tf * plant.pole_pairs * law.flux)
-    ix = _kernel.pack_indices()
-    SC = np.zeros(_kernel.N_SC)
-    SC[ix["duration"]] = scenario.duration
-    SC[ix["mech"]] = 1.0 if kind in ("current_step", "constant_acceleration") else 0.0
-    SC[ix["omega0"]] = scenario.initial_speed
-    SC[ix["acc"]] = scenario.acceleration
-    SC[ix["id0"]] = scenario.id_ref0
-    SC[ix["iq0"]] = scenario.iq_ref0
-    SC[ix["id1"]] = scenario.id_ref
-    SC[ix["iq1"]] = iq1
-    SC[ix["t_step"]] = scenario.step_time
-    if kind == "load_step":
-        SC[ix["speed0"]] = SC[ix["speed1"]] = scenario.speed_ref
-    else:
-        SC[ix["speed0"]] = scenario.speed_ref0
-        SC[ix["speed1"]] = scenario.speed_ref
-    SC[ix["load"]] = scenario.load_torque
-    SC[ix["load_time"]] = scenario.load_time
-    SC[ix["iq_amp"]] = scenario.torque_amplitude / (tf * plant.pole_pairs * law.flux)
-    SC[ix["f_sin"]] = scenario.torque_frequency
-    SC[ix["ref_mode"]] = {"sinusoidal_torque": 1, "speed_step": 2, "load_step": 2}.get(kind, 0)
     if kind in ("speed_step", "load_step"):
         sig = 2
     elif iq1 == scenario.iq_ref0 and scenario.id_ref != scenario.id_ref0:
         sig = 1
     else:
         sig = 0
-    SC[ix["signal"]] = sig
-    SC[ix["gain"]] = scenario.speed_gain_error
-    SC[ix["offset"]] = scenario.speed_offset
-    SC[ix["speed_noise"]] = scenario.speed_noise
-    SC[ix["noise_kind"]] = 0.0 if scenario.noise == "uniform" else 1.0
-    SC[ix["current_noise"]] = scenario.current_noise
-    SC[ix["current_quantum"]] = scenario.current_quantum
-    SC[ix["seed"]] = scenario.seed
-    SC[ix["h"]] = scenario.plant_step
-    dec = 1 if scenario.trace_step is None else max(1, round(scenario.trace_step / Ts))
-    SC[ix["trace_decim"]] = dec
+    speed0 = scenario.speed_ref if kind == "load_step" else scenario.speed_ref0
+    SC = _packed(
+        "SC", duration=scenario.duration,
+        mech=1.0 if kind in ("current_step", "constant_acceleration") else 0.0,
+        omega0=scenario.initial_speed, acc=scenario.acceleration,
+        id0=scenario.id_ref0, iq0=scenario.iq_ref0, id1=scenario.id_ref, iq1=iq1,
+        t_step=scenario.step_time, speed0=speed0, speed1=scenario.speed_ref,
+        load=scenario.load_torque, load_time=scenario.load_time,
+        iq_amp=scenario.torque_amplitude / (tf * plant.pole_pairs * law.flux),
+        f_sin=scenario.torque_frequency,
+        ref_mode={"sinusoidal_torque": 1, "speed_step": 2, "load_step": 2}.get(kind, 0),
+        signal=sig, gain=scenario.speed_gain_error, offset=scenario.speed_offset,
+        speed_noise=scenario.speed_noise,
+        noise_kind=0.0 if scenario.noise == "uniform" else 1.0,
+        current_noise=scenario.current_noise, current_quantum=scenario.current_quantum,
+        seed=scenario.seed, h=scenario.plant_step,
+        trace_decim=1 if scenario.trace_step is None
+        else max(1, round(scenario.trace_step / Ts)))
     return DP, SP, SC
 
 
@@ -495,7 +511,7 @@ def simulate_batch(law: ControlLaw,
         ``metrics[name]``: array of length N.
     """
     if isinstance(plants, Mapping):
-        names = ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor")
+        names = _kernel.LAYOUTS["P"]
         unknown = set(plants) - set(names)
         if unknown:
             raise SpecError("plants", "parameter arrays named " + ", ".join(names),

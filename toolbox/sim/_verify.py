@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 
-from ._checks import LinearFigures, default_checks, finalise_check
+from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check
 from ._scenario import Scenario
 from ._simulate import (AxisLaw, ControlLaw, DriveParams, FcsWeights, PlantParams,
                         SimResult, SpeedLoop, simulate)
@@ -25,16 +25,14 @@ VERIFY_SCHEMA = "cct.verify/1"
 
 
 def plant_params(motor) -> PlantParams:
-    """The simulated plant of a motor (nominal values).
+    """The simulated plant of a motor (nominal values): :meth:`PlantParams.from_motor`.
 
     Parameters
     ----------
     motor : Motor
         Validated motor.
     """
-    return PlantParams(R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
-                       pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
-                       torque_factor=motor.torque_factor)
+    return PlantParams.from_motor(motor)
 
 
 def drive_params(drive, inverter: str = "average") -> DriveParams:
@@ -52,18 +50,17 @@ def drive_params(drive, inverter: str = "average") -> DriveParams:
                        inverter=inverter)
 
 
-def _axis_law(axis, reduced: bool) -> AxisLaw:
-    chosen = axis.reduced if reduced and axis.reduced is not None else axis
-    aw = None if chosen.antiwindup is None else chosen.antiwindup.reshape(-1)
-    law = chosen.law
+def _axis_law(axis) -> AxisLaw:
+    aw = None if axis.antiwindup is None else axis.antiwindup.reshape(-1)
+    law = axis.law
     return AxisLaw(law.A, law.B, law.C, law.D, aw)
 
 
 def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
     """The simulator's :class:`ControlLaw` executing ``artifact``.
 
-    The executed law of each axis is the artifact's ``law`` (or its reduced
-    twin when the artifact's gains say ``executed = "reduced"``).
+    The executed law of each axis is the artifact's ``axes.<axis>.law``; the
+    predictive law of ``fcs_mpc`` reads the typed ``artifact.fcs`` weights.
 
     Parameters
     ----------
@@ -72,18 +69,11 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
     speed_loop : SpeedLoop, optional
         Outer speed loop of the scenario.
     """
-    reduced = artifact.gains.get("executed") == "reduced"
     dec = artifact.decoupling
-    fcs = None
-    if artifact.method == "fcs_mpc":
-        g = artifact.gains
-        fcs = FcsWeights(alpha=float(g["alpha"]), beta=float(g["beta"]),
-                         gamma=float(g["gamma"]))
-    return ControlLaw(d=_axis_law(artifact.axes["d"], reduced),
-                      q=_axis_law(artifact.axes["q"], reduced),
+    return ControlLaw(d=_axis_law(artifact.axes["d"]), q=_axis_law(artifact.axes["q"]),
                       sample_time=artifact.sample_time, R=dec.R_c, Ld=dec.Ld_c,
                       Lq=dec.Lq_c, flux=dec.flux_c, cross=int(dec.cross), emf=int(dec.emf),
-                      speed_loop=speed_loop, fcs=fcs)
+                      speed_loop=speed_loop, fcs=artifact.fcs)
 
 
 def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
@@ -235,10 +225,10 @@ def _finite_or_none(v: float) -> float | None:
 
 def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict, list, dict]:
     """Margin checks, stability, linear figures and warnings from the executed law."""
-    from ..analysis.executed import (INFORMATIONAL_METHODS, loop_stability,
-                                     margin_disagreements, recompute_margins)
+    from ..analysis import compute_margins
+    from ..analysis.executed import INFORMATIONAL_METHODS, loop_stability, margin_disagreements
 
-    margins = recompute_margins(artifact, spec.motor)
+    margins = compute_margins(artifact, spec.motor)
     warnings = margin_disagreements(artifact.margins, margins, file)
     stability = loop_stability(artifact, spec.motor)
     fresh = {ax: m.to_json(extras=False) for ax, m in margins.items()}
@@ -319,9 +309,12 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
                   if c["quantity"] in metrics}
         true_plant = plant.with_overrides(sc.plant_values, sc.plant_scale)
         r_hex, v_max = drive.radii(plant.torque_factor)
-        # one vector held for a whole period (see toolbox.sim._checks)
-        ripple = (r_hex * drive.sample_time / (2.0 * min(true_plant.Ld, true_plant.Lq))
-                  if drive.inverter == "fcs_mpc" else 0.0)
+        # one vector held for a whole period, and the switching penalty's dead band
+        ripple = 0.0
+        if drive.inverter == "fcs_mpc" and artifact.fcs is not None:
+            fcs, L_min = artifact.fcs, min(true_plant.Ld, true_plant.Lq)
+            ripple = {ax: fcs_ripple(r_hex, drive.sample_time, L_min, w, fcs.gamma)
+                      for ax, w in (("q", fcs.alpha), ("d", fcs.beta))}
         checks.update(default_checks(
             sc, metrics, res, plant=true_plant, motor=spec.motor, v_max=v_max,
             delay_samples=spec.drive.delay_samples, sample_time=spec.drive.sample_time,

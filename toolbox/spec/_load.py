@@ -15,6 +15,8 @@ from typing import Any, Callable, Mapping
 from .._io import check_data_depth, check_text_depth, read_limited
 from ..errors import SpecError
 from ._catalog import CATALOG
+from ._datasheet import (catalog_kept, relocate, reported_keys, resolve_drive,
+                         resolve_motor)
 from ._bounds import (check_drive, check_motor, check_motor_drive, check_scenario_count,
                       check_work)
 from ._fields import Collector, Table, check_keys
@@ -26,9 +28,11 @@ __all__ = ["load_spec", "spec_from_dict", "motor_from_dict", "drive_from_dict"]
 
 TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario")
 MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
-              "convention", "rated_current", "max_current", "rated_speed")
+              "convention", "rated_current", "max_current", "rated_speed",
+              # datasheet forms (toolbox/spec/_datasheet.py)
+              "R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms")
 DRIVE_KEYS = ("vdc", "sample_time", "delay_samples", "switching_frequency",
-              "voltage_limit", "max_speed")
+              "voltage_limit", "max_speed", "sample_frequency")
 
 
 def load_spec(path: str | Path) -> Spec:
@@ -98,10 +102,13 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     with errors.check():
         title = top.string("title", "")
     motor = motor_raw = drive = controller = None
+    conversions: list = []
     with errors.check():
-        motor, motor_raw = _motor(top.raw("motor"))
+        motor, motor_raw, motor_log = _motor_logged(top.raw("motor"))
+        conversions += motor_log
     with errors.check():
-        drive = _drive(top.raw("drive"))
+        drive, drive_log = _drive_logged(top.raw("drive"))
+        conversions += drive_log
     if motor is not None:
         check_motor(motor, errors)
     if drive is not None:
@@ -119,31 +126,66 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
         with errors.check():
             scenarios = _scenarios(top.raw("scenario", []), drive, controller.method)
         check_work(scenarios, drive.sample_time, errors)
+    # a range error on a derived value names the key the user wrote (R_ll, not R)
+    errors.errors = [relocate(e, conversions) for e in errors.errors]
     errors.raise_if_any()
     raw = copy.deepcopy(dict(data))
     raw["motor"] = motor_raw
     return Spec(title=title, motor=motor, drive=drive, controller=controller,
-                requirements=requirements, scenarios=scenarios, raw=raw, source=file)
+                requirements=requirements, scenarios=scenarios, raw=raw, source=file,
+                conversions=tuple(conversions))
 
 
 def _collect(errors: Collector, read: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
     """``read(*args, **kwargs)``, or None with its SpecError recorded."""
     with errors.check():
-        return read(*args, **kwargs)
+        try:
+            return read(*args, **kwargs)
+        except _AlreadyReported:  # its message is in ``errors`` already
+            return None
     return None
 
 
+class _Unreported(Table):
+    """A table whose already-reported keys read as None (one message per key:
+    a failed unit conversion is not also "expected a number")."""
+
+    def __init__(self, data: Any, prefix: str, reported: set[str]) -> None:
+        super().__init__(data, prefix)
+        self.reported = reported
+
+    def _get(self, name: str, default: Any, expected: str) -> Any:
+        if name in self.reported:
+            raise _AlreadyReported()
+        return super()._get(name, default, expected)
+
+
+class _AlreadyReported(SpecError):
+    def __init__(self) -> None:
+        super().__init__("", "reported already")
+
+
 def _motor(value: Any) -> tuple[Motor, dict]:
+    motor, raw, _ = _motor_logged(value)
+    return motor, raw
+
+
+def _motor_logged(value: Any) -> tuple[Motor, dict, list]:
+    """The motor, the resolved table as given (catalog applied) and the
+    conversion log of the datasheet keys and unit strings."""
     if value is None:
         raise SpecError("motor", "a [motor] table (missing)")
     t = Table(value, "motor", MOTOR_KEYS)
-    merged: dict[str, Any] = {}
+    catalog: dict[str, Any] = {}
     if t.has("catalog"):
         name = t.string("catalog", choices=sorted(CATALOG))
-        merged.update({k: v for k, v in CATALOG[name].items() if v is not None})
-    merged.update(t.data)
-    t = Table(merged, "motor")
+        catalog = {k: v for k, v in CATALOG[name].items() if v is not None}
     errors = Collector()
+    # datasheet keys -> model keys; the raw table keeps what was written, so
+    # reloading it (controller.json's spec) converts the same way again
+    merged, log = resolve_motor(t.data, catalog, errors)
+    raw = {**catalog_kept(catalog, t.data), **dict(t.data)}
+    t = _Unreported(merged, "motor", reported_keys(errors, "motor"))
     fields = dict(
         R=_collect(errors, t.number, "R", positive=True, unit="ohm"),
         Ld=_collect(errors, t.number, "Ld", positive=True, unit="H"),
@@ -164,14 +206,20 @@ def _motor(value: Any) -> tuple[Motor, dict]:
     if errors.failed:
         errors.raise_if_any()
     motor = Motor(**fields, catalog=t.raw("catalog"))
-    return motor, {k: v for k, v in merged.items() if v is not None}
+    return motor, {k: v for k, v in raw.items() if v is not None}, log
 
 
 def _drive(value: Any) -> Drive:
+    return _drive_logged(value)[0]
+
+
+def _drive_logged(value: Any) -> tuple[Drive, list]:
     if value is None:
         raise SpecError("drive", "a [drive] table (missing)")
     t = Table(value, "drive", DRIVE_KEYS)
     errors = Collector()
+    merged, log = resolve_drive(t.data, errors)
+    t = _Unreported(merged, "drive", reported_keys(errors, "drive"))
     fields = dict(
         vdc=_collect(errors, t.number, "vdc", positive=True, unit="V"),
         sample_time=_collect(errors, t.number, "sample_time", positive=True, unit="s"),
@@ -185,6 +233,11 @@ def _drive(value: Any) -> Drive:
     if errors.failed:
         errors.raise_if_any()
     drive = Drive(**fields)
+    _check_drive_timing(drive)
+    return drive, log
+
+
+def _check_drive_timing(drive: Drive) -> None:
     if drive.delay_samples > 10:
         raise SpecError("drive.delay_samples", "at most 10 periods of computation delay",
                         drive.delay_samples)
@@ -196,7 +249,6 @@ def _drive(value: Any) -> Drive:
                 "a whole number of half PWM periods (1/(2 switching_frequency) = "
                 f"{0.5 / drive.switching_frequency:g} s)", drive.sample_time,
                 hint="sample once or twice per carrier period")
-    return drive
 
 
 def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:

@@ -231,6 +231,10 @@ class Spec:
         The resolved plain data (catalog defaults applied), for the artifact.
     source : str or None
         The file the spec came from.
+    conversions : tuple of Conversion
+        Datasheet keys and unit strings converted to the model's SI values:
+        what was given, the value derived and the formula
+        (:mod:`toolbox.spec._datasheet`).
     """
 
     title: str
@@ -241,6 +245,7 @@ class Spec:
     scenarios: tuple = ()
     raw: dict = field(default_factory=dict)
     source: str | None = None
+    conversions: tuple = ()
 
     def motor_dict(self) -> dict:
         return asdict(self.motor)

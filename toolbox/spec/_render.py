@@ -1,0 +1,136 @@
+"""A resolved spec printed back as a TOML spec file (``cct check``).
+
+Motor, drive and scenarios are printed with every default filled in, the
+motor as per-phase dq model values; datasheet keys and unit strings appear as
+comments next to the value derived from them, with the formula and the dq
+convention. Loading the printed text gives the same spec (a test round-trips
+it); floats are printed with ``repr`` so that no digit is lost.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import asdict, fields
+from typing import Any, Iterable, Mapping
+
+from ._datasheet import CONVENTION_TEXT, Conversion
+from ._model import Spec
+
+__all__ = ["spec_to_toml", "toml_value"]
+
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _string(text: str) -> str:
+    """A TOML basic string: escapes for quote, backslash and control characters."""
+    out = []
+    for ch in text:
+        code = ord(ch)
+        if ch == '"':
+            out.append('\\"')
+        elif ch == "\\":
+            out.append("\\\\")
+        elif code < 0x20 or code == 0x7F:
+            out.append({"\n": "\\n", "\t": "\\t", "\r": "\\r"}.get(ch, f"\\u{code:04X}"))
+        elif 0xD800 <= code <= 0xDFFF:  # lone surrogate: not representable in TOML
+            out.append("\\uFFFD")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _key(name: Any) -> str:
+    name = str(name)
+    return name if _BARE_KEY.match(name) else _string(name)
+
+
+def toml_value(value: Any) -> str:
+    """One value in TOML syntax (inline tables for nested mappings).
+
+    Examples
+    --------
+    >>> toml_value({"d": 1.5, "q": [1, 2]})
+    '{d = 1.5, q = [1, 2]}'
+    >>> toml_value(float("inf"))
+    'inf'
+    """
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)
+    if isinstance(value, str):
+        return _string(value)
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{_key(k)} = {toml_value(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
+    raise TypeError(f"no TOML form for {type(value).__name__}")
+
+
+def _comment(text: str) -> str:
+    """A comment line's text: control characters would end or break it."""
+    return "".join(ch if ch.isprintable() else " " for ch in text)
+
+
+def _lines(table: Mapping[str, Any], notes: Mapping[str, str]) -> Iterable[str]:
+    for key, value in table.items():
+        if value is None:  # TOML has no null: an absent optional key
+            continue
+        line = f"{_key(key)} = {toml_value(value)}"
+        if key in notes:
+            line += f"  # {_comment(notes[key])}"
+        yield line
+
+
+def _note(conv: Conversion) -> str:
+    given = ", ".join(f"{k} = {toml_value(v)}" for k, v in conv.given.items())
+    if conv.formula.endswith("in SI units"):
+        return f"given {given}"
+    return f"from {given}: {conv.formula}"
+
+
+def spec_to_toml(spec: Spec, source: str | None = None) -> str:
+    """The resolved spec as TOML text that loads back to the same spec.
+
+    Parameters
+    ----------
+    spec : Spec
+        A validated spec.
+    source : str, optional
+        File named in the header comment.
+
+    Returns
+    -------
+    str
+        TOML: ``[motor]`` and ``[drive]`` with every default filled in (per
+        phase dq values, SI), ``[controller]`` and ``[requirements]`` as
+        given (method defaults are applied by the design method), and every
+        ``[[scenario]]`` with all its keys.
+    """
+    notes = {c.key: _note(c) for c in spec.conversions}
+    out = [f"# {_comment(source or spec.source or 'spec')}: ok (resolved spec, SI units)",
+           f"# dq convention: {CONVENTION_TEXT[spec.motor.convention]}"]
+    if spec.title:
+        out.append(f"title = {toml_value(spec.title)}")
+    motor = asdict(spec.motor)
+    motor = {"catalog": motor.pop("catalog"), **motor}
+    out += ["", "[motor]"] + list(_lines(motor, notes))
+    drive = asdict(spec.drive)
+    out += ["", "[drive]"] + list(_lines(drive, notes))
+    controller = spec.raw.get("controller")
+    if isinstance(controller, Mapping):
+        out += ["", "[controller]", "# method parameters as given; the design method "
+                "applies its defaults"] + list(_lines(controller, {}))
+    if spec.requirements.bounds:
+        out += ["", "[requirements]"] + list(_lines(spec.requirements.bounds, {}))
+    for scenario in spec.scenarios:
+        values = {f.name: getattr(scenario, f.name) for f in fields(scenario)}
+        out += ["", "[[scenario]]"] + list(_lines(values, {}))
+    return "\n".join(out) + "\n"
