@@ -30,8 +30,8 @@ def step_response(loop: "AxisLoop", A, B, C, D) -> tuple[np.ndarray, np.ndarray]
             x = np.zeros(A.shape[0])
             X = np.empty((n_steps + 1, A.shape[0]))
             Bv = B[:, 0]
-            # an unstable loop's response overflows to inf/nan: expected, the step
-            # figures then read "not computable" (no numpy warning to leak to the CLI)
+            # an unstable loop's response overflows to inf: expected, and judged
+            # by the stability verdict, not a warning for the user
             with np.errstate(over="ignore", invalid="ignore"):
                 for k in range(n_steps + 1):
                     X[k] = x
