@@ -75,7 +75,7 @@ def test_default_design_sampled_loop_margins(motor, method):
         assert m.stable, f"{motor} {method} {ax}: sampled loop unstable"
         assert m.phase_margin_deg >= MIN_PM_DEG, (motor, method, ax, m.phase_margin_deg)
         assert m.gain_margin_db >= MIN_GM_DB, (motor, method, ax, m.gain_margin_db)
-    assert "defaults" in art.gains, f"{method}: the default used is not stated"
+    assert "defaults" in art.design_parameters, f"{method}: the default used is not stated"
 
 
 def test_pi_default_is_the_stated_rule():
@@ -84,9 +84,9 @@ def test_pi_default_is_the_stated_rule():
     spec = spec_for("ipmsm_400V", "pi")
     art = design_quietly(spec)
     wc = math.radians(25.0) / (1.5 * 1e-4)
-    assert art.gains["bandwidth_rad_s"]["q"] == pytest.approx(wc, rel=1e-12)
-    assert art.gains["Kp"]["q"] == pytest.approx(0.5e-3 * wc, rel=1e-12)
-    rule = art.gains["defaults"]["bandwidth"]["rule"]
+    assert art.design_parameters["bandwidth_rad_s"]["q"] == pytest.approx(wc, rel=1e-12)
+    assert art.design_parameters["Kp"]["q"] == pytest.approx(0.5e-3 * wc, rel=1e-12)
+    rule = art.design_parameters["defaults"]["bandwidth"]["rule"]
     assert "PM 65 deg" in rule and "T_eq = (delay_samples 1 + 0.5) Ts" in rule
     pm = compute_margins(art, spec.motor, step=False)["q"].phase_margin_deg
     assert pm == pytest.approx(65.0, abs=1.0)
@@ -108,7 +108,7 @@ def test_largest_stable_pi_bandwidth_is_the_stability_boundary():
 
 def test_unstable_pi_bandwidth_suggests_the_value_that_works():
     art = toolbox.design_spec(spec_for("paper003", "pi", {"bandwidth": 20000.0}))
-    (text,) = art.gains["design_warnings"]
+    (text,) = art.design_parameters["design_warnings"]
     assert text.startswith("controller.pi.bandwidth: 20000 rad/s")
     assert "largest stable bandwidth 10000 rad/s" in text
     assert "2908.9 rad/s keeps a phase margin of about 65 deg" in text
@@ -118,13 +118,13 @@ def test_fcs_mpc_designs_without_parameters():
     """Criterion (23) weights default to 1, 1, 0; the baseline PI is informational."""
     for motor in MOTORS:
         art = design_quietly(spec_for(motor, "fcs_mpc"))
-        assert (art.gains["alpha"], art.gains["beta"], art.gains["gamma"]) == (1.0, 1.0, 0.0)
+        assert (art.fcs.alpha, art.fcs.beta, art.fcs.gamma) == (1.0, 1.0, 0.0)
 
 
 def test_stated_defaults_in_artifact_and_report(tmp_path):
     spec = spec_for("ipmsm_400V", "lq")
     out = build_outputs(spec, analysis=True, verification=False, report=True, header=False)
-    weights = out.artifact.gains["defaults"]["weights"]
+    weights = out.artifact.design_parameters["defaults"]["weights"]
     assert "min(V_max drive, wc L i_max) per axis" in weights["v_max"]
     assert "voltage-allowed current" in weights["i_max"]
     html = out.files["report.html"]
@@ -134,7 +134,7 @@ def test_stated_defaults_in_artifact_and_report(tmp_path):
 
 def test_hinf_default_weights_are_stated_and_built_like_makeweight():
     art = design_quietly(spec_for("paper003", "hinf"))
-    d = art.gains["defaults"]
+    d = art.design_parameters["defaults"]
     assert d["gamma"] == "optimal"
     w1 = d["weights"]["q"]["w1"]["makeweight"]
     assert w1["dc_gain"] == 1000.0 and w1["hf_gain"] == 0.5 and w1["crossover_gain"] == 1.0
@@ -148,7 +148,7 @@ def test_hinf_weights_from_requirements():
     spec = spec_for("paper003", "hinf",
                     requirements={"min_bandwidth_rad_s": 800.0, "min_stability_margin": 0.6})
     art = design_quietly(spec)
-    w1 = art.gains["defaults"]["weights"]["d"]["w1"]
+    w1 = art.design_parameters["defaults"]["weights"]["d"]["w1"]
     assert w1["makeweight"]["crossover"] == 800.0 and w1["makeweight"]["hf_gain"] == 0.6
     assert "requirements.min_bandwidth_rad_s" in w1["rule"]
 
@@ -159,8 +159,8 @@ def test_hinf_w2_left_out_gets_the_default():
     spec = spec_for("paper003", "hinf", {"gamma": "optimal",
                                          "weights": {"d": {"w1": w1}, "q": {"w1": w1}}})
     art = design_quietly(spec)
-    assert "w2" in art.gains["defaults"]["weights"]["q"]
-    assert "w1" not in art.gains["defaults"]["weights"]["q"]
+    assert "w2" in art.design_parameters["defaults"]["weights"]["q"]
+    assert "w1" not in art.design_parameters["defaults"]["weights"]["q"]
 
 
 def test_hinf_strictly_proper_w2_names_key_and_suggests_w2():
