@@ -221,3 +221,19 @@ def test_cct_design_exit_0_on_the_issue_lq_case(tmp_path):
     assert res.returncode == 0, res.stderr
     assert "Warning" not in res.stderr and "axes.d.law" not in res.stderr
     assert (tmp_path / "out" / "controller.h").exists()
+
+
+def test_hinf_optimal_gamma_unrealisable_does_not_say_raise_gamma():
+    """Issue 12: with gamma already "optimal" the refusal told the user to raise gamma or
+    use gamma = "optimal"; it now names what to change (w1's crossover, w2's roll-off)."""
+    from toolbox.errors import DesignInfeasible
+    w1 = {"dc_gain": 1000, "crossover": 2e4, "crossover_gain": 1, "hf_gain": 0.5}
+    spec = spec_for("paper003", "hinf", {"gamma": "optimal",
+                                         "weights": {"d": {"w1": w1, "w2": 0.01},
+                                                     "q": {"w1": w1, "w2": 0.01}}})
+    with pytest.raises(DesignInfeasible) as info:
+        toolbox.design_spec(spec)
+    text = str(info.value)
+    assert info.value.key == "controller.hinf.gamma"
+    assert "raise gamma" not in text
+    assert "backed off to 2 without removing it: lower w1's crossover" in text
