@@ -9,11 +9,38 @@ The pipeline as function calls::
     outputs = toolbox.build_outputs(spec)              # everything cct design writes
 """
 
-from .artifact import ControllerArtifact
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 from .errors import ArtifactError, CctError, DesignInfeasible, ExportRefused, SpecError
-from .pipeline import analyse, build_outputs, design_spec, run_verification, write_outputs
 from .spec import Spec, load_spec, spec_from_dict
 from . import design as _design  # noqa: F401  registers the methods' parameter readers with spec
+
+#: public name -> defining module, imported on first access (PEP 562): the
+#: artifact and pipeline import python-control, which imports matplotlib.pyplot
+#: and scipy.signal (about 1 s); ``import toolbox`` and ``cct --help`` must not
+#: pay for it (issue 13).
+_LAZY = {
+    "ControllerArtifact": "artifact",
+    "analyse": "pipeline", "build_outputs": "pipeline", "design_spec": "pipeline",
+    "run_verification": "pipeline", "write_outputs": "pipeline",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Import the module defining ``name`` on first use (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value  # later look-ups skip __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = ["ArtifactError", "CctError", "ControllerArtifact", "DesignInfeasible",
            "ExportRefused", "SpecError", "analyse", "build_outputs", "design_spec",

@@ -12,7 +12,10 @@ Routes:
 2. a plain C loop of the same model, integrator and step (gcc -O2, and
    -O3 -march=native for reference), written to a temporary directory and
    compiled here: the practical limit. It prints the same final state and
-   mean-square torque error as ours, so the two compute the same thing;
+   mean-square torque error as ours, so the two compute the same thing.
+   Ours and both C builds are run alternately (ours, -O2, -O3, ours, ...);
+   each ratio is the median of the per-round ratios with its interquartile
+   range;
 3. scipy.integrate.solve_ivp (RK45, rtol 1e-8, atol 1e-10) once per control
    period, run on a shorter horizon and reported per simulated second;
 4. gym-electric-motor, if installed (skipped with a message otherwise): its
@@ -35,7 +38,13 @@ import sys
 import tempfile
 import time
 
-import numpy as np
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from _timing import fmt_ratio, interleaved, pin_blas_threads, quartiles  # noqa: E402
+
+pin_blas_threads(1)  # before numpy: the batch's parallelism is numba's, not BLAS's
+
+import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 
@@ -53,15 +62,16 @@ LAW = ControlLaw(d=discrete_pi(M.Ld * WC, M.R * WC, TS), q=discrete_pi(M.Lq * WC
 DRIVE = DriveParams(vdc=VDC, sample_time=TS, delay_samples=1, v_limit="circle", v_max=V_MAX)
 
 
-def bench_ours():
+def ours_route():
+    """Warm the kernel; return a route timing one 1 s simulation and its result holder."""
     sc = Scenario(kind="unloaded_start", duration=DURATION, iq_ref=IQ_REF, plant_step=H)
     simulate(LAW, M, Scenario(kind="unloaded_start", duration=1e-3, iq_ref=IQ_REF), DRIVE)
-    best = math.inf
-    for _ in range(3):
-        t0 = time.perf_counter()
-        res = simulate(LAW, M, sc, DRIVE)
-        best = min(best, time.perf_counter() - t0)
-    return DURATION / best, res.metrics
+    last = {}
+
+    def run():
+        last["metrics"] = simulate(LAW, M, sc, DRIVE).metrics
+
+    return run, last
 
 
 C_SOURCE = r"""
@@ -116,7 +126,8 @@ int main(void) {
 """
 
 
-def bench_c(flags=("-O2",)):
+def compile_c(directory: str, flags=("-O2",)):
+    """Compile the C loop with ``flags`` into ``directory``; (exe, None) or (None, reason)."""
     gcc = shutil.which("gcc")
     if gcc is None:
         return None, "gcc not found"
@@ -125,18 +136,26 @@ def bench_c(flags=("-O2",)):
                           iqr=IQ_REF, kpd=M.Ld * WC, kid=M.R * WC, kpq=M.Lq * WC,
                           kiq=M.R * WC, nper=int(round(DURATION / TS)),
                           nsub=int(round(TS / H)))
-    with tempfile.TemporaryDirectory() as d:
-        c_path, exe = os.path.join(d, "loop.c"), os.path.join(d, "loop")
-        with open(c_path, "w") as fh:
-            fh.write(src)
-        subprocess.run([gcc, *flags, "-std=c99", "-o", exe, c_path, "-lm"], check=True)
-        best, out = math.inf, None
-        for _ in range(3):
-            vals = [float(v) for v in subprocess.run([exe], check=True, capture_output=True,
-                                                     text=True).stdout.split()]
-            if vals[0] < best:
-                best, out = vals[0], vals
-    return DURATION / best, out
+    tag = "".join(c for c in "".join(flags) if c.isalnum())
+    c_path, exe = os.path.join(directory, f"loop{tag}.c"), os.path.join(directory, f"loop{tag}")
+    with open(c_path, "w") as fh:
+        fh.write(src)
+    subprocess.run([gcc, *flags, "-std=c99", "-o", exe, c_path, "-lm"], check=True)
+    return exe, None
+
+
+def c_route(exe: str):
+    """A route running the compiled loop; it returns the loop's own elapsed time
+    (process start-up excluded) and keeps its printed state in ``last``."""
+    last = {}
+
+    def run() -> float:
+        vals = [float(v) for v in subprocess.run([exe], check=True, capture_output=True,
+                                                 text=True).stdout.split()]
+        last["out"] = vals
+        return vals[0]
+
+    return run, last
 
 
 def bench_scipy(horizon=0.05):
@@ -271,19 +290,26 @@ def main():
           "(other processes on the machine lower every rate, the parallel batch most)")
     print(f"scenario: {DURATION} s unloaded start, iq_ref {IQ_REF} A, PI wc {WC} rad/s, "
           f"Ts {TS} s, delay 1, plant RK4 at {H} s\n")
-    ours, m = bench_ours()
-    print(f"ours (numba)          : {ours:10.2f} simulated s / wall s "
-          f"(final speed {m['final_speed']:.6f} rad/s, mse_torque {m['mse_torque']:.6g})")
-    c_rate, c_out = bench_c()
-    if c_rate is None:
-        print(f"plain C loop          : skipped ({c_out})")
-    else:
-        print(f"plain C loop (gcc -O2): {c_rate:10.2f} simulated s / wall s "
-              f"(final speed {c_out[3]:.6f} rad/s, mse_torque {c_out[4]:.6g})")
-    c3_rate, c3_out = bench_c(("-O3", "-march=native"))
-    if c3_rate is not None:
-        print(f"C loop (-O3 -march=native): {c3_rate:6.2f} simulated s / wall s "
-              f"(what numba's LLVM also targets: FMA, this CPU's vector units)")
+    ours_run, ours_last = ours_route()
+    routes = {"ours": ours_run}
+    c_last = {}
+    with tempfile.TemporaryDirectory() as d:
+        for label, flags in (("C -O2", ("-O2",)), ("C -O3 -march=native", ("-O3", "-march=native"))):
+            exe, why = compile_c(d, flags)
+            if exe is None:
+                print(f"plain C loop ({label}): skipped ({why})")
+                continue
+            routes[label], c_last[label] = c_route(exe)
+        times = interleaved(routes, rounds=9)
+    rate = {k: DURATION / quartiles(v)[1] for k, v in times.items()}
+    m = ours_last["metrics"]
+    print(f"ours (numba)          : {rate['ours']:10.2f} simulated s / wall s, median of "
+          f"{len(times['ours'])} (final speed {m['final_speed']:.6f} rad/s, "
+          f"mse_torque {m['mse_torque']:.6g})")
+    for label, last in c_last.items():
+        out = last["out"]
+        print(f"{label:22s}: {rate[label]:10.2f} simulated s / wall s "
+              f"(final speed {out[3]:.6f} rad/s, mse_torque {out[4]:.6g})")
     sp_rate, _ = bench_scipy()
     print(f"scipy solve_ivp/period: {sp_rate:10.4f} simulated s / wall s (RK45, 50 ms run)")
     gem = bench_gem()
@@ -295,12 +321,12 @@ def main():
               f"defaults: its own motor, {gem_solver}, tau {gem_tau} s, {DURATION} s = "
               f"{int(round(DURATION / gem_tau))} steps, dq PI agent; median |i_dq error| "
               f"{gem_err:.2f} A, {gem_resets} episode reset(s))")
-    print("\nratios:")
-    if c_rate is not None:
-        print(f"  ours / C -O2  = {ours / c_rate:8.3f}")
-    if c3_rate is not None:
-        print(f"  ours / C -O3 -march=native = {ours / c3_rate:8.3f}")
-    print(f"  ours / scipy  = {ours / sp_rate:8.1f}")
+    print("\nratios (speed, ours / other; >1 means ours is faster):")
+    for label in c_last:
+        # speed ratio = time ratio inverted: other_i / ours_i per round
+        print(f"  ours / {label:20s} = {fmt_ratio(times[label], times['ours'], 3)}")
+    ours = rate["ours"]
+    print(f"  ours / scipy  = {ours / sp_rate:8.1f} (one run each: order of magnitude only)")
     if gem is not None:
         print(f"  ours / gym-electric-motor = {ours / gem[0]:8.1f} (different motor and "
               "scenario: a rate comparison only)")

@@ -1,5 +1,8 @@
 """All benchmarks in one run (same machine, same moment): H-infinity design and
-closed-loop simulation. ``python tests/benchmarks/run.py`` from the repository root."""
+closed-loop simulation. ``python tests/benchmarks/run.py`` from the repository root.
+
+Routes are timed alternately (A B A B ..., medians and interquartile ranges of
+the per-round ratios); BLAS is pinned to one thread (small problems)."""
 
 from __future__ import annotations
 
@@ -8,6 +11,10 @@ import platform
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from _timing import pin_blas_threads  # noqa: E402
+
+pin_blas_threads(1)  # before numpy is imported (by the benchmarks below)
 
 import bench_hinf  # noqa: E402
 import bench_sim  # noqa: E402

@@ -17,6 +17,11 @@ from pathlib import Path
 import click
 
 from ..errors import CctError, SpecError
+from ._progress import StepBar, design_stages
+
+#: -q/--quiet of the long-running commands: the bar goes, the summary stays.
+_QUIET = click.option("--quiet", "-q", is_flag=True,
+                      help="No progress bar (the result summary is still printed).")
 
 EXIT_OK, EXIT_REQUIREMENT, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -49,14 +54,6 @@ def _write_file(path: str | Path, data: str | bytes, option: str) -> None:
     except OSError as err:
         raise SpecError(option, "a writable file path (its directory must be creatable)",
                         str(path), hint=err.strerror or str(err)) from None
-
-
-def _progress(quiet: bool):
-    def show(stage: str) -> None:
-        if not quiet:
-            click.echo(f"  - {stage} ...", err=True)
-
-    return show
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -157,7 +154,7 @@ def derive(spec: str, fmt: str | None) -> None:
               help="Output directory.")
 @click.option("--only-controller", is_flag=True,
               help="Write controller.json only (no analysis, verification, report, header).")
-@click.option("--quiet", "-q", is_flag=True, help="No progress display.")
+@_QUIET
 @_spec_errors
 def design(spec: str, out_dir: str, only_controller: bool, quiet: bool) -> None:
     """Design the controller of SPEC and write controller.json, analysis.json,
@@ -175,12 +172,13 @@ def design(spec: str, out_dir: str, only_controller: bool, quiet: bool) -> None:
 
     s = load_spec(spec)
     full = not only_controller
-    out = build_outputs(s, analysis=full, verification=full, report=full, header=full,
-                        progress=_progress(quiet))
+    with StepBar(design_stages(full, full, full, full), quiet=quiet, desc="design") as bar:
+        out = build_outputs(s, analysis=full, verification=full, report=full, header=full,
+                            progress=bar)
     for path in write_outputs(out.files, out_dir):
         if not quiet:
             click.echo(f"wrote {path}", err=True)
-    _summary(out, quiet)
+    _summary(out)
     sys.exit(EXIT_OK if out.passed else EXIT_REQUIREMENT)
 
 
@@ -192,14 +190,13 @@ def _notices(notice: str | None, warnings: list[str]) -> None:
         click.echo(f"cct: warning: {w}", err=True)
 
 
-def _summary(out, quiet: bool) -> None:
+def _summary(out) -> None:
     warnings = list(out.warnings)
     if out.verification is not None:
         warnings += out.verification.warnings
     # the notice describes what was checked: nothing is checked without verification
     _notices(out.notice if out.verification is not None else None, warnings)
-    if quiet:
-        return
+    # the result summary is printed even with -q: -q silences progress only
     for axis, m in out.artifact.margins.items():
         click.echo(f"{axis} axis (sampled loop): GM {_fmt(m.get('gain_margin_db'))} dB, "
                    f"PM {_fmt(m.get('phase_margin_deg'))} deg, "
@@ -221,8 +218,9 @@ def _summary(out, quiet: bool) -> None:
 @main.command()
 @click.argument("out_dir", type=click.Path(file_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print verify.json to stdout.")
+@_QUIET
 @_spec_errors
-def verify(out_dir: str, as_json: bool) -> None:
+def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
     """Re-run the closed-loop verification of the design in OUT_DIR and write
     OUT_DIR/verify.json (exit 1 if a requirement fails).
 
@@ -236,7 +234,9 @@ def verify(out_dir: str, as_json: bool) -> None:
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=file)
     # margins and stability are recomputed from the executed law, never read back
-    result = run_verification(artifact, spec, file=file)
+    with StepBar(["verification"], quiet=quiet, desc="verify") as bar:
+        bar("verification")
+        result = run_verification(artifact, spec, file=file)
     text = json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n"
     write_outputs({"verify.json": text}, out_dir)
     _notices(result.notice, result.warnings)
@@ -263,8 +263,9 @@ def verify(out_dir: str, as_json: bool) -> None:
 
 @main.command()
 @click.argument("out_dir", type=click.Path(file_okay=False))
+@_QUIET
 @_spec_errors
-def report(out_dir: str) -> None:
+def report(out_dir: str, quiet: bool) -> None:
     """Regenerate report.html and report.pdf from the design in OUT_DIR.
 
     Reads controller.json and analysis.json (analysing again only when
@@ -286,25 +287,30 @@ def report(out_dir: str) -> None:
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=file)
-    # verified first, on the artifact as stored: its margins are compared, not trusted
-    verification = run_verification(artifact, spec, file=file)
-    files = {}
-    analysis = load_analysis(out_dir, artifact)
-    if analysis is None:
-        artifact, analysis = analyse(artifact, spec)
-        files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
-    # the report shows margins, margin checks and stability of the executed law,
-    # not the stored numbers (the stored response figures are drawn as they are)
-    fresh = {ax: m.to_json() for ax, m in compute_margins(artifact, spec.motor).items()}
-    artifact = artifact.with_margins(fresh)
-    analysis = {**analysis, "margins": {**(analysis.get("margins") or {}), "discrete": fresh},
-                "stability": loop_stability(artifact, spec.motor),
-                "requirements": {k: c for k, c in verification.margin_checks.items()
-                                 if not k.startswith("default.")}}
-    out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
-                        verification=verification)
-    context = build_context(report_data(out))  # figures drawn once for both
-    files.update({"report.html": write_html(context), "report.pdf": write_pdf(context)})
+    with StepBar(["verification", "analysis", "report"], quiet=quiet, desc="report") as bar:
+        # verified first, on the artifact as stored: its margins are compared, not trusted
+        bar("verification")
+        verification = run_verification(artifact, spec, file=file)
+        files = {}
+        bar("analysis")
+        analysis = load_analysis(out_dir, artifact)
+        if analysis is None:
+            artifact, analysis = analyse(artifact, spec)
+            files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"
+        # the report shows margins, margin checks and stability of the executed law,
+        # not the stored numbers (the stored response figures are drawn as they are)
+        fresh = {ax: m.to_json() for ax, m in compute_margins(artifact, spec.motor).items()}
+        artifact = artifact.with_margins(fresh)
+        analysis = {**analysis,
+                    "margins": {**(analysis.get("margins") or {}), "discrete": fresh},
+                    "stability": loop_stability(artifact, spec.motor),
+                    "requirements": {k: c for k, c in verification.margin_checks.items()
+                                     if not k.startswith("default.")}}
+        out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
+                            verification=verification)
+        bar("report")
+        context = build_context(report_data(out))  # figures drawn once for both
+        files.update({"report.html": write_html(context), "report.pdf": write_pdf(context)})
     write_outputs(files, out_dir)
     _notices(out.notice, verification.warnings)
     sys.exit(EXIT_OK if out.passed else EXIT_REQUIREMENT)
@@ -354,8 +360,9 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
 @click.argument("specs", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option("--json", "json_path", type=click.Path(dir_okay=False),
               help="Also write the table as JSON to this file.")
+@_QUIET
 @_spec_errors
-def compare(specs: tuple[str, ...], json_path: str | None) -> None:
+def compare(specs: tuple[str, ...], json_path: str | None, quiet: bool) -> None:
     """Design every SPEC and print margins and robustness side by side.
 
     Each design is also verified (margins and stability of the executed law,
@@ -376,16 +383,25 @@ def compare(specs: tuple[str, ...], json_path: str | None) -> None:
                 first.motor, first.drive.vdc, first.drive.sample_time):
             raise SpecError("motor", f"the motor, vdc and sample_time of {specs[0]} "
                             "(compare designs for one drive)", "a different one", file=s.source)
-    artifacts = [design_spec(s) for s in loaded]
-    rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive)
+    names = [Path(p).name for p in specs]
+    steps = ([f"design {n}" for n in names] + ["analysis"]
+             + [f"verification {n}" for n in names])
     failed = False
-    for spec_path, row, art, s in zip(specs, rows, artifacts, loaded):
-        row["spec"] = spec_path
-        result = run_verification(art, s)
-        row["passed"] = result.passed
-        row["failures"] = _failures(result)
-        row["notice"] = result.notice
-        failed |= not result.passed
+    with StepBar(steps, quiet=quiet, desc="compare") as bar:
+        artifacts = []
+        for name, s in zip(names, loaded):
+            bar(f"design {name}")
+            artifacts.append(design_spec(s))
+        bar("analysis")
+        rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive)
+        for name, spec_path, row, art, s in zip(names, specs, rows, artifacts, loaded):
+            bar(f"verification {name}")
+            row["spec"] = spec_path
+            result = run_verification(art, s)
+            row["passed"] = result.passed
+            row["failures"] = _failures(result)
+            row["notice"] = result.notice
+            failed |= not result.passed
     if json_path:
         _write_file(json_path, json.dumps(rows, indent=1, allow_nan=False) + "\n", "--json")
     _print_table(rows)
@@ -442,8 +458,9 @@ def _fmt(value) -> str:
               type=click.Path(file_okay=False), help="Directory of spec files.")
 @click.option("--out", "out_dir", default="reports", show_default=True,
               type=click.Path(file_okay=False), help="Gallery directory.")
+@_QUIET
 @_spec_errors
-def gallery(designs_dir: str, out_dir: str) -> None:
+def gallery(designs_dir: str, out_dir: str, quiet: bool) -> None:
     """Regenerate the report gallery: every spec in DESIGNS into OUT/<name>/.
 
     Every design's outputs are written; exit 1 when any design fails.
@@ -456,12 +473,14 @@ def gallery(designs_dir: str, out_dir: str) -> None:
     from ..spec import load_spec
 
     failed = []
-    for path in sorted(Path(designs_dir).glob("*.toml")):
-        click.echo(f"{path.name} ...", err=True)
-        out = build_outputs(load_spec(path))
-        write_outputs({**out.files, **_figures(out.html or "")}, Path(out_dir) / path.stem)
-        if not out.passed:
-            failed.append(path.name)
+    paths = sorted(Path(designs_dir).glob("*.toml"))
+    with StepBar([p.name for p in paths], quiet=quiet, desc="gallery") as bar:
+        for path in paths:
+            bar(path.name)
+            out = build_outputs(load_spec(path))
+            write_outputs({**out.files, **_figures(out.html or "")}, Path(out_dir) / path.stem)
+            if not out.passed:
+                failed.append(path.name)
     for name in failed:
         click.echo(f"FAIL  {name}", err=True)
     sys.exit(EXIT_REQUIREMENT if failed else EXIT_OK)

@@ -9,16 +9,44 @@ the sample time and the delay (``default_bandwidth``, ``current_scale``,
 ``speed_scale``, ``largest_stable_pi_bandwidth``).
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+# light (math only): imported eagerly, toolbox.sim's default scenarios use it
 from ._defaults import (current_scale, default_bandwidth, largest_stable_pi_bandwidth,
                         speed_scale)
 from ._registry import METHOD_MODULES, design, read_method_cfg
-from .hinf import design_hinf_axis
-from .ilq import design_ilq, inverse_lq, inverse_lq_sdp, sigma_bound
-from .lq import bryson_weights, design_lq, lqi_continuous, lqi_discrete
-from .pi import design_pi, gains_cancellation, gains_symmetric_optimum
-from .steady_state import (pi_acceleration_steady_state, tc_speed_error_steady_state,
-                           tci_acceleration_steady_state)
-from .total_comp import design_total_compensation, gains_match_pi
+
+#: public name -> defining submodule. The method modules import python-control
+#: (which imports matplotlib.pyplot): they are loaded on first attribute access
+#: (PEP 562) so that ``import toolbox`` stays light (issue 13).
+_LAZY = {
+    "design_hinf_axis": "hinf",
+    "design_ilq": "ilq", "inverse_lq": "ilq", "inverse_lq_sdp": "ilq", "sigma_bound": "ilq",
+    "bryson_weights": "lq", "design_lq": "lq", "lqi_continuous": "lq", "lqi_discrete": "lq",
+    "design_pi": "pi", "gains_cancellation": "pi", "gains_symmetric_optimum": "pi",
+    "pi_acceleration_steady_state": "steady_state",
+    "tc_speed_error_steady_state": "steady_state",
+    "tci_acceleration_steady_state": "steady_state",
+    "design_total_compensation": "total_comp", "gains_match_pi": "total_comp",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Import the submodule defining ``name`` on first use (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value  # later look-ups skip __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = ["METHOD_MODULES", "design", "read_method_cfg", "design_hinf_axis", "design_ilq",
            "inverse_lq", "inverse_lq_sdp", "sigma_bound", "bryson_weights", "design_lq",

@@ -40,10 +40,29 @@ def design(spec) -> Any:
     return _module(spec.controller.method).design(spec)
 
 
+class _LazyReader:
+    """A method's ``read_cfg`` that imports its module on first call.
+
+    Importing every method module at registration would pull python-control
+    (and with it matplotlib.pyplot and scipy.signal, about 1 s) into every
+    ``import toolbox``, ``cct --help`` and ``cct check`` (issue 13); only the
+    method a spec names is imported, when the spec is read.
+    """
+
+    def __init__(self, method: str) -> None:
+        self.method = method
+
+    def __call__(self, method: str, table, motor, drive) -> Any:
+        return _module(self.method).read_cfg(method, table, motor, drive)
+
+    def __repr__(self) -> str:
+        return f"<lazy read_cfg of toolbox.design.{METHOD_MODULES[self.method]}>"
+
+
 def _register_readers() -> None:
-    """Register every method's ``read_cfg`` with the spec stage."""
+    """Register every method's ``read_cfg`` (imported lazily) with the spec stage."""
     for method in METHOD_MODULES:
-        register_method_reader(method, _module(method).read_cfg)
+        register_method_reader(method, _LazyReader(method))
 
 
 _register_readers()

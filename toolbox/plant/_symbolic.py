@@ -24,6 +24,8 @@ from functools import lru_cache
 
 import sympy as sp
 
+from ._cache import cached
+
 __all__ = ["SYMBOLS", "DqModel", "park_matrix", "derive_dq_model"]
 
 CONVENTIONS = ("amplitude", "power")
@@ -137,6 +139,10 @@ class DqModel:
 def derive_dq_model(convention: str = "amplitude") -> DqModel:
     """Derive the dq model of a salient PMSM from its phase equations.
 
+    The result is cached in memory and on disk, keyed by a hash of this
+    module's source and the sympy version (:mod:`toolbox.plant._cache`);
+    ``_derive_dq_model`` always derives.
+
     Parameters
     ----------
     convention : {"amplitude", "power"}
@@ -159,6 +165,14 @@ def derive_dq_model(convention: str = "amplitude") -> DqModel:
 
     and ``T dT^{-1}/dtheta = [[0, -1, 0], [1, 0, 0], [0, 0, 0]]``.
     """
+    if convention not in CONVENTIONS:
+        raise ValueError(f"convention: expected one of {CONVENTIONS}, got {convention!r}")
+    return cached(f"dq_model-{convention}", __file__, lambda: _derive_dq_model(convention),
+                  lambda m: isinstance(m, DqModel) and m.convention == convention)
+
+
+def _derive_dq_model(convention: str) -> DqModel:
+    """The derivation behind :func:`derive_dq_model` (no cache)."""
     th = theta
     T = park_matrix(th, convention)
     Tinv = _simplify_matrix(T.inv())

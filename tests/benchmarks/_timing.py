@@ -1,0 +1,70 @@
+"""Timing helpers shared by the benchmarks (issue 13).
+
+* :func:`pin_blas_threads` must run before numpy is first imported: the
+  problems here are tiny (matrices of order <= 10), where a multi-threaded
+  BLAS only adds variance (one ``mixsyn`` call once took 9 s under OpenBLAS
+  thread contention).
+* :func:`interleaved` times the routes alternately in one run (A B A B ...),
+  so that a slow spell of the shared machine hits every route alike;
+  :func:`ratio` reports the per-round ratio A_i/B_i as its median and
+  interquartile range, the spread the printed claims must respect.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import time
+from typing import Callable, Mapping
+
+BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+            "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")
+
+
+def pin_blas_threads(n: int = 1) -> None:
+    """Set the BLAS/OpenMP thread counts (only effective before ``import numpy``)."""
+    for key in BLAS_ENV:
+        os.environ.setdefault(key, str(n))
+
+
+def interleaved(routes: Mapping[str, Callable[[], object]],
+                rounds: int) -> dict[str, list[float]]:
+    """Run every route once per round, in turn; return each route's times (s).
+
+    A route may return its own elapsed seconds as a ``float`` (e.g. a C
+    program timing its inner loop); anything else it returns is ignored and
+    its wall time is measured here.
+    """
+    times: dict[str, list[float]] = {name: [] for name in routes}
+    for _ in range(rounds):
+        for name, func in routes.items():
+            t0 = time.perf_counter()
+            own = func()
+            wall = time.perf_counter() - t0
+            times[name].append(own if isinstance(own, float) else wall)
+    return times
+
+
+def quartiles(values: list[float]) -> tuple[float, float, float]:
+    """(25 %, median, 75 %) of ``values``."""
+    if len(values) == 1:
+        return values[0], values[0], values[0]
+    q1, q2, q3 = statistics.quantiles(values, n=4, method="inclusive")
+    return q1, q2, q3
+
+
+def ratio(a: list[float], b: list[float]) -> tuple[float, float, float]:
+    """Quartiles (25 %, median, 75 %) of the per-round ratio a_i / b_i."""
+    return quartiles([x / y for x, y in zip(a, b)])
+
+
+def fmt_ratio(a: list[float], b: list[float], digits: int = 2) -> str:
+    """``median [q25, q75] (n rounds)`` of a_i / b_i."""
+    lo, med, hi = ratio(a, b)
+    return f"{med:.{digits}f} [IQR {lo:.{digits}f}..{hi:.{digits}f}] ({len(a)} rounds)"
+
+
+def fmt_time(values: list[float], scale: float = 1.0, unit: str = "s") -> str:
+    """``median [q25..q75] unit`` of a route's times."""
+    lo, med, hi = quartiles(values)
+    return f"{med * scale:9.4g} {unit} [IQR {lo * scale:.4g}..{hi * scale:.4g}]"

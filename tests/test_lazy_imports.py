@@ -1,0 +1,70 @@
+"""``import toolbox`` and ``cct --help`` stay light (issue 13).
+
+python-control imports matplotlib.pyplot and scipy.signal (about 1 s on the
+reference machine); sympy, cvxpy and numba cost as much again. They must be
+imported only by the stage that uses them. The check is on which modules are
+loaded, never on time (timings are for the benchmarks), so it is exact and
+machine independent. It runs in a fresh interpreter because this test
+process has long since imported everything.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("control", "matplotlib", "sympy", "cvxpy", "numba", "scipy", "slycot")
+
+
+def _loaded_after(code: str) -> set[str]:
+    """Top-level packages from HEAVY that are in sys.modules after running ``code``."""
+    probe = (f"{code}\nimport sys, json\n"
+             f"print(json.dumps(sorted({{m.split('.')[0] for m in sys.modules}} & {set(HEAVY)!r})))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         check=True, timeout=120)
+    return set(json.loads(out.stdout.strip().splitlines()[-1]))
+
+
+@pytest.mark.parametrize("code", [
+    "import toolbox",
+    "import toolbox.spec; toolbox.spec.load_spec",
+    "from toolbox.cli import main\n"
+    "try:\n    main(['--help'], prog_name='cct')\nexcept SystemExit:\n    pass",
+    "from toolbox.cli import main\n"
+    "try:\n    main(['design', '--help'], prog_name='cct')\nexcept SystemExit:\n    pass",
+])
+def test_light_imports(code):
+    """None of the heavy packages is imported by the entry points."""
+    assert _loaded_after(code) == set()
+
+
+def test_lazy_names_resolve():
+    """The lazily exported names are the real objects and listed by dir()."""
+    import toolbox
+    import toolbox.design
+    from toolbox.artifact import ControllerArtifact
+    from toolbox.design.pi import design_pi
+    from toolbox.pipeline import design_spec
+    assert toolbox.ControllerArtifact is ControllerArtifact
+    assert toolbox.design_spec is design_spec
+    assert toolbox.design.design_pi is design_pi
+    assert {"ControllerArtifact", "design_spec"} <= set(dir(toolbox))
+    for name in toolbox.__all__:
+        assert getattr(toolbox, name) is not None
+    for name in toolbox.design.__all__:
+        assert getattr(toolbox.design, name) is not None
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        toolbox.nope  # noqa: B018
+
+
+def test_check_imports_only_the_named_method():
+    """Reading a PI spec imports toolbox.design.pi, not the H-infinity module."""
+    code = ("import sys, toolbox\n"
+            "toolbox.load_spec('designs/003_azaiz2007_pi.toml')\n"
+            "assert 'toolbox.design.pi' in sys.modules\n"
+            "assert 'toolbox.design.hinf' not in sys.modules\n")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120,
+                   cwd=__import__("pathlib").Path(__file__).resolve().parents[1])
