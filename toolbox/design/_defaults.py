@@ -5,7 +5,7 @@ a spec gives no bandwidth (poles, weights, ...), the crossover is the largest
 one whose phase margin, for the ideal loop of the method, is
 :data:`TARGET_PM_DEG` once the sampling is accounted for.
 
-The rule (stated in every artifact that uses it, ``gains["defaults"]``)
+The rule (stated in every artifact that uses it, ``design_parameters["defaults"]``)
 ------------------------------------------------------------------------
 A sampled current loop loses phase to the computation delay (``delay_samples``
 periods) and to the zero-order hold (half a period on average):
@@ -62,7 +62,7 @@ class DefaultBandwidth:
     rule: str
 
     def as_dict(self) -> dict:
-        """Plain data for ``gains["defaults"]``."""
+        """Plain data for ``design_parameters["defaults"]``."""
         return {"bandwidth_rad_s": self.value, "rule": self.rule}
 
 

@@ -94,7 +94,7 @@ def default_axis_weights(L: float, drive, requirements=None, *,
     weights : dict
         ``{"w1": tf, "w2": tf, "w3": None}``.
     stated : dict
-        The makeweight parameters and rules, for ``gains["defaults"]``.
+        The makeweight parameters and rules, for ``design_parameters["defaults"]``.
     """
     p1, r1 = w1_params(drive, requirements)
     p2, r2 = w2_params(L, drive)
