@@ -208,6 +208,8 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
     progress("design")
     artifact = design_spec(spec)
     out = DesignOutputs(artifact=artifact, spec=spec)
+    # design-time advice (e.g. a PI bandwidth past the stability limit, with the value that works)
+    out.warnings.extend(str(w) for w in artifact.design_parameters.get("design_warnings", []))
     if analysis:
         progress("analysis")
         out.artifact, out.analysis = analyse(artifact, spec)

@@ -119,8 +119,6 @@ def test_allow_non_optimal_warns_and_omits_weights():
 def test_bad_parameters():
     with pytest.raises(SpecError, match=r"controller\.ilq\.poles: expected a number < 0 \(rad/s\), got 500"):
         spec(poles=500.0, sigma=2500.0)
-    with pytest.raises(SpecError, match="controller.ilq.poles: expected assigned poles"):
-        spec(sigma=2500.0)
     with pytest.raises(SpecError, match='controller.ilq.sigmaa: .*did you mean "sigma"'):
         spec(poles=-1000.0, sigmaa=2500.0)
     with pytest.raises(SpecError, match="controller.ilq.sigma: expected a number > 0"):

@@ -98,11 +98,20 @@ def test_continuous_artifact_tustin_and_error_controller():
 
 
 def test_bryson_defaults():
-    """i_max = rated 20 A, v_max = vdc/sqrt(3), w_b = pi/(10 Ts) (exact formulas)."""
-    cfg = spec().controller.cfg
-    (qi, qz), r = bryson_weights(20.0, 150 / math.sqrt(3), math.pi / (10 * TS))
-    assert cfg.Q["q"] == pytest.approx((qi, qz)) and cfg.R["d"] == pytest.approx(r)
-    assert qi == pytest.approx(1 / 400) and r == pytest.approx(3 / 150 ** 2)
+    """i_max = rated 20 A, w_b = wc/4 and per axis v_max = min(vdc/sqrt(3), wc L i_max),
+    wc = (90 - 65 - atan(1/4)) deg / ((delay + 0.5) Ts) (exact formulas; issue 12:
+    the drive's whole voltage as v_max crossed over too fast for the delay)."""
+    sp = spec()
+    cfg = sp.controller.cfg
+    wc = math.radians(90 - 65 - math.degrees(math.atan(0.25))) / (
+        (sp.drive.delay_samples + 0.5) * TS)
+    for ax, L in (("d", sp.motor.Ld), ("q", sp.motor.Lq)):
+        v = min(150 / math.sqrt(3), wc * L * 20.0)
+        (qi, qz), r = bryson_weights(20.0, v, wc / 4)
+        assert cfg.Q[ax] == pytest.approx((qi, qz), rel=1e-12)
+        assert cfg.R[ax] == pytest.approx(r, rel=1e-12)
+    assert qi == pytest.approx(1 / 400)
+    assert "min(V_max drive, wc L i_max)" in cfg.defaults["weights"]["v_max"]
 
 
 def test_explicit_weights_and_errors():

@@ -253,8 +253,6 @@ def test_tci_discrete_poles_two_routes(delay):
      "controller.tc.K2: expected a number > 0 (1/s) (missing)"),
     ("tc", {"K1": 800, "K2": 800, "response_time": 1e-3},
      "controller.tc.response_time: expected either K1 or response_time, not both, got 0.001"),
-    ("tc", {},
-     "controller.tc: expected one of K1, response_time, poles (missing)"),
     ("tc", {"K1": 800, "K2": 800, "K3": 1},
      "controller.tc.K3: expected a known key of [controller.tc] (allowed keys: K1, K2, "
      "discretisation, model, poles, response_time)"),

@@ -4,7 +4,9 @@ One module per method (``pi``, ``total_comp``, ``ilq``, ``lq``, ``hinf``,
 ``fcs_mpc``), each with ``read_cfg`` (validates ``[controller.<method>]``),
 ``design(spec)`` and a plain API on python-control plants and numbers,
 re-exported here. ``steady_state`` holds the symbolic steady-state analysis
-of paper 000.
+of paper 000. ``_defaults`` derives the parameters a spec leaves out from
+the sample time and the delay (``default_bandwidth``, ``current_scale``,
+``speed_scale``, ``largest_stable_pi_bandwidth``).
 """
 
 from __future__ import annotations
@@ -12,6 +14,9 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+# light (math only): imported eagerly, toolbox.sim's default scenarios use it
+from ._defaults import (current_scale, default_bandwidth, largest_stable_pi_bandwidth,
+                        speed_scale)
 from ._registry import METHOD_MODULES, design, read_method_cfg
 
 #: public name -> defining submodule. The method modules import python-control
@@ -48,4 +53,5 @@ __all__ = ["METHOD_MODULES", "design", "read_method_cfg", "design_hinf_axis", "d
            "lqi_continuous", "lqi_discrete", "design_pi", "gains_cancellation",
            "gains_symmetric_optimum", "pi_acceleration_steady_state",
            "tc_speed_error_steady_state", "tci_acceleration_steady_state",
-           "design_total_compensation", "gains_match_pi"]
+           "design_total_compensation", "gains_match_pi", "default_bandwidth",
+           "largest_stable_pi_bandwidth", "current_scale", "speed_scale"]

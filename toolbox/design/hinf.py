@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
 import control as ct
@@ -51,6 +51,7 @@ from ..errors import DesignInfeasible, SpecError
 from ..plant import axis_plants
 from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
+from ._hinf_defaults import default_w2, w1_params, w2_params, w2_toml
 from ._hinf_riccati import (GammaBelowOptimum, augment_mixed_sensitivity, fastest_pole_modulus,
                             gamma_iteration, synthesize, weight_bound_check)
 from ._reduction import compare_margins, loop_margins, reduce_controller
@@ -88,7 +89,13 @@ class HinfCfg:
     executed : str
         ``"reduced"`` or ``"full"``: the controller the law runs.
     weights : dict
-        ``{axis: {"w1": tf, "w2": tf or None, "w3": tf or None}}``.
+        ``{axis: {"w1": tf or None, "w2": tf, "w3": tf or None}}``; a ``w1``
+        of ``None`` is built at design time from the requirements
+        (:mod:`toolbox.design._hinf_defaults`).
+    defaults : dict or None
+        Method-level defaults taken (``gamma``), stated in the artifact.
+    stated : dict
+        Per axis, the default weights used and the rule of each.
     """
 
     gamma: float | str
@@ -99,6 +106,8 @@ class HinfCfg:
     on_margin_loss: str
     executed: str
     weights: dict
+    defaults: dict | None = None
+    stated: dict = field(default_factory=dict)
 
 
 def _root(value: Any, key: str) -> complex:
@@ -197,7 +206,9 @@ def read_cfg(method: str, table, motor, drive) -> HinfCfg:
     HinfCfg
     """
     t = Table(table.data, table.prefix, CFG_KEYS)
-    gamma = t.raw("gamma", 1.0)
+    # default weights: gamma defaults to the optimum (their level is not tuned to 1)
+    gamma_default = 1.0 if t.has("weights") else "optimal"
+    gamma = t.raw("gamma", gamma_default)
     if isinstance(gamma, str):
         if gamma != "optimal":
             raise SpecError(t.key("gamma"), 'a number > 0 or "optimal"', gamma)
@@ -212,15 +223,47 @@ def read_cfg(method: str, table, motor, drive) -> HinfCfg:
                         choices=("reduced", "full"))
     if executed == "reduced" and order is None:
         raise SpecError(t.key("executed"), '"full" unless reduce_order is given', executed)
-    wt = t.table("weights", AXES, required=True)
-    weights = {}
-    for ax in AXES:
-        sub = wt.table(ax, ("w1", "w2", "w3"), required=True)
-        if not sub.has("w1"):
-            raise SpecError(sub.key("w1"), "a sensitivity weight (missing)")
+    wt = t.table("weights", AXES)
+    weights, stated = {}, {}
+    for ax, L in zip(AXES, (motor.Ld, motor.Lq)):
+        sub = wt.table(ax, ("w1", "w2", "w3"))
         weights[ax] = {w: (read_weight(sub.raw(w), sub.key(w)) if sub.has(w) else None)
                        for w in ("w1", "w2", "w3")}
-    return HinfCfg(gamma, backoff, order, itol, loss, on_loss, executed, weights)
+        if weights[ax]["w2"] is None:
+            # assumption A2 (D12 full column rank) needs a control weight: the default one
+            weights[ax]["w2"] = default_w2(L, drive, sub.key("w2"))
+            stated.setdefault(ax, {})["w2"] = dict(zip(("makeweight", "rule"),
+                                                       w2_params(L, drive)))
+        elif _hf_gain(weights[ax]["w2"]) == 0.0:
+            raise SpecError(sub.key("w2"), "a control weight with a non-zero high-frequency "
+                            "gain (assumption A2 of the H-infinity problem: u weighted "
+                            "directly, D12 of full column rank)", sub.raw("w2"),
+                            hint=f"e.g. the default for this axis, {w2_toml(L, drive)}, "
+                                 "or leave w2 out to get it")
+        if weights[ax]["w1"] is None:
+            stated.setdefault(ax, {})["w1"] = "default, from requirements (see design)"
+    return HinfCfg(gamma, backoff, order, itol, loss, on_loss, executed, weights,
+                   defaults={"gamma": gamma} if not t.has("gamma") and not t.has("weights")
+                   else None, stated=stated)
+
+
+def _hf_gain(W: Any) -> float:
+    """``|W(j inf)|`` of a proper weight (0 for a strictly proper one)."""
+    return float(np.abs(np.asarray(ct.ss(W).D)).max())
+
+
+def _fill_default_w1(cfg: HinfCfg, spec) -> tuple[dict, dict]:
+    """The weights with every missing ``w1`` built from the requirements
+    (:mod:`toolbox.design._hinf_defaults`), and the stated defaults."""
+    weights = {ax: dict(w) for ax, w in cfg.weights.items()}
+    stated = {ax: dict(v) for ax, v in cfg.stated.items()}
+    for ax in AXES:
+        if weights[ax]["w1"] is None:
+            p, rule = w1_params(spec.drive, spec.requirements)
+            weights[ax]["w1"] = makeweight(p["dc_gain"], p["crossover"], p["crossover_gain"],
+                                           p["hf_gain"], key=f"{_KEY}.weights.{ax}.w1")
+            stated.setdefault(ax, {})["w1"] = {"makeweight": p, "rule": rule}
+    return weights, stated
 
 
 @dataclass
@@ -332,10 +375,17 @@ def _refuse_unrealisable(res, Kr, gamma, axis: str) -> None:
         return
     if Kr is not None and fastest_pole_modulus(Kr) <= res.pole_limit:
         return
+    if gamma == "optimal":
+        # the back-off already went up to its limit: a larger gamma is not the cure,
+        # the weights ask for a loop faster than the sampling allows
+        advice = (f"gamma = \"optimal\" backed off to {res.backoff:.3g} without removing it: "
+                  f"lower w1's crossover or give w2 a larger high-frequency gain (roll-off), "
+                  "e.g. leave the weights out for defaults derived from the sample time")
+    else:
+        advice = 'raise gamma or use gamma = "optimal" (automatic back-off)'
     raise DesignInfeasible(f"{_KEY}.gamma", "a gamma whose controller has no pole faster than "
                     f"pi/Ts = {res.pole_limit:.4g} rad/s", gamma,
-                    hint=f"{axis} axis: fastest pole |s| = {res.fastest_pole:.4g} rad/s; "
-                         'raise gamma or use gamma = "optimal" (automatic back-off)')
+                    hint=f"{axis} axis: fastest pole |s| = {res.fastest_pole:.4g} rad/s; {advice}")
 
 
 def _weight_data(W: Any) -> TransferFunctionData | None:
@@ -373,6 +423,8 @@ def design(spec) -> ControllerArtifact:
     cfg: HinfCfg = spec.controller.cfg
     ts = spec.drive.sample_time
     plants = axis_plants(spec.motor)
+    weights, stated = _fill_default_w1(cfg, spec)
+    cfg = replace(cfg, weights=weights, stated=stated)
     try:
         results = {ax: design_hinf_axis(plants[ax], **cfg.weights[ax], gamma=cfg.gamma,
                                         backoff=cfg.backoff, sample_time=ts,
@@ -431,6 +483,10 @@ def _design_parameters(cfg: HinfCfg, results: dict) -> dict:
                                for k, v in r.bounds.items()} for ax, r in results.items()},
         "warnings": {ax: list(r.synthesis.warnings) for ax, r in results.items()},
     }
+    if cfg.stated or cfg.defaults:
+        g["defaults"] = {"weights": cfg.stated, **(cfg.defaults or {}),
+                         "source": "toolbox.design._hinf_defaults (makeweight from requirements, "
+                                   "sample time and delay)"}
     if cfg.reduce_order is not None:
         g["reduction"] = {ax: {"order_before": r.reduction.order_before,
                                "order_after": r.reduction.order_after,

@@ -42,6 +42,7 @@ from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
 from ..spec import Table
+from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["IlqCfg", "IlqAxis", "IlqDesign", "sigma_bound", "ilq_axis", "ilq_axis_from_plant",
@@ -64,11 +65,14 @@ class IlqCfg:
         Gain-adjusting parameters ``(sigma_1, sigma_2)`` (1/s, > 0).
     allow_non_optimal : bool
         Accept sigma at or below the bound of eq (3) with a warning.
+    defaults : dict or None
+        The default poles and the rule that gave them (no poles in the spec).
     """
 
     poles: tuple[float, float]
     sigma: tuple[float, float]
     allow_non_optimal: bool = False
+    defaults: dict | None = None
 
 
 def sigma_bound(a: float, s_star: float) -> float:
@@ -443,14 +447,14 @@ def read_cfg(method: str, table, motor, drive) -> IlqCfg:
               ("poles", "s1", "s2", "sigma", "sigma_factor", "allow_non_optimal"))
     if t.has("poles") and (t.has("s1") or t.has("s2")):
         raise SpecError(t.key("poles"), "either poles or s1/s2, not both")
+    default_note = None
     if t.has("poles"):
         poles = t.per_axis("poles", negative=True, unit="rad/s")
     elif t.has("s1") or t.has("s2"):
         poles = (t.number("s1", negative=True, unit="rad/s"),
                  t.number("s2", negative=True, unit="rad/s"))
     else:
-        raise SpecError(t.key("poles"), "assigned poles s* < 0 (rad/s), a number or "
-                        "{d = .., q = ..} (missing)")
+        poles, default_note = _default_poles(t, motor, drive)
     allow = t.boolean("allow_non_optimal", False)
     bounds = tuple(sigma_bound(axis_coefficients(motor.R, L)[0], p)
                    for L, p in zip((motor.Ld, motor.Lq), poles))
@@ -471,7 +475,30 @@ def read_cfg(method: str, table, motor, drive) -> IlqCfg:
         sigma = tuple(factor * b for b in bounds)
     for ax, s, b in zip(AXES, sigma, bounds):
         _check_sigma(s, b, ax, allow)
-    return IlqCfg(poles=poles, sigma=sigma, allow_non_optimal=allow)
+    return IlqCfg(poles=poles, sigma=sigma, allow_non_optimal=allow, defaults=default_note)
+
+
+def _default_poles(t: Table, motor, drive) -> tuple[tuple[float, float], dict | None]:
+    """Assigned poles from the sample time and delay when the spec gives none.
+
+    With ``sigma = factor x 2 (a - s*)`` (eq 3, ``a = -R/L``) the loop
+    crosses over near ``sigma`` (``K_F = sigma L``) with its integral zero at
+    ``-s*``; ``s* = a - wc/(2 factor)`` makes ``sigma = wc``, the default
+    crossover of :func:`toolbox.design._defaults.default_bandwidth` (for the
+    default factor 2 the zero sits at ``wc/4 + R/L``, counted in ``wc``).
+    An explicit ``sigma`` keeps ``wc = sigma``'s axis value instead.
+    """
+    bw = _defaults.default_bandwidth(drive, zero=True)
+    if t.has("sigma"):
+        wc = t.per_axis("sigma", positive=True, unit="1/s")
+        factor = 2.0
+    else:
+        wc = (bw.value, bw.value)
+        factor = t.number("sigma_factor", 2.0, positive=True, maximum=1e3)
+    poles = tuple(-motor.R / L - w / (2.0 * factor) for L, w in zip((motor.Ld, motor.Lq), wc))
+    return poles, {"poles": {**bw.as_dict(),
+                             "s_star": f"s* = -R/L - wc/(2 sigma_factor), sigma_factor {factor:g}",
+                             "d": poles[0], "q": poles[1]}}
 
 
 def design(spec) -> ControllerArtifact:
@@ -501,5 +528,8 @@ def design(spec) -> ControllerArtifact:
     axes = {ax: AxisController.from_law(des.axes[ax].law(), sample_time=ts, method="tustin",
                                         error_controller=des.axes[ax].error_controller())
             for ax in AXES}
-    return make_artifact(spec, axes, decoupling_from_motor(m), des.gains(),
+    gains = des.gains()
+    if cfg.defaults:
+        gains["defaults"] = cfg.defaults
+    return make_artifact(spec, axes, decoupling_from_motor(m), gains,
                          ["001 eq (1)", "001 eq (2)", "001 eq (3)", "001 eq (4)", "001 Fig. 2(a)"])

@@ -39,6 +39,7 @@ from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
 from ..spec import Table
+from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["LqCfg", "LqAxis", "bryson_weights", "lqi_continuous", "lqi_discrete",
@@ -71,6 +72,7 @@ class LqCfg:
     bandwidth: float
     current_limit: float | None
     voltage_limit: float
+    defaults: dict | None = None
 
 
 def bryson_weights(current_limit: float, voltage_limit: float,
@@ -361,9 +363,13 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
     Keys: ``domain`` ("continuous" | "discrete", default "discrete"); ``Q``
     (``[q_i, q_z]`` or ``{d = [..], q = [..]}``) and ``R`` (number or
     ``{d =, q =}``) explicit, otherwise Bryson's rule from ``bandwidth``
-    (rad/s, default pi/(10 Ts)), ``current_limit`` (A, default
-    motor.rated_current or motor.max_current) and ``voltage_limit`` (V,
-    default drive.max_voltage).
+    (rad/s, default ``wc/4`` with ``wc`` of
+    :func:`toolbox.design._defaults.default_bandwidth`), ``current_limit``
+    (A, default :func:`toolbox.design._defaults.current_scale`: rated, max or
+    voltage-allowed current) and ``voltage_limit`` (V, default per axis
+    ``min(drive.max_voltage, wc L i_max)``, the voltage a full-scale error
+    asks at crossover; the drive's whole voltage made the loop cross over
+    far above what the delay allows).
 
     Parameters: as :func:`toolbox.design.read_method_cfg`.
 
@@ -374,29 +380,41 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
     t = Table(table.data, table.prefix,
               ("domain", "Q", "R", "bandwidth", "current_limit", "voltage_limit"))
     domain = t.string("domain", "discrete", choices=("continuous", "discrete"))
-    bandwidth = t.number("bandwidth", math.pi / (10 * drive.sample_time), positive=True,
+    # Bryson defaults tied to the sample time: crossover wc of
+    # _defaults.default_bandwidth (integral zero counted), integral weight at
+    # wc/4, and per axis the voltage a full-scale current error may ask at that
+    # crossover, wc L i_max (capped by the drive): then Kp ~ sqrt(q_i/r) = wc L
+    bw = _defaults.default_bandwidth(drive, zero=True)
+    bandwidth = t.number("bandwidth", bw.value / _defaults.ZERO_RATIO, positive=True,
                          unit="rad/s")
-    i_max = t.number("current_limit", motor.rated_current or motor.max_current,
-                     positive=True, unit="A")
-    v_max = t.number("voltage_limit", drive.max_voltage(motor.convention), positive=True,
-                     unit="V")
-    if i_max is None and not t.has("Q"):
-        raise SpecError(t.key("current_limit"), "a current limit (A) for Bryson's rule "
-                        "(missing: the motor gives neither rated_current nor max_current)")
+    # no current from the motor: the current the voltage allows (_defaults.current_scale)
+    i_default, i_source = _defaults.current_scale(motor, drive)
+    i_max = t.number("current_limit", i_default, positive=True, unit="A")
+    v_drive = drive.max_voltage(motor.convention)
+    v_max = t.number("voltage_limit", v_drive, positive=True, unit="V")
+    v_axis = {ax: (v_max if t.has("voltage_limit") else min(v_drive, bw.value * L * i_max))
+              for ax, L in zip(AXES, (motor.Ld, motor.Lq))}
+    defaults = None
     if t.has("Q"):
         Q = _read_q(t)
     else:
-        Qb, _ = bryson_weights(i_max, v_max, bandwidth)
-        Q = {"d": Qb, "q": Qb}
+        Q = {ax: bryson_weights(i_max, v_axis[ax], bandwidth)[0] for ax in AXES}
+        defaults = {"weights": {
+            **bw.as_dict(),
+            "bryson": "q_i = 1/i_max^2, q_z = (w_b/i_max)^2, r = 1/v_max^2",
+            "w_b": "bandwidth" if t.has("bandwidth") else f"wc/{_defaults.ZERO_RATIO:g}",
+            "i_max": i_max if t.has("current_limit") else f"{i_max:.5g} A from {i_source}",
+            "v_max": ("voltage_limit" if t.has("voltage_limit") else
+                      "min(V_max drive, wc L i_max) per axis: "
+                      + ", ".join(f"{ax} {v:.4g} V" for ax, v in v_axis.items()))}}
     if t.has("R"):
         rd, rq = t.per_axis("R", positive=True, unit="1/V^2")
         Rw = {"d": rd, "q": rq}
     else:
-        r = 1.0 / v_max ** 2
-        Rw = {"d": r, "q": r}
+        Rw = {ax: 1.0 / v_axis[ax] ** 2 for ax in AXES}
     for ax in AXES:
         _check_weights(Q[ax], Rw[ax], ax)
-    return LqCfg(domain, Q, Rw, bandwidth, i_max, v_max)
+    return LqCfg(domain, Q, Rw, bandwidth, i_max, v_max, defaults)
 
 
 def _read_q(t) -> dict:
@@ -449,5 +467,7 @@ def design(spec) -> ControllerArtifact:
         "voltage_limit": cfg.voltage_limit,
         "delay_samples": dr.delay_samples if cfg.domain == "discrete" else 0,
     }
+    if cfg.defaults:
+        gains["defaults"] = cfg.defaults
     eqs = ["001 eq (1)", "003 eq (33)-(34)"]
     return make_artifact(spec, axes, decoupling_from_motor(m), gains, eqs)

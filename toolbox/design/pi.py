@@ -85,6 +85,7 @@ import numpy as np
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..spec import Table
+from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
 
 __all__ = [
@@ -320,7 +321,7 @@ def _reject_foreign(t: Table, rule: str, structure: str) -> None:
                             hint=f"its keys: {', '.join(_RULE_KEYS[rule])}")
 
 
-def _bandwidth(t: Table) -> tuple[float, float]:
+def _bandwidth(t: Table, default: float | None = None) -> tuple[float, float]:
     if t.has("bandwidth") and t.has("response_time"):
         raise SpecError(t.key("response_time"), "either bandwidth or response_time, not both",
                         t.raw("response_time"))
@@ -328,8 +329,29 @@ def _bandwidth(t: Table) -> tuple[float, float]:
         t5 = t.per_axis("response_time", positive=True, unit="s")
         return (bandwidth_from_response_time(t5[0]), bandwidth_from_response_time(t5[1]))
     if not t.has("bandwidth"):
+        if default is not None:
+            return default, default
         raise SpecError(t.key("bandwidth"), "a number > 0 (rad/s) or response_time (missing)")
     return t.per_axis("bandwidth", positive=True, unit="rad/s")
+
+
+def _default_lag(drive) -> float:
+    """Default ``lag_time_constant`` of ``pi_lag`` (s): one sample period, an
+    anti-aliasing filter at the sampling rate (paper 001 gives no value)."""
+    return float(drive.sample_time)
+
+
+def _ip_default_gains(L: float, R: float, wc: float) -> tuple[float, float]:
+    """IP gains for crossover ``wc`` with the integral zero at ``wc/4``.
+
+    ``Kp = L wc``, ``Ki = Kp wc/4``: the characteristic polynomial
+    ``L s^2 + (R + L wc) s + L wc^2/4`` is ``L (s + wc/2)^2`` for ``R -> 0``,
+    so the IP reference response (no closed-loop zero) settles with a double
+    pole at ``wc/2`` instead of the plant time constant ``L/R`` that the
+    cancellation rule leaves it.
+    """
+    Kp = L * wc
+    return Kp, Kp * wc / _defaults.ZERO_RATIO
 
 
 def _explicit(t: Table, structure: str, drive) -> tuple[tuple, tuple, dict]:
@@ -395,11 +417,43 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
     L = (motor.Ld, motor.Lq)
     details: dict[str, Any] = {}
     Kt = None
-    if rule in ("cancellation", "bandwidth", "complex_vector"):
-        wc = _bandwidth(t)
+    lag = None
+    if method == "pi_lag":
+        lag = t.number("lag_time_constant", _default_lag(drive), positive=True, unit="s")
+        if not t.has("lag_time_constant"):
+            details.setdefault("defaults", {})["lag_time_constant"] = {
+                "value": lag, "rule": "T_d = Ts (anti-aliasing lag at the sampling rate)"}
+    # nothing of the rule given: the bandwidth is derived from Ts and the delay
+    # (_defaults module docstring), the lag counted as extra delay
+    no_gain_keys = not any(t.has(k) for k in ("rule",) + _ALL_RULE_KEYS)
+    ip_default = method == "ip" and no_gain_keys
+    default_wc = _defaults.default_bandwidth(drive, zero=ip_default, extra_delay=lag or 0.0)
+    if ip_default:
+        wc = (default_wc.value, default_wc.value)
+        g = [_ip_default_gains(L[k], motor.R, wc[k]) for k in (0, 1)]
+        Kp, Ki = (g[0][0], g[1][0]), (g[0][1], g[1][1])
+        rule = "ip_default"
+        details["bandwidth_rad_s"] = _axes(wc)
+        details.setdefault("defaults", {})["bandwidth"] = {
+            **default_wc.as_dict(),
+            "gains": "Kp = L wc, Ki = Kp wc/4 (closed-loop double pole near wc/2)"}
+    elif rule in ("cancellation", "bandwidth", "complex_vector"):
+        wc = _bandwidth(t, default_wc.value)
+        if not (t.has("bandwidth") or t.has("response_time")):
+            details.setdefault("defaults", {})["bandwidth"] = default_wc.as_dict()
         Kp = (L[0] * wc[0], L[1] * wc[1])
         Ki = (motor.R * wc[0], motor.R * wc[1])
         details["bandwidth_rad_s"] = _axes(wc)
+        limit = _defaults.largest_stable_pi_bandwidth(drive)
+        if max(wc) >= limit:
+            # the design exists (exit 1, outputs written): say which bandwidth would do
+            key = t.key("bandwidth" if t.has("bandwidth") else "response_time")
+            details["design_warnings"] = [
+                f"{key}: {max(wc):.5g} rad/s is at or above the largest stable bandwidth "
+                f"{limit:.5g} rad/s of the sampled loop (2 sin(pi/(4 delay + 2))/Ts, "
+                f"delay_samples {drive.delay_samples}); {default_wc.value:.5g} rad/s keeps "
+                f"a phase margin of about {_defaults.TARGET_PM_DEG:g} deg (leave bandwidth "
+                "out for it)"]
         if rule == "complex_vector":
             if t.has("integral_bandwidth"):
                 if method != "pi":
@@ -427,16 +481,14 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
         Kp, Ki = (g[0][0], g[1][0]), (g[0][1], g[1][1])
         details.update(a=a, T_sigma=T_sigma, Ti=a * a * T_sigma)
     else:
-        Kp, Ki, details = _explicit(t, method, drive)
+        Kp, Ki, explicit_details = _explicit(t, method, drive)
+        details.update(explicit_details)
     if method == "ip" and rule in ("cancellation", "bandwidth", "complex_vector"):
         warnings.warn(
             f'ip with rule = "{rule}": the loop has the PI\'s poles (-R/L, -wc), but the '
             "IP reference response has no zero to cancel -R/L, so it follows the plant "
             f"time constant L/R = {1e3 * max(L) / motor.R:.3g} ms; give explicit Kp, Ki "
             "for a faster IP", stacklevel=2)
-    lag = None
-    if method == "pi_lag":
-        lag = t.number("lag_time_constant", positive=True, unit="s")
     return PiCfg(structure=method, rule=rule, Kp=tuple(map(float, Kp)),
                  Kt=None if Kt is None else tuple(map(float, Kt)),
                  Ki=tuple(map(float, Ki)), decoupling=t.boolean("decoupling", True),
@@ -495,6 +547,8 @@ _RULE_EQUATIONS = {
                        "Kp = (alpha_c + alpha_i) L - R, Ki = alpha_c alpha_i L); "
                        "delay compensation angle 1.5 Ts omega"),
     "explicit": "Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)",
+    "ip_default": ("Kp = L wc, Ki = Kp wc/4, wc = (90 deg - 65 deg - atan(1/4))/((delay + 0.5) Ts) "
+                   "(defaults from the sample time, toolbox.design._defaults)"),
 }
 
 

@@ -42,6 +42,7 @@ import numpy as np
 from ..artifact import AxisController, ControllerArtifact, Decoupling
 from ..errors import SpecError
 from ..spec import Table
+from . import _defaults
 from ._common import make_artifact
 from .pi import DISCRETISATIONS, _explicit
 
@@ -261,6 +262,26 @@ def _read_model(t: Table, motor) -> dict:
             "flux": sub.number("flux", motor.flux, nonnegative=True, unit="Wb")}
 
 
+def _default_gains(method: str, drive) -> tuple[tuple, tuple | None, dict]:
+    """Gains from the sample time and delay when the spec gives none.
+
+    ``tc``: ``K = wc`` (error dynamics ``de/dt = -wc e``, the loop of a
+    cancellation PI with crossover ``wc``). ``tci``: ``K11 = wc``,
+    ``K12 = wc^2/4`` (damping 1, natural frequency ``wc/2``; the integral
+    zero at ``wc/4`` costs ``atan(1/4)`` of phase, counted in ``wc``).
+    ``wc`` from :func:`toolbox.design._defaults.default_bandwidth`.
+    """
+    bw = _defaults.default_bandwidth(drive, zero=method == "tci")
+    wc = bw.value
+    if method == "tc":
+        return (wc, wc), None, {"defaults": {"gains": {**bw.as_dict(), "K": "K1 = K2 = wc"}}}
+    K12 = wc * wc / _defaults.ZERO_RATIO
+    return (wc, wc), (K12, K12), {
+        "natural_frequency": {"d": wc / 2, "q": wc / 2}, "damping": {"d": 1.0, "q": 1.0},
+        "defaults": {"gains": {**bw.as_dict(),
+                               "K": "K11 = K21 = wc, K12 = K22 = wc^2/4 (damping 1)"}}}
+
+
 def _read_tc(t: Table) -> tuple[tuple, None, dict]:
     group = _one_group(t, _TC_GROUPS)
     if group == "gains":
@@ -329,7 +350,10 @@ def read_cfg(method: str, table: Table, motor, drive) -> TotalCompCfg:
     """
     t = Table(table.data, table.prefix, _TC_KEYS if method == "tc" else _TCI_KEYS)
     model = _read_model(t, motor)
-    if method == "tc":
+    groups = _TC_GROUPS if method == "tc" else _TCI_GROUPS
+    if not any(t.has(k) for keys in groups.values() for k in keys):
+        K_prop, K_int, details = _default_gains(method, drive)
+    elif method == "tc":
         K_prop, K_int, details = _read_tc(t)
     else:
         K_prop, K_int, details = _read_tci(t, model, drive)

@@ -480,8 +480,12 @@ def _law_zeros(law) -> np.ndarray:
     import scipy.signal
     if law.A.shape[0] == 0:
         return np.zeros(0)
-    z, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, :1], law.C, law.D[:, :1])
-    z2, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, 1:], law.C, law.D[:, 1:])
+    with warnings.catch_warnings():
+        # ss2tf leaves round-off leading numerator coefficients (zeros at infinity)
+        # that tf2zpk trims with BadCoefficients; the finite zeros are unaffected
+        warnings.simplefilter("ignore", scipy.signal.BadCoefficients)
+        z, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, :1], law.C, law.D[:, :1])
+        z2, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, 1:], law.C, law.D[:, 1:])
     return np.concatenate([z[np.isfinite(z)], z2[np.isfinite(z2)]])
 
 

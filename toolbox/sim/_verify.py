@@ -76,21 +76,60 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
                       speed_loop=speed_loop, fcs=artifact.fcs)
 
 
-def default_scenarios(motor) -> tuple[Scenario, ...]:
-    """Used when a spec has no ``[[scenario]]``: a q-current step to half the
-    rated current at standstill, 20 ms, and the same step during free
-    acceleration (unloaded start).
+def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
+    """Scenarios used when a spec has no ``[[scenario]]``, scaled to the motor.
+
+    A q-current step to half the current scale at standstill, the same step
+    during free acceleration (unloaded start), and the same step at half the
+    speed scale (speed held). The scales
+    (:func:`toolbox.design._defaults.current_scale`, ``speed_scale``) are
+    the rated (else maximum) current and speed, else what the voltage
+    allows; each scenario's ``name`` states its numbers.
+
+    Durations: at least 20 ms and 30 time constants of the slowest default
+    crossover (``3/wc`` is the 5 % time of a first-order loop: ten of them
+    leave room for the slower second-order defaults); the unloaded start
+    stops when the speed reaches half the speed scale (beyond, the back-EMF
+    would saturate the voltage: a field-weakening question, not the loop's).
 
     Parameters
     ----------
     motor : Motor
-        Its rated current sets the step (10 A when unknown).
+        Rated/max current and speed, torque constant and inertia.
+    drive : Drive, optional
+        Sample time, delay and voltage; without it the step is half the
+        rated current (10 A when unknown) and the speed scenario is left out.
     """
-    i_step = 0.5 * (motor.rated_current or 10.0)
-    return (Scenario(name="q step at standstill", kind="current_step", duration=0.02,
-                     iq_ref=i_step, step_time=0.001, keep_traces=True),
-            Scenario(name="q step, unloaded start", kind="unloaded_start", duration=0.02,
-                     iq_ref=i_step, step_time=0.001, keep_traces=True))
+    if drive is None:
+        i_step = 0.5 * (motor.rated_current or motor.max_current or 10.0)
+        return (Scenario(name="q step at standstill", kind="current_step", duration=0.02,
+                         iq_ref=i_step, step_time=0.001, keep_traces=True),
+                Scenario(name="q step, unloaded start", kind="unloaded_start", duration=0.02,
+                         iq_ref=i_step, step_time=0.001, keep_traces=True))
+    # lazy: toolbox.design imports the spec and plant stages, not needed without a drive
+    from ..design import current_scale, default_bandwidth, speed_scale
+    i_scale, _ = current_scale(motor, drive)
+    w_scale, _ = speed_scale(motor, drive)
+    i_step = 0.5 * i_scale
+    wc = default_bandwidth(drive, zero=True).value
+    step_time = 0.001
+    span = max(0.02, 30.0 / wc)
+    accel = motor.torque_factor * motor.pole_pairs * motor.flux * i_step / motor.J
+    t_half = 0.5 * w_scale / accel if accel > 0 and math.isfinite(w_scale) else math.inf
+    span_start = max(min(span, t_half), 10.0 / wc)
+    out = [Scenario(name=f"q step to {i_step:.4g} A (0.5 x current scale) at standstill",
+                    kind="current_step", duration=step_time + span, iq_ref=i_step,
+                    step_time=step_time, keep_traces=True),
+           Scenario(name=f"q step to {i_step:.4g} A, unloaded start",
+                    kind="unloaded_start", duration=step_time + span_start, iq_ref=i_step,
+                    step_time=step_time, keep_traces=True)]
+    if math.isfinite(w_scale):
+        out.append(Scenario(name=f"q step to {i_step:.4g} A at {0.5 * w_scale:.4g} rad/s "
+                                 "(0.5 x speed scale)",
+                            kind="current_step", duration=step_time + span, iq_ref=i_step,
+                            initial_speed=0.5 * w_scale, step_time=step_time,
+                            keep_traces=True))
+    return tuple(out)
 
 
 def _speed_loop(scenario: Scenario, sample_time: float) -> SpeedLoop | None:
@@ -245,7 +284,7 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     -------
     VerifyResult
     """
-    scenarios = spec.scenarios or default_scenarios(spec.motor)
+    scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
     plant = plant_params(spec.motor)
     inverter_default = "fcs_mpc" if artifact.method == "fcs_mpc" else "average"
     margin_checks, stability, linear, warnings, info = _margin_verdict(artifact, spec, file)
