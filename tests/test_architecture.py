@@ -128,3 +128,12 @@ def test_unregistered_method_is_a_located_spec_error():
     with pytest.raises(SpecError, match=r"controller\.method: expected a method with a "
                                         r"registered parameter reader .*got \"nope\""):
         read_method_cfg("nope", None, None, None)
+
+
+def test_test_module_basenames_are_unique():
+    """pytest's default (prepend) import mode imports test modules by basename:
+    two ``test_x.py`` in different folders stop the whole run at collection,
+    which a run of one folder does not show."""
+    tests = Path(__file__).parent
+    names = [p.name for p in tests.rglob("test_*.py")]
+    assert len(names) == len(set(names)), sorted({n for n in names if names.count(n) > 1})
