@@ -8,7 +8,8 @@ Motor: paper 003 sect. 6 (amplitude-invariant), Ts = 1e-4 s, one period of delay
 """
 import control as ct
 import numpy as np
-from toolbox.artifact import AxisController, ControllerArtifact, Decoupling
+from toolbox.artifact import (AxisController, AxisWeights, ControllerArtifact, Decoupling,
+                              TransferFunctionData)
 from toolbox.spec import Motor, Drive
 from toolbox.design import _hinf_riccati as H
 from toolbox.design._weights import weight_from_tf
@@ -20,9 +21,13 @@ DRIVE = Drive(vdc=150.0, sample_time=1e-4, delay_samples=1, max_speed=230.0)
 def dec(m, cross=True, emf=True):
     return Decoupling(cross, emf, m.R, m.Ld, m.Lq, m.flux, m.pole_pairs)
 
-def art(method, axes, m=AZAIZ, Ts=1e-4, d=1, cross=True):
+def art(method, axes, m=AZAIZ, Ts=1e-4, d=1, cross=True, weights=None):
     return ControllerArtifact(method=method, spec={}, sample_time=Ts, delay_samples=d,
-                              axes=axes, decoupling=dec(m, cross))
+                              axes=axes, decoupling=dec(m, cross), weights=weights)
+
+
+def _tf_data(w) -> TransferFunctionData:
+    return TransferFunctionData(np.asarray(w.num[0][0], float), np.asarray(w.den[0][0], float))
 
 def pi_artifact(wc=1000.0, m=AZAIZ, Ts=1e-4, d=1):
     s = ct.tf("s")
@@ -35,11 +40,12 @@ def hinf_artifact(Ts=1e-4, d=1):
                weight_from_tf([0.5e-3, 0.5], [2e-5, 1]), weight_from_tf([1e4, 1e4 * 135.68], [1, 2.7135e6])),
          "d": (ct.tf([1], [1.4e-3, 0.6]), weight_from_tf([1 / 1.7, 68.7386 / 1.7], [1, 0.0040]),
                weight_from_tf([25, 25e3], [1, 5e4]), weight_from_tf([1e4, 1e4 * 577.3503], [1, 1.1547e7]))}
-    ax = {}
+    ax, weights = {}, {}
     for n, (G, w1, w2, w3) in W.items():
         K = H.central_controller(H.augment_mixed_sensitivity(G, w1, w2, w3), 1.0)
         ax[n] = AxisController.from_error_controller(K, Ts)
-    return art("hinf", ax, AZAIZ, Ts, d)
+        weights[n] = AxisWeights(1.0, _tf_data(w1), _tf_data(w2), _tf_data(w3))
+    return art("hinf", ax, AZAIZ, Ts, d, weights=weights)
 
 def tc_artifact(K=800.0, m=AZAIZ, Ts=1e-4, d=1):
     """Total compensation (paper 000 eq 11): v = L K (i_ref - i) + R i (+ decoupling)."""
