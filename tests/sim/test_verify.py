@@ -270,4 +270,8 @@ def test_fcs_mpc_reach_band_is_the_switching_penalty_dead_band():
     assert swing <= band, (swing, band)
     assert band >= math.sqrt(3 * 35.0) - 1e-12
     assert math.isinf(fcs_ripple(8.0, 1e-4, 1e-3, 0.0, 35.0))     # unweighted axis
-    assert fcs_ripple(8.0, 1e-4, 1e-3, 1.0, 0.0) == pytest.approx(0.4, rel=1e-12)
+    # covering radius of the one-period lattice: d / sqrt(3), d = r_hex Ts / L = 0.8 A
+    assert fcs_ripple(8.0, 1e-4, 1e-3, 1.0, 0.0) == pytest.approx(0.8 / math.sqrt(3), rel=1e-12)
+    # unequal weights: the lighter axis' error grows by sqrt(w_max / w)
+    assert fcs_ripple(8.0, 1e-4, 1e-3, 1.0, 0.0, 4.0) == pytest.approx(1.6 / math.sqrt(3),
+                                                                        rel=1e-12)

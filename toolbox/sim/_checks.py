@@ -13,16 +13,21 @@ did. Every scenario now gets these checks, derived from the spec alone:
     sensor, and quantisation and noise cannot be tracked below their own size,
     so no band narrower than that is demanded of a small step. ``ripple`` is
     zero for the average and SVM inverters (symmetric PWM samples the current
-    at the centre of its ripple) and ``r_hex Ts / (2 L)`` for the predictive
-    switching inverter, which holds one of the eight voltage vectors (length
-    ``r_hex``) for a whole period: the current moves by up to ``r_hex Ts / L``
-    per period and the best vector can still leave half of that. With a
-    switching penalty ``gamma`` in criterion (23) of paper 002 the law keeps
-    the present vector while ``w e^2 <= gamma n`` (``w`` the weight of the
-    axis' squared error, ``n`` the commutations the better vector costs, at
-    most 3): it tolerates, by design, a current error up to
-    ``sqrt(3 gamma / w)`` before it switches, and :func:`fcs_ripple` adds that
-    dead band to the per-period move.
+    at the centre of its ripple) and :func:`fcs_ripple` for the predictive
+    switching inverter, which holds one of the eight voltage vectors (vertex
+    radius ``r_hex``) for a whole period: the currents it can reach in one
+    period are the centre and six vertices of a hexagon of radius
+    ``d = r_hex Ts / L``, and the law picks the one nearest the reference, so
+    the error it leaves is up to the covering radius of that lattice,
+    ``d / sqrt(3)`` (the centroid of one of its equilateral triangles), not
+    ``d / 2``: along a vertex direction it is ``d / 2``, between two vertices
+    ``d / sqrt(3)``. With a switching penalty ``gamma`` in criterion (23) of
+    paper 002 the law keeps the present vector while ``w e^2 <= gamma n``
+    (``w`` the weight of the axis' squared error, ``n`` the commutations the
+    better vector costs, at most 3): it tolerates, by design, a current error
+    up to ``sqrt(3 gamma / w)`` before it switches, and :func:`fcs_ripple`
+    adds that dead band. For that inverter the step metrics use the same band
+    (:mod:`toolbox.sim._fcs_metrics`).
 ``default.bounded_current``
     Nothing diverges: the peak current magnitude ``|i_dq|`` (with traces) or
     the RMS tracking error ``sqrt(mse_id + mse_iq)`` (without) stays under
@@ -357,19 +362,28 @@ def default_checks(scenario, metrics: dict, result, *, plant, motor, v_max: floa
 
 
 def fcs_ripple(r_hex: float, sample_time: float, L: float, weight: float,
-               gamma: float) -> float:
+               gamma: float, other_weight: float | None = None) -> float:
     """Current error the predictive switching law leaves by design (A).
 
-    Half the per-period move of one held vector, ``r_hex Ts / (2 L)``, plus
-    the dead band of the switching penalty of criterion (23) (paper 002):
-    a switch costing ``n <= 3`` commutations is taken only once it lowers
-    ``w e^2`` by more than ``gamma n``, so errors up to ``sqrt(3 gamma / w)``
-    may persist. With ``w = 0`` the axis is not regulated (infinite).
+    The covering radius of the currents one period can reach, plus the dead
+    band of the switching penalty of criterion (23) (paper 002). The eight
+    inverter states reach, one period ahead, the centre and the six vertices
+    of a hexagon of radius ``d = r_hex Ts / L`` around the free response
+    (``L`` the smallest inductance: a larger one only shrinks that axis). The
+    law picks the state of least ``alpha e_q^2 + beta e_d^2``; in the
+    Euclidean metric no point of the hexagon is further than ``d / sqrt(3)``
+    from one of the seven (the centroid of an equilateral triangle of side
+    ``d``). With unequal weights the weighted covering radius is at most
+    ``sqrt(w_max) d / sqrt(3)``, i.e. an error of ``sqrt(w_max / w) d /
+    sqrt(3)`` on the axis of weight ``w``. A switch costing ``n <= 3``
+    commutations is taken only once it lowers ``w e^2`` by more than
+    ``gamma n``, so errors up to ``sqrt(3 gamma / w)`` more may persist. With
+    ``w = 0`` the axis is not regulated (infinite).
 
     Parameters
     ----------
     r_hex : float
-        Inscribed-hexagon voltage radius (V).
+        Hexagon vertex voltage radius (V).
     sample_time : float
         Period (s).
     L : float
@@ -378,15 +392,21 @@ def fcs_ripple(r_hex: float, sample_time: float, L: float, weight: float,
         Weight of the axis' squared current error in criterion (23) (1/A^2).
     gamma : float
         Switching penalty of criterion (23).
+    other_weight : float, optional
+        Weight of the other axis (default ``weight``: equal weights).
 
     Examples
     --------
     >>> round(fcs_ripple(8.0, 1e-4, 1e-3, 1.0, 35.0), 3)
-    10.647
+    10.709
+    >>> round(fcs_ripple(8.0, 1e-4, 1e-3, 1.0, 0.0), 4)    # 0.8 A / sqrt(3)
+    0.4619
     """
     if weight <= 0:
         return math.inf
-    return r_hex * sample_time / (2.0 * L) + math.sqrt(3.0 * gamma / weight)
+    w_max = max(weight, other_weight if other_weight is not None else weight)
+    cover = math.sqrt(w_max / weight) * r_hex * sample_time / (math.sqrt(3.0) * L)
+    return cover + math.sqrt(3.0 * gamma / weight)
 
 
 def _reach(facts, scenario, metrics, result, traces, plant, v_max, delay_samples,

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 
-from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check
+from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
+from ._fcs_metrics import ripple_band_step_times
 from ._scenario import Scenario
 from ._simulate import (AxisLaw, ControlLaw, DriveParams, FcsWeights, PlantParams,
                         SimResult, SpeedLoop, simulate)
@@ -253,6 +254,36 @@ def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict,
     return checks, stability, linear, warnings, informational
 
 
+def _fcs_ripple(artifact, drive: DriveParams, true_plant: PlantParams,
+                r_hex: float) -> dict[str, float] | None:
+    """Per-axis design ripple of the predictive switching law, None for other inverters.
+
+    One vector held for a whole period, and the switching penalty's dead band
+    (:func:`toolbox.sim._checks.fcs_ripple`).
+    """
+    if drive.inverter != "fcs_mpc" or artifact.fcs is None:
+        return None
+    fcs, L_min = artifact.fcs, min(true_plant.Ld, true_plant.Lq)
+    return {"q": fcs_ripple(r_hex, drive.sample_time, L_min, fcs.alpha, fcs.gamma, fcs.beta),
+            "d": fcs_ripple(r_hex, drive.sample_time, L_min, fcs.beta, fcs.gamma, fcs.alpha)}
+
+
+def _fcs_step_times(scenario: Scenario, res: SimResult, true_plant: PlantParams, artifact,
+                    ripple: dict[str, float]) -> dict[str, float]:
+    """5 % / 2 % times of a switching-law current step in the band max(b |delta|, ripple).
+
+    See :mod:`toolbox.sim._fcs_metrics`; empty (the kernel's metrics stand)
+    without traces or without a current step.
+    """
+    facts = step_facts(scenario, true_plant, artifact.decoupling.flux_c)
+    if facts.axis is None or not facts.has_step or getattr(res, "t", None) is None:
+        return {}
+    y = res.iq if facts.axis == "q" else res.id
+    times, _ = ripple_band_step_times(res.t, y, facts.y0, facts.yf, scenario.step_time or 0.0,
+                                      scenario.duration, ripple[facts.axis])
+    return times
+
+
 def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
            keep_traces: bool = True, file: str | None = None) -> VerifyResult:
     """Simulate ``artifact`` in every scenario of ``spec`` and check it.
@@ -301,24 +332,21 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
                else dataclasses.replace(sc, keep_traces=True))
         res = simulate(law, plant, run, drive)  # simulate applies the scenario's overrides
         metrics = dict(res.metrics)
+        true_plant = plant.with_overrides(sc.plant_values, sc.plant_scale)
+        r_hex, v_max = drive.radii(plant.torque_factor)
+        ripple = _fcs_ripple(artifact, drive, true_plant, r_hex)
+        if ripple:
+            metrics.update(_fcs_step_times(sc, res, true_plant, artifact, ripple))
         error = abs(metrics.get("static_error", float("nan")))
         speed_signal = sc.kind in ("speed_step", "load_step")
         metrics["static_speed_error_abs" if speed_signal else "static_error_abs"] = error
         # a bound on a quantity this kind of scenario does not produce does not apply
         checks = {k: c for k, c in spec.requirements.check(metrics, "sim").items()
                   if c["quantity"] in metrics}
-        true_plant = plant.with_overrides(sc.plant_values, sc.plant_scale)
-        r_hex, v_max = drive.radii(plant.torque_factor)
-        # one vector held for a whole period, and the switching penalty's dead band
-        ripple = 0.0
-        if drive.inverter == "fcs_mpc" and artifact.fcs is not None:
-            fcs, L_min = artifact.fcs, min(true_plant.Ld, true_plant.Lq)
-            ripple = {ax: fcs_ripple(r_hex, drive.sample_time, L_min, w, fcs.gamma)
-                      for ax, w in (("q", fcs.alpha), ("d", fcs.beta))}
         checks.update(default_checks(
             sc, metrics, res, plant=true_plant, motor=spec.motor, v_max=v_max,
             delay_samples=spec.drive.delay_samples, sample_time=spec.drive.sample_time,
-            linear=linear, flux_c=artifact.decoupling.flux_c, ripple=ripple))
+            linear=linear, flux_c=artifact.decoupling.flux_c, ripple=ripple or 0.0))
         checks = {k: finalise_check(c) for k, c in checks.items()}
         kept = res if sc.keep_traces else SimResult(metrics=res.metrics)
         out.scenarios.append(ScenarioOutcome(sc.name or sc.kind, sc.kind, metrics, checks,
