@@ -44,6 +44,21 @@ class FcsMpcCfg:
     beta: float = 1.0
     gamma: float = 0.0
 
+    def to_spec(self, spec=None) -> dict[str, float]:
+        """``[controller.fcs_mpc]`` keys that read back to this configuration.
+
+        Parameters
+        ----------
+        spec : Spec, optional
+            Unused (same signature as the other methods' ``to_spec``).
+
+        Returns
+        -------
+        dict
+            ``alpha``, ``beta``, ``gamma``.
+        """
+        return {"alpha": float(self.alpha), "beta": float(self.beta), "gamma": float(self.gamma)}
+
 
 def baseline_pi(R: float, L: float) -> tuple[float, float]:
     """SVM baseline PI of paper 002 eq (19)-(20).

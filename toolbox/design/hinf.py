@@ -109,6 +109,64 @@ class HinfCfg:
     defaults: dict | None = None
     stated: dict = field(default_factory=dict)
 
+    def to_spec(self, spec=None) -> dict[str, Any]:
+        """``[controller.hinf]`` keys that read back to this configuration.
+
+        Every weight is written: a default one as its makeweight parameters
+        (``w2`` from the drive, ``w1`` from the requirements, which needs
+        ``spec``), a given one as given in ``spec`` (else ``{num, den}`` of
+        its transfer function).
+
+        Parameters
+        ----------
+        spec : Spec, optional
+            Drive and requirements for the default ``w1``; without it a
+            default ``w1`` is not representable and ValueError is raised.
+
+        Returns
+        -------
+        dict
+        """
+        out: dict[str, Any] = {"gamma": self.gamma, "backoff": float(self.backoff)}
+        if self.reduce_order is not None:
+            out["reduce_order"] = int(self.reduce_order)
+        out.update(integrator_tol=float(self.integrator_tol),
+                   margin_loss=float(self.margin_loss), on_margin_loss=self.on_margin_loss,
+                   executed=self.executed)
+        weights: dict[str, Any] = {}
+        for ax in AXES:
+            stated = self.stated.get(ax, {})
+            weights[ax] = {}
+            for name in ("w1", "w2", "w3"):
+                W = self.weights[ax][name]
+                if name == "w1" and W is None:
+                    if spec is None:
+                        raise ValueError("HinfCfg.to_spec: a default w1 needs the spec "
+                                         "(drive and requirements)")
+                    weights[ax][name] = dict(w1_params(spec.drive, spec.requirements)[0])
+                elif name == "w2" and isinstance(stated.get("w2"), dict):
+                    weights[ax][name] = dict(stated["w2"]["makeweight"])
+                elif W is not None:
+                    given = _given_weight(spec, ax, name)
+                    weights[ax][name] = given if given is not None else _tf_table(W)
+        out["weights"] = weights
+        return out
+
+
+def _tf_table(W: Any) -> dict[str, list[float]]:
+    """A SISO weight as the spec's ``{num = [..], den = [..]}`` (highest power first)."""
+    tf = ct.tf(W)
+    return {"num": [float(c) for c in np.atleast_1d(np.squeeze(tf.num[0][0]))],
+            "den": [float(c) for c in np.atleast_1d(np.squeeze(tf.den[0][0]))]}
+
+
+def _given_weight(spec, ax: str, name: str) -> Any:
+    """The weight table as written in the spec file, or None."""
+    raw = getattr(spec, "raw", None) or {}
+    for key in ("controller", "hinf", "weights", ax, name):
+        raw = raw.get(key) if isinstance(raw, Mapping) else None
+    return raw
+
 
 def _root(value: Any, key: str) -> complex:
     if isinstance(value, (int, float)) and not isinstance(value, bool):

@@ -74,6 +74,24 @@ class IlqCfg:
     allow_non_optimal: bool = False
     defaults: dict | None = None
 
+    def to_spec(self, spec=None) -> dict[str, Any]:
+        """``[controller.ilq]`` keys that read back to this configuration:
+        ``poles`` and ``sigma`` per axis (whatever default or factor gave
+        them) and ``allow_non_optimal``.
+
+        Parameters
+        ----------
+        spec : Spec, optional
+            Unused (same signature as the other methods' ``to_spec``).
+
+        Returns
+        -------
+        dict
+        """
+        return {"poles": {"d": float(self.poles[0]), "q": float(self.poles[1])},
+                "sigma": {"d": float(self.sigma[0]), "q": float(self.sigma[1])},
+                "allow_non_optimal": bool(self.allow_non_optimal)}
+
 
 def sigma_bound(a: float, s_star: float) -> float:
     """Lower bound of sigma for LQ optimality, eq (3) (1/s).

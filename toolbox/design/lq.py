@@ -74,6 +74,26 @@ class LqCfg:
     voltage_limit: float
     defaults: dict | None = None
 
+    def to_spec(self, spec=None) -> dict[str, Any]:
+        """``[controller.lq]`` keys that read back to this configuration:
+        ``domain`` and the weights ``Q``, ``R`` per axis (Bryson's defaults
+        included). ``bandwidth``, ``current_limit`` and ``voltage_limit``
+        only shape default weights, so they are left out once Q and R are
+        written.
+
+        Parameters
+        ----------
+        spec : Spec, optional
+            Unused (same signature as the other methods' ``to_spec``).
+
+        Returns
+        -------
+        dict
+        """
+        return {"domain": self.domain,
+                "Q": {ax: [float(v) for v in self.Q[ax]] for ax in ("d", "q")},
+                "R": {ax: float(self.R[ax]) for ax in ("d", "q")}}
+
 
 def bryson_weights(current_limit: float, voltage_limit: float,
                    bandwidth: float) -> tuple[tuple[float, float], float]:

@@ -151,6 +151,38 @@ class PiCfg:
     Kt: tuple[float, float] | None = None
     details: dict = field(default_factory=dict)
 
+    def to_spec(self, spec=None) -> dict[str, Any] | None:
+        """``[controller.<structure>]`` keys that read back to the same gains.
+
+        The gains are written as the explicit rule (effective ``Kp``, ``Ki``
+        per axis): whatever rule or default gave them, the same law results.
+        A two-degree-of-freedom PI (``Kt``) has no explicit form, and the
+        complex-vector rule carries its delay compensation: None (the table
+        is printed as given).
+
+        Parameters
+        ----------
+        spec : Spec, optional
+            Unused (same signature as the other methods' ``to_spec``).
+
+        Returns
+        -------
+        dict or None
+        """
+        if self.Kt is not None or self.rule == "complex_vector":
+            return None
+        out: dict[str, Any] = {"rule": "explicit", "Kp": _per_axis(self.Kp),
+                               "Ki": _per_axis(self.Ki), "decoupling": bool(self.decoupling),
+                               "discretisation": self.discretisation}
+        if self.structure == "pi_lag":
+            out["lag_time_constant"] = float(self.lag_time_constant)
+        return out
+
+
+def _per_axis(pair) -> dict[str, float]:
+    """``(d, q)`` as the spec's per-axis inline table ``{d = .., q = ..}``."""
+    return {"d": float(pair[0]), "q": float(pair[1])}
+
 
 def bandwidth_from_response_time(response_time: float) -> float:
     """Bandwidth of a first-order loop with the given 5 % response time.

@@ -93,6 +93,30 @@ class TotalCompCfg:
     discretisation: str = "tustin"
     details: dict = field(default_factory=dict)
 
+    def to_spec(self, spec=None) -> dict[str, Any]:
+        """``[controller.tc|tci]`` keys that read back to the same gains.
+
+        ``tc``: ``K1`` (d), ``K2`` (q); ``tci``: ``K11``, ``K12`` (d), ``K21``,
+        ``K22`` (q), whatever group (poles, response time, match_pi, default)
+        gave them; the controller-side ``model`` and the discretisation.
+
+        Parameters
+        ----------
+        spec : Spec, optional
+            Unused (same signature as the other methods' ``to_spec``).
+
+        Returns
+        -------
+        dict
+        """
+        if self.K_int is None:
+            gains = {"K1": float(self.K_prop[0]), "K2": float(self.K_prop[1])}
+        else:
+            gains = {"K11": float(self.K_prop[0]), "K12": float(self.K_int[0]),
+                     "K21": float(self.K_prop[1]), "K22": float(self.K_int[1])}
+        return {**gains, "model": {k: float(v) for k, v in self.model.items()},
+                "discretisation": self.discretisation}
+
 
 # ------------------------------------------------------------------ plain API
 def gains_from_response_time(response_time: float) -> float:

@@ -1,7 +1,7 @@
 """A resolved spec printed back as a TOML spec file (``cct check``).
 
-Motor, drive and scenarios are printed with every default filled in, the
-motor as per-phase dq model values; datasheet keys and unit strings appear as
+Motor, drive, the method's parameters and scenarios are printed with every
+default filled in, the motor as per-phase dq model values; datasheet keys and unit strings appear as
 comments next to the value derived from them, with the formula and the dq
 convention. Loading the printed text gives the same spec (a test round-trips
 it); floats are printed with ``repr`` so that no digit is lost.
@@ -96,6 +96,34 @@ def _note(conv: Conversion) -> str:
     return f"from {given}: {conv.formula}"
 
 
+def _method_table(spec: Spec) -> Mapping[str, Any] | None:
+    """The method's parameters with every default filled in, or None.
+
+    The design method's validated configuration renders itself
+    (``cfg.to_spec(spec)``, e.g. :meth:`toolbox.design.lq.LqCfg.to_spec`):
+    the spec stage does not import the design stage (toolbox/ARCHITECTURE.md
+    "Layers"), it asks the object it was handed.
+    """
+    to_spec = getattr(spec.controller.cfg, "to_spec", None)
+    return to_spec(spec) if callable(to_spec) else None
+
+
+def _controller_lines(spec: Spec) -> list[str]:
+    """``[controller]`` and ``[controller.<method>]``, defaults filled in when the
+    method can render them, else as given."""
+    method = spec.controller.method
+    table = _method_table(spec)
+    if table is None:
+        given = spec.raw.get("controller")
+        given = dict(given) if isinstance(given, Mapping) else {"method": method}
+        return (["", "[controller]", "# method parameters as given; the design method "
+                 "applies its defaults"] + list(_lines(given, {})))
+    return (["", "[controller]", f"method = {toml_value(method)}", "",
+             f"[controller.{_key(method)}]",
+             "# every parameter, defaults filled in (the values the design uses)"]
+            + list(_lines(table, {})))
+
+
 def spec_to_toml(spec: Spec, source: str | None = None) -> str:
     """The resolved spec as TOML text that loads back to the same spec.
 
@@ -110,9 +138,10 @@ def spec_to_toml(spec: Spec, source: str | None = None) -> str:
     -------
     str
         TOML: ``[motor]`` and ``[drive]`` with every default filled in (per
-        phase dq values, SI), ``[controller]`` and ``[requirements]`` as
-        given (method defaults are applied by the design method), and every
-        ``[[scenario]]`` with all its keys.
+        phase dq values, SI), ``[controller.<method>]`` with the method's
+        defaults filled in (the design method's ``cfg.to_spec``; as given
+        when the method cannot render itself), ``[requirements]`` as given,
+        and every ``[[scenario]]`` with all its keys.
     """
     notes = {c.key: _note(c) for c in spec.conversions}
     out = [f"# {_comment(source or spec.source or 'spec')}: ok (resolved spec, SI units)",
@@ -124,10 +153,7 @@ def spec_to_toml(spec: Spec, source: str | None = None) -> str:
     out += ["", "[motor]"] + list(_lines(motor, notes))
     drive = asdict(spec.drive)
     out += ["", "[drive]"] + list(_lines(drive, notes))
-    controller = spec.raw.get("controller")
-    if isinstance(controller, Mapping):
-        out += ["", "[controller]", "# method parameters as given; the design method "
-                "applies its defaults"] + list(_lines(controller, {}))
+    out += _controller_lines(spec)
     if spec.requirements.bounds:
         out += ["", "[requirements]"] + list(_lines(spec.requirements.bounds, {}))
     for scenario in spec.scenarios:
