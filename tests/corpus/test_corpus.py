@@ -1,0 +1,137 @@
+"""A corpus of real motors, each designed with every method on defaults (issue 12 item 4).
+
+``tests/corpus/motors/*.toml`` holds 33 motors in datasheet form (line-to-line
+R and L, V/krpm or N m/A, rpm, kHz strings), from a 10 W gimbal motor at 12 V
+to 150 kW traction machines at 800 V, surface and interior PM; each file
+cites its source and marks every value the source does not print as assumed.
+
+Each case runs what ``cct design`` runs (design, analysis, verification on
+the default scenarios, header) through the Python API and asserts the
+exit-0 equivalent: ``DesignOutputs.passed`` (every default check of
+verification, stability, no refused header) and a header for the methods
+that export one. Reports are built for one case only (they cost more than
+the rest together).
+
+Time: the full grid (33 motors x 9 methods) took 547 s on the shared 2-core
+machine, over the CI budget; by default a representative grid runs (one
+motor per class, every method: ``DEFAULT_MOTORS``), ``CCT_CORPUS=full``
+runs all 33. Measured: see the report of branch ``corpus``.
+
+Known failures are listed in ``KNOWN`` with the reason found; they are
+``xfail(strict=True)``, so a fix makes the test say so. FCS-MPC cases whose
+per-period ripple (``fcs_ripple``) is at least half the default step are
+physically out of reach at the datasheet's sampling rate (the law holds one
+of eight vectors for a whole period): a failure of those is reported as an
+expected failure; every other fcs_mpc case must pass.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from pathlib import Path
+
+import pytest
+
+import toolbox
+from toolbox.pipeline import NO_HEADER_METHODS, build_outputs
+from toolbox.sim import default_scenarios
+from toolbox.sim._checks import fcs_ripple
+from toolbox.sim._simulate import DriveParams
+
+MOTOR_DIR = Path(__file__).parent / "motors"
+MOTORS = sorted(p.stem for p in MOTOR_DIR.glob("*.toml"))
+METHODS = ("pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc")
+#: one motor per class: issue 12's IPM, axial flux, industrial servo, small BLDC,
+#: 48 V BLDC, hybrid traction IPM
+DEFAULT_MOTORS = ("issue12_ipmsm", "emrax_228", "kollmorgen_akm42g", "maxon_ec45flat_50w",
+                  "nanotec_db57m012", "toyota_prius2004_mg2")
+FULL = os.environ.get("CCT_CORPUS") == "full"
+
+_UNLOADED = ("default scenario 'unloaded start' of a low-inertia motor: the 10/wc floor "
+             "on its duration lets the rotor run past the speed the voltage allows at the "
+             "step current (toolbox.sim._verify.default_scenarios; not fixed)")
+_EMF_RAMP = ("unloaded start: the back-EMF ramps with the speed and the type-1 loop "
+             "(no EMF feedforward in the law) keeps a ramp error above 2 %")
+_SPEED = ("0.5 x speed scale from the assumed rated speed is out of voltage reach with "
+          "R i at the step current (the speed scale ignores R i)")
+#: (motor, method) -> reason (found by running the grid, branch corpus)
+KNOWN: dict[tuple[str, str], str] = {
+    **{("tmotor_gb2208", m): _SPEED + "; " + _UNLOADED for m in METHODS},
+    **{("ipower_gm2804", m): _UNLOADED for m in METHODS},
+    **{("ipower_gm4108", m): _UNLOADED for m in ("ip", "tci", "lq")},
+    **{("issue12_gimbal", m): _UNLOADED for m in ("ip", "tc", "lq")},
+    ("kollmorgen_akm22c", "lq"): _EMF_RAMP,
+    ("teknic_cpm_2310", "ip"): _EMF_RAMP,
+    ("teknic_cpm_2310", "lq"): _EMF_RAMP,
+    ("siemens_1fk7042", "pi_lag"): ("reach at half speed 4.0 ms against a bound of 3.5 ms: "
+                                    "the 8 kHz lag of pi_lag on a 10 mH servo; marginal"),
+}
+#: fcs_mpc cases with a baseline PI unstable at the sample rate: the reach bound reads
+#: the (informational) baseline's linear figures (toolbox.sim._verify; not fixed)
+KNOWN_FCS = {"ipower_gm2804", "ipower_gm4108", "tmotor_gb2208", "maxon_ec32flat_15w",
+             "maxon_eci40_70w"}
+
+
+def corpus_spec(motor: str, method: str):
+    """The motor's spec with ``method`` and no method parameters."""
+    data = tomllib.loads((MOTOR_DIR / f"{motor}.toml").read_text())
+    data["controller"] = {"method": method}
+    return toolbox.spec_from_dict(data)
+
+
+def fcs_ripple_ratio(spec) -> float:
+    """Design ripple of the default fcs_mpc law over the default step (q axis)."""
+    drive = DriveParams(vdc=spec.drive.vdc, sample_time=spec.drive.sample_time,
+                        delay_samples=spec.drive.delay_samples,
+                        v_limit=spec.drive.voltage_limit, inverter="fcs_mpc")
+    r_hex, _ = drive.radii(spec.motor.torque_factor)
+    ripple = fcs_ripple(r_hex, spec.drive.sample_time, min(spec.motor.Ld, spec.motor.Lq),
+                        1.0, 0.0)
+    step = default_scenarios(spec.motor, spec.drive)[0].iq_ref
+    return ripple / step
+
+
+def test_corpus_size_and_range():
+    """At least 25 motors, 10 W gimbal to 150 kW traction, 12 V to 800 V, SPM and IPM."""
+    assert len(MOTORS) >= 25
+    specs = [corpus_spec(m, "pi") for m in MOTORS]
+    vdc = [s.drive.vdc for s in specs]
+    assert min(vdc) == 12.0 and max(vdc) == 800.0
+    assert any(s.motor.Lq > 1.5 * s.motor.Ld for s in specs)       # interior PM
+    assert any(s.motor.Lq == s.motor.Ld for s in specs)            # surface PM
+    for path in MOTOR_DIR.glob("*.toml"):
+        text = path.read_text()
+        assert text.startswith("#") and "assumed" in text, f"{path.name}: cite the source"
+
+
+def _cases():
+    for motor in (MOTORS if FULL else DEFAULT_MOTORS):
+        for method in METHODS:
+            marks = []
+            if (motor, method) in KNOWN:
+                marks.append(pytest.mark.xfail(reason=KNOWN[motor, method], strict=True))
+            yield pytest.param(motor, method, marks=marks, id=f"{motor}-{method}")
+
+
+@pytest.mark.parametrize("motor, method", list(_cases()))
+def test_corpus_motor_designs_on_defaults(motor, method):
+    spec = corpus_spec(motor, method)
+    report = (motor, method) == ("issue12_ipmsm", "pi")
+    out = build_outputs(spec, analysis=True, verification=True, report=report,
+                        header=method not in NO_HEADER_METHODS)
+    failed = {s.name: {k: c.get("reason") for k, c in s.checks.items() if not c["pass"]}
+              for s in out.verification.scenarios if not s.passed}
+    if method == "fcs_mpc" and not out.passed:
+        # a failure is accepted only where it is physically explained (module docstring)
+        ratio = fcs_ripple_ratio(spec)
+        if ratio >= 0.5 or motor in KNOWN_FCS:
+            pytest.xfail(f"fcs_mpc: per-period ripple {ratio:.2f} x the default step at "
+                         f"{1 / spec.drive.sample_time:.0f} Hz (physically out of reach), "
+                         "or an unstable informational baseline PI")
+    assert out.passed, (failed, out.header_refused)
+    if method not in NO_HEADER_METHODS:
+        assert out.header is not None and out.header.strip()
+    if report:
+        assert out.html and out.pdf
