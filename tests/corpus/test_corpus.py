@@ -68,10 +68,6 @@ KNOWN: dict[tuple[str, str], str] = {
     ("siemens_1fk7042", "pi_lag"): ("reach at half speed 4.0 ms against a bound of 3.5 ms: "
                                     "the 8 kHz lag of pi_lag on a 10 mH servo; marginal"),
 }
-#: fcs_mpc cases with a baseline PI unstable at the sample rate: the reach bound reads
-#: the (informational) baseline's linear figures (toolbox.sim._verify; not fixed)
-KNOWN_FCS = {"ipower_gm2804", "ipower_gm4108", "tmotor_gb2208", "maxon_ec32flat_15w",
-             "maxon_eci40_70w"}
 
 
 def corpus_spec(motor: str, method: str):
@@ -126,10 +122,9 @@ def test_corpus_motor_designs_on_defaults(motor, method):
     if method == "fcs_mpc" and not out.passed:
         # a failure is accepted only where it is physically explained (module docstring)
         ratio = fcs_ripple_ratio(spec)
-        if ratio >= 0.5 or motor in KNOWN_FCS:
+        if ratio >= 0.5:
             pytest.xfail(f"fcs_mpc: per-period ripple {ratio:.2f} x the default step at "
-                         f"{1 / spec.drive.sample_time:.0f} Hz (physically out of reach), "
-                         "or an unstable informational baseline PI")
+                         f"{1 / spec.drive.sample_time:.0f} Hz (physically out of reach)")
     assert out.passed, (failed, out.header_refused)
     if method not in NO_HEADER_METHODS:
         assert out.header is not None and out.header.strip()

@@ -254,6 +254,22 @@ def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict,
     return checks, stability, linear, warnings, informational
 
 
+def _fcs_linear_figures(drive) -> dict[str, LinearFigures]:
+    """The reach-time yardstick of the predictive law: the default linear loop.
+
+    The axes of an ``fcs_mpc`` artifact hold paper 002's baseline PI, whose
+    margins are informational (it is not executed; its sampled loop may even
+    be unstable for a high-R/L motor, leaving no bandwidth and no reach
+    bound). The switching law is a minimum-time law, so it is held to the
+    time the default linear design of this drive reaches its band in
+    (bandwidth ``wc`` of :func:`toolbox.design.default_bandwidth`).
+    """
+    from ..design import default_bandwidth  # lazy: the design stage is heavier
+
+    wc = default_bandwidth(drive).value
+    return {ax: LinearFigures(wc, math.nan) for ax in ("d", "q")}
+
+
 def _fcs_ripple(artifact, drive: DriveParams, true_plant: PlantParams,
                 r_hex: float) -> dict[str, float] | None:
     """Per-axis design ripple of the predictive switching law, None for other inverters.
@@ -319,6 +335,8 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     plant = plant_params(spec.motor)
     inverter_default = "fcs_mpc" if artifact.method == "fcs_mpc" else "average"
     margin_checks, stability, linear, warnings, info = _margin_verdict(artifact, spec, file)
+    if artifact.fcs is not None:
+        linear = _fcs_linear_figures(spec.drive)
     out = VerifyResult(method=artifact.method, margin_checks=margin_checks,
                        stability=stability, warnings=warnings, informational=info,
                        notice=None if spec.requirements.bounds else NO_REQUIREMENTS)
