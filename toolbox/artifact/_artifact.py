@@ -622,7 +622,7 @@ class Decoupling:
                    float(data["Lq_c"]), float(data["flux_c"]), pp, float(t_comp))
 
 
-#: The MARGINS keys of DESIGN.md: numbers (non-finite ones as the strings
+#: The MARGINS keys (toolbox/ARCHITECTURE.md "controller.json"): numbers (non-finite ones as the strings
 #: "inf", "-inf", "nan") or null. Other keys (lists of crossings, skewed disk
 #: margins, "domain") are free-form analysis details.
 MARGIN_NUMBERS = ("gain_margin_db", "gain_crossover_rad_s", "phase_margin_deg",
