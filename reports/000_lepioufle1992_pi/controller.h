@@ -4,7 +4,7 @@
  * method:      pi
  * version:     0.1.0
  * spec sha256: 896f40f9f1f00250e5b0e90b0c443f9b5de36c81eb978506b0cbaeb2dfcdcdea
- * created:     2026-11-22T00:16:05+00:00
+ * created:     2026-11-23T19:26:57+00:00
  * equations:   000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e); 002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation); Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -16,8 +16,16 @@
  * then decoupling  v_d += -cross w_e Lq_c i_q,
  *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,
  * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of
- * the SVM hexagon, also when the spec asks for the hexagon) and back-calculation
- * anti-windup x += aw (v_sat - v_unsat).
+ * the SVM hexagon), and
+ * back-calculation anti-windup x += aw (v_sat - v_unsat).
+ * Faults: out->status is
+ *   CCT_STATUS_OK (0)        the law ran;
+ *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
+ *   CCT_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).
+ * On 1 and 2 the last good output is repeated (0 V before the first good
+ * period), saturated = 0, and the state is left exactly as it was: the next
+ * valid period continues as if the bad one had not happened. Finiteness is
+ * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
  * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:
  *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the
  *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.
@@ -27,6 +35,7 @@
 #define CCT_CONTROLLER_H
 
 #include <math.h> /* sqrtf */
+#include <stdint.h> /* uint32_t */
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
 #define CCT_DELAY_SAMPLES 1 /* computation delay the design assumed, periods */
@@ -76,16 +85,24 @@ typedef struct {
     float omega_m; /* measured mechanical speed, rad/s */
 } cct_input_t;
 
+#define CCT_STATUS_OK 0         /* the law ran */
+#define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
+#define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
+
 typedef struct {
     float v_d;     /* V, to apply next period */
     float v_q;     /* V */
     int saturated; /* 1 when the voltage limit acted */
+    int status;    /* CCT_STATUS_* */
 } cct_output_t;
 
-/* controller states (sos d axis: 2, sos q axis: 2; arrays have at least one element) */
+/* controller states (sos d axis: 2, sos q axis: 2; arrays have at least one element)
+ * and the last good output, held when a period fails */
 typedef struct {
     float d[2];
     float q[2];
+    float v_d_hold; /* V */
+    float v_q_hold; /* V */
 } cct_state_t;
 
 static inline void cct_init(cct_state_t *s)
@@ -93,6 +110,34 @@ static inline void cct_init(cct_state_t *s)
     unsigned i;
     for (i = 0u; i < 2u; ++i) { s->d[i] = 0.0f; }
     for (i = 0u; i < 2u; ++i) { s->q[i] = 0.0f; }
+    s->v_d_hold = 0.0f;
+    s->v_q_hold = 0.0f;
+}
+
+/* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that
+ * -ffast-math / -ffinite-math-only cannot remove the test (isfinite() may be). */
+static inline int cct_finite(float v)
+{
+    union { float f; uint32_t u; } b;
+    b.f = v;
+    return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+static inline int cct_state_finite(const cct_state_t *s)
+{
+    unsigned i;
+    int ok = 1;
+    for (i = 0u; i < 2u; ++i) { ok &= cct_finite(s->d[i]); }
+    for (i = 0u; i < 2u; ++i) { ok &= cct_finite(s->q[i]); }
+    return ok;
+}
+
+static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
+{
+    out->v_d = s->v_d_hold;
+    out->v_q = s->v_q_hold;
+    out->saturated = 0;
+    out->status = status;
 }
 
 /* d axis linear law: returns v (V); updates the state to A x + B u */
@@ -133,30 +178,49 @@ static inline float cct_q_linear(float *x, float r, float y)
     return CCT_Q_GAIN * in;
 }
 
-/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup) */
+/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
+ * out->status: CCT_STATUS_OK, or _BAD_INPUT / _BAD_STATE with the last good
+ * output repeated and the state left as it was (see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
+    cct_state_t nx;
+    if (!(cct_finite(in->i_d_ref) && cct_finite(in->i_q_ref)
+          && cct_finite(in->i_d) && cct_finite(in->i_q)
+          && cct_finite(in->omega_m))) {
+        cct_hold(s, out, CCT_STATUS_BAD_INPUT);
+        return;
+    }
+    nx = *s;
     const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
-    const float vd_lin = cct_d_linear(s->d, in->i_d_ref, in->i_d);
-    const float vq_lin = cct_q_linear(s->q, in->i_q_ref, in->i_q);
+    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, in->i_d);
+    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, in->i_q);
     const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
     const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
                    + (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
-    const float mag2 = vd * vd + vq * vq;
     float vds = vd;
     float vqs = vq;
-    out->saturated = 0;
+    int saturated = 0;
+    const float mag2 = vd * vd + vq * vq;
     if (mag2 > CCT_V_MAX * CCT_V_MAX) {
         const float k = CCT_V_MAX / sqrtf(mag2);
         vds = vd * k;
         vqs = vq * k;
-        out->saturated = 1;
+        saturated = 1;
     }
     /* back-calculation anti-windup */
-    s->d[0] += 1.762525528e-03f * (vds - vd);
-    s->q[0] += 1.762525528e-03f * (vqs - vq);
+    nx.d[0] += 1.762525528e-03f * (vds - vd);
+    nx.q[0] += 1.762525528e-03f * (vqs - vq);
+    if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
+        cct_hold(s, out, CCT_STATUS_BAD_STATE);
+        return;
+    }
+    nx.v_d_hold = vds;
+    nx.v_q_hold = vqs;
+    *s = nx;
     out->v_d = vds;
     out->v_q = vqs;
+    out->saturated = saturated;
+    out->status = CCT_STATUS_OK;
 }
 
 #ifdef CCT_FIXED_POINT

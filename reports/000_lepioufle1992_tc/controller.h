@@ -4,7 +4,7 @@
  * method:      tc
  * version:     0.1.0
  * spec sha256: bfbd2612ef9951308507a3387cd59aa74050331f6eaa224654826036fce3a2dc
- * created:     2026-11-22T00:16:13+00:00
+ * created:     2026-11-23T19:27:00+00:00
  * equations:   000 eq (8): de/dt = -K e; 000 eq (9)-(11): total compensation law; 000 eq (12): controller-side parameters R_c, L_dc, L_qc, psi_fc
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -15,9 +15,19 @@
  *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),
  * then decoupling  v_d += -cross w_e Lq_c i_q,
  *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,
- * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of
- * the SVM hexagon, also when the spec asks for the hexagon) and back-calculation
- * anti-windup x += aw (v_sat - v_unsat).
+ * then the SVM hexagon limit (voltage_limit = "hexagon", as the toolbox
+ * simulator): the voltage is rotated to the stationary frame at the angle
+ * theta_e + w_e Ts (DELAY_SAMPLES + 1/2) (input theta_e: electrical angle at the
+ * sampling instant) and scaled radially onto the hexagon of apothem V_MAX, and
+ * back-calculation anti-windup x += aw (v_sat - v_unsat).
+ * Faults: out->status is
+ *   CCT_STATUS_OK (0)        the law ran;
+ *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
+ *   CCT_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).
+ * On 1 and 2 the last good output is repeated (0 V before the first good
+ * period), saturated = 0, and the state is left exactly as it was: the next
+ * valid period continues as if the bad one had not happened. Finiteness is
+ * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
  * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:
  *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the
  *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.
@@ -26,11 +36,12 @@
 #ifndef CCT_CONTROLLER_H
 #define CCT_CONTROLLER_H
 
-#include <math.h> /* sqrtf */
+#include <math.h> /* sqrtf, sinf, cosf */
+#include <stdint.h> /* uint32_t */
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
 #define CCT_DELAY_SAMPLES 1 /* computation delay the design assumed, periods */
-#define CCT_V_MAX 1.060660172e+02f /* voltage-limit circle radius, V */
+#define CCT_V_MAX 1.060660172e+02f /* voltage-limit hexagon radius, V */
 /* motor (power-invariant dq convention) */
 #define CCT_MOTOR_R 6.000000238e-01f /* stator resistance, ohm */
 #define CCT_MOTOR_LD 1.399999950e-03f /* d-axis inductance, H */
@@ -60,18 +71,27 @@ typedef struct {
     float i_d;     /* measured, A */
     float i_q;     /* measured, A */
     float omega_m; /* measured mechanical speed, rad/s */
+    float theta_e; /* measured ELECTRICAL rotor angle at the sampling instant, rad */
 } cct_input_t;
+
+#define CCT_STATUS_OK 0         /* the law ran */
+#define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
+#define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
 
 typedef struct {
     float v_d;     /* V, to apply next period */
     float v_q;     /* V */
     int saturated; /* 1 when the voltage limit acted */
+    int status;    /* CCT_STATUS_* */
 } cct_output_t;
 
-/* controller states (ss d axis: 0, ss q axis: 0; arrays have at least one element) */
+/* controller states (ss d axis: 0, ss q axis: 0; arrays have at least one element)
+ * and the last good output, held when a period fails */
 typedef struct {
     float d[1];
     float q[1];
+    float v_d_hold; /* V */
+    float v_q_hold; /* V */
 } cct_state_t;
 
 static inline void cct_init(cct_state_t *s)
@@ -79,6 +99,34 @@ static inline void cct_init(cct_state_t *s)
     unsigned i;
     for (i = 0u; i < 1u; ++i) { s->d[i] = 0.0f; }
     for (i = 0u; i < 1u; ++i) { s->q[i] = 0.0f; }
+    s->v_d_hold = 0.0f;
+    s->v_q_hold = 0.0f;
+}
+
+/* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that
+ * -ffast-math / -ffinite-math-only cannot remove the test (isfinite() may be). */
+static inline int cct_finite(float v)
+{
+    union { float f; uint32_t u; } b;
+    b.f = v;
+    return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+static inline int cct_state_finite(const cct_state_t *s)
+{
+    unsigned i;
+    int ok = 1;
+    for (i = 0u; i < 1u; ++i) { ok &= cct_finite(s->d[i]); }
+    for (i = 0u; i < 1u; ++i) { ok &= cct_finite(s->q[i]); }
+    return ok;
+}
+
+static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
+{
+    out->v_d = s->v_d_hold;
+    out->v_q = s->v_q_hold;
+    out->saturated = 0;
+    out->status = status;
 }
 
 /* d axis linear law: returns v (V); updates the state to A x + B u */
@@ -95,160 +143,65 @@ static inline float cct_q_linear(float *x, float r, float y)
     return 2.240000010e+00f * r + -1.639999986e+00f * y;
 }
 
-/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup) */
+/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
+ * out->status: CCT_STATUS_OK, or _BAD_INPUT / _BAD_STATE with the last good
+ * output repeated and the state left as it was (see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
+    cct_state_t nx;
+    if (!(cct_finite(in->i_d_ref) && cct_finite(in->i_q_ref)
+          && cct_finite(in->i_d) && cct_finite(in->i_q)
+          && cct_finite(in->omega_m) && cct_finite(in->theta_e))) {
+        cct_hold(s, out, CCT_STATUS_BAD_INPUT);
+        return;
+    }
+    nx = *s;
     const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
-    const float vd_lin = cct_d_linear(s->d, in->i_d_ref, in->i_d);
-    const float vq_lin = cct_q_linear(s->q, in->i_q_ref, in->i_q);
+    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, in->i_d);
+    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, in->i_q);
     const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
     const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
                    + (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
-    const float mag2 = vd * vd + vq * vq;
     float vds = vd;
     float vqs = vq;
-    out->saturated = 0;
-    if (mag2 > CCT_V_MAX * CCT_V_MAX) {
-        const float k = CCT_V_MAX / sqrtf(mag2);
+    int saturated = 0;
+    /* SVM hexagon in the stationary frame at the angle of the middle of the
+     * application period (as the toolbox simulator): theta_e + w_e Ts (DELAY + 1/2) */
+    const float th = in->theta_e + w * CCT_SAMPLE_TIME * ((float)CCT_DELAY_SAMPLES + 0.5f);
+    const float c = cosf(th);
+    const float sn = sinf(th);
+    const float va = vd * c - vq * sn;
+    const float vb = vd * sn + vq * c;
+    /* largest projection on the edge normals (30, 90, 150 deg); the edges lie
+     * at the apothem r_hex sqrt(3)/2 = V_MAX from the centre */
+    const float p1 = 0.866025404f * va + 0.5f * vb;
+    const float p3 = -0.866025404f * va + 0.5f * vb;
+    float pm = vb < 0.0f ? -vb : vb;
+    if (p1 > pm) { pm = p1; }
+    if (-p1 > pm) { pm = -p1; }
+    if (p3 > pm) { pm = p3; }
+    if (-p3 > pm) { pm = -p3; }
+    if (pm > CCT_V_MAX) {
+        const float k = CCT_V_MAX / pm;
         vds = vd * k;
         vqs = vq * k;
-        out->saturated = 1;
+        saturated = 1;
     }
+    if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
+        cct_hold(s, out, CCT_STATUS_BAD_STATE);
+        return;
+    }
+    nx.v_d_hold = vds;
+    nx.v_q_hold = vqs;
+    *s = nx;
     out->v_d = vds;
     out->v_q = vqs;
+    out->saturated = saturated;
+    out->status = CCT_STATUS_OK;
 }
 
 #ifdef CCT_FIXED_POINT
-/*
- * Fixed point: Q31 words (value / 2^31), int64 accumulators, arithmetic
- * right shifts (as gcc and arm-none-eabi implement >> on negative values).
- * Each coefficient set is an int32 mantissa vector m with one shift F:
- * c = m / 2^F (integer gains with power-of-two divisors, as STM32 MCSDK).
- * Inputs up to I_MAX = 30 A and W_MAX = 230 rad/s (mechanical),
- * voltage limit 106.066 V: bases below are powers of two above rigorous
- * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 8.38e-07 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 1.01e-06 V over 20 ms from equal states.
- */
-#include <stdint.h>
-#define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
-#define CCT_Q31_V_BASE 5.120000000e+02f /* V at full scale */
-#define CCT_Q31_W_BASE 2.560000000e+02f /* mechanical rad/s at full scale */
-#define CCT_Q31_V_MAX 444873120L /* V_MAX / V_BASE in Q31 */
-#define CCT_Q31_DEC_DD -769658139L /* decoupling coefficient -0.1792 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DD_SHIFT 32u
-#define CCT_Q31_DEC_DQ 769658139L /* decoupling coefficient 0.0896 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DQ_SHIFT 33u
-#define CCT_Q31_DEC_DE 1030792151L /* decoupling coefficient 0.24 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DE_SHIFT 32u
-
-typedef struct {
-    int32_t i_d_ref; /* Q31 of Q31_I_BASE */
-    int32_t i_q_ref;
-    int32_t i_d;
-    int32_t i_q;
-    int32_t omega_m; /* Q31 of Q31_W_BASE (mechanical) */
-} cct_input_q31_t;
-
-typedef struct {
-    int32_t v_d; /* Q31 of Q31_V_BASE */
-    int32_t v_q;
-    int saturated;
-} cct_output_q31_t;
-
-typedef struct {
-    int32_t d[1];
-    int32_t q[1];
-} cct_state_q31_t;
-
-static inline void cct_init_q31(cct_state_q31_t *s)
-{
-    unsigned i;
-    for (i = 0u; i < 1u; ++i) { s->d[i] = 0; }
-    for (i = 0u; i < 1u; ++i) { s->q[i] = 0; }
-}
-
-static inline int32_t cct_sat32(int64_t v)
-{
-    if (v > (int64_t)INT32_MAX) { return INT32_MAX; }
-    if (v < -(int64_t)INT32_MAX) { return -INT32_MAX; }
-    return (int32_t)v;
-}
-
-static inline int64_t cct_shr(int64_t acc, unsigned f)
-{
-    return f ? (acc + ((int64_t)1 << (f - 1u))) >> f : acc;
-}
-
-static inline uint32_t cct_isqrt64(uint64_t v)
-{
-    uint64_t r = 0u, bit = (uint64_t)1 << 62;
-    while (bit > v) { bit >>= 2; }
-    while (bit != 0u) {
-        if (v >= r + bit) { v -= r + bit; r = (r >> 1) + bit; } else { r >>= 1; }
-        bit >>= 2;
-    }
-    return (uint32_t)r;
-}
-
-/* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
-static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
-{
-    static const int32_t co[2] = { 300647711L, -139586437L };
-    int64_t acc = (int64_t)co[0] * r + (int64_t)co[1] * y;
-    acc = cct_shr(acc, 32u);
-    (void)x;
-    return acc;
-}
-
-static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
-{
-    (void)x;
-    (void)dv;
-}
-
-/* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
-static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
-{
-    static const int32_t co[2] = { 300647711L, -220117074L };
-    int64_t acc = (int64_t)co[0] * r + (int64_t)co[1] * y;
-    acc = cct_shr(acc, 31u);
-    (void)x;
-    return acc;
-}
-
-static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
-{
-    (void)x;
-    (void)dv;
-}
-
-static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, cct_output_q31_t *out)
-{
-    const int64_t vd_lin = cct_d_linear_q31(s->d, in->i_d_ref, in->i_d);
-    const int64_t vq_lin = cct_q_linear_q31(s->q, in->i_q_ref, in->i_q);
-    const int64_t wiq = cct_shr((int64_t)in->omega_m * in->i_q, 31u);
-    const int64_t wid = cct_shr((int64_t)in->omega_m * in->i_d, 31u);
-    const int64_t vd = vd_lin + cct_shr((int64_t)CCT_Q31_DEC_DD * wiq, CCT_Q31_DEC_DD_SHIFT);
-    const int64_t vq = vq_lin + cct_shr((int64_t)CCT_Q31_DEC_DQ * wid, CCT_Q31_DEC_DQ_SHIFT)
-                     + cct_shr((int64_t)CCT_Q31_DEC_DE * in->omega_m, CCT_Q31_DEC_DE_SHIFT);
-    const int64_t vdc = cct_sat32(vd);
-    const int64_t vqc = cct_sat32(vq);
-    const uint64_t mag2 = (uint64_t)(vdc * vdc) + (uint64_t)(vqc * vqc);
-    int64_t vds = vdc;
-    int64_t vqs = vqc;
-    out->saturated = 0;
-    if (mag2 > (uint64_t)CCT_Q31_V_MAX * (uint64_t)CCT_Q31_V_MAX) {
-        const int64_t mag = (int64_t)cct_isqrt64(mag2);
-        vds = (vdc * CCT_Q31_V_MAX) / mag;
-        vqs = (vqc * CCT_Q31_V_MAX) / mag;
-        out->saturated = 1;
-    }
-    cct_d_antiwindup_q31(s->d, vds - vd);
-    cct_q_antiwindup_q31(s->q, vqs - vq);
-    out->v_d = (int32_t)vds;
-    out->v_q = (int32_t)vqs;
-}
+#error "fixed-point variant not available: voltage_limit = 'hexagon' is implemented in the float path only; the Q31 variant needs voltage_limit = 'circle'"
 #endif /* CCT_FIXED_POINT */
 
 #endif /* CCT_CONTROLLER_H */

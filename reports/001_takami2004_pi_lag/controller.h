@@ -4,7 +4,7 @@
  * method:      pi_lag
  * version:     0.1.0
  * spec sha256: c924a9280bf2ddac6bd85976cacff2c93467e25d061a5c2b9b96aa59ed079d9c
- * created:     2026-11-22T00:16:45+00:00
+ * created:     2026-11-23T19:27:08+00:00
  * equations:   001 Fig. 2b: PI with first-order lag 1/(1 + T_d s) on the measured currents; Kp = L wc, Ki = R wc (closed loop wc/(s + wc), wc = ln(20)/t5)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -16,8 +16,16 @@
  * then decoupling  v_d += -cross w_e Lq_c i_q,
  *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,
  * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of
- * the SVM hexagon, also when the spec asks for the hexagon) and back-calculation
- * anti-windup x += aw (v_sat - v_unsat).
+ * the SVM hexagon), and
+ * back-calculation anti-windup x += aw (v_sat - v_unsat).
+ * Faults: out->status is
+ *   CCT_STATUS_OK (0)        the law ran;
+ *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
+ *   CCT_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).
+ * On 1 and 2 the last good output is repeated (0 V before the first good
+ * period), saturated = 0, and the state is left exactly as it was: the next
+ * valid period continues as if the bad one had not happened. Finiteness is
+ * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
  * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:
  *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the
  *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.
@@ -27,6 +35,7 @@
 #define CCT_CONTROLLER_H
 
 #include <math.h> /* sqrtf */
+#include <stdint.h> /* uint32_t */
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
 #define CCT_DELAY_SAMPLES 1 /* computation delay the design assumed, periods */
@@ -52,16 +61,6 @@
 #define CCT_DEC_LQ 1.787830028e-03f /* H */
 #define CCT_DEC_FLUX 1.189600006e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
-/* d axis PI gains (method pi_lag); the law below is what runs */
-#define CCT_D_KP 1.787829995e+00f /* parallel proportional gain, V/A */
-#define CCT_D_KI 4.000000000e+02f /* parallel integral gain, V/(A s) */
-#define CCT_D_KI_TS 3.999999911e-02f /* integral gain per sample Ki*Ts, V/A */
-#define CCT_D_TI 4.469574895e-03f /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */
-/* q axis PI gains (method pi_lag); the law below is what runs */
-#define CCT_Q_KP 1.787829995e+00f /* parallel proportional gain, V/A */
-#define CCT_Q_KI 4.000000000e+02f /* parallel integral gain, V/(A s) */
-#define CCT_Q_KI_TS 3.999999911e-02f /* integral gain per sample Ki*Ts, V/A */
-#define CCT_Q_TI 4.469574895e-03f /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */
 
 
 /* inputs: currents in A, measured MECHANICAL speed in rad/s */
@@ -73,16 +72,24 @@ typedef struct {
     float omega_m; /* measured mechanical speed, rad/s */
 } cct_input_t;
 
+#define CCT_STATUS_OK 0         /* the law ran */
+#define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
+#define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
+
 typedef struct {
     float v_d;     /* V, to apply next period */
     float v_q;     /* V */
     int saturated; /* 1 when the voltage limit acted */
+    int status;    /* CCT_STATUS_* */
 } cct_output_t;
 
-/* controller states (ss d axis: 2, ss q axis: 2; arrays have at least one element) */
+/* controller states (ss d axis: 2, ss q axis: 2; arrays have at least one element)
+ * and the last good output, held when a period fails */
 typedef struct {
     float d[2];
     float q[2];
+    float v_d_hold; /* V */
+    float v_q_hold; /* V */
 } cct_state_t;
 
 static inline void cct_init(cct_state_t *s)
@@ -90,6 +97,34 @@ static inline void cct_init(cct_state_t *s)
     unsigned i;
     for (i = 0u; i < 2u; ++i) { s->d[i] = 0.0f; }
     for (i = 0u; i < 2u; ++i) { s->q[i] = 0.0f; }
+    s->v_d_hold = 0.0f;
+    s->v_q_hold = 0.0f;
+}
+
+/* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that
+ * -ffast-math / -ffinite-math-only cannot remove the test (isfinite() may be). */
+static inline int cct_finite(float v)
+{
+    union { float f; uint32_t u; } b;
+    b.f = v;
+    return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+static inline int cct_state_finite(const cct_state_t *s)
+{
+    unsigned i;
+    int ok = 1;
+    for (i = 0u; i < 2u; ++i) { ok &= cct_finite(s->d[i]); }
+    for (i = 0u; i < 2u; ++i) { ok &= cct_finite(s->q[i]); }
+    return ok;
+}
+
+static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
+{
+    out->v_d = s->v_d_hold;
+    out->v_q = s->v_q_hold;
+    out->saturated = 0;
+    out->status = status;
 }
 
 /* d axis linear law: returns v (V); updates the state to A x + B u */
@@ -138,32 +173,49 @@ static inline float cct_q_linear(float *x, float r, float y)
     return v;
 }
 
-/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup) */
+/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
+ * out->status: CCT_STATUS_OK, or _BAD_INPUT / _BAD_STATE with the last good
+ * output repeated and the state left as it was (see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
+    cct_state_t nx;
+    if (!(cct_finite(in->i_d_ref) && cct_finite(in->i_q_ref)
+          && cct_finite(in->i_d) && cct_finite(in->i_q)
+          && cct_finite(in->omega_m))) {
+        cct_hold(s, out, CCT_STATUS_BAD_INPUT);
+        return;
+    }
+    nx = *s;
     const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
-    const float vd_lin = cct_d_linear(s->d, in->i_d_ref, in->i_d);
-    const float vq_lin = cct_q_linear(s->q, in->i_q_ref, in->i_q);
+    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, in->i_d);
+    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, in->i_q);
     const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
     const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
                    + (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
-    const float mag2 = vd * vd + vq * vq;
     float vds = vd;
     float vqs = vq;
-    out->saturated = 0;
+    int saturated = 0;
+    const float mag2 = vd * vd + vq * vq;
     if (mag2 > CCT_V_MAX * CCT_V_MAX) {
         const float k = CCT_V_MAX / sqrtf(mag2);
         vds = vd * k;
         vqs = vq * k;
-        out->saturated = 1;
+        saturated = 1;
     }
     /* back-calculation anti-windup */
-    s->d[0] += 5.531493662e-05f * (vds - vd);
-    s->d[1] += -4.148620069e-01f * (vds - vd);
-    s->q[0] += 5.531493662e-05f * (vqs - vq);
-    s->q[1] += -4.148620069e-01f * (vqs - vq);
+    nx.d[0] += 5.531493662e-05f * (vds - vd);
+    nx.q[0] += 5.531493662e-05f * (vqs - vq);
+    if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
+        cct_hold(s, out, CCT_STATUS_BAD_STATE);
+        return;
+    }
+    nx.v_d_hold = vds;
+    nx.v_q_hold = vqs;
+    *s = nx;
     out->v_d = vds;
     out->v_q = vqs;
+    out->saturated = saturated;
+    out->status = CCT_STATUS_OK;
 }
 
 #ifdef CCT_FIXED_POINT
@@ -175,32 +227,24 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 30 A and W_MAX = 157.08 rad/s (mechanical),
  * voltage limit 115.47 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000289 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000428 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000295 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000594 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
-#define CCT_Q31_V_BASE 1.024000000e+03f /* V at full scale */
+#define CCT_Q31_V_BASE 5.120000000e+02f /* V at full scale */
 #define CCT_Q31_W_BASE 2.560000000e+02f /* mechanical rad/s at full scale */
-#define CCT_Q31_V_MAX 242158254L /* V_MAX / V_BASE in Q31 */
+#define CCT_Q31_V_MAX 484316508L /* V_MAX / V_BASE in Q31 */
 #define CCT_Q31_D_X0_BASE 5.000000000e-01f /* state 0 full scale */
-#define CCT_Q31_D_X1_BASE 2.560000000e+02f /* state 1 full scale */
+#define CCT_Q31_D_X1_BASE 3.200000000e+01f /* state 1 full scale */
 #define CCT_Q31_Q_X0_BASE 1.000000000e+00f /* state 0 full scale */
-#define CCT_Q31_Q_X1_BASE 2.560000000e+02f /* state 1 full scale */
-#define CCT_Q31_DEC_DD -982869937L /* decoupling coefficient -0.0572106 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DD_SHIFT 34u
-#define CCT_Q31_DEC_DQ 982869937L /* decoupling coefficient 0.0572106 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DQ_SHIFT 34u
-#define CCT_Q31_DEC_DE 1021858619L /* decoupling coefficient 0.11896 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DE_SHIFT 33u
-#define CCT_Q31_D_KP_GAIN 959833923L /* per-unit KP: 0.0558697 */
-#define CCT_Q31_D_KP_DIV_LOG2 34 /* divisor 2^34 */
-#define CCT_Q31_D_KI_TS_GAIN 687194767L /* per-unit KI_TS: 0.00125 */
-#define CCT_Q31_D_KI_TS_DIV_LOG2 39 /* divisor 2^39 */
-#define CCT_Q31_Q_KP_GAIN 959833923L /* per-unit KP: 0.0558697 */
-#define CCT_Q31_Q_KP_DIV_LOG2 34 /* divisor 2^34 */
-#define CCT_Q31_Q_KI_TS_GAIN 687194767L /* per-unit KI_TS: 0.00125 */
-#define CCT_Q31_Q_KI_TS_DIV_LOG2 39 /* divisor 2^39 */
+#define CCT_Q31_Q_X1_BASE 3.200000000e+01f /* state 1 full scale */
+#define CCT_Q31_DEC_DD -982869937L /* decoupling coefficient -0.114421 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DD_SHIFT 33u
+#define CCT_Q31_DEC_DQ 982869937L /* decoupling coefficient 0.114421 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DQ_SHIFT 33u
+#define CCT_Q31_DEC_DE 1021858619L /* decoupling coefficient 0.23792 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DE_SHIFT 32u
 
 typedef struct {
     int32_t i_d_ref; /* Q31 of Q31_I_BASE */
@@ -254,12 +298,12 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[4] = { 104857600L, -194114268L, 30330354L, -6066071L };
+    static const int32_t co[4] = { 209715200L, -48528567L, 60660709L, -12132142L };
     static const int32_t ca[10] = {
-        134217728L, -5497558L, 858993L, -171799L, 15204854L,
-        0L, 80530637L, 0L, 6710886L, -222727349L,
+        134217728L, -687195L, 858993L, -171799L, 7602427L,
+        0L, 161061274L, 0L, 107374182L, 0L,
     };
-    static const unsigned fa[2] = { 27u, 27u };
+    static const unsigned fa[2] = { 27u, 28u };
     int32_t xn[2];
     unsigned i, j;
     int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
@@ -277,8 +321,8 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[2] = { 15204854L, -222727349L };
-    static const unsigned fa[2] = { 27u, 27u };
+    static const int32_t aw[2] = { 7602427L, 0L };
+    static const unsigned fa[2] = { 27u, 28u };
     unsigned i;
     for (i = 0u; i < 2u; ++i) {
         x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));
@@ -288,17 +332,17 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[4] = { 209715200L, -194114268L, 30330354L, -6066071L };
+    static const int32_t co[4] = { 209715200L, -24264284L, 30330354L, -6066071L };
     static const int32_t ca[10] = {
-        134217728L, -2748779L, 429497L, -85899L, 7602427L,
-        0L, 80530637L, 0L, 6710886L, -222727349L,
+        134217728L, -343597L, 429497L, -85899L, 3801213L,
+        0L, 161061274L, 0L, 107374182L, 0L,
     };
-    static const unsigned fa[2] = { 27u, 27u };
+    static const unsigned fa[2] = { 27u, 28u };
     int32_t xn[2];
     unsigned i, j;
     int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
     for (j = 0u; j < 2u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 29u);
+    acc = cct_shr(acc, 28u);
     for (i = 0u; i < 2u; ++i) {
         const int32_t *m = &ca[5u * i];
         int64_t a = (int64_t)m[2] * r + (int64_t)m[3] * y;
@@ -311,8 +355,8 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[2] = { 7602427L, -222727349L };
-    static const unsigned fa[2] = { 27u, 27u };
+    static const int32_t aw[2] = { 3801213L, 0L };
+    static const unsigned fa[2] = { 27u, 28u };
     unsigned i;
     for (i = 0u; i < 2u; ++i) {
         x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));

@@ -4,7 +4,7 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: 725ca7e47e8fb783e32a98f3530d9f7f87e8372a8e40b66b26c2473ca062b79f
- * created:     2026-11-23T18:39:54+00:00
+ * created:     2026-11-23T19:27:16+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

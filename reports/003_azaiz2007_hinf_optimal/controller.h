@@ -4,7 +4,7 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: fe6722ab3d8aaf89f7f3af7cde13d4df131e24c702653ac07366c33f1f6f30b5
- * created:     2026-11-22T00:17:22+00:00
+ * created:     2026-11-23T19:27:20+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -16,8 +16,16 @@
  * then decoupling  v_d += -cross w_e Lq_c i_q,
  *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,
  * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of
- * the SVM hexagon, also when the spec asks for the hexagon) and back-calculation
- * anti-windup x += aw (v_sat - v_unsat).
+ * the SVM hexagon), and
+ * back-calculation anti-windup x += aw (v_sat - v_unsat).
+ * Faults: out->status is
+ *   CCT_STATUS_OK (0)        the law ran;
+ *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
+ *   CCT_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).
+ * On 1 and 2 the last good output is repeated (0 V before the first good
+ * period), saturated = 0, and the state is left exactly as it was: the next
+ * valid period continues as if the bad one had not happened. Finiteness is
+ * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
  * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:
  *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the
  *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.
@@ -27,6 +35,7 @@
 #define CCT_CONTROLLER_H
 
 #include <math.h> /* sqrtf */
+#include <stdint.h> /* uint32_t */
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
 #define CCT_DELAY_SAMPLES 1 /* computation delay the design assumed, periods */
@@ -66,16 +75,24 @@ typedef struct {
     float omega_m; /* measured mechanical speed, rad/s */
 } cct_input_t;
 
+#define CCT_STATUS_OK 0         /* the law ran */
+#define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
+#define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
+
 typedef struct {
     float v_d;     /* V, to apply next period */
     float v_q;     /* V */
     int saturated; /* 1 when the voltage limit acted */
+    int status;    /* CCT_STATUS_* */
 } cct_output_t;
 
-/* controller states (sos d axis: 4, sos q axis: 4; arrays have at least one element) */
+/* controller states (sos d axis: 4, sos q axis: 4; arrays have at least one element)
+ * and the last good output, held when a period fails */
 typedef struct {
     float d[4];
     float q[4];
+    float v_d_hold; /* V */
+    float v_q_hold; /* V */
 } cct_state_t;
 
 static inline void cct_init(cct_state_t *s)
@@ -83,6 +100,34 @@ static inline void cct_init(cct_state_t *s)
     unsigned i;
     for (i = 0u; i < 4u; ++i) { s->d[i] = 0.0f; }
     for (i = 0u; i < 4u; ++i) { s->q[i] = 0.0f; }
+    s->v_d_hold = 0.0f;
+    s->v_q_hold = 0.0f;
+}
+
+/* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that
+ * -ffast-math / -ffinite-math-only cannot remove the test (isfinite() may be). */
+static inline int cct_finite(float v)
+{
+    union { float f; uint32_t u; } b;
+    b.f = v;
+    return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+static inline int cct_state_finite(const cct_state_t *s)
+{
+    unsigned i;
+    int ok = 1;
+    for (i = 0u; i < 4u; ++i) { ok &= cct_finite(s->d[i]); }
+    for (i = 0u; i < 4u; ++i) { ok &= cct_finite(s->q[i]); }
+    return ok;
+}
+
+static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
+{
+    out->v_d = s->v_d_hold;
+    out->v_q = s->v_q_hold;
+    out->saturated = 0;
+    out->status = status;
 }
 
 /* d axis linear law: returns v (V); updates the state to A x + B u */
@@ -125,34 +170,53 @@ static inline float cct_q_linear(float *x, float r, float y)
     return CCT_Q_GAIN * in;
 }
 
-/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup) */
+/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
+ * out->status: CCT_STATUS_OK, or _BAD_INPUT / _BAD_STATE with the last good
+ * output repeated and the state left as it was (see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
+    cct_state_t nx;
+    if (!(cct_finite(in->i_d_ref) && cct_finite(in->i_q_ref)
+          && cct_finite(in->i_d) && cct_finite(in->i_q)
+          && cct_finite(in->omega_m))) {
+        cct_hold(s, out, CCT_STATUS_BAD_INPUT);
+        return;
+    }
+    nx = *s;
     const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
-    const float vd_lin = cct_d_linear(s->d, in->i_d_ref, in->i_d);
-    const float vq_lin = cct_q_linear(s->q, in->i_q_ref, in->i_q);
+    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, in->i_d);
+    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, in->i_q);
     const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
     const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
                    + (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
-    const float mag2 = vd * vd + vq * vq;
     float vds = vd;
     float vqs = vq;
-    out->saturated = 0;
+    int saturated = 0;
+    const float mag2 = vd * vd + vq * vq;
     if (mag2 > CCT_V_MAX * CCT_V_MAX) {
         const float k = CCT_V_MAX / sqrtf(mag2);
         vds = vd * k;
         vqs = vq * k;
-        out->saturated = 1;
+        saturated = 1;
     }
     /* back-calculation anti-windup */
-    s->d[0] += 8.584930420e+02f * (vds - vd);
-    s->d[1] += -2.842356262e+02f * (vds - vd);
-    s->d[2] += 1.736776733e+01f * (vds - vd);
-    s->q[0] += 2.823598938e+02f * (vqs - vq);
-    s->q[1] += -8.723779297e+01f * (vqs - vq);
-    s->q[2] += 2.998911381e+00f * (vqs - vq);
+    nx.d[0] += 6.783046875e+02f * (vds - vd);
+    nx.d[1] += -2.842356262e+02f * (vds - vd);
+    nx.d[2] += 1.736776733e+01f * (vds - vd);
+    nx.q[0] += 2.207859802e+02f * (vqs - vq);
+    nx.q[1] += -8.723779297e+01f * (vqs - vq);
+    nx.q[2] += 2.998911381e+00f * (vqs - vq);
+    if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
+        cct_hold(s, out, CCT_STATUS_BAD_STATE);
+        return;
+    }
+    nx.v_d_hold = vds;
+    nx.v_q_hold = vqs;
+    *s = nx;
     out->v_d = vds;
     out->v_q = vqs;
+    out->saturated = saturated;
+    out->status = CCT_STATUS_OK;
 }
 
 #ifdef CCT_FIXED_POINT
@@ -164,19 +228,19 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 86.6025 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.0044 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00103 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.00295 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000801 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
 #define CCT_Q31_V_BASE 2.048000000e+03f /* V at full scale */
 #define CCT_Q31_W_BASE 2.560000000e+02f /* mechanical rad/s at full scale */
 #define CCT_Q31_V_MAX 90809345L /* V_MAX / V_BASE in Q31 */
-#define CCT_Q31_D_X0_BASE 5.242880000e+05f /* state 0 full scale */
+#define CCT_Q31_D_X0_BASE 2.621440000e+05f /* state 0 full scale */
 #define CCT_Q31_D_X1_BASE 1.310720000e+05f /* state 1 full scale */
 #define CCT_Q31_D_X2_BASE 6.553600000e+04f /* state 2 full scale */
 #define CCT_Q31_D_X3_BASE 1.000000000e+00f /* state 3 full scale */
-#define CCT_Q31_Q_X0_BASE 2.621440000e+05f /* state 0 full scale */
+#define CCT_Q31_Q_X0_BASE 1.310720000e+05f /* state 0 full scale */
 #define CCT_Q31_Q_X1_BASE 6.553600000e+04f /* state 1 full scale */
 #define CCT_Q31_Q_X2_BASE 3.276800000e+04f /* state 2 full scale */
 #define CCT_Q31_Q_X3_BASE 1.000000000e+00f /* state 3 full scale */
@@ -239,19 +303,19 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 166016421L, 0L, 20752053L, 0L, 10133L, -10133L };
+    static const int32_t co[6] = { 166016421L, 0L, 41504105L, 0L, 20266L, -20266L };
     static const int32_t ca[28] = {
-        110422600L, 16777216L, 0L, 0L, 12591L, -12591L, 225048808L,
-        -92163638L, 0L, 0L, 0L, -2114L, 2114L, -149021332L,
-        45052105L, 0L, 134217728L, 2048L, 2750L, -2750L, 72845699L,
+        55211300L, 16777216L, 0L, 0L, 12591L, -12591L, 177813501L,
+        -46081819L, 0L, 0L, 0L, -2114L, 2114L, -149021332L,
+        22526052L, 0L, 134217728L, 2048L, 2750L, -2750L, 72845699L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
-    static const unsigned fa[4] = { 26u, 25u, 27u, 31u };
+    static const unsigned fa[4] = { 25u, 25u, 27u, 31u };
     int32_t xn[4];
     unsigned i, j;
     int64_t acc = (int64_t)co[4] * r + (int64_t)co[5] * y;
     for (j = 0u; j < 4u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 28u);
+    acc = cct_shr(acc, 29u);
     for (i = 0u; i < 4u; ++i) {
         const int32_t *m = &ca[7u * i];
         int64_t a = (int64_t)m[4] * r + (int64_t)m[5] * y;
@@ -264,8 +328,8 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 225048808L, -149021332L, 72845699L, 0L };
-    static const unsigned fa[4] = { 26u, 25u, 27u, 31u };
+    static const int32_t aw[4] = { 177813501L, -149021332L, 72845699L, 0L };
+    static const unsigned fa[4] = { 25u, 25u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
         x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));
@@ -275,11 +339,11 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 242913147L, 0L, 30364143L, 0L, 29652L, -29652L };
+    static const int32_t co[6] = { 242913147L, 0L, 60728287L, 0L, 59305L, -59305L };
     static const int32_t ca[28] = {
-        105201820L, 16777216L, 0L, 0L, 24545L, -24545L, 148037911L,
-        -165556304L, 0L, 0L, 0L, -6166L, 6166L, -182950913L,
-        22764844L, 0L, 134217728L, 4096L, 2779L, -2779L, 25156693L,
+        105201820L, 33554432L, 0L, 0L, 49090L, -49090L, 231510882L,
+        -82778152L, 0L, 0L, 0L, -6166L, 6166L, -182950913L,
+        11382422L, 0L, 134217728L, 4096L, 2779L, -2779L, 25156693L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
@@ -287,7 +351,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
     unsigned i, j;
     int64_t acc = (int64_t)co[4] * r + (int64_t)co[5] * y;
     for (j = 0u; j < 4u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 28u);
+    acc = cct_shr(acc, 29u);
     for (i = 0u; i < 4u; ++i) {
         const int32_t *m = &ca[7u * i];
         int64_t a = (int64_t)m[4] * r + (int64_t)m[5] * y;
@@ -300,7 +364,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 148037911L, -182950913L, 25156693L, 0L };
+    static const int32_t aw[4] = { 231510882L, -182950913L, 25156693L, 0L };
     static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {

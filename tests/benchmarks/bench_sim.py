@@ -50,15 +50,16 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 
 from toolbox.sim._scenario import Scenario  # noqa: E402
 from toolbox.spec import Motor  # noqa: E402
-from toolbox.sim._simulate import (ControlLaw, DriveParams, PlantParams,  # noqa: E402
+from toolbox.artifact import Decoupling  # noqa: E402
+from toolbox.sim._simulate import (ControlLaw, DriveParams,  # noqa: E402
                                    discrete_pi, simulate, simulate_batch)
 
-M = PlantParams.from_motor(Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4,
-                                 J=1.11e-3, friction=1.4e-3, convention="power"))
+M = Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4,
+          J=1.11e-3, friction=1.4e-3, convention="power")
 TS, H, WC, VDC, IQ_REF, DURATION = 1e-4, 1e-6, 2000.0, 150.0, 10.0, 1.0
 V_MAX = VDC / math.sqrt(2.0)
 LAW = ControlLaw(d=discrete_pi(M.Ld * WC, M.R * WC, TS), q=discrete_pi(M.Lq * WC, M.R * WC, TS),
-                 sample_time=TS, R=M.R, Ld=M.Ld, Lq=M.Lq, flux=M.flux, cross=1, emf=1)
+                 sample_time=TS, decoupling=Decoupling.from_motor(M))
 DRIVE = DriveParams(vdc=VDC, sample_time=TS, delay_samples=1, v_limit="circle", v_max=V_MAX)
 
 

@@ -26,7 +26,7 @@ import pytest
 from toolbox.errors import ExportRefused
 from toolbox.export import check_exportable, write_header
 from toolbox.export.c_header import ReferenceLaw, reference_law
-from toolbox.sim import DriveParams, Scenario, control_law, plant_params, simulate
+from toolbox.sim import DriveParams, Scenario, control_law, simulate
 
 import export_artifacts as A
 import export_c_helpers as C
@@ -68,7 +68,7 @@ def _kernel_run(art, limit: str, speed: float):
     scen = Scenario(kind="current_step", duration=0.02, id_ref=-100.0, iq_ref=250.0,
                     step_time=0.002, initial_speed=speed, keep_traces=True, trace_step=A.TS)
     drive = DriveParams(vdc=A.DRIVE.vdc, sample_time=A.TS, delay_samples=1, v_limit=limit)
-    return simulate(control_law(art), plant_params(A.MOTOR), scen, drive)
+    return simulate(control_law(art), A.MOTOR, scen, drive)
 
 
 @pytest.mark.parametrize("limit", ["circle", "hexagon"])

@@ -118,7 +118,7 @@ def test_simulator_agrees_with_linear_analysis():
     plant inductance at 0.5, 1 and 2 x nominal. Its 5 % response times agree with the
     sampled linear analysis above within one period, and the figure of merit computed
     from the simulated traces (20 ms window) within 5 % of the linear one."""
-    from toolbox.sim import Scenario, control_law, drive_params, plant_params, simulate
+    from toolbox.sim import Scenario, control_law, drive_params, simulate
 
     sp = ilq_spec()
     art = design(sp)
@@ -128,7 +128,7 @@ def test_simulator_agrees_with_linear_analysis():
     sim, lin = {}, {}
     for k in (0.5, 1.0, 2.0):
         res = simulate(control_law(art),
-                       plant_params(sp.motor).with_overrides({}, {"Ld": k, "Lq": k}),
+                       sp.motor.with_overrides({}, {"Ld": k, "Lq": k}),
                        sc, drive_params(sp.drive))
         y = step(law, k * sp.motor.Lq, sp.motor.R)[:200]
         assert abs(res.metrics["response_time_5pct"] - t5(y)) <= TS

@@ -51,8 +51,7 @@ import numpy as np
 import pytest
 
 from toolbox.design import design
-from toolbox.sim import (Scenario, SpeedLoop, control_law, drive_params, plant_params,
-                         simulate)
+from toolbox.sim import (Scenario, SpeedLoop, control_law, drive_params, simulate)
 from toolbox.spec import load_spec
 
 DESIGNS = Path(__file__).resolve().parents[2] / "designs"
@@ -75,7 +74,7 @@ def run_system(name: str) -> dict:
     spec = load_spec(DESIGNS / f"001_takami2004_{name}.toml")
     art = design(spec)
     law = control_law(art, speed_loop(spec.motor))
-    plant, drive = plant_params(spec.motor), drive_params(spec.drive)
+    plant, drive = spec.motor, drive_params(spec.drive)
     sc = Scenario(kind="speed_step", duration=0.08, step_time=0.005, speed_ref=SPEED_REF,
                   keep_traces=True)
     return {k: simulate(law, plant.with_overrides(scale={"Ld": k, "Lq": k}), sc, drive)

@@ -61,7 +61,7 @@ from pathlib import Path
 import pytest
 
 from toolbox.design import design
-from toolbox.sim import Scenario, control_law, drive_params, plant_params, simulate
+from toolbox.sim import Scenario, control_law, drive_params, simulate
 from toolbox.spec import spec_from_dict
 
 DESIGNS = Path(__file__).resolve().parents[2] / "designs"
@@ -82,7 +82,7 @@ def _metrics(name: str, inverter: str, sample_time: float | None = None,
     art = design(spec)
     sc = Scenario(kind="unloaded_start", duration=duration, torque_ref=36.0,
                   inverter=inverter)
-    return simulate(control_law(art), plant_params(spec.motor), sc,
+    return simulate(control_law(art), spec.motor, sc,
                     drive_params(spec.drive, inverter)).metrics
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from toolbox.plant import (ElectricalPlant, axis_coefficients, axis_plants, dq_matrices,
                            zoh_first_order)
-from toolbox.spec import CATALOG, spec_from_dict
+from toolbox.spec import CATALOG, Motor, spec_from_dict
 
 RNG = np.random.default_rng(7)
 
@@ -23,7 +23,8 @@ def test_dq_matrices_equal_symbolic_plant(convention):
     for _ in range(20):
         R, Ld, Lq = RNG.uniform(0.01, 5), RNG.uniform(1e-4, 0.05), RNG.uniform(1e-4, 0.05)
         w = RNG.uniform(-3000, 3000)
-        plant = ElectricalPlant(R, Ld, Lq, 0.1, 3, convention)
+        plant = ElectricalPlant(Motor(R=R, Ld=Ld, Lq=Lq, flux=0.1, pole_pairs=3, J=1e-3,
+                                      convention=convention))
         A, B = dq_matrices(R, Ld, Lq, w)
         np.testing.assert_allclose(A[0], plant.A(w), rtol=1e-12, atol=0)
         np.testing.assert_allclose(B[0], plant.B(), rtol=1e-12, atol=0)

@@ -3,7 +3,7 @@
 Motors and drives drawn far outside the plausible range (zero, negative,
 tiny, huge and non-finite numbers mixed with plausible ones) with every
 linear method, through the CLI in process (click's CliRunner). The contract
-of DESIGN.md: exit 0 (pass) or 1 (a design that fails; its outputs written),
+of toolbox/ARCHITECTURE.md ("Errors and exit codes"): exit 0 (pass) or 1 (a design that fails; its outputs written),
 or 2 with ``cct: error:`` and a message naming the spec file and a key path
 (``motor.R``, ``drive.sample_time``, ``controller.pi.bandwidth``, ...) with
 nothing written. Never a Python traceback, never another exit code.

@@ -2,15 +2,16 @@
 
 import numpy as np
 
-from toolbox.sim._simulate import AxisLaw, ControlLaw, PlantParams
+from toolbox.artifact import Decoupling
+from toolbox.sim._simulate import AxisLaw, ControlLaw
 from toolbox.spec import Motor
 
 # Le Pioufle 1992 (paper 000), appendix; power-invariant dq (torque factor 1)
-PAPER000 = PlantParams.from_motor(Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4,
-                                        J=1.11e-3, friction=1.4e-3, convention="power"))
+PAPER000 = Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4,
+                 J=1.11e-3, friction=1.4e-3, convention="power")
 # Cormerais 2002 (paper 002), section 3.2; power-invariant (eq 3)
-PAPER002 = PlantParams.from_motor(Motor(R=0.02, Ld=112.6e-6, Lq=112.6e-6, flux=60.39e-3,
-                                        pole_pairs=6, J=1.0, friction=0.0, convention="power"))
+PAPER002 = Motor(R=0.02, Ld=112.6e-6, Lq=112.6e-6, flux=60.39e-3,
+                 pole_pairs=6, J=1.0, friction=0.0, convention="power")
 
 
 def tc_law(plant, K1, K2, Ts, **kw):
@@ -18,8 +19,8 @@ def tc_law(plant, K1, K2, Ts, **kw):
     def ax(L, K):
         return AxisLaw(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)),
                        np.array([[K * L, plant.R - K * L]]))
-    return ControlLaw(d=ax(plant.Ld, K1), q=ax(plant.Lq, K2), sample_time=Ts, R=plant.R,
-                      Ld=plant.Ld, Lq=plant.Lq, flux=plant.flux, cross=1, emf=1, **kw)
+    return ControlLaw(d=ax(plant.Ld, K1), q=ax(plant.Lq, K2), sample_time=Ts,
+                      decoupling=Decoupling.from_motor(plant), **kw)
 
 
 def tci_law(plant, K11, K12, K21, K22, Ts):
@@ -32,4 +33,4 @@ def tci_law(plant, K11, K12, K21, K22, Ts):
         return AxisLaw(np.array([[1.0]]), np.array([[Ts, -Ts]]), np.array([[Ki * L]]),
                        np.array([[Kp * L, plant.R - Kp * L]]), np.array([1.0 / (Ki * L)]))
     return ControlLaw(d=ax(plant.Ld, K11, K12), q=ax(plant.Lq, K21, K22), sample_time=Ts,
-                      R=plant.R, Ld=plant.Ld, Lq=plant.Lq, flux=plant.flux, cross=1, emf=1)
+                      decoupling=Decoupling.from_motor(plant))

@@ -15,6 +15,7 @@ import numpy as np
 
 def reference(plant, law, Ts, delay, v_max, duration, h, iq_ref, id_ref=0.0,
               omega0=0.0, imposed_acc=None, gain=0.0, offset=0.0, load=0.0):
+    dec = law.decoupling  # the controller's model (what the law believes)
     R, Ld, Lq, flux, p, J, fr, tf = (plant.R, plant.Ld, plant.Lq, plant.flux,
                                      plant.pole_pairs, plant.J, plant.friction,
                                      plant.torque_factor)
@@ -47,7 +48,7 @@ def reference(plant, law, Ts, delay, v_max, duration, h, iq_ref, id_ref=0.0,
     queue = [(0.0, 0.0)] * delay
     rows = []
     sq_t = sq_id = 0.0
-    tref = tf * p * (law.flux * iq_ref + (law.Ld - law.Lq) * id_ref * iq_ref)
+    tref = tf * p * (dec.flux_c * iq_ref + (dec.Ld_c - dec.Lq_c) * id_ref * iq_ref)
     for k in range(n_per):
         om_m = (1 + gain) * x[2] + offset
         w_m = p * om_m
@@ -57,8 +58,8 @@ def reference(plant, law, Ts, delay, v_max, duration, h, iq_ref, id_ref=0.0,
         for a in range(2):
             ax = axes[a]
             u.append(ax["C"] @ ax["x"] + ax["D"] @ np.array([refs[a], meas[a]]))
-        vd = u[0] - law.cross * w_m * law.Lq * meas[1]
-        vq = u[1] + law.cross * w_m * law.Ld * meas[0] + law.emf * w_m * law.flux
+        vd = u[0] - dec.cross * w_m * dec.Lq_c * meas[1]
+        vq = u[1] + dec.cross * w_m * dec.Ld_c * meas[0] + dec.emf * w_m * dec.flux_c
         mag = math.hypot(vd, vq)
         s = v_max / mag if mag > v_max else 1.0
         sat = (vd * s, vq * s)

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from toolbox.artifact import Decoupling
 from toolbox.sim._inverter import (bit_changes, hexagon_scale, state_vector,
                                    svm_times)
 from toolbox.sim._scenario import Scenario
@@ -52,7 +53,7 @@ def test_svm_current_tracks_average_model():
     with L = 2.8 mH is ~0.3 A peak-to-peak and averages out over the last 10 %)."""
     Ts, wc = 1e-4, 1500.0
     law = ControlLaw(d=discrete_pi(M.Ld * wc, M.R * wc, Ts), q=discrete_pi(M.Lq * wc, M.R * wc, Ts),
-                     sample_time=Ts, R=M.R, Ld=M.Ld, Lq=M.Lq, flux=M.flux, cross=1, emf=1)
+                     sample_time=Ts, decoupling=Decoupling.from_motor(M))
     sc = Scenario(kind="current_step", duration=0.03, iq_ref=8.0, id_ref=-2.0,
                   initial_speed=375.0)
     out = {}

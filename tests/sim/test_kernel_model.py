@@ -23,8 +23,7 @@ import sympy as sp
 from toolbox.plant import SYMBOLS as S
 from toolbox.plant import derive_dq_model, dq_matrices, numeric_plant
 from toolbox.sim import _kernel
-from toolbox.sim._simulate import PlantParams, _packed
-from toolbox.sim._verify import plant_params
+from toolbox.sim._simulate import _packed, _plant_array
 from toolbox.spec import Motor
 
 REL = 1e-12
@@ -71,16 +70,16 @@ def test_packed_fills_by_name_and_refuses_missing_or_unknown_slots():
 
 # ---------------------------------------------------- one parameter source
 @pytest.mark.parametrize("convention,tf", [("amplitude", 1.5), ("power", 1.0)])
-def test_plant_params_come_from_the_motor(convention, tf):
+def test_kernel_plant_array_is_packed_from_the_motor(convention, tf):
+    """The simulator's true plant is a ``Motor`` (one parameter type): its
+    kernel array holds exactly the motor's values (equality, no arithmetic),
+    the dq convention entering only as ``torque_factor``."""
     motor = MOTORS[convention]
-    plant = PlantParams.from_motor(motor)
-    assert plant_params(motor) == plant
-    assert plant.torque_factor == tf == motor.torque_factor
-    for name in ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction"):
-        assert getattr(plant, name) == getattr(motor, name)
+    arr = _plant_array(motor)
     ix = _kernel.pack_indices("P")
-    arr = plant.as_array()
-    assert arr[ix["Ld"]] == motor.Ld and arr[ix["torque_factor"]] == tf
+    for name in ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction"):
+        assert arr[ix[name]] == getattr(motor, name), name
+    assert arr[ix["torque_factor"]] == tf == motor.torque_factor
 
 
 # ------------------------------------------------- kernel model == plant model
@@ -92,7 +91,7 @@ def test_kernel_rhs_is_the_derived_model(convention):
     args = (S["R"], S["L_d"], S["L_q"], S["psi_f"], S["p"], S["J"], S["F"], S["i_d"],
             S["i_q"], S["Omega"], S["v_d"], S["v_q"], S["T_L"])
     rhs = sp.lambdify(args, f, "numpy")
-    pl = tuple(PlantParams.from_motor(motor).as_array())
+    pl = tuple(_plant_array(motor))
     for i_d, i_q, om, th, vd, vq, tl in _points():
         did, diq, dom, w = _kernel._deriv(i_d, i_q, om, th, vd, vq, 0, pl, tl, 0, 0.0)
         ref = np.array(rhs(motor.R, motor.Ld, motor.Lq, motor.flux, motor.pole_pairs,
@@ -107,7 +106,7 @@ def test_kernel_rhs_stationary_frame_and_imposed_speed():
     (inverse of ``_to_ab``); mech = 1 imposes dOmega/dt = acc."""
     motor = MOTORS["amplitude"]
     plant = numeric_plant(motor)
-    pl = tuple(PlantParams.from_motor(motor).as_array())
+    pl = tuple(_plant_array(motor))
     for i_d, i_q, om, th, vd, vq, tl in _points(seed=2):
         va, vb = _kernel._to_ab(vd, vq, math.cos(th), math.sin(th))
         did, diq, dom, _ = _kernel._deriv(i_d, i_q, om, th, va, vb, 1, pl, tl, 1, 123.0)

@@ -55,7 +55,7 @@ def test_compiled_kernel_equals_interpreted_kernel(inverter):
     by the Python interpreter (``run.py_func``) to 1e-9 relative: no
     numba-specific semantics (integer division, wrap-around, casts) leak in."""
     from toolbox.sim import _kernel
-    from toolbox.sim._simulate import FcsWeights, _pack, _pack_law
+    from toolbox.sim._simulate import FcsWeights, _pack, _pack_law, _plant_array
     from dataclasses import replace
 
     law = replace(tci_law(M, 3750, 707100, 3750, 707100, Ts), fcs=FcsWeights(1.0, 1.0, 5.0))
@@ -66,7 +66,7 @@ def test_compiled_kernel_equals_interpreted_kernel(inverter):
                   keep_traces=True)
     A, B, C, D, W, LP = _pack_law(law)
     DP, SP, SC = _pack(law, M, sc, drive)
-    args = (M.as_array(), A, B, C, D, W, LP, SP, DP, SC, True)
+    args = (_plant_array(M), A, B, C, D, W, LP, SP, DP, SC, True)
     m1, t1 = _kernel.run(*args)
     m2, t2 = _kernel.run.py_func(*args)
     assert _close(t1, t2)

@@ -8,6 +8,7 @@ controller; any difference comes from the RK4 integration only.
 import control
 import numpy as np
 
+from toolbox.artifact import Decoupling
 from toolbox.sim._scenario import Scenario
 from toolbox.sim._simulate import (ControlLaw, DriveParams, discrete_pi, simulate)
 
@@ -18,7 +19,8 @@ def _pi_law(wc, Ts):
     # pole-zero cancellation: Kp = L wc, Ki = R wc -> closed loop wc / (s + wc)
     return ControlLaw(d=discrete_pi(M.Ld * wc, M.R * wc, Ts),
                       q=discrete_pi(M.Lq * wc, M.R * wc, Ts),
-                      sample_time=Ts, R=M.R, Ld=M.Ld, Lq=M.Lq, flux=M.flux)
+                      sample_time=Ts,
+                      decoupling=Decoupling.from_motor(M, cross=False, emf=False))
 
 
 def test_pi_tiny_sample_time_matches_first_order():

@@ -19,6 +19,7 @@ import control
 import numpy as np
 import pytest
 
+from toolbox.artifact import Decoupling
 from toolbox.sim._metrics import step_metrics
 from toolbox.sim._scenario import Scenario
 from toolbox.sim._simulate import (AxisLaw, ControlLaw, DriveParams, discrete_pi,
@@ -107,7 +108,8 @@ def test_pi_static_error_under_acceleration():
     Kp, KI = 3.5 / 256, 660.0 / 256
     kp, kI = E * ki_s * Kp, E * ki_s * KI                # V/A, V/(A s)
     law = ControlLaw(d=discrete_pi(kp, kI, Ts), q=discrete_pi(kp, kI, Ts),
-                     sample_time=Ts, R=M.R, Ld=M.Ld, Lq=M.Lq, flux=M.flux)
+                     sample_time=Ts,
+                     decoupling=Decoupling.from_motor(M, cross=False, emf=False))
     acc = 5000.0
     sc = Scenario(kind="constant_acceleration", duration=0.06, iq_ref=10.0,
                   acceleration=acc)

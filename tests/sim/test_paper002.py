@@ -17,6 +17,7 @@ our cell changes; both counts are reported.
 
 import pytest
 
+from toolbox.artifact import Decoupling
 from toolbox.sim._scenario import Scenario
 from toolbox.sim._simulate import (ControlLaw, DriveParams, FcsWeights, discrete_pi,
                                    simulate)
@@ -30,7 +31,7 @@ def _law(Ts, gamma=0.0):
     K = 10 * M.R                 # eq (19)-(20): K = 10 R, Ti = L/R
     Ki = K * M.R / M.Ld
     return ControlLaw(d=discrete_pi(K, Ki, Ts), q=discrete_pi(K, Ki, Ts), sample_time=Ts,
-                      R=M.R, Ld=M.Ld, Lq=M.Lq, flux=M.flux, cross=1, emf=1,
+                      decoupling=Decoupling.from_motor(M),
                       fcs=FcsWeights(alpha=1.0, beta=1.0, gamma=gamma))
 
 

@@ -9,8 +9,9 @@ import pytest
 
 from toolbox.errors import SpecError
 from toolbox.sim._scenario import Scenario
-from toolbox.sim._simulate import (ControlLaw, DriveParams, PlantParams, SpeedLoop,
-                                   discrete_pi, simulate, simulate_batch)
+from toolbox.artifact import Decoupling
+from toolbox.sim._simulate import (ControlLaw, DriveParams, SpeedLoop, discrete_pi, simulate,
+                                   simulate_batch)
 
 from sim_helpers import PAPER000 as M, tc_law, tci_law
 
@@ -21,8 +22,7 @@ DRIVE = DriveParams(vdc=150, sample_time=Ts, delay_samples=1)
 def _pi(wc=2000.0, speed_loop=None):
     return ControlLaw(d=discrete_pi(M.Ld * wc, M.R * wc, Ts),
                       q=discrete_pi(M.Lq * wc, M.R * wc, Ts), sample_time=Ts,
-                      R=M.R, Ld=M.Ld, Lq=M.Lq, flux=M.flux, cross=1, emf=1,
-                      speed_loop=speed_loop)
+                      decoupling=Decoupling.from_motor(M), speed_loop=speed_loop)
 
 
 def test_batch_equals_single_runs_and_reports_progress():
@@ -125,7 +125,7 @@ def test_axis_law_from_error_controller_equals_two_input_form():
     pi_d, pi_q = discrete_pi(M.Ld * wc, M.R * wc, Ts), discrete_pi(M.Lq * wc, M.R * wc, Ts)
     wide = [AxisLaw.from_error_controller(ax.A, ax.B[:, :1], ax.C, ax.D[0, 0], ax.antiwindup)
             for ax in (pi_d, pi_q)]
-    law2 = ControlLaw(d=wide[0], q=wide[1], sample_time=Ts, R=M.R, Ld=M.Ld, Lq=M.Lq,
-                      flux=M.flux, cross=1, emf=1)
+    law2 = ControlLaw(d=wide[0], q=wide[1], sample_time=Ts,
+                      decoupling=Decoupling.from_motor(M))
     sc = Scenario(kind="unloaded_start", duration=0.01, iq_ref=5.0)
     assert simulate(law2, M, sc, DRIVE).metrics == simulate(_pi(), M, sc, DRIVE).metrics

@@ -12,7 +12,6 @@ from toolbox.artifact import ControllerArtifact
 from toolbox.design import design
 from toolbox.sim import NO_REQUIREMENTS, verify
 from toolbox.sim._checks import LinearFigures, StepFacts, reach_time_bound
-from toolbox.sim._verify import plant_params
 from toolbox.spec import spec_from_dict
 
 BASE = {"motor": {"catalog": "azaiz2007"},
@@ -103,7 +102,7 @@ def test_reach_bound_is_the_documented_formula():
     checked on paper 003's motor against the hand evaluation (pure arithmetic:
     rel 1e-12). At standstill V_avail = V_max = 150/sqrt(3), v_ss = R i."""
     spec = _spec([STEP])
-    plant = plant_params(spec.motor)
+    plant = spec.motor
     v_max = 150 / math.sqrt(3)
     facts = StepFacts("q", 0.0, 5.0, 0.0, 5.0, True)
     lin = LinearFigures(1000.0, 0.004)
@@ -200,7 +199,7 @@ def _synthetic(metrics, scenario=None):
     from toolbox.sim._checks import default_checks
 
     spec = _spec([scenario or STEP])
-    plant = plant_params(spec.motor)
+    plant = spec.motor
     lin = {ax: LinearFigures(1000.0, 0.003) for ax in "dq"}
     return default_checks(spec.scenarios[0], metrics, None, plant=plant, motor=spec.motor,
                           v_max=150 / math.sqrt(3), delay_samples=1, sample_time=1e-4,

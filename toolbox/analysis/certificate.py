@@ -56,7 +56,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.linalg import matrix_balance
 
-from ..plant import max_electrical_speed
+from ..plant import dq_matrices, max_electrical_speed
 from .margins import AXES, axis_law, json_ready
 
 __all__ = ["CertificateResult", "ParameterBox", "closed_loop_matrix",
@@ -109,12 +109,37 @@ class ParameterBox:
         return np.vstack([self.corners(), lo + rng.random((n, 5)) * (hi - lo)])
 
 
+def _plant_entries(points: np.ndarray):
+    """The dq plant at parameter points, from :func:`toolbox.plant.dq_matrices`.
+
+    Returns ``A`` (N, 2, 2) and ``B`` (N, 2, 2) of ``di/dt = A(omega) i + B v``
+    (paper 003 eq (3)-(4)); the certificate's coordinates are read off these
+    entries so that the dq model is written once, in :mod:`toolbox.plant`.
+    """
+    R, Ld, Lq, om, _ = points.T
+    return dq_matrices(R, Ld, Lq, om)
+
+
+def _coupling(points: np.ndarray, dec) -> np.ndarray:
+    """``g omega cross``: the speed the decoupling ``W`` is scaled by (N,)."""
+    _, _, _, om, g = points.T
+    return (1.0 if dec.cross else 0.0) * g * om
+
+
 def _theta(points: np.ndarray, dec) -> np.ndarray:
-    R, Ld, Lq, om, g = points.T
-    cross = 1.0 if dec.cross else 0.0
-    return np.stack([1 / Ld, 1 / Lq, R / Ld, R / Lq,
-                     om * (Lq - cross * g * dec.Lq_c) / Ld,
-                     om * (Ld - cross * g * dec.Ld_c) / Lq], axis=1)
+    """The six affine coordinates (module docstring) at parameter points.
+
+    The plant seen by the linear law is ``A + B W`` with the decoupling
+    ``W = g omega [[0, -Lq_c], [Ld_c, 0]]``; ``theta`` lists its entries
+    ``(B_dd, B_qq, -M_dd, -M_qq, M_dq, -M_qd)`` with ``M = A + B W``.
+    """
+    A, B = _plant_entries(points)
+    h = _coupling(points, dec)
+    B_d, B_q = B[:, 0, 0], B[:, 1, 1]
+    # (B W)_dq = -h Lq_c B_d, (B W)_qd = h Ld_c B_q
+    m_dq = A[:, 0, 1] - h * dec.Lq_c * B_d
+    m_qd = A[:, 1, 0] + h * dec.Ld_c * B_q
+    return np.stack([B_d, B_q, -A[:, 0, 0], -A[:, 1, 1], m_dq, -m_qd], axis=1)
 
 
 def _laws(artifact):
@@ -155,10 +180,15 @@ def closed_loop_matrix(artifact, theta: np.ndarray) -> np.ndarray:
 
 
 def _theta_delay(points: np.ndarray, dec) -> np.ndarray:
-    R, Ld, Lq, om, g = points.T
-    cross = 1.0 if dec.cross else 0.0
-    return np.stack([1 / Ld, 1 / Lq, R / Ld, R / Lq, om * Lq / Ld, om * Ld / Lq,
-                     cross * g * om / Ld, cross * g * om / Lq, cross * g * om], axis=1)
+    """The nine affine coordinates of the Pade-delay model at parameter points:
+    the plant entries ``(B_dd, B_qq, -A_dd, -A_qq, A_dq, -A_qd)`` of
+    :func:`toolbox.plant.dq_matrices`, then ``h B_dd``, ``h B_qq`` and ``h``
+    with ``h = cross g omega`` (the decoupling's speed)."""
+    A, B = _plant_entries(points)
+    h = _coupling(points, dec)
+    B_d, B_q = B[:, 0, 0], B[:, 1, 1]
+    return np.stack([B_d, B_q, -A[:, 0, 0], -A[:, 1, 1], A[:, 0, 1], -A[:, 1, 0],
+                     h * B_d, h * B_q, h], axis=1)
 
 
 def closed_loop_matrix_delay(artifact, theta: np.ndarray, tau: float) -> np.ndarray:

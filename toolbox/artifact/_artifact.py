@@ -571,6 +571,25 @@ class Decoupling:
     pole_pairs: int
     delay_compensation_time: float = 0.0
 
+    @classmethod
+    def from_motor(cls, motor, *, cross: bool = True, emf: bool = True,
+                   delay_compensation_time: float = 0.0) -> "Decoupling":
+        """The controller-side model equal to a motor's nominal parameters.
+
+        Parameters
+        ----------
+        motor : toolbox.spec.Motor
+            The motor the controller believes in (its ``R``, ``Ld``, ``Lq``,
+            ``flux``, ``pole_pairs`` are copied into ``R_c`` ... ``pole_pairs``).
+        cross, emf : bool
+            Cross-coupling and back-EMF compensation on.
+        delay_compensation_time : float
+            Rotation time of ``v_dq`` (s, 0 = none).
+        """
+        return cls(cross=cross, emf=emf, R_c=motor.R, Ld_c=motor.Ld, Lq_c=motor.Lq,
+                   flux_c=motor.flux, pole_pairs=motor.pole_pairs,
+                   delay_compensation_time=delay_compensation_time)
+
     def to_json(self) -> dict:
         return {"cross": self.cross, "emf": self.emf, "R_c": self.R_c,
                 "Ld_c": self.Ld_c, "Lq_c": self.Lq_c, "flux_c": self.flux_c,
@@ -603,7 +622,7 @@ class Decoupling:
                    float(data["Lq_c"]), float(data["flux_c"]), pp, float(t_comp))
 
 
-#: The MARGINS keys of DESIGN.md: numbers (non-finite ones as the strings
+#: The MARGINS keys (toolbox/ARCHITECTURE.md "controller.json"): numbers (non-finite ones as the strings
 #: "inf", "-inf", "nan") or null. Other keys (lists of crossings, skewed disk
 #: margins, "domain") are free-form analysis details.
 MARGIN_NUMBERS = ("gain_margin_db", "gain_crossover_rad_s", "phase_margin_deg",

@@ -19,9 +19,8 @@ def decoupling_from_motor(motor, *, cross: bool = True, emf: bool = True,
     ``delay_compensation_time`` (s, 0 = none) is the rotation of ``v_dq`` by
     ``delay_compensation_time * w_e`` the law assumes (see :class:`Decoupling`).
     """
-    return Decoupling(cross=cross, emf=emf, R_c=motor.R, Ld_c=motor.Ld, Lq_c=motor.Lq,
-                      flux_c=motor.flux, pole_pairs=motor.pole_pairs,
-                      delay_compensation_time=delay_compensation_time)
+    return Decoupling.from_motor(motor, cross=cross, emf=emf,
+                                 delay_compensation_time=delay_compensation_time)
 
 
 def make_artifact(spec, axes: dict[str, AxisController], decoupling: Decoupling,

@@ -15,6 +15,8 @@ import control
 import numpy as np
 import sympy as sp
 
+from toolbox.spec import Motor
+
 from ._symbolic import SYMBOLS as S
 from ._symbolic import derive_dq_model
 
@@ -36,50 +38,58 @@ def _electrical_matrices(convention: str):
 
 @dataclass(frozen=True)
 class ElectricalPlant:
-    """dq electrical model ``di/dt = A(omega) i + B v + e(omega)`` of a motor.
+    """The linear dq electrical model ``di/dt = A(omega) i + B v + e(omega)``
+    derived for a motor: a model, not a parameter holder.
 
+    The parameters live in the one parameter type, :class:`toolbox.spec.Motor`
+    (``motor``); this object evaluates the sympy derivation
+    (:func:`~toolbox.plant.derive_dq_model`, lambdified) for them.
     ``omega`` is the electrical speed ``p * Omega`` (rad/s); currents in A,
-    voltages in V. Built by :func:`numeric_plant`.
+    voltages in V. Built by :func:`numeric_plant`. The vectorised closed
+    forms of :mod:`._linear` are tested equal to it.
+
+    Parameters
+    ----------
+    motor : toolbox.spec.Motor
+        The motor (``R``, ``Ld``, ``Lq``, ``flux`` and its dq ``convention``
+        are read).
     """
 
-    R: float
-    Ld: float
-    Lq: float
-    flux: float
-    pole_pairs: int
-    convention: str
+    motor: Motor
 
     def _args(self, omega: float) -> tuple:
-        return (self.R, self.Ld, self.Lq, self.flux, float(omega))
+        m = self.motor
+        return (m.R, m.Ld, m.Lq, m.flux, float(omega))
+
+    def _matrices(self):
+        return _electrical_matrices(self.motor.convention)
 
     def A(self, omega: float = 0.0) -> np.ndarray:
         """State matrix at electrical speed ``omega`` (1/s)."""
-        return np.array(_electrical_matrices(self.convention)[0](*self._args(omega)), float)
+        return np.array(self._matrices()[0](*self._args(omega)), float)
 
     def B(self) -> np.ndarray:
         """Input matrix diag(1/Ld, 1/Lq) (1/H)."""
-        return np.array(_electrical_matrices(self.convention)[1](*self._args(0.0)), float)
+        return np.array(self._matrices()[1](*self._args(0.0)), float)
 
     def emf(self, omega: float) -> np.ndarray:
         """Back-EMF disturbance term of di/dt (A/s), ``[0, -omega flux/Lq]``."""
-        return np.array(_electrical_matrices(self.convention)[2](*self._args(omega)),
-                        float).reshape(2)
+        return np.array(self._matrices()[2](*self._args(omega)), float).reshape(2)
 
     def statespace(self, omega: float = 0.0) -> control.StateSpace:
         """Two-input two-output system v -> i at fixed electrical speed."""
         return control.ss(self.A(omega), self.B(), np.eye(2), np.zeros((2, 2)))
 
 
-def numeric_plant(motor) -> ElectricalPlant:
-    """The numeric dq plant of a motor.
+def numeric_plant(motor: Motor) -> ElectricalPlant:
+    """The linear dq model derived for a motor.
 
     Parameters
     ----------
-    motor : Motor
-        Parameters (R, Ld, Lq, flux, pole_pairs, convention).
+    motor : toolbox.spec.Motor
+        Parameters (R, Ld, Lq, flux, convention).
     """
-    return ElectricalPlant(motor.R, motor.Ld, motor.Lq, motor.flux, motor.pole_pairs,
-                           motor.convention)
+    return ElectricalPlant(motor)
 
 
 def axis_plants(motor) -> dict[str, control.TransferFunction]:

@@ -3,15 +3,14 @@
 from ._metrics import METRIC_NAMES, step_metrics
 from ._scenario import INVERTER_KINDS, SCENARIO_KINDS, Scenario
 from ._simulate import (AxisLaw, BatchResult, ControlLaw, DriveParams, FcsWeights,
-                        PlantParams, SimResult, SpeedLoop, discrete_pi, simulate,
-                        simulate_batch)
+                        SimResult, SpeedLoop, discrete_pi, simulate, simulate_batch)
 
 __all__ = ["METRIC_NAMES", "step_metrics", "INVERTER_KINDS", "SCENARIO_KINDS", "Scenario",
-           "AxisLaw", "BatchResult", "ControlLaw", "DriveParams", "FcsWeights", "PlantParams",
+           "AxisLaw", "BatchResult", "ControlLaw", "DriveParams", "FcsWeights",
            "SimResult", "SpeedLoop", "discrete_pi", "simulate", "simulate_batch"]
 
 from ._verify import (NO_REQUIREMENTS, VERIFY_SCHEMA, ScenarioOutcome, VerifyResult, control_law,
-                      default_scenarios, drive_params, plant_params, verify)
+                      default_scenarios, drive_params, verify)
 
 __all__ += ["NO_REQUIREMENTS", "VERIFY_SCHEMA", "ScenarioOutcome", "VerifyResult", "control_law",
-            "default_scenarios", "drive_params", "plant_params", "verify"]
+            "default_scenarios", "drive_params", "verify"]

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
 from toolbox.errors import SpecError
+from toolbox.spec import MOTOR_PARAMETER_KEYS
 
 __all__ = ["Scenario", "SCENARIO_KINDS", "INVERTER_KINDS", "PLANT_KEYS"]
 
@@ -42,7 +43,7 @@ SCENARIO_KINDS = ("current_step", "constant_acceleration", "unloaded_start",
                   "load_step", "speed_step", "sinusoidal_torque")
 INVERTER_KINDS = ("average", "svm", "fcs_mpc")
 NOISE_KINDS = ("uniform", "gaussian")
-PLANT_KEYS = ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction")
+PLANT_KEYS = MOTOR_PARAMETER_KEYS  # a scenario's true plant is a Motor.with_overrides
 SPEED_LOOP_KEYS = ("kp", "ki", "kd", "sample_time", "iq_limit")
 
 

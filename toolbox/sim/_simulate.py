@@ -17,83 +17,17 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from toolbox.artifact import FcsWeights  # typed in the artifact; re-exported here
+from toolbox.artifact import Decoupling, FcsWeights  # typed in the artifact; FcsWeights re-exported
 from toolbox.errors import SpecError
-from toolbox.spec import inverter_radii
+from toolbox.spec import Motor, inverter_radii
 
 from . import _kernel
 from ._metrics import METRIC_NAMES, metrics_dict
-from ._scenario import PLANT_KEYS, Scenario
+from ._scenario import Scenario
 
-__all__ = ["PlantParams", "DriveParams", "AxisLaw", "SpeedLoop", "FcsWeights",
+__all__ = ["DriveParams", "AxisLaw", "SpeedLoop", "FcsWeights",
            "ControlLaw", "SimResult", "BatchResult", "simulate", "simulate_batch",
            "discrete_pi"]
-
-
-@dataclass(frozen=True)
-class PlantParams:
-    """True motor parameters of the simulated plant (SI).
-
-    A view of the spec's :class:`toolbox.spec.Motor` (the one parameter type,
-    as motulator keeps one): build it with :meth:`from_motor`, which is the
-    only place the motor's parameters and its dq convention (torque factor)
-    are converted for the simulator.
-
-    Parameters
-    ----------
-    R : float
-        Stator resistance (ohm).
-    Ld, Lq : float
-        dq inductances (H).
-    flux : float
-        Permanent-magnet flux linkage (Wb).
-    pole_pairs : int
-        Pole pairs p; electrical speed ``w = p Omega`` (rad/s).
-    J : float
-        Inertia (kg m^2).
-    friction : float
-        Viscous friction (N m s/rad).
-    torque_factor : float
-        1.5 amplitude-invariant, 1.0 power-invariant dq convention:
-        ``T = torque_factor p (flux iq + (Ld - Lq) id iq)`` (N m).
-    """
-
-    R: float
-    Ld: float
-    Lq: float
-    flux: float
-    pole_pairs: int
-    J: float
-    friction: float = 0.0
-    torque_factor: float = 1.5
-
-    @classmethod
-    def from_motor(cls, motor) -> "PlantParams":
-        """The simulated plant of a motor (nominal values).
-
-        Parameters
-        ----------
-        motor : toolbox.spec.Motor
-            Validated motor; its ``convention`` sets ``torque_factor``.
-        """
-        return cls(R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
-                   pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
-                   torque_factor=motor.torque_factor)
-
-    def with_overrides(self, values: Mapping[str, float] | None = None,
-                       scale: Mapping[str, float] | None = None) -> "PlantParams":
-        """Plant with some parameters replaced (``values``) then multiplied (``scale``)."""
-        kw = {k: getattr(self, k) for k in PLANT_KEYS}
-        kw.update(values or {})
-        for k, m in (scale or {}).items():
-            kw[k] = kw[k] * m
-        return replace(self, **kw)
-
-    def as_array(self) -> np.ndarray:
-        """The kernel's plant array (slots ``_kernel.LAYOUTS["P"]``)."""
-        return _packed("P", R=self.R, Ld=self.Ld, Lq=self.Lq, flux=self.flux,
-                       pole_pairs=self.pole_pairs, J=self.J, friction=self.friction,
-                       torque_factor=self.torque_factor)
 
 
 @dataclass(frozen=True)
@@ -209,7 +143,8 @@ class SpeedLoop:
 
 @dataclass(frozen=True)
 class ControlLaw:
-    """The whole current-control law in plain arrays.
+    """The whole current-control law: linear axis laws plus what the
+    controller believes about the motor.
 
     Parameters
     ----------
@@ -218,12 +153,15 @@ class ControlLaw:
         used by the ``"fcs_mpc"`` inverter, which chooses switch states directly.
     sample_time : float
         Period the discrete controllers were designed for (s).
-    R, Ld, Lq, flux : float
-        Controller's model parameters (ohm, H, H, Wb), used by the decoupling
-        terms and the predictive control (may differ from the plant).
-    cross, emf : int
-        Decoupling flags: ``v_d += -cross w_m Lq iq_m``,
-        ``v_q += cross w_m Ld id_m + emf w_m flux`` with ``w_m = p Omega_m``.
+    decoupling : Decoupling
+        The artifact's controller-side model (``R_c``, ``Ld_c``, ``Lq_c``,
+        ``flux_c``) and decoupling flags: ``v_d += -cross w_m Lq_c iq_m``,
+        ``v_q += cross w_m Ld_c id_m + emf w_m flux_c`` with ``w_m = p
+        Omega_m``; the predictive law of ``fcs_mpc`` predicts with the same
+        model. It is what the controller believes, a distinct concept from
+        the true plant (a :class:`toolbox.spec.Motor`) it controls.
+        ``delay_compensation_time`` is not simulated (the kernel has no
+        rotation of ``v_dq``); the firmware header exports it.
     speed_loop : SpeedLoop, optional
         Outer loop for ``speed_step`` and ``load_step`` scenarios.
     fcs : FcsWeights, optional
@@ -233,12 +171,7 @@ class ControlLaw:
     d: AxisLaw
     q: AxisLaw
     sample_time: float
-    R: float
-    Ld: float
-    Lq: float
-    flux: float
-    cross: int = 0
-    emf: int = 0
+    decoupling: Decoupling
     speed_loop: SpeedLoop | None = None
     fcs: FcsWeights | None = None
 
@@ -350,13 +283,14 @@ def _pack_law(law: ControlLaw):
         if not np.all(np.isfinite(arr)):
             raise SpecError("law", "finite controller matrices", "NaN or inf")
     f = law.fcs or FcsWeights()
-    LP = _packed("LP", R_c=law.R, Ld_c=law.Ld, Lq_c=law.Lq, flux_c=law.flux,
-                 cross=float(law.cross), emf=float(law.emf), alpha=f.alpha, beta=f.beta,
+    dec = law.decoupling
+    LP = _packed("LP", R_c=dec.R_c, Ld_c=dec.Ld_c, Lq_c=dec.Lq_c, flux_c=dec.flux_c,
+                 cross=float(dec.cross), emf=float(dec.emf), alpha=f.alpha, beta=f.beta,
                  gamma=f.gamma)
     return A, B, C, D, W, LP
 
 
-def _pack(law: ControlLaw, plant: PlantParams, scenario: Scenario, drive: DriveParams):
+def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams):
     Ts = drive.sample_time
     if not (Ts > 0 and math.isfinite(Ts)):
         raise SpecError("drive.sample_time", "a number > 0 (s)", Ts)
@@ -402,7 +336,7 @@ def _pack(law: ControlLaw, plant: PlantParams, scenario: Scenario, drive: DriveP
     tf = plant.torque_factor
     iq1 = scenario.iq_ref
     if scenario.torque_ref is not None:
-        iq1 = scenario.torque_ref / (tf * plant.pole_pairs * law.flux)
+        iq1 = scenario.torque_ref / (tf * plant.pole_pairs * law.decoupling.flux_c)
     if kind in ("speed_step", "load_step"):
         sig = 2
     elif iq1 == scenario.iq_ref0 and scenario.id_ref != scenario.id_ref0:
@@ -417,7 +351,7 @@ def _pack(law: ControlLaw, plant: PlantParams, scenario: Scenario, drive: DriveP
         id0=scenario.id_ref0, iq0=scenario.iq_ref0, id1=scenario.id_ref, iq1=iq1,
         t_step=scenario.step_time, speed0=speed0, speed1=scenario.speed_ref,
         load=scenario.load_torque, load_time=scenario.load_time,
-        iq_amp=scenario.torque_amplitude / (tf * plant.pole_pairs * law.flux),
+        iq_amp=scenario.torque_amplitude / (tf * plant.pole_pairs * law.decoupling.flux_c),
         f_sin=scenario.torque_frequency,
         ref_mode={"sinusoidal_torque": 1, "speed_step": 2, "load_step": 2}.get(kind, 0),
         signal=sig, gain=scenario.speed_gain_error, offset=scenario.speed_offset,
@@ -430,7 +364,18 @@ def _pack(law: ControlLaw, plant: PlantParams, scenario: Scenario, drive: DriveP
     return DP, SP, SC
 
 
-def _check_plant(plant: PlantParams, key: str = "plant") -> None:
+def _plant_array(motor: Motor) -> np.ndarray:
+    """The kernel's plant array (slots ``_kernel.LAYOUTS["P"]``) of a true motor.
+
+    The only place a :class:`~toolbox.spec.Motor` is packed for the kernel;
+    its dq convention enters as ``torque_factor`` (``Motor.torque_factor``).
+    """
+    return _packed("P", R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
+                   pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
+                   torque_factor=motor.torque_factor)
+
+
+def _check_plant(plant: Motor, key: str = "plant") -> None:
     for name in ("R", "Ld", "Lq", "flux", "pole_pairs", "J"):
         v = getattr(plant, name)
         if not (isinstance(v, (int, float, np.floating, np.integer)) and math.isfinite(v)
@@ -440,21 +385,21 @@ def _check_plant(plant: PlantParams, key: str = "plant") -> None:
         raise SpecError(f"{key}.friction", "a finite number >= 0", plant.friction)
 
 
-def simulate(law: ControlLaw, plant: PlantParams, scenario: Scenario,
+def simulate(law: ControlLaw, plant: Motor, scenario: Scenario,
              drive: DriveParams) -> SimResult:
     """Simulate one closed loop: nonlinear PMSM + sampled control + inverter.
 
-    The plant (``plant`` with the scenario's ``plant_values``/``plant_scale``
-    applied) is integrated by RK4 at ``scenario.plant_step``; the control law
-    runs every ``drive.sample_time`` with ZOH and ``drive.delay_samples``
-    periods of computation delay.
+    The plant (``plant.with_overrides(scenario.plant_values,
+    scenario.plant_scale)``) is integrated by RK4 at ``scenario.plant_step``;
+    the control law runs every ``drive.sample_time`` with ZOH and
+    ``drive.delay_samples`` periods of computation delay.
 
     Parameters
     ----------
     law : ControlLaw
-        Controller (plain arrays, model parameters, decoupling flags).
-    plant : PlantParams
-        Nominal true motor (SI).
+        Controller (plain arrays, its model of the motor, decoupling flags).
+    plant : toolbox.spec.Motor
+        Nominal true motor (SI); its ``convention`` sets the torque factor.
     scenario : Scenario
         What happens (references, speed, load, sensor errors, inverter, traces).
     drive : DriveParams
@@ -474,7 +419,7 @@ def simulate(law: ControlLaw, plant: PlantParams, scenario: Scenario,
     _check_plant(true_plant)
     A, B, C, D, W, LP = _pack_law(law)
     DP, SP, SC = _pack(law, true_plant, scenario, drive)
-    M, tr = _kernel.run(true_plant.as_array(), A, B, C, D, W, LP, SP, DP, SC,
+    M, tr = _kernel.run(_plant_array(true_plant), A, B, C, D, W, LP, SP, DP, SC,
                         bool(scenario.keep_traces))
     res = SimResult(metrics=metrics_dict(M))
     if scenario.keep_traces:
@@ -484,8 +429,41 @@ def simulate(law: ControlLaw, plant: PlantParams, scenario: Scenario,
     return res
 
 
+#: dq convention of each kernel torque factor (``Motor.torque_factor`` inverse).
+_CONVENTION_OF_TORQUE_FACTOR = {1.5: "amplitude", 1.0: "power"}
+
+
+def _motors_from_columns(plants: Mapping[str, Sequence[float]]) -> list[Motor]:
+    """N motors from parameter arrays (``simulate_batch``'s mapping form).
+
+    Keys are the kernel's plant slots (``R`` ... ``friction``, and
+    ``torque_factor`` 1.5 or 1, which selects the dq convention; default 1.5).
+    """
+    names = _kernel.LAYOUTS["P"]
+    unknown = set(plants) - set(names)
+    if unknown:
+        raise SpecError("plants", "parameter arrays named " + ", ".join(names),
+                        sorted(unknown)[0])
+    N = max(np.size(v) for v in plants.values())
+    defaults = {"friction": 0.0, "torque_factor": 1.5}
+    cols = {k: np.broadcast_to(np.asarray(plants.get(k, defaults.get(k, np.nan)), float), (N,))
+            for k in names}
+    motors = []
+    for i in range(N):
+        tf = float(cols["torque_factor"][i])
+        if tf not in _CONVENTION_OF_TORQUE_FACTOR:
+            raise SpecError(f"plants.torque_factor[{i}]", "1.5 (amplitude-invariant) or 1 "
+                            "(power-invariant)", tf)
+        motors.append(Motor(R=float(cols["R"][i]), Ld=float(cols["Ld"][i]),
+                            Lq=float(cols["Lq"][i]), flux=float(cols["flux"][i]),
+                            pole_pairs=float(cols["pole_pairs"][i]), J=float(cols["J"][i]),
+                            friction=float(cols["friction"][i]),
+                            convention=_CONVENTION_OF_TORQUE_FACTOR[tf]))
+    return motors
+
+
 def simulate_batch(law: ControlLaw,
-                   plants: Sequence[PlantParams] | Mapping[str, Sequence[float]],
+                   plants: Sequence[Motor] | Mapping[str, Sequence[float]],
                    scenario: Scenario, drive: DriveParams,
                    progress: Callable[[int, int], None] | None = None,
                    chunk: int | None = None) -> BatchResult:
@@ -495,11 +473,11 @@ def simulate_batch(law: ControlLaw,
     ----------
     law, scenario, drive
         As for :func:`simulate` (traces are never kept).
-    plants : sequence of PlantParams, or mapping
-        The N true plants: a list of :class:`PlantParams`, or a mapping from
-        parameter name (``R``, ``Ld``, ... ``torque_factor``) to arrays of
-        length N (scalars broadcast). The scenario's plant overrides apply on
-        top of each.
+    plants : sequence of toolbox.spec.Motor, or mapping
+        The N true plants: a list of motors (e.g. ``Motor.with_overrides`` of
+        a nominal one), or a mapping from parameter name (``R``, ``Ld``, ...
+        ``friction``, ``torque_factor``) to arrays of length N (scalars
+        broadcast). The scenario's plant overrides apply on top of each.
     progress : callable, optional
         Called as ``progress(done, N)`` after each chunk.
     chunk : int, optional
@@ -510,20 +488,8 @@ def simulate_batch(law: ControlLaw,
     BatchResult
         ``metrics[name]``: array of length N.
     """
-    if isinstance(plants, Mapping):
-        names = _kernel.LAYOUTS["P"]
-        unknown = set(plants) - set(names)
-        if unknown:
-            raise SpecError("plants", "parameter arrays named " + ", ".join(names),
-                            sorted(unknown)[0])
-        N = max(np.size(v) for v in plants.values())
-        cols = {k: np.broadcast_to(np.asarray(plants.get(k, 0.0 if k == "friction"
-                                                         else 1.5 if k == "torque_factor"
-                                                         else np.nan), float), (N,))
-                for k in names}
-        plant_list = [PlantParams(*(float(cols[k][i]) for k in names)) for i in range(N)]
-    else:
-        plant_list = list(plants)
+    plant_list = (_motors_from_columns(plants) if isinstance(plants, Mapping)
+                  else list(plants))
     N = len(plant_list)
     if N == 0:
         return BatchResult({name: np.empty(0) for name in METRIC_NAMES})
@@ -535,7 +501,7 @@ def simulate_batch(law: ControlLaw,
         if p.torque_factor != tf0 or p.pole_pairs != trues[0].pole_pairs:
             raise SpecError(f"plants[{i}].torque_factor", "the same torque factor and "
                             "pole pairs for every plant of a batch", p.torque_factor)
-    P = np.array([p.as_array() for p in trues])
+    P = np.array([_plant_array(p) for p in trues])
     A, B, C, D, W, LP = _pack_law(law)
     scen = replace(scenario, keep_traces=False)
     DP, SP, SC = _pack(law, trues[0], scen, drive)

@@ -16,24 +16,13 @@ from typing import Callable
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
 from ._fcs_metrics import ripple_band_step_times
 from ._scenario import Scenario
-from ._simulate import (AxisLaw, ControlLaw, DriveParams, FcsWeights, PlantParams,
-                        SimResult, SpeedLoop, simulate)
+from ._simulate import (AxisLaw, ControlLaw, DriveParams, FcsWeights, SimResult, SpeedLoop,
+                        simulate)
 
-__all__ = ["VERIFY_SCHEMA", "control_law", "plant_params", "drive_params",
+__all__ = ["VERIFY_SCHEMA", "control_law", "drive_params",
            "default_scenarios", "verify", "VerifyResult", "ScenarioOutcome", "NO_REQUIREMENTS"]
 
 VERIFY_SCHEMA = "cct.verify/1"
-
-
-def plant_params(motor) -> PlantParams:
-    """The simulated plant of a motor (nominal values): :meth:`PlantParams.from_motor`.
-
-    Parameters
-    ----------
-    motor : Motor
-        Validated motor.
-    """
-    return PlantParams.from_motor(motor)
 
 
 def drive_params(drive, inverter: str = "average") -> DriveParams:
@@ -70,10 +59,8 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
     speed_loop : SpeedLoop, optional
         Outer speed loop of the scenario.
     """
-    dec = artifact.decoupling
     return ControlLaw(d=_axis_law(artifact.axes["d"]), q=_axis_law(artifact.axes["q"]),
-                      sample_time=artifact.sample_time, R=dec.R_c, Ld=dec.Ld_c,
-                      Lq=dec.Lq_c, flux=dec.flux_c, cross=int(dec.cross), emf=int(dec.emf),
+                      sample_time=artifact.sample_time, decoupling=artifact.decoupling,
                       speed_loop=speed_loop, fcs=artifact.fcs)
 
 
@@ -332,7 +319,7 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     VerifyResult
     """
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
-    plant = plant_params(spec.motor)
+    plant = spec.motor  # the true plant is the spec's Motor (one parameter type)
     inverter_default = "fcs_mpc" if artifact.method == "fcs_mpc" else "average"
     margin_checks, stability, linear, warnings, info = _margin_verdict(artifact, spec, file)
     if artifact.fcs is not None:

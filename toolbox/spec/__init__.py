@@ -5,11 +5,11 @@ from ._fields import Collector, SpecErrors, Table, check_keys
 from ._load import drive_from_dict, load_spec, motor_from_dict, spec_from_dict
 from ._methods import read_method_cfg, register_method_reader, registered_methods
 from ._render import spec_to_toml
-from ._model import (METHODS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor, inverter_radii,
+from ._model import (METHODS, MOTOR_PARAMETER_KEYS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor, inverter_radii,
                      Requirements, Spec)
 
 __all__ = ["CATALOG", "CATALOG_NOTES", "Collector", "SpecErrors", "Table", "check_keys", "load_spec",
-           "spec_from_dict", "METHODS", "REQUIREMENT_KEYS", "ControllerChoice",
+           "spec_from_dict", "METHODS", "MOTOR_PARAMETER_KEYS", "REQUIREMENT_KEYS", "ControllerChoice",
            "Drive", "Motor", "Requirements", "Spec", "inverter_radii",
            "motor_from_dict", "drive_from_dict", "read_method_cfg",
            "register_method_reader", "registered_methods", "spec_to_toml"]

@@ -7,11 +7,18 @@ error messages (``motor.Ld``). All quantities are SI.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
-from typing import Any
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any, Mapping
+
+from ..errors import SpecError
 
 __all__ = ["inverter_radii", "Motor", "Drive", "ControllerChoice", "Requirements", "Spec",
-           "METHODS", "REQUIREMENT_KEYS"]
+           "METHODS", "REQUIREMENT_KEYS", "MOTOR_PARAMETER_KEYS"]
+
+#: The physical parameters of a :class:`Motor` a robustness set or a scenario
+#: may replace or scale (``Motor.with_overrides``; a scenario's
+#: ``plant_values``/``plant_scale`` keys).
+MOTOR_PARAMETER_KEYS = ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction")
 
 #: Design methods the toolbox knows (toolbox/ARCHITECTURE.md "Spec file").
 METHODS = ("pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc")
@@ -106,6 +113,45 @@ class Motor:
     def emf_constant(self) -> float:
         """Back-EMF amplitude per mechanical speed, p * flux (V s/rad)."""
         return self.pole_pairs * self.flux
+
+    def with_overrides(self, values: Mapping[str, float] | None = None,
+                       scale: Mapping[str, float] | None = None) -> "Motor":
+        """The same motor with some parameters replaced, then multiplied.
+
+        This is how a robustness set or a scenario's true plant is made: the
+        result is again a :class:`Motor` (the one parameter type), so every
+        model of :mod:`toolbox.plant` and the simulator apply to it unchanged.
+        No physical check is made here; the consumer (e.g. the simulator)
+        checks the values it needs, naming its own key path.
+
+        Parameters
+        ----------
+        values : mapping, optional
+            Parameter name (one of :data:`MOTOR_PARAMETER_KEYS`) -> value
+            (SI) replacing the nominal one.
+        scale : mapping, optional
+            Parameter name -> multiplier, applied after ``values``.
+
+        Returns
+        -------
+        Motor
+            A new motor; ``self`` is unchanged.
+
+        Raises
+        ------
+        SpecError
+            A name that is not one of :data:`MOTOR_PARAMETER_KEYS`.
+        """
+        kw = {k: getattr(self, k) for k in MOTOR_PARAMETER_KEYS}
+        for table, entries in (("values", values or {}), ("scale", scale or {})):
+            for k in entries:
+                if k not in kw:
+                    raise SpecError(f"plant_{table}.{k}", "a motor parameter ("
+                                    + ", ".join(MOTOR_PARAMETER_KEYS) + ")", k)
+        kw.update(values or {})
+        for k, m in (scale or {}).items():
+            kw[k] = kw[k] * m
+        return replace(self, **kw)
 
 
 @dataclass(frozen=True)
