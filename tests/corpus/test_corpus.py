@@ -29,7 +29,6 @@ expected failure; every other fcs_mpc case must pass.
 
 from __future__ import annotations
 
-import math
 import os
 import tomllib
 from pathlib import Path
