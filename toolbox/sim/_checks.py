@@ -131,7 +131,7 @@ def step_facts(scenario, plant, flux_c: float) -> StepFacts:
     Parameters
     ----------
     scenario : Scenario
-    plant : PlantParams
+    plant : Motor
         True plant (pole pairs, torque factor).
     flux_c : float
         Controller model flux (Wb): a torque reference becomes ``i_q`` with it.
@@ -192,7 +192,7 @@ def reach_time_bound(facts: StepFacts, scenario, plant, v_max: float, delay_samp
     facts : StepFacts
         The step (axis and references).
     scenario : Scenario
-    plant : PlantParams
+    plant : Motor
         True plant of the scenario (overrides applied).
     v_max : float
         dq voltage limit of the drive (V, linear modulation circle).
@@ -314,7 +314,7 @@ def default_checks(scenario, metrics: dict, result, *, plant, motor, v_max: floa
         The simulator's metrics of the run.
     result : SimResult or None
         The run, with traces when the scenario kept them (peaks, reach band).
-    plant : PlantParams
+    plant : Motor
         True plant of the scenario (overrides applied).
     motor : Motor
         Spec motor (rated/maximum current and speed).

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Callable
 
+from toolbox.spec import Motor
 
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
 from ._fcs_metrics import ripple_band_step_times
@@ -257,7 +258,7 @@ def _fcs_linear_figures(drive) -> dict[str, LinearFigures]:
     return {ax: LinearFigures(wc, math.nan) for ax in ("d", "q")}
 
 
-def _fcs_ripple(artifact, drive: DriveParams, true_plant: PlantParams,
+def _fcs_ripple(artifact, drive: DriveParams, true_plant: Motor,
                 r_hex: float) -> dict[str, float] | None:
     """Per-axis design ripple of the predictive switching law, None for other inverters.
 
@@ -271,7 +272,7 @@ def _fcs_ripple(artifact, drive: DriveParams, true_plant: PlantParams,
             "d": fcs_ripple(r_hex, drive.sample_time, L_min, fcs.beta, fcs.gamma, fcs.alpha)}
 
 
-def _fcs_step_times(scenario: Scenario, res: SimResult, true_plant: PlantParams, artifact,
+def _fcs_step_times(scenario: Scenario, res: SimResult, true_plant: Motor, artifact,
                     ripple: dict[str, float]) -> dict[str, float]:
     """5 % / 2 % times of a switching-law current step in the band max(b |delta|, ripple).
 
