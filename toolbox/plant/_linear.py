@@ -14,9 +14,12 @@ in ``tests/plant/test_linear.py``, so the model is written once.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["axis_coefficients", "zoh_first_order", "dq_matrices", "steady_state_voltage"]
+__all__ = ["axis_coefficients", "zoh_first_order", "dq_matrices", "steady_state_voltage",
+           "voltage_limited_speed"]
 
 
 def axis_coefficients(R, L):
@@ -114,3 +117,25 @@ def steady_state_voltage(R, Ld, Lq, flux, omega, i_d, i_q):
         Voltages (V); everything broadcasts.
     """
     return R * i_d - omega * Lq * i_q, R * i_q + omega * (Ld * i_d + flux)
+
+
+def voltage_limited_speed(motor, v_max: float, iq: float) -> float:
+    """Mechanical speed at which ``i_q = iq, i_d = 0`` uses the whole voltage (rad/s).
+
+    The steady state of :func:`steady_state_voltage`, ``v_d = -w Lq iq``,
+    ``v_q = R iq + w psi`` (``w`` the electrical speed, ``psi`` the flux in
+    the motor's convention, ``v_max`` in the same convention) meets
+    ``|v| = v_max`` at the positive root of
+    ``(Lq^2 iq^2 + psi^2) w^2 + 2 R iq psi w + R^2 iq^2 - v_max^2 = 0``;
+    ``0`` when ``R iq`` alone exceeds ``v_max``, ``inf`` without flux and
+    inductance (nothing grows with speed).
+    """
+    a = (motor.Lq * iq) ** 2 + motor.flux ** 2
+    b = motor.R * iq * motor.flux
+    c = (motor.R * iq) ** 2 - v_max ** 2
+    if c >= 0:
+        return 0.0
+    if a == 0:
+        return math.inf
+    w_e = (-b + math.sqrt(b * b - a * c)) / a
+    return w_e / motor.pole_pairs

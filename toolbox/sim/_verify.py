@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Callable
 
+from toolbox.plant import voltage_limited_speed
 from toolbox.spec import Motor
 
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
@@ -70,16 +71,21 @@ def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
 
     A q-current step to half the current scale at standstill, the same step
     during free acceleration (unloaded start), and the same step at half the
-    speed scale (speed held). The scales
+    speed scale (speed held), capped at half the speed the voltage allows at
+    that current (:func:`toolbox.plant.voltage_limited_speed`: the speed scale alone ignores
+    the ``R i`` and ``w L i`` drops). The scales
     (:func:`toolbox.design._defaults.current_scale`, ``speed_scale``) are
     the rated (else maximum) current and speed, else what the voltage
     allows; each scenario's ``name`` states its numbers.
 
     Durations: at least 20 ms and 30 time constants of the slowest default
     crossover (``3/wc`` is the 5 % time of a first-order loop: ten of them
-    leave room for the slower second-order defaults); the unloaded start
-    stops when the speed reaches half the speed scale (beyond, the back-EMF
-    would saturate the voltage: a field-weakening question, not the loop's).
+    leave room for the slower second-order defaults). The unloaded start
+    must not pass the speed scale nor 80 % of the voltage-limited speed
+    (beyond, the back-EMF would saturate the voltage: a field-weakening
+    question, not the loop's): it ends when the rotor gets there, and a rotor
+    so light that it would get there within ``20/wc`` (too short for the loop
+    to settle) gets a smaller step, sized to arrive there after ``20/wc``.
 
     Parameters
     ----------
@@ -100,24 +106,36 @@ def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
     i_scale, _ = current_scale(motor, drive)
     w_scale, _ = speed_scale(motor, drive)
     i_step = 0.5 * i_scale
+    w_reach = voltage_limited_speed(motor, drive.max_voltage(motor.convention), i_step)
+    w_held = 0.5 * min(w_scale, w_reach)
     wc = default_bandwidth(drive, zero=True).value
     step_time = 0.001
     span = max(0.02, 30.0 / wc)
-    accel = motor.torque_factor * motor.pole_pairs * motor.flux * i_step / motor.J
-    t_half = 0.5 * w_scale / accel if accel > 0 and math.isfinite(w_scale) else math.inf
-    span_start = max(min(span, t_half), 10.0 / wc)
+    # free acceleration may end at the speed scale or at 80 % of the voltage-limited speed
+    # (20 % of the voltage left for the loop): a rotor that gets there within the span
+    # stops there; one so light that it gets there before the loop has had 20/wc to
+    # settle steps less current, sized to arrive there after 20/wc
+    w_end = min(w_scale, 0.8 * w_reach)
+    torque_per_amp = motor.torque_factor * motor.pole_pairs * motor.flux
+    i_start, span_start = i_step, span
+    if torque_per_amp > 0 and math.isfinite(w_end):
+        t_end = w_end * motor.J / (torque_per_amp * i_step)
+        span_start = min(span, max(t_end, 20.0 / wc))
+        i_start = min(i_step, w_end * motor.J / (torque_per_amp * span_start))
+    start_txt = (f"{i_start:.4g} A, unloaded start" if span_start == span else
+                 f"{i_start:.4g} A, unloaded start (reaches {w_end:.4g} rad/s at the end)")
     out = [Scenario(name=f"q step to {i_step:.4g} A (0.5 x current scale) at standstill",
                     kind="current_step", duration=step_time + span, iq_ref=i_step,
                     step_time=step_time, keep_traces=True),
-           Scenario(name=f"q step to {i_step:.4g} A, unloaded start",
-                    kind="unloaded_start", duration=step_time + span_start, iq_ref=i_step,
+           Scenario(name=f"q step to {start_txt}",
+                    kind="unloaded_start", duration=step_time + span_start, iq_ref=i_start,
                     step_time=step_time, keep_traces=True)]
-    if math.isfinite(w_scale):
-        out.append(Scenario(name=f"q step to {i_step:.4g} A at {0.5 * w_scale:.4g} rad/s "
-                                 "(0.5 x speed scale)",
+    if math.isfinite(w_held):
+        held_txt = ("0.5 x speed scale" if w_held == 0.5 * w_scale else
+                    "0.5 x the speed the voltage allows at this current")
+        out.append(Scenario(name=f"q step to {i_step:.4g} A at {w_held:.4g} rad/s ({held_txt})",
                             kind="current_step", duration=step_time + span, iq_ref=i_step,
-                            initial_speed=0.5 * w_scale, step_time=step_time,
-                            keep_traces=True))
+                            initial_speed=w_held, step_time=step_time, keep_traces=True))
     return tuple(out)
 
 
