@@ -55,6 +55,9 @@ _EMF_RAMP = ("unloaded start: the back-EMF ramps with the speed and the type-1 l
 #: (motor, method) -> reason (found by running the full grid)
 KNOWN: dict[tuple[str, str], str] = {
     ("ipower_gm2804", "tc"): _EMF_RAMP + " (6.3 %: J = 1.2e-6 kg m^2, 2800 V/s per A)",
+    ("issue12_gimbal", "tc"): _EMF_RAMP + " (0.56 A step, J = 3e-6 kg m^2)",
+    ("siemens_1fk7042", "pi_lag"): ("reach at half speed 4.0 ms against a bound of 3.5 ms: "
+                                    "the 8 kHz lag of pi_lag on a 10 mH servo; marginal"),
 }
 
 
