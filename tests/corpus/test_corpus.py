@@ -17,7 +17,8 @@ machine, over the CI budget; by default a representative grid runs (one
 motor per class, every method: ``DEFAULT_MOTORS``), ``CCT_CORPUS=full``
 runs all 33. Measured on the shared 2-core machine: the default grid (6 motors
 x 9 methods, one report) 66-74 s (54 passed, 1 expected fcs failure); the
-full grid (CCT_CORPUS=full) 358 s: 257 passed, 41 expected failures.
+full grid (CCT_CORPUS=full) 277 passed, 21 expected failures (18 fcs_mpc out of
+reach, 3 in ``KNOWN``), 358 s alone, 674 s beside two other test runs.
 
 Known failures are listed in ``KNOWN`` with the reason found; they are
 ``xfail(strict=True)``, so a fix makes the test say so. FCS-MPC cases whose
