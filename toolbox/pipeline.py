@@ -231,7 +231,8 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
             out.warnings.append(f"controller.h not written: {err}")
             progress(f"firmware header refused: {err}")
         else:
-            out.header = write_header(out.artifact, spec.motor, spec.drive)
+            out.header = write_header(out.artifact, spec.motor, spec.drive,
+                                      prefix=spec.export_prefix)
     if report:
         progress("report")
         from .report import build_context, write_html, write_pdf
