@@ -34,6 +34,17 @@ A fixed-point variant (``#define CCT_FIXED_POINT`` before including) adds
 ``cct_step_q31`` with Q31 signals and int64 accumulators; see
 :mod:`toolbox.export._fixed` for the scaling rules.
 
+Every identifier carries the prefix (``prefix=``, default ``cct_``: guard
+``CCT_CONTROLLER_H``, switch ``CCT_FIXED_POINT``). The voltage limit in use is
+set at run time from the measured bus (``<p>set_vdc``); the delay
+compensation is applied in ``<p>step`` (outputs ``v_d_comp``, ``v_q_comp``);
+a usage example closes the header under ``#if 0``.
+
+Method ``fcs_mpc`` exports its predictive switching law instead (paper 002
+criterion (23) over the 8 inverter states with the switching penalty, one
+forward-Euler prediction, the one-period delay handled as the simulator's
+``_fcs_choice``; templates/fcs.c.j2), float only.
+
 Exportability rules (:func:`check_exportable`) -- a controller is refused with
 :class:`toolbox.errors.ExportRefused` (key ``controller.<method>``, the
 message names the axis) when:
@@ -789,10 +800,6 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
     t(" *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the")
     t(" *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.")
     t(" *   y = b0 x + s1; s1 = b1 x + a1 y + s2; s2 = b2 x + a2 y.")
-    if artifact.method == "fcs_mpc":
-        t(" * NOTE: method fcs_mpc chooses inverter switch states online; that predictive")
-        t(" *   law is not exported. This header runs the linear axis controllers stored")
-        t(" *   in the artifact (the SVM + PI baseline).")
     for ax in check.marginal_antiwindup:
         t(f" * WARNING ({ax} axis): in saturation the anti-windup recursion A - aw C has")
         t(f" *   spectral radius {check.saturated_radius[ax]:.9g} >= 1 (not strictly stable):")
@@ -1022,6 +1029,151 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -
                            nd=max(plan.axes["d"].S.size, 1), nq=max(plan.axes["q"].S.size, 1)))
 
 
+def fcs_r_hex_per_vdc(convention: str) -> float:
+    """Length of an active inverter vector per volt of bus (the hexagon's
+    vertex radius, :func:`toolbox.spec.inverter_radii`)."""
+    from ..spec import inverter_radii
+    return inverter_radii(1.0, convention)[0]
+
+
+def _write_fcs_header(artifact, motor, drive, name: str, title: str | None,
+                      example: bool) -> str:
+    """controller.h of method ``fcs_mpc``: the predictive switching law of paper
+    002 criterion (23) as the simulator runs it (``toolbox.sim._kernel._fcs_choice``),
+    float only."""
+    if drive is None:
+        raise ExportRefused("drive", "drive data (vdc) for the inverter vectors",
+                            hint="pass drive= or keep [drive] in the artifact's spec")
+    conv = motor.convention if motor is not None else "amplitude"
+    N = name.lower()
+    P = name.upper() + "_"
+    guard = f"{P}CONTROLLER_H"
+    if title is None:
+        title = (artifact.spec or {}).get("title", "")
+    prov = artifact.provenance or {}
+    fcs = artifact.fcs
+    dec = artifact.decoupling
+    key = _law_key(artifact)
+    predict = int(artifact.delay_samples) >= 1
+    k_hex = fcs_r_hex_per_vdc(conv)
+    t = _Text()
+    t("/*")
+    t(" * controller.h -- current controller exported by current-control-toolbox")
+    t(f" * title:       {sanitise_comment(title)}")
+    t(f" * method:      {sanitise_comment(artifact.method)}")
+    t(f" * version:     {sanitise_comment(prov.get('version', 'unknown'))}")
+    t(f" * spec sha256: {sanitise_comment(prov.get('spec_sha256', 'unknown'))}")
+    t(f" * created:     {sanitise_comment(prov.get('created', 'unknown'))}")
+    t(" *")
+    t(" * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no")
+    t(f" * fixed-point variant: {P}FIXED_POINT is an error).")
+    t(" * Boolean predictive control (Cormerais 2002, paper 002): every period")
+    t(f" * {N}_step() predicts the currents one period ahead (forward Euler of the dq")
+    t(" * model with the controller's R, Ld, Lq, flux) for each of the 8 inverter")
+    t(" * states and returns the state of least")
+    t(" *   J = ALPHA (i_q - i_q_ref)^2 + BETA (i_d - i_d_ref)^2 + GAMMA commutations")
+    t(" * (criterion (23), GAMMA the switching penalty); ties go to the fewest")
+    t(" * commutations, then the lower state index.")
+    if predict:
+        t(f" * Computation delay {int(artifact.delay_samples)} period(s): the state returned is applied during")
+        t(" * the NEXT period; the currents are first advanced over the current one with")
+        t(" * the state chosen last period (as the toolbox simulator).")
+    else:
+        t(" * No computation delay: the state returned is applied at once, for this period.")
+    t(f" * Call {N}_init() once, then {N}_set_vdc() with the measured bus voltage and")
+    t(f" * {N}_step() once per period (example at the end of this file).")
+    t(f" * Faults: out->status {N.upper()}_STATUS_BAD_INPUT (an input is inf/nan) or")
+    t(f" * {N.upper()}_STATUS_BAD_STATE (the cost overflowed): the previous state is held.")
+    t(" */")
+    t(f"#ifndef {guard}")
+    t(f"#define {guard}")
+    t("")
+    t("#include <math.h> /* sinf, cosf */")
+    t("#include <stdint.h> /* uint32_t */")
+    t("")
+    t(f"#ifdef {P}FIXED_POINT")
+    t('#error "fixed-point variant not available: the fcs_mpc law is exported in float only"')
+    t(f"#endif /* {P}FIXED_POINT */")
+    t("")
+    t(f"#define {P}SAMPLE_TIME {_f(artifact.sample_time, 'drive.sample_time', 'SAMPLE_TIME')} /* controller period, s */")
+    t(f"#define {P}DELAY_SAMPLES {_int(artifact.delay_samples, 'drive.delay_samples', 'DELAY_SAMPLES', 0)} /* computation delay, periods */")
+    t(f"#define {P}DRIVE_VDC {_f(drive.vdc, 'drive.vdc', 'DRIVE_VDC')} /* nominal DC-link voltage, V */")
+    t(f"#define {P}R_HEX_PER_VDC {_f(k_hex, 'drive.vdc', 'R_HEX_PER_VDC')} /* active vector length per volt of bus ({sanitise_comment(conv)}-invariant dq) */")
+    t(f"#define {P}R_HEX {_f(k_hex * drive.vdc, 'drive.vdc', 'R_HEX')} /* active vector length at the nominal bus, V */")
+    t("/* controller-side model of the predictor */")
+    t(f"#define {P}DEC_R {_f(dec.R_c, 'motor.R', 'DEC_R')} /* ohm */")
+    t(f"#define {P}DEC_LD {_f(dec.Ld_c, 'motor.Ld', 'DEC_LD')} /* H */")
+    t(f"#define {P}DEC_LQ {_f(dec.Lq_c, 'motor.Lq', 'DEC_LQ')} /* H */")
+    t(f"#define {P}DEC_FLUX {_f(dec.flux_c, 'motor.flux', 'DEC_FLUX')} /* Wb */")
+    t(f"#define {P}POLE_PAIRS {_int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)} /* w_e = POLE_PAIRS * Omega_m */")
+    t("/* criterion (23) weights: alpha (q error, A^-2), beta (d error, A^-2), gamma (per commutation) */")
+    t(f"#define {P}FCS_ALPHA {_f(fcs.alpha, key + '.alpha', 'FCS_ALPHA')}")
+    t(f"#define {P}FCS_BETA {_f(fcs.beta, key + '.beta', 'FCS_BETA')}")
+    t(f"#define {P}FCS_GAMMA {_f(fcs.gamma, key + '.gamma', 'FCS_GAMMA')}")
+    t("")
+    t.lines.extend(_render("fcs.c.j2", N=N, P=P, U=N.upper(), predict=predict))
+    if example:
+        t("")
+        _fcs_example(t, N, P)
+    t("")
+    t(f"#endif /* {guard} */")
+    return t.text()
+
+
+def _fcs_example(t: _Text, N: str, P: str) -> None:
+    U = N.upper()
+    t("#if 0 /* usage example: copy the lines between BEGIN and END into main.c */")
+    t(f"// {EXAMPLE_BEGIN}")
+    src = f"""#include <stdio.h>
+#include "controller.h"
+
+/* stand-ins for the board's drivers: ADC, encoder, gate drivers, fault output */
+static float adc_i_d(void) {{ return 0.0f; }}
+static float adc_i_q(void) {{ return 0.0f; }}
+static float adc_vdc(void) {{ return {P}DRIVE_VDC; }}
+static float encoder_speed(void) {{ return 0.0f; }}
+static float encoder_theta_e(void) {{ return 0.0f; }}
+static void gates_apply(int s_a, int s_b, int s_c) {{ (void)s_a; (void)s_b; (void)s_c; }}
+static void fault_report(int status) {{ printf("controller status %d\\n", status); }}
+
+static {N}_state_t ctl;
+
+/* once per controller period ({P}SAMPLE_TIME s) */
+static void control_isr(float i_d_ref, float i_q_ref)
+{{
+    {N}_input_t in;
+    {N}_output_t out;
+    if ({N}_set_vdc(&ctl, adc_vdc()) != {U}_STATUS_OK) {{
+        fault_report({U}_STATUS_BAD_INPUT); /* bus reading lost: previous vectors kept */
+    }}
+    in.i_d_ref = i_d_ref;
+    in.i_q_ref = i_q_ref;
+    in.i_d = adc_i_d();
+    in.i_q = adc_i_q();
+    in.omega_m = encoder_speed();
+    in.theta_e = encoder_theta_e();
+    {N}_step(&ctl, &in, &out);
+    if (out.status != {U}_STATUS_OK) {{
+        fault_report(out.status); /* previous state held: decide to trip or ride through */
+    }}
+    gates_apply(out.s_a, out.s_b, out.s_c); /* applied next period when DELAY_SAMPLES >= 1 */
+}}
+
+int main(void)
+{{
+    int k;
+    {N}_init(&ctl);
+    for (k = 0; k < 10; ++k) {{
+        control_isr(0.0f, 1.0f);
+    }}
+    return 0;
+}}"""
+    for ln in src.split("\n"):
+        t(ln)
+    t(f"// {EXAMPLE_END}")
+    t("#endif /* usage example */")
+
+
 EXAMPLE_BEGIN = "EXAMPLE main.c BEGIN"
 EXAMPLE_END = "EXAMPLE main.c END"
 
@@ -1183,6 +1335,8 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     if not isinstance(name, str) or not _IDENT.match(name):
         raise SpecError("export.name", "a C identifier of at most 31 characters", name)
     motor, drive = _motor_drive(artifact, motor, drive)
+    if artifact.method == "fcs_mpc":
+        return _write_fcs_header(artifact, motor, drive, name, title, example)
     check = check_exportable(artifact, motor, drive)
     N = name.lower()
     P = name.upper() + "_"
