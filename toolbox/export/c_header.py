@@ -40,6 +40,10 @@ set at run time from the measured bus (``<p>set_vdc``); the delay
 compensation is applied in ``<p>step`` (outputs ``v_d_comp``, ``v_q_comp``);
 a usage example closes the header under ``#if 0``.
 
+STM32 MCSDK-style (``<P>MCSDK``) and TI IQmath-style (``<P>IQMATH``) integer
+variants of a one-degree-of-freedom PI law: :mod:`toolbox.export._vendor`
+(templates/vendor.c.j2).
+
 Method ``fcs_mpc`` exports its predictive switching law instead (paper 002
 criterion (23) over the 8 inverter states with the switching penalty, one
 forward-Euler prediction, the one-period delay handled as the simulator's
@@ -83,7 +87,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import CctError, ExportRefused, SpecError
-from . import _fixed
+from . import _fixed, _vendor
 from ._minimal import MinimalLaw, minimal_law
 from ._sos import Realisation, realise_axis
 
@@ -963,6 +967,56 @@ def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive
     t(f"#endif /* {P}FIXED_POINT */")
 
 
+def vendor_plan(artifact, motor, drive, check: ExportCheck):
+    """The MCSDK/IQmath plan of a PI law (:mod:`toolbox.export._vendor`), or (None, why)."""
+    i_max, w_max = _ranges(artifact, motor, drive, check.v_max)
+    dec = artifact.decoupling
+    p = dec.pole_pairs
+    dec_coeffs = {"dd": -float(dec.cross) * p * dec.Lq_c,
+                  "dq": float(dec.cross) * p * dec.Ld_c,
+                  "de": float(dec.emf) * p * dec.flux_c}
+    if check.limit == "hexagon":
+        return None, ('voltage_limit = "hexagon" is implemented in the float path only; '
+                      'the MCSDK/IQmath variants need voltage_limit = "circle"')
+    return _vendor.plan_vendor(minimal_laws(artifact), i_max, w_max, check.v_max, dec_coeffs)
+
+
+def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str,
+                    P: str) -> None:
+    """MCSDK (``<P>MCSDK``) and IQmath (``<P>IQMATH``) variants, or an #error saying why not."""
+    plan, why = vendor_plan(artifact, motor, drive, check)
+    key = _law_key(artifact)
+    if plan is not None:
+        try:
+            mc = _vendor.mcsdk_constants(plan)
+            iq = _vendor.iq_constants(plan)
+        except OverflowError as err:
+            plan, why = None, str(err)
+    if plan is None:
+        t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
+        t(f"#error \"MCSDK/IQmath variants not available: {sanitise_comment(why).replace(chr(34), chr(39))}\"")
+        t("#endif")
+        return
+    t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
+    t(f"/* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;")
+    for ax in AXES:
+        t(f" *   {ax}: Kp = {plan.kp[ax]:.9g} V/A, Ki = {plan.ki[ax]:.9g} V/A per sample, "
+          f"Kaw = {plan.kaw[ax]:.9g}")
+    t(" * ranges: currents and speed beyond these are clamped (status CLAMPED) */")
+    t(f"#define {P}MCSDK_I_FS {_f(plan.I_FS, 'motor.max_current', 'MCSDK_I_FS')} /* A = 32768 digits (s16A) */")
+    t(f"#define {P}MCSDK_V_FS {_f(plan.V_FS, 'drive.vdc', 'MCSDK_V_FS')} /* V = 32768 digits (s16V) */")
+    t(f"#define {P}MCSDK_W_FS {_f(plan.W_FS, 'drive.max_speed', 'MCSDK_W_FS')} /* mechanical rad/s = 32768 digits */")
+    t(f"#define {P}MCSDK_V_MAX {_int(round(plan.V_MAX / plan.V_FS * 32768), 'drive.vdc', 'MCSDK_V_MAX', 0, 32767)} /* nominal voltage limit, s16V */")
+    t(f"#define {P}IQ_I_BASE {_f(plan.I_FS, 'motor.max_current', 'IQ_I_BASE')} /* A = 1.0 p.u. */")
+    t(f"#define {P}IQ_V_BASE {_f(plan.V_MAX, 'drive.vdc', 'IQ_V_BASE')} /* V = 1.0 p.u. (nominal limit) */")
+    t(f"#define {P}IQ_W_BASE {_f(plan.W_FS, 'drive.max_speed', 'IQ_W_BASE')} /* mechanical rad/s = 1.0 p.u. */")
+    t("#endif")
+    mc_ctx = {k: (_int(g, key, f"MCSDK {k} gain", -32767, 32767), _int(sh, key, f"MCSDK {k} divisor", 0, 15))
+              for k, (g, sh) in mc.items()}
+    iq_ctx = {k: _int(v, key, f"IQ24 {k}", -C_INT32_MAX, C_INT32_MAX) for k, v in iq.items()}
+    t.lines.extend(_render("vendor.c.j2", N=N, P=P, U=N.upper(), mc=mc_ctx, iq=iq_ctx))
+
+
 def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
     plan = check.fixed
     key = _law_key(artifact)
@@ -1363,6 +1417,8 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     _float_section(t, check.realisations, N, P, _law_key(artifact), check.limit == "hexagon",
                    _delay_comp_time(artifact) is not None)
     _fixed_section(t, check, N, P, artifact, drive)
+    t("")
+    _vendor_section(t, artifact, motor, drive, check, N, P)
     t("")
     if example:
         _example(t, N, P, check.limit == "hexagon")
