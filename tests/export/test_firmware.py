@@ -417,3 +417,26 @@ def test_cli_prefix_option_and_spec(tmp_path):
     out2 = _design_dir(tmp_path / "b", SPEC + '[export]\nprefix = "axis2_"\n')
     assert run("export", out2, "-o", out2 / "a2.h").exit_code == 0
     assert "axis2_step(" in (out2 / "a2.h").read_text()
+
+
+def test_q31_input_conversion_clamps_and_flags(tmp_path):
+    """issue 15: a 100 A input overflowed a Q31 range sized to 2 x rated
+    current. The Q31 variant's <p>to_q31() clamps to the stated range
+    (Q31_I_MAX = motor.max_current = 20 A here) and flags it; in range it is
+    exact to float32 (24-bit) rounding of the word: |word - exact| <= 2^31 x
+    2^-23 (2 float32 ulps of the ratio)."""
+    h = write_header(A.pi_artifact(), A.MOTOR, A.DRIVE)
+    chk = check_exportable(A.pi_artifact(), A.MOTOR, A.DRIVE, fixed_point=True)
+    src = ('#include <stdio.h>\n#include "controller.h"\nint main(void)\n{\n'
+           '    const float x[4] = {100.0f, -100.0f, 12.5f, -3.0f};\n    int k;\n'
+           '    for (k = 0; k < 4; ++k) {\n        int f = 0;\n'
+           '        const int32_t w = cct_to_q31(x[k], CCT_Q31_I_MAX, CCT_Q31_I_BASE, &f);\n'
+           '        printf("%ld %d\\n", (long)w, f);\n    }\n    return 0;\n}\n')
+    exe = _build(tmp_path, {"controller.h": h, "m.c": src}, "q31conv", defines=["-DCCT_FIXED_POINT"])
+    out = [ln.split() for ln in subprocess.run([exe], capture_output=True, text=True,
+                                               timeout=30).stdout.split("\n") if ln]
+    P = chk.fixed
+    exact = [P.I_MAX, -P.I_MAX, 12.5, -3.0]
+    for (w, f), x, flag in zip(out, exact, [1, 1, 0, 0]):
+        assert int(f) == flag
+        assert abs(int(w) - x / P.I_BASE * 2 ** 31) <= 2 ** 31 * 2 ** -23

@@ -1037,6 +1037,8 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -
     t(f"#define {P}Q31_I_BASE {_f(plan.I_BASE, 'motor.max_current', 'Q31_I_BASE')} /* A at full scale */")
     t(f"#define {P}Q31_V_BASE {_f(plan.V_BASE, 'drive.vdc', 'Q31_V_BASE')} /* V at full scale */")
     t(f"#define {P}Q31_W_BASE {_f(plan.W_BASE, 'drive.max_speed', 'Q31_W_BASE')} /* mechanical rad/s at full scale */")
+    t(f"#define {P}Q31_I_MAX {_f(plan.I_MAX, 'motor.max_current', 'Q31_I_MAX')} /* A, current range ({N}_to_q31 clamps beyond) */")
+    t(f"#define {P}Q31_W_MAX {_f(plan.W_MAX, 'drive.max_speed', 'Q31_W_MAX')} /* rad/s, speed range ({N}_to_q31 clamps beyond) */")
     t(f"#define {P}Q31_V_MAX {_q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX')} /* V_MAX / V_BASE in Q31: the largest limit */")
     if drive is not None and drive.vdc > 0:
         t(f"#define {P}Q31_VDC_BASE {_f(plan.V_BASE * drive.vdc / check.v_max, 'drive.vdc', 'Q31_VDC_BASE')} "
