@@ -992,13 +992,23 @@ def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str
             iq = _vendor.iq_constants(plan)
         except OverflowError as err:
             plan, why = None, str(err)
-    if plan is None:
-        t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
-        t(f"#error \"MCSDK/IQmath variants not available: {sanitise_comment(why).replace(chr(34), chr(39))}\"")
-        t("#endif")
-        return
+    if plan is not None:
+        body = _Text()
+        try:
+            _vendor_body(body, plan, mc, iq, N, P, key)
+        except ExportRefused as err:          # a constant out of range: no variant
+            why = str(err)
+        else:
+            t.lines.extend(body.lines)
+            return
     t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
-    t(f"/* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;")
+    t(f"#error \"MCSDK/IQmath variants not available: {sanitise_comment(why).replace(chr(34), chr(39))}\"")
+    t("#endif")
+
+
+def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str) -> None:
+    t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
+    t("/* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;")
     for ax in AXES:
         t(f" *   {ax}: Kp = {plan.kp[ax]:.9g} V/A, Ki = {plan.ki[ax]:.9g} V/A per sample, "
           f"Kaw = {plan.kaw[ax]:.9g}")
