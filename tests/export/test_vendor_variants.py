@@ -288,3 +288,88 @@ def test_reference_pi_designs(design, variant, tmp_path):
     # not vacuous: the MCSDK's 16-bit LSB alone is 2.4e-4 of 003's max|v| (21.9 V),
     # its bound 1.1e-3; a wrong gain or decoupling term errs by > 1e-2
     assert bound.max() < 2e-3 * np.abs(res[:, :2]).max()
+
+
+RETUNE = r"""
+#include <stdio.h>
+#include <stdint.h>
+#include "controller.h"
+int main(void)
+{
+    long a, b, c, d, e;
+#ifdef CCT_MCSDK
+    cct_state_s16_t s;
+    cct_input_s16_t in;
+    cct_output_s16_t out;
+    cct_init_s16(&s);
+#ifdef RETUNE
+    s.gd.kp_gain = D_KP_G; s.gd.kp_div = D_KP_S; s.gd.ki_gain = D_KI_G; s.gd.ki_div = D_KI_S;
+    s.gd.kaw_gain = D_KAW_G; s.gd.kaw_div = D_KAW_S;
+    s.gq.kp_gain = Q_KP_G; s.gq.kp_div = Q_KP_S; s.gq.ki_gain = Q_KI_G; s.gq.ki_div = Q_KI_S;
+    s.gq.kaw_gain = Q_KAW_G; s.gq.kaw_div = Q_KAW_S;
+#endif
+#else
+    cct_state_iq_t s;
+    cct_input_iq_t in;
+    cct_output_iq_t out;
+    cct_init_iq(&s);
+#ifdef RETUNE
+    s.gd.kp = D_KP; s.gd.ki = D_KI; s.gd.kaw = D_KAW;
+    s.gq.kp = Q_KP; s.gq.ki = Q_KI; s.gq.kaw = Q_KAW;
+#endif
+#endif
+    while (scanf("%ld %ld %ld %ld %ld", &a, &b, &c, &d, &e) == 5) {
+#ifdef CCT_MCSDK
+        in.i_d_ref = (int16_t)a; in.i_q_ref = (int16_t)b; in.i_d = (int16_t)c;
+        in.i_q = (int16_t)d; in.omega_m = (int16_t)e;
+        cct_step_s16(&s, &in, &out);
+#else
+        in.i_d_ref = (int32_t)a; in.i_q_ref = (int32_t)b; in.i_d = (int32_t)c;
+        in.i_q = (int32_t)d; in.omega_m = (int32_t)e;
+        cct_step_iq(&s, &in, &out);
+#endif
+        printf("%ld %ld %d %d\n", (long)out.v_d, (long)out.v_q, out.saturated, out.status);
+    }
+    return 0;
+}
+"""
+
+
+@pytest.mark.parametrize("variant", ["MCSDK", "IQMATH"])
+def test_gains_retunable_at_run_time(variant, tmp_path):
+    """Gains honesty for the integer variants: the step reads the gains from
+    the state (as the MCSDK's PI handle), so writing the gains of a PI tuned
+    for wc = 1000 rad/s into a controller exported for wc = 500 rad/s gives
+    exactly (bit for bit) the outputs of the controller exported for 1000
+    rad/s, and outputs that differ from the untuned one (saturating steps at
+    300 rad/s: anti-windup gains exercised too)."""
+    h500 = write_header(A.pi_artifact(wc=500.0), A.MOTOR, A.DRIVE)
+    h1000 = write_header(A.pi_artifact(wc=1000.0), A.MOTOR, A.DRIVE)
+    I, W, V, full = _scales(h500, variant)
+    inp = C.test_inputs(i_step=20.0, speed=300.0, seed=2)
+    inp[:, :4] = np.clip(inp[:, :4], -0.999 * I, 0.999 * I)
+    q = _quantise(inp, I, W, full)
+    defs = []
+    for ax in "DQ":
+        for k in ("KP", "KI", "KAW"):
+            if variant == "MCSDK":
+                defs += [f"-D{ax}_{k}_G={int(_macro(h1000, f'MCSDK_{ax}_{k}_GAIN'))}",
+                         f"-D{ax}_{k}_S={int(_macro(h1000, f'MCSDK_{ax}_{k}_DIV'))}"]
+            else:
+                defs.append(f"-D{ax}_{k}={int(_macro(h1000, f'IQ_{ax}_{k}'))}")
+    runs = {}
+    for name, h, extra in (("500", h500, []), ("1000", h1000, []),
+                           ("retuned", h500, ["-DRETUNE", *defs])):
+        tmp = tmp_path / name
+        tmp.mkdir()
+        (tmp / "controller.h").write_text(h)
+        (tmp / "r.c").write_text(RETUNE)
+        res = subprocess.run([C.require_gcc(), *C.CFLAGS, f"-DCCT_{variant}", *extra, "-I", str(tmp),
+                              str(tmp / "r.c"), "-o", str(tmp / "r"), "-lm"],
+                             capture_output=True, text=True, timeout=60)
+        assert res.returncode == 0, res.stderr
+        text = "\n".join(" ".join(str(int(v)) for v in row) for row in q) + "\n"
+        runs[name] = subprocess.run([str(tmp / "r")], input=text, capture_output=True,
+                                    text=True, timeout=60, check=True).stdout
+    assert runs["retuned"] == runs["1000"]
+    assert runs["retuned"] != runs["500"]
