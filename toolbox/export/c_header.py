@@ -1328,7 +1328,8 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
         Prefix of every C identifier (``<name>_step``, ``<NAME>_V_MAX``); a C
         identifier of at most 31 characters.
     prefix : str, optional
-        The same as ``prefix`` (``cct export --prefix``, ``[export] prefix``):
+        The C prefix (``cct export --prefix``, ``[export] prefix``), ``name``
+        with its underscore:
         ``"motor1_"`` gives ``motor1_step``, ``MOTOR1_V_MAX``, the guard
         ``MOTOR1_CONTROLLER_H`` and the switch ``MOTOR1_FIXED_POINT``; a
         trailing underscore is added when missing (``"motor1"`` is the same).
