@@ -322,13 +322,20 @@ def report(out_dir: str, quiet: bool) -> None:
               show_default=True, help="C header or controller JSON.")
 @click.option("--output", "-o", type=click.Path(dir_okay=False),
               help="File to write (default: OUT_DIR/controller.h or stdout for json).")
+@click.option("--prefix", default=None,
+              help="Prefix of every C identifier of the header (guard, types, functions, "
+                   "macros), e.g. motor1_ (default: the spec's [export] prefix, else cct_).")
 @_spec_errors
-def export(out_dir: str, fmt: str, output: str | None) -> None:
+def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> None:
     """Export the controller of OUT_DIR as a C99 header or JSON.
+
+    The header ends with a usage example (init, bus-voltage update,
+    per-period call, fault handling) inside #if 0.
 
     \b
     Example:
       cct export out/003 --format c -o firmware/current_loop.h
+      cct export out/m1 --prefix motor1_ -o firmware/motor1.h
     """
     from ..pipeline import load_artifact, spec_of_artifact
 
@@ -350,9 +357,14 @@ def export(out_dir: str, fmt: str, output: str | None) -> None:
 
     file = str(Path(out_dir) / "controller.json")
     spec = spec_of_artifact(artifact, file=file)
-    refuse_unstable_export(artifact, spec.motor, file=file)
+    if artifact.method != "fcs_mpc":            # fcs: the axes hold only a baseline PI
+        refuse_unstable_export(artifact, spec.motor, file=file)
     # refusals name the design file the controller came from
-    text = write_header(artifact, spec.motor, spec.drive, source=file)
+    if prefix is not None:
+        from ..export import prefix_name
+        prefix_name(prefix, key="--prefix")      # a bad option is bad input (exit 2)
+    text = write_header(artifact, spec.motor, spec.drive, source=file,
+                        prefix=prefix if prefix is not None else spec.export_prefix)
     _write_file(output or Path(out_dir) / "controller.h", text, "--output")
 
 

@@ -34,6 +34,21 @@ A fixed-point variant (``#define CCT_FIXED_POINT`` before including) adds
 ``cct_step_q31`` with Q31 signals and int64 accumulators; see
 :mod:`toolbox.export._fixed` for the scaling rules.
 
+Every identifier carries the prefix (``prefix=``, default ``cct_``: guard
+``CCT_CONTROLLER_H``, switch ``CCT_FIXED_POINT``). The voltage limit in use is
+set at run time from the measured bus (``<p>set_vdc``); the delay
+compensation is applied in ``<p>step`` (outputs ``v_d_comp``, ``v_q_comp``);
+a usage example closes the header under ``#if 0``.
+
+STM32 MCSDK-style (``<P>MCSDK``) and TI IQmath-style (``<P>IQMATH``) integer
+variants of a one-degree-of-freedom PI law: :mod:`toolbox.export._vendor`
+(templates/vendor.c.j2).
+
+Method ``fcs_mpc`` exports its predictive switching law instead (paper 002
+criterion (23) over the 8 inverter states with the switching penalty, one
+forward-Euler prediction, the one-period delay handled as the simulator's
+``_fcs_choice``; templates/fcs.c.j2), float only.
+
 Exportability rules (:func:`check_exportable`) -- a controller is refused with
 :class:`toolbox.errors.ExportRefused` (key ``controller.<method>``, the
 message names the axis) when:
@@ -72,13 +87,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import CctError, ExportRefused, SpecError
-from . import _fixed
+from . import _fixed, _vendor
 from ._minimal import MinimalLaw, minimal_law
 from ._sos import Realisation, realise_axis
 
 __all__ = ["write_header", "check_exportable", "ExportCheck", "sanitise_comment",
            "realisations", "reference_law", "ReferenceLaw", "check_fixed", "INTEGRATOR_TOL", "RING_RADIUS",
-           "DYNAMIC_RANGE"]
+           "DYNAMIC_RANGE", "prefix_name", "example_source"]
 
 AXES = ("d", "q")
 INTEGRATOR_TOL = 1e-9
@@ -749,8 +764,11 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
     if eqs:
         t(f" * equations:   {sanitise_comment('; '.join(map(str, eqs)), 400)}")
     t(" *")
-    t(" * C99, header-only, no dynamic memory; libm: sqrtf only (float path).")
-    t(f" * Call {N}_init() once, then {N}_step() once per controller period. The")
+    trig = check.limit == "hexagon" or _delay_comp_time(artifact) is not None
+    t(" * C99, header-only, no dynamic memory; libm: sqrtf"
+      + (", sinf, cosf" if trig else " only") + " (float path).")
+    t(f" * Call {N}_init() once, then {N}_set_vdc() with the measured bus voltage and")
+    t(f" * {N}_step() once per controller period (example at the end of this file). The")
     t(" * voltage returned is applied by the inverter in the NEXT period: the")
     t(" * computation delay is part of the plant the design assumed, not of this code.")
     t(" * Law per axis: x' = A x + B [i_ref; i_meas], v = C x + D [i_ref; i_meas]")
@@ -761,11 +779,18 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
         t(" * then the SVM hexagon limit (voltage_limit = \"hexagon\", as the toolbox")
         t(" * simulator): the voltage is rotated to the stationary frame at the angle")
         t(" * theta_e + w_e Ts (DELAY_SAMPLES + 1/2) (input theta_e: electrical angle at the")
-        t(" * sampling instant) and scaled radially onto the hexagon of apothem V_MAX, and")
+        t(" * sampling instant) and scaled radially onto the hexagon whose apothem is the")
+        t(" * limit in use, and")
     else:
-        t(" * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of")
-        t(" * the SVM hexagon), and")
+        t(" * then the circle limit |v| <= limit in use (radial scaling; the inscribed")
+        t(" * circle of the SVM hexagon), and")
     t(" * back-calculation anti-windup x += aw (v_sat - v_unsat).")
+    t(" * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc")
+    t(" * (V_MAX, the nominal bus, after init).")
+    if _delay_comp_time(artifact) is not None:
+        t(" * Delay compensation: v_d_comp, v_q_comp are v_dq rotated by DELAY_COMP_TIME w_e")
+        t(" * (the design's assumption); apply them with the inverse Park transform at the")
+        t(" * sampled angle theta_e. v_d, v_q are the law's own (unrotated) output.")
     U = N.upper()
     t(" * Faults: out->status is")
     t(f" *   {U}_STATUS_OK (0)        the law ran;")
@@ -779,10 +804,6 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
     t(" *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the")
     t(" *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.")
     t(" *   y = b0 x + s1; s1 = b1 x + a1 y + s2; s2 = b2 x + a2 y.")
-    if artifact.method == "fcs_mpc":
-        t(" * NOTE: method fcs_mpc chooses inverter switch states online; that predictive")
-        t(" *   law is not exported. This header runs the linear axis controllers stored")
-        t(" *   in the artifact (the SVM + PI baseline).")
     for ax in check.marginal_antiwindup:
         t(f" * WARNING ({ax} axis): in saturation the anti-windup recursion A - aw C has")
         t(f" *   spectral radius {check.saturated_radius[ax]:.9g} >= 1 (not strictly stable):")
@@ -801,7 +822,12 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
         # the step function compares |v|^2 with V_MAX^2 in float
         raise ExportRefused("drive.vdc", f"a voltage limit whose square fits float32 "
                             f"(V_MAX <= {math.sqrt(F32_MAX):.3g} V)", check.v_max)
-    t(f"#define {P}V_MAX {vmax_} /* voltage-limit {check.limit} radius, V */")
+    what = "hexagon apothem" if check.limit == "hexagon" else "circle radius"
+    t(f"#define {P}V_MAX {vmax_} /* voltage limit ({what}) at the nominal bus voltage, V; "
+      f"{P.lower()}init's default */")
+    if drive is not None and drive.vdc > 0:
+        t(f"#define {P}V_MAX_PER_VDC {_f(check.v_max / drive.vdc, 'drive.vdc', 'V_MAX_PER_VDC')} "
+          f"/* voltage limit per volt of measured bus ({P.lower()}set_vdc) */")
     if motor is not None:
         t(f"/* motor ({sanitise_comment(motor.convention)}-invariant dq convention) */")
         t(f"#define {P}MOTOR_R {_f(motor.R, 'motor.R', 'MOTOR_R')} /* stator resistance, ohm */")
@@ -833,22 +859,26 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
     if t_comp is not None:
         k = t_comp / artifact.sample_time
         t(f"#define {P}DELAY_COMP_TIME {_f(t_comp, 'drive.sample_time', 'DELAY_COMP_TIME')} /* s ({k:g} Ts): the design assumes v_dq "
-          f"rotated by angle = {P}DELAY_COMP_TIME * w_e (rad) before the inverse Park transform "
-          f"(not applied inside {P.lower()}step) */")
+          f"rotated by angle = {P}DELAY_COMP_TIME * w_e (rad) before the inverse Park transform: "
+          f"applied inside {P.lower()}step, outputs v_d_comp, v_q_comp */")
     if artifact.method in PI_METHODS:
         for ax in AXES:
             g = _pi_gains(artifact, ax)
             if g is None:
                 continue
             kp, ki = g
-            A = ax.upper()
             gk = _law_key(artifact)
-            t(f"/* {ax} axis PI gains (method {artifact.method}); the law below is what runs */")
-            t(f"#define {P}{A}_KP {_f(kp, gk, f'{ax}-axis KP')} /* parallel proportional gain, V/A */")
-            t(f"#define {P}{A}_KI {_f(ki, gk, f'{ax}-axis KI')} /* parallel integral gain, V/(A s) */")
-            t(f"#define {P}{A}_KI_TS {_f(ki * artifact.sample_time, gk, f'{ax}-axis KI_TS')} /* integral gain per sample Ki*Ts, V/A */")
-            if kp:
-                t(f"#define {P}{A}_TI {_f(kp / ki, gk, f'{ax}-axis TI') if ki else '0.0f'} /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */")
+            # gains honesty (issue 15): the law runs from the coefficients below,
+            # so the gains are documentation, not macros a reader could edit
+            t(f"/* {ax} axis PI gains (method {artifact.method}), FOR INFORMATION ONLY: the code")
+            t(" *   runs the coefficients of the law below, derived from these gains at export;")
+            t(" *   to retune, change the spec and re-export (editing these numbers does nothing).")
+            t(f" *   Kp = {kp:.9g} V/A (parallel proportional gain)")
+            t(f" *   Ki = {ki:.9g} V/(A s) (parallel integral gain)")
+            t(f" *   Ki Ts = {ki * artifact.sample_time:.9g} V/A (integral gain per sample)")
+            if kp and ki:
+                t(f" *   Ti = {kp / ki:.9g} s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)")
+            t(" */")
 
 
 def _axis_context(real: Realisation, ax: str, key: str) -> dict:
@@ -896,14 +926,15 @@ def _environment():
     return _ENV
 
 
-def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: bool) -> None:
+def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: bool,
+                   comp: bool) -> None:
     """The float path (templates/float.c.j2)."""
     inputs = ["i_d_ref", "i_q_ref", "i_d", "i_q", "omega_m"] + (["theta_e"] if hexagon else [])
     checks = [f"{N}_finite(in->{v})" for v in inputs]
     aw = _aw_lines(reals["d"], "d", "(vds - vd)", key) + \
         _aw_lines(reals["q"], "q", "(vqs - vq)", key)
     t.lines.extend(_render(
-        "float.c.j2", N=N, P=P, U=N.upper(), hexagon=hexagon,
+        "float.c.j2", N=N, P=P, U=N.upper(), hexagon=hexagon, comp=comp,
         nd=max(reals["d"].order, 1), nq=max(reals["q"].order, 1),
         form_d=reals["d"].form, order_d=reals["d"].order,
         form_q=reals["q"].form, order_q=reals["q"].order,
@@ -913,30 +944,90 @@ def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: boo
         aw=[ln.strip().replace("s->", "nx.") for ln in aw]))
 
 
-def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
-    """The Q31 variant under ``#ifdef CCT_FIXED_POINT``, or an ``#error`` saying why not.
+def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
+    """The Q31 variant under ``#ifdef <PREFIX>FIXED_POINT``, or an ``#error`` saying why not.
 
     A constant of the Q31 variant out of its range (e.g. a current base beyond
     float32) makes the variant unavailable, not the float header.
     """
     t("")
-    t("#ifdef CCT_FIXED_POINT")
+    t(f"#ifdef {P}FIXED_POINT")
     reason = check.fixed_reason
     if check.fixed is not None:
         body = _Text()
         try:
-            _fixed_body(body, check, N, P, artifact)
+            _fixed_body(body, check, N, P, artifact, drive)
         except ExportRefused as err:
             reason = str(err)
         else:
             t.lines.extend(body.lines)
-            t("#endif /* CCT_FIXED_POINT */")
+            t(f"#endif /* {P}FIXED_POINT */")
             return
     t(f"#error \"fixed-point variant not available: {sanitise_comment(reason).replace(chr(34), chr(39))}\"")
-    t("#endif /* CCT_FIXED_POINT */")
+    t(f"#endif /* {P}FIXED_POINT */")
 
 
-def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
+def vendor_plan(artifact, motor, drive, check: ExportCheck):
+    """The MCSDK/IQmath plan of a PI law (:mod:`toolbox.export._vendor`), or (None, why)."""
+    i_max, w_max = _ranges(artifact, motor, drive, check.v_max)
+    dec = artifact.decoupling
+    p = dec.pole_pairs
+    dec_coeffs = {"dd": -float(dec.cross) * p * dec.Lq_c,
+                  "dq": float(dec.cross) * p * dec.Ld_c,
+                  "de": float(dec.emf) * p * dec.flux_c}
+    if check.limit == "hexagon":
+        return None, ('voltage_limit = "hexagon" is implemented in the float path only; '
+                      'the MCSDK/IQmath variants need voltage_limit = "circle"')
+    return _vendor.plan_vendor(minimal_laws(artifact), i_max, w_max, check.v_max, dec_coeffs)
+
+
+def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str,
+                    P: str) -> None:
+    """MCSDK (``<P>MCSDK``) and IQmath (``<P>IQMATH``) variants, or an #error saying why not."""
+    plan, why = vendor_plan(artifact, motor, drive, check)
+    key = _law_key(artifact)
+    if plan is not None:
+        try:
+            mc = _vendor.mcsdk_constants(plan)
+            iq = _vendor.iq_constants(plan)
+        except OverflowError as err:
+            plan, why = None, str(err)
+    if plan is not None:
+        body = _Text()
+        try:
+            _vendor_body(body, plan, mc, iq, N, P, key)
+        except ExportRefused as err:          # a constant out of range: no variant
+            why = str(err)
+        else:
+            t.lines.extend(body.lines)
+            return
+    t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
+    t(f"#error \"MCSDK/IQmath variants not available: {sanitise_comment(why).replace(chr(34), chr(39))}\"")
+    t("#endif")
+
+
+def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str) -> None:
+    t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
+    t("/* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;")
+    for ax in AXES:
+        t(f" *   {ax}: Kp = {plan.kp[ax]:.9g} V/A, Ki = {plan.ki[ax]:.9g} V/A per sample, "
+          f"Kaw = {plan.kaw[ax]:.9g}")
+    t(" * ranges: currents and speed beyond these are clamped (status CLAMPED) */")
+    t(f"#define {P}MCSDK_I_FS {_f(plan.I_FS, 'motor.max_current', 'MCSDK_I_FS')} /* A = 32768 digits (s16A) */")
+    t(f"#define {P}MCSDK_V_FS {_f(plan.V_FS, 'drive.vdc', 'MCSDK_V_FS')} /* V = 32768 digits (s16V) */")
+    t(f"#define {P}MCSDK_W_FS {_f(plan.W_FS, 'drive.max_speed', 'MCSDK_W_FS')} /* mechanical rad/s = 32768 digits */")
+    t(f"#define {P}MCSDK_V_MAX {_int(round(plan.V_MAX / plan.V_FS * 32768), 'drive.vdc', 'MCSDK_V_MAX', 0, 32767)} /* nominal voltage limit, s16V */")
+    t(f"#define {P}IQ_I_BASE {_f(plan.I_FS, 'motor.max_current', 'IQ_I_BASE')} /* A = 1.0 p.u. */")
+    t(f"#define {P}IQ_V_BASE {_f(plan.V_MAX, 'drive.vdc', 'IQ_V_BASE')} /* V = 1.0 p.u. (nominal limit) */")
+    t(f"#define {P}IQ_W_BASE {_f(plan.W_FS, 'drive.max_speed', 'IQ_W_BASE')} /* mechanical rad/s = 1.0 p.u. */")
+    t("#endif")
+    mc_ctx = {k: (_int(g, key, f"MCSDK {k} gain", -32767, 32767), _int(sh, key, f"MCSDK {k} divisor", 0, 15))
+              for k, (g, sh) in mc.items()}
+    iq_ctx = {k: _int(v, key, f"IQ24 {k}", -C_INT32_MAX, C_INT32_MAX) for k, v in iq.items()}
+    t.lines.extend(_render("vendor.c.j2", N=N, P=P, U=N.upper(), mc=mc_ctx, iq=iq_ctx))
+
+
+def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
     plan = check.fixed
     key = _law_key(artifact)
     t("/*")
@@ -956,7 +1047,12 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
     t(f"#define {P}Q31_I_BASE {_f(plan.I_BASE, 'motor.max_current', 'Q31_I_BASE')} /* A at full scale */")
     t(f"#define {P}Q31_V_BASE {_f(plan.V_BASE, 'drive.vdc', 'Q31_V_BASE')} /* V at full scale */")
     t(f"#define {P}Q31_W_BASE {_f(plan.W_BASE, 'drive.max_speed', 'Q31_W_BASE')} /* mechanical rad/s at full scale */")
-    t(f"#define {P}Q31_V_MAX {_q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX')} /* V_MAX / V_BASE in Q31 */")
+    t(f"#define {P}Q31_I_MAX {_f(plan.I_MAX, 'motor.max_current', 'Q31_I_MAX')} /* A, current range ({N}_to_q31 clamps beyond) */")
+    t(f"#define {P}Q31_W_MAX {_f(plan.W_MAX, 'drive.max_speed', 'Q31_W_MAX')} /* rad/s, speed range ({N}_to_q31 clamps beyond) */")
+    t(f"#define {P}Q31_V_MAX {_q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX')} /* V_MAX / V_BASE in Q31: the largest limit */")
+    if drive is not None and drive.vdc > 0:
+        t(f"#define {P}Q31_VDC_BASE {_f(plan.V_BASE * drive.vdc / check.v_max, 'drive.vdc', 'Q31_VDC_BASE')} "
+          f"/* V of bus at full scale ({P.lower()}set_vdc_q31) */")
     for ax in AXES:
         fa = plan.axes[ax]
         for i, s in enumerate(fa.S):
@@ -970,13 +1066,16 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
             if g is None:
                 continue
             kp, ki = g
-            for label, val in (("KP", kp * plan.I_BASE / plan.V_BASE),
-                               ("KI_TS", ki * artifact.sample_time * plan.I_BASE / plan.V_BASE)):
+            t(f"/* {ax} axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY")
+            t(" * (the Q31 law below runs its own quantised coefficients):")
+            for label, val in (("Kp", kp * plan.I_BASE / plan.V_BASE),
+                               ("Ki Ts", ki * artifact.sample_time * plan.I_BASE / plan.V_BASE)):
                 q = _fixed._quantise_row(np.array([val]), 1)
                 if q is None:
                     continue
-                t(f"#define {P}Q31_{ax.upper()}_{label}_GAIN {_q31(q[0][0], key, f'Q31 {ax}-axis {label}')} /* per-unit {label}: {val:.6g} */")
-                t(f"#define {P}Q31_{ax.upper()}_{label}_DIV_LOG2 {_int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62)} /* divisor 2^{q[1]} */")
+                t(f" *   {label} = {_q31(q[0][0], key, f'Q31 {ax}-axis {label}')} / 2^"
+                  f"{_int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62)} ({val:.6g} p.u.)")
+            t(" */")
     t("")
     axes = []
     for ax in AXES:
@@ -996,8 +1095,226 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact) -> None:
                            nd=max(plan.axes["d"].S.size, 1), nq=max(plan.axes["q"].S.size, 1)))
 
 
+def fcs_r_hex_per_vdc(convention: str) -> float:
+    """Length of an active inverter vector per volt of bus (the hexagon's
+    vertex radius, :func:`toolbox.spec.inverter_radii`)."""
+    from ..spec import inverter_radii
+    return inverter_radii(1.0, convention)[0]
+
+
+def _write_fcs_header(artifact, motor, drive, name: str, title: str | None,
+                      example: bool) -> str:
+    """controller.h of method ``fcs_mpc``: the predictive switching law of paper
+    002 criterion (23) as the simulator runs it (``toolbox.sim._kernel._fcs_choice``),
+    float only."""
+    if drive is None:
+        raise ExportRefused("drive", "drive data (vdc) for the inverter vectors",
+                            hint="pass drive= or keep [drive] in the artifact's spec")
+    conv = motor.convention if motor is not None else "amplitude"
+    N = name.lower()
+    P = name.upper() + "_"
+    guard = f"{P}CONTROLLER_H"
+    if title is None:
+        title = (artifact.spec or {}).get("title", "")
+    prov = artifact.provenance or {}
+    fcs = artifact.fcs
+    dec = artifact.decoupling
+    key = _law_key(artifact)
+    predict = int(artifact.delay_samples) >= 1
+    k_hex = fcs_r_hex_per_vdc(conv)
+    t = _Text()
+    t("/*")
+    t(" * controller.h -- current controller exported by current-control-toolbox")
+    t(f" * title:       {sanitise_comment(title)}")
+    t(f" * method:      {sanitise_comment(artifact.method)}")
+    t(f" * version:     {sanitise_comment(prov.get('version', 'unknown'))}")
+    t(f" * spec sha256: {sanitise_comment(prov.get('spec_sha256', 'unknown'))}")
+    t(f" * created:     {sanitise_comment(prov.get('created', 'unknown'))}")
+    t(" *")
+    t(" * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no")
+    t(f" * fixed-point variant: {P}FIXED_POINT is an error).")
+    t(" * Boolean predictive control (Cormerais 2002, paper 002): every period")
+    t(f" * {N}_step() predicts the currents one period ahead (forward Euler of the dq")
+    t(" * model with the controller's R, Ld, Lq, flux) for each of the 8 inverter")
+    t(" * states and returns the state of least")
+    t(" *   J = ALPHA (i_q - i_q_ref)^2 + BETA (i_d - i_d_ref)^2 + GAMMA commutations")
+    t(" * (criterion (23), GAMMA the switching penalty); ties go to the fewest")
+    t(" * commutations, then the lower state index.")
+    if predict:
+        t(f" * Computation delay {int(artifact.delay_samples)} period(s): the state returned is applied during")
+        t(" * the NEXT period; the currents are first advanced over the current one with")
+        t(" * the state chosen last period (as the toolbox simulator).")
+    else:
+        t(" * No computation delay: the state returned is applied at once, for this period.")
+    t(f" * Call {N}_init() once, then {N}_set_vdc() with the measured bus voltage and")
+    t(f" * {N}_step() once per period (example at the end of this file).")
+    t(f" * Faults: out->status {N.upper()}_STATUS_BAD_INPUT (an input is inf/nan) or")
+    t(f" * {N.upper()}_STATUS_BAD_STATE (the cost overflowed): the previous state is held.")
+    t(" */")
+    t(f"#ifndef {guard}")
+    t(f"#define {guard}")
+    t("")
+    t("#include <math.h> /* sinf, cosf */")
+    t("#include <stdint.h> /* uint32_t */")
+    t("")
+    t(f"#ifdef {P}FIXED_POINT")
+    t('#error "fixed-point variant not available: the fcs_mpc law is exported in float only"')
+    t(f"#endif /* {P}FIXED_POINT */")
+    t("")
+    t(f"#define {P}SAMPLE_TIME {_f(artifact.sample_time, 'drive.sample_time', 'SAMPLE_TIME')} /* controller period, s */")
+    t(f"#define {P}DELAY_SAMPLES {_int(artifact.delay_samples, 'drive.delay_samples', 'DELAY_SAMPLES', 0)} /* computation delay, periods */")
+    t(f"#define {P}DRIVE_VDC {_f(drive.vdc, 'drive.vdc', 'DRIVE_VDC')} /* nominal DC-link voltage, V */")
+    t(f"#define {P}R_HEX_PER_VDC {_f(k_hex, 'drive.vdc', 'R_HEX_PER_VDC')} /* active vector length per volt of bus ({sanitise_comment(conv)}-invariant dq) */")
+    t(f"#define {P}R_HEX {_f(k_hex * drive.vdc, 'drive.vdc', 'R_HEX')} /* active vector length at the nominal bus, V */")
+    t("/* controller-side model of the predictor */")
+    t(f"#define {P}DEC_R {_f(dec.R_c, 'motor.R', 'DEC_R')} /* ohm */")
+    t(f"#define {P}DEC_LD {_f(dec.Ld_c, 'motor.Ld', 'DEC_LD')} /* H */")
+    t(f"#define {P}DEC_LQ {_f(dec.Lq_c, 'motor.Lq', 'DEC_LQ')} /* H */")
+    t(f"#define {P}DEC_FLUX {_f(dec.flux_c, 'motor.flux', 'DEC_FLUX')} /* Wb */")
+    t(f"#define {P}POLE_PAIRS {_int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)} /* w_e = POLE_PAIRS * Omega_m */")
+    t("/* criterion (23) weights: alpha (q error, A^-2), beta (d error, A^-2), gamma (per commutation) */")
+    t(f"#define {P}FCS_ALPHA {_f(fcs.alpha, key + '.alpha', 'FCS_ALPHA')}")
+    t(f"#define {P}FCS_BETA {_f(fcs.beta, key + '.beta', 'FCS_BETA')}")
+    t(f"#define {P}FCS_GAMMA {_f(fcs.gamma, key + '.gamma', 'FCS_GAMMA')}")
+    t("")
+    t.lines.extend(_render("fcs.c.j2", N=N, P=P, U=N.upper(), predict=predict))
+    if example:
+        t("")
+        _fcs_example(t, N, P)
+    t("")
+    t(f"#endif /* {guard} */")
+    return t.text()
+
+
+def _fcs_example(t: _Text, N: str, P: str) -> None:
+    U = N.upper()
+    t("#if 0 /* usage example: copy the lines between BEGIN and END into main.c */")
+    t(f"// {EXAMPLE_BEGIN}")
+    src = f"""#include <stdio.h>
+#include "controller.h"
+
+/* stand-ins for the board's drivers: ADC, encoder, gate drivers, fault output */
+static float adc_i_d(void) {{ return 0.0f; }}
+static float adc_i_q(void) {{ return 0.0f; }}
+static float adc_vdc(void) {{ return {P}DRIVE_VDC; }}
+static float encoder_speed(void) {{ return 0.0f; }}
+static float encoder_theta_e(void) {{ return 0.0f; }}
+static void gates_apply(int s_a, int s_b, int s_c) {{ (void)s_a; (void)s_b; (void)s_c; }}
+static void fault_report(int status) {{ printf("controller status %d\\n", status); }}
+
+static {N}_state_t ctl;
+
+/* once per controller period ({P}SAMPLE_TIME s) */
+static void control_isr(float i_d_ref, float i_q_ref)
+{{
+    {N}_input_t in;
+    {N}_output_t out;
+    if ({N}_set_vdc(&ctl, adc_vdc()) != {U}_STATUS_OK) {{
+        fault_report({U}_STATUS_BAD_INPUT); /* bus reading lost: previous vectors kept */
+    }}
+    in.i_d_ref = i_d_ref;
+    in.i_q_ref = i_q_ref;
+    in.i_d = adc_i_d();
+    in.i_q = adc_i_q();
+    in.omega_m = encoder_speed();
+    in.theta_e = encoder_theta_e();
+    {N}_step(&ctl, &in, &out);
+    if (out.status != {U}_STATUS_OK) {{
+        fault_report(out.status); /* previous state held: decide to trip or ride through */
+    }}
+    gates_apply(out.s_a, out.s_b, out.s_c); /* applied next period when DELAY_SAMPLES >= 1 */
+}}
+
+int main(void)
+{{
+    int k;
+    {N}_init(&ctl);
+    for (k = 0; k < 10; ++k) {{
+        control_isr(0.0f, 1.0f);
+    }}
+    return 0;
+}}"""
+    for ln in src.split("\n"):
+        t(ln)
+    t(f"// {EXAMPLE_END}")
+    t("#endif /* usage example */")
+
+
+EXAMPLE_BEGIN = "EXAMPLE main.c BEGIN"
+EXAMPLE_END = "EXAMPLE main.c END"
+
+
+def example_source(header: str) -> str:
+    """The usage example written at the end of a header (the C text between
+    the ``EXAMPLE main.c BEGIN`` and ``END`` lines), to compile as ``main.c``."""
+    lines = header.splitlines()
+    i = next(k for k, ln in enumerate(lines) if EXAMPLE_BEGIN in ln)
+    j = next(k for k, ln in enumerate(lines) if EXAMPLE_END in ln)
+    return "\n".join(lines[i + 1:j]) + "\n"
+
+
+def _example(t: _Text, N: str, P: str, hexagon: bool) -> None:
+    """A compilable main.c, inside a comment (no ``/*`` in it)."""
+    U = N.upper()
+    t("#if 0 /* usage example: copy the lines between BEGIN and END into main.c */")
+    t(f"// {EXAMPLE_BEGIN}")
+    src = f"""#include <stdio.h>
+#include "controller.h"
+
+/* stand-ins for the board's drivers: ADC, encoder, PWM, fault output */
+static float adc_i_d(void) {{ return 0.0f; }}
+static float adc_i_q(void) {{ return 0.0f; }}
+static float adc_vdc(void) {{ return {P}DRIVE_VDC; }}
+static float encoder_speed(void) {{ return 0.0f; }}
+static float encoder_theta_e(void) {{ return 0.0f; }}
+static void pwm_apply(float v_d, float v_q, float theta_e)
+{{
+    (void)v_d; (void)v_q; (void)theta_e; /* inverse Park at theta_e, then SVM */
+}}
+static void fault_report(int status) {{ printf("controller status %d\\n", status); }}
+
+static {N}_state_t ctl;
+
+/* once per controller period ({P}SAMPLE_TIME s), e.g. in the ADC interrupt */
+static void control_isr(float i_d_ref, float i_q_ref)
+{{
+    {N}_input_t in;
+    {N}_output_t out;
+    const float theta_e = encoder_theta_e();
+    if ({N}_set_vdc(&ctl, adc_vdc()) != {U}_STATUS_OK) {{
+        fault_report({U}_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
+    }}
+    in.i_d_ref = i_d_ref;
+    in.i_q_ref = i_q_ref;
+    in.i_d = adc_i_d();
+    in.i_q = adc_i_q();
+    in.omega_m = encoder_speed();
+{"    in.theta_e = theta_e;" if hexagon else ""}
+    {N}_step(&ctl, &in, &out);
+    if (out.status != {U}_STATUS_OK) {{
+        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
+    }}
+    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e); /* applied during the next period */
+}}
+
+int main(void)
+{{
+    int k;
+    {N}_init(&ctl);
+    for (k = 0; k < 10; ++k) {{
+        control_isr(0.0f, 1.0f);
+    }}
+    return 0;
+}}"""
+    for ln in src.split("\n"):
+        t(ln)
+    t(f"// {EXAMPLE_END}")
+    t("#endif /* usage example */")
+
+
 def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
-                 title: str | None = None, source: str | None = None) -> str:
+                 prefix: str | None = None, title: str | None = None,
+                 source: str | None = None, example: bool = True) -> str:
     """The C99 header text of a controller artifact.
 
     Parameters
@@ -1010,6 +1327,17 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
     name : str
         Prefix of every C identifier (``<name>_step``, ``<NAME>_V_MAX``); a C
         identifier of at most 31 characters.
+    prefix : str, optional
+        The C prefix (``cct export --prefix``, ``[export] prefix``), ``name``
+        with its underscore:
+        ``"motor1_"`` gives ``motor1_step``, ``MOTOR1_V_MAX``, the guard
+        ``MOTOR1_CONTROLLER_H`` and the switch ``MOTOR1_FIXED_POINT``; a
+        trailing underscore is added when missing (``"motor1"`` is the same).
+        It must start with a letter; it overrides ``name``. Two headers in one
+        program need prefixes that differ in upper case.
+    example : bool
+        Append the usage example (init, bus-voltage update, per-period call,
+        fault handling) as a comment at the end of the header.
     title : str, optional
         Title for the provenance comment (default: ``artifact.spec["title"]``);
         sanitised by :func:`sanitise_comment`.
@@ -1032,17 +1360,50 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
         Bad ``name``.
     """
     try:
-        return _write_header(artifact, motor, drive, name, title)
+        if prefix is not None:
+            name = prefix_name(prefix)
+        return _write_header(artifact, motor, drive, name, title, example)
     except CctError as err:
         if source and not err.file:
             raise err.with_file(str(source)) from None
         raise
 
 
-def _write_header(artifact, motor, drive, name: str, title: str | None) -> str:
+PREFIX_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,30}$")
+
+
+def prefix_name(prefix: Any, key: str = "export.prefix") -> str:
+    """The identifier stem of a C prefix: ``"motor1_"`` and ``"motor1"`` -> ``"motor1"``.
+
+    Parameters
+    ----------
+    prefix : str
+        A C identifier starting with a letter, at most 31 characters, with
+        or without its trailing underscore.
+    key : str
+        The key named in the error.
+
+    Raises
+    ------
+    SpecError
+        Not such an identifier.
+    """
+    if not isinstance(prefix, str) or not PREFIX_RE.match(prefix):
+        raise SpecError(key, "a C identifier prefix: a letter, then letters, digits or _ "
+                        "(at most 31 characters), e.g. \"motor1_\"", prefix)
+    stem = prefix[:-1] if prefix.endswith("_") else prefix
+    if not stem:
+        raise SpecError(key, "a prefix with a letter before the underscore", prefix)
+    return stem
+
+
+def _write_header(artifact, motor, drive, name: str, title: str | None,
+                  example: bool = True) -> str:
     if not isinstance(name, str) or not _IDENT.match(name):
         raise SpecError("export.name", "a C identifier of at most 31 characters", name)
     motor, drive = _motor_drive(artifact, motor, drive)
+    if artifact.method == "fcs_mpc":
+        return _write_fcs_header(artifact, motor, drive, name, title, example)
     check = check_exportable(artifact, motor, drive)
     N = name.lower()
     P = name.upper() + "_"
@@ -1054,7 +1415,8 @@ def _write_header(artifact, motor, drive, name: str, title: str | None) -> str:
     t(f"#ifndef {guard}")
     t(f"#define {guard}")
     t("")
-    t("#include <math.h> /* sqrtf" + (", sinf, cosf" if check.limit == "hexagon" else "") + " */")
+    trig = check.limit == "hexagon" or _delay_comp_time(artifact) is not None
+    t("#include <math.h> /* sqrtf" + (", sinf, cosf" if trig else "") + " */")
     t("#include <stdint.h> /* uint32_t */")
     t("")
     _defines(t, artifact, motor, drive, P, check)
@@ -1065,8 +1427,14 @@ def _write_header(artifact, motor, drive, name: str, title: str | None) -> str:
             t(f"#define {P}{ax.upper()}_GAIN {_f(r.gain, _law_key(artifact), f'{ax}-axis SOS gain')} /* {ax} axis SOS output gain, V/A */")
             t(f"#define {P}{ax.upper()}_NUM_STAGES {r.sos.shape[0]}")
     t("")
-    _float_section(t, check.realisations, N, P, _law_key(artifact), check.limit == "hexagon")
-    _fixed_section(t, check, N, P, artifact)
+    _float_section(t, check.realisations, N, P, _law_key(artifact), check.limit == "hexagon",
+                   _delay_comp_time(artifact) is not None)
+    _fixed_section(t, check, N, P, artifact, drive)
     t("")
+    _vendor_section(t, artifact, motor, drive, check, N, P)
+    t("")
+    if example:
+        _example(t, N, P, check.limit == "hexagon")
+        t("")
     t(f"#endif /* {guard} */")
     return t.text()

@@ -8,6 +8,7 @@ path, what was expected and what was found.
 from __future__ import annotations
 
 import copy
+import re
 import tomllib
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -26,7 +27,11 @@ from ._model import (METHODS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor,
 
 __all__ = ["load_spec", "spec_from_dict", "motor_from_dict", "drive_from_dict"]
 
-TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario")
+TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario", "export")
+EXPORT_KEYS = ("prefix",)
+#: a C identifier prefix (letter first, at most 31 characters); the export
+#: (toolbox.export.prefix_name) applies the same rule
+_C_PREFIX = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,30}$")
 MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "convention", "rated_current", "max_current", "rated_speed",
               # datasheet forms (toolbox/spec/_datasheet.py)
@@ -121,6 +126,9 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     requirements = None
     with errors.check():
         requirements = _requirements(top.raw("requirements"))
+    export_prefix = "cct_"
+    with errors.check():
+        export_prefix = _export_prefix(top.raw("export", {}))
     scenarios: tuple = ()
     if drive is not None and controller is not None:
         with errors.check():
@@ -133,7 +141,7 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     raw["motor"] = motor_raw
     return Spec(title=title, motor=motor, drive=drive, controller=controller,
                 requirements=requirements, scenarios=scenarios, raw=raw, source=file,
-                conversions=tuple(conversions))
+                conversions=tuple(conversions), export_prefix=export_prefix)
 
 
 def _collect(errors: Collector, read: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
@@ -260,6 +268,16 @@ def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
     # the design methods register their readers (spec/_methods.py): spec stays data
     cfg = read_method_cfg(method, t.table(method), motor=motor, drive=drive)
     return ControllerChoice(method=method, cfg=cfg)
+
+
+def _export_prefix(value: Any) -> str:
+    """``[export] prefix``: the C prefix of controller.h (default ``cct_``)."""
+    t = Table(value, "export", EXPORT_KEYS)
+    prefix = t.string("prefix", "cct_")
+    if not _C_PREFIX.match(prefix) or prefix == "_":
+        raise SpecError("export.prefix", "a C identifier prefix: a letter, then letters, "
+                        'digits or _ (at most 31 characters), e.g. "motor1_"', prefix)
+    return prefix
 
 
 def _requirements(value: Any) -> Requirements:

@@ -281,6 +281,9 @@ class Spec:
         Datasheet keys and unit strings converted to the model's SI values:
         what was given, the value derived and the formula
         (:mod:`toolbox.spec._datasheet`).
+    export_prefix : str
+        ``[export] prefix``: the prefix of every C identifier of controller.h
+        (``cct_`` by default; ``motor1_`` gives ``motor1_step``, ``MOTOR1_V_MAX``).
     """
 
     title: str
@@ -292,6 +295,7 @@ class Spec:
     raw: dict = field(default_factory=dict)
     source: str | None = None
     conversions: tuple = ()
+    export_prefix: str = "cct_"
 
     def motor_dict(self) -> dict:
         return asdict(self.motor)

@@ -156,6 +156,8 @@ def spec_to_toml(spec: Spec, source: str | None = None) -> str:
     out += _controller_lines(spec)
     if spec.requirements.bounds:
         out += ["", "[requirements]"] + list(_lines(spec.requirements.bounds, {}))
+    if spec.export_prefix != "cct_":
+        out += ["", "[export]", f"prefix = {toml_value(spec.export_prefix)}"]
     for scenario in spec.scenarios:
         values = {f.name: getattr(scenario, f.name) for f in fields(scenario)}
         out += ["", "[[scenario]]"] + list(_lines(values, {}))
