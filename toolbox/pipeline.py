@@ -27,11 +27,6 @@ OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h
 
 Progress = Callable[[str], None]
 
-#: Methods whose executed law is not a linear controller the header can hold.
-#: methods without a C export (method -> why); fcs_mpc exports its predictive
-#: switching law (toolbox.export: paper 002 criterion (23))
-NO_HEADER_METHODS: dict[str, str] = {}
-
 
 def _quiet(_: str) -> None:
     pass
@@ -100,6 +95,9 @@ def unstable_axes(analysis: dict | None) -> list[str]:
 def refuse_unstable_export(artifact: ControllerArtifact, motor, file: str | None = None) -> None:
     """Raise :class:`ExportRefused` when the executed sampled loop is unstable.
 
+    ``fcs_mpc`` is exempt: its axes hold only the baseline PI for comparison,
+    and the header exports the predictive switching law instead.
+
     Parameters
     ----------
     artifact : ControllerArtifact
@@ -108,6 +106,8 @@ def refuse_unstable_export(artifact: ControllerArtifact, motor, file: str | None
     file : str, optional
         The controller.json named in the message.
     """
+    if artifact.method == "fcs_mpc":
+        return
     from .analysis.executed import loop_stability
 
     stability = loop_stability(artifact, motor)
@@ -215,15 +215,12 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
     if verification:
         progress("verification")
         out.verification = run_verification(out.artifact, spec)
-    if header and artifact.method in NO_HEADER_METHODS:
-        progress(f"firmware header skipped: {NO_HEADER_METHODS[artifact.method]}")
-    elif header:
+    if header:
         progress("firmware header")
         from .export import write_header
 
         try:
-            if artifact.method != "fcs_mpc":    # fcs: the axes hold only a baseline PI
-                refuse_unstable_export(out.artifact, spec.motor)
+            refuse_unstable_export(out.artifact, spec.motor)
         except ExportRefused as err:
             # a design that exists but must not reach firmware: everything else is
             # still written so the report shows why (exit 1 through `passed`)

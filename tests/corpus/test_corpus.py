@@ -8,8 +8,8 @@ cites its source and marks every value the source does not print as assumed.
 Each case runs what ``cct design`` runs (design, analysis, verification on
 the default scenarios, header) through the Python API and asserts the
 exit-0 equivalent: ``DesignOutputs.passed`` (every default check of
-verification, stability, no refused header) and a header for the methods
-that export one. Reports are built for one case only (they cost more than
+verification, stability, no refused header) and a header (every method,
+fcs_mpc included, exports one). Reports are built for one case only (they cost more than
 the rest together).
 
 Time: the full grid (33 motors x 9 methods) took 547 s on the shared 2-core
@@ -37,7 +37,7 @@ from pathlib import Path
 import pytest
 
 import toolbox
-from toolbox.pipeline import NO_HEADER_METHODS, build_outputs
+from toolbox.pipeline import build_outputs
 from toolbox.sim import default_scenarios
 from toolbox.sim._checks import fcs_ripple
 from toolbox.sim._simulate import DriveParams
@@ -107,8 +107,7 @@ def _cases():
 def test_corpus_motor_designs_on_defaults(motor, method):
     spec = corpus_spec(motor, method)
     report = (motor, method) == ("issue12_ipmsm", "pi")
-    out = build_outputs(spec, analysis=True, verification=True, report=report,
-                        header=method not in NO_HEADER_METHODS)
+    out = build_outputs(spec, analysis=True, verification=True, report=report, header=True)
     failed = {s.name: {k: c.get("reason") for k, c in s.checks.items() if not c["pass"]}
               for s in out.verification.scenarios if not s.passed}
     if method == "fcs_mpc" and not out.passed:
@@ -118,7 +117,6 @@ def test_corpus_motor_designs_on_defaults(motor, method):
             pytest.xfail(f"fcs_mpc: per-period ripple {ratio:.2f} x the default step at "
                          f"{1 / spec.drive.sample_time:.0f} Hz (physically out of reach)")
     assert out.passed, (failed, out.header_refused)
-    if method not in NO_HEADER_METHODS:
-        assert out.header is not None and out.header.strip()
+    assert out.header is not None and out.header.strip()
     if report:
         assert out.html and out.pdf

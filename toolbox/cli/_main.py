@@ -348,17 +348,11 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
             click.echo(text, nl=False)
         return
     from ..export import write_header
-    from ..pipeline import NO_HEADER_METHODS
-
-    if artifact.method in NO_HEADER_METHODS:
-        raise SpecError("controller.method", "a method with a C export",
-                        artifact.method, hint=NO_HEADER_METHODS[artifact.method])
     from ..pipeline import refuse_unstable_export
 
     file = str(Path(out_dir) / "controller.json")
     spec = spec_of_artifact(artifact, file=file)
-    if artifact.method != "fcs_mpc":            # fcs: the axes hold only a baseline PI
-        refuse_unstable_export(artifact, spec.motor, file=file)
+    refuse_unstable_export(artifact, spec.motor, file=file)
     # refusals name the design file the controller came from
     if prefix is not None:
         from ..export import prefix_name
