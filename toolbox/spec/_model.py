@@ -281,6 +281,8 @@ class Spec:
         Datasheet keys and unit strings converted to the model's SI values:
         what was given, the value derived and the formula
         (:mod:`toolbox.spec._datasheet`).
+    campaign : CampaignCfg or None
+        The ``[campaign]`` table (:mod:`toolbox.spec._campaign`), if any.
     """
 
     title: str
@@ -292,6 +294,7 @@ class Spec:
     raw: dict = field(default_factory=dict)
     source: str | None = None
     conversions: tuple = ()
+    campaign: Any = None
 
     def motor_dict(self) -> dict:
         return asdict(self.motor)
