@@ -119,3 +119,14 @@ def test_cli_needs_campaign_table(tmp_path):
     res = CliRunner().invoke(main, ["campaign", str(path), "--out", str(tmp_path / "o")])
     assert res.exit_code == 2
     assert "campaign: expected a [campaign] table (missing)" in res.output
+
+
+def test_cct_check_round_trips_the_campaign(tmp_path):
+    """``cct check`` prints [campaign]; its output loads back to the same table."""
+    path = write_spec(tmp_path)
+    res = CliRunner().invoke(main, ["check", str(path)])
+    assert res.exit_code == 0, res.output
+    assert "[campaign]" in res.output
+    again = tmp_path / "resolved.toml"
+    again.write_text(res.output)
+    assert load_spec(again).campaign == load_spec(path).campaign

@@ -32,7 +32,7 @@ import numpy as np
 from ..spec import REQUIREMENT_KEYS
 from ._sampling import draw_samples
 
-__all__ = ["Plan", "make_plan", "evaluate_chunk", "scenario_slug", "DIVERGED"]
+__all__ = ["Plan", "make_plan", "evaluate_chunk", "scenario_slug", "warm_up", "DIVERGED"]
 
 #: Reason of a sample whose simulation produced non-finite currents.
 DIVERGED = "diverged"
@@ -177,6 +177,17 @@ def _judge(checks: list, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
         worst_check[take] = name
     passed = np.array([not f for f in failure], bool)
     return passed, np.array(["; ".join(f) for f in failure], dtype=object), worst_check, worst_ratio
+
+
+def warm_up(plan: Plan) -> None:
+    """Load the compiled kernel and the margin code in this process (one nominal
+    sample per scenario), so that the first chunk's time is simulation time."""
+    from ..sim import simulate_batch
+
+    for _slug, scenario, law, drive in plan.runs:
+        simulate_batch(law, [plan.motor], scenario, drive)
+    m = plan.motor
+    _margins(plan, np.array([m.R]), np.array([m.Ld]), np.array([m.Lq]))
 
 
 def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:

@@ -36,7 +36,7 @@ import numpy as np
 from .._io import write_atomic
 from .._version import toolbox_version
 from ..errors import CctError, SpecError
-from ._evaluate import Plan, chunk_range, evaluate_chunk, make_plan
+from ._evaluate import Plan, chunk_range, evaluate_chunk, make_plan, warm_up
 
 __all__ = ["CAMPAIGN_SCHEMA", "CampaignRun", "run_campaign", "campaign_hash", "read_results",
            "valid_chunks", "chunk_path", "evaluate_serial"]
@@ -60,7 +60,10 @@ class CampaignRun:
     chunks_total, chunks_run, chunks_resumed : int
         Chunks of the campaign, run now, found valid on disk.
     seconds : float
-        Wall time of the simulation phase.
+        Wall time of the simulation phase (start-up included).
+    startup_seconds : float
+        Of which: cluster start or connection, plan broadcast and the
+        workers' warm-up (kernel loaded), before the first chunk is submitted.
     files : list of Path
     """
 
@@ -71,6 +74,7 @@ class CampaignRun:
     chunks_run: int
     chunks_resumed: int
     seconds: float
+    startup_seconds: float = 0.0
     files: list = field(default_factory=list)
 
     @property
@@ -160,16 +164,23 @@ def _manifest(out_dir: Path, spec, digest: str) -> None:
         "version": toolbox_version(), "spec": spec.raw}, indent=1, sort_keys=True, default=str) + "\n")
 
 
-def evaluate_serial(plan: Plan, chunks, on_chunk: Callable[[int, dict], None]) -> None:
-    """Evaluate ``chunks`` in this process (no Dask), in order."""
+def evaluate_serial(plan: Plan, chunks, on_chunk: Callable[[int, dict], None]) -> float:
+    """Evaluate ``chunks`` in this process (no Dask), in order; returns the
+    warm-up time (s)."""
+    t0 = time.perf_counter()
+    warm_up(plan)
+    startup = time.perf_counter() - t0
     for c in chunks:
         on_chunk(c, evaluate_chunk(plan, c))
+    return startup
 
 
 def _evaluate_dask(plan: Plan, chunks, on_chunk, scheduler: str | None, workers: int | None,
-                   digest: str) -> None:
+                   digest: str) -> float:
+    """Evaluate ``chunks`` on Dask; returns the start-up time (s)."""
     from dask.distributed import Client, LocalCluster, as_completed
 
+    t0 = time.perf_counter()
     cluster = None
     if scheduler in (None, "local"):
         n = workers or os.cpu_count() or 1
@@ -187,12 +198,15 @@ def _evaluate_dask(plan: Plan, chunks, on_chunk, scheduler: str | None, workers:
         if workers and cluster is None:
             client.wait_for_workers(workers, timeout=CONNECT_TIMEOUT)
         plan_f = client.scatter(plan, broadcast=True, hash=False)
+        client.run(warm_up, plan)
+        startup = time.perf_counter() - t0
         futures = {client.submit(evaluate_chunk, plan_f, c, retries=3, pure=False,
                                  key=f"cct-chunk-{digest[:12]}-{c}"): c for c in chunks}
         for fut in as_completed(futures):
             c = futures[fut]
             on_chunk(c, fut.result())
             fut.release()
+        return startup
     finally:
         client.close()
         if cluster is not None:
@@ -250,7 +264,7 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     _manifest(out_dir, spec, digest)
     done = valid_chunks(out_dir, spec)
     todo = [c for c in range(cfg.n_chunks) if c not in done]
-    samples_done = sum(np.subtract(*chunk_range(cfg, c)[::-1]) for c in done)
+    samples_done = sum(chunk_range(cfg, c)[1] - chunk_range(cfg, c)[0] for c in done)
     if progress:
         progress(int(samples_done), cfg.samples)
 
@@ -262,23 +276,27 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
             progress(int(samples_done), cfg.samples)
 
     t0 = time.perf_counter()
+    startup = 0.0
     if todo:
         if scheduler == "serial":
-            evaluate_serial(make_plan(spec, artifact), todo, on_chunk)
+            startup = evaluate_serial(make_plan(spec, artifact), todo, on_chunk)
         else:
             threads = 1 if scheduler in (None, "local") else None
-            _evaluate_dask(make_plan(spec, artifact, numba_threads=threads), todo, on_chunk,
-                           scheduler, workers, digest)
+            startup = _evaluate_dask(make_plan(spec, artifact, numba_threads=threads), todo,
+                                     on_chunk, scheduler, workers, digest)
     seconds = time.perf_counter() - t0
+    n_run = sum(chunk_range(cfg, c)[1] - chunk_range(cfg, c)[0] for c in todo)
     table = _assemble(out_dir, spec, digest)
     summary = summarize(table, spec, artifact)
-    summary["timing"] = {"seconds": seconds, "chunks_run": len(todo),
-                         "samples_per_s": (sum(np.subtract(*chunk_range(cfg, c)[::-1])
-                                               for c in todo) / seconds) if todo and seconds else None}
+    summary["timing"] = {"seconds": seconds, "startup_seconds": startup,
+                         "chunks_run": len(todo), "samples_run": n_run,
+                         "samples_per_s": (n_run / (seconds - startup)
+                                           if todo and seconds > startup else None)}
     files = write_outputs(out_dir, table, summary, spec, artifact, report=report)
     return CampaignRun(out_dir=out_dir, table=table, summary=summary,
                        chunks_total=cfg.n_chunks, chunks_run=len(todo),
-                       chunks_resumed=len(done), seconds=seconds, files=files)
+                       chunks_resumed=len(done), seconds=seconds, startup_seconds=startup,
+                       files=files)
 
 
 def _assemble(out_dir: Path, spec, digest: str):

@@ -201,7 +201,8 @@ def _measured(value: Any, drawn: dict[str, ParameterDist]) -> tuple[tuple, tuple
                         f"{len(rows)} rows")
     out = []
     for i, r in enumerate(rows):
-        row = Table({"r": r}, "campaign.measured").numbers("r", length=len(cols))
+        row = Table({f"rows[{i}]": r}, "campaign.measured").numbers(f"rows[{i}]",
+                                                                     length=len(cols))
         for c, v in zip(cols, row):
             if (v <= 0) if c in _POSITIVE else (v < 0):
                 raise SpecError(f"campaign.measured.rows[{i}]",
