@@ -73,9 +73,12 @@ def test_local_cluster_equals_serial(designed, serial_run, tmp_path):
 
 
 def test_killed_worker_chunks_are_retried(designed, serial_run, cluster, tmp_path):
-    """16 chunks of 25 on two single-thread workers: at the first finished chunk
-    the killed worker is running or holding chunks (at most 1 of 16 is done)."""
+    """16 chunks of 25 on two single-thread workers. At the first finished chunk
+    a monitor client asks the scheduler which worker is running a chunk and
+    that worker is killed (SIGKILL): its running chunk can only reach the
+    table by being run again on the survivor."""
     from campaign_helpers import write_spec
+    from dask.distributed import Client
 
     from toolbox.spec import load_spec
 
@@ -83,17 +86,28 @@ def test_killed_worker_chunks_are_retried(designed, serial_run, cluster, tmp_pat
     artifact = designed[1]
     address, workers = cluster
     killed = []
+    monitor = Client(address, timeout=30)
+    try:
+        def kill_busy(done, total):
+            if done == 0 or killed:
+                return
+            info = monitor.scheduler_info()["workers"]
+            for addr, keys in monitor.processing().items():
+                chunks = [k for k in keys if "cct-chunk" in str(k)]
+                if chunks and not killed:
+                    k = int(info[addr]["name"][1:])
+                    workers[k].send_signal(signal.SIGKILL)
+                    workers[k].wait(timeout=30)
+                    killed.append((done, k, chunks))
 
-    def kill_one(done, total):
-        if done > 0 and not killed:
-            workers[0].send_signal(signal.SIGKILL)
-            workers[0].wait(timeout=30)
-            killed.append(done)
-
-    run = run_campaign(spec, tmp_path / "remote", scheduler=address, workers=2,
-                       artifact=artifact, progress=kill_one, report=False)
-    assert killed and killed[0] <= 2 * 25  # killed with at least 14 of 16 chunks to go
-    assert workers[0].poll() is not None and workers[1].poll() is None
+        run = run_campaign(spec, tmp_path / "remote", scheduler=address, workers=2,
+                           artifact=artifact, progress=kill_busy, report=False)
+    finally:
+        monitor.close()
+    assert killed, "no worker was running a chunk at any progress report"
+    done, k, running = killed[0]
+    assert done < spec.campaign.samples and running  # killed mid-campaign, mid-chunk
+    assert workers[k].poll() is not None and workers[1 - k].poll() is None
     assert run.chunks_run == spec.campaign.n_chunks
     np.testing.assert_array_equal(run.table.column("sample").to_numpy(),
                                   np.arange(spec.campaign.samples))

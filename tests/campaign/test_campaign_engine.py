@@ -157,9 +157,12 @@ def test_cli_campaign_exit_codes(designed, tmp_path):
     """Exit 0 without min_yield, 1 when the yield is below it (outputs written)."""
     path = write_spec(tmp_path, samples=100, chunk_size=50)
     res = CliRunner().invoke(main, ["campaign", str(path), "--out", str(tmp_path / "a"),
-                                    "--scheduler", "serial", "-q"])
+                                    "--scheduler", "serial"])
     assert res.exit_code == 0, res.output
     assert "campaign: 100 samples" in res.output and "2 chunks run, 0 resumed" in res.output
+    # progress on stderr (no terminal here: one line per tenth), then the files
+    assert "- campaign: 50/100 samples" in res.stderr and "- campaign: 100/100" in res.stderr
+    assert "wrote " in res.stderr and "results.parquet" in res.stderr
     text = path.read_text().replace("operating_speeds", "min_yield = 1.0\noperating_speeds")
     path.write_text(text)
     res = CliRunner().invoke(main, ["campaign", str(path), "--out", str(tmp_path / "b"),
