@@ -1,7 +1,8 @@
 """Helpers of the campaign tests: a small campaign on paper 003's motor (catalog azaiz2007).
 
 PI by pole-zero cancellation at 600 rad/s, one 20 ms i_q step, R, Ld, Lq and
-flux drawn (Ld, Lq correlated), two operating speeds. The bounds are set so
+flux drawn (Ld, Lq correlated), a grid of 8 operating points (speed,
+speed-sensor offset, computation delay). The bounds are set so
 that a few per cent of the samples fail (rise time with large R and small L,
 overshoot), so that pass/fail and the failure columns are exercised.
 """
@@ -35,7 +36,6 @@ iq_ref = 10.0
 samples = {samples}
 seed = 3
 chunk_size = {chunk_size}
-operating_speeds = [0.0, 100.0]
 [campaign.parameters.R]
 distribution = "uniform"
 low = 1.0
@@ -57,6 +57,10 @@ std = 0.02
 [campaign.correlation]
 parameters = ["Ld", "Lq"]
 matrix = [[1.0, 0.8], [0.8, 1.0]]
+[campaign.operating_points]
+speed = [0.0, 100.0]
+speed_offset = [0.0, 5.0]
+delay_samples = [1, 2]
 '''
 
 

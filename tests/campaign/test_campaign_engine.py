@@ -51,6 +51,8 @@ def test_distributions_and_correlation(designed):
     assert abs(flux.mean() - 0.95) < 4 * 0.02 / np.sqrt(4000)
     assert abs(flux.std() - 0.02) < 0.002
     assert set(np.unique(d["speed"])) == {0.0, 100.0}
+    points = set(zip(d["speed"], d["speed_offset"], d["delay_samples"]))
+    assert len(points) == 8 and d["delay_samples"].dtype.kind == "i"
     assert spearmanr(d["Ld"], d["Lq"])[0] == pytest.approx(6 / np.pi * np.arcsin(0.4), abs=0.03)
     assert abs(spearmanr(d["R"], d["flux"])[0]) < 0.06
 
@@ -143,7 +145,8 @@ def test_outputs_and_report(serial_run):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["samples"] == 400 and len(summary["worst_cases"]) == 10
     assert summary["worst_cases"][0]["worst_ratio"] >= summary["worst_cases"][-1]["worst_ratio"]
-    assert {e["parameter"] for e in summary["sensitivity"]} == {"R", "Ld", "Lq", "flux", "speed"}
+    assert {e["parameter"] for e in summary["sensitivity"]} == {"R", "Ld", "Lq", "flux", "speed",
+                                                                "speed_offset", "delay_samples"}
     assert json.loads((out / "controller.json").read_text())["method"] == "pi"
     html = (out / "report.html").read_text()
     assert "campaign test &lt;on&gt; paper 003" in html and "<on>" not in html
@@ -163,7 +166,7 @@ def test_cli_campaign_exit_codes(designed, tmp_path):
     # progress on stderr (no terminal here: one line per tenth), then the files
     assert "- campaign: 50/100 samples" in res.stderr and "- campaign: 100/100" in res.stderr
     assert "wrote " in res.stderr and "results.parquet" in res.stderr
-    text = path.read_text().replace("operating_speeds", "min_yield = 1.0\noperating_speeds")
+    text = path.read_text().replace("seed = 3", "seed = 3\nmin_yield = 1.0")
     path.write_text(text)
     res = CliRunner().invoke(main, ["campaign", str(path), "--out", str(tmp_path / "b"),
                                     "--scheduler", "serial", "-q"])
@@ -174,3 +177,32 @@ def test_cli_campaign_exit_codes(designed, tmp_path):
     res = CliRunner().invoke(main, ["campaign", str(path), "--out", str(tmp_path / "c"),
                                     "--scheduler", "nowhere"])
     assert res.exit_code == 2 and "--scheduler" in res.output
+
+
+def test_rows_match_single_simulations(designed, serial_run):
+    """A row's metrics are those of simulating that sample alone at its operating
+    point (initial speed, speed-sensor offset, computation delay): the grouping
+    by operating point maps every sample to its own point. Exact equality: the
+    same kernel on the same inputs."""
+    from dataclasses import replace
+
+    from toolbox.campaign import make_plan
+    from toolbox.sim import simulate_batch
+
+    spec, artifact = designed
+    _slug, scenario, law, drive = make_plan(spec, artifact).runs[0]
+    t = serial_run.table
+    picked = set()
+    for i in range(t.num_rows):
+        row = {c: t.column(c)[i].as_py() for c in t.column_names}
+        point = (row["speed"], row["speed_offset"], row["delay_samples"])
+        if point in picked:
+            continue
+        picked.add(point)
+        motor = spec.motor.with_overrides({k: row[k] for k in ("R", "Ld", "Lq", "flux")})
+        sc = replace(scenario, initial_speed=row["speed"], speed_offset=row["speed_offset"])
+        res = simulate_batch(law, [motor], sc, replace(drive, delay_samples=row["delay_samples"]))
+        for m in ("rise_time_10_90", "overshoot_pct", "mse_iq", "final_value"):
+            assert res.metrics[m][0] == row[f"iq_step.{m}"] or (
+                np.isnan(res.metrics[m][0]) and row[f"iq_step.{m}"] is None), (i, m)
+    assert len(picked) == 8

@@ -34,7 +34,9 @@ def test_valid_table(tmp_path):
     assert [p.name for p in cfg.parameters] == ["R", "Ld", "Lq", "flux"]
     assert cfg.parameters[1].distribution == "truncnormal"
     assert cfg.correlation[0] == ("Ld", "Lq")
-    assert cfg.operating_speeds == (0.0, 100.0)
+    assert cfg.operating_points == (("speed", (0.0, 100.0)), ("speed_offset", (0.0, 5.0)),
+                                    ("delay_samples", (1, 2)))
+    assert cfg.n_operating_points == 8
 
 
 def test_spec_without_campaign_has_none(tmp_path):
@@ -53,6 +55,12 @@ def test_spec_without_campaign_has_none(tmp_path):
     (('distribution = "uniform"\nlow = 1.0', 'distribution = "uniforn"\nlow = 1.0'),
      "campaign.parameters.R.distribution", 'did you mean "uniform"'),
     (("samples = 400", "samples = 0"), "campaign.samples", "an integer >= 1"),
+    (("speed_offset = [0.0, 5.0]", "speed_ofset = [0.0, 5.0]"),
+     "campaign.operating_points.speed_ofset", 'did you mean "speed_offset"'),
+    (("delay_samples = [1, 2]", "delay_samples = [1, 2.5]"),
+     "campaign.operating_points.delay_samples", "integers in 0 .. 10"),
+    (("speed = [0.0, 100.0]", "speed = [0.0, 0.0]"), "campaign.operating_points.speed",
+     "distinct values"),
     (("seed = 3", "seed = 1.5"), "campaign.seed", "an integer"),
     (("low = 1.0\nhigh = 1.4", "low = 1.4\nhigh = 1.0"), "campaign.parameters.R.high",
      "a number > low"),
@@ -100,7 +108,7 @@ def test_measured_table(tmp_path):
 
 def test_unknown_scenario_name(tmp_path):
     with pytest.raises(SpecError, match=r'campaign\.scenarios: .*did you mean "iq step"'):
-        _load(tmp_path, ("operating_speeds", 'scenarios = ["iq stp"]\noperating_speeds'))
+        _load(tmp_path, ("seed = 3", 'seed = 3\nscenarios = ["iq stp"]'))
 
 
 def test_cli_bad_campaign_exit_2_writes_nothing(tmp_path):

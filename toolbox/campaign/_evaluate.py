@@ -9,12 +9,14 @@ rows as plain numpy columns; it has no side effect (the client writes the
 Parquet file), so a chunk lost with its worker is simply run again.
 
 Columns of a row (one per sample): ``sample``; the drawn parameters (motor
-parameters in SI, ``measured_row``, ``speed``); per scenario ``<scenario>.``
+parameters in SI, ``measured_row``, the operating point: ``speed``,
+``speed_gain_error``, ``speed_offset``, ``delay_samples``, ``vdc`` as given);
+per scenario ``<scenario>.``
 every simulator metric (:data:`toolbox.sim.METRIC_NAMES`) and
 ``static_error_abs`` (A, or rad/s for speed scenarios: ``static_speed_error_abs``);
 per axis ``margin.<axis>.`` gain margin (dB), phase margin (deg), stability
 margin and disk margin of the sampled loop at zero speed with the drawn
-``R``, ``L``; then ``passed``, ``failure`` (the failed checks, ``""`` when
+``R``, ``L`` and delay; then ``passed``, ``failure`` (the failed checks, ``""`` when
 passed), ``worst_check`` and ``worst_ratio`` (the most violated bound:
 value/bound for an upper bound, bound/value for a lower one; > 1 fails).
 """
@@ -29,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..spec import REQUIREMENT_KEYS
+from ..spec import OPERATING_POINT_KEYS, REQUIREMENT_KEYS
 from ._sampling import draw_samples
 
 __all__ = ["Plan", "make_plan", "evaluate_chunk", "scenario_slug", "warm_up", "DIVERGED"]
@@ -119,16 +121,20 @@ def chunk_range(cfg, chunk: int) -> tuple[int, int]:
     return start, min(cfg.samples, start + cfg.chunk_size)
 
 
+_NOT_MOTOR = ("sample", "measured_row") + OPERATING_POINT_KEYS
+
+
 def _physical(cols: dict, n: int) -> np.ndarray:
     ok = np.ones(n, bool)
     for name, v in cols.items():
-        if name in ("sample", "measured_row", "speed"):
+        if name in _NOT_MOTOR:
             continue
         ok &= np.isfinite(v) & ((v > 0) if name in _POSITIVE else (v >= 0))
     return ok
 
 
-def _margins(plan: Plan, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray) -> dict:
+def _margins(plan: Plan, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
+             delay: np.ndarray | None = None) -> dict:
     from ..analysis.margins import axis_law, freqresp
     from ..analysis.robustness import batch_axis_margins
 
@@ -137,7 +143,8 @@ def _margins(plan: Plan, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray) -> dict:
     w = np.logspace(0, math.log10(math.pi / Ts), MARGIN_GRID)
     w[-1] = math.pi / Ts
     z = np.exp(1j * w * Ts)
-    d = np.full(len(R), art.delay_samples, int)
+    d = (np.full(len(R), art.delay_samples, int) if delay is None
+         else np.asarray(delay, int))
     out = {}
     for axis, L in (("d", Ld), ("q", Lq)):
         K_fr = freqresp(*axis_law(art.axes[axis], True).error_controller(), z)[:, 0, 0]
@@ -205,24 +212,33 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
     start, stop = chunk_range(cfg, chunk)
     n = stop - start
     cols = draw_samples(cfg, motor, start, stop)
-    varied = [k for k in cols if k not in ("sample", "measured_row", "speed")]
+    varied = [k for k in cols if k not in _NOT_MOTOR]
     ok = _physical(cols, n)
     good = np.nonzero(ok)[0]
     motors = [motor.with_overrides({k: float(cols[k][i]) for k in varied}) for i in good]
-    speeds = cols.get("speed")
+    op_keys = [k for k in OPERATING_POINT_KEYS if k in cols]
+    if op_keys:  # one batch per operating point present in the chunk
+        grid = np.column_stack([cols[k][good].astype(float) for k in op_keys])
+        points, which = np.unique(grid, axis=0, return_inverse=True)
+        groups = [(dict(zip(op_keys, p)), good[which.ravel() == j])
+                  for j, p in enumerate(points)]
+    else:
+        groups = [({}, good)]
     out: dict[str, np.ndarray] = dict(cols)
     checks: list = [(NON_PHYSICAL, ~ok)]
     for slug, scenario, law, drive in plan.runs:
         table = {m: np.full(n, np.nan) for m in METRIC_NAMES}
-        groups = ([(None, good)] if speeds is None
-                  else [(s, good[speeds[good] == s]) for s in np.unique(speeds[good])])
-        for speed, rows in groups:
+        for point, rows in groups:
             if rows.size == 0:
                 continue
-            sc = scenario if speed is None else dataclasses.replace(scenario,
-                                                                  initial_speed=float(speed))
+            sc = dataclasses.replace(scenario, **{
+                ("initial_speed" if k == "speed" else k): float(v)
+                for k, v in point.items() if k in ("speed", "speed_gain_error", "speed_offset")})
+            dr = dataclasses.replace(drive, **{
+                k: (int(v) if k == "delay_samples" else float(v))
+                for k, v in point.items() if k in ("delay_samples", "vdc")})
             pick = np.searchsorted(good, rows)
-            res = simulate_batch(law, [motors[j] for j in pick], sc, drive, chunk=rows.size)
+            res = simulate_batch(law, [motors[j] for j in pick], sc, dr, chunk=rows.size)
             for m in METRIC_NAMES:
                 table[m][rows] = res.metrics[m]
         speed_signal = scenario.kind in ("speed_step", "load_step")
@@ -241,7 +257,7 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
     R = np.where(ok, cols.get("R", np.full(n, motor.R)), motor.R)
     Ld = np.where(ok, cols.get("Ld", np.full(n, motor.Ld)), motor.Ld)
     Lq = np.where(ok, cols.get("Lq", np.full(n, motor.Lq)), motor.Lq)
-    margins = _margins(plan, R, Ld, Lq)
+    margins = _margins(plan, R, Ld, Lq, cols.get("delay_samples"))
     for k, v in margins.items():
         out[k] = np.where(ok, v, np.nan)
     for key, bound in plan.bounds.items():

@@ -210,7 +210,7 @@ def campaign_html(table, summary: dict, spec, artifact) -> str:
                      + str([list(r) for r in cfg.correlation[1]])) if cfg.correlation else "",
         measured=(f"{len(cfg.measured_rows)} rows of {', '.join(cfg.measured_columns)}"
                   if cfg.measured_rows else ""),
-        speeds=", ".join(f"{s:g}" for s in cfg.operating_speeds),
+        points=[(k, ", ".join(f"{v:g}" for v in values)) for k, values in cfg.operating_points],
         requirements=[(k, _fmt(b), REQUIREMENT_KEYS[k][3])
                       for k, b in spec.requirements.bounds.items()],
         reasons=[(k, c, f"{100 * c / n:.2f} %") for k, c in summary["failure_reasons"].items()],

@@ -71,7 +71,9 @@ def draw_samples(cfg, motor, start: int, stop: int) -> dict[str, np.ndarray]:
     dict
         ``sample`` (int64), one column per motor parameter that varies
         (absolute SI values), ``measured_row`` when a measured table is given,
-        ``speed`` (rad/s mechanical) when operating points are given.
+        and one column per axis of the operating-point grid (``speed``,
+        ``speed_gain_error``, ``speed_offset``, ``delay_samples``, ``vdc``):
+        the sample's point, drawn uniformly from the grid.
     """
     idx = np.arange(start, stop, dtype=np.int64)
     names = [p.name for p in cfg.parameters]
@@ -96,8 +98,12 @@ def draw_samples(cfg, motor, start: int, stop: int) -> dict[str, np.ndarray]:
         values[p.name] = base * x if p.mode == "scale" else x
     for name in sorted(values):
         out[name] = np.asarray(values[name], dtype=float)
-    if cfg.operating_speeds:
-        speeds = np.array(cfg.operating_speeds)
-        k = np.minimum((U[:, 1] * len(speeds)).astype(np.int64), len(speeds) - 1)
-        out["speed"] = speeds[k]
+    if cfg.operating_points:
+        n_points = cfg.n_operating_points
+        k = np.minimum((U[:, 1] * n_points).astype(np.int64), n_points - 1)
+        point = {}
+        for key, values in reversed(cfg.operating_points):  # mixed radix, last axis fastest
+            point[key] = np.array(values)[k % len(values)]
+            k = k // len(values)
+        out.update((key, point[key]) for key, _values in cfg.operating_points)
     return out

@@ -27,7 +27,7 @@ _NOT_PARAMETERS = ("sample", "measured_row", "passed", "failure", "worst_check",
 
 
 def parameter_columns(table) -> list[str]:
-    """The drawn columns (motor parameters, ``speed``) of a results table."""
+    """The drawn columns (motor parameters, operating point) of a results table."""
     return [c for c in table.column_names
             if "." not in c and c not in _NOT_PARAMETERS]
 

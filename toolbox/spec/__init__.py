@@ -1,6 +1,7 @@
 """Spec files: TOML -> validated frozen dataclasses."""
 
-from ._campaign import CAMPAIGN_PARAMETERS, DISTRIBUTIONS, CampaignCfg, ParameterDist
+from ._campaign import (CAMPAIGN_PARAMETERS, DISTRIBUTIONS, OPERATING_POINT_KEYS, CampaignCfg,
+                        ParameterDist)
 from ._catalog import CATALOG, CATALOG_NOTES
 from ._fields import Collector, SpecErrors, Table, check_keys
 from ._load import drive_from_dict, load_spec, motor_from_dict, spec_from_dict
@@ -14,4 +15,5 @@ __all__ = ["CATALOG", "CATALOG_NOTES", "Collector", "SpecErrors", "Table", "chec
            "Drive", "Motor", "Requirements", "Spec", "inverter_radii",
            "motor_from_dict", "drive_from_dict", "read_method_cfg",
            "register_method_reader", "registered_methods", "spec_to_toml",
-           "CAMPAIGN_PARAMETERS", "DISTRIBUTIONS", "CampaignCfg", "ParameterDist"]
+           "CAMPAIGN_PARAMETERS", "DISTRIBUTIONS", "OPERATING_POINT_KEYS", "CampaignCfg",
+           "ParameterDist"]

@@ -12,7 +12,6 @@ Layout (README.md "Campaigns")::
     samples = 20000           # number of samples (closed-loop plants)
     seed = 7                  # sample i draws from SeedSequence([seed, i])
     chunk_size = 500          # samples per task / per Parquet file
-    operating_speeds = [0.0, 100.0]   # rad/s (mechanical); one per sample
     scenarios = ["i_q step"]  # names of [[scenario]] tables (default: all)
     min_yield = 0.99          # exit 1 below this yield (optional)
 
@@ -22,6 +21,13 @@ Layout (README.md "Campaigns")::
     high = 1.4
     # mean, std               # normal, truncnormal
     mode = "scale"            # scale (x nominal, default) | value (SI)
+
+    [campaign.operating_points]   # a grid: each sample takes one point of it
+    speed = [0.0, 100.0]      # rad/s (mechanical): the scenarios' initial speed
+    speed_gain_error = [-0.02, 0.0, 0.02]   # speed sensor (scenario keys)
+    speed_offset = [0.0, 2.0] # rad/s
+    delay_samples = [1, 2]    # the drive's computation delay (the design keeps its own)
+    vdc = [140.0, 150.0]      # V
 
     [campaign.correlation]    # Gaussian copula between drawn parameters
     parameters = ["R", "flux"]
@@ -34,7 +40,6 @@ Layout (README.md "Campaigns")::
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,7 +48,7 @@ from ._fields import Table
 from ._model import MOTOR_PARAMETER_KEYS
 
 __all__ = ["CampaignCfg", "ParameterDist", "read_campaign", "CAMPAIGN_PARAMETERS",
-           "DISTRIBUTIONS", "MAX_SAMPLES"]
+           "DISTRIBUTIONS", "MAX_SAMPLES", "OPERATING_POINT_KEYS"]
 
 #: Motor parameters a campaign may draw (pole pairs are not a spread).
 CAMPAIGN_PARAMETERS = tuple(k for k in MOTOR_PARAMETER_KEYS if k != "pole_pairs")
@@ -56,8 +61,11 @@ _POSITIVE = ("R", "Ld", "Lq", "J")
 #: A normal draw is refused when its mean lies within this many standard
 #: deviations of the physical bound (0): use truncnormal instead.
 _NORMAL_SIGMAS = 6.0
-CAMPAIGN_KEYS = ("samples", "seed", "chunk_size", "operating_speeds", "scenarios",
+CAMPAIGN_KEYS = ("samples", "seed", "chunk_size", "operating_points", "scenarios",
                  "min_yield", "parameters", "correlation", "measured")
+#: ``[campaign.operating_points]`` keys, in the order of the grid's axes.
+OPERATING_POINT_KEYS = ("speed", "speed_gain_error", "speed_offset", "delay_samples", "vdc")
+MAX_OPERATING_POINTS = 100_000
 _DIST_KEYS = {"uniform": ("low", "high"), "normal": ("mean", "std"),
               "truncnormal": ("mean", "std", "low", "high")}
 
@@ -100,9 +108,10 @@ class CampaignCfg:
         ``(names, matrix)`` of the Gaussian copula, or ``()``.
     measured_columns : tuple of str
     measured_rows : tuple of tuple of float
-    operating_speeds : tuple of float
-        Mechanical speeds (rad/s) of the operating points; ``()`` keeps each
-        scenario's own speed.
+    operating_points : tuple
+        ``((key, values), ...)`` in the order of :data:`OPERATING_POINT_KEYS`:
+        the axes of the operating-point grid; ``()`` keeps each scenario's and
+        the drive's own values.
     scenarios : tuple of str
         Scenario names to run (``()``: every scenario of the spec).
     min_yield : float or None
@@ -115,9 +124,17 @@ class CampaignCfg:
     correlation: tuple = ()
     measured_columns: tuple = ()
     measured_rows: tuple = ()
-    operating_speeds: tuple = ()
+    operating_points: tuple = ()
     scenarios: tuple = ()
     min_yield: float | None = None
+
+    @property
+    def n_operating_points(self) -> int:
+        """Points of the operating-point grid (1 when none is given)."""
+        n = 1
+        for _key, values in self.operating_points:
+            n *= len(values)
+        return n
 
     @property
     def n_chunks(self) -> int:
@@ -212,6 +229,35 @@ def _measured(value: Any, drawn: dict[str, ParameterDist]) -> tuple[tuple, tuple
     return tuple(cols), tuple(out)
 
 
+def _operating_points(value: Any) -> tuple:
+    t = Table(value, "campaign.operating_points", OPERATING_POINT_KEYS)
+    out, n = [], 1
+    for key in OPERATING_POINT_KEYS:
+        if not t.has(key):
+            continue
+        if key == "delay_samples":
+            raw = t.raw(key)
+            if (not isinstance(raw, list) or not raw or not all(
+                    isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 10 for v in raw)):
+                raise SpecError(t.key(key), "a non-empty list of integers in 0 .. 10", raw)
+            values = tuple(int(v) for v in raw)
+        else:
+            unit = {"speed": "rad/s", "speed_offset": "rad/s", "vdc": "V"}.get(key, "")
+            values = t.numbers(key, min_length=1, max_length=1000, unit=unit)
+            if key == "vdc" and min(values) <= 0:
+                raise SpecError(t.key(key), "DC-link voltages > 0 (V)", list(values))
+            if key == "speed_gain_error" and min(values) <= -1:
+                raise SpecError(t.key(key), "sensor gain errors > -1", list(values))
+        if len(set(values)) != len(values):
+            raise SpecError(t.key(key), "distinct values", list(values))
+        n *= len(values)
+        out.append((key, values))
+    if n > MAX_OPERATING_POINTS:
+        raise SpecError("campaign.operating_points", f"at most {MAX_OPERATING_POINTS} "
+                        "points (the product of the list lengths)", n)
+    return tuple(out)
+
+
 def read_campaign(value: Any) -> CampaignCfg:
     """Validate a ``[campaign]`` table.
 
@@ -249,14 +295,13 @@ def read_campaign(value: Any) -> CampaignCfg:
     if not params and not rows:
         raise SpecError("campaign.parameters", "at least one drawn parameter or a "
                         "[campaign.measured] table (nothing varies)")
-    speeds = t.numbers("operating_speeds", (), max_length=1000, unit="rad/s")
+    points = (_operating_points(t.raw("operating_points"))
+              if t.has("operating_points") else ())
     scen = t.raw("scenarios", [])
     if not isinstance(scen, list) or not all(isinstance(s, str) for s in scen):
         raise SpecError("campaign.scenarios", "a list of scenario names", scen)
     min_yield = t.number("min_yield", None, minimum=0.0, maximum=1.0)
-    if any(not math.isfinite(s) for s in speeds):  # pragma: no cover - numbers() checks
-        raise SpecError("campaign.operating_speeds", "finite speeds", speeds)
     return CampaignCfg(samples=samples, seed=seed, chunk_size=chunk_size, parameters=params,
                        correlation=correlation, measured_columns=cols, measured_rows=rows,
-                       operating_speeds=tuple(speeds), scenarios=tuple(scen),
+                       operating_points=points, scenarios=tuple(scen),
                        min_yield=min_yield)
