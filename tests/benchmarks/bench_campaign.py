@@ -1,7 +1,8 @@
 """Campaign throughput benchmark (issue 14): samples per second.
 
 Campaign: the test campaign of tests/campaign (PI on paper 003's motor, one
-20 ms i_q step per sample, R, Ld, Lq, flux drawn, two operating speeds; each
+20 ms i_q step per sample, R, Ld, Lq, flux drawn, a grid of 8 operating
+points, one batch per point and chunk; each
 sample also gets its per-axis loop margins). Routes, each on a fresh output
 directory, the design made once beforehand:
 

@@ -134,9 +134,21 @@ def test_interrupted_campaign_resumes(designed, serial_run, tmp_path):
 
 
 def test_other_campaign_in_out_dir_refused(designed, serial_run, tmp_path):
+    """Rows of another campaign are never mixed in: another sample count (or any
+    row-changing key) is refused; min_yield and the title change no row."""
+    import shutil
+
+    out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
     spec = load_spec(write_spec(tmp_path, samples=300))
     with pytest.raises(SpecError, match="another spec or campaign"):
-        run_campaign(spec, serial_run.out_dir, scheduler="serial", artifact=designed[1])
+        run_campaign(spec, out, scheduler="serial", artifact=designed[1])
+    path = write_spec(tmp_path)
+    path.write_text(path.read_text().replace("seed = 3", "seed = 3\nmin_yield = 0.5")
+                    .replace('title = "campaign test', 'title = "renamed campaign test'))
+    again = run_campaign(load_spec(path), out, scheduler="serial",
+                         artifact=designed[1], report=False)
+    assert (again.chunks_resumed, again.chunks_run) == (4, 0)
+    assert again.summary["min_yield"] == 0.5
 
 
 def test_outputs_and_report(serial_run):

@@ -85,9 +85,12 @@ class CampaignRun:
 
 def campaign_hash(spec) -> str:
     """Hash of what determines the rows: the resolved spec (campaign table
-    included) and the row schema version."""
-    data = json.dumps({"schema": CAMPAIGN_SCHEMA, "spec": spec.raw}, sort_keys=True,
-                      default=str)
+    included) and the row schema version; the title and ``campaign.min_yield``
+    do not change a row and are left out (changing them keeps the chunks)."""
+    raw = {k: v for k, v in spec.raw.items() if k != "title"}
+    if isinstance(raw.get("campaign"), dict):
+        raw["campaign"] = {k: v for k, v in raw["campaign"].items() if k != "min_yield"}
+    data = json.dumps({"schema": CAMPAIGN_SCHEMA, "spec": raw}, sort_keys=True, default=str)
     return hashlib.sha256(data.encode()).hexdigest()
 
 
