@@ -90,6 +90,7 @@ def _region_figures(table, summary) -> list[dict]:
         ax.set_ylabel(b)
         ax.legend(loc="best")
         ax.set_title("Samples over the two most sensitive parameters")
+        fig.tight_layout()
         figs.append({"id": "scatter", "svg": _svg(fig, "cs"),
                      "caption": f"Failing samples (red) over {a} and {b}, the two parameters "
                                 "ranked most sensitive."})
@@ -106,6 +107,8 @@ def _region_figures(table, summary) -> list[dict]:
         ax.set_xticks(pos, params)
         ax.set_ylabel("scaled to the drawn range")
         ax.set_title("Parallel coordinates: failing (red) over passing (grey)")
+        ax.tick_params(axis="x", labelsize=7)
+        fig.tight_layout()
         figs.append({"id": "parallel", "svg": _svg(fig, "cp"),
                      "caption": "Each line is a sample; each parameter is scaled from its "
                                 "smallest (0) to its largest (1) drawn value."})
@@ -116,6 +119,7 @@ def _region_figures(table, summary) -> list[dict]:
         ax.barh(names, vals, color=[FAIL_COLOR if v > 0 else "#1f5fa8" for v in vals])
         ax.set_xlabel("rank correlation with failure (> 0: larger values fail more)")
         ax.set_xlim(-1, 1)
+        fig.tight_layout()
         figs.append({"id": "sensitivity", "svg": _svg(fig, "cr"),
                      "caption": "Sensitivity ranking: Spearman correlation of each parameter "
                                 "with the failure indicator."})
@@ -149,7 +153,7 @@ def _dist_figures(table, spec, runs: list[str]) -> list[dict]:
     fig.tight_layout()
     figs.append({"id": "margins", "svg": _svg(fig, "cm"),
                  "caption": "Loop margins of each sample (sampled loop with the drawn R, L "
-                            "and the design's delay, zero speed); dashed: the requirement."})
+                            "and delay, zero speed); dashed: the requirement."})
     bounds = spec.requirements.bounds
     for k, slug in enumerate(runs):
         shown = [(key, q, u) for key, (stage, _d, q, u) in REQUIREMENT_KEYS.items()
