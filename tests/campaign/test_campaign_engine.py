@@ -125,7 +125,11 @@ def test_interrupted_campaign_resumes(designed, serial_run, tmp_path):
     first = chunk_path(out, 1)
     first.write_bytes(first.read_bytes()[:-100])  # a damaged file is redone
     assert valid_chunks(out, spec) == {0}
+    stale = [out / "chunks" / ".chunk-000002.parquet.k9Xa01bc", out / ".results.parquet.zz12ab34"]
+    for path in stale:  # temporaries of a write killed midway
+        path.write_bytes(b"PAR1 half")
     run = run_campaign(spec, out, scheduler="serial", artifact=artifact, report=False)
+    assert not any(path.exists() for path in stale)
     assert (run.chunks_resumed, run.chunks_run) == (1, 3)
     assert run.table.equals(serial_run.table)
     again = run_campaign(spec, out, scheduler="serial", artifact=artifact, report=False)

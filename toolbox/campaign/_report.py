@@ -26,7 +26,7 @@ from .._version import toolbox_version
 from ..spec import REQUIREMENT_KEYS
 from ._summary import parameter_columns
 
-__all__ = ["campaign_html"]
+__all__ = ["campaign_html", "report_columns"]
 
 PASS_COLOR, FAIL_COLOR = "#9aa3ad", "#b3261e"
 #: Points drawn per figure at most (a random but seeded subset beyond).
@@ -136,6 +136,29 @@ def _hist(ax, v: np.ndarray, title: str, bound=None, unit: str = "") -> None:
     ax.tick_params(labelsize=7)
 
 
+#: Metrics shown for a scenario without a bounded one.
+_DEFAULT_SHOWN = (("rise_time_10_90", "s"), ("overshoot_pct", "%"))
+
+
+def _shown(names, spec, slug: str) -> list[tuple]:
+    """``(requirement key or None, quantity, unit)`` histogrammed for scenario ``slug``."""
+    bounds = spec.requirements.bounds
+    shown = [(key, q, u) for key, (stage, _d, q, u) in REQUIREMENT_KEYS.items()
+             if stage == "sim" and key in bounds and f"{slug}.{q}" in names]
+    return shown or [(None, q, u) for q, u in _DEFAULT_SHOWN]
+
+
+def report_columns(names, spec, artifact) -> list[str]:
+    """The columns of results.parquet the summary and the report read: all but
+    the scenario metrics that are not shown."""
+    from ._evaluate import make_plan
+
+    slugs = [slug for slug, *_ in make_plan(spec, artifact).runs]
+    keep = {f"{slug}.{q}" for slug in slugs for _k, q, _u in _shown(names, spec, slug)}
+    return [c for c in names
+            if not any(c.startswith(f"{slug}.") for slug in slugs) or c in keep]
+
+
 def _dist_figures(table, spec, runs: list[str]) -> list[dict]:
     import matplotlib
 
@@ -156,11 +179,7 @@ def _dist_figures(table, spec, runs: list[str]) -> list[dict]:
                             "and delay, zero speed); dashed: the requirement."})
     bounds = spec.requirements.bounds
     for k, slug in enumerate(runs):
-        shown = [(key, q, u) for key, (stage, _d, q, u) in REQUIREMENT_KEYS.items()
-                 if stage == "sim" and key in bounds and f"{slug}.{q}" in table.column_names]
-        if not shown:
-            shown = [(None, q, u) for q, u in (("rise_time_10_90", "s"),
-                                               ("overshoot_pct", "%"))]
+        shown = _shown(table.column_names, spec, slug)
         fig, axes = plt.subplots(1, len(shown), figsize=(6.4, 2.6), squeeze=False)
         for ax, (key, q, unit) in zip(axes[0], shown):
             _hist(ax, _col(table, f"{slug}.{q}").astype(float), q,

@@ -26,6 +26,7 @@ import hashlib
 import io
 import json
 import os
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,7 +34,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .._io import write_atomic
+from .._io import remove_stale, write_atomic
 from .._version import toolbox_version
 from ..errors import CctError, SpecError
 from ._evaluate import Plan, chunk_range, evaluate_chunk, make_plan, warm_up
@@ -42,6 +43,9 @@ __all__ = ["CAMPAIGN_SCHEMA", "CampaignRun", "run_campaign", "campaign_hash", "r
            "valid_chunks", "chunk_path", "evaluate_serial"]
 
 CAMPAIGN_SCHEMA = "cct.campaign/1"
+#: Files of a campaign directory besides ``chunks/``.
+OUTPUT_NAMES = ("campaign.json", "controller.json", "results.parquet", "summary.json",
+                "report.html")
 #: Seconds to wait for workers of an existing cluster.
 CONNECT_TIMEOUT = 30
 
@@ -54,7 +58,8 @@ class CampaignRun:
     ----------
     out_dir : Path
     table : pyarrow.Table
-        Every row, ordered by sample.
+        Every row, ordered by sample (read from ``results.parquet`` when
+        asked: a large campaign is never held in memory whole).
     summary : dict
         As written to ``summary.json``.
     chunks_total, chunks_run, chunks_resumed : int
@@ -68,7 +73,6 @@ class CampaignRun:
     """
 
     out_dir: Path
-    table: Any
     summary: dict
     chunks_total: int
     chunks_run: int
@@ -76,6 +80,11 @@ class CampaignRun:
     seconds: float
     startup_seconds: float = 0.0
     files: list = field(default_factory=list)
+
+    @property
+    def table(self):
+        """Every row of ``results.parquet`` (read now)."""
+        return read_results(self.out_dir)
 
     @property
     def passed(self) -> bool:
@@ -265,6 +274,11 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
         artifact = design_spec(spec)
     out_dir.mkdir(parents=True, exist_ok=True)
     _manifest(out_dir, spec, digest)
+    # temporaries of a run killed while writing (write_atomic, _assemble)
+    remove_stale(out_dir, OUTPUT_NAMES)
+    if (out_dir / "chunks").is_dir():
+        remove_stale(out_dir / "chunks", {chunk_path(out_dir, c).name
+                                          for c in range(cfg.n_chunks)})
     done = valid_chunks(out_dir, spec)
     todo = [c for c in range(cfg.n_chunks) if c not in done]
     samples_done = sum(chunk_range(cfg, c)[1] - chunk_range(cfg, c)[0] for c in done)
@@ -289,28 +303,61 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
                                      on_chunk, scheduler, workers, digest)
     seconds = time.perf_counter() - t0
     n_run = sum(chunk_range(cfg, c)[1] - chunk_range(cfg, c)[0] for c in todo)
-    table = _assemble(out_dir, spec, digest)
+    results = _assemble(out_dir, spec, digest)
+    table = _read_for_summary(results, spec, artifact)
     summary = summarize(table, spec, artifact)
     summary["timing"] = {"seconds": seconds, "startup_seconds": startup,
                          "chunks_run": len(todo), "samples_run": n_run,
                          "samples_per_s": (n_run / (seconds - startup)
                                            if todo and seconds > startup else None)}
-    files = write_outputs(out_dir, table, summary, spec, artifact, report=report)
-    return CampaignRun(out_dir=out_dir, table=table, summary=summary,
+    files = [results] + write_outputs(out_dir, table, summary, spec, artifact, report=report)
+    return CampaignRun(out_dir=out_dir, summary=summary,
                        chunks_total=cfg.n_chunks, chunks_run=len(todo),
                        chunks_resumed=len(done), seconds=seconds, startup_seconds=startup,
                        files=files)
 
 
-def _assemble(out_dir: Path, spec, digest: str):
-    import pyarrow as pa
+def _assemble(out_dir: Path, spec, digest: str) -> Path:
+    """Stream the chunk files, in sample order, into ``results.parquet``
+    (temporary name, fsync, rename: readers never see half a file), one row
+    group per chunk; memory holds one chunk at a time."""
     import pyarrow.parquet as pq
 
     cfg = spec.campaign
-    tables = []
-    for c in range(cfg.n_chunks):
-        path = chunk_path(out_dir, c)
-        if not _chunk_valid(path, c, digest, cfg):  # pragma: no cover - a bug if reached
-            raise RuntimeError(f"campaign: chunk {c} missing after the run")
-        tables.append(pq.read_table(path).replace_schema_metadata(None))
-    return pa.concat_tables(tables).sort_by("sample")
+    final = out_dir / "results.parquet"
+    fd, tmp = tempfile.mkstemp(prefix=".results.parquet.", dir=out_dir)
+    os.close(fd)
+    writer = None
+    try:
+        for c in range(cfg.n_chunks):
+            path = chunk_path(out_dir, c)
+            if not _chunk_valid(path, c, digest, cfg):  # pragma: no cover - a bug if reached
+                raise RuntimeError(f"campaign: chunk {c} missing after the run")
+            table = pq.read_table(path).replace_schema_metadata(None)
+            if writer is None:
+                writer = pq.ParquetWriter(tmp, table.schema)
+            writer.write_table(table)
+        writer.close()
+        writer = None
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, final)
+    except BaseException:
+        if writer is not None:
+            writer.close()
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return final
+
+
+def _read_for_summary(results: Path, spec, artifact):
+    """The columns the summary and the report use (not every metric)."""
+    import pyarrow.parquet as pq
+
+    from ._report import report_columns
+
+    names = pq.read_schema(results).names
+    return pq.read_table(results, columns=report_columns(names, spec, artifact))

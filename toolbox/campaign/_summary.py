@@ -10,7 +10,6 @@ parameters (largest ``worst_ratio``).
 
 from __future__ import annotations
 
-import io
 import json
 import math
 from pathlib import Path
@@ -69,6 +68,16 @@ def _sensitivity(table, failed: np.ndarray) -> list[dict]:
     return out
 
 
+def _reasons(failure) -> dict[str, int]:
+    """Samples per failed check, from the ``failure`` column ("a = 1 (bound 2); b")."""
+    import pyarrow.compute as pc
+
+    parts = pc.list_flatten(pc.split_pattern(failure, "; "))
+    names = pc.list_element(pc.split_pattern(parts, " = ", max_splits=1), 0)
+    counts = pc.value_counts(names).to_pylist()
+    return {c["values"]: int(c["counts"]) for c in counts if c["values"]}
+
+
 def _finite(v):
     if isinstance(v, (float, np.floating)):
         return float(v) if math.isfinite(v) else str(float(v))
@@ -86,13 +95,11 @@ def summarize(table, spec, artifact) -> dict:
     passed = np.asarray(table.column("passed").to_numpy(zero_copy_only=False), bool)
     failed = ~passed
     k = int(passed.sum())
-    reasons: dict[str, int] = {}
-    for text in table.column("failure").to_pylist():
-        for part in filter(None, (text or "").split("; ")):
-            name = part.split(" = ")[0]
-            reasons[name] = reasons.get(name, 0) + 1
+    reasons = _reasons(table.column("failure"))
     ratio = np.asarray(table.column("worst_ratio").to_numpy(), float)
-    order = np.argsort(-np.where(np.isfinite(ratio), ratio, np.inf), kind="stable")[:N_WORST]
+    key = -np.where(np.isnan(ratio), np.inf, ratio)
+    top = np.argpartition(key, N_WORST)[:N_WORST] if n > N_WORST else np.arange(n)
+    order = top[np.lexsort((top, key[top]))]  # largest ratio first, then by sample
     params = parameter_columns(table)
     worst = []
     for i in order:
@@ -118,13 +125,9 @@ def summarize(table, spec, artifact) -> dict:
 
 def write_outputs(out_dir: Path, table, summary: dict, spec, artifact, *,
                   report: bool = True) -> list[Path]:
-    """Write results.parquet, summary.json, controller.json and report.html (atomically)."""
-    import pyarrow.parquet as pq
-
-    buf = io.BytesIO()
-    pq.write_table(table, buf)
-    files = [write_atomic(out_dir / "results.parquet", buf.getvalue()),
-             write_atomic(out_dir / "summary.json",
+    """Write summary.json, controller.json and report.html (atomically);
+    ``table`` holds the columns of :func:`toolbox.campaign._report.report_columns`."""
+    files = [write_atomic(out_dir / "summary.json",
                           json.dumps(summary, indent=1, default=_finite) + "\n"),
              write_atomic(out_dir / "controller.json", artifact.dumps())]
     if report:
