@@ -120,11 +120,11 @@ def test_interrupted_campaign_resumes(designed, serial_run, tmp_path):
 
     with pytest.raises(KeyboardInterrupt):
         run_campaign(spec, out, scheduler="serial", artifact=artifact, progress=stop_after_two)
-    assert valid_chunks(out, spec) == {0, 1}
+    assert valid_chunks(out, spec, artifact) == {0, 1}
     assert not (out / "results.parquet").exists()
     first = chunk_path(out, 1)
     first.write_bytes(first.read_bytes()[:-100])  # a damaged file is redone
-    assert valid_chunks(out, spec) == {0}
+    assert valid_chunks(out, spec, artifact) == {0}
     stale = [out / "chunks" / ".chunk-000002.parquet.k9Xa01bc", out / ".results.parquet.zz12ab34"]
     for path in stale:  # temporaries of a write killed midway
         path.write_bytes(b"PAR1 half")
@@ -144,7 +144,7 @@ def test_other_campaign_in_out_dir_refused(designed, serial_run, tmp_path):
 
     out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
     spec = load_spec(write_spec(tmp_path, samples=300))
-    with pytest.raises(SpecError, match="another spec or campaign"):
+    with pytest.raises(SpecError, match="another spec, campaign table or controller"):
         run_campaign(spec, out, scheduler="serial", artifact=designed[1])
     path = write_spec(tmp_path)
     path.write_text(path.read_text().replace("seed = 3", "seed = 3\nmin_yield = 0.5")
@@ -222,3 +222,41 @@ def test_rows_match_single_simulations(designed, serial_run):
             assert res.metrics[m][0] == row[f"iq_step.{m}"] or (
                 np.isnan(res.metrics[m][0]) and row[f"iq_step.{m}"] is None), (i, m)
     assert len(picked) == 8
+
+
+def test_candidate_controller(serial_run, tmp_path):
+    """--controller simulates another design (a candidate) on the same campaign:
+    other rows, another campaign hash (its chunks are never mixed with the
+    spec's own design), and a design for another sample time is refused."""
+    import shutil
+
+    spec_path = write_spec(tmp_path)
+    text = spec_path.read_text()
+    runner = CliRunner()
+    candidate = tmp_path / "candidate.toml"
+    candidate.write_text(text.replace("bandwidth = 600.0", "bandwidth = 400.0"))
+    res = runner.invoke(main, ["design", str(candidate), "--out", str(tmp_path / "d400"),
+                               "--only-controller", "-q"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(main, ["campaign", str(spec_path), "--out", str(tmp_path / "c400"),
+                               "--controller", str(tmp_path / "d400"), "--scheduler", "serial",
+                               "-q", "--no-report"])
+    assert res.exit_code in (0, 1), res.output
+    rows = pq.read_table(tmp_path / "c400" / "results.parquet")
+    assert rows.num_rows == 400
+    slow = rows.column("iq_step.rise_time_10_90").to_numpy()
+    fast = serial_run.table.column("iq_step.rise_time_10_90").to_numpy()
+    assert np.nanmedian(slow) > 1.3 * np.nanmedian(fast)  # 400 vs 600 rad/s: about 1.5 x
+    out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
+    res = runner.invoke(main, ["campaign", str(spec_path), "--out", str(out), "--controller",
+                               str(tmp_path / "d400"), "--scheduler", "serial", "-q"])
+    assert res.exit_code == 2 and "another spec, campaign table or controller" in res.output
+    other_ts = tmp_path / "ts.toml"
+    other_ts.write_text(text.replace("sample_time = 1e-4", "sample_time = 5e-5"))
+    res = runner.invoke(main, ["design", str(other_ts), "--out", str(tmp_path / "d_ts"),
+                               "--only-controller", "-q"])
+    assert res.exit_code == 0, res.output
+    res = runner.invoke(main, ["campaign", str(spec_path), "--out", str(tmp_path / "c_ts"),
+                               "--controller", str(tmp_path / "d_ts"), "--scheduler", "serial"])
+    assert res.exit_code == 2 and "--controller: expected a design for drive.sample_time" in res.output
+    assert not (tmp_path / "c_ts").exists()

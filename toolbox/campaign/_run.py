@@ -92,14 +92,22 @@ class CampaignRun:
         return bool(self.summary["meets_min_yield"])
 
 
-def campaign_hash(spec) -> str:
+def campaign_hash(spec, artifact=None) -> str:
     """Hash of what determines the rows: the resolved spec (campaign table
-    included) and the row schema version; the title and ``campaign.min_yield``
-    do not change a row and are left out (changing them keeps the chunks)."""
+    included), the executed controller of ``artifact`` (method, sample time,
+    delay, axes, decoupling, fcs weights; not its provenance) and the row
+    schema version. The title and ``campaign.min_yield`` do not change a row
+    and are left out (changing them keeps the chunks)."""
     raw = {k: v for k, v in spec.raw.items() if k != "title"}
     if isinstance(raw.get("campaign"), dict):
         raw["campaign"] = {k: v for k, v in raw["campaign"].items() if k != "min_yield"}
-    data = json.dumps({"schema": CAMPAIGN_SCHEMA, "spec": raw}, sort_keys=True, default=str)
+    executed = None
+    if artifact is not None:
+        data = artifact.to_json()
+        executed = {k: data[k] for k in ("method", "sample_time", "delay_samples", "axes",
+                                         "decoupling", "fcs")}
+    data = json.dumps({"schema": CAMPAIGN_SCHEMA, "spec": raw, "controller": executed},
+                      sort_keys=True, default=str)
     return hashlib.sha256(data.encode()).hexdigest()
 
 
@@ -142,9 +150,9 @@ def _chunk_valid(path: Path, chunk: int, digest: str, cfg) -> bool:
         return False
 
 
-def valid_chunks(out_dir: str | Path, spec) -> set[int]:
-    """Chunks of ``spec``'s campaign already complete in ``out_dir``."""
-    digest, cfg = campaign_hash(spec), spec.campaign
+def valid_chunks(out_dir: str | Path, spec, artifact=None) -> set[int]:
+    """Chunks of ``spec``'s campaign (for ``artifact``) already complete in ``out_dir``."""
+    digest, cfg = campaign_hash(spec, artifact), spec.campaign
     return {c for c in range(cfg.n_chunks)
             if chunk_path(Path(out_dir), c).is_file()
             and _chunk_valid(chunk_path(Path(out_dir), c), c, digest, cfg)}
@@ -166,8 +174,8 @@ def _manifest(out_dir: Path, spec, digest: str) -> None:
             old = {}
         if old.get("campaign") != digest:
             raise SpecError("--out", "a new directory or one of the same campaign (resume)",
-                            str(out_dir), hint="it holds the results of another spec or "
-                            "campaign table; choose another --out or delete it")
+                            str(out_dir), hint="it holds the results of another spec, "
+                            "campaign table or controller; choose another --out or delete it")
         return
     cfg = spec.campaign
     write_atomic(path, json.dumps({
@@ -246,7 +254,9 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     workers : int, optional
         LocalCluster workers; for an existing cluster, wait for this many.
     artifact : ControllerArtifact, optional
-        The design; default: designed from ``spec`` (once, here).
+        The design (e.g. a candidate made from another spec, loaded with
+        :func:`toolbox.pipeline.load_artifact`); default: designed from
+        ``spec`` (once, here). Its sample time must be the spec's.
     progress : callable, optional
         ``progress(samples_done, samples_total)`` after each chunk.
     report : bool
@@ -259,7 +269,8 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     Raises
     ------
     SpecError
-        No ``[campaign]`` table, or ``out_dir`` holds another campaign.
+        No ``[campaign]`` table, ``out_dir`` holds another campaign (other
+        spec or controller), or ``artifact`` has another sample time.
     """
     from ._summary import summarize, write_outputs
 
@@ -267,11 +278,15 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
         raise SpecError("campaign", "a [campaign] table (missing)", file=spec.source)
     cfg = spec.campaign
     out_dir = Path(out_dir)
-    digest = campaign_hash(spec)
     if artifact is None:
         from ..pipeline import design_spec
 
         artifact = design_spec(spec)
+    elif abs(artifact.sample_time - spec.drive.sample_time) > 1e-12 * spec.drive.sample_time:
+        raise SpecError("--controller", f"a design for drive.sample_time = "
+                        f"{spec.drive.sample_time:g} s", artifact.sample_time,
+                        hint="the controller runs at the spec's sample time")
+    digest = campaign_hash(spec, artifact)
     out_dir.mkdir(parents=True, exist_ok=True)
     _manifest(out_dir, spec, digest)
     # temporaries of a run killed while writing (write_atomic, _assemble)
@@ -279,7 +294,7 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     if (out_dir / "chunks").is_dir():
         remove_stale(out_dir / "chunks", {chunk_path(out_dir, c).name
                                           for c in range(cfg.n_chunks)})
-    done = valid_chunks(out_dir, spec)
+    done = valid_chunks(out_dir, spec, artifact)
     todo = [c for c in range(cfg.n_chunks) if c not in done]
     samples_done = sum(chunk_range(cfg, c)[1] - chunk_range(cfg, c)[0] for c in done)
     if progress:

@@ -464,11 +464,14 @@ def _fmt(value) -> str:
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="LocalCluster worker processes (default: one per core); with "
                    "--scheduler, wait for this many workers.")
+@click.option("--controller", "design_dir", type=click.Path(file_okay=False), default=None,
+              help="A design directory (cct design --out): simulate its controller.json "
+                   "(a candidate design) instead of designing SPEC's controller.")
 @click.option("--no-report", is_flag=True, help="Do not write report.html.")
 @_QUIET
 @_spec_errors
 def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None,
-             no_report: bool, quiet: bool) -> None:
+             design_dir: str | None, no_report: bool, quiet: bool) -> None:
     """Run the robustness campaign of SPEC's [campaign] table: design once,
     simulate every sample on Dask, write one row per sample to
     OUT/results.parquet, a summary and a report.
@@ -481,6 +484,7 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
     Example:
       cct campaign designs/campaign_003.toml --out out/campaign_003
       cct campaign designs/campaign_003.toml --out out/c --scheduler tcp://10.0.0.5:8786
+      cct campaign designs/campaign_003.toml --out out/c_pi --controller out/003_pi
     """
     from ..campaign import run_campaign
     from ..spec import load_spec
@@ -491,10 +495,15 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
                         hint="README.md \"Campaigns\"")
     if scheduler is not None and scheduler not in ("local", "serial") and "://" not in scheduler:
         raise SpecError("--scheduler", "tcp://host:port, 'local' or 'serial'", scheduler)
+    artifact = None
+    if design_dir is not None:
+        from ..pipeline import load_artifact
+
+        artifact = load_artifact(design_dir)
     try:
         with CountBar(quiet=quiet, desc="campaign") as bar:
             run = run_campaign(s, out_dir, scheduler=scheduler, workers=workers,
-                               progress=bar, report=not no_report)
+                               artifact=artifact, progress=bar, report=not no_report)
     except KeyboardInterrupt:
         click.echo(f"cct: interrupted; the chunks written are kept in {out_dir}/chunks: "
                    "run the same command again to resume", err=True)
