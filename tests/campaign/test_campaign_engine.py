@@ -260,3 +260,24 @@ def test_candidate_controller(serial_run, tmp_path):
                                "--controller", str(tmp_path / "d_ts"), "--scheduler", "serial"])
     assert res.exit_code == 2 and "--controller: expected a design for drive.sample_time" in res.output
     assert not (tmp_path / "c_ts").exists()
+
+
+@pytest.mark.parametrize("bounds, passed", [
+    ("min_phase_margin_deg = 1\n", 40),         # every sample passes
+    ("max_rise_time = 1e-6\n", 0),               # below one sample period: none passes
+])
+def test_yield_extremes(designed, tmp_path, bounds, passed):
+    """All pass or all fail: the summary and report are still written (no
+    sensitivity can be ranked: the correlations are null, not NaN)."""
+    path = write_spec(tmp_path, samples=40, chunk_size=20)
+    text = path.read_text()
+    head, rest = text.split("[requirements]\n", 1)
+    rest = rest.split("[[scenario]]", 1)[1]
+    path.write_text(head + "[requirements]\n" + bounds + "[[scenario]]" + rest)
+    run = run_campaign(load_spec(path), tmp_path / "out", scheduler="serial",
+                       artifact=designed[1])
+    sm = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert sm["passed"] == passed and sm["samples"] == 40
+    assert all(e["rank_correlation"] is None for e in sm["sensitivity"])
+    assert "Yield" in (tmp_path / "out" / "report.html").read_text()
+    assert run.passed  # no min_yield: the exit code does not depend on the yield
