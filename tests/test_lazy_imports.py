@@ -16,7 +16,8 @@ import sys
 
 import pytest
 
-HEAVY = ("control", "matplotlib", "sympy", "cvxpy", "numba", "scipy", "slycot")
+HEAVY = ("control", "matplotlib", "sympy", "cvxpy", "numba", "scipy", "slycot",
+         "dask", "distributed", "pyarrow")  # the last three: cct campaign (issue 14)
 
 
 def _loaded_after(code: str) -> set[str]:
@@ -35,6 +36,9 @@ def _loaded_after(code: str) -> set[str]:
     "try:\n    main(['--help'], prog_name='cct')\nexcept SystemExit:\n    pass",
     "from toolbox.cli import main\n"
     "try:\n    main(['design', '--help'], prog_name='cct')\nexcept SystemExit:\n    pass",
+    "from toolbox.cli import main\n"
+    "try:\n    main(['campaign', '--help'], prog_name='cct')\nexcept SystemExit:\n    pass",
+    "import toolbox.campaign",
 ])
 def test_light_imports(code):
     """None of the heavy packages is imported by the entry points."""

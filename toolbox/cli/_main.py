@@ -17,7 +17,7 @@ from pathlib import Path
 import click
 
 from ..errors import CctError, SpecError
-from ._progress import StepBar, design_stages
+from ._progress import CountBar, StepBar, design_stages
 
 #: -q/--quiet of the long-running commands: the bar goes, the summary stays.
 _QUIET = click.option("--quiet", "-q", is_flag=True,
@@ -457,6 +457,81 @@ def _print_table(rows: list[dict]) -> None:
 
 def _fmt(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+@main.command()
+@click.argument("spec", type=click.Path(dir_okay=False))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Campaign directory (chunks, results.parquet, summary.json, report.html); "
+                   "an interrupted campaign resumes from it.")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="tcp://host:8786 of a running Dask scheduler; default: a LocalCluster "
+                   "on this machine; 'serial': this process, no Dask.")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="LocalCluster worker processes (default: one per core); with "
+                   "--scheduler, wait for this many workers.")
+@click.option("--controller", "design_dir", type=click.Path(file_okay=False), default=None,
+              help="A design directory (cct design --out): simulate its controller.json "
+                   "(a candidate design) instead of designing SPEC's controller.")
+@click.option("--no-report", is_flag=True, help="Do not write report.html.")
+@_QUIET
+@_spec_errors
+def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None,
+             design_dir: str | None, no_report: bool, quiet: bool) -> None:
+    """Run the robustness campaign of SPEC's [campaign] table: design once,
+    simulate every sample on Dask, write one row per sample to
+    OUT/results.parquet, a summary and a report.
+
+    Exit 0 when the yield reaches campaign.min_yield (or none is given), 1
+    below it, 2 on bad input. Run the same command again after an interrupt
+    to resume (chunks already written are skipped).
+
+    \b
+    Example:
+      cct campaign designs/campaign_003.toml --out out/campaign_003
+      cct campaign designs/campaign_003.toml --out out/c --scheduler tcp://scheduler-host:8786
+      cct campaign designs/campaign_003.toml --out out/c_pi --controller out/003_pi
+    """
+    from ..campaign import run_campaign
+    from ..spec import load_spec
+
+    s = load_spec(spec)
+    if s.campaign is None:
+        raise SpecError("campaign", "a [campaign] table (missing)", file=spec,
+                        hint="README.md \"Campaigns\"")
+    if scheduler is not None and scheduler not in ("local", "serial") and "://" not in scheduler:
+        raise SpecError("--scheduler", "tcp://host:port, 'local' or 'serial'", scheduler)
+    artifact = None
+    if design_dir is not None:
+        from ..pipeline import load_artifact
+
+        artifact = load_artifact(design_dir)
+    try:
+        with CountBar(quiet=quiet, desc="campaign") as bar:
+            run = run_campaign(s, out_dir, scheduler=scheduler, workers=workers,
+                               artifact=artifact, progress=bar, report=not no_report)
+    except KeyboardInterrupt:
+        click.echo(f"cct: interrupted; the chunks written are kept in {out_dir}/chunks: "
+                   "run the same command again to resume", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    sm = run.summary
+    if not quiet:
+        for path in run.files:
+            click.echo(f"wrote {path}", err=True)
+    click.echo(f"campaign: {sm['samples']} samples, {sm['passed']} pass: yield "
+               f"{100 * sm['yield']:.2f} % (95 % interval {100 * sm['yield_95'][0]:.2f} - "
+               f"{100 * sm['yield_95'][1]:.2f} %); {run.chunks_run} chunks run, "
+               f"{run.chunks_resumed} resumed")
+    for name, count in list(sm["failure_reasons"].items())[:5]:
+        click.echo(f"  fails {name}: {count}")
+    ranked = [e for e in sm["sensitivity"] if e["rank_correlation"] is not None][:3]
+    if ranked:
+        click.echo("  most sensitive: " + ", ".join(
+            f"{e['parameter']} ({e['rank_correlation']:+.2f})" for e in ranked))
+    if sm["min_yield"] is not None:
+        click.echo(f"  min_yield {sm['min_yield']:g}: "
+                   + ("pass" if run.passed else "FAIL"))
+    sys.exit(EXIT_OK if run.passed else EXIT_REQUIREMENT)
 
 
 @main.command()

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import sys
 from typing import Iterable
-__all__ = ["StepBar", "design_stages"]
+__all__ = ["CountBar", "StepBar", "design_stages"]
 
 
 def design_stages(analysis: bool, verification: bool, header: bool,
@@ -99,3 +99,44 @@ class StepBar:
     def __exit__(self, *exc) -> None:
         self.close()
 
+
+
+class CountBar:
+    """A stderr progress bar over a count (e.g. campaign samples), silent when ``quiet``.
+
+    Called as ``bar(done, total)`` (the signature of
+    :func:`toolbox.campaign.run_campaign`'s ``progress``); without a
+    terminal it prints one line per tenth of the total instead of redrawing.
+    """
+
+    def __init__(self, *, quiet: bool, desc: str = "cct", unit: str = "sample",
+                 tty: bool | None = None) -> None:
+        from tqdm import tqdm  # imported here: `cct --help` stays light
+
+        self.quiet = quiet
+        self._stream = sys.stderr
+        self._lines = not (self._stream.isatty() if tty is None else tty)
+        self._desc = desc
+        self._printed = -1
+        self._bar = tqdm(total=None, file=self._stream, disable=quiet or self._lines,
+                         leave=False, unit=unit, desc=desc, dynamic_ncols=True,
+                         unit_scale=True)
+
+    def __call__(self, done: int, total: int) -> None:
+        if self._bar.total != total:
+            self._bar.reset(total=total)
+        self._bar.update(done - self._bar.n)
+        tenth = 10 * done // max(total, 1)
+        if self._lines and not self.quiet and tenth > self._printed:
+            self._printed = tenth
+            print(f"  - {self._desc}: {done}/{total} samples", file=self._stream, flush=True)
+
+    def close(self) -> None:
+        """Remove the bar."""
+        self._bar.close()
+
+    def __enter__(self) -> "CountBar":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

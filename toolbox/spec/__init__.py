@@ -1,5 +1,7 @@
 """Spec files: TOML -> validated frozen dataclasses."""
 
+from ._campaign import (CAMPAIGN_PARAMETERS, DISTRIBUTIONS, OPERATING_POINT_KEYS, CampaignCfg,
+                        ParameterDist)
 from ._catalog import CATALOG, CATALOG_NOTES
 from ._fields import Collector, SpecErrors, Table, check_keys
 from ._load import drive_from_dict, load_spec, motor_from_dict, spec_from_dict
@@ -12,4 +14,6 @@ __all__ = ["CATALOG", "CATALOG_NOTES", "Collector", "SpecErrors", "Table", "chec
            "spec_from_dict", "METHODS", "MOTOR_PARAMETER_KEYS", "REQUIREMENT_KEYS", "ControllerChoice",
            "Drive", "Motor", "Requirements", "Spec", "inverter_radii",
            "motor_from_dict", "drive_from_dict", "read_method_cfg",
-           "register_method_reader", "registered_methods", "spec_to_toml"]
+           "register_method_reader", "registered_methods", "spec_to_toml",
+           "CAMPAIGN_PARAMETERS", "DISTRIBUTIONS", "OPERATING_POINT_KEYS", "CampaignCfg",
+           "ParameterDist"]

@@ -8,6 +8,7 @@ path, what was expected and what was found.
 from __future__ import annotations
 
 import copy
+import difflib
 import re
 import tomllib
 from pathlib import Path
@@ -15,6 +16,7 @@ from typing import Any, Callable, Mapping
 
 from .._io import check_data_depth, check_text_depth, read_limited
 from ..errors import SpecError
+from ._campaign import read_campaign
 from ._catalog import CATALOG
 from ._datasheet import (catalog_kept, relocate, reported_keys, resolve_drive,
                          resolve_motor)
@@ -27,7 +29,8 @@ from ._model import (METHODS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor,
 
 __all__ = ["load_spec", "spec_from_dict", "motor_from_dict", "drive_from_dict"]
 
-TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario", "export")
+TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario", "export",
+            "campaign")
 EXPORT_KEYS = ("prefix",)
 #: a C identifier prefix (letter first, at most 31 characters); the export
 #: (toolbox.export.prefix_name) applies the same rule
@@ -134,6 +137,11 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
         with errors.check():
             scenarios = _scenarios(top.raw("scenario", []), drive, controller.method)
         check_work(scenarios, drive.sample_time, errors)
+    campaign = None
+    if top.has("campaign"):
+        with errors.check():
+            campaign = read_campaign(top.raw("campaign"))
+            _check_campaign_scenarios(campaign, scenarios)
     # a range error on a derived value names the key the user wrote (R_ll, not R)
     errors.errors = [relocate(e, conversions) for e in errors.errors]
     errors.raise_if_any()
@@ -141,7 +149,19 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     raw["motor"] = motor_raw
     return Spec(title=title, motor=motor, drive=drive, controller=controller,
                 requirements=requirements, scenarios=scenarios, raw=raw, source=file,
-                conversions=tuple(conversions), export_prefix=export_prefix)
+                conversions=tuple(conversions), export_prefix=export_prefix,
+                campaign=campaign)
+
+
+def _check_campaign_scenarios(campaign, scenarios: tuple) -> None:
+    """``campaign.scenarios`` names scenarios of the spec (``name``, else ``kind``)."""
+    names = [s.name or s.kind for s in scenarios]
+    for name in campaign.scenarios:
+        if name not in names:
+            close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
+            raise SpecError("campaign.scenarios", "names of [[scenario]] tables ("
+                            + (", ".join(f'"{n}"' for n in names) or "none given") + ")",
+                            name, hint=f'did you mean "{close[0]}"?' if close else None)
 
 
 def _collect(errors: Collector, read: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:

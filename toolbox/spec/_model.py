@@ -284,6 +284,8 @@ class Spec:
     export_prefix : str
         ``[export] prefix``: the prefix of every C identifier of controller.h
         (``cct_`` by default; ``motor1_`` gives ``motor1_step``, ``MOTOR1_V_MAX``).
+    campaign : CampaignCfg or None
+        The ``[campaign]`` table (:mod:`toolbox.spec._campaign`), if any.
     """
 
     title: str
@@ -296,6 +298,7 @@ class Spec:
     source: str | None = None
     conversions: tuple = ()
     export_prefix: str = "cct_"
+    campaign: Any = None
 
     def motor_dict(self) -> dict:
         return asdict(self.motor)

@@ -141,7 +141,7 @@ def spec_to_toml(spec: Spec, source: str | None = None) -> str:
         phase dq values, SI), ``[controller.<method>]`` with the method's
         defaults filled in (the design method's ``cfg.to_spec``; as given
         when the method cannot render itself), ``[requirements]`` as given,
-        and every ``[[scenario]]`` with all its keys.
+        and every ``[[scenario]]`` with all its keys; ``[campaign]`` as given.
     """
     notes = {c.key: _note(c) for c in spec.conversions}
     out = [f"# {_comment(source or spec.source or 'spec')}: ok (resolved spec, SI units)",
@@ -161,4 +161,8 @@ def spec_to_toml(spec: Spec, source: str | None = None) -> str:
     for scenario in spec.scenarios:
         values = {f.name: getattr(scenario, f.name) for f in fields(scenario)}
         out += ["", "[[scenario]]"] + list(_lines(values, {}))
+    campaign = spec.raw.get("campaign")
+    if isinstance(campaign, Mapping):
+        out += ["", "[campaign]", "# as given (README.md \"Campaigns\")"] + list(
+            _lines(campaign, {}))
     return "\n".join(out) + "\n"

@@ -1,0 +1,274 @@
+"""One chunk of a campaign: draw, simulate, measure, judge (runs on a worker).
+
+A :class:`Plan` is everything a worker needs, made once on the client from
+the spec and the designed artifact (the design is never re-run on a worker):
+the campaign table, the nominal motor, the executed control law and drive of
+each scenario, the requirement bounds, and the artifact for the per-sample
+loop margins. :func:`evaluate_chunk` turns ``(plan, chunk)`` into the chunk's
+rows as plain numpy columns; it has no side effect (the client writes the
+Parquet file), so a chunk lost with its worker is simply run again.
+
+Columns of a row (one per sample): ``sample``; the drawn parameters (motor
+parameters in SI, ``measured_row``, the operating point: ``speed``,
+``speed_gain_error``, ``speed_offset``, ``delay_samples``, ``vdc`` as given);
+per scenario ``<scenario>.``
+every simulator metric (:data:`toolbox.sim.METRIC_NAMES`) and
+``static_error_abs`` (A, or rad/s for speed scenarios: ``static_speed_error_abs``);
+per axis ``margin.<axis>.`` gain margin (dB), phase margin (deg), stability
+margin and disk margin of the sampled loop at zero speed with the drawn
+``R``, ``L`` and delay; then ``passed``, ``failure`` (the failed checks, ``""`` when
+passed), ``worst_check`` and ``worst_ratio`` (the most violated bound:
+value/bound for an upper bound, bound/value for a lower one; > 1 fails).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..spec import OPERATING_POINT_KEYS, REQUIREMENT_KEYS
+from ._sampling import draw_samples
+
+__all__ = ["Plan", "make_plan", "evaluate_chunk", "scenario_slug", "warm_up", "DIVERGED"]
+
+#: Reason of a sample whose simulation produced non-finite currents.
+DIVERGED = "diverged"
+#: Reason of a sample whose drawn parameters are not physical (a normal tail).
+NON_PHYSICAL = "non-physical draw"
+_POSITIVE = ("R", "Ld", "Lq", "J")
+#: Frequency points of the per-sample margin grid (1 rad/s .. Nyquist).
+MARGIN_GRID = 600
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What a worker needs to evaluate chunks (picklable plain data).
+
+    Attributes
+    ----------
+    cfg : toolbox.spec.CampaignCfg
+    motor : toolbox.spec.Motor
+        The nominal motor.
+    runs : tuple
+        ``(slug, scenario, law, drive_params)`` per scenario.
+    bounds : dict
+        The ``[requirements]`` bounds.
+    artifact : ControllerArtifact
+        For the loop margins of each sample.
+    numba_threads : int or None
+        Threads of the compiled batch per task (None: numba's default).
+    """
+
+    cfg: Any
+    motor: Any
+    runs: tuple
+    bounds: dict
+    artifact: Any
+    numba_threads: int | None = None
+
+
+def scenario_slug(name: str) -> str:
+    """A column-friendly scenario name: ``"i_q step 0 -> 10 A"`` -> ``"i_q_step_0_10_A"``."""
+    return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_") or "scenario"
+
+
+def make_plan(spec, artifact, numba_threads: int | None = None) -> Plan:
+    """The :class:`Plan` of ``spec``'s campaign for the designed ``artifact``.
+
+    Scenarios: those named in ``campaign.scenarios``, else every
+    ``[[scenario]]``, else :func:`toolbox.sim.default_scenarios`.
+    """
+    from ..sim import control_law, default_scenarios, drive_params
+
+    cfg = spec.campaign
+    scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
+    if cfg.scenarios:
+        scenarios = tuple(s for s in scenarios if (s.name or s.kind) in cfg.scenarios)
+    inverter_default = "fcs_mpc" if artifact.method == "fcs_mpc" else "average"
+    runs, seen = [], set()
+    for k, sc in enumerate(scenarios):
+        slug = scenario_slug(sc.name or sc.kind)
+        if slug in seen:
+            slug = f"{slug}_{k}"
+        seen.add(slug)
+        law = control_law(artifact, _speed_loop(sc, artifact.sample_time))
+        drive = drive_params(spec.drive, sc.inverter or inverter_default)
+        runs.append((slug, dataclasses.replace(sc, keep_traces=False), law, drive))
+    return Plan(cfg=cfg, motor=spec.motor, runs=tuple(runs),
+                bounds=dict(spec.requirements.bounds), artifact=artifact,
+                numba_threads=numba_threads)
+
+
+def _speed_loop(scenario, sample_time: float):
+    from ..sim import SpeedLoop
+
+    if scenario.kind not in ("load_step", "speed_step"):
+        return None
+    p = dict(scenario.speed_loop)
+    return SpeedLoop(kp=p["kp"], ki=p.get("ki", 0.0), kd=p.get("kd", 0.0),
+                     sample_time=p.get("sample_time", sample_time),
+                     iq_limit=p.get("iq_limit", math.inf))
+
+
+def chunk_range(cfg, chunk: int) -> tuple[int, int]:
+    """Sample indices ``[start, stop)`` of ``chunk``."""
+    start = chunk * cfg.chunk_size
+    return start, min(cfg.samples, start + cfg.chunk_size)
+
+
+_NOT_MOTOR = ("sample", "measured_row") + OPERATING_POINT_KEYS
+
+
+def _physical(cols: dict, n: int) -> np.ndarray:
+    ok = np.ones(n, bool)
+    for name, v in cols.items():
+        if name in _NOT_MOTOR:
+            continue
+        ok &= np.isfinite(v) & ((v > 0) if name in _POSITIVE else (v >= 0))
+    return ok
+
+
+def _margins(plan: Plan, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
+             delay: np.ndarray | None = None) -> dict:
+    from ..analysis.margins import axis_law, freqresp
+    from ..analysis.robustness import batch_axis_margins
+
+    art = plan.artifact
+    Ts = art.sample_time
+    w = np.logspace(0, math.log10(math.pi / Ts), MARGIN_GRID)
+    w[-1] = math.pi / Ts
+    z = np.exp(1j * w * Ts)
+    d = (np.full(len(R), art.delay_samples, int) if delay is None
+         else np.asarray(delay, int))
+    out = {}
+    for axis, L in (("d", Ld), ("q", Lq)):
+        K_fr = freqresp(*axis_law(art.axes[axis], True).error_controller(), z)[:, 0, 0]
+        for key, v in batch_axis_margins(K_fr, z, w, R, L, Ts, d).items():
+            out[f"margin.{axis}.{key}"] = np.asarray(v, float)
+    return out
+
+
+def _judge(checks: list, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``passed``, ``failure``, ``worst_check``, ``worst_ratio`` from
+    ``checks``: ``(name, value array, bound, direction)`` or ``(name, fail mask)``."""
+    failure = [[] for _ in range(n)]
+    worst_ratio = np.zeros(n)
+    worst_check = np.array([""] * n, dtype=object)
+    for check in checks:
+        if len(check) == 2:
+            name, bad = check
+            ratio = np.where(bad, np.inf, 0.0)
+            for i in np.nonzero(bad)[0]:
+                failure[i].append(name)
+        else:
+            name, value, bound, direction = check
+            with np.errstate(divide="ignore", invalid="ignore"):
+                if direction == "max":
+                    bad = ~(value <= bound)
+                    ratio = value / bound if bound > 0 else np.where(bad, np.inf, 0.0)
+                else:
+                    bad = ~(value >= bound)
+                    ratio = np.where(value > 0, bound / value, np.where(bad, np.inf, 0.0))
+                # ratio > 1 exactly when the bound is violated (NaN: never measured)
+                ratio = np.where(bad, np.maximum(np.nan_to_num(ratio, nan=np.inf), 1.0),
+                                 np.clip(np.nan_to_num(ratio, nan=0.0), 0.0, 1.0))
+            for i in np.nonzero(bad)[0]:
+                failure[i].append(f"{name} = {value[i]:.4g} (bound {bound:g})")
+        take = ratio > worst_ratio
+        worst_ratio = np.where(take, ratio, worst_ratio)
+        worst_check[take] = name
+    passed = np.array([not f for f in failure], bool)
+    return passed, np.array(["; ".join(f) for f in failure], dtype=object), worst_check, worst_ratio
+
+
+def warm_up(plan: Plan) -> None:
+    """Load the compiled kernel and the margin code in this process (one nominal
+    sample per scenario), so that the first chunk's time is simulation time."""
+    from ..sim import simulate_batch
+
+    for _slug, scenario, law, drive in plan.runs:
+        simulate_batch(law, [plan.motor], scenario, drive)
+    m = plan.motor
+    _margins(plan, np.array([m.R]), np.array([m.Ld]), np.array([m.Lq]))
+
+
+def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
+    """The rows of ``chunk`` (module docstring), as ``{column: array}``.
+
+    Deterministic: a sample's row depends on the plan and its index only.
+    """
+    from ..sim import METRIC_NAMES, simulate_batch
+
+    if plan.numba_threads:
+        import numba
+
+        numba.set_num_threads(min(plan.numba_threads, numba.config.NUMBA_NUM_THREADS))
+    cfg, motor = plan.cfg, plan.motor
+    start, stop = chunk_range(cfg, chunk)
+    n = stop - start
+    cols = draw_samples(cfg, motor, start, stop)
+    varied = [k for k in cols if k not in _NOT_MOTOR]
+    ok = _physical(cols, n)
+    good = np.nonzero(ok)[0]
+    motors = [motor.with_overrides({k: float(cols[k][i]) for k in varied}) for i in good]
+    op_keys = [k for k in OPERATING_POINT_KEYS if k in cols]
+    if op_keys:  # one batch per operating point present in the chunk
+        grid = np.column_stack([cols[k][good].astype(float) for k in op_keys])
+        points, which = np.unique(grid, axis=0, return_inverse=True)
+        groups = [(dict(zip(op_keys, p)), good[which.ravel() == j])
+                  for j, p in enumerate(points)]
+    else:
+        groups = [({}, good)]
+    out: dict[str, np.ndarray] = dict(cols)
+    checks: list = [(NON_PHYSICAL, ~ok)]
+    for slug, scenario, law, drive in plan.runs:
+        table = {m: np.full(n, np.nan) for m in METRIC_NAMES}
+        for point, rows in groups:
+            if rows.size == 0:
+                continue
+            sc = dataclasses.replace(scenario, **{
+                ("initial_speed" if k == "speed" else k): float(v)
+                for k, v in point.items() if k in ("speed", "speed_gain_error", "speed_offset")})
+            dr = dataclasses.replace(drive, **{
+                k: (int(v) if k == "delay_samples" else float(v))
+                for k, v in point.items() if k in ("delay_samples", "vdc")})
+            pick = np.searchsorted(good, rows)
+            res = simulate_batch(law, [motors[j] for j in pick], sc, dr, chunk=rows.size)
+            for m in METRIC_NAMES:
+                table[m][rows] = res.metrics[m]
+        speed_signal = scenario.kind in ("speed_step", "load_step")
+        err_key = "static_speed_error_abs" if speed_signal else "static_error_abs"
+        table[err_key] = np.abs(table["static_error"])
+        for m, v in table.items():
+            out[f"{slug}.{m}"] = v
+        diverged = ok & ~(np.isfinite(table["final_value"]) & np.isfinite(table["mse_iq"]))
+        checks.append((f"{slug}: {DIVERGED}", diverged))
+        for key, bound in plan.bounds.items():
+            stage, direction, quantity, _unit = REQUIREMENT_KEYS[key]
+            if stage != "sim" or quantity not in table:
+                continue
+            value = np.where(ok, table[quantity], np.nan)
+            checks.append((f"{slug}: {key}", value, bound, direction))
+    R = np.where(ok, cols.get("R", np.full(n, motor.R)), motor.R)
+    Ld = np.where(ok, cols.get("Ld", np.full(n, motor.Ld)), motor.Ld)
+    Lq = np.where(ok, cols.get("Lq", np.full(n, motor.Lq)), motor.Lq)
+    margins = _margins(plan, R, Ld, Lq, cols.get("delay_samples"))
+    for k, v in margins.items():
+        out[k] = np.where(ok, v, np.nan)
+    for key, bound in plan.bounds.items():
+        stage, direction, quantity, _unit = REQUIREMENT_KEYS[key]
+        if stage != "margins" or f"margin.d.{quantity}" not in margins:
+            continue
+        pick = np.minimum if direction == "min" else np.maximum
+        value = np.where(ok, pick(margins[f"margin.d.{quantity}"],
+                                  margins[f"margin.q.{quantity}"]), np.nan)
+        checks.append((f"margins: {key}", value, bound, direction))
+    passed, failure, worst_check, worst_ratio = _judge(checks, n)
+    out.update(passed=passed, failure=failure, worst_check=worst_check,
+               worst_ratio=worst_ratio)
+    return out

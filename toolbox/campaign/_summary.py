@@ -1,0 +1,138 @@
+"""Campaign results -> summary.json, results.parquet, controller.json, report.html.
+
+The summary answers the questions of a qualification: the yield (with its
+95 % Wilson interval), which checks fail and how often, which parameters
+drive the failures (sensitivity ranking: the Spearman rank correlation of
+each drawn parameter with the failure indicator, and the failure rate in
+its lowest and highest quartile), and the worst samples with their
+parameters (largest ``worst_ratio``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .._io import write_atomic
+
+__all__ = ["summarize", "write_outputs", "parameter_columns", "wilson_interval"]
+
+#: Worst cases listed in the summary and the report.
+N_WORST = 10
+_NOT_PARAMETERS = ("sample", "measured_row", "passed", "failure", "worst_check", "worst_ratio")
+
+
+def parameter_columns(table) -> list[str]:
+    """The drawn columns (motor parameters, operating point) of a results table."""
+    return [c for c in table.column_names
+            if "." not in c and c not in _NOT_PARAMETERS]
+
+
+def wilson_interval(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """95 % Wilson score interval of a proportion ``k / n``.
+
+    Examples
+    --------
+    >>> [round(x, 4) for x in wilson_interval(95, 100)]
+    [0.8882, 0.9785]
+    """
+    if n == 0:
+        return (0.0, 1.0)
+    p = k / n
+    den = 1 + z * z / n
+    mid = (p + z * z / (2 * n)) / den
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
+    return (max(0.0, mid - half), min(1.0, mid + half))
+
+
+def _sensitivity(table, failed: np.ndarray) -> list[dict]:
+    from scipy.stats import rankdata
+
+    out = []
+    for name in parameter_columns(table):
+        x = np.asarray(table.column(name).to_numpy(zero_copy_only=False), float)
+        entry = {"parameter": name, "rank_correlation": None,
+                 "fail_rate_low_quartile": None, "fail_rate_high_quartile": None}
+        if np.ptp(x) > 0:
+            lo, hi = np.quantile(x, [0.25, 0.75])
+            entry["fail_rate_low_quartile"] = float(failed[x <= lo].mean())
+            entry["fail_rate_high_quartile"] = float(failed[x >= hi].mean())
+            if 0 < failed.sum() < failed.size:
+                rx, rf = rankdata(x), rankdata(failed)
+                entry["rank_correlation"] = float(np.corrcoef(rx, rf)[0, 1])
+        out.append(entry)
+    out.sort(key=lambda e: -abs(e["rank_correlation"] or 0.0))
+    return out
+
+
+def _reasons(failure) -> dict[str, int]:
+    """Samples per failed check, from the ``failure`` column ("a = 1 (bound 2); b")."""
+    import pyarrow.compute as pc
+
+    parts = pc.list_flatten(pc.split_pattern(failure, "; "))
+    names = pc.list_element(pc.split_pattern(parts, " = ", max_splits=1), 0)
+    counts = pc.value_counts(names).to_pylist()
+    return {c["values"]: int(c["counts"]) for c in counts if c["values"]}
+
+
+def _finite(v):
+    if isinstance(v, (float, np.floating)):
+        return float(v) if math.isfinite(v) else str(float(v))
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, np.bool_):
+        return bool(v)
+    return v
+
+
+def summarize(table, spec, artifact) -> dict:
+    """The summary of a results table (module docstring); JSON-ready."""
+    cfg = spec.campaign
+    n = table.num_rows
+    passed = np.asarray(table.column("passed").to_numpy(zero_copy_only=False), bool)
+    failed = ~passed
+    k = int(passed.sum())
+    reasons = _reasons(table.column("failure"))
+    ratio = np.asarray(table.column("worst_ratio").to_numpy(), float)
+    key = -np.where(np.isnan(ratio), np.inf, ratio)
+    top = np.argpartition(key, N_WORST)[:N_WORST] if n > N_WORST else np.arange(n)
+    order = top[np.lexsort((top, key[top]))]  # largest ratio first, then by sample
+    params = parameter_columns(table)
+    worst = []
+    for i in order:
+        row = {c: _finite(table.column(c)[int(i)].as_py()) for c in
+               ["sample"] + params + ["worst_check", "worst_ratio", "failure"]}
+        worst.append(row)
+    yield_ = k / n if n else 0.0
+    return {
+        "schema": "cct.campaign-summary/1",
+        "title": spec.title,
+        "method": artifact.method,
+        "samples": n, "passed": k, "failed": n - k,
+        "yield": yield_, "yield_95": list(wilson_interval(k, n)),
+        "min_yield": cfg.min_yield,
+        "meets_min_yield": cfg.min_yield is None or yield_ >= cfg.min_yield,
+        "seed": cfg.seed, "chunk_size": cfg.chunk_size, "chunks": cfg.n_chunks,
+        "parameters": params,
+        "failure_reasons": dict(sorted(reasons.items(), key=lambda kv: -kv[1])),
+        "sensitivity": _sensitivity(table, failed),
+        "worst_cases": worst,
+    }
+
+
+def write_outputs(out_dir: Path, table, summary: dict, spec, artifact, *,
+                  report: bool = True) -> list[Path]:
+    """Write summary.json, controller.json and report.html (atomically);
+    ``table`` holds the columns of :func:`toolbox.campaign._report.report_columns`."""
+    files = [write_atomic(out_dir / "summary.json",
+                          json.dumps(summary, indent=1, default=_finite) + "\n"),
+             write_atomic(out_dir / "controller.json", artifact.dumps())]
+    if report:
+        from ._report import campaign_html
+
+        files.append(write_atomic(out_dir / "report.html",
+                                  campaign_html(table, summary, spec, artifact)))
+    return files
