@@ -27,7 +27,7 @@ from ._siso import disk_variations, log_grid
 from ._statespace import freqresp, zoh_coupled
 
 __all__ = ["MimoMarginsResult", "sigma_max_2x2", "mu_upper_2x2", "mimo_loop_response",
-           "mimo_disk_margins"]
+           "mimo_disk_margins", "multimodel_disk_margins", "MultiModelLoops"]
 
 
 @dataclass(frozen=True)
@@ -216,3 +216,94 @@ def _continuous_coupled_stable(artifact, motor, omega: float, pade_order: int = 
     C = control.append(*Ks) - control.ss([], [], [], decoupling_matrix(artifact.decoupling, omega)[0])
     cl = control.feedback(P * C, np.eye(2))
     return bool(np.all(np.real(cl.poles()) < 0))
+
+
+
+class MultiModelLoops:
+    """The coupled sampled dq loop over a set of plants and speeds, plant side precomputed.
+
+    The plant responses ``P(e^{jwTs})`` (ZOH, ``z^-d``) of every (motor,
+    speed) pair are computed once; :meth:`disk_margins` then closes them with
+    the error controllers and the decoupling of an artifact, exactly as
+    :func:`mimo_loop_response` does for one pair, so a tuner evaluating many
+    candidate controllers on one model set pays for the plant once.
+
+    Parameters
+    ----------
+    motors : sequence of Motor
+        True plants (R, Ld, Lq are read; the back-EMF does not enter a
+        linear margin).
+    speeds : array_like
+        Electrical speeds (rad/s). The margin is even in the speed (the
+        similarity ``diag(1, -1)`` maps the loop at ``-omega`` onto the loop
+        at ``omega`` and leaves the diagonal D-scaling unchanged), so
+        ``speeds >= 0`` cover the range.
+    sample_time : float
+        Controller period (s).
+    delay_samples : int
+        Computation delay (periods).
+    n_grid : int
+        Frequency points (log grid 1e-2 rad/s .. Nyquist, Nyquist excluded).
+    """
+
+    def __init__(self, motors, speeds, sample_time: float, delay_samples: int,
+                 n_grid: int = 300) -> None:
+        self.speeds = np.atleast_1d(np.asarray(speeds, float))
+        self.Ts, self.d = float(sample_time), int(delay_samples)
+        self.R = np.array([m.R for m in motors], float)
+        self.Ld = np.array([m.Ld for m in motors], float)
+        self.Lq = np.array([m.Lq for m in motors], float)
+        self.w = log_grid(1e-2, math.pi / self.Ts, n_grid, True)[:-1]
+        self.z = np.exp(1j * self.w * self.Ts)
+        nm, ns = self.R.size, self.speeds.size
+        R, Ld, Lq, om = (np.repeat(self.R, ns), np.repeat(self.Ld, ns),
+                         np.repeat(self.Lq, ns), np.tile(self.speeds, nm))
+        Ac, Bc = coupled_plant(R, Ld, Lq, om)
+        Phi, Gam = zoh_coupled(Ac, Bc, self.Ts)
+        x = self.z[None, :, None, None]
+        P = np.linalg.solve(x * np.eye(2) - Phi[:, None], np.broadcast_to(
+            Gam[:, None], (R.size, self.w.size, 2, 2)))
+        self.P = P * (self.z ** (-self.d))[None, :, None, None]   # (nm*ns, Nw, 2, 2)
+        self.shape = (nm, ns)
+
+    def disk_margins(self, artifact, *, n_scale: int = 49, n_refine: int = 40) -> np.ndarray:
+        """``(motors, speeds)`` balanced multiloop disk margins of ``artifact``.
+
+        ``alpha = 1/max_w mu_ub(S_i - I/2)`` (module docstring), 0 where the
+        coupled closed loop (:func:`coupled_closed_loop`, spectral radius)
+        is unstable. Fewer D-scaling points (``n_scale``, ``n_refine``) only
+        make the bound more conservative (:func:`mu_upper_2x2`).
+        """
+        laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
+        stable = np.zeros(self.shape, bool)
+        for j, om in enumerate(self.speeds):
+            loop = coupled_closed_loop(laws, artifact.decoupling, self.Ts, self.d,
+                                       R=self.R, Ld=self.Ld, Lq=self.Lq, omega=om)
+            stable[:, j] = loop.spectral_radius() < 1 - 1e-9
+        C = np.zeros((self.w.size, 2, 2), complex)
+        for k, name in enumerate(AXES):
+            C[:, k, k] = freqresp(*laws[name].error_controller(), self.z)[:, 0, 0]
+        W = decoupling_matrix(artifact.decoupling, np.tile(self.speeds, self.shape[0]))
+        Li = (C[None] - W[:, None]) @ self.P
+        M = np.linalg.inv(np.eye(2) + Li) - 0.5 * np.eye(2)
+        mu = np.max(mu_upper_2x2(M, n_scale, n_refine), axis=-1).reshape(self.shape)
+        return np.where(stable, 1.0 / mu, 0.0)
+
+
+def multimodel_disk_margins(artifact, motors, speeds, *, n_grid: int = 300) -> np.ndarray:
+    """Multiloop disk margins of one design over a set of plants and speeds.
+
+    Each entry is what :func:`mimo_disk_margins` computes at one speed for
+    one plant: the executed sampled loop (ZOH, the artifact's computation
+    delay, the decoupling with the controller's parameters),
+    ``alpha = 1/max_w mu_ub(S_i - I/2)``, 0 where the coupled closed loop is
+    unstable (:class:`MultiModelLoops`, which the robust PI tuner
+    ``toolbox.design.robust_pi`` reuses across candidates).
+
+    Returns
+    -------
+    ndarray
+        ``(len(motors), len(speeds))`` balanced multiloop disk margins.
+    """
+    return MultiModelLoops(motors, speeds, artifact.sample_time, artifact.delay_samples,
+                           n_grid).disk_margins(artifact)

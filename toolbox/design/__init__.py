@@ -1,7 +1,7 @@
 """Design methods: each turns a validated spec into a ControllerArtifact.
 
 One module per method (``pi``, ``total_comp``, ``ilq``, ``lq``, ``hinf``,
-``fcs_mpc``), each with ``read_cfg`` (validates ``[controller.<method>]``),
+``fcs_mpc``, ``robust_pi``), each with ``read_cfg`` (validates ``[controller.<method>]``),
 ``design(spec)`` and a plain API on python-control plants and numbers,
 re-exported here. ``steady_state`` holds the symbolic steady-state analysis
 of paper 000. ``_defaults`` derives the parameters a spec leaves out from

@@ -50,6 +50,7 @@ METHOD_NAMES = {
     "lq": "LQ servo via Riccati",
     "hinf": "H-infinity mixed sensitivity",
     "fcs_mpc": "Finite-control-set predictive control",
+    "robust_pi": "Robust PI (multi-model disk-margin tuning at speed)",
 }
 
 #: MARGINS keys (toolbox/ARCHITECTURE.md "controller.json") -> (label, unit).
