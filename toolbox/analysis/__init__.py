@@ -18,13 +18,14 @@ from __future__ import annotations
 from ._responses import loop_responses
 from .certificate import (CertificateResult, ParameterBox, certify,
                           largest_certified_scale)
-from .margins import (MARGIN_KEYS, FrequencyMargins, MarginsResult, MimoMarginsResult,
-                      compute_margins, disk_variations, frequency_margins, grid_margins,
-                      json_ready, lti_loop_margins, mimo_disk_margins)
+from .margins import (MARGIN_KEYS, FrequencyMargins, MarginsResult, MimoBoxResult,
+                      MimoMarginsResult, compute_margins, disk_variations, frequency_margins,
+                      grid_margins, json_ready, lti_loop_margins, mimo_disk_margins,
+                      mimo_over_box)
 from .robustness import DEFAULT_RANGES, SweepResult, robustness_sweep
 
 __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "compute_margins",
-           "disk_variations", "mimo_disk_margins", "DEFAULT_RANGES", "SweepResult",
+           "disk_variations", "mimo_disk_margins", "MimoBoxResult", "mimo_over_box", "DEFAULT_RANGES", "SweepResult",
            "robustness_sweep", "CertificateResult", "ParameterBox", "certify",
            "largest_certified_scale", "analysis_report", "compare_designs", "ANALYSIS_SCHEMA",
            "FrequencyMargins", "frequency_margins", "grid_margins", "lti_loop_margins"]
@@ -62,7 +63,9 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
         "margins": {"discrete": {d, q}, "continuous": {d, q},
         "continuous_delay": {d, q}}, "responses": {...} (figure data of
         the executed loops, :func:`toolbox.analysis._responses.loop_responses`),
-        "mimo_at_speed": {...},
+        "mimo_at_speed": {...}, "mimo_over_box": {...} (worst multiloop disk
+        margin over the nominal plant and the corners of R, Ld, Lq x0.5..x2 at
+        speeds 0..max, :func:`mimo_over_box`),
         "sweep": {...}, "certificate": {...} or None}``; each margins entry is
         :meth:`MarginsResult.to_json`.
     """
@@ -81,6 +84,7 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
         },
         "responses": loop_responses(artifact, motor),
         "mimo_at_speed": mimo_disk_margins(artifact, motor, drive).to_json(),
+        "mimo_over_box": mimo_over_box(artifact, motor, drive).to_json(),
         "sweep": robustness_sweep(artifact, motor, n=sweep_sets, drive=drive,
                                   seed=seed).to_json(),
         "certificate": (largest_certified_scale(artifact, motor, drive,
@@ -98,7 +102,9 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
     sampled loop), ``response_times`` (per axis, the four step figures, s and
     %), ``worst_case`` (per axis, the smallest gain/phase/stability/disk
     margins over the robustness sweep), ``n_unstable`` (sweep sets that lose
-    stability), ``mimo_worst_disk_margin`` and ``certificate``
+    stability), ``mimo_worst_disk_margin``, ``mimo_box`` (worst multiloop
+    disk margin over the parameter box and the speeds, with its speed and
+    parameters, :func:`mimo_over_box`) and ``certificate``
     (``{"certified_scale", "certified"}`` or None).
 
     Parameters
@@ -119,6 +125,7 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
         m = compute_margins(art, motor)
         sw = robustness_sweep(art, motor, n=sweep_sets, drive=drive).to_json()
         mimo = mimo_disk_margins(art, motor, drive)
+        box = mimo_over_box(art, motor, drive)
         cert = largest_certified_scale(art, motor, drive) if certificate else None
         rows.append(json_ready({
             "method": art.method,
@@ -129,6 +136,9 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
             "n_unstable": sw["n_unstable"],
             "n_sets": sw["n_sets"],
             "mimo_worst_disk_margin": mimo.worst_disk_margin,
+            "mimo_box": {"worst_disk_margin": box.worst_disk_margin,
+                         "worst_speed_rad_s": box.worst_speed_rad_s,
+                         "worst_params": box.worst_params, "n_unstable": box.n_unstable},
             "certificate": (None if cert is None else
                             {"certified_scale": cert.scale, "certified": cert.certified}),
         }))

@@ -27,7 +27,8 @@ from ._siso import disk_variations, log_grid
 from ._statespace import freqresp, zoh_coupled
 
 __all__ = ["MimoMarginsResult", "sigma_max_2x2", "mu_upper_2x2", "mimo_loop_response",
-           "mimo_disk_margins", "multimodel_disk_margins", "MultiModelLoops"]
+           "mimo_disk_margins", "multimodel_disk_margins", "MultiModelLoops",
+           "MimoBoxResult", "mimo_over_box"]
 
 
 @dataclass(frozen=True)
@@ -307,3 +308,100 @@ def multimodel_disk_margins(artifact, motors, speeds, *, n_grid: int = 300) -> n
     """
     return MultiModelLoops(motors, speeds, artifact.sample_time, artifact.delay_samples,
                            n_grid).disk_margins(artifact)
+
+
+#: Default parameter box of :func:`mimo_over_box`: the robustness sweep's R, Ld, Lq ranges.
+DEFAULT_BOX = {"R": (0.5, 2.0), "Ld": (0.5, 2.0), "Lq": (0.5, 2.0)}
+
+
+@dataclass(frozen=True)
+class MimoBoxResult:
+    """Multiloop disk margins of the coupled loop over a parameter box and the speed range.
+
+    Attributes
+    ----------
+    box : dict
+        ``{"R": [lo, hi], "Ld": .., "Lq": ..}`` scale factors.
+    speeds_rad_s : list
+        Electrical speeds ``linspace(0, w_max)`` (the margin is even in the speed).
+    n_models : int
+        Plants: the nominal motor and the ``2^3`` corners of the box.
+    n_unstable : int
+        (plant, speed) pairs whose coupled closed loop is unstable.
+    worst_disk_margin : float
+        Smallest balanced multiloop disk margin (0 when a pair is unstable).
+    worst_speed_rad_s : float
+        Electrical speed of the worst pair (rad/s).
+    worst_params : dict
+        Scale factors of the worst pair's plant.
+    worst_gain_margin : tuple
+        Simultaneous gain factors ``(low, high)`` at the worst pair.
+    worst_phase_margin_deg : float
+        Simultaneous phase variation at the worst pair (deg).
+    nominal_worst_disk_margin : float
+        Smallest margin of the nominal plant over the speeds.
+    domain : str
+    """
+
+    box: dict
+    speeds_rad_s: list
+    n_models: int
+    n_unstable: int
+    worst_disk_margin: float
+    worst_speed_rad_s: float
+    worst_params: dict
+    worst_gain_margin: tuple
+    worst_phase_margin_deg: float
+    nominal_worst_disk_margin: float
+    domain: str = "discrete"
+
+    def to_json(self) -> dict:
+        """JSON-ready dict of all attributes (non-finite floats as strings)."""
+        return json_ready(asdict(self))
+
+
+def mimo_over_box(artifact, motor, drive=None, *, box: dict | None = None, n_speeds: int = 5,
+                  n_grid: int = 1500, max_speed_rad_s: float | None = None) -> MimoBoxResult:
+    """Worst multiloop disk margin of the executed coupled loop over a box and the speeds.
+
+    The ``mimo_at_speed`` analysis of :func:`mimo_disk_margins` on the nominal
+    plant and every corner of ``box`` (:class:`MultiModelLoops`: ZOH, the
+    artifact's delay, the decoupling with the controller's parameters), at
+    ``n_speeds`` electrical speeds ``linspace(0, w_max)``.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        Nominal plant; corners are ``scale * nominal``.
+    drive : Drive, optional
+        Speed range (:func:`toolbox.plant.max_electrical_speed`).
+    box : dict, optional
+        ``{"R": (lo, hi), "Ld": .., "Lq": ..}`` (default :data:`DEFAULT_BOX`).
+    n_speeds : int
+        Speeds from 0 to the maximum (1: standstill only).
+    n_grid : int
+        Frequency points.
+    max_speed_rad_s : float, optional
+        Electrical speed range override (rad/s).
+
+    Returns
+    -------
+    MimoBoxResult
+    """
+    box = {k: tuple(v) for k, v in (box or DEFAULT_BOX).items()}
+    names = list(box)
+    params = [{k: 1.0 for k in names}]
+    for corner in np.array(np.meshgrid(*[[0, 1]] * len(names), indexing="ij")).reshape(len(names), -1).T:
+        params.append({k: float(box[k][c]) for k, c in zip(names, corner)})
+    motors = [motor.with_overrides(None, p) for p in params]
+    wmax = max_speed_rad_s if max_speed_rad_s is not None else max_electrical_speed(motor, drive)
+    speeds = np.linspace(0.0, wmax, n_speeds) if (wmax > 0 and n_speeds > 1) else np.zeros(1)
+    M = MultiModelLoops(motors, speeds, artifact.sample_time, artifact.delay_samples,
+                        n_grid).disk_margins(artifact)
+    i, j = np.unravel_index(int(np.argmin(M)), M.shape)
+    worst = float(M[i, j])
+    lo, hi, ph = disk_variations(worst, 0.0)
+    return MimoBoxResult({k: list(v) for k, v in box.items()}, [float(s) for s in speeds],
+                         len(motors), int(np.sum(M == 0.0)), worst, float(speeds[j]),
+                         params[i], (lo, hi), ph, float(np.min(M[0])))

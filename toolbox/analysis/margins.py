@@ -22,8 +22,9 @@ from ._axis import AxisLoop, MarginsResult, axis_margins, compute_margins, make_
 from ._coupled import CoupledLoop, coupled_closed_loop, coupled_plant, decoupling_matrix
 from ._json import json_ready
 from ._laws import AXES, Law, axis_law, law_to_continuous
-from ._mimo import (MimoMarginsResult, MultiModelLoops, mimo_disk_margins, mimo_loop_response,
-                    mu_upper_2x2, multimodel_disk_margins, sigma_max_2x2)
+from ._mimo import (MimoBoxResult, MimoMarginsResult, MultiModelLoops, mimo_disk_margins,
+                    mimo_loop_response, mimo_over_box, mu_upper_2x2, multimodel_disk_margins,
+                    sigma_max_2x2)
 from ._siso import (MARGIN_KEYS, FrequencyMargins, disk_variations, frequency_margins,
                     grid_margins, lti_loop_margins, log_grid)
 from ._statespace import (closed_loop, freqresp, is_stable, pade, plant_chain, series,
@@ -33,6 +34,7 @@ from ._steps import step_figures, step_response
 __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "AxisLoop", "CoupledLoop",
            "compute_margins", "make_axis_loop", "axis_margins", "mimo_disk_margins",
            "mimo_loop_response", "MultiModelLoops", "multimodel_disk_margins",
+           "MimoBoxResult", "mimo_over_box",
            "coupled_closed_loop", "coupled_plant", "decoupling_matrix",
            "disk_variations", "law_to_continuous", "mu_upper_2x2", "sigma_max_2x2",
            "zoh_2x2", "json_ready",

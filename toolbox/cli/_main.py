@@ -437,9 +437,17 @@ _COLUMNS = (
     ("worst GM dB", lambda r: _worst(r["worst_case"], "gain_margin_db", min)),
     ("unstable", lambda r: f"{r['n_unstable']}/{r['n_sets']}"),
     ("MIMO disk", lambda r: r["mimo_worst_disk_margin"]),
+    ("box MIMO", lambda r: r["mimo_box"]["worst_disk_margin"]),
+    ("box worst at", lambda r: _box_where(r["mimo_box"])),
     ("cert. scale", lambda r: (r["certificate"] or {}).get("certified_scale")),
     ("verdict", lambda r: "pass" if r.get("passed", True) else "FAIL"),
 )
+
+
+def _box_where(box: dict) -> str:
+    """``w=<rad/s> R<x>Ld<x>Lq<x>``: speed and scale factors of the worst box model."""
+    p = box["worst_params"]
+    return f"w={box['worst_speed_rad_s']:.0f} " + "".join(f"{k}x{v:g}" for k, v in p.items())
 
 
 def _worst(per_axis: dict, key: str, pick) -> float:

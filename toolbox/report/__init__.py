@@ -291,7 +291,8 @@ def _robustness_of(analysis: Mapping | None) -> dict | None:
 
 
 def _certificate_of(analysis: Mapping | None) -> dict | None:
-    """Named facts of ``analysis.certificate`` and ``analysis.mimo_at_speed``."""
+    """Named facts of ``analysis.certificate``, ``analysis.mimo_at_speed`` and
+    ``analysis.mimo_over_box``."""
     facts: dict[str, Any] = {}
     cert = (analysis or {}).get("certificate")
     if cert:
@@ -304,6 +305,17 @@ def _certificate_of(analysis: Mapping | None) -> dict | None:
     if mimo:
         facts["MIMO disk margin, worst electrical speed (rad/s)"] = mimo.get("worst_speed_rad_s")
         facts["MIMO disk margin, worst value"] = mimo.get("worst_disk_margin")
+    box = (analysis or {}).get("mimo_over_box") or {}
+    if box:
+        facts["MIMO disk margin over the parameter box and speeds, worst value"] = (
+            box.get("worst_disk_margin"))
+        facts["MIMO disk margin over the box, worst electrical speed (rad/s)"] = (
+            box.get("worst_speed_rad_s"))
+        facts["MIMO disk margin over the box, worst parameters (scale factors)"] = ", ".join(
+            f"{k} x{v:g}" for k, v in (box.get("worst_params") or {}).items())
+        facts["MIMO over the box: unstable (plant, speed) pairs"] = (
+            f"{box.get('n_unstable')} of {box.get('n_models')} plants x "
+            f"{len(box.get('speeds_rad_s') or [])} speeds")
     return facts or None
 
 
