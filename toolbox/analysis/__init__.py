@@ -25,7 +25,8 @@ from .margins import (MARGIN_KEYS, FrequencyMargins, MarginsResult, MimoBoxResul
 from .robustness import DEFAULT_RANGES, SweepResult, robustness_sweep
 
 __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "compute_margins",
-           "disk_variations", "mimo_disk_margins", "MimoBoxResult", "mimo_over_box", "DEFAULT_RANGES", "SweepResult",
+           "disk_variations", "mimo_disk_margins", "MimoBoxResult", "mimo_over_box",
+           "DEFAULT_RANGES", "SweepResult",
            "robustness_sweep", "CertificateResult", "ParameterBox", "certify",
            "largest_certified_scale", "analysis_report", "compare_designs", "ANALYSIS_SCHEMA",
            "FrequencyMargins", "frequency_margins", "grid_margins", "lti_loop_margins"]

@@ -392,7 +392,8 @@ def mimo_over_box(artifact, motor, drive=None, *, box: dict | None = None, n_spe
     box = {k: tuple(v) for k, v in (box or DEFAULT_BOX).items()}
     names = list(box)
     params = [{k: 1.0 for k in names}]
-    for corner in np.array(np.meshgrid(*[[0, 1]] * len(names), indexing="ij")).reshape(len(names), -1).T:
+    grid = np.array(np.meshgrid(*[[0, 1]] * len(names), indexing="ij"))
+    for corner in grid.reshape(len(names), -1).T:
         params.append({k: float(box[k][c]) for k, c in zip(names, corner)})
     motors = [motor.with_overrides(None, p) for p in params]
     wmax = max_speed_rad_s if max_speed_rad_s is not None else max_electrical_speed(motor, drive)

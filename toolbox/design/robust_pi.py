@@ -146,7 +146,8 @@ def read_cfg(method: str, table: Table, motor, drive) -> RobustPiCfg:
     default_speed = max_electrical_speed(motor, drive) / motor.pole_pairs
     speed = t.number("max_speed", default_speed, nonnegative=True, unit="rad/s mechanical")
     if not t.has("max_speed"):
-        details["max_speed"] = f"default {default_speed:.6g} rad/s (drive max_speed, rated speed or EMF limit)"
+        details["max_speed"] = (f"default {default_speed:.6g} rad/s "
+                                "(drive max_speed, rated speed or EMF limit)")
     ratios = t.numbers("zero_ratios", (4.0, 10.0), min_length=0, max_length=8)
     for r in ratios:
         if not r > 1.0:
