@@ -41,15 +41,3 @@ __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "AxisLoop", "Cou
            # loop building blocks (used by robustness, certificate and the tests)
            "AXES", "Law", "axis_law", "freqresp", "zoh_axis", "plant_chain", "pade", "series",
            "closed_loop", "is_stable", "zoh_coupled", "step_response", "step_figures"]
-
-# Private names of the former single module, kept importable from here for code
-# written against it (branches merged after the split; toolbox.analysis only,
-# by the privacy rule). New code imports the public names above.
-from ._axis import _axis_margins, _dc_gain, _has_integrator, _pade_twin  # noqa: E402,F401
-from ._mimo import _continuous_coupled_stable  # noqa: E402,F401
-from ._siso import _peak, _roots_in_grid  # noqa: E402,F401
-from ._siso import log_grid as _grid  # noqa: E402,F401
-from ._steps import _settled  # noqa: E402,F401
-from ._steps import step_figures as _step_figures  # noqa: E402,F401
-from ._steps import step_response as _step_response  # noqa: E402,F401
-from ..plant import max_electrical_speed as _electrical_max_speed  # noqa: E402,F401
