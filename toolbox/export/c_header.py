@@ -750,8 +750,9 @@ def _delay_comp_time(artifact) -> float | None:
     return float(t_comp) if t_comp > 0 else None
 
 
-def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
-                title: str) -> None:
+def _provenance(t: _Text, artifact, title: str) -> dict:
+    """Open the header comment with the provenance lines (every user string
+    sanitised); returns ``artifact.provenance``."""
     prov = artifact.provenance or {}
     t("/*")
     t(" * controller.h -- current controller exported by current-control-toolbox")
@@ -760,6 +761,12 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
     t(f" * version:     {sanitise_comment(prov.get('version', 'unknown'))}")
     t(f" * spec sha256: {sanitise_comment(prov.get('spec_sha256', 'unknown'))}")
     t(f" * created:     {sanitise_comment(prov.get('created', 'unknown'))}")
+    return prov
+
+
+def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
+                title: str) -> None:
+    prov = _provenance(t, artifact, title)
     eqs = prov.get("equations")
     if eqs:
         t(f" * equations:   {sanitise_comment('; '.join(map(str, eqs)), 400)}")
@@ -1116,20 +1123,13 @@ def _write_fcs_header(artifact, motor, drive, name: str, title: str | None,
     guard = f"{P}CONTROLLER_H"
     if title is None:
         title = (artifact.spec or {}).get("title", "")
-    prov = artifact.provenance or {}
     fcs = artifact.fcs
     dec = artifact.decoupling
     key = _law_key(artifact)
     predict = int(artifact.delay_samples) >= 1
     k_hex = fcs_r_hex_per_vdc(conv)
     t = _Text()
-    t("/*")
-    t(" * controller.h -- current controller exported by current-control-toolbox")
-    t(f" * title:       {sanitise_comment(title)}")
-    t(f" * method:      {sanitise_comment(artifact.method)}")
-    t(f" * version:     {sanitise_comment(prov.get('version', 'unknown'))}")
-    t(f" * spec sha256: {sanitise_comment(prov.get('spec_sha256', 'unknown'))}")
-    t(f" * created:     {sanitise_comment(prov.get('created', 'unknown'))}")
+    _provenance(t, artifact, title)
     t(" *")
     t(" * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no")
     t(f" * fixed-point variant: {P}FIXED_POINT is an error).")
@@ -1180,64 +1180,10 @@ def _write_fcs_header(artifact, motor, drive, name: str, title: str | None,
     t.lines.extend(_render("fcs.c.j2", N=N, P=P, U=N.upper(), predict=predict))
     if example:
         t("")
-        _fcs_example(t, N, P)
+        _example(t, N, P, fcs=True)
     t("")
     t(f"#endif /* {guard} */")
     return t.text()
-
-
-def _fcs_example(t: _Text, N: str, P: str) -> None:
-    U = N.upper()
-    t("#if 0 /* usage example: copy the lines between BEGIN and END into main.c */")
-    t(f"// {EXAMPLE_BEGIN}")
-    src = f"""#include <stdio.h>
-#include "controller.h"
-
-/* stand-ins for the board's drivers: ADC, encoder, gate drivers, fault output */
-static float adc_i_d(void) {{ return 0.0f; }}
-static float adc_i_q(void) {{ return 0.0f; }}
-static float adc_vdc(void) {{ return {P}DRIVE_VDC; }}
-static float encoder_speed(void) {{ return 0.0f; }}
-static float encoder_theta_e(void) {{ return 0.0f; }}
-static void gates_apply(int s_a, int s_b, int s_c) {{ (void)s_a; (void)s_b; (void)s_c; }}
-static void fault_report(int status) {{ printf("controller status %d\\n", status); }}
-
-static {N}_state_t ctl;
-
-/* once per controller period ({P}SAMPLE_TIME s) */
-static void control_isr(float i_d_ref, float i_q_ref)
-{{
-    {N}_input_t in;
-    {N}_output_t out;
-    if ({N}_set_vdc(&ctl, adc_vdc()) != {U}_STATUS_OK) {{
-        fault_report({U}_STATUS_BAD_INPUT); /* bus reading lost: previous vectors kept */
-    }}
-    in.i_d_ref = i_d_ref;
-    in.i_q_ref = i_q_ref;
-    in.i_d = adc_i_d();
-    in.i_q = adc_i_q();
-    in.omega_m = encoder_speed();
-    in.theta_e = encoder_theta_e();
-    {N}_step(&ctl, &in, &out);
-    if (out.status != {U}_STATUS_OK) {{
-        fault_report(out.status); /* previous state held: decide to trip or ride through */
-    }}
-    gates_apply(out.s_a, out.s_b, out.s_c); /* applied next period when DELAY_SAMPLES >= 1 */
-}}
-
-int main(void)
-{{
-    int k;
-    {N}_init(&ctl);
-    for (k = 0; k < 10; ++k) {{
-        control_isr(0.0f, 1.0f);
-    }}
-    return 0;
-}}"""
-    for ln in src.split("\n"):
-        t(ln)
-    t(f"// {EXAMPLE_END}")
-    t("#endif /* usage example */")
 
 
 EXAMPLE_BEGIN = "EXAMPLE main.c BEGIN"
@@ -1253,63 +1199,11 @@ def example_source(header: str) -> str:
     return "\n".join(lines[i + 1:j]) + "\n"
 
 
-def _example(t: _Text, N: str, P: str, hexagon: bool) -> None:
-    """A compilable main.c, inside a comment (no ``/*`` in it)."""
-    U = N.upper()
-    t("#if 0 /* usage example: copy the lines between BEGIN and END into main.c */")
-    t(f"// {EXAMPLE_BEGIN}")
-    src = f"""#include <stdio.h>
-#include "controller.h"
-
-/* stand-ins for the board's drivers: ADC, encoder, PWM, fault output */
-static float adc_i_d(void) {{ return 0.0f; }}
-static float adc_i_q(void) {{ return 0.0f; }}
-static float adc_vdc(void) {{ return {P}DRIVE_VDC; }}
-static float encoder_speed(void) {{ return 0.0f; }}
-static float encoder_theta_e(void) {{ return 0.0f; }}
-static void pwm_apply(float v_d, float v_q, float theta_e)
-{{
-    (void)v_d; (void)v_q; (void)theta_e; /* inverse Park at theta_e, then SVM */
-}}
-static void fault_report(int status) {{ printf("controller status %d\\n", status); }}
-
-static {N}_state_t ctl;
-
-/* once per controller period ({P}SAMPLE_TIME s), e.g. in the ADC interrupt */
-static void control_isr(float i_d_ref, float i_q_ref)
-{{
-    {N}_input_t in;
-    {N}_output_t out;
-    const float theta_e = encoder_theta_e();
-    if ({N}_set_vdc(&ctl, adc_vdc()) != {U}_STATUS_OK) {{
-        fault_report({U}_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
-    }}
-    in.i_d_ref = i_d_ref;
-    in.i_q_ref = i_q_ref;
-    in.i_d = adc_i_d();
-    in.i_q = adc_i_q();
-    in.omega_m = encoder_speed();
-{"    in.theta_e = theta_e;" if hexagon else ""}
-    {N}_step(&ctl, &in, &out);
-    if (out.status != {U}_STATUS_OK) {{
-        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
-    }}
-    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e); /* applied during the next period */
-}}
-
-int main(void)
-{{
-    int k;
-    {N}_init(&ctl);
-    for (k = 0; k < 10; ++k) {{
-        control_isr(0.0f, 1.0f);
-    }}
-    return 0;
-}}"""
-    for ln in src.split("\n"):
-        t(ln)
-    t(f"// {EXAMPLE_END}")
-    t("#endif /* usage example */")
+def _example(t: _Text, N: str, P: str, *, hexagon: bool = False, fcs: bool = False) -> None:
+    """A compilable main.c, inside ``#if 0`` (no ``/*`` in it): ``templates/example.c.j2``,
+    the predictive switching law's (``fcs``) or the linear law's."""
+    t.lines.extend(_render("example.c.j2", N=N, P=P, U=N.upper(), hexagon=hexagon, fcs=fcs,
+                           begin=EXAMPLE_BEGIN, end=EXAMPLE_END))
 
 
 def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
@@ -1434,7 +1328,7 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     _vendor_section(t, artifact, motor, drive, check, N, P)
     t("")
     if example:
-        _example(t, N, P, check.limit == "hexagon")
+        _example(t, N, P, hexagon=check.limit == "hexagon")
         t("")
     t(f"#endif /* {guard} */")
     return t.text()
