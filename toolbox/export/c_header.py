@@ -355,6 +355,15 @@ def _ranges(artifact, motor, drive, v_max: float) -> tuple[float, float]:
     return float(i_max), float(w_max)
 
 
+def _dec_coeffs(dec) -> dict[str, float]:
+    """The decoupling terms as coefficients of the mechanical speed, the form the
+    integer variants scale: ``v_d += dd w_m i_q``, ``v_q += dq w_m i_d + de w_m``."""
+    p = dec.pole_pairs
+    return {"dd": -float(dec.cross) * p * dec.Lq_c,
+            "dq": float(dec.cross) * p * dec.Ld_c,
+            "de": float(dec.emf) * p * dec.flux_c}
+
+
 def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = False,
                      v_max: float | None = None, limit: str | None = None) -> ExportCheck:
     """Refuse controllers that must not reach firmware; plan the export.
@@ -433,11 +442,7 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
                       f"radius {max(res.saturated_radius.values()):.9g}); the controller "
                       "states can ring or drift while saturated", RuntimeWarning, stacklevel=2)
     i_max, w_max = _ranges(artifact, motor, drive, v_max)
-    dec = artifact.decoupling
-    p = dec.pole_pairs
-    dec_coeffs = {"dd": -float(dec.cross) * p * dec.Lq_c,
-                  "dq": float(dec.cross) * p * dec.Ld_c,
-                  "de": float(dec.emf) * p * dec.flux_c}
+    dec_coeffs = _dec_coeffs(artifact.decoupling)
     if limit == "hexagon":
         # the hexagon needs sin/cos of the electrical angle: not written in Q31
         plan, reason = None, ('voltage_limit = "hexagon" is implemented in the float path '
@@ -970,18 +975,20 @@ def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive
             t.lines.extend(body.lines)
             t(f"#endif /* {P}FIXED_POINT */")
             return
-    t(f"#error \"fixed-point variant not available: {sanitise_comment(reason).replace(chr(34), chr(39))}\"")
+    t(_c_error("fixed-point variant not available", reason))
     t(f"#endif /* {P}FIXED_POINT */")
+
+
+def _c_error(what: str, reason: Any) -> str:
+    """An ``#error`` line ``what: reason`` (the reason sanitised, its double
+    quotes made single so the C string stays one token)."""
+    return f"#error \"{what}: {sanitise_comment(reason).replace(chr(34), chr(39))}\""
 
 
 def vendor_plan(artifact, motor, drive, check: ExportCheck):
     """The MCSDK/IQmath plan of a PI law (:mod:`toolbox.export._vendor`), or (None, why)."""
     i_max, w_max = _ranges(artifact, motor, drive, check.v_max)
-    dec = artifact.decoupling
-    p = dec.pole_pairs
-    dec_coeffs = {"dd": -float(dec.cross) * p * dec.Lq_c,
-                  "dq": float(dec.cross) * p * dec.Ld_c,
-                  "de": float(dec.emf) * p * dec.flux_c}
+    dec_coeffs = _dec_coeffs(artifact.decoupling)
     if check.limit == "hexagon":
         return None, ('voltage_limit = "hexagon" is implemented in the float path only; '
                       'the MCSDK/IQmath variants need voltage_limit = "circle"')
@@ -1009,7 +1016,7 @@ def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str
             t.lines.extend(body.lines)
             return
     t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
-    t(f"#error \"MCSDK/IQmath variants not available: {sanitise_comment(why).replace(chr(34), chr(39))}\"")
+    t(_c_error("MCSDK/IQmath variants not available", why))
     t("#endif")
 
 
