@@ -824,73 +824,62 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
 
 
 def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> None:
+    """The ``#define`` block (``templates/defines.c.j2``); every number is
+    formatted and range-checked here, in the order of the lines."""
     dec = artifact.decoupling
     ts_ = _f(artifact.sample_time, "drive.sample_time", "controller period SAMPLE_TIME")
-    t(f"#define {P}SAMPLE_TIME {ts_} /* controller period, s */")
     nd_ = _int(artifact.delay_samples, "drive.delay_samples", "DELAY_SAMPLES", 0)
-    t(f"#define {P}DELAY_SAMPLES {nd_} /* computation delay the design assumed, periods */")
     vmax_ = _f(check.v_max, "drive.vdc", "voltage limit V_MAX")
     if check.v_max ** 2 > F32_MAX:
         # the step function compares |v|^2 with V_MAX^2 in float
         raise ExportRefused("drive.vdc", f"a voltage limit whose square fits float32 "
                             f"(V_MAX <= {math.sqrt(F32_MAX):.3g} V)", check.v_max)
-    what = "hexagon apothem" if check.limit == "hexagon" else "circle radius"
-    t(f"#define {P}V_MAX {vmax_} /* voltage limit ({what}) at the nominal bus voltage, V; "
-      f"{P.lower()}init's default */")
-    if drive is not None and drive.vdc > 0:
-        t(f"#define {P}V_MAX_PER_VDC {_f(check.v_max / drive.vdc, 'drive.vdc', 'V_MAX_PER_VDC')} "
-          f"/* voltage limit per volt of measured bus ({P.lower()}set_vdc) */")
+    per_vdc = (_f(check.v_max / drive.vdc, 'drive.vdc', 'V_MAX_PER_VDC')
+               if drive is not None and drive.vdc > 0 else None)
+    mot = None
     if motor is not None:
-        t(f"/* motor ({sanitise_comment(motor.convention)}-invariant dq convention) */")
-        t(f"#define {P}MOTOR_R {_f(motor.R, 'motor.R', 'MOTOR_R')} /* stator resistance, ohm */")
-        t(f"#define {P}MOTOR_LD {_f(motor.Ld, 'motor.Ld', 'MOTOR_LD')} /* d-axis inductance, H */")
-        t(f"#define {P}MOTOR_LQ {_f(motor.Lq, 'motor.Lq', 'MOTOR_LQ')} /* q-axis inductance, H */")
-        t(f"#define {P}MOTOR_FLUX {_f(motor.flux, 'motor.flux', 'MOTOR_FLUX')} /* PM flux linkage, Wb */")
-        t(f"#define {P}MOTOR_POLE_PAIRS {_int(motor.pole_pairs, 'motor.pole_pairs', 'MOTOR_POLE_PAIRS', 1)} /* pole pairs */")
-        t(f"#define {P}MOTOR_J {_f(motor.J, 'motor.J', 'MOTOR_J')} /* inertia, kg m^2 */")
-        t(f"#define {P}MOTOR_FRICTION {_f(motor.friction, 'motor.friction', 'MOTOR_FRICTION')} /* viscous friction, N m s/rad */")
-        if motor.max_current:
-            t(f"#define {P}MOTOR_MAX_CURRENT {_f(motor.max_current, 'motor.max_current', 'MOTOR_MAX_CURRENT')} /* dq current amplitude limit, A */")
-        if motor.rated_current:
-            t(f"#define {P}MOTOR_RATED_CURRENT {_f(motor.rated_current, 'motor.rated_current', 'MOTOR_RATED_CURRENT')} /* A */")
-        if motor.rated_speed:
-            t(f"#define {P}MOTOR_RATED_SPEED {_f(motor.rated_speed, 'motor.rated_speed', 'MOTOR_RATED_SPEED')} /* mechanical, rad/s */")
+        mot = {"convention": sanitise_comment(motor.convention),
+               "R": _f(motor.R, 'motor.R', 'MOTOR_R'),
+               "Ld": _f(motor.Ld, 'motor.Ld', 'MOTOR_LD'),
+               "Lq": _f(motor.Lq, 'motor.Lq', 'MOTOR_LQ'),
+               "flux": _f(motor.flux, 'motor.flux', 'MOTOR_FLUX'),
+               "pole_pairs": _int(motor.pole_pairs, 'motor.pole_pairs', 'MOTOR_POLE_PAIRS', 1),
+               "J": _f(motor.J, 'motor.J', 'MOTOR_J'),
+               "friction": _f(motor.friction, 'motor.friction', 'MOTOR_FRICTION')}
+        for name in ("max_current", "rated_current", "rated_speed"):
+            v = getattr(motor, name)
+            mot[name] = _f(v, f"motor.{name}", f"MOTOR_{name.upper()}") if v else None
+    drv = None
     if drive is not None:
-        t("/* drive */")
-        t(f"#define {P}DRIVE_VDC {_f(drive.vdc, 'drive.vdc', 'DRIVE_VDC')} /* DC-link voltage, V */")
-        if drive.switching_frequency:
-            t(f"#define {P}DRIVE_SWITCHING_FREQUENCY {_f(drive.switching_frequency, 'drive.switching_frequency', 'DRIVE_SWITCHING_FREQUENCY')} /* PWM carrier, Hz */")
-    t("/* decoupling: controller-side model parameters */")
-    t(f"#define {P}DEC_CROSS {int(bool(dec.cross))} /* 1: cross-coupling terms on */")
-    t(f"#define {P}DEC_EMF {int(bool(dec.emf))} /* 1: back-EMF term on */")
-    t(f"#define {P}DEC_LD {_f(dec.Ld_c, 'motor.Ld', 'decoupling DEC_LD')} /* H */")
-    t(f"#define {P}DEC_LQ {_f(dec.Lq_c, 'motor.Lq', 'decoupling DEC_LQ')} /* H */")
-    t(f"#define {P}DEC_FLUX {_f(dec.flux_c, 'motor.flux', 'decoupling DEC_FLUX')} /* Wb */")
-    t(f"#define {P}POLE_PAIRS {_int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)} /* w_e = POLE_PAIRS * Omega_m */")
+        fsw = drive.switching_frequency
+        drv = {"vdc": _f(drive.vdc, 'drive.vdc', 'DRIVE_VDC'),
+               "switching_frequency": (_f(fsw, 'drive.switching_frequency',
+                                          'DRIVE_SWITCHING_FREQUENCY') if fsw else None)}
+    dec_ = {"cross": int(bool(dec.cross)), "emf": int(bool(dec.emf)),
+            "Ld": _f(dec.Ld_c, 'motor.Ld', 'decoupling DEC_LD'),
+            "Lq": _f(dec.Lq_c, 'motor.Lq', 'decoupling DEC_LQ'),
+            "flux": _f(dec.flux_c, 'motor.flux', 'decoupling DEC_FLUX'),
+            "pole_pairs": _int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)}
     t_comp = _delay_comp_time(artifact)
+    comp = None
     if t_comp is not None:
-        k = t_comp / artifact.sample_time
-        t(f"#define {P}DELAY_COMP_TIME {_f(t_comp, 'drive.sample_time', 'DELAY_COMP_TIME')} /* s ({k:g} Ts): the design assumes v_dq "
-          f"rotated by angle = {P}DELAY_COMP_TIME * w_e (rad) before the inverse Park transform: "
-          f"applied inside {P.lower()}step, outputs v_d_comp, v_q_comp */")
+        comp = {"time": _f(t_comp, 'drive.sample_time', 'DELAY_COMP_TIME'),
+                "periods": f"{t_comp / artifact.sample_time:g}"}
+    pi = []
     if artifact.method in PI_METHODS:
         for ax in AXES:
             g = _pi_gains(artifact, ax)
             if g is None:
                 continue
             kp, ki = g
-            gk = _law_key(artifact)
-            # gains honesty (issue 15): the law runs from the coefficients below,
-            # so the gains are documentation, not macros a reader could edit
-            t(f"/* {ax} axis PI gains (method {artifact.method}), FOR INFORMATION ONLY: the code")
-            t(" *   runs the coefficients of the law below, derived from these gains at export;")
-            t(" *   to retune, change the spec and re-export (editing these numbers does nothing).")
-            t(f" *   Kp = {kp:.9g} V/A (parallel proportional gain)")
-            t(f" *   Ki = {ki:.9g} V/(A s) (parallel integral gain)")
-            t(f" *   Ki Ts = {ki * artifact.sample_time:.9g} V/A (integral gain per sample)")
-            if kp and ki:
-                t(f" *   Ti = {kp / ki:.9g} s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)")
-            t(" */")
+            pi.append({"axis": ax, "kp": f"{kp:.9g}", "ki": f"{ki:.9g}",
+                       "ki_ts": f"{ki * artifact.sample_time:.9g}",
+                       "ti": f"{kp / ki:.9g}" if kp and ki else None})
+    lines = _render("defines.c.j2", P=P, p=P.lower(), ts=ts_, nd=nd_, vmax=vmax_,
+                    what="hexagon apothem" if check.limit == "hexagon" else "circle radius",
+                    vmax_per_vdc=per_vdc, motor=mot, drive=drv, dec=dec_, comp=comp,
+                    method=artifact.method, pi=pi)
+    t.lines.extend(lines[:-1] if lines and lines[-1] == "" else lines)
 
 
 def _axis_context(real: Realisation, ax: str, key: str) -> dict:
