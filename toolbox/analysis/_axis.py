@@ -29,7 +29,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..plant import axis_coefficients
-from ._json import json_ready
+from ..artifact import json_ready
 from ._laws import Law, axis_law
 from ._siso import MARGIN_KEYS, frequency_margins, log_grid
 from ._statespace import closed_loop, freqresp, is_stable, pade, plant_chain, series, zoh_axis

@@ -10,7 +10,8 @@ The implementation lives in private modules, one concept each:
 * :mod:`._steps` - linear step responses and their figures;
 * :mod:`._coupled` - the coupled dq loop at speed;
 * :mod:`._mimo` - multiloop disk margins over speed;
-* :mod:`._json` - JSON encoding (non-finite floats as strings).
+
+and re-exports :func:`toolbox.artifact.json_ready` (the one JSON encoder).
 
 Import from here (or from :mod:`toolbox.analysis`), never from the private
 modules (toolbox/ARCHITECTURE.md "Privacy rule").
@@ -20,7 +21,7 @@ from __future__ import annotations
 
 from ._axis import AxisLoop, MarginsResult, axis_margins, compute_margins, make_axis_loop
 from ._coupled import CoupledLoop, coupled_closed_loop, coupled_plant, decoupling_matrix
-from ._json import json_ready
+from ..artifact import json_ready
 from ._laws import AXES, Law, axis_law, law_to_continuous
 from ._mimo import (MimoMarginsResult, mimo_disk_margins, mimo_loop_response, mu_upper_2x2,
                     sigma_max_2x2)
