@@ -746,6 +746,14 @@ def _pi_gains(artifact, ax: str) -> tuple[float, float] | None:
     return None
 
 
+def _informational_pi_gains(artifact) -> list[tuple[str, float, float]]:
+    """``(axis, Kp, Ki)`` of each PI-type axis (:func:`_pi_gains`) of a PI
+    method, for the comments marked "for information only"; empty otherwise."""
+    if artifact.method not in PI_METHODS:
+        return []
+    return [(ax, *g) for ax in AXES if (g := _pi_gains(artifact, ax)) is not None]
+
+
 def _delay_comp_time(artifact) -> float | None:
     """Delay-compensation time (s) the law assumes, or None.
 
@@ -865,16 +873,10 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
     if t_comp is not None:
         comp = {"time": _f(t_comp, 'drive.sample_time', 'DELAY_COMP_TIME'),
                 "periods": f"{t_comp / artifact.sample_time:g}"}
-    pi = []
-    if artifact.method in PI_METHODS:
-        for ax in AXES:
-            g = _pi_gains(artifact, ax)
-            if g is None:
-                continue
-            kp, ki = g
-            pi.append({"axis": ax, "kp": f"{kp:.9g}", "ki": f"{ki:.9g}",
-                       "ki_ts": f"{ki * artifact.sample_time:.9g}",
-                       "ti": f"{kp / ki:.9g}" if kp and ki else None})
+    pi = [{"axis": ax, "kp": f"{kp:.9g}", "ki": f"{ki:.9g}",
+           "ki_ts": f"{ki * artifact.sample_time:.9g}",
+           "ti": f"{kp / ki:.9g}" if kp and ki else None}
+          for ax, kp, ki in _informational_pi_gains(artifact)]
     lines = _render("defines.c.j2", P=P, p=P.lower(), ts=ts_, nd=nd_, vmax=vmax_,
                     what="hexagon apothem" if check.limit == "hexagon" else "circle radius",
                     vmax_per_vdc=per_vdc, motor=mot, drive=drv, dec=dec_, comp=comp,
@@ -1063,22 +1065,17 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -
     for name, (m, F, val) in plan.dec.items():
         t(f"#define {P}Q31_DEC_{name.upper()} {_q31(m, 'motor', f'Q31 decoupling {name}')} /* decoupling coefficient {val:.6g} p.u. = m / 2^shift */")
         t(f"#define {P}Q31_DEC_{name.upper()}_SHIFT {_shift(F, 'motor', f'Q31 decoupling {name} shift')}")
-    if artifact.method in PI_METHODS:
-        for ax in AXES:
-            g = _pi_gains(artifact, ax)
-            if g is None:
+    for ax, kp, ki in _informational_pi_gains(artifact):
+        t(f"/* {ax} axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY")
+        t(" * (the Q31 law below runs its own quantised coefficients):")
+        for label, val in (("Kp", kp * plan.I_BASE / plan.V_BASE),
+                           ("Ki Ts", ki * artifact.sample_time * plan.I_BASE / plan.V_BASE)):
+            q = _fixed._quantise_row(np.array([val]), 1)
+            if q is None:
                 continue
-            kp, ki = g
-            t(f"/* {ax} axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY")
-            t(" * (the Q31 law below runs its own quantised coefficients):")
-            for label, val in (("Kp", kp * plan.I_BASE / plan.V_BASE),
-                               ("Ki Ts", ki * artifact.sample_time * plan.I_BASE / plan.V_BASE)):
-                q = _fixed._quantise_row(np.array([val]), 1)
-                if q is None:
-                    continue
-                t(f" *   {label} = {_q31(q[0][0], key, f'Q31 {ax}-axis {label}')} / 2^"
-                  f"{_int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62)} ({val:.6g} p.u.)")
-            t(" */")
+            t(f" *   {label} = {_q31(q[0][0], key, f'Q31 {ax}-axis {label}')} / 2^"
+              f"{_int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62)} ({val:.6g} p.u.)")
+        t(" */")
     t("")
     axes = []
     for ax in AXES:
