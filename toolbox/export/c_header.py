@@ -763,72 +763,24 @@ def _delay_comp_time(artifact) -> float | None:
     return float(t_comp) if t_comp > 0 else None
 
 
-def _provenance(t: _Text, artifact, title: str) -> dict:
-    """Open the header comment with the provenance lines (every user string
-    sanitised); returns ``artifact.provenance``."""
+def _provenance(artifact, title: str) -> dict:
+    """The provenance strings of the header comment (every user string
+    sanitised), for the ``provenance`` macro of ``templates/common.c.j2``."""
     prov = artifact.provenance or {}
-    t("/*")
-    t(" * controller.h -- current controller exported by current-control-toolbox")
-    t(f" * title:       {sanitise_comment(title)}")
-    t(f" * method:      {sanitise_comment(artifact.method)}")
-    t(f" * version:     {sanitise_comment(prov.get('version', 'unknown'))}")
-    t(f" * spec sha256: {sanitise_comment(prov.get('spec_sha256', 'unknown'))}")
-    t(f" * created:     {sanitise_comment(prov.get('created', 'unknown'))}")
-    return prov
+    return {"title": sanitise_comment(title), "method": sanitise_comment(artifact.method),
+            **{k: sanitise_comment(prov.get(k, "unknown"))
+               for k in ("version", "spec_sha256", "created")}}
 
 
 def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
                 title: str) -> None:
-    prov = _provenance(t, artifact, title)
-    eqs = prov.get("equations")
-    if eqs:
-        t(f" * equations:   {sanitise_comment('; '.join(map(str, eqs)), 400)}")
-    t(" *")
-    trig = check.limit == "hexagon" or _delay_comp_time(artifact) is not None
-    t(" * C99, header-only, no dynamic memory; libm: sqrtf"
-      + (", sinf, cosf" if trig else " only") + " (float path).")
-    t(f" * Call {N}_init() once, then {N}_set_vdc() with the measured bus voltage and")
-    t(f" * {N}_step() once per controller period (example at the end of this file). The")
-    t(" * voltage returned is applied by the inverter in the NEXT period: the")
-    t(" * computation delay is part of the plant the design assumed, not of this code.")
-    t(" * Law per axis: x' = A x + B [i_ref; i_meas], v = C x + D [i_ref; i_meas]")
-    t(f" *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),")
-    t(" * then decoupling  v_d += -cross w_e Lq_c i_q,")
-    t(" *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,")
-    if check.limit == "hexagon":
-        t(" * then the SVM hexagon limit (voltage_limit = \"hexagon\", as the toolbox")
-        t(" * simulator): the voltage is rotated to the stationary frame at the angle")
-        t(" * theta_e + w_e Ts (DELAY_SAMPLES + 1/2) (input theta_e: electrical angle at the")
-        t(" * sampling instant) and scaled radially onto the hexagon whose apothem is the")
-        t(" * limit in use, and")
-    else:
-        t(" * then the circle limit |v| <= limit in use (radial scaling; the inscribed")
-        t(" * circle of the SVM hexagon), and")
-    t(" * back-calculation anti-windup x += aw (v_sat - v_unsat).")
-    t(" * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc")
-    t(" * (V_MAX, the nominal bus, after init).")
-    if _delay_comp_time(artifact) is not None:
-        t(" * Delay compensation: v_d_comp, v_q_comp are v_dq rotated by DELAY_COMP_TIME w_e")
-        t(" * (the design's assumption); apply them with the inverse Park transform at the")
-        t(" * sampled angle theta_e. v_d, v_q are the law's own (unrotated) output.")
-    U = N.upper()
-    t(" * Faults: out->status is")
-    t(f" *   {U}_STATUS_OK (0)        the law ran;")
-    t(f" *   {U}_STATUS_BAD_INPUT (1) an input is inf or nan;")
-    t(f" *   {U}_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).")
-    t(" * On 1 and 2 the last good output is repeated (0 V before the first good")
-    t(" * period), saturated = 0, and the state is left exactly as it was: the next")
-    t(" * valid period continues as if the bad one had not happened. Finiteness is")
-    t(" * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.")
-    t(" * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:")
-    t(" *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the")
-    t(" *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.")
-    t(" *   y = b0 x + s1; s1 = b1 x + a1 y + s2; s2 = b2 x + a2 y.")
-    for ax in check.marginal_antiwindup:
-        t(f" * WARNING ({ax} axis): in saturation the anti-windup recursion A - aw C has")
-        t(f" *   spectral radius {check.saturated_radius[ax]:.9g} >= 1 (not strictly stable):")
-        t(" *   states may ring at the Nyquist frequency or drift while the limit acts.")
-    t(" */")
+    """The opening comment of a linear law's header (``templates/top.c.j2``)."""
+    eqs = (artifact.provenance or {}).get("equations")
+    t.lines.extend(_render(
+        "top.c.j2", prov=_provenance(artifact, title), N=N, U=N.upper(),
+        equations=sanitise_comment('; '.join(map(str, eqs)), 400) if eqs else None,
+        hexagon=check.limit == "hexagon", comp=_delay_comp_time(artifact) is not None,
+        warnings=[(ax, f"{check.saturated_radius[ax]:.9g}") for ax in check.marginal_antiwindup]))
 
 
 def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> None:
@@ -1122,28 +1074,8 @@ def _write_fcs_header(artifact, motor, drive, name: str, title: str | None,
     predict = int(artifact.delay_samples) >= 1
     k_hex = fcs_r_hex_per_vdc(conv)
     t = _Text()
-    _provenance(t, artifact, title)
-    t(" *")
-    t(" * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no")
-    t(f" * fixed-point variant: {P}FIXED_POINT is an error).")
-    t(" * Boolean predictive control (Cormerais 2002, paper 002): every period")
-    t(f" * {N}_step() predicts the currents one period ahead (forward Euler of the dq")
-    t(" * model with the controller's R, Ld, Lq, flux) for each of the 8 inverter")
-    t(" * states and returns the state of least")
-    t(" *   J = ALPHA (i_q - i_q_ref)^2 + BETA (i_d - i_d_ref)^2 + GAMMA commutations")
-    t(" * (criterion (23), GAMMA the switching penalty); ties go to the fewest")
-    t(" * commutations, then the lower state index.")
-    if predict:
-        t(f" * Computation delay {int(artifact.delay_samples)} period(s): the state returned is applied during")
-        t(" * the NEXT period; the currents are first advanced over the current one with")
-        t(" * the state chosen last period (as the toolbox simulator).")
-    else:
-        t(" * No computation delay: the state returned is applied at once, for this period.")
-    t(f" * Call {N}_init() once, then {N}_set_vdc() with the measured bus voltage and")
-    t(f" * {N}_step() once per period (example at the end of this file).")
-    t(f" * Faults: out->status {N.upper()}_STATUS_BAD_INPUT (an input is inf/nan) or")
-    t(f" * {N.upper()}_STATUS_BAD_STATE (the cost overflowed): the previous state is held.")
-    t(" */")
+    t.lines.extend(_render("fcs_top.c.j2", prov=_provenance(artifact, title), N=N, P=P,
+                           U=N.upper(), delay=int(artifact.delay_samples)))
     t(f"#ifndef {guard}")
     t(f"#define {guard}")
     t("")
