@@ -1074,33 +1074,20 @@ def _write_fcs_header(artifact, motor, drive, name: str, title: str | None,
     predict = int(artifact.delay_samples) >= 1
     k_hex = fcs_r_hex_per_vdc(conv)
     t = _Text()
+    d = {"ts": _f(artifact.sample_time, 'drive.sample_time', 'SAMPLE_TIME'),
+         "nd": _int(artifact.delay_samples, 'drive.delay_samples', 'DELAY_SAMPLES', 0),
+         "vdc": _f(drive.vdc, 'drive.vdc', 'DRIVE_VDC'),
+         "r_hex_per_vdc": _f(k_hex, 'drive.vdc', 'R_HEX_PER_VDC'),
+         "convention": sanitise_comment(conv),
+         "r_hex": _f(k_hex * drive.vdc, 'drive.vdc', 'R_HEX'),
+         "R": _f(dec.R_c, 'motor.R', 'DEC_R'), "Ld": _f(dec.Ld_c, 'motor.Ld', 'DEC_LD'),
+         "Lq": _f(dec.Lq_c, 'motor.Lq', 'DEC_LQ'), "flux": _f(dec.flux_c, 'motor.flux', 'DEC_FLUX'),
+         "pole_pairs": _int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1),
+         "alpha": _f(fcs.alpha, key + '.alpha', 'FCS_ALPHA'),
+         "beta": _f(fcs.beta, key + '.beta', 'FCS_BETA'),
+         "gamma": _f(fcs.gamma, key + '.gamma', 'FCS_GAMMA')}
     t.lines.extend(_render("fcs_top.c.j2", prov=_provenance(artifact, title), N=N, P=P,
-                           U=N.upper(), delay=int(artifact.delay_samples)))
-    t(f"#ifndef {guard}")
-    t(f"#define {guard}")
-    t("")
-    t("#include <math.h> /* sinf, cosf */")
-    t("#include <stdint.h> /* uint32_t */")
-    t("")
-    t(f"#ifdef {P}FIXED_POINT")
-    t('#error "fixed-point variant not available: the fcs_mpc law is exported in float only"')
-    t(f"#endif /* {P}FIXED_POINT */")
-    t("")
-    t(f"#define {P}SAMPLE_TIME {_f(artifact.sample_time, 'drive.sample_time', 'SAMPLE_TIME')} /* controller period, s */")
-    t(f"#define {P}DELAY_SAMPLES {_int(artifact.delay_samples, 'drive.delay_samples', 'DELAY_SAMPLES', 0)} /* computation delay, periods */")
-    t(f"#define {P}DRIVE_VDC {_f(drive.vdc, 'drive.vdc', 'DRIVE_VDC')} /* nominal DC-link voltage, V */")
-    t(f"#define {P}R_HEX_PER_VDC {_f(k_hex, 'drive.vdc', 'R_HEX_PER_VDC')} /* active vector length per volt of bus ({sanitise_comment(conv)}-invariant dq) */")
-    t(f"#define {P}R_HEX {_f(k_hex * drive.vdc, 'drive.vdc', 'R_HEX')} /* active vector length at the nominal bus, V */")
-    t("/* controller-side model of the predictor */")
-    t(f"#define {P}DEC_R {_f(dec.R_c, 'motor.R', 'DEC_R')} /* ohm */")
-    t(f"#define {P}DEC_LD {_f(dec.Ld_c, 'motor.Ld', 'DEC_LD')} /* H */")
-    t(f"#define {P}DEC_LQ {_f(dec.Lq_c, 'motor.Lq', 'DEC_LQ')} /* H */")
-    t(f"#define {P}DEC_FLUX {_f(dec.flux_c, 'motor.flux', 'DEC_FLUX')} /* Wb */")
-    t(f"#define {P}POLE_PAIRS {_int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)} /* w_e = POLE_PAIRS * Omega_m */")
-    t("/* criterion (23) weights: alpha (q error, A^-2), beta (d error, A^-2), gamma (per commutation) */")
-    t(f"#define {P}FCS_ALPHA {_f(fcs.alpha, key + '.alpha', 'FCS_ALPHA')}")
-    t(f"#define {P}FCS_BETA {_f(fcs.beta, key + '.beta', 'FCS_BETA')}")
-    t(f"#define {P}FCS_GAMMA {_f(fcs.gamma, key + '.gamma', 'FCS_GAMMA')}")
+                           U=N.upper(), guard=guard, delay=int(artifact.delay_samples), d=d))
     t("")
     t.lines.extend(_render("fcs.c.j2", N=N, P=P, U=N.upper(), predict=predict))
     if example:
