@@ -964,24 +964,23 @@ def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str
 
 
 def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str) -> None:
-    t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
-    t("/* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;")
-    for ax in AXES:
-        t(f" *   {ax}: Kp = {plan.kp[ax]:.9g} V/A, Ki = {plan.ki[ax]:.9g} V/A per sample, "
-          f"Kaw = {plan.kaw[ax]:.9g}")
-    t(" * ranges: currents and speed beyond these are clamped (status CLAMPED) */")
-    t(f"#define {P}MCSDK_I_FS {_f(plan.I_FS, 'motor.max_current', 'MCSDK_I_FS')} /* A = 32768 digits (s16A) */")
-    t(f"#define {P}MCSDK_V_FS {_f(plan.V_FS, 'drive.vdc', 'MCSDK_V_FS')} /* V = 32768 digits (s16V) */")
-    t(f"#define {P}MCSDK_W_FS {_f(plan.W_FS, 'drive.max_speed', 'MCSDK_W_FS')} /* mechanical rad/s = 32768 digits */")
-    t(f"#define {P}MCSDK_V_MAX {_int(round(plan.V_MAX / plan.V_FS * 32768), 'drive.vdc', 'MCSDK_V_MAX', 0, 32767)} /* nominal voltage limit, s16V */")
-    t(f"#define {P}IQ_I_BASE {_f(plan.I_FS, 'motor.max_current', 'IQ_I_BASE')} /* A = 1.0 p.u. */")
-    t(f"#define {P}IQ_V_BASE {_f(plan.V_MAX, 'drive.vdc', 'IQ_V_BASE')} /* V = 1.0 p.u. (nominal limit) */")
-    t(f"#define {P}IQ_W_BASE {_f(plan.W_FS, 'drive.max_speed', 'IQ_W_BASE')} /* mechanical rad/s = 1.0 p.u. */")
-    t("#endif")
+    """The MCSDK/IQmath section (``templates/vendor.c.j2``); numbers formatted
+    and range-checked here, in line order."""
+    gains = [(ax, f"{plan.kp[ax]:.9g}", f"{plan.ki[ax]:.9g}", f"{plan.kaw[ax]:.9g}")
+             for ax in AXES]
+    d = {"MCSDK_I_FS": _f(plan.I_FS, 'motor.max_current', 'MCSDK_I_FS'),
+         "MCSDK_V_FS": _f(plan.V_FS, 'drive.vdc', 'MCSDK_V_FS'),
+         "MCSDK_W_FS": _f(plan.W_FS, 'drive.max_speed', 'MCSDK_W_FS'),
+         "MCSDK_V_MAX": _int(round(plan.V_MAX / plan.V_FS * 32768), 'drive.vdc', 'MCSDK_V_MAX',
+                             0, 32767),
+         "IQ_I_BASE": _f(plan.I_FS, 'motor.max_current', 'IQ_I_BASE'),
+         "IQ_V_BASE": _f(plan.V_MAX, 'drive.vdc', 'IQ_V_BASE'),
+         "IQ_W_BASE": _f(plan.W_FS, 'drive.max_speed', 'IQ_W_BASE')}
     mc_ctx = {k: (_int(g, key, f"MCSDK {k} gain", -32767, 32767), _int(sh, key, f"MCSDK {k} divisor", 0, 15))
               for k, (g, sh) in mc.items()}
     iq_ctx = {k: _int(v, key, f"IQ24 {k}", -C_INT32_MAX, C_INT32_MAX) for k, v in iq.items()}
-    t.lines.extend(_render("vendor.c.j2", N=N, P=P, U=N.upper(), mc=mc_ctx, iq=iq_ctx))
+    t.lines.extend(_render("vendor.c.j2", N=N, P=P, U=N.upper(), gains=gains, d=d, mc=mc_ctx,
+                           iq=iq_ctx))
 
 
 def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
