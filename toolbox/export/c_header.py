@@ -984,50 +984,38 @@ def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str) -
 
 
 def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
+    """The Q31 section (``templates/fixed.c.j2``); numbers formatted and
+    range-checked here, in line order."""
     plan = check.fixed
     key = _law_key(artifact)
-    t("/*")
-    t(" * Fixed point: Q31 words (value / 2^31), int64 accumulators, arithmetic")
-    t(" * right shifts (as gcc and arm-none-eabi implement >> on negative values).")
-    t(" * Each coefficient set is an int32 mantissa vector m with one shift F:")
-    t(" * c = m / 2^F (integer gains with power-of-two divisors, as STM32 MCSDK).")
-    t(f" * Inputs up to I_MAX = {plan.I_MAX:.6g} A and W_MAX = {plan.W_MAX:.6g} rad/s (mechanical),")
-    t(f" * voltage limit {plan.V_MAX:.6g} V: bases below are powers of two above rigorous")
-    t(" * bounds of every signal and state, so no accumulator or word overflows.")
-    for ax in AXES:
-        if ax in check.fixed_error_bound:
-            t(f" * Quantisation error bound, {ax} axis: |v_q31 - v_exact| <= "
-              f"{check.fixed_error_bound[ax]:.3g} V over {HORIZON * 1e3:g} ms from equal states.")
-    t(" */")
-    t("#include <stdint.h>")
-    t(f"#define {P}Q31_I_BASE {_f(plan.I_BASE, 'motor.max_current', 'Q31_I_BASE')} /* A at full scale */")
-    t(f"#define {P}Q31_V_BASE {_f(plan.V_BASE, 'drive.vdc', 'Q31_V_BASE')} /* V at full scale */")
-    t(f"#define {P}Q31_W_BASE {_f(plan.W_BASE, 'drive.max_speed', 'Q31_W_BASE')} /* mechanical rad/s at full scale */")
-    t(f"#define {P}Q31_I_MAX {_f(plan.I_MAX, 'motor.max_current', 'Q31_I_MAX')} /* A, current range ({N}_to_q31 clamps beyond) */")
-    t(f"#define {P}Q31_W_MAX {_f(plan.W_MAX, 'drive.max_speed', 'Q31_W_MAX')} /* rad/s, speed range ({N}_to_q31 clamps beyond) */")
-    t(f"#define {P}Q31_V_MAX {_q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX')} /* V_MAX / V_BASE in Q31: the largest limit */")
-    if drive is not None and drive.vdc > 0:
-        t(f"#define {P}Q31_VDC_BASE {_f(plan.V_BASE * drive.vdc / check.v_max, 'drive.vdc', 'Q31_VDC_BASE')} "
-          f"/* V of bus at full scale ({P.lower()}set_vdc_q31) */")
-    for ax in AXES:
-        fa = plan.axes[ax]
-        for i, s in enumerate(fa.S):
-            t(f"#define {P}Q31_{ax.upper()}_X{i}_BASE {_f(s, key, f'Q31 {ax}-axis state base')} /* state {i} full scale */")
-    for name, (m, F, val) in plan.dec.items():
-        t(f"#define {P}Q31_DEC_{name.upper()} {_q31(m, 'motor', f'Q31 decoupling {name}')} /* decoupling coefficient {val:.6g} p.u. = m / 2^shift */")
-        t(f"#define {P}Q31_DEC_{name.upper()}_SHIFT {_shift(F, 'motor', f'Q31 decoupling {name} shift')}")
+    head = {"I_MAX": f"{plan.I_MAX:.6g}", "W_MAX": f"{plan.W_MAX:.6g}",
+            "V_MAX": f"{plan.V_MAX:.6g}",
+            "bounds": [(ax, f"{check.fixed_error_bound[ax]:.3g}", f"{HORIZON * 1e3:g}")
+                       for ax in AXES if ax in check.fixed_error_bound]}
+    d = {"I_BASE": _f(plan.I_BASE, 'motor.max_current', 'Q31_I_BASE'),
+         "V_BASE": _f(plan.V_BASE, 'drive.vdc', 'Q31_V_BASE'),
+         "W_BASE": _f(plan.W_BASE, 'drive.max_speed', 'Q31_W_BASE'),
+         "I_MAX": _f(plan.I_MAX, 'motor.max_current', 'Q31_I_MAX'),
+         "W_MAX": _f(plan.W_MAX, 'drive.max_speed', 'Q31_W_MAX'),
+         "V_MAX": _q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX'),
+         "VDC_BASE": (_f(plan.V_BASE * drive.vdc / check.v_max, 'drive.vdc', 'Q31_VDC_BASE')
+                      if drive is not None and drive.vdc > 0 else None)}
+    state_bases = [(ax.upper(), i, _f(s, key, f'Q31 {ax}-axis state base'))
+                   for ax in AXES for i, s in enumerate(plan.axes[ax].S)]
+    dec = [(name.upper(), _q31(m, 'motor', f'Q31 decoupling {name}'), f"{val:.6g}",
+            _shift(F, 'motor', f'Q31 decoupling {name} shift'))
+           for name, (m, F, val) in plan.dec.items()]
+    pi = []
     for ax, kp, ki in _informational_pi_gains(artifact):
-        t(f"/* {ax} axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY")
-        t(" * (the Q31 law below runs its own quantised coefficients):")
+        rows = []
         for label, val in (("Kp", kp * plan.I_BASE / plan.V_BASE),
                            ("Ki Ts", ki * artifact.sample_time * plan.I_BASE / plan.V_BASE)):
             q = _fixed._quantise_row(np.array([val]), 1)
-            if q is None:
-                continue
-            t(f" *   {label} = {_q31(q[0][0], key, f'Q31 {ax}-axis {label}')} / 2^"
-              f"{_int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62)} ({val:.6g} p.u.)")
-        t(" */")
-    t("")
+            if q is not None:
+                rows.append((label, _q31(q[0][0], key, f'Q31 {ax}-axis {label}'),
+                             _int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62),
+                             f"{val:.6g}"))
+        pi.append((ax, rows))
     axes = []
     for ax in AXES:
         fa = plan.axes[ax]
@@ -1042,7 +1030,8 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -
                      for m, _ in fa.rows],
             "aw": ", ".join(_q31(m[n + 2], key, f"Q31 {ax}-axis anti-windup")
                             for m, _ in fa.rows) if has_aw else ""})
-    t.lines.extend(_render("fixed.c.j2", N=N, P=P, axes=axes,
+    t.lines.extend(_render("fixed.c.j2", N=N, P=P, p=P.lower(), head=head, d=d,
+                           state_bases=state_bases, dec=dec, pi=pi, axes=axes,
                            nd=max(plan.axes["d"].S.size, 1), nq=max(plan.axes["q"].S.size, 1)))
 
 
