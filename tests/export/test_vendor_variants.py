@@ -51,11 +51,21 @@ int main(void)
     cct_input_s16_t in;
     cct_output_s16_t out;
     cct_init_s16(&s);
+#ifdef RETUNE
+    s.gd.kp_gain = D_KP_G; s.gd.kp_div = D_KP_S; s.gd.ki_gain = D_KI_G; s.gd.ki_div = D_KI_S;
+    s.gd.kaw_gain = D_KAW_G; s.gd.kaw_div = D_KAW_S;
+    s.gq.kp_gain = Q_KP_G; s.gq.kp_div = Q_KP_S; s.gq.ki_gain = Q_KI_G; s.gq.ki_div = Q_KI_S;
+    s.gq.kaw_gain = Q_KAW_G; s.gq.kaw_div = Q_KAW_S;
+#endif
 #else
     cct_state_iq_t s;
     cct_input_iq_t in;
     cct_output_iq_t out;
     cct_init_iq(&s);
+#ifdef RETUNE
+    s.gd.kp = D_KP; s.gd.ki = D_KI; s.gd.kaw = D_KAW;
+    s.gq.kp = Q_KP; s.gq.ki = Q_KI; s.gq.kaw = Q_KAW;
+#endif
 #endif
     while (scanf("%ld %ld %ld %ld %ld", &a, &b, &c, &d, &e) == 5) {
 #ifdef CCT_MCSDK
@@ -290,51 +300,6 @@ def test_reference_pi_designs(design, variant, tmp_path):
     assert bound.max() < 2e-3 * np.abs(res[:, :2]).max()
 
 
-RETUNE = r"""
-#include <stdio.h>
-#include <stdint.h>
-#include "controller.h"
-int main(void)
-{
-    long a, b, c, d, e;
-#ifdef CCT_MCSDK
-    cct_state_s16_t s;
-    cct_input_s16_t in;
-    cct_output_s16_t out;
-    cct_init_s16(&s);
-#ifdef RETUNE
-    s.gd.kp_gain = D_KP_G; s.gd.kp_div = D_KP_S; s.gd.ki_gain = D_KI_G; s.gd.ki_div = D_KI_S;
-    s.gd.kaw_gain = D_KAW_G; s.gd.kaw_div = D_KAW_S;
-    s.gq.kp_gain = Q_KP_G; s.gq.kp_div = Q_KP_S; s.gq.ki_gain = Q_KI_G; s.gq.ki_div = Q_KI_S;
-    s.gq.kaw_gain = Q_KAW_G; s.gq.kaw_div = Q_KAW_S;
-#endif
-#else
-    cct_state_iq_t s;
-    cct_input_iq_t in;
-    cct_output_iq_t out;
-    cct_init_iq(&s);
-#ifdef RETUNE
-    s.gd.kp = D_KP; s.gd.ki = D_KI; s.gd.kaw = D_KAW;
-    s.gq.kp = Q_KP; s.gq.ki = Q_KI; s.gq.kaw = Q_KAW;
-#endif
-#endif
-    while (scanf("%ld %ld %ld %ld %ld", &a, &b, &c, &d, &e) == 5) {
-#ifdef CCT_MCSDK
-        in.i_d_ref = (int16_t)a; in.i_q_ref = (int16_t)b; in.i_d = (int16_t)c;
-        in.i_q = (int16_t)d; in.omega_m = (int16_t)e;
-        cct_step_s16(&s, &in, &out);
-#else
-        in.i_d_ref = (int32_t)a; in.i_q_ref = (int32_t)b; in.i_d = (int32_t)c;
-        in.i_q = (int32_t)d; in.omega_m = (int32_t)e;
-        cct_step_iq(&s, &in, &out);
-#endif
-        printf("%ld %ld %d %d\n", (long)out.v_d, (long)out.v_q, out.saturated, out.status);
-    }
-    return 0;
-}
-"""
-
-
 @pytest.mark.parametrize("variant", ["MCSDK", "IQMATH"])
 def test_gains_retunable_at_run_time(variant, tmp_path):
     """Gains honesty for the integer variants: the step reads the gains from
@@ -363,7 +328,7 @@ def test_gains_retunable_at_run_time(variant, tmp_path):
         tmp = tmp_path / name
         tmp.mkdir()
         (tmp / "controller.h").write_text(h)
-        (tmp / "r.c").write_text(RETUNE)
+        (tmp / "r.c").write_text(DRIVER)
         res = subprocess.run([C.require_gcc(), *C.CFLAGS, f"-DCCT_{variant}", *extra, "-I", str(tmp),
                               str(tmp / "r.c"), "-o", str(tmp / "r"), "-lm"],
                              capture_output=True, text=True, timeout=60)

@@ -34,17 +34,7 @@ def _spec(title: str):
             "drive": {"vdc": 150, "sample_time": 1e-4},
             "controller": {"method": "pi", "pi": {"bandwidth": WC}},
             "requirements": {"min_phase_margin_deg": 60.0, "min_gain_margin_db": 40.0}}
-    try:
-        return spec_from_dict(data)
-    except Exception:  # pi design module not written yet: assemble the spec directly
-        from toolbox.spec._catalog import CATALOG
-        from toolbox.spec._model import ControllerChoice, Drive, Motor, Requirements, Spec
-
-        return Spec(title=title, motor=Motor(**CATALOG["azaiz2007"], catalog="azaiz2007"),
-                    drive=Drive(vdc=150.0, sample_time=1e-4),
-                    controller=ControllerChoice("pi", {"bandwidth": WC}),
-                    requirements=Requirements(dict(data["requirements"])),
-                    raw={**data, "motor": dict(CATALOG["azaiz2007"])})
+    return spec_from_dict(data)
 
 
 #: Paper 003's q-axis weights (num/den in s), recorded as an H-infinity design does.

@@ -5,12 +5,11 @@ from __future__ import annotations
 import io
 import re
 
+import pypdf  # a declared test dependency: fail, never skip
 import pytest
 
-pypdf = pytest.importorskip("pypdf")
-
-from toolbox.report import write_pdf  # noqa: E402
-from toolbox.report.pdf import escape_markup, render_typst, typst_string  # noqa: E402
+from toolbox.report import write_pdf
+from toolbox.report.pdf import escape_markup, render_typst, typst_string
 
 
 @pytest.fixture(scope="module")

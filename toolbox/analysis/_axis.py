@@ -29,7 +29,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..plant import axis_coefficients
-from ._json import json_ready
+from ..artifact import json_ready
 from ._laws import Law, axis_law
 from ._siso import MARGIN_KEYS, frequency_margins, log_grid
 from ._statespace import closed_loop, freqresp, is_stable, pade, plant_chain, series, zoh_axis
@@ -87,7 +87,8 @@ class AxisLoop:
             a, b = zoh_axis(self.R, self.L, self.sample_time)
             return b / (x - a) * x ** (-self.delay_samples)
         if self.exact_delay or self.tau == 0:
-            return np.exp(-1j * w * self.tau) / (self.R + 1j * w * self.L)
+            a_c, b_c = axis_coefficients(self.R, self.L)     # the plant 1/(R + s L)
+            return np.exp(-1j * w * self.tau) * b_c / (1j * w - a_c)
         return freqresp(*self.plant, x)[:, 0, 0]
 
     def loop(self, w: np.ndarray) -> np.ndarray:

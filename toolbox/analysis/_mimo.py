@@ -21,7 +21,7 @@ import numpy as np
 
 from ..plant import max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_plant, decoupling_matrix
-from ._json import json_ready
+from ..artifact import json_ready
 from ._laws import AXES, axis_law
 from ._siso import disk_variations, log_grid
 from ._statespace import freqresp, zoh_coupled

@@ -37,11 +37,10 @@ from typing import Any, Mapping
 import numpy as np
 from scipy.linalg import eigvals
 
-# Names used from margins.py (kept public there, except _step_response: the
-# step helper whose figures margins.discrete reports; importing it keeps one
-# step computation).
+# step_response is the step helper whose figures the discrete margins report:
+# one step computation.
 from ..artifact import AxisWeights
-from .margins import AxisLoop, _step_response, freqresp, json_ready, make_axis_loop
+from .margins import AxisLoop, freqresp, json_ready, make_axis_loop, step_response
 
 __all__ = ["RESPONSES_SCHEMA", "N_POINTS", "W_END_FRACTION", "round_sig", "axis_responses",
            "loop_responses"]
@@ -130,7 +129,7 @@ def _step(loop: AxisLoop) -> dict:
     which is where the report's time axis ends.
     """
     cl = loop.reference_loop()
-    t, y = _step_response(loop, *cl)
+    t, y = step_response(loop, *cl)
     outside = np.nonzero(np.abs(y - 1.0) > 0.02)[0]
     t_settle = float(t[outside[-1] + 1]) if outside.size and outside[-1] + 1 < t.size else (
         float(t[-1]) if outside.size else 0.0)

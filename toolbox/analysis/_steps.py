@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import expm
 
+from ..plant import zoh_first_order
 from ..sim import step_metrics
 
 if TYPE_CHECKING:
@@ -46,8 +47,8 @@ def step_response(loop: "AxisLoop", A, B, C, D) -> tuple[np.ndarray, np.ndarray]
                 u_k = X[:, :nl] @ Ck[0] + Dk[0, 0] + Dk[0, 1] * i_k
             m = 10
             s = np.arange(m) * Ts / m
-            e = np.exp(-loop.R * s / loop.L)
-            y = (i_k[:, None] * e + u_k[:, None] * (1 - e) / loop.R).reshape(-1)
+            e, g = zoh_first_order(loop.R, loop.L, s)   # the plant held over s
+            y = (i_k[:, None] * e + u_k[:, None] * g).reshape(-1)
             t = (np.arange(n_steps + 1)[:, None] * Ts + s).reshape(-1)
             if _settled(y) or n_steps >= 32000:
                 return t, y

@@ -10,7 +10,8 @@ The implementation lives in private modules, one concept each:
 * :mod:`._steps` - linear step responses and their figures;
 * :mod:`._coupled` - the coupled dq loop at speed;
 * :mod:`._mimo` - multiloop disk margins over speed;
-* :mod:`._json` - JSON encoding (non-finite floats as strings).
+
+and re-exports :func:`toolbox.artifact.json_ready` (the one JSON encoder).
 
 Import from here (or from :mod:`toolbox.analysis`), never from the private
 modules (toolbox/ARCHITECTURE.md "Privacy rule").
@@ -20,7 +21,7 @@ from __future__ import annotations
 
 from ._axis import AxisLoop, MarginsResult, axis_margins, compute_margins, make_axis_loop
 from ._coupled import CoupledLoop, coupled_closed_loop, coupled_plant, decoupling_matrix
-from ._json import json_ready
+from ..artifact import json_ready
 from ._laws import AXES, Law, axis_law, law_to_continuous
 from ._mimo import (MimoBoxResult, MimoMarginsResult, MultiModelLoops, mimo_disk_margins,
                     mimo_loop_response, mimo_over_box, mu_upper_2x2, multimodel_disk_margins,
@@ -44,15 +45,3 @@ __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "AxisLoop", "Cou
            # loop building blocks (used by robustness, certificate and the tests)
            "AXES", "Law", "axis_law", "freqresp", "zoh_axis", "plant_chain", "pade", "series",
            "closed_loop", "is_stable", "zoh_coupled", "step_response", "step_figures"]
-
-# Private names of the former single module, kept importable from here for code
-# written against it (branches merged after the split; toolbox.analysis only,
-# by the privacy rule). New code imports the public names above.
-from ._axis import _axis_margins, _dc_gain, _has_integrator, _pade_twin  # noqa: E402,F401
-from ._mimo import _continuous_coupled_stable  # noqa: E402,F401
-from ._siso import _peak, _roots_in_grid  # noqa: E402,F401
-from ._siso import log_grid as _grid  # noqa: E402,F401
-from ._steps import _settled  # noqa: E402,F401
-from ._steps import step_figures as _step_figures  # noqa: E402,F401
-from ._steps import step_response as _step_response  # noqa: E402,F401
-from ..plant import max_electrical_speed as _electrical_max_speed  # noqa: E402,F401

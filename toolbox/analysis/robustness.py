@@ -36,7 +36,7 @@ from .margins import (AXES, axis_law, axis_margins, coupled_closed_loop, freqres
                       grid_margins, json_ready, make_axis_loop, zoh_axis)
 
 __all__ = ["DEFAULT_RANGES", "SweepResult", "sample_parameters", "robustness_sweep",
-           "batch_axis_margins"]
+           "batch_axis_margins", "batch_loop_margins"]
 
 #: name -> (low, high, kind): "scale" multiplies the nominal value
 #: (log-uniform), "offset" is an absolute value (uniform), "int" a count.
@@ -114,6 +114,42 @@ def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.nda
     Lw = K_fr[None, :] * b / (z[None, :] - a) * z[None, :] ** (-d[:, None].astype(float))
     # the last grid point is the Nyquist frequency (robustness_sweep builds it so)
     return grid_margins(w, Lw, nyquist=True)
+
+
+def batch_loop_margins(artifact, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
+                       d: np.ndarray, n_grid: int) -> dict[str, dict[str, np.ndarray]]:
+    """Grid margins of both axes' sampled executed loops for N plants at once.
+
+    The grid is ``n_grid`` log-spaced frequencies from 1 rad/s to the Nyquist
+    frequency (its last point exactly); each axis's error controller is that
+    of its executed law (:func:`toolbox.analysis.margins.axis_law`). The
+    robustness sweep and the campaign both call it.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        The controller (its laws and sample time).
+    R, Ld, Lq : ndarray
+        Plant resistance (ohm) and inductances (H), (N,).
+    d : ndarray
+        Delay (periods), (N,).
+    n_grid : int
+        Number of grid frequencies.
+
+    Returns
+    -------
+    dict
+        ``{"d": ..., "q": ...}``, each the dict of :func:`batch_axis_margins`.
+    """
+    Ts = artifact.sample_time
+    w = np.logspace(0, math.log10(math.pi / Ts), n_grid)
+    w[-1] = math.pi / Ts
+    z = np.exp(1j * w * Ts)
+    margins = {}
+    for name, L in (("d", Ld), ("q", Lq)):
+        K_fr = freqresp(*axis_law(artifact.axes[name], True).error_controller(), z)[:, 0, 0]
+        margins[name] = batch_axis_margins(K_fr, z, w, R, L, Ts, d)
+    return margins
 
 
 @dataclass(frozen=True)
@@ -226,13 +262,7 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
     Ts = artifact.sample_time
 
     # per-axis loops at zero speed (vectorised over sets)
-    w = np.logspace(0, math.log10(math.pi / Ts), n_grid)
-    w[-1] = math.pi / Ts
-    z = np.exp(1j * w * Ts)
-    margins = {}
-    for name, L in (("d", Ld), ("q", Lq)):
-        K_fr = freqresp(*axis_law(artifact.axes[name], True).error_controller(), z)[:, 0, 0]
-        margins[name] = batch_axis_margins(K_fr, z, w, R, L, Ts, d)
+    margins = batch_loop_margins(artifact, R, Ld, Lq, d, n_grid)
 
     # coupled closed loops at speed (vectorised per delay value)
     wmax = max_electrical_speed(motor, drive)

@@ -1,9 +1,9 @@
 """Controller artifact (controller.json) and its python-control conversions."""
 
 from ._artifact import (SCHEMA, AxisController, ControllerArtifact, Decoupling,
-                        StateSpaceData, Zpk, spec_sha256)
+                        StateSpaceData, Zpk, json_ready, spec_sha256)
 from ._fields import WEIGHT_NAMES, AxisWeights, FcsWeights, TransferFunctionData
 
 __all__ = ["SCHEMA", "AxisController", "AxisWeights", "ControllerArtifact", "Decoupling",
            "FcsWeights", "StateSpaceData", "TransferFunctionData", "WEIGHT_NAMES", "Zpk",
-           "spec_sha256"]
+           "json_ready", "spec_sha256"]

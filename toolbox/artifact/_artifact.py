@@ -45,6 +45,7 @@ __all__ = [
     "TransferFunctionData",
     "ControllerArtifact",
     "spec_sha256",
+    "json_ready",
 ]
 
 SCHEMA = "cct.controller/2"
@@ -649,14 +650,28 @@ def _check_margins(margins: Mapping) -> None:
                                 values["stable"])
 
 
-def _jsonable(value: Any) -> Any:
-    """Plain-JSON copy of gains and margins (arrays to lists, complex to [re, im])."""
+def json_ready(value: Any) -> Any:
+    """Plain-JSON copy, the one encoder of every JSON the toolbox writes
+    (controller.json, analysis.json): mappings to dicts, arrays and tuples to
+    lists, numpy scalars to Python, complex to ``[re, im]``, non-finite floats
+    to the strings ``"inf"``, ``"-inf"``, ``"nan"``.
+
+    Parameters
+    ----------
+    value : Any
+        Nested mappings, sequences, arrays and scalars.
+
+    Returns
+    -------
+    Any
+        The same structure in plain JSON types.
+    """
     if isinstance(value, Mapping):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
+        return [json_ready(v) for v in value]
     if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
+        return json_ready(value.tolist())
     if isinstance(value, (complex, np.complexfloating)):
         return [float(value.real), float(value.imag)]
     if isinstance(value, (np.bool_, bool)):
@@ -671,7 +686,7 @@ def _jsonable(value: Any) -> Any:
 
 def spec_sha256(spec: Mapping) -> str:
     """SHA-256 of the canonical JSON form of a validated spec."""
-    text = json.dumps(_jsonable(spec), sort_keys=True, separators=(",", ":"))
+    text = json.dumps(json_ready(spec), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -769,13 +784,13 @@ class ControllerArtifact:
 
     def with_margins(self, margins: dict) -> "ControllerArtifact":
         """A copy carrying analysis results."""
-        return replace(self, margins=_jsonable(margins))
+        return replace(self, margins=json_ready(margins))
 
     def to_json(self) -> dict:
         return {
             "schema": SCHEMA,
             "method": self.method,
-            "spec": _jsonable(self.spec),
+            "spec": json_ready(self.spec),
             "sample_time": self.sample_time,
             "delay_samples": self.delay_samples,
             "axes": {name: self.axes[name].to_json() for name in AXES},
@@ -783,9 +798,9 @@ class ControllerArtifact:
             "fcs": None if self.fcs is None else self.fcs.to_json(),
             "weights": (None if self.weights is None
                         else {ax: self.weights[ax].to_json() for ax in AXES}),
-            "design_parameters": _jsonable(self.design_parameters),
-            "margins": _jsonable(self.margins),
-            "provenance": _jsonable(self.provenance),
+            "design_parameters": json_ready(self.design_parameters),
+            "margins": json_ready(self.margins),
+            "provenance": json_ready(self.provenance),
         }
 
     def dumps(self) -> str:

@@ -135,22 +135,14 @@ def _physical(cols: dict, n: int) -> np.ndarray:
 
 def _margins(plan: Plan, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
              delay: np.ndarray | None = None) -> dict:
-    from ..analysis.margins import axis_law, freqresp
-    from ..analysis.robustness import batch_axis_margins
+    from ..analysis.robustness import batch_loop_margins
 
     art = plan.artifact
-    Ts = art.sample_time
-    w = np.logspace(0, math.log10(math.pi / Ts), MARGIN_GRID)
-    w[-1] = math.pi / Ts
-    z = np.exp(1j * w * Ts)
     d = (np.full(len(R), art.delay_samples, int) if delay is None
          else np.asarray(delay, int))
-    out = {}
-    for axis, L in (("d", Ld), ("q", Lq)):
-        K_fr = freqresp(*axis_law(art.axes[axis], True).error_controller(), z)[:, 0, 0]
-        for key, v in batch_axis_margins(K_fr, z, w, R, L, Ts, d).items():
-            out[f"margin.{axis}.{key}"] = np.asarray(v, float)
-    return out
+    return {f"margin.{axis}.{key}": np.asarray(v, float)
+            for axis, m in batch_loop_margins(art, R, Ld, Lq, d, MARGIN_GRID).items()
+            for key, v in m.items()}
 
 
 def _judge(checks: list, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

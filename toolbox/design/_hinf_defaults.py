@@ -39,7 +39,7 @@ from ._defaults import default_bandwidth
 from ._weights import makeweight
 
 __all__ = ["W1_DC_GAIN", "DEFAULT_MODULUS_MARGIN", "w1_params", "w2_params",
-           "default_axis_weights", "w2_toml"]
+           "w2_toml"]
 
 #: low-frequency gain of w1: steady-state error <= 1/1000 of the reference
 W1_DC_GAIN = 1000.0
@@ -72,34 +72,6 @@ def w2_params(L: float, drive) -> tuple[dict, str]:
     params = {"dc_gain": h / 100.0, "crossover": w_c, "crossover_gain": h / 10.0, "hf_gain": h}
     return params, (f"h = 1/(L w_c) = 1/({L:.4g} x {w_c:.5g}) = {h:.4g} A/V: |K| <= gamma L w_c "
                     "above w_c (w_c = PI default crossover)")
-
-
-def default_axis_weights(L: float, drive, requirements=None, *,
-                         key: str = "controller.hinf.weights") -> tuple[dict, dict]:
-    """Default ``w1``, ``w2`` (transfer functions) of one axis.
-
-    Parameters
-    ----------
-    L : float
-        Axis inductance (H).
-    drive : Drive
-        Sample time and delay.
-    requirements : Requirements, optional
-        ``min_bandwidth_rad_s`` and ``min_stability_margin`` shape ``w1``.
-    key : str
-        Spec key for error messages of :func:`makeweight`.
-
-    Returns
-    -------
-    weights : dict
-        ``{"w1": tf, "w2": tf, "w3": None}``.
-    stated : dict
-        The makeweight parameters and rules, for ``design_parameters["defaults"]``.
-    """
-    p1, r1 = w1_params(drive, requirements)
-    p2, r2 = w2_params(L, drive)
-    weights = {"w1": _make(p1, f"{key}.w1"), "w2": _make(p2, f"{key}.w2"), "w3": None}
-    return weights, {"w1": {"makeweight": p1, "rule": r1}, "w2": {"makeweight": p2, "rule": r2}}
 
 
 def default_w2(L: float, drive, key: str = "controller.hinf.weights.w2"):

@@ -78,10 +78,6 @@ class GammaBelowOptimum(DesignInfeasible):
 # --------------------------------------------------------------------------
 # partitioned plant, eq (2) and (64)
 # --------------------------------------------------------------------------
-def _mat(x: Any) -> np.ndarray:
-    return np.atleast_2d(np.asarray(x, dtype=float))
-
-
 @dataclass(frozen=True)
 class PartitionedPlant:
     r"""Generalised plant P of eq (2)/(64) of paper 003.

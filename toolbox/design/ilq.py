@@ -513,7 +513,8 @@ def _default_poles(t: Table, motor, drive) -> tuple[tuple[float, float], dict | 
     else:
         wc = (bw.value, bw.value)
         factor = t.number("sigma_factor", 2.0, positive=True, maximum=1e3)
-    poles = tuple(-motor.R / L - w / (2.0 * factor) for L, w in zip((motor.Ld, motor.Lq), wc))
+    poles = tuple(axis_coefficients(motor.R, L)[0] - w / (2.0 * factor)
+                  for L, w in zip((motor.Ld, motor.Lq), wc))
     return poles, {"poles": {**bw.as_dict(),
                              "s_star": f"s* = -R/L - wc/(2 sigma_factor), sigma_factor {factor:g}",
                              "d": poles[0], "q": poles[1]}}

@@ -473,8 +473,8 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
         wc = _bandwidth(t, default_wc.value)
         if not (t.has("bandwidth") or t.has("response_time")):
             details.setdefault("defaults", {})["bandwidth"] = default_wc.as_dict()
-        Kp = (L[0] * wc[0], L[1] * wc[1])
-        Ki = (motor.R * wc[0], motor.R * wc[1])
+        g = [gains_cancellation(L[k], motor.R, wc[k]) for k in (0, 1)]
+        Kp, Ki = (g[0][0], g[1][0]), (g[0][1], g[1][1])
         details["bandwidth_rad_s"] = _axes(wc)
         limit = _defaults.largest_stable_pi_bandwidth(drive)
         if max(wc) >= limit:

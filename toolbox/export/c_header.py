@@ -355,6 +355,15 @@ def _ranges(artifact, motor, drive, v_max: float) -> tuple[float, float]:
     return float(i_max), float(w_max)
 
 
+def _dec_coeffs(dec) -> dict[str, float]:
+    """The decoupling terms as coefficients of the mechanical speed, the form the
+    integer variants scale: ``v_d += dd w_m i_q``, ``v_q += dq w_m i_d + de w_m``."""
+    p = dec.pole_pairs
+    return {"dd": -float(dec.cross) * p * dec.Lq_c,
+            "dq": float(dec.cross) * p * dec.Ld_c,
+            "de": float(dec.emf) * p * dec.flux_c}
+
+
 def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = False,
                      v_max: float | None = None, limit: str | None = None) -> ExportCheck:
     """Refuse controllers that must not reach firmware; plan the export.
@@ -433,11 +442,7 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
                       f"radius {max(res.saturated_radius.values()):.9g}); the controller "
                       "states can ring or drift while saturated", RuntimeWarning, stacklevel=2)
     i_max, w_max = _ranges(artifact, motor, drive, v_max)
-    dec = artifact.decoupling
-    p = dec.pole_pairs
-    dec_coeffs = {"dd": -float(dec.cross) * p * dec.Lq_c,
-                  "dq": float(dec.cross) * p * dec.Ld_c,
-                  "de": float(dec.emf) * p * dec.flux_c}
+    dec_coeffs = _dec_coeffs(artifact.decoupling)
     if limit == "hexagon":
         # the hexagon needs sin/cos of the electrical angle: not written in Q31
         plan, reason = None, ('voltage_limit = "hexagon" is implemented in the float path '
@@ -741,6 +746,14 @@ def _pi_gains(artifact, ax: str) -> tuple[float, float] | None:
     return None
 
 
+def _informational_pi_gains(artifact) -> list[tuple[str, float, float]]:
+    """``(axis, Kp, Ki)`` of each PI-type axis (:func:`_pi_gains`) of a PI
+    method, for the comments marked "for information only"; empty otherwise."""
+    if artifact.method not in PI_METHODS:
+        return []
+    return [(ax, *g) for ax in AXES if (g := _pi_gains(artifact, ax)) is not None]
+
+
 def _delay_comp_time(artifact) -> float | None:
     """Delay-compensation time (s) the law assumes, or None.
 
@@ -750,135 +763,77 @@ def _delay_comp_time(artifact) -> float | None:
     return float(t_comp) if t_comp > 0 else None
 
 
+def _provenance(artifact, title: str) -> dict:
+    """The provenance strings of the header comment (every user string
+    sanitised), for the ``provenance`` macro of ``templates/common.c.j2``."""
+    prov = artifact.provenance or {}
+    return {"title": sanitise_comment(title), "method": sanitise_comment(artifact.method),
+            **{k: sanitise_comment(prov.get(k, "unknown"))
+               for k in ("version", "spec_sha256", "created")}}
+
+
 def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
                 title: str) -> None:
-    prov = artifact.provenance or {}
-    t("/*")
-    t(" * controller.h -- current controller exported by current-control-toolbox")
-    t(f" * title:       {sanitise_comment(title)}")
-    t(f" * method:      {sanitise_comment(artifact.method)}")
-    t(f" * version:     {sanitise_comment(prov.get('version', 'unknown'))}")
-    t(f" * spec sha256: {sanitise_comment(prov.get('spec_sha256', 'unknown'))}")
-    t(f" * created:     {sanitise_comment(prov.get('created', 'unknown'))}")
-    eqs = prov.get("equations")
-    if eqs:
-        t(f" * equations:   {sanitise_comment('; '.join(map(str, eqs)), 400)}")
-    t(" *")
-    trig = check.limit == "hexagon" or _delay_comp_time(artifact) is not None
-    t(" * C99, header-only, no dynamic memory; libm: sqrtf"
-      + (", sinf, cosf" if trig else " only") + " (float path).")
-    t(f" * Call {N}_init() once, then {N}_set_vdc() with the measured bus voltage and")
-    t(f" * {N}_step() once per controller period (example at the end of this file). The")
-    t(" * voltage returned is applied by the inverter in the NEXT period: the")
-    t(" * computation delay is part of the plant the design assumed, not of this code.")
-    t(" * Law per axis: x' = A x + B [i_ref; i_meas], v = C x + D [i_ref; i_meas]")
-    t(f" *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),")
-    t(" * then decoupling  v_d += -cross w_e Lq_c i_q,")
-    t(" *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,")
-    if check.limit == "hexagon":
-        t(" * then the SVM hexagon limit (voltage_limit = \"hexagon\", as the toolbox")
-        t(" * simulator): the voltage is rotated to the stationary frame at the angle")
-        t(" * theta_e + w_e Ts (DELAY_SAMPLES + 1/2) (input theta_e: electrical angle at the")
-        t(" * sampling instant) and scaled radially onto the hexagon whose apothem is the")
-        t(" * limit in use, and")
-    else:
-        t(" * then the circle limit |v| <= limit in use (radial scaling; the inscribed")
-        t(" * circle of the SVM hexagon), and")
-    t(" * back-calculation anti-windup x += aw (v_sat - v_unsat).")
-    t(" * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc")
-    t(" * (V_MAX, the nominal bus, after init).")
-    if _delay_comp_time(artifact) is not None:
-        t(" * Delay compensation: v_d_comp, v_q_comp are v_dq rotated by DELAY_COMP_TIME w_e")
-        t(" * (the design's assumption); apply them with the inverse Park transform at the")
-        t(" * sampled angle theta_e. v_d, v_q are the law's own (unrotated) output.")
-    U = N.upper()
-    t(" * Faults: out->status is")
-    t(f" *   {U}_STATUS_OK (0)        the law ran;")
-    t(f" *   {U}_STATUS_BAD_INPUT (1) an input is inf or nan;")
-    t(f" *   {U}_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).")
-    t(" * On 1 and 2 the last good output is repeated (0 V before the first good")
-    t(" * period), saturated = 0, and the state is left exactly as it was: the next")
-    t(" * valid period continues as if the bad one had not happened. Finiteness is")
-    t(" * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.")
-    t(" * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:")
-    t(" *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the")
-    t(" *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.")
-    t(" *   y = b0 x + s1; s1 = b1 x + a1 y + s2; s2 = b2 x + a2 y.")
-    for ax in check.marginal_antiwindup:
-        t(f" * WARNING ({ax} axis): in saturation the anti-windup recursion A - aw C has")
-        t(f" *   spectral radius {check.saturated_radius[ax]:.9g} >= 1 (not strictly stable):")
-        t(" *   states may ring at the Nyquist frequency or drift while the limit acts.")
-    t(" */")
+    """The opening comment of a linear law's header (``templates/top.c.j2``)."""
+    eqs = (artifact.provenance or {}).get("equations")
+    t.lines.extend(_render(
+        "top.c.j2", prov=_provenance(artifact, title), N=N, U=N.upper(),
+        equations=sanitise_comment('; '.join(map(str, eqs)), 400) if eqs else None,
+        hexagon=check.limit == "hexagon", comp=_delay_comp_time(artifact) is not None,
+        warnings=[(ax, f"{check.saturated_radius[ax]:.9g}") for ax in check.marginal_antiwindup]))
 
 
 def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> None:
+    """The ``#define`` block (``templates/defines.c.j2``); every number is
+    formatted and range-checked here, in the order of the lines."""
     dec = artifact.decoupling
     ts_ = _f(artifact.sample_time, "drive.sample_time", "controller period SAMPLE_TIME")
-    t(f"#define {P}SAMPLE_TIME {ts_} /* controller period, s */")
     nd_ = _int(artifact.delay_samples, "drive.delay_samples", "DELAY_SAMPLES", 0)
-    t(f"#define {P}DELAY_SAMPLES {nd_} /* computation delay the design assumed, periods */")
     vmax_ = _f(check.v_max, "drive.vdc", "voltage limit V_MAX")
     if check.v_max ** 2 > F32_MAX:
         # the step function compares |v|^2 with V_MAX^2 in float
         raise ExportRefused("drive.vdc", f"a voltage limit whose square fits float32 "
                             f"(V_MAX <= {math.sqrt(F32_MAX):.3g} V)", check.v_max)
-    what = "hexagon apothem" if check.limit == "hexagon" else "circle radius"
-    t(f"#define {P}V_MAX {vmax_} /* voltage limit ({what}) at the nominal bus voltage, V; "
-      f"{P.lower()}init's default */")
-    if drive is not None and drive.vdc > 0:
-        t(f"#define {P}V_MAX_PER_VDC {_f(check.v_max / drive.vdc, 'drive.vdc', 'V_MAX_PER_VDC')} "
-          f"/* voltage limit per volt of measured bus ({P.lower()}set_vdc) */")
+    per_vdc = (_f(check.v_max / drive.vdc, 'drive.vdc', 'V_MAX_PER_VDC')
+               if drive is not None and drive.vdc > 0 else None)
+    mot = None
     if motor is not None:
-        t(f"/* motor ({sanitise_comment(motor.convention)}-invariant dq convention) */")
-        t(f"#define {P}MOTOR_R {_f(motor.R, 'motor.R', 'MOTOR_R')} /* stator resistance, ohm */")
-        t(f"#define {P}MOTOR_LD {_f(motor.Ld, 'motor.Ld', 'MOTOR_LD')} /* d-axis inductance, H */")
-        t(f"#define {P}MOTOR_LQ {_f(motor.Lq, 'motor.Lq', 'MOTOR_LQ')} /* q-axis inductance, H */")
-        t(f"#define {P}MOTOR_FLUX {_f(motor.flux, 'motor.flux', 'MOTOR_FLUX')} /* PM flux linkage, Wb */")
-        t(f"#define {P}MOTOR_POLE_PAIRS {_int(motor.pole_pairs, 'motor.pole_pairs', 'MOTOR_POLE_PAIRS', 1)} /* pole pairs */")
-        t(f"#define {P}MOTOR_J {_f(motor.J, 'motor.J', 'MOTOR_J')} /* inertia, kg m^2 */")
-        t(f"#define {P}MOTOR_FRICTION {_f(motor.friction, 'motor.friction', 'MOTOR_FRICTION')} /* viscous friction, N m s/rad */")
-        if motor.max_current:
-            t(f"#define {P}MOTOR_MAX_CURRENT {_f(motor.max_current, 'motor.max_current', 'MOTOR_MAX_CURRENT')} /* dq current amplitude limit, A */")
-        if motor.rated_current:
-            t(f"#define {P}MOTOR_RATED_CURRENT {_f(motor.rated_current, 'motor.rated_current', 'MOTOR_RATED_CURRENT')} /* A */")
-        if motor.rated_speed:
-            t(f"#define {P}MOTOR_RATED_SPEED {_f(motor.rated_speed, 'motor.rated_speed', 'MOTOR_RATED_SPEED')} /* mechanical, rad/s */")
+        mot = {"convention": sanitise_comment(motor.convention),
+               "R": _f(motor.R, 'motor.R', 'MOTOR_R'),
+               "Ld": _f(motor.Ld, 'motor.Ld', 'MOTOR_LD'),
+               "Lq": _f(motor.Lq, 'motor.Lq', 'MOTOR_LQ'),
+               "flux": _f(motor.flux, 'motor.flux', 'MOTOR_FLUX'),
+               "pole_pairs": _int(motor.pole_pairs, 'motor.pole_pairs', 'MOTOR_POLE_PAIRS', 1),
+               "J": _f(motor.J, 'motor.J', 'MOTOR_J'),
+               "friction": _f(motor.friction, 'motor.friction', 'MOTOR_FRICTION')}
+        for name in ("max_current", "rated_current", "rated_speed"):
+            v = getattr(motor, name)
+            mot[name] = _f(v, f"motor.{name}", f"MOTOR_{name.upper()}") if v else None
+    drv = None
     if drive is not None:
-        t("/* drive */")
-        t(f"#define {P}DRIVE_VDC {_f(drive.vdc, 'drive.vdc', 'DRIVE_VDC')} /* DC-link voltage, V */")
-        if drive.switching_frequency:
-            t(f"#define {P}DRIVE_SWITCHING_FREQUENCY {_f(drive.switching_frequency, 'drive.switching_frequency', 'DRIVE_SWITCHING_FREQUENCY')} /* PWM carrier, Hz */")
-    t("/* decoupling: controller-side model parameters */")
-    t(f"#define {P}DEC_CROSS {int(bool(dec.cross))} /* 1: cross-coupling terms on */")
-    t(f"#define {P}DEC_EMF {int(bool(dec.emf))} /* 1: back-EMF term on */")
-    t(f"#define {P}DEC_LD {_f(dec.Ld_c, 'motor.Ld', 'decoupling DEC_LD')} /* H */")
-    t(f"#define {P}DEC_LQ {_f(dec.Lq_c, 'motor.Lq', 'decoupling DEC_LQ')} /* H */")
-    t(f"#define {P}DEC_FLUX {_f(dec.flux_c, 'motor.flux', 'decoupling DEC_FLUX')} /* Wb */")
-    t(f"#define {P}POLE_PAIRS {_int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)} /* w_e = POLE_PAIRS * Omega_m */")
+        fsw = drive.switching_frequency
+        drv = {"vdc": _f(drive.vdc, 'drive.vdc', 'DRIVE_VDC'),
+               "switching_frequency": (_f(fsw, 'drive.switching_frequency',
+                                          'DRIVE_SWITCHING_FREQUENCY') if fsw else None)}
+    dec_ = {"cross": int(bool(dec.cross)), "emf": int(bool(dec.emf)),
+            "Ld": _f(dec.Ld_c, 'motor.Ld', 'decoupling DEC_LD'),
+            "Lq": _f(dec.Lq_c, 'motor.Lq', 'decoupling DEC_LQ'),
+            "flux": _f(dec.flux_c, 'motor.flux', 'decoupling DEC_FLUX'),
+            "pole_pairs": _int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)}
     t_comp = _delay_comp_time(artifact)
+    comp = None
     if t_comp is not None:
-        k = t_comp / artifact.sample_time
-        t(f"#define {P}DELAY_COMP_TIME {_f(t_comp, 'drive.sample_time', 'DELAY_COMP_TIME')} /* s ({k:g} Ts): the design assumes v_dq "
-          f"rotated by angle = {P}DELAY_COMP_TIME * w_e (rad) before the inverse Park transform: "
-          f"applied inside {P.lower()}step, outputs v_d_comp, v_q_comp */")
-    if artifact.method in PI_METHODS:
-        for ax in AXES:
-            g = _pi_gains(artifact, ax)
-            if g is None:
-                continue
-            kp, ki = g
-            gk = _law_key(artifact)
-            # gains honesty (issue 15): the law runs from the coefficients below,
-            # so the gains are documentation, not macros a reader could edit
-            t(f"/* {ax} axis PI gains (method {artifact.method}), FOR INFORMATION ONLY: the code")
-            t(" *   runs the coefficients of the law below, derived from these gains at export;")
-            t(" *   to retune, change the spec and re-export (editing these numbers does nothing).")
-            t(f" *   Kp = {kp:.9g} V/A (parallel proportional gain)")
-            t(f" *   Ki = {ki:.9g} V/(A s) (parallel integral gain)")
-            t(f" *   Ki Ts = {ki * artifact.sample_time:.9g} V/A (integral gain per sample)")
-            if kp and ki:
-                t(f" *   Ti = {kp / ki:.9g} s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)")
-            t(" */")
+        comp = {"time": _f(t_comp, 'drive.sample_time', 'DELAY_COMP_TIME'),
+                "periods": f"{t_comp / artifact.sample_time:g}"}
+    pi = [{"axis": ax, "kp": f"{kp:.9g}", "ki": f"{ki:.9g}",
+           "ki_ts": f"{ki * artifact.sample_time:.9g}",
+           "ti": f"{kp / ki:.9g}" if kp and ki else None}
+          for ax, kp, ki in _informational_pi_gains(artifact)]
+    lines = _render("defines.c.j2", P=P, p=P.lower(), ts=ts_, nd=nd_, vmax=vmax_,
+                    what="hexagon apothem" if check.limit == "hexagon" else "circle radius",
+                    vmax_per_vdc=per_vdc, motor=mot, drive=drv, dec=dec_, comp=comp,
+                    method=artifact.method, pi=pi)
+    t.lines.extend(lines[:-1] if lines and lines[-1] == "" else lines)
 
 
 def _axis_context(real: Realisation, ax: str, key: str) -> dict:
@@ -963,18 +918,20 @@ def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive
             t.lines.extend(body.lines)
             t(f"#endif /* {P}FIXED_POINT */")
             return
-    t(f"#error \"fixed-point variant not available: {sanitise_comment(reason).replace(chr(34), chr(39))}\"")
+    t(_c_error("fixed-point variant not available", reason))
     t(f"#endif /* {P}FIXED_POINT */")
+
+
+def _c_error(what: str, reason: Any) -> str:
+    """An ``#error`` line ``what: reason`` (the reason sanitised, its double
+    quotes made single so the C string stays one token)."""
+    return f"#error \"{what}: {sanitise_comment(reason).replace(chr(34), chr(39))}\""
 
 
 def vendor_plan(artifact, motor, drive, check: ExportCheck):
     """The MCSDK/IQmath plan of a PI law (:mod:`toolbox.export._vendor`), or (None, why)."""
     i_max, w_max = _ranges(artifact, motor, drive, check.v_max)
-    dec = artifact.decoupling
-    p = dec.pole_pairs
-    dec_coeffs = {"dd": -float(dec.cross) * p * dec.Lq_c,
-                  "dq": float(dec.cross) * p * dec.Ld_c,
-                  "de": float(dec.emf) * p * dec.flux_c}
+    dec_coeffs = _dec_coeffs(artifact.decoupling)
     if check.limit == "hexagon":
         return None, ('voltage_limit = "hexagon" is implemented in the float path only; '
                       'the MCSDK/IQmath variants need voltage_limit = "circle"')
@@ -1002,81 +959,63 @@ def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str
             t.lines.extend(body.lines)
             return
     t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
-    t(f"#error \"MCSDK/IQmath variants not available: {sanitise_comment(why).replace(chr(34), chr(39))}\"")
+    t(_c_error("MCSDK/IQmath variants not available", why))
     t("#endif")
 
 
 def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str) -> None:
-    t(f"#if defined({P}MCSDK) || defined({P}IQMATH)")
-    t("/* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;")
-    for ax in AXES:
-        t(f" *   {ax}: Kp = {plan.kp[ax]:.9g} V/A, Ki = {plan.ki[ax]:.9g} V/A per sample, "
-          f"Kaw = {plan.kaw[ax]:.9g}")
-    t(" * ranges: currents and speed beyond these are clamped (status CLAMPED) */")
-    t(f"#define {P}MCSDK_I_FS {_f(plan.I_FS, 'motor.max_current', 'MCSDK_I_FS')} /* A = 32768 digits (s16A) */")
-    t(f"#define {P}MCSDK_V_FS {_f(plan.V_FS, 'drive.vdc', 'MCSDK_V_FS')} /* V = 32768 digits (s16V) */")
-    t(f"#define {P}MCSDK_W_FS {_f(plan.W_FS, 'drive.max_speed', 'MCSDK_W_FS')} /* mechanical rad/s = 32768 digits */")
-    t(f"#define {P}MCSDK_V_MAX {_int(round(plan.V_MAX / plan.V_FS * 32768), 'drive.vdc', 'MCSDK_V_MAX', 0, 32767)} /* nominal voltage limit, s16V */")
-    t(f"#define {P}IQ_I_BASE {_f(plan.I_FS, 'motor.max_current', 'IQ_I_BASE')} /* A = 1.0 p.u. */")
-    t(f"#define {P}IQ_V_BASE {_f(plan.V_MAX, 'drive.vdc', 'IQ_V_BASE')} /* V = 1.0 p.u. (nominal limit) */")
-    t(f"#define {P}IQ_W_BASE {_f(plan.W_FS, 'drive.max_speed', 'IQ_W_BASE')} /* mechanical rad/s = 1.0 p.u. */")
-    t("#endif")
+    """The MCSDK/IQmath section (``templates/vendor.c.j2``); numbers formatted
+    and range-checked here, in line order."""
+    gains = [(ax, f"{plan.kp[ax]:.9g}", f"{plan.ki[ax]:.9g}", f"{plan.kaw[ax]:.9g}")
+             for ax in AXES]
+    d = {"MCSDK_I_FS": _f(plan.I_FS, 'motor.max_current', 'MCSDK_I_FS'),
+         "MCSDK_V_FS": _f(plan.V_FS, 'drive.vdc', 'MCSDK_V_FS'),
+         "MCSDK_W_FS": _f(plan.W_FS, 'drive.max_speed', 'MCSDK_W_FS'),
+         "MCSDK_V_MAX": _int(round(plan.V_MAX / plan.V_FS * 32768), 'drive.vdc', 'MCSDK_V_MAX',
+                             0, 32767),
+         "IQ_I_BASE": _f(plan.I_FS, 'motor.max_current', 'IQ_I_BASE'),
+         "IQ_V_BASE": _f(plan.V_MAX, 'drive.vdc', 'IQ_V_BASE'),
+         "IQ_W_BASE": _f(plan.W_FS, 'drive.max_speed', 'IQ_W_BASE')}
     mc_ctx = {k: (_int(g, key, f"MCSDK {k} gain", -32767, 32767), _int(sh, key, f"MCSDK {k} divisor", 0, 15))
               for k, (g, sh) in mc.items()}
     iq_ctx = {k: _int(v, key, f"IQ24 {k}", -C_INT32_MAX, C_INT32_MAX) for k, v in iq.items()}
-    t.lines.extend(_render("vendor.c.j2", N=N, P=P, U=N.upper(), mc=mc_ctx, iq=iq_ctx))
+    t.lines.extend(_render("vendor.c.j2", N=N, P=P, U=N.upper(), gains=gains, d=d, mc=mc_ctx,
+                           iq=iq_ctx))
 
 
 def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
+    """The Q31 section (``templates/fixed.c.j2``); numbers formatted and
+    range-checked here, in line order."""
     plan = check.fixed
     key = _law_key(artifact)
-    t("/*")
-    t(" * Fixed point: Q31 words (value / 2^31), int64 accumulators, arithmetic")
-    t(" * right shifts (as gcc and arm-none-eabi implement >> on negative values).")
-    t(" * Each coefficient set is an int32 mantissa vector m with one shift F:")
-    t(" * c = m / 2^F (integer gains with power-of-two divisors, as STM32 MCSDK).")
-    t(f" * Inputs up to I_MAX = {plan.I_MAX:.6g} A and W_MAX = {plan.W_MAX:.6g} rad/s (mechanical),")
-    t(f" * voltage limit {plan.V_MAX:.6g} V: bases below are powers of two above rigorous")
-    t(" * bounds of every signal and state, so no accumulator or word overflows.")
-    for ax in AXES:
-        if ax in check.fixed_error_bound:
-            t(f" * Quantisation error bound, {ax} axis: |v_q31 - v_exact| <= "
-              f"{check.fixed_error_bound[ax]:.3g} V over {HORIZON * 1e3:g} ms from equal states.")
-    t(" */")
-    t("#include <stdint.h>")
-    t(f"#define {P}Q31_I_BASE {_f(plan.I_BASE, 'motor.max_current', 'Q31_I_BASE')} /* A at full scale */")
-    t(f"#define {P}Q31_V_BASE {_f(plan.V_BASE, 'drive.vdc', 'Q31_V_BASE')} /* V at full scale */")
-    t(f"#define {P}Q31_W_BASE {_f(plan.W_BASE, 'drive.max_speed', 'Q31_W_BASE')} /* mechanical rad/s at full scale */")
-    t(f"#define {P}Q31_I_MAX {_f(plan.I_MAX, 'motor.max_current', 'Q31_I_MAX')} /* A, current range ({N}_to_q31 clamps beyond) */")
-    t(f"#define {P}Q31_W_MAX {_f(plan.W_MAX, 'drive.max_speed', 'Q31_W_MAX')} /* rad/s, speed range ({N}_to_q31 clamps beyond) */")
-    t(f"#define {P}Q31_V_MAX {_q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX')} /* V_MAX / V_BASE in Q31: the largest limit */")
-    if drive is not None and drive.vdc > 0:
-        t(f"#define {P}Q31_VDC_BASE {_f(plan.V_BASE * drive.vdc / check.v_max, 'drive.vdc', 'Q31_VDC_BASE')} "
-          f"/* V of bus at full scale ({P.lower()}set_vdc_q31) */")
-    for ax in AXES:
-        fa = plan.axes[ax]
-        for i, s in enumerate(fa.S):
-            t(f"#define {P}Q31_{ax.upper()}_X{i}_BASE {_f(s, key, f'Q31 {ax}-axis state base')} /* state {i} full scale */")
-    for name, (m, F, val) in plan.dec.items():
-        t(f"#define {P}Q31_DEC_{name.upper()} {_q31(m, 'motor', f'Q31 decoupling {name}')} /* decoupling coefficient {val:.6g} p.u. = m / 2^shift */")
-        t(f"#define {P}Q31_DEC_{name.upper()}_SHIFT {_shift(F, 'motor', f'Q31 decoupling {name} shift')}")
-    if artifact.method in PI_METHODS:
-        for ax in AXES:
-            g = _pi_gains(artifact, ax)
-            if g is None:
-                continue
-            kp, ki = g
-            t(f"/* {ax} axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY")
-            t(" * (the Q31 law below runs its own quantised coefficients):")
-            for label, val in (("Kp", kp * plan.I_BASE / plan.V_BASE),
-                               ("Ki Ts", ki * artifact.sample_time * plan.I_BASE / plan.V_BASE)):
-                q = _fixed._quantise_row(np.array([val]), 1)
-                if q is None:
-                    continue
-                t(f" *   {label} = {_q31(q[0][0], key, f'Q31 {ax}-axis {label}')} / 2^"
-                  f"{_int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62)} ({val:.6g} p.u.)")
-            t(" */")
-    t("")
+    head = {"I_MAX": f"{plan.I_MAX:.6g}", "W_MAX": f"{plan.W_MAX:.6g}",
+            "V_MAX": f"{plan.V_MAX:.6g}",
+            "bounds": [(ax, f"{check.fixed_error_bound[ax]:.3g}", f"{HORIZON * 1e3:g}")
+                       for ax in AXES if ax in check.fixed_error_bound]}
+    d = {"I_BASE": _f(plan.I_BASE, 'motor.max_current', 'Q31_I_BASE'),
+         "V_BASE": _f(plan.V_BASE, 'drive.vdc', 'Q31_V_BASE'),
+         "W_BASE": _f(plan.W_BASE, 'drive.max_speed', 'Q31_W_BASE'),
+         "I_MAX": _f(plan.I_MAX, 'motor.max_current', 'Q31_I_MAX'),
+         "W_MAX": _f(plan.W_MAX, 'drive.max_speed', 'Q31_W_MAX'),
+         "V_MAX": _q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX'),
+         "VDC_BASE": (_f(plan.V_BASE * drive.vdc / check.v_max, 'drive.vdc', 'Q31_VDC_BASE')
+                      if drive is not None and drive.vdc > 0 else None)}
+    state_bases = [(ax.upper(), i, _f(s, key, f'Q31 {ax}-axis state base'))
+                   for ax in AXES for i, s in enumerate(plan.axes[ax].S)]
+    dec = [(name.upper(), _q31(m, 'motor', f'Q31 decoupling {name}'), f"{val:.6g}",
+            _shift(F, 'motor', f'Q31 decoupling {name} shift'))
+           for name, (m, F, val) in plan.dec.items()]
+    pi = []
+    for ax, kp, ki in _informational_pi_gains(artifact):
+        rows = []
+        for label, val in (("Kp", kp * plan.I_BASE / plan.V_BASE),
+                           ("Ki Ts", ki * artifact.sample_time * plan.I_BASE / plan.V_BASE)):
+            q = _fixed._quantise_row(np.array([val]), 1)
+            if q is not None:
+                rows.append((label, _q31(q[0][0], key, f'Q31 {ax}-axis {label}'),
+                             _int(q[1], key, f'Q31 {ax}-axis {label} divisor', 0, 62),
+                             f"{val:.6g}"))
+        pi.append((ax, rows))
     axes = []
     for ax in AXES:
         fa = plan.axes[ax]
@@ -1091,7 +1030,8 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -
                      for m, _ in fa.rows],
             "aw": ", ".join(_q31(m[n + 2], key, f"Q31 {ax}-axis anti-windup")
                             for m, _ in fa.rows) if has_aw else ""})
-    t.lines.extend(_render("fixed.c.j2", N=N, P=P, axes=axes,
+    t.lines.extend(_render("fixed.c.j2", N=N, P=P, p=P.lower(), head=head, d=d,
+                           state_bases=state_bases, dec=dec, pi=pi, axes=axes,
                            nd=max(plan.axes["d"].S.size, 1), nq=max(plan.axes["q"].S.size, 1)))
 
 
@@ -1116,128 +1056,34 @@ def _write_fcs_header(artifact, motor, drive, name: str, title: str | None,
     guard = f"{P}CONTROLLER_H"
     if title is None:
         title = (artifact.spec or {}).get("title", "")
-    prov = artifact.provenance or {}
     fcs = artifact.fcs
     dec = artifact.decoupling
     key = _law_key(artifact)
     predict = int(artifact.delay_samples) >= 1
     k_hex = fcs_r_hex_per_vdc(conv)
     t = _Text()
-    t("/*")
-    t(" * controller.h -- current controller exported by current-control-toolbox")
-    t(f" * title:       {sanitise_comment(title)}")
-    t(f" * method:      {sanitise_comment(artifact.method)}")
-    t(f" * version:     {sanitise_comment(prov.get('version', 'unknown'))}")
-    t(f" * spec sha256: {sanitise_comment(prov.get('spec_sha256', 'unknown'))}")
-    t(f" * created:     {sanitise_comment(prov.get('created', 'unknown'))}")
-    t(" *")
-    t(" * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no")
-    t(f" * fixed-point variant: {P}FIXED_POINT is an error).")
-    t(" * Boolean predictive control (Cormerais 2002, paper 002): every period")
-    t(f" * {N}_step() predicts the currents one period ahead (forward Euler of the dq")
-    t(" * model with the controller's R, Ld, Lq, flux) for each of the 8 inverter")
-    t(" * states and returns the state of least")
-    t(" *   J = ALPHA (i_q - i_q_ref)^2 + BETA (i_d - i_d_ref)^2 + GAMMA commutations")
-    t(" * (criterion (23), GAMMA the switching penalty); ties go to the fewest")
-    t(" * commutations, then the lower state index.")
-    if predict:
-        t(f" * Computation delay {int(artifact.delay_samples)} period(s): the state returned is applied during")
-        t(" * the NEXT period; the currents are first advanced over the current one with")
-        t(" * the state chosen last period (as the toolbox simulator).")
-    else:
-        t(" * No computation delay: the state returned is applied at once, for this period.")
-    t(f" * Call {N}_init() once, then {N}_set_vdc() with the measured bus voltage and")
-    t(f" * {N}_step() once per period (example at the end of this file).")
-    t(f" * Faults: out->status {N.upper()}_STATUS_BAD_INPUT (an input is inf/nan) or")
-    t(f" * {N.upper()}_STATUS_BAD_STATE (the cost overflowed): the previous state is held.")
-    t(" */")
-    t(f"#ifndef {guard}")
-    t(f"#define {guard}")
-    t("")
-    t("#include <math.h> /* sinf, cosf */")
-    t("#include <stdint.h> /* uint32_t */")
-    t("")
-    t(f"#ifdef {P}FIXED_POINT")
-    t('#error "fixed-point variant not available: the fcs_mpc law is exported in float only"')
-    t(f"#endif /* {P}FIXED_POINT */")
-    t("")
-    t(f"#define {P}SAMPLE_TIME {_f(artifact.sample_time, 'drive.sample_time', 'SAMPLE_TIME')} /* controller period, s */")
-    t(f"#define {P}DELAY_SAMPLES {_int(artifact.delay_samples, 'drive.delay_samples', 'DELAY_SAMPLES', 0)} /* computation delay, periods */")
-    t(f"#define {P}DRIVE_VDC {_f(drive.vdc, 'drive.vdc', 'DRIVE_VDC')} /* nominal DC-link voltage, V */")
-    t(f"#define {P}R_HEX_PER_VDC {_f(k_hex, 'drive.vdc', 'R_HEX_PER_VDC')} /* active vector length per volt of bus ({sanitise_comment(conv)}-invariant dq) */")
-    t(f"#define {P}R_HEX {_f(k_hex * drive.vdc, 'drive.vdc', 'R_HEX')} /* active vector length at the nominal bus, V */")
-    t("/* controller-side model of the predictor */")
-    t(f"#define {P}DEC_R {_f(dec.R_c, 'motor.R', 'DEC_R')} /* ohm */")
-    t(f"#define {P}DEC_LD {_f(dec.Ld_c, 'motor.Ld', 'DEC_LD')} /* H */")
-    t(f"#define {P}DEC_LQ {_f(dec.Lq_c, 'motor.Lq', 'DEC_LQ')} /* H */")
-    t(f"#define {P}DEC_FLUX {_f(dec.flux_c, 'motor.flux', 'DEC_FLUX')} /* Wb */")
-    t(f"#define {P}POLE_PAIRS {_int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)} /* w_e = POLE_PAIRS * Omega_m */")
-    t("/* criterion (23) weights: alpha (q error, A^-2), beta (d error, A^-2), gamma (per commutation) */")
-    t(f"#define {P}FCS_ALPHA {_f(fcs.alpha, key + '.alpha', 'FCS_ALPHA')}")
-    t(f"#define {P}FCS_BETA {_f(fcs.beta, key + '.beta', 'FCS_BETA')}")
-    t(f"#define {P}FCS_GAMMA {_f(fcs.gamma, key + '.gamma', 'FCS_GAMMA')}")
+    d = {"ts": _f(artifact.sample_time, 'drive.sample_time', 'SAMPLE_TIME'),
+         "nd": _int(artifact.delay_samples, 'drive.delay_samples', 'DELAY_SAMPLES', 0),
+         "vdc": _f(drive.vdc, 'drive.vdc', 'DRIVE_VDC'),
+         "r_hex_per_vdc": _f(k_hex, 'drive.vdc', 'R_HEX_PER_VDC'),
+         "convention": sanitise_comment(conv),
+         "r_hex": _f(k_hex * drive.vdc, 'drive.vdc', 'R_HEX'),
+         "R": _f(dec.R_c, 'motor.R', 'DEC_R'), "Ld": _f(dec.Ld_c, 'motor.Ld', 'DEC_LD'),
+         "Lq": _f(dec.Lq_c, 'motor.Lq', 'DEC_LQ'), "flux": _f(dec.flux_c, 'motor.flux', 'DEC_FLUX'),
+         "pole_pairs": _int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1),
+         "alpha": _f(fcs.alpha, key + '.alpha', 'FCS_ALPHA'),
+         "beta": _f(fcs.beta, key + '.beta', 'FCS_BETA'),
+         "gamma": _f(fcs.gamma, key + '.gamma', 'FCS_GAMMA')}
+    t.lines.extend(_render("fcs_top.c.j2", prov=_provenance(artifact, title), N=N, P=P,
+                           U=N.upper(), guard=guard, delay=int(artifact.delay_samples), d=d))
     t("")
     t.lines.extend(_render("fcs.c.j2", N=N, P=P, U=N.upper(), predict=predict))
     if example:
         t("")
-        _fcs_example(t, N, P)
+        _example(t, N, P, fcs=True)
     t("")
     t(f"#endif /* {guard} */")
     return t.text()
-
-
-def _fcs_example(t: _Text, N: str, P: str) -> None:
-    U = N.upper()
-    t("#if 0 /* usage example: copy the lines between BEGIN and END into main.c */")
-    t(f"// {EXAMPLE_BEGIN}")
-    src = f"""#include <stdio.h>
-#include "controller.h"
-
-/* stand-ins for the board's drivers: ADC, encoder, gate drivers, fault output */
-static float adc_i_d(void) {{ return 0.0f; }}
-static float adc_i_q(void) {{ return 0.0f; }}
-static float adc_vdc(void) {{ return {P}DRIVE_VDC; }}
-static float encoder_speed(void) {{ return 0.0f; }}
-static float encoder_theta_e(void) {{ return 0.0f; }}
-static void gates_apply(int s_a, int s_b, int s_c) {{ (void)s_a; (void)s_b; (void)s_c; }}
-static void fault_report(int status) {{ printf("controller status %d\\n", status); }}
-
-static {N}_state_t ctl;
-
-/* once per controller period ({P}SAMPLE_TIME s) */
-static void control_isr(float i_d_ref, float i_q_ref)
-{{
-    {N}_input_t in;
-    {N}_output_t out;
-    if ({N}_set_vdc(&ctl, adc_vdc()) != {U}_STATUS_OK) {{
-        fault_report({U}_STATUS_BAD_INPUT); /* bus reading lost: previous vectors kept */
-    }}
-    in.i_d_ref = i_d_ref;
-    in.i_q_ref = i_q_ref;
-    in.i_d = adc_i_d();
-    in.i_q = adc_i_q();
-    in.omega_m = encoder_speed();
-    in.theta_e = encoder_theta_e();
-    {N}_step(&ctl, &in, &out);
-    if (out.status != {U}_STATUS_OK) {{
-        fault_report(out.status); /* previous state held: decide to trip or ride through */
-    }}
-    gates_apply(out.s_a, out.s_b, out.s_c); /* applied next period when DELAY_SAMPLES >= 1 */
-}}
-
-int main(void)
-{{
-    int k;
-    {N}_init(&ctl);
-    for (k = 0; k < 10; ++k) {{
-        control_isr(0.0f, 1.0f);
-    }}
-    return 0;
-}}"""
-    for ln in src.split("\n"):
-        t(ln)
-    t(f"// {EXAMPLE_END}")
-    t("#endif /* usage example */")
 
 
 EXAMPLE_BEGIN = "EXAMPLE main.c BEGIN"
@@ -1253,63 +1099,11 @@ def example_source(header: str) -> str:
     return "\n".join(lines[i + 1:j]) + "\n"
 
 
-def _example(t: _Text, N: str, P: str, hexagon: bool) -> None:
-    """A compilable main.c, inside a comment (no ``/*`` in it)."""
-    U = N.upper()
-    t("#if 0 /* usage example: copy the lines between BEGIN and END into main.c */")
-    t(f"// {EXAMPLE_BEGIN}")
-    src = f"""#include <stdio.h>
-#include "controller.h"
-
-/* stand-ins for the board's drivers: ADC, encoder, PWM, fault output */
-static float adc_i_d(void) {{ return 0.0f; }}
-static float adc_i_q(void) {{ return 0.0f; }}
-static float adc_vdc(void) {{ return {P}DRIVE_VDC; }}
-static float encoder_speed(void) {{ return 0.0f; }}
-static float encoder_theta_e(void) {{ return 0.0f; }}
-static void pwm_apply(float v_d, float v_q, float theta_e)
-{{
-    (void)v_d; (void)v_q; (void)theta_e; /* inverse Park at theta_e, then SVM */
-}}
-static void fault_report(int status) {{ printf("controller status %d\\n", status); }}
-
-static {N}_state_t ctl;
-
-/* once per controller period ({P}SAMPLE_TIME s), e.g. in the ADC interrupt */
-static void control_isr(float i_d_ref, float i_q_ref)
-{{
-    {N}_input_t in;
-    {N}_output_t out;
-    const float theta_e = encoder_theta_e();
-    if ({N}_set_vdc(&ctl, adc_vdc()) != {U}_STATUS_OK) {{
-        fault_report({U}_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
-    }}
-    in.i_d_ref = i_d_ref;
-    in.i_q_ref = i_q_ref;
-    in.i_d = adc_i_d();
-    in.i_q = adc_i_q();
-    in.omega_m = encoder_speed();
-{"    in.theta_e = theta_e;" if hexagon else ""}
-    {N}_step(&ctl, &in, &out);
-    if (out.status != {U}_STATUS_OK) {{
-        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
-    }}
-    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e); /* applied during the next period */
-}}
-
-int main(void)
-{{
-    int k;
-    {N}_init(&ctl);
-    for (k = 0; k < 10; ++k) {{
-        control_isr(0.0f, 1.0f);
-    }}
-    return 0;
-}}"""
-    for ln in src.split("\n"):
-        t(ln)
-    t(f"// {EXAMPLE_END}")
-    t("#endif /* usage example */")
+def _example(t: _Text, N: str, P: str, *, hexagon: bool = False, fcs: bool = False) -> None:
+    """A compilable main.c, inside ``#if 0`` (no ``/*`` in it): ``templates/example.c.j2``,
+    the predictive switching law's (``fcs``) or the linear law's."""
+    t.lines.extend(_render("example.c.j2", N=N, P=P, U=N.upper(), hexagon=hexagon, fcs=fcs,
+                           begin=EXAMPLE_BEGIN, end=EXAMPLE_END))
 
 
 def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
@@ -1434,7 +1228,7 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     _vendor_section(t, artifact, motor, drive, check, N, P)
     t("")
     if example:
-        _example(t, N, P, check.limit == "hexagon")
+        _example(t, N, P, hexagon=check.limit == "hexagon")
         t("")
     t(f"#endif /* {guard} */")
     return t.text()

@@ -48,18 +48,25 @@ def state_vector(state, r_hex):
 
 
 @njit(cache=True)
-def hexagon_scale(va, vb, r_hex):
-    """Factor s <= 1 that brings (va, vb) onto or inside the hexagon of vertex radius r_hex."""
-    mag = math.hypot(va, vb)
-    if mag == 0.0:
-        return 1.0
+def sector(va, vb):
+    """Hexagon sector ``0..5`` of the stationary-frame vector (va, vb) and its
+    angle ``phi`` (rad, ``0 <= phi < pi/3``) from the sector's first edge."""
     ang = math.atan2(vb, va)
     if ang < 0.0:
         ang += 2.0 * math.pi
     sect = int(ang / (math.pi / 3.0))
     if sect > 5:
         sect = 5
-    phi = ang - sect * (math.pi / 3.0)
+    return sect, ang - sect * (math.pi / 3.0)
+
+
+@njit(cache=True)
+def hexagon_scale(va, vb, r_hex):
+    """Factor s <= 1 that brings (va, vb) onto or inside the hexagon of vertex radius r_hex."""
+    mag = math.hypot(va, vb)
+    if mag == 0.0:
+        return 1.0
+    sect, phi = sector(va, vb)
     # distance from the centre to the hexagon edge along this direction
     edge = r_hex * _SQ3_2 / math.cos(phi - math.pi / 6.0)
     if mag > edge:
@@ -76,13 +83,7 @@ def svm_times(va, vb, r_hex, ts):
     0-first-second-7-second-first-0 commutes one cell at a time. Vectors
     outside the hexagon are scaled onto it (T0 = 0).
     """
-    ang = math.atan2(vb, va)
-    if ang < 0.0:
-        ang += 2.0 * math.pi
-    sect = int(ang / (math.pi / 3.0))
-    if sect > 5:
-        sect = 5
-    phi = ang - sect * (math.pi / 3.0)
+    sect, phi = sector(va, vb)
     mag = math.hypot(va, vb)
     k_state = ACTIVE_ORDER[sect]
     l_state = ACTIVE_ORDER[(sect + 1) % 6]

@@ -52,6 +52,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._inverter import bit_changes, hexagon_scale, state_vector, svm_times
+from ._metrics import METRIC_NAMES
 
 __all__ = ["run", "run_batch", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices"]
 
@@ -82,8 +83,11 @@ del _prefix, _names
 
 #: Length of the scenario array.
 N_SC = len(LAYOUTS["SC"])
-#: Metrics (raw kernel output order; names in ``_metrics.METRIC_NAMES``).
-N_METRICS = 13
+#: Metrics (raw kernel output order: ``_metrics.METRIC_NAMES``, the one
+#: declaration; written through the generated slots ``M_<NAME>``, e.g.
+#: ``M_OVERSHOOT_PCT``).
+N_METRICS = len(METRIC_NAMES)
+globals().update({f"M_{_n.upper()}": _i for _i, _n in enumerate(METRIC_NAMES)})
 #: Trace columns: t, id, iq, vd, vq, speed (mech rad/s), torque, id_ref,
 #: iq_ref, speed_measured.
 N_TRACE = 10
@@ -464,32 +468,32 @@ def _finalise(acc_m, n_per, Ts, om_final, t_step, mset):
     M = np.full(N_METRICS, np.nan)
     total = n_per * Ts
     if acc_m[_A_OUT5] < 0.0:
-        M[0] = 0.0
+        M[M_RESPONSE_TIME_5PCT] = 0.0
     elif acc_m[_A_OUT5] < total - 1e-12:
-        M[0] = acc_m[_A_OUT5] - t_step
+        M[M_RESPONSE_TIME_5PCT] = acc_m[_A_OUT5] - t_step
     if acc_m[_A_T10] >= 0.0 and acc_m[_A_T90] >= 0.0:
-        M[1] = acc_m[_A_T90] - acc_m[_A_T10]
+        M[M_RISE_TIME_10_90] = acc_m[_A_T90] - acc_m[_A_T10]
     if acc_m[_A_OUT2] < 0.0:
-        M[2] = 0.0
+        M[M_SETTLING_TIME_2PCT] = 0.0
     elif acc_m[_A_OUT2] < total - 1e-12:
-        M[2] = acc_m[_A_OUT2] - t_step
-    M[3] = 100.0 * acc_m[_A_OVER]
+        M[M_SETTLING_TIME_2PCT] = acc_m[_A_OUT2] - t_step
+    M[M_OVERSHOOT_PCT] = 100.0 * acc_m[_A_OVER]
     if acc_m[_A_STATT] > 0.0:
-        M[4] = acc_m[_A_STAT] / acc_m[_A_STATT]
-        M[10] = acc_m[_A_FINAL] / acc_m[_A_STATT]
+        M[M_STATIC_ERROR] = acc_m[_A_STAT] / acc_m[_A_STATT]
+        M[M_FINAL_VALUE] = acc_m[_A_FINAL] / acc_m[_A_STATT]
     if total > 0.0:
-        M[5] = acc_m[_A_SQT] / total
-        M[6] = acc_m[_A_SQID] / total
-        M[11] = acc_m[_A_SQIQ] / total
-        M[7] = 2.0 * acc_m[_A_CELLS] / total
-        M[8] = acc_m[_A_CELLS] / total
-    M[9] = acc_m[_A_SAT]
-    M[12] = om_final
+        M[M_MSE_TORQUE] = acc_m[_A_SQT] / total
+        M[M_MSE_ID] = acc_m[_A_SQID] / total
+        M[M_MSE_IQ] = acc_m[_A_SQIQ] / total
+        M[M_COMMUTATIONS_PER_S] = 2.0 * acc_m[_A_CELLS] / total
+        M[M_CELL_TRANSITIONS_PER_S] = acc_m[_A_CELLS] / total
+    M[M_SATURATION_TIME] = acc_m[_A_SAT]
+    M[M_FINAL_SPEED] = om_final
     if mset[2] - mset[1] == 0.0:  # no step: the step metrics are undefined
-        M[0] = np.nan
-        M[1] = np.nan
-        M[2] = np.nan
-        M[3] = np.nan
+        M[M_RESPONSE_TIME_5PCT] = np.nan
+        M[M_RISE_TIME_10_90] = np.nan
+        M[M_SETTLING_TIME_2PCT] = np.nan
+        M[M_OVERSHOOT_PCT] = np.nan
     return M
 
 
