@@ -132,3 +132,65 @@ def test_ilq_less_sensitive_to_inductance_than_pi(results):
           f"PI {peak_id['pi_lag']:.3g} A")
     assert peak_id["ilq"] < 1.5
     assert peak_id["ilq"] <= RATIO * peak_id["pi_lag"]
+
+
+# ------------------------------------------------ Figs. 4-5 (b)-(c) and (f)-(g)
+# Sect. 3.1: "(b) and (c) are the results at one-half the rated value and at two
+# times the rated value of r_1 ... (f) and (g) ... 0.8 times ... and 1.2 times the
+# rated value of lambda_f"; claim: "the variations of state variables due to the
+# error of armature resistance r_1 are very small in both the ILQ and the PI servo
+# systems". The paper states nothing about (f)-(g). Same setup and figures of
+# merit as above (true plant varied, controllers and decoupling nominal).
+# Measured (dspeed rad, did A): R x0.5: ILQ 0.0029 / 0.013, PI 0.0127 / 0.070;
+# R x2: ILQ 0.0079 / 0.022, PI 0.0234 / 0.085; flux x0.8: ILQ 0.0365 / 0.039,
+# PI 0.0356 / 0.082; flux x1.2: ILQ 0.0251 / 0.040, PI 0.0293 / 0.080.
+R_FLUX = {"R x0.5": {"R": 0.5}, "R x2": {"R": 2.0},
+          "flux x0.8": {"flux": 0.8}, "flux x1.2": {"flux": 1.2}}
+
+
+@pytest.fixture(scope="module")
+def r_flux_merits(results):
+    out = {}
+    for name in ("ilq", "pi_lag"):
+        spec = load_spec(DESIGNS / f"001_takami2004_{name}.toml")
+        law = control_law(design(spec), speed_loop(spec.motor))
+        sc = Scenario(kind="speed_step", duration=0.08, step_time=0.005, speed_ref=SPEED_REF,
+                      keep_traces=True)
+        ref = results[name][1.0]
+        for case, scale in R_FLUX.items():
+            r = simulate(law, spec.motor.with_overrides(scale=scale), sc,
+                         drive_params(spec.drive))
+            out[name, case] = (float(np.sum(np.abs(r.speed - ref.speed)) * 1e-4),
+                               float(np.max(np.abs(r.id - ref.id))))
+    return out
+
+
+def test_resistance_variation_small_in_both(r_flux_merits, results):
+    """Figs. 4-5 (b)-(c): with r_1 x0.5 / x2 the i_d excursion of both systems
+    stays below 0.1 A, under a tenth of the PI's i_d excursion at 2x L_1
+    (2.36 A), and the speed moves at most 0.025 rad, a third of the PI's
+    0.071 rad at 2x L_1: 'very small in both' reproduced. The ILQ still moves
+    less than the PI (speed 2.9-4.4x, i_d 3.9-5.4x less), which the paper does
+    not say."""
+    pi_L = merits(results["pi_lag"])[2.0]
+    for case in ("R x0.5", "R x2"):
+        (s_i, d_i), (s_p, d_p) = r_flux_merits["ilq", case], r_flux_merits["pi_lag", case]
+        print(f"\n{case}: int|dOmega| ILQ {s_i:.4f} rad, PI {s_p:.4f} rad; max|di_d| ILQ "
+              f"{d_i:.3f} A, PI {d_p:.3f} A (PI at 2x L: {pi_L[0]:.4f} rad, {pi_L[1]:.2f} A)")
+        for s_, d_ in ((s_i, d_i), (s_p, d_p)):
+            assert d_ < 0.1 and d_ < 0.1 * pi_L[1]
+            assert s_ < 0.035 and s_ < 0.5 * pi_L[0]
+        assert s_i <= RATIO * s_p and d_i <= RATIO * d_p
+
+
+def test_flux_variation_same_for_both(r_flux_merits):
+    """Figs. 4-5 (f)-(g) (no claim in the text): lambda_f x0.8 / x1.2 changes the
+    torque constant, which the speed loop, not the current servo, absorbs; the
+    speed changes of the two systems agree within 25 % (0.025-0.037 rad) and
+    i_d stays below 0.1 A in both."""
+    for case in ("flux x0.8", "flux x1.2"):
+        (s_i, d_i), (s_p, d_p) = r_flux_merits["ilq", case], r_flux_merits["pi_lag", case]
+        print(f"\n{case}: int|dOmega| ILQ {s_i:.4f} rad, PI {s_p:.4f} rad; max|di_d| ILQ "
+              f"{d_i:.3f} A, PI {d_p:.3f} A")
+        assert abs(s_i / s_p - 1) < 0.25
+        assert d_i < 0.1 and d_p < 0.1
