@@ -44,6 +44,7 @@ won by a slower design.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -132,3 +133,140 @@ def test_ilq_less_sensitive_to_inductance_than_pi(results):
           f"PI {peak_id['pi_lag']:.3g} A")
     assert peak_id["ilq"] < 1.5
     assert peak_id["ilq"] <= RATIO * peak_id["pi_lag"]
+
+
+# ------------------------------------------------ Figs. 4-5 (b)-(c) and (f)-(g)
+# Sect. 3.1: "(b) and (c) are the results at one-half the rated value and at two
+# times the rated value of r_1 ... (f) and (g) ... 0.8 times ... and 1.2 times the
+# rated value of lambda_f"; claim: "the variations of state variables due to the
+# error of armature resistance r_1 are very small in both the ILQ and the PI servo
+# systems". The paper states nothing about (f)-(g). Same setup and figures of
+# merit as above (true plant varied, controllers and decoupling nominal).
+# Measured (dspeed rad, did A): R x0.5: ILQ 0.0029 / 0.013, PI 0.0127 / 0.070;
+# R x2: ILQ 0.0079 / 0.022, PI 0.0234 / 0.085; flux x0.8: ILQ 0.0365 / 0.039,
+# PI 0.0356 / 0.082; flux x1.2: ILQ 0.0251 / 0.040, PI 0.0293 / 0.080.
+R_FLUX = {"R x0.5": {"R": 0.5}, "R x2": {"R": 2.0},
+          "flux x0.8": {"flux": 0.8}, "flux x1.2": {"flux": 1.2}}
+
+
+@pytest.fixture(scope="module")
+def r_flux_merits(results):
+    out = {}
+    for name in ("ilq", "pi_lag"):
+        spec = load_spec(DESIGNS / f"001_takami2004_{name}.toml")
+        law = control_law(design(spec), speed_loop(spec.motor))
+        sc = Scenario(kind="speed_step", duration=0.08, step_time=0.005, speed_ref=SPEED_REF,
+                      keep_traces=True)
+        ref = results[name][1.0]
+        for case, scale in R_FLUX.items():
+            r = simulate(law, spec.motor.with_overrides(scale=scale), sc,
+                         drive_params(spec.drive))
+            out[name, case] = (float(np.sum(np.abs(r.speed - ref.speed)) * 1e-4),
+                               float(np.max(np.abs(r.id - ref.id))))
+    return out
+
+
+def test_resistance_variation_small_in_both(r_flux_merits, results):
+    """Figs. 4-5 (b)-(c): with r_1 x0.5 / x2 the i_d excursion of both systems
+    stays below 0.1 A, under a tenth of the PI's i_d excursion at 2x L_1
+    (2.36 A), and the speed moves at most 0.025 rad, a third of the PI's
+    0.071 rad at 2x L_1: 'very small in both' reproduced. The ILQ still moves
+    less than the PI (speed 2.9-4.4x, i_d 3.9-5.4x less), which the paper does
+    not say."""
+    pi_L = merits(results["pi_lag"])[2.0]
+    for case in ("R x0.5", "R x2"):
+        (s_i, d_i), (s_p, d_p) = r_flux_merits["ilq", case], r_flux_merits["pi_lag", case]
+        print(f"\n{case}: int|dOmega| ILQ {s_i:.4f} rad, PI {s_p:.4f} rad; max|di_d| ILQ "
+              f"{d_i:.3f} A, PI {d_p:.3f} A (PI at 2x L: {pi_L[0]:.4f} rad, {pi_L[1]:.2f} A)")
+        for s_, d_ in ((s_i, d_i), (s_p, d_p)):
+            assert d_ < 0.1 and d_ < 0.1 * pi_L[1]
+            assert s_ < 0.035 and s_ < 0.5 * pi_L[0]
+        assert s_i <= RATIO * s_p and d_i <= RATIO * d_p
+
+
+def test_flux_variation_same_for_both(r_flux_merits):
+    """Figs. 4-5 (f)-(g) (no claim in the text): lambda_f x0.8 / x1.2 changes the
+    torque constant, which the speed loop, not the current servo, absorbs; the
+    speed changes of the two systems agree within 25 % (0.025-0.037 rad) and
+    i_d stays below 0.1 A in both."""
+    for case in ("flux x0.8", "flux x1.2"):
+        (s_i, d_i), (s_p, d_p) = r_flux_merits["ilq", case], r_flux_merits["pi_lag", case]
+        print(f"\n{case}: int|dOmega| ILQ {s_i:.4f} rad, PI {s_p:.4f} rad; max|di_d| ILQ "
+              f"{d_i:.3f} A, PI {d_p:.3f} A")
+        assert abs(s_i / s_p - 1) < 0.25
+        assert d_i < 0.1 and d_p < 0.1
+
+
+# ------------------------------------------------ dq convention of Tables 1-2
+# Paper 001 (Takami 2004): which dq convention Tables 1-2 use, and why the
+# catalog's amplitude-invariant reading does not change what we reproduce.
+#
+# The paper prints no torque equation and no Park normalisation (sect. 2 gives
+# only the decoupled electrical model eq (1)); Table 1: 1.3 kW, 1500 rpm,
+# 8.34 N m, 8 poles, phase current 10.7 A; Table 2: lambda_f = 0.11896 Wb, EMF
+# 49.83 V at 1000 rpm. The EMF is exactly p lambda_f omega_m (4 x 0.11896 x
+# 104.72 = 49.83 V), the dq back-EMF magnitude in the paper's frame, so the
+# convention is to be read from the rated point:
+#
+# * amplitude-invariant (catalog "takami2004"): lambda_f is the phase-peak flux,
+#   the EMF is the phase-peak EMF, i_q = sqrt(2) x 10.7 = 15.13 A and
+#   T = 3/2 p lambda_f i_q = 10.80 N m: 29.5 % above the printed 8.34 N m;
+# * power-invariant: the EMF is the line-to-line rms EMF (the usual datasheet
+#   figure), i_q = sqrt(3) x 10.7 = 18.53 A and T = p lambda_f i_q = 8.82 N m:
+#   5.7 % above 8.34 N m (a hot-magnet / rating margin of that size is usual),
+#   and the electromagnetic power 8.82 x 157.1 = 1.39 kW against 1.3 kW rated
+#   (amplitude: 1.70 kW).
+#
+# So Tables 1-2 support the power-invariant convention; the paper never says so.
+# The catalog keeps the amplitude-invariant reading (changing it changes the
+# physical motor: the phase flux is then 0.11896 sqrt(2/3) = 0.0971 Wb, and the
+# reference reports of designs/001_*). What we reproduce of paper 001 does not
+# depend on it: the dq electrical equations, hence every current-loop figure
+# (test_001_ilq.py), hold the same numbers in both conventions; the speed-step
+# comparison (above, in this file) designs its speed PI from the torque
+# constant, and the test below re-runs it with the power-invariant motor (same
+# physical current limit, 30 A x sqrt(3/2)): ILQ still <= 0.6 x PI on every figure
+# (measured: speed 0.0060 / 0.022 rad vs 0.029 / 0.066 rad, i_d 0.35 / 1.28 A vs
+# 1.50 / 3.20 A, at 0.5x / 2x L).
+PAPER_TORQUE, PAPER_CURRENT_RMS, PAPER_POWER = 8.34, 10.7, 1300.0   # Table 1
+RATED_SPEED = 1500 * 2 * math.pi / 60
+
+
+def test_table_1_favours_power_invariant():
+    m = load_spec(DESIGNS / "001_takami2004_ilq.toml").motor
+    assert m.convention == "amplitude" and m.flux == 0.11896
+    assert m.pole_pairs * m.flux * 1000 * 2 * math.pi / 60 == pytest.approx(49.83, abs=0.005)
+    t_amp = 1.5 * m.pole_pairs * m.flux * math.sqrt(2) * PAPER_CURRENT_RMS
+    t_pow = m.pole_pairs * m.flux * math.sqrt(3) * PAPER_CURRENT_RMS
+    print(f"\nTable 1: 8.34 N m at 10.7 A; amplitude-invariant {t_amp:.2f} N m "
+          f"({t_amp / PAPER_TORQUE - 1:+.1%}), power-invariant {t_pow:.2f} N m "
+          f"({t_pow / PAPER_TORQUE - 1:+.1%}); power {t_pow * RATED_SPEED:.0f} W vs "
+          f"{t_amp * RATED_SPEED:.0f} W (rated 1300 W)")
+    assert t_amp == pytest.approx(10.80, abs=0.01) and t_pow == pytest.approx(8.82, abs=0.01)
+    assert abs(t_pow / PAPER_TORQUE - 1) < 0.06 < 0.25 < abs(t_amp / PAPER_TORQUE - 1)
+    assert t_pow * RATED_SPEED == pytest.approx(PAPER_POWER, rel=0.07)
+
+
+@pytest.fixture(scope="module")
+def power_invariant_merits():
+    out = {}
+    for name in ("ilq", "pi_lag"):
+        spec = load_spec(DESIGNS / f"001_takami2004_{name}.toml")
+        motor = dataclasses.replace(spec.motor, convention="power",
+                                    max_current=spec.motor.max_current * math.sqrt(1.5))
+        law = control_law(design(dataclasses.replace(spec, motor=motor)), speed_loop(motor))
+        sc = Scenario(kind="speed_step", duration=0.08, step_time=0.005, speed_ref=SPEED_REF,
+                      keep_traces=True)
+        runs = {k: simulate(law, motor.with_overrides(scale={"Ld": k, "Lq": k}), sc,
+                            drive_params(spec.drive)) for k in FACTORS}
+        out[name] = merits(runs)
+    return out
+
+
+def test_inductance_conclusion_holds_power_invariant(power_invariant_merits):
+    m = power_invariant_merits
+    for k in (0.5, 2.0):
+        (s_i, d_i), (s_p, d_p) = m["ilq"][k], m["pi_lag"][k]
+        print(f"\npower-invariant, L x{k}: int|dOmega| ILQ {s_i:.4f} rad, PI {s_p:.4f} rad; "
+              f"max|di_d| ILQ {d_i:.2f} A, PI {d_p:.2f} A")
+        assert s_i <= RATIO * s_p and d_i <= RATIO * d_p

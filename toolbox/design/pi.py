@@ -36,23 +36,40 @@ Gain rules (``[controller.<method>] rule``), all in effective units
     gem-control itself uses ``T_sigma = tau`` (its sample time) and
     ``a = 4``: set ``small_time_constant = Ts`` and ``a = 4`` to reproduce it.
 ``complex_vector``
-    motulator's synchronous-frame complex-vector PI (Briz 1999/2000): a
-    continuous design in rotor coordinates, bandwidth ``alpha_c``, delay
-    compensated by rotating the output voltage by ``1.5 Ts omega`` (Bae &
-    Sul 2003, motulator's PWM ``k_comp = 1.5``). Per-axis reproduction:
-    by default ``Kp = alpha_c L``, ``Ki = alpha_c R`` (cancellation), with
-    the cross-coupling moved to the decoupling feedforward. With
-    ``integral_bandwidth`` (``alpha_i``, method ``pi`` only) motulator's
+    After motulator's synchronous-frame complex-vector PI (Briz 1999/2000),
+    NOT motulator's controller itself. A continuous design in rotor
+    coordinates, bandwidth ``alpha_c``, with the delay compensation angle
+    ``1.5 Ts omega`` (Bae & Sul 2003, motulator's PWM ``k_comp = 1.5``)
+    recorded in ``decoupling.delay_compensation_time`` for the firmware (the
+    simulator does not rotate ``v_dq``). By default ``Kp = alpha_c L``,
+    ``Ki = alpha_c R``: a 1DOF cancellation PI (motulator has no such
+    default), with the cross-coupling and EMF in the decoupling feedforward.
+    With ``integral_bandwidth`` (``alpha_i``, method ``pi`` only) the
     two-degree-of-freedom gains: reference feedforward ``Kt = alpha_c L``,
     ``Kp = (alpha_c + alpha_i) L - R``, ``Ki = alpha_c alpha_i L``, law
     ``v = Kt r - Kp y + Ki int (r - y)``: reference tracking
-    ``alpha_c/(s + alpha_c)``, poles ``-alpha_c``, ``-alpha_i`` (motulator's
-    synchronous-machine controller takes ``R = 0``). The factor ``1.5 Ts``
-    is recorded in the artifact's ``decoupling.delay_compensation_time`` for the firmware.
-    NOT reproduced: the complex cross-axis integral term
-    ``j omega Kt (r - y)``, the flux-map state, the rotation itself (a
-    nonlinear step outside the linear per-axis law) and motulator's direct
-    discrete-time design.
+    ``alpha_c/(s + alpha_c)``, poles exactly ``-alpha_c``, ``-alpha_i``.
+    How it differs from motulator 0.5's ``drive.control.sm.CurrentController``
+    (``k_p = 2 alpha_c``, ``k_i = alpha_c^2``, ``k_t = alpha_c`` on
+    ``psi = L i``; tested against motulator in
+    ``tests/design/test_pi_motulator.py``):
+
+    * ``Kp`` subtracts ``R``; motulator's does not (``alpha_i = alpha_c``,
+      ``Kp = 2 alpha_c L``): with ``alpha_i = alpha_c``, ``euler``
+      discretisation, ``w = 0`` and no voltage limit our law's output is
+      motulator's plus ``R i_meas``, exactly;
+    * motulator's integrator is complex, ``u_i += Ts (alpha_i + j w)(u - v)``:
+      the ``j w`` cross-axis term, absent here (two real per-axis laws plus
+      the decoupling feedforward; motulator's synchronous-machine control
+      has no feedforward, ``u_ff = 0``);
+    * motulator updates the integrator with the realised (limited) voltage;
+      the executed law here has Hanus's conditioning (``antiwindup = Ts/Kt``
+      with ``euler``), which is the same update: with ``R -> 0`` and a
+      circle limit the two agree exactly (tested);
+    * motulator's integrator is forward Euler; ours is discretised by
+      ``discretisation`` (default ``tustin``);
+    * motulator's flux-map state and its direct discrete-time variants are
+      not reproduced.
 ``explicit``
     ``Kp``, ``Ki`` (V/A, V/(A s)), or paper 000's normalised
     ``Kp_normalised``, ``Ki_normalised`` with ``voltage_gain`` E (V, default

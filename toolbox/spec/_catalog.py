@@ -27,11 +27,16 @@ CATALOG: dict[str, dict] = {
                       rated_current=20.0, max_current=20.0, rated_speed=230.0),
     # Takami 2004 (paper 001), Tables 1-2: 1.3 kW, 1500 rpm, 8.34 N m, 8 poles,
     # 10.7 A (rms phase current, peak 15.1 A), L1 = Ld = Lq = 1.78783 mH,
-    # lambda_f = 0.11896 Wb (EMF 49.83 V at 1000 rpm = p*lambda_f*omega, so the
-    # flux is a phase-peak value: amplitude-invariant dq), J = 0.00123 kg m^2,
+    # lambda_f = 0.11896 Wb (EMF 49.83 V at 1000 rpm = p*lambda_f*omega, read here
+    # as the phase-peak EMF: amplitude-invariant dq), J = 0.00123 kg m^2,
     # D = 0.036607 N m s/rad. The paper gives NO resistance: R = 0.4 ohm is our
     # assumption (typical of 1-2 kW, 8-pole servo motors of this inductance,
     # tau = L/R = 4.5 ms); the robustness claims are tested over R x0.5..x2.
+    # Convention: the paper states none. Its Table 1 fits power-invariant dq better
+    # (p lambda_f sqrt(3) 10.7 A = 8.82 N m vs the printed 8.34; amplitude-invariant
+    # gives 10.80 N m at sqrt(2) 10.7 A), i.e. the EMF is then line-to-line rms. The
+    # amplitude reading is kept: the reproduced figures do not depend on it
+    # (tests/papers/test_001_speed_step.py, "dq convention of Tables 1-2").
     "takami2004": dict(R=0.4, Ld=1.78783e-3, Lq=1.78783e-3, flux=0.11896, pole_pairs=4,
                        J=0.00123, friction=0.036607, convention="amplitude",
                        rated_current=10.7 * math.sqrt(2), max_current=30.0,
