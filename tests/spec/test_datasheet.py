@@ -291,6 +291,20 @@ def test_all_errors_at_once_one_each():
     assert "motor.R (missing)" not in text and "motor.flux" not in text  # no echoes
 
 
+def test_motor_method_and_scenario_errors_reported_in_one_run():
+    """A bad motor value used to hide a misspelt method, and that one a bad
+    scenario: three runs to see three errors (README: all at once)."""
+    with pytest.raises(SpecErrors) as info:
+        spec_from_dict({"motor": {"J": 1e-3, "R_ll": "0.2 mH", "Ld": 1e-3, "Lq": 1e-3,
+                                  "flux": 0.1, "pole_pairs": 4},
+                        "drive": DRIVE, "controller": {"method": "pii"},
+                        "scenario": [{"kind": "current_step", "iq_ref": 5.0,
+                                      "duration": -1.0}]})
+    assert [e.key for e in info.value.errors] == ["motor.R_ll", "controller.method",
+                                                 "scenario[0].duration"]
+    assert 'did you mean "pi"' in str(info.value)
+
+
 def test_range_error_on_a_derived_value_names_the_given_key():
     err = spec_error({"R_ll": "2e-9 ohm", "Ld": 1e-3, "Lq": 1e-3, "flux": 0.1,
                       "pole_pairs": 4})
