@@ -305,6 +305,17 @@ def test_motor_method_and_scenario_errors_reported_in_one_run():
     assert 'did you mean "pi"' in str(info.value)
 
 
+def test_pwm_timing_error_names_sample_frequency_when_that_was_given():
+    """40 kHz sampling against a 30 kHz carrier: the error named drive.sample_time,
+    a key not in the file; it names drive.sample_frequency and a value that works."""
+    err = spec_error({"R": 0.1, "Ld": 1e-3, "Lq": 1e-3, "flux": 0.1, "pole_pairs": 4},
+                     drive={"vdc": 24, "sample_frequency": "40 kHz",
+                            "switching_frequency": "30 kHz"})
+    assert err.key == "drive.sample_frequency"
+    assert 'from sample_frequency = "40 kHz"' in str(err)
+    assert "sample_frequency = 30000 Hz" in str(err)
+
+
 def test_range_error_on_a_derived_value_names_the_given_key():
     err = spec_error({"R_ll": "2e-9 ohm", "Ld": 1e-3, "Lq": 1e-3, "flux": 0.1,
                       "pole_pairs": 4})

@@ -266,7 +266,10 @@ def _drive_logged(value: Any) -> tuple[Drive, list]:
     if errors.failed:
         errors.raise_if_any()
     drive = Drive(**fields)
-    _check_drive_timing(drive)
+    try:
+        _check_drive_timing(drive)
+    except SpecError as err:  # names sample_frequency when that is what the user wrote
+        raise relocate(err, log) from None
     return drive, log
 
 
@@ -281,7 +284,10 @@ def _check_drive_timing(drive: Drive) -> None:
                 "drive.sample_time",
                 "a whole number of half PWM periods (1/(2 switching_frequency) = "
                 f"{0.5 / drive.switching_frequency:g} s)", drive.sample_time,
-                hint="sample once or twice per carrier period")
+                hint="sample once or twice per carrier period: sample_time = "
+                     f"{max(1, round(half_periods)) * 0.5 / drive.switching_frequency:g} s "
+                     f"(sample_frequency = "
+                     f"{2 * drive.switching_frequency / max(1, round(half_periods)):g} Hz)")
 
 
 def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
