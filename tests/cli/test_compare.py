@@ -34,3 +34,26 @@ def test_compare_paper000_motor(tmp_path):
     gm = {r["method"]: min(r["margins"][a]["gain_margin_db"] for a in "dq") for r in rows}
     assert gm["pi"] < gm["hinf"]
     assert "hinf" in res.output
+
+
+def test_compare_fcs_mpc_row_is_what_it_executes(tmp_path):
+    """fcs_mpc's axes hold the baseline PI of eq (19)-(20): its compare row used to
+    show that PI's margins and linear step figures as if they were the switching
+    law's (a 7 ms t5% for a law that reaches in 0.2 ms). Now its margins are
+    starred as informational and its t5%/OS are the simulated ones."""
+    spec = (DESIGNS / "002_cormerais2002_fcs_mpc.toml").read_text()
+    pi_spec = tmp_path / "002_pi.toml"  # the same drive, the baseline rule as a PI
+    pi_spec.write_text(spec.replace('method = "fcs_mpc"', 'method = "pi"')
+                       .replace("[controller.fcs_mpc]\nalpha = 1.0\nbeta = 1.0\ngamma = 35.0\n", "")
+                       .replace('inverter = "fcs_mpc"', 'inverter = "average"'))
+    specs = [pi_spec, DESIGNS / "002_cormerais2002_fcs_mpc.toml"]
+    out = tmp_path / "compare.json"
+    res = CliRunner().invoke(main, ["compare", "-q", *map(str, specs), "--json", str(out)],
+                             catch_exceptions=False)
+    rows = json.loads(out.read_text())
+    pi, fcs = rows
+    assert "margins_basis" not in pi and "baseline PI" in fcs["margins_basis"]
+    assert fcs["response_times"]["q"]["basis"] == "simulated (executed law)"
+    assert "* fcs_mpc: margins and robustness of its baseline PI" in res.output
+    fcs_line = next(line for line in res.output.splitlines() if line.lstrip().startswith("fcs_mpc"))
+    assert "*" in fcs_line

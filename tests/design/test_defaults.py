@@ -269,3 +269,18 @@ def test_hinf_optimal_gamma_unrealisable_does_not_say_raise_gamma():
     assert info.value.key == "controller.hinf.gamma"
     assert "raise gamma" not in text
     assert "backed off to 2 without removing it: lower w1's crossover" in text
+
+
+def test_fcs_mpc_step_not_resolved_by_its_ripple_fails_default_reach():
+    """400 V IPMSM, Ld = 0.2 mH at 10 kHz: one vector for one period moves the
+    current by ~115 A, so the predictive law's band is +/-77 A around a 78 A step
+    and the current settled 40 A (51 %) short of its reference; default.reach
+    passed anyway. A band wider than half the step now fails with a reason
+    that names the ripple and a sample time that would resolve it."""
+    out = build_outputs(spec_for("ipmsm_400V", "fcs_mpc"), analysis=False,
+                        verification=True, report=False, header=False)
+    standstill = out.verification.scenarios[0]
+    reach = standstill.checks["default.reach"]
+    assert not reach["pass"] and not out.passed
+    assert "not resolved" in reach["reason"] and "ripple" in reach["reason"]
+    assert reach["tolerance_A"] > 0.5 * reach["reference_A"]

@@ -149,3 +149,14 @@ def test_python_control_plant_route():
         ref = (lqi_continuous(A, B, (1e-2, 3e4), 1e-4) if dom == "continuous"
                else lqi_discrete(A, B, (1e-2, 3e4), 1e-4, TS, 1))
         assert ax.K == pytest.approx(ref.K, rel=1e-9)
+
+
+def test_extreme_weights_are_a_spec_error_without_a_leaked_warning():
+    """Q = [1e300, 1e300], R = 1e-300 made scipy's DARE print "RuntimeWarning:
+    invalid value encountered in cast" on stderr before the spec error."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(SpecError, match=r"controller\.lq"):
+            design(spec(Q=[1e300, 1e300], R=1e-300))

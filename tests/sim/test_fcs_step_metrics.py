@@ -41,19 +41,26 @@ def _lattice_radius(spec) -> float:
 
 @pytest.mark.parametrize("motor", list(MOTORS))
 def test_fcs_defaults_pass_the_default_checks(motor):
-    """Every default scenario whose step exceeds the lattice radius passes. A smaller
-    step is out of the law's reach: the nearest lattice point to it can be the
-    present current, so the law need not move and the step metrics cannot be
-    computed; that is a failure with the reason, not a pass (the corpus,
-    tests/corpus/test_corpus.py, tolerates a failure from twice the radius on). The 24 V gimbal's unloaded start (5.3 A, sized for its light
-    rotor, against a 7.7 A radius at 40 kHz and 30 uH) is such a step."""
+    """Every default scenario whose step exceeds twice the lattice radius passes. A
+    smaller step is not resolved: below the radius the nearest lattice point to it
+    can be the present current, so the law need not move and the step metrics
+    cannot be computed; between one and two radii the band +/-radius is more than
+    half the step and passes a current anywhere in it (the 400 V IPMSM at 10 kHz,
+    0.2 mH: +/-77 A around 78 A, settled 40 A short), so default.reach fails with
+    "not resolved" (the corpus, tests/corpus/test_corpus.py, tolerates a failure
+    from half the step on). The 24 V gimbal's unloaded start (5.3 A, sized for its
+    light rotor, against a 7.7 A radius at 40 kHz and 30 uH) is such a step."""
     spec = spec_for(motor, "fcs_mpc")
     out = build_outputs(spec, analysis=True, verification=True, report=False, header=False)
     radius = _lattice_radius(spec)
     for s, scen in zip(out.verification.scenarios, default_scenarios(spec.motor, spec.drive)):
-        if scen.iq_ref > radius:
+        if scen.iq_ref > 2.0 * radius:
             assert s.passed, {s.name: _failed(out).get(s.name)}
             assert math.isfinite(s.metrics["settling_time_2pct"]), s.name
+        elif scen.iq_ref > radius:
+            assert motor == "ipmsm_400V", (motor, s.name)
+            assert not s.passed
+            assert "not resolved" in s.checks["default.reach"]["reason"]
         else:
             assert motor == "gimbal_24V" and scen.kind == "unloaded_start", (motor, s.name)
             assert not s.passed

@@ -72,3 +72,17 @@ def test_scenario_pickles_copies_and_serialises():
     assert copy.deepcopy(sc) == sc
     d = json.loads(json.dumps(dataclasses.asdict(sc)))
     assert Scenario.from_dict(d) == sc
+
+
+def test_default_plant_step_follows_a_fast_sample_time():
+    """A drive sampled faster than 1 us does not fail on the default plant step
+    (a key the user never wrote); an explicit one above the period still does."""
+    sc = Scenario.from_dict({"kind": "current_step", "iq_ref": 1.0, "duration": 1e-3},
+                            key="scenario[0]", sample_time=5e-7)
+    assert sc.plant_step == 5e-7
+    sc = Scenario.from_dict({"kind": "current_step", "iq_ref": 1.0, "duration": 1e-3},
+                            key="scenario[0]", sample_time=1e-4)
+    assert sc.plant_step == 1e-6
+    with pytest.raises(SpecError, match=r"scenario\[0\]\.plant_step"):
+        Scenario.from_dict({"kind": "current_step", "plant_step": 1e-6, "duration": 1e-3},
+                           key="scenario[0]", sample_time=5e-7)

@@ -39,7 +39,7 @@ CASES = [
     ("sample_time_zero.toml",
      'drive.sample_time: expected a number > 0 (s), got 0'),
     ("sample_vs_switching.toml",
-     'drive.sample_time: expected a whole number of half PWM periods (1/(2 switching_frequency) = 0.000166667 s), got 0.0001 (sample once or twice per carrier period)'),
+     'drive.sample_time: expected a whole number of half PWM periods (1/(2 switching_frequency) = 0.000166667 s), got 0.0001 (sample once or twice per carrier period: sample_time = 0.000166667 s (sample_frequency = 6000 Hz))'),
     ("scenario_fcs_on_pi.toml",
      'scenario[0].inverter: expected "average" or "svm", got "fcs_mpc" (predictive switching needs controller.method = "fcs_mpc")'),
     ("scenario_negative_duration.toml",

@@ -194,6 +194,32 @@ def test_unit_strings_convert_to_si(text, key, si):
     assert getattr(motor(**keys), key) == pytest.approx(si, rel=REL)
 
 
+@pytest.mark.parametrize("text, key, si", [
+    ("30.2 mNm/A", "kt_rms", 30.2e-3), ("0.42 Nm/A", "kt_rms", 0.42),
+    ("42 Ncm/A", "kt_rms", 0.42), ("1e-4 Nms", "friction", 1e-4),
+    ("1e-4 Nms/rad", "friction", 1e-4),
+])
+def test_datasheet_newton_metre_spellings(text, key, si):
+    """maxon, Kollmorgen and Siemens print "mNm/A", "Nm/A", "Nms": pint alone reads
+    "Nm" as "number meter" and refuses them with a nonsense dimension."""
+    keys = {"R": 0.1, "Ld": 1e-3, "Lq": 1e-3, "pole_pairs": 4, key: text}
+    if key != "kt_rms":
+        keys["flux"] = 0.05
+    m = motor(**keys)
+    got = m.friction if key == "friction" else m.flux * 1.5 * math.sqrt(2) * 4
+    assert got == pytest.approx(si, rel=REL)
+
+
+def test_per_minute_speed_is_refused_not_read_as_rad_per_s():
+    """"3000 min^-1" (a European datasheet's rpm) was silently 50 rad/s (pint:
+    3000 per minute = 50 per second), 2 pi too slow."""
+    err = spec_error({"R": 0.1, "Ld": 1e-3, "Lq": 1e-3, "flux": 0.1, "pole_pairs": 4,
+                      "rated_speed": "3000 min^-1"})
+    assert str(err).startswith('motor.rated_speed: expected a speed (rad/s, or rpm), '
+                               'got "3000 min^-1"')
+    assert 'write "3000 rpm"' in str(err)
+
+
 def test_v_per_krpm_by_hand():
     m = motor(R=0.1, Ld=1e-3, Lq=1e-3, pole_pairs=4, ke_ll_peak="49.8 V/krpm")
     assert m.flux == pytest.approx(49.8 / KRPM / (math.sqrt(3) * 4), rel=REL)
@@ -263,6 +289,31 @@ def test_all_errors_at_once_one_each():
                                            "motor.rated_speed", "drive.vdc"]
     text = str(err)
     assert "motor.R (missing)" not in text and "motor.flux" not in text  # no echoes
+
+
+def test_motor_method_and_scenario_errors_reported_in_one_run():
+    """A bad motor value used to hide a misspelt method, and that one a bad
+    scenario: three runs to see three errors (README: all at once)."""
+    with pytest.raises(SpecErrors) as info:
+        spec_from_dict({"motor": {"J": 1e-3, "R_ll": "0.2 mH", "Ld": 1e-3, "Lq": 1e-3,
+                                  "flux": 0.1, "pole_pairs": 4},
+                        "drive": DRIVE, "controller": {"method": "pii"},
+                        "scenario": [{"kind": "current_step", "iq_ref": 5.0,
+                                      "duration": -1.0}]})
+    assert [e.key for e in info.value.errors] == ["motor.R_ll", "controller.method",
+                                                 "scenario[0].duration"]
+    assert 'did you mean "pi"' in str(info.value)
+
+
+def test_pwm_timing_error_names_sample_frequency_when_that_was_given():
+    """40 kHz sampling against a 30 kHz carrier: the error named drive.sample_time,
+    a key not in the file; it names drive.sample_frequency and a value that works."""
+    err = spec_error({"R": 0.1, "Ld": 1e-3, "Lq": 1e-3, "flux": 0.1, "pole_pairs": 4},
+                     drive={"vdc": 24, "sample_frequency": "40 kHz",
+                            "switching_frequency": "30 kHz"})
+    assert err.key == "drive.sample_frequency"
+    assert 'from sample_frequency = "40 kHz"' in str(err)
+    assert "sample_frequency = 30000 Hz" in str(err)
 
 
 def test_range_error_on_a_derived_value_names_the_given_key():

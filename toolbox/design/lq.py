@@ -28,6 +28,7 @@ current), ``v_max`` = ``voltage_limit`` (default ``drive.max_voltage``) and
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -213,7 +214,12 @@ def _riccati(solver, A, B, Q, R, rtol: float = 1e-6) -> np.ndarray:
     with extreme weight ratios the solvers return inaccurate solutions
     silently, and a failure is a consequence of the spec's weights."""
     try:
-        P = solver(A, B, Q, R)
+        # extreme weights make scipy warn (e.g. "invalid value encountered in cast")
+        # before it fails or returns: the failure and the residual check below are
+        # the message, a library warning is not leaked
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            P = solver(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError) as err:
         raise SpecError("controller.lq", "weights for which the Riccati equation has a "
                         "stabilising solution", str(err),

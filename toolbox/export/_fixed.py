@@ -303,8 +303,16 @@ def propagate_bound(A: np.ndarray, C: np.ndarray, delta_x: np.ndarray,
     aC = np.abs(C[0])
     # g[m] = |C| |A^m| (row vector)
     g = np.einsum("j,mjk->mk", aC, powers)
-    for k in range(1, N):
-        out[k] += float(np.einsum("mk,mk->", g[:k][::-1], delta_x[:k]))
+    # out[k] += sum_{i<k} g[k-1-i] . delta_x[i]: a convolution, by FFT (the direct
+    # double sum is O(N^2): 0.02 s at Ts = 1e-7 is 2e5 periods, hours), widened
+    # by the FFT's rounding so that it stays an upper bound
+    from scipy.signal import fftconvolve
+
+    conv = np.zeros(N)
+    for j in range(n):
+        conv += fftconvolve(g[:, j], delta_x[:, j])[:N]
+    scale = float(np.abs(g).max(initial=0.0) * np.abs(delta_x).sum())
+    out[1:] += np.maximum(conv[:N - 1], 0.0) + 1e-12 * scale
     return out
 
 

@@ -11,7 +11,9 @@ did. Every scenario now gets these checks, derived from the spec alone:
     ``floor = max(0.01 I_scale, 2 current_quantum, 3 current_noise, ripple)``:
     1 % of the current scale is the accuracy of a typical drive current
     sensor, and quantisation and noise cannot be tracked below their own size,
-    so no band narrower than that is demanded of a small step. ``ripple`` is
+    so no band narrower than that is demanded of a small step; a band wider
+    than ``RESOLVE_FRACTION`` (50 %) of the step fails: the step is not
+    resolved, any current within the band would pass. ``ripple`` is
     zero for the average and SVM inverters (symmetric PWM samples the current
     at the centre of its ripple) and :func:`fcs_ripple` for the predictive
     switching inverter, which holds one of the eight voltage vectors (vertex
@@ -68,6 +70,10 @@ __all__ = ["fcs_ripple", "CURRENT_FACTOR", "SPEED_FACTOR", "REACH_BAND", "SENSOR
 
 #: Relative band of the reach check (paper 000's "5 % response time").
 REACH_BAND = 0.05
+#: Widest reach band accepted, as a fraction of the step: a band (ripple,
+#: sensor accuracy, noise) wider than this passes a current anywhere in it, so
+#: the step is not resolved and ``default.reach`` fails.
+RESOLVE_FRACTION = 0.5
 #: Relative accuracy of a drive current sensor (fraction of the current scale).
 SENSOR_ACCURACY = 0.01
 #: Bound of ``default.bounded_current`` in units of the current scale.
@@ -430,6 +436,17 @@ def _reach(facts, scenario, metrics, result, traces, plant, v_max, delay_samples
         basis = "response_time_5pct"
     extra = {"tolerance_A": tol, "axis": facts.axis, "reference_A": facts.yf,
              "basis": basis, **parts}
+    if delta != 0.0 and tol > RESOLVE_FRACTION * abs(delta):
+        what = ("the predictive law's ripple (one vector per period; it scales with "
+                f"Ts / L: a sample time of {sample_time * RESOLVE_FRACTION * abs(delta) / tol:.3g}"
+                " s or less would resolve it)" if tol == ripple else
+                "the current sensor accuracy, quantum or noise")
+        return _record("time to reach the reference band", t_reach, t_bound, "s", False,
+                       f"the {facts.axis} current step of {abs(delta):.4g} A is not resolved: "
+                       f"the band +/-{tol:.4g} A set by {what} is "
+                       f"{100.0 * tol / abs(delta):.0f} % of the step (at most "
+                       f"{100.0 * RESOLVE_FRACTION:.0f} %), so any current within it "
+                       "would pass", **extra)
     if problem is not None:
         return _record("time to reach the reference band", t_reach, t_bound, "s", False,
                        problem, **extra)

@@ -232,6 +232,11 @@ class Scenario:
                                 hint=_did_you_mean(k, names) or "known keys: "
                                 + ", ".join(names))
             kw[k] = _check_type(f"{key}.{k}", k, v)
+        if "plant_step" not in kw and sample_time is not None and sample_time > 0:
+            # the default step (1 us) is capped at the sample time, so a fast
+            # drive does not fail on a key the user never wrote
+            default_step = next(f.default for f in fields(cls) if f.name == "plant_step")
+            kw["plant_step"] = min(default_step, sample_time)
         try:
             sc = cls(**kw)
         except SpecError as e:

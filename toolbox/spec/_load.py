@@ -126,6 +126,9 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     if not errors.failed:  # method parameters are read against a plausible motor
         with errors.check():
             controller = _controller(top.raw("controller"), motor, drive)
+    else:  # the method's name is still checked, so that one run reports it too
+        with errors.check():
+            _method_name(top.raw("controller"))
     requirements = None
     with errors.check():
         requirements = _requirements(top.raw("requirements"))
@@ -133,9 +136,11 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     with errors.check():
         export_prefix = _export_prefix(top.raw("export", {}))
     scenarios: tuple = ()
-    if drive is not None and controller is not None:
+    if drive is not None:  # read even when the motor or controller failed: all errors at once
+        method = controller.method if controller is not None else _known_method(
+            top.raw("controller"))
         with errors.check():
-            scenarios = _scenarios(top.raw("scenario", []), drive, controller.method)
+            scenarios = _scenarios(top.raw("scenario", []), drive, method)
         check_work(scenarios, drive.sample_time, errors)
     campaign = None
     if top.has("campaign"):
@@ -261,7 +266,10 @@ def _drive_logged(value: Any) -> tuple[Drive, list]:
     if errors.failed:
         errors.raise_if_any()
     drive = Drive(**fields)
-    _check_drive_timing(drive)
+    try:
+        _check_drive_timing(drive)
+    except SpecError as err:  # names sample_frequency when that is what the user wrote
+        raise relocate(err, log) from None
     return drive, log
 
 
@@ -276,7 +284,10 @@ def _check_drive_timing(drive: Drive) -> None:
                 "drive.sample_time",
                 "a whole number of half PWM periods (1/(2 switching_frequency) = "
                 f"{0.5 / drive.switching_frequency:g} s)", drive.sample_time,
-                hint="sample once or twice per carrier period")
+                hint="sample once or twice per carrier period: sample_time = "
+                     f"{max(1, round(half_periods)) * 0.5 / drive.switching_frequency:g} s "
+                     f"(sample_frequency = "
+                     f"{2 * drive.switching_frequency / max(1, round(half_periods)):g} Hz)")
 
 
 def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
@@ -288,6 +299,21 @@ def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
     # the design methods register their readers (spec/_methods.py): spec stays data
     cfg = read_method_cfg(method, t.table(method), motor=motor, drive=drive)
     return ControllerChoice(method=method, cfg=cfg)
+
+
+def _method_name(value: Any) -> str | None:
+    """``controller.method`` checked alone (None without a [controller] table)."""
+    if value is None:
+        return None
+    return Table(value, "controller").string("method", choices=METHODS)
+
+
+def _known_method(value: Any) -> str | None:
+    """The method named by a raw [controller] table, or None when it is not valid."""
+    try:
+        return _method_name(value)
+    except SpecError:
+        return None
 
 
 def _export_prefix(value: Any) -> str:
@@ -313,7 +339,7 @@ def _requirements(value: Any) -> Requirements:
 MAX_SCENARIO_DURATION = 60.0
 
 
-def _scenarios(value: Any, drive: Drive, method: str) -> tuple:
+def _scenarios(value: Any, drive: Drive, method: str | None) -> tuple:
     if not isinstance(value, list):
         raise SpecError("scenario", "an array of tables [[scenario]]", value)
     check_scenario_count(len(value))  # before reading 10,000 tables
@@ -332,7 +358,7 @@ def _scenarios(value: Any, drive: Drive, method: str) -> tuple:
             if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
                 raise SpecError(f"{key}.speed_loop.sample_time", "a whole multiple of "
                                 f"drive.sample_time ({drive.sample_time:g} s)", ts_speed)
-        if scenario.inverter == "fcs_mpc" and method != "fcs_mpc":
+        if scenario.inverter == "fcs_mpc" and method is not None and method != "fcs_mpc":
             raise SpecError(f"{key}.inverter", '"average" or "svm"', "fcs_mpc",
                             hint='predictive switching needs controller.method = "fcs_mpc"')
         if scenario.duration > MAX_SCENARIO_DURATION:

@@ -65,7 +65,7 @@ KINDS: dict[str, Kind] = {
     "flux": Kind("a flux linkage", "Wb", "Wb"),
     "emf_constant": Kind("a back-EMF constant", "V*s/rad", "V s/rad, or V/krpm"),
     "torque_constant": Kind("a torque constant", "N*m/A", "N m/A"),
-    "speed": Kind("a speed", "rad/s", "rad/s, or rpm", refuse=("hertz",)),
+    "speed": Kind("a speed", "rad/s", "rad/s, or rpm", refuse=("hertz", "minute")),
     "frequency": Kind("a frequency", "Hz", "Hz",
                       refuse=("revolutions_per_minute", "radian", "revolution")),
     "time": Kind("a time", "s", "s"),
@@ -93,6 +93,21 @@ def _registry() -> Any:
     with warnings.catch_warnings():  # registry construction must not leak warnings
         warnings.simplefilter("ignore")
         return pint.UnitRegistry()
+
+
+#: Datasheet spellings of newton metres: "Nm", "mNm", "Ncm", "Nms" (pint reads
+#: "Nm" as its "number meter" and gives a nonsense dimension).
+_NEWTON_METRE = re.compile(r"(?<![A-Za-z_])([munµμck]?)N([cm])m(s?)(?![A-Za-z_])|"
+                           r"(?<![A-Za-z_])([munµμck]?)Nm(s?)(?![A-Za-z_])")
+
+
+def _datasheet_spelling(unit_text: str) -> str:
+    """``"mNm/A"`` -> ``"mN*m/A"``, ``"Nms"`` -> ``"N*m*s"``, ``"Ncm"`` -> ``"N*cm"``."""
+    def sub(m: re.Match) -> str:
+        if m.group(2) is not None:  # N cm / N mm
+            return f"{m.group(1)}N*{m.group(2)}m" + ("*s" if m.group(3) else "")
+        return f"{m.group(4)}N*m" + ("*s" if m.group(5) else "")
+    return _NEWTON_METRE.sub(sub, unit_text)
 
 
 def looks_like_quantity(value: Any) -> bool:
@@ -169,6 +184,7 @@ def parse_quantity(value: str, key: str, kind: str) -> float:
 
     ureg = _registry()
     number, unit_text = match.groups()
+    unit_text = _datasheet_spelling(unit_text)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # a pint warning is an error here, never leaked
@@ -179,7 +195,12 @@ def parse_quantity(value: str, key: str, kind: str) -> float:
         raise SpecError(key, expected, value, hint=f"unknown unit: {err}") from None
     quantity = ureg.Quantity(float(number), unit)
     used = [name for name, _ in quantity.unit_items()]
-    refused = [name for name in k.refuse if any(name in u for u in used)]
+    refused = [name for name in k.refuse
+               if any((name in u) if name != "minute" else u == "minute" for u in used)]
+    if refused and refused[0] == "minute":
+        raise SpecError(key, expected, value,
+                        hint='a speed "per minute" (min^-1, 1/min) on a datasheet means '
+                             f'revolutions per minute: write "{number} rpm"')
     if refused:
         raise SpecError(key, expected, value,
                         hint=f"{refused[0]} is not {k.name}: give {k.shown}")
