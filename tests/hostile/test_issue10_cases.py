@@ -56,7 +56,7 @@ SPEC_CASES = [
     ("sample_time_1e-7_with_traces",
      dict(drive={"sample_time": 1e-7}, motor={"R": 0.6},
           scenario=[{**STEP, "duration": 2.0, "plant_step": 1e-7, "keep_traces": True}]),
-     'scenario: expected at most 1e+07 kept trace rows over all scenarios'),
+     "scenario: expected at most 2e+06 kept trace rows over all scenarios"),
 ]
 
 

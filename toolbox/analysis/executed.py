@@ -118,8 +118,9 @@ def margin_disagreements(stored: dict, recomputed: dict, file: str | None = None
             a, b = _number(old.get(key)), _number(fresh.get(key))
             if a is None or b is None or _same(a, b):
                 continue
+            fresh_txt = f"{b:.4g}" if math.isfinite(b) else "no finite value"
             out.append(f"{where}margins.{ax}.{key}: stored {a:.4g} disagrees with "
-                       f"{b:.4g} recomputed from the executed law (axes.{ax}.law); "
+                       f"{fresh_txt} recomputed from the executed law (axes.{ax}.law); "
                        f"the recomputed value is used")
         if old.get("stable") is not None and bool(old.get("stable")) != res.stable:
             out.append(f"{where}margins.{ax}.stable: stored {old.get('stable')} disagrees "

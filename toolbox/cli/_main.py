@@ -9,9 +9,9 @@ anything else is a bug and keeps its traceback.
 
 from __future__ import annotations
 
-import math
 import functools
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -249,8 +249,9 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
             click.echo(f"{axis} axis: {verdict} ({s['basis']})")
         for sc in result.scenarios:
             status = "pass" if sc.passed else "FAIL"
+            t5 = _fmt(sc.metrics.get('response_time_5pct'))
             click.echo(f"{status}  {sc.name}: 5% response "
-                       f"{_fmt(sc.metrics.get('response_time_5pct'))} s, static error "
+                       f"{t5 + ' s' if t5 != 'not reached' else t5}, static error "
                        f"{_fmt(sc.metrics.get('static_error'))}")
             for key, check in sc.checks.items():
                 if not check["pass"]:
@@ -489,7 +490,11 @@ def _print_table(rows: list[dict]) -> None:
 
 
 def _fmt(value) -> str:
-    return f"{value:.4g}" if isinstance(value, float) else str(value)
+    """A metric for the terminal: 4 significant digits; a metric that could not be
+    computed (NaN, e.g. a response that never settled) reads "not reached"."""
+    if isinstance(value, float):
+        return f"{value:.4g}" if math.isfinite(value) else "not reached"
+    return str(value)
 
 
 @main.command()

@@ -155,7 +155,8 @@ class ReportData:
 def fmt(value: Any, digits: int = 4) -> str:
     """Format a value for a table: numbers to ``digits`` significant digits.
 
-    ``None`` becomes "not computed"; infinities "inf"; booleans "yes"/"no".
+    ``None`` and NaN (a quantity that has no value, e.g. the bandwidth of an
+    unstable loop) become "not computed"; infinities "inf"; booleans "yes"/"no".
     """
     if value is None:
         return NOT_COMPUTED
@@ -166,7 +167,7 @@ def fmt(value: Any, digits: int = 4) -> str:
     if isinstance(value, (float, np.floating)):
         v = float(value)
         if math.isnan(v):
-            return "nan"
+            return NOT_COMPUTED
         if math.isinf(v):
             return "inf" if v > 0 else "-inf"
         return f"{v:.{digits}g}"
@@ -285,7 +286,7 @@ def _robustness_of(analysis: Mapping | None) -> dict | None:
     notes = (f"{sweep.get('n_sets')} parameter sets over {sweep.get('ranges')}, at speeds "
              f"{sweep.get('speeds_rad_s')} rad/s (electrical): {sweep.get('n_unstable')} "
              f"unstable, worst closed-loop spectral radius "
-             f"{fmt(worst_rho if worst_rho is not None else float('nan'))}.")
+             f"{fmt(worst_rho)}.")
     return {"cases": cases, "worst": [c["label"] for c in cases if not c["pass"]],
             "notes": notes}
 
