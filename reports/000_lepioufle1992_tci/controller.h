@@ -4,20 +4,23 @@
  * method:      tci
  * version:     0.1.0
  * spec sha256: 9e6cb4b92141432f59e1d7413c810901151cf0d51431f1522b402acd653e204e
- * created:     2026-11-23T19:27:03+00:00
+ * created:     2026-11-24T08:27:56+00:00
  * equations:   000 eq (18) (sign corrected): de/dt = -K11 e - K12 int e; 000 eq (19)-(20): total compensation with integrators; 000 eq (21): s^2 + K11 s + K12 = 0; 000 eq (22)-(24): K21 = E k_i Kp/Lq, K22 = E k_i KI/Lq, K11 = K21, K12 = K22
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
- * Call cct_init() once, then cct_step() once per controller period. The
+ * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
+ * cct_step() once per controller period (example at the end of this file). The
  * voltage returned is applied by the inverter in the NEXT period: the
  * computation delay is part of the plant the design assumed, not of this code.
  * Law per axis: x' = A x + B [i_ref; i_meas], v = C x + D [i_ref; i_meas]
  *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),
  * then decoupling  v_d += -cross w_e Lq_c i_q,
  *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,
- * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of
- * the SVM hexagon), and
+ * then the circle limit |v| <= limit in use (radial scaling; the inscribed
+ * circle of the SVM hexagon), and
  * back-calculation anti-windup x += aw (v_sat - v_unsat).
+ * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc
+ * (V_MAX, the nominal bus, after init).
  * Faults: out->status is
  *   CCT_STATUS_OK (0)        the law ran;
  *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
@@ -39,7 +42,8 @@
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
 #define CCT_DELAY_SAMPLES 1 /* computation delay the design assumed, periods */
-#define CCT_V_MAX 1.060660172e+02f /* voltage-limit circle radius, V */
+#define CCT_V_MAX 1.060660172e+02f /* voltage limit (circle radius) at the nominal bus voltage, V; cct_init's default */
+#define CCT_V_MAX_PER_VDC 7.071067691e-01f /* voltage limit per volt of measured bus (cct_set_vdc) */
 /* motor (power-invariant dq convention) */
 #define CCT_MOTOR_R 6.000000238e-01f /* stator resistance, ohm */
 #define CCT_MOTOR_LD 1.399999950e-03f /* d-axis inductance, H */
@@ -76,8 +80,10 @@ typedef struct {
 #define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
 
 typedef struct {
-    float v_d;     /* V, to apply next period */
+    float v_d;     /* V, the law's output (limited), to apply next period */
     float v_q;     /* V */
+    float v_d_comp; /* V, = v_d (this design has no delay compensation): */
+    float v_q_comp; /* V, feed these to the inverse Park transform at theta_e */
     int saturated; /* 1 when the voltage limit acted */
     int status;    /* CCT_STATUS_* */
 } cct_output_t;
@@ -89,8 +95,12 @@ typedef struct {
     float q[1];
     float v_d_hold; /* V */
     float v_q_hold; /* V */
+    float v_d_comp_hold; /* V */
+    float v_q_comp_hold; /* V */
+    float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
 } cct_state_t;
 
+/* zero states and held outputs; voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
 static inline void cct_init(cct_state_t *s)
 {
     unsigned i;
@@ -98,6 +108,9 @@ static inline void cct_init(cct_state_t *s)
     for (i = 0u; i < 1u; ++i) { s->q[i] = 0.0f; }
     s->v_d_hold = 0.0f;
     s->v_q_hold = 0.0f;
+    s->v_d_comp_hold = 0.0f;
+    s->v_q_comp_hold = 0.0f;
+    s->v_max = CCT_V_MAX;
 }
 
 /* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that
@@ -107,6 +120,19 @@ static inline int cct_finite(float v)
     union { float f; uint32_t u; } b;
     b.f = v;
     return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+/* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
+ * circle's radius); call whenever a new bus measurement arrives (e.g. once per
+ * period, before cct_step). Returns CCT_STATUS_OK, or CCT_STATUS_BAD_INPUT
+ * (vdc not finite or not > 0) leaving the limit in use unchanged. */
+static inline int cct_set_vdc(cct_state_t *s, float vdc)
+{
+    if (!(cct_finite(vdc) && vdc > 0.0f)) {
+        return CCT_STATUS_BAD_INPUT;
+    }
+    s->v_max = CCT_V_MAX_PER_VDC * vdc;
+    return CCT_STATUS_OK;
 }
 
 static inline int cct_state_finite(const cct_state_t *s)
@@ -122,6 +148,8 @@ static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
 {
     out->v_d = s->v_d_hold;
     out->v_q = s->v_q_hold;
+    out->v_d_comp = s->v_d_comp_hold;
+    out->v_q_comp = s->v_q_comp_hold;
     out->saturated = 0;
     out->status = status;
 }
@@ -195,8 +223,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     float vqs = vq;
     int saturated = 0;
     const float mag2 = vd * vd + vq * vq;
-    if (mag2 > CCT_V_MAX * CCT_V_MAX) {
-        const float k = CCT_V_MAX / sqrtf(mag2);
+    if (mag2 > s->v_max * s->v_max) {
+        const float k = s->v_max / sqrtf(mag2);
         vds = vd * k;
         vqs = vq * k;
         saturated = 1;
@@ -208,11 +236,17 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
     }
+    const float vdr = vds; /* no delay compensation in this design */
+    const float vqr = vqs;
     nx.v_d_hold = vds;
     nx.v_q_hold = vqs;
+    nx.v_d_comp_hold = vdr;
+    nx.v_q_comp_hold = vqr;
     *s = nx;
     out->v_d = vds;
     out->v_q = vqs;
+    out->v_d_comp = vdr;
+    out->v_q_comp = vqr;
     out->saturated = saturated;
     out->status = CCT_STATUS_OK;
 }
@@ -233,7 +267,10 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
 #define CCT_Q31_V_BASE 2.048000000e+03f /* V at full scale */
 #define CCT_Q31_W_BASE 2.560000000e+02f /* mechanical rad/s at full scale */
-#define CCT_Q31_V_MAX 111218280L /* V_MAX / V_BASE in Q31 */
+#define CCT_Q31_I_MAX 3.000000000e+01f /* A, current range (cct_to_q31 clamps beyond) */
+#define CCT_Q31_W_MAX 2.300000000e+02f /* rad/s, speed range (cct_to_q31 clamps beyond) */
+#define CCT_Q31_V_MAX 111218280L /* V_MAX / V_BASE in Q31: the largest limit */
+#define CCT_Q31_VDC_BASE 2.896309326e+03f /* V of bus at full scale (cct_set_vdc_q31) */
 #define CCT_Q31_D_X0_BASE 2.500000000e-01f /* state 0 full scale */
 #define CCT_Q31_Q_X0_BASE 2.500000000e-01f /* state 0 full scale */
 #define CCT_Q31_DEC_DD -769658139L /* decoupling coefficient -0.0448 p.u. = m / 2^shift */
@@ -260,6 +297,7 @@ typedef struct {
 typedef struct {
     int32_t d[1];
     int32_t q[1];
+    int32_t v_max; /* voltage limit in use, Q31 of Q31_V_BASE (cct_set_vdc_q31) */
 } cct_state_q31_t;
 
 static inline void cct_init_q31(cct_state_q31_t *s)
@@ -267,6 +305,41 @@ static inline void cct_init_q31(cct_state_q31_t *s)
     unsigned i;
     for (i = 0u; i < 1u; ++i) { s->d[i] = 0; }
     for (i = 0u; i < 1u; ++i) { s->q[i] = 0; }
+    s->v_max = CCT_Q31_V_MAX;
+}
+
+/* measured DC-link voltage as Q31 of CCT_Q31_VDC_BASE (chosen so that the
+ * word IS the voltage limit in Q31 of Q31_V_BASE). The scaling and the state
+ * bounds were derived for the nominal bus: above it the limit is clamped to
+ * CCT_Q31_V_MAX and 1 is returned; a negative word is refused (-1, limit
+ * unchanged); 0 otherwise. */
+static inline int cct_set_vdc_q31(cct_state_q31_t *s, int32_t vdc)
+{
+    if (vdc < 0) { return -1; }
+    if (vdc > CCT_Q31_V_MAX) {
+        s->v_max = CCT_Q31_V_MAX;
+        return 1;
+    }
+    s->v_max = vdc;
+    return 0;
+}
+
+/* physical value -> Q31 word of base, clamped to +-range (the range the
+ * scaling and state bounds were derived for) with *clamped = 1 beyond it or
+ * for a non-finite value (then 0). E.g. currents: range CCT_Q31_I_MAX, base
+ * CCT_Q31_I_BASE; speed: CCT_Q31_W_MAX, CCT_Q31_W_BASE. */
+static inline int32_t cct_to_q31(float value, float range, float base, int *clamped)
+{
+    float v = value;
+    if (!(v == v)) { *clamped = 1; return 0; }
+    if (v > range) { v = range; *clamped = 1; }
+    if (v < -range) { v = -range; *clamped = 1; }
+    {
+        const float q = v / base * 2147483648.0f; /* truncated towards zero below */
+        if (q >= 2147483648.0f) { return INT32_MAX; }
+        if (q <= -2147483648.0f) { return -INT32_MAX; }
+        return (int32_t)q;
+    }
 }
 
 static inline int32_t cct_sat32(int64_t v)
@@ -373,10 +446,10 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
     int64_t vds = vdc;
     int64_t vqs = vqc;
     out->saturated = 0;
-    if (mag2 > (uint64_t)CCT_Q31_V_MAX * (uint64_t)CCT_Q31_V_MAX) {
+    if (mag2 > (uint64_t)s->v_max * (uint64_t)s->v_max) {
         const int64_t mag = (int64_t)cct_isqrt64(mag2);
-        vds = (vdc * CCT_Q31_V_MAX) / mag;
-        vqs = (vqc * CCT_Q31_V_MAX) / mag;
+        vds = (vdc * s->v_max) / mag;
+        vqs = (vqc * s->v_max) / mag;
         out->saturated = 1;
     }
     cct_d_antiwindup_q31(s->d, vds - vd);
@@ -385,5 +458,62 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
     out->v_q = (int32_t)vqs;
 }
 #endif /* CCT_FIXED_POINT */
+
+#if defined(CCT_MCSDK) || defined(CCT_IQMATH)
+#error "MCSDK/IQmath variants not available: d axis: the MCSDK/IQmath variants run a one-degree-of-freedom PI (v from i_ref - i_meas); this law weights them differently"
+#endif
+
+#if 0 /* usage example: copy the lines between BEGIN and END into main.c */
+// EXAMPLE main.c BEGIN
+#include <stdio.h>
+#include "controller.h"
+
+/* stand-ins for the board's drivers: ADC, encoder, PWM, fault output */
+static float adc_i_d(void) { return 0.0f; }
+static float adc_i_q(void) { return 0.0f; }
+static float adc_vdc(void) { return CCT_DRIVE_VDC; }
+static float encoder_speed(void) { return 0.0f; }
+static float encoder_theta_e(void) { return 0.0f; }
+static void pwm_apply(float v_d, float v_q, float theta_e)
+{
+    (void)v_d; (void)v_q; (void)theta_e; /* inverse Park at theta_e, then SVM */
+}
+static void fault_report(int status) { printf("controller status %d\n", status); }
+
+static cct_state_t ctl;
+
+/* once per controller period (CCT_SAMPLE_TIME s), e.g. in the ADC interrupt */
+static void control_isr(float i_d_ref, float i_q_ref)
+{
+    cct_input_t in;
+    cct_output_t out;
+    const float theta_e = encoder_theta_e();
+    if (cct_set_vdc(&ctl, adc_vdc()) != CCT_STATUS_OK) {
+        fault_report(CCT_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
+    }
+    in.i_d_ref = i_d_ref;
+    in.i_q_ref = i_q_ref;
+    in.i_d = adc_i_d();
+    in.i_q = adc_i_q();
+    in.omega_m = encoder_speed();
+
+    cct_step(&ctl, &in, &out);
+    if (out.status != CCT_STATUS_OK) {
+        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
+    }
+    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e); /* applied during the next period */
+}
+
+int main(void)
+{
+    int k;
+    cct_init(&ctl);
+    for (k = 0; k < 10; ++k) {
+        control_isr(0.0f, 1.0f);
+    }
+    return 0;
+}
+// EXAMPLE main.c END
+#endif /* usage example */
 
 #endif /* CCT_CONTROLLER_H */

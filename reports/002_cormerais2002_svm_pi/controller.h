@@ -4,11 +4,12 @@
  * method:      pi
  * version:     0.1.0
  * spec sha256: c2d359a3c9ca7ddd59150a1dd1450b8824ca1ecb0118674363d4512b3a5e5af0
- * created:     2026-11-23T19:27:13+00:00
+ * created:     2026-11-24T08:28:11+00:00
  * equations:   000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e); 002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation); Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)
  *
- * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
- * Call cct_init() once, then cct_step() once per controller period. The
+ * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
+ * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
+ * cct_step() once per controller period (example at the end of this file). The
  * voltage returned is applied by the inverter in the NEXT period: the
  * computation delay is part of the plant the design assumed, not of this code.
  * Law per axis: x' = A x + B [i_ref; i_meas], v = C x + D [i_ref; i_meas]
@@ -18,8 +19,11 @@
  * then the SVM hexagon limit (voltage_limit = "hexagon", as the toolbox
  * simulator): the voltage is rotated to the stationary frame at the angle
  * theta_e + w_e Ts (DELAY_SAMPLES + 1/2) (input theta_e: electrical angle at the
- * sampling instant) and scaled radially onto the hexagon of apothem V_MAX, and
+ * sampling instant) and scaled radially onto the hexagon whose apothem is the
+ * limit in use, and
  * back-calculation anti-windup x += aw (v_sat - v_unsat).
+ * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc
+ * (V_MAX, the nominal bus, after init).
  * Faults: out->status is
  *   CCT_STATUS_OK (0)        the law ran;
  *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
@@ -41,7 +45,8 @@
 
 #define CCT_SAMPLE_TIME 1.000000047e-03f /* controller period, s */
 #define CCT_DELAY_SAMPLES 0 /* computation delay the design assumed, periods */
-#define CCT_V_MAX 8.485280991e+00f /* voltage-limit hexagon radius, V */
+#define CCT_V_MAX 8.485280991e+00f /* voltage limit (hexagon apothem) at the nominal bus voltage, V; cct_init's default */
+#define CCT_V_MAX_PER_VDC 7.071067691e-01f /* voltage limit per volt of measured bus (cct_set_vdc) */
 /* motor (power-invariant dq convention) */
 #define CCT_MOTOR_R 1.999999955e-02f /* stator resistance, ohm */
 #define CCT_MOTOR_LD 1.125999988e-04f /* d-axis inductance, H */
@@ -61,16 +66,22 @@
 #define CCT_DEC_LQ 1.125999988e-04f /* H */
 #define CCT_DEC_FLUX 6.038999930e-02f /* Wb */
 #define CCT_POLE_PAIRS 6 /* w_e = POLE_PAIRS * Omega_m */
-/* d axis PI gains (method pi); the law below is what runs */
-#define CCT_D_KP 2.000000030e-01f /* parallel proportional gain, V/A */
-#define CCT_D_KI 3.552397919e+01f /* parallel integral gain, V/(A s) */
-#define CCT_D_KI_TS 3.552397713e-02f /* integral gain per sample Ki*Ts, V/A */
-#define CCT_D_TI 5.630000029e-03f /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */
-/* q axis PI gains (method pi); the law below is what runs */
-#define CCT_Q_KP 2.000000030e-01f /* parallel proportional gain, V/A */
-#define CCT_Q_KI 3.552397919e+01f /* parallel integral gain, V/(A s) */
-#define CCT_Q_KI_TS 3.552397713e-02f /* integral gain per sample Ki*Ts, V/A */
-#define CCT_Q_TI 5.630000029e-03f /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */
+/* d axis PI gains (method pi), FOR INFORMATION ONLY: the code
+ *   runs the coefficients of the law below, derived from these gains at export;
+ *   to retune, change the spec and re-export (editing these numbers does nothing).
+ *   Kp = 0.2 V/A (parallel proportional gain)
+ *   Ki = 35.5239787 V/(A s) (parallel integral gain)
+ *   Ki Ts = 0.0355239787 V/A (integral gain per sample)
+ *   Ti = 0.00563 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
+ */
+/* q axis PI gains (method pi), FOR INFORMATION ONLY: the code
+ *   runs the coefficients of the law below, derived from these gains at export;
+ *   to retune, change the spec and re-export (editing these numbers does nothing).
+ *   Kp = 0.2 V/A (parallel proportional gain)
+ *   Ki = 35.5239787 V/(A s) (parallel integral gain)
+ *   Ki Ts = 0.0355239787 V/A (integral gain per sample)
+ *   Ti = 0.00563 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
+ */
 
 #define CCT_D_GAIN 2.177619934e-01f /* d axis SOS output gain, V/A */
 #define CCT_D_NUM_STAGES 1
@@ -92,8 +103,10 @@ typedef struct {
 #define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
 
 typedef struct {
-    float v_d;     /* V, to apply next period */
+    float v_d;     /* V, the law's output (limited), to apply next period */
     float v_q;     /* V */
+    float v_d_comp; /* V, = v_d (this design has no delay compensation): */
+    float v_q_comp; /* V, feed these to the inverse Park transform at theta_e */
     int saturated; /* 1 when the voltage limit acted */
     int status;    /* CCT_STATUS_* */
 } cct_output_t;
@@ -105,8 +118,12 @@ typedef struct {
     float q[2];
     float v_d_hold; /* V */
     float v_q_hold; /* V */
+    float v_d_comp_hold; /* V */
+    float v_q_comp_hold; /* V */
+    float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
 } cct_state_t;
 
+/* zero states and held outputs; voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
 static inline void cct_init(cct_state_t *s)
 {
     unsigned i;
@@ -114,6 +131,9 @@ static inline void cct_init(cct_state_t *s)
     for (i = 0u; i < 2u; ++i) { s->q[i] = 0.0f; }
     s->v_d_hold = 0.0f;
     s->v_q_hold = 0.0f;
+    s->v_d_comp_hold = 0.0f;
+    s->v_q_comp_hold = 0.0f;
+    s->v_max = CCT_V_MAX;
 }
 
 /* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that
@@ -123,6 +143,19 @@ static inline int cct_finite(float v)
     union { float f; uint32_t u; } b;
     b.f = v;
     return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+/* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
+ * hexagon's apothem); call whenever a new bus measurement arrives (e.g. once per
+ * period, before cct_step). Returns CCT_STATUS_OK, or CCT_STATUS_BAD_INPUT
+ * (vdc not finite or not > 0) leaving the limit in use unchanged. */
+static inline int cct_set_vdc(cct_state_t *s, float vdc)
+{
+    if (!(cct_finite(vdc) && vdc > 0.0f)) {
+        return CCT_STATUS_BAD_INPUT;
+    }
+    s->v_max = CCT_V_MAX_PER_VDC * vdc;
+    return CCT_STATUS_OK;
 }
 
 static inline int cct_state_finite(const cct_state_t *s)
@@ -138,6 +171,8 @@ static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
 {
     out->v_d = s->v_d_hold;
     out->v_q = s->v_q_hold;
+    out->v_d_comp = s->v_d_comp_hold;
+    out->v_q_comp = s->v_q_comp_hold;
     out->saturated = 0;
     out->status = status;
 }
@@ -218,8 +253,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     if (-p1 > pm) { pm = -p1; }
     if (p3 > pm) { pm = p3; }
     if (-p3 > pm) { pm = -p3; }
-    if (pm > CCT_V_MAX) {
-        const float k = CCT_V_MAX / pm;
+    if (pm > s->v_max) {
+        const float k = s->v_max / pm;
         vds = vd * k;
         vqs = vq * k;
         saturated = 1;
@@ -231,11 +266,17 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
     }
+    const float vdr = vds; /* no delay compensation in this design */
+    const float vqr = vqs;
     nx.v_d_hold = vds;
     nx.v_q_hold = vqs;
+    nx.v_d_comp_hold = vdr;
+    nx.v_q_comp_hold = vqr;
     *s = nx;
     out->v_d = vds;
     out->v_q = vqs;
+    out->v_d_comp = vdr;
+    out->v_q_comp = vqr;
     out->saturated = saturated;
     out->status = CCT_STATUS_OK;
 }
@@ -243,5 +284,62 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
 #ifdef CCT_FIXED_POINT
 #error "fixed-point variant not available: voltage_limit = 'hexagon' is implemented in the float path only; the Q31 variant needs voltage_limit = 'circle'"
 #endif /* CCT_FIXED_POINT */
+
+#if defined(CCT_MCSDK) || defined(CCT_IQMATH)
+#error "MCSDK/IQmath variants not available: voltage_limit = 'hexagon' is implemented in the float path only; the MCSDK/IQmath variants need voltage_limit = 'circle'"
+#endif
+
+#if 0 /* usage example: copy the lines between BEGIN and END into main.c */
+// EXAMPLE main.c BEGIN
+#include <stdio.h>
+#include "controller.h"
+
+/* stand-ins for the board's drivers: ADC, encoder, PWM, fault output */
+static float adc_i_d(void) { return 0.0f; }
+static float adc_i_q(void) { return 0.0f; }
+static float adc_vdc(void) { return CCT_DRIVE_VDC; }
+static float encoder_speed(void) { return 0.0f; }
+static float encoder_theta_e(void) { return 0.0f; }
+static void pwm_apply(float v_d, float v_q, float theta_e)
+{
+    (void)v_d; (void)v_q; (void)theta_e; /* inverse Park at theta_e, then SVM */
+}
+static void fault_report(int status) { printf("controller status %d\n", status); }
+
+static cct_state_t ctl;
+
+/* once per controller period (CCT_SAMPLE_TIME s), e.g. in the ADC interrupt */
+static void control_isr(float i_d_ref, float i_q_ref)
+{
+    cct_input_t in;
+    cct_output_t out;
+    const float theta_e = encoder_theta_e();
+    if (cct_set_vdc(&ctl, adc_vdc()) != CCT_STATUS_OK) {
+        fault_report(CCT_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
+    }
+    in.i_d_ref = i_d_ref;
+    in.i_q_ref = i_q_ref;
+    in.i_d = adc_i_d();
+    in.i_q = adc_i_q();
+    in.omega_m = encoder_speed();
+    in.theta_e = theta_e;
+    cct_step(&ctl, &in, &out);
+    if (out.status != CCT_STATUS_OK) {
+        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
+    }
+    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e); /* applied during the next period */
+}
+
+int main(void)
+{
+    int k;
+    cct_init(&ctl);
+    for (k = 0; k < 10; ++k) {
+        control_isr(0.0f, 1.0f);
+    }
+    return 0;
+}
+// EXAMPLE main.c END
+#endif /* usage example */
 
 #endif /* CCT_CONTROLLER_H */

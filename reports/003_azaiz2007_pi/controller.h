@@ -4,20 +4,23 @@
  * method:      pi
  * version:     0.1.0
  * spec sha256: f2d5685ae25647222d5d14f8e22c2ae2e7ba3436f8b20ded87fe03b7fb2388f2
- * created:     2026-11-23T19:27:23+00:00
+ * created:     2026-11-24T08:28:25+00:00
  * equations:   000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e); 002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation); Kp = L wc, Ki = R wc (closed loop wc/(s + wc), wc = ln(20)/t5)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
- * Call cct_init() once, then cct_step() once per controller period. The
+ * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
+ * cct_step() once per controller period (example at the end of this file). The
  * voltage returned is applied by the inverter in the NEXT period: the
  * computation delay is part of the plant the design assumed, not of this code.
  * Law per axis: x' = A x + B [i_ref; i_meas], v = C x + D [i_ref; i_meas]
  *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),
  * then decoupling  v_d += -cross w_e Lq_c i_q,
  *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,
- * then the circle limit |v| <= V_MAX (radial scaling; the inscribed circle of
- * the SVM hexagon), and
+ * then the circle limit |v| <= limit in use (radial scaling; the inscribed
+ * circle of the SVM hexagon), and
  * back-calculation anti-windup x += aw (v_sat - v_unsat).
+ * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc
+ * (V_MAX, the nominal bus, after init).
  * Faults: out->status is
  *   CCT_STATUS_OK (0)        the law ran;
  *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
@@ -39,7 +42,8 @@
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
 #define CCT_DELAY_SAMPLES 1 /* computation delay the design assumed, periods */
-#define CCT_V_MAX 8.660253906e+01f /* voltage-limit circle radius, V */
+#define CCT_V_MAX 8.660253906e+01f /* voltage limit (circle radius) at the nominal bus voltage, V; cct_init's default */
+#define CCT_V_MAX_PER_VDC 5.773502588e-01f /* voltage limit per volt of measured bus (cct_set_vdc) */
 /* motor (amplitude-invariant dq convention) */
 #define CCT_MOTOR_R 6.000000238e-01f /* stator resistance, ohm */
 #define CCT_MOTOR_LD 1.399999950e-03f /* d-axis inductance, H */
@@ -60,16 +64,22 @@
 #define CCT_DEC_LQ 2.799999900e-03f /* H */
 #define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
-/* d axis PI gains (method pi); the law below is what runs */
-#define CCT_D_KP 2.029999942e-01f /* parallel proportional gain, V/A */
-#define CCT_D_KI 8.700000000e+01f /* parallel integral gain, V/(A s) */
-#define CCT_D_KI_TS 8.700000122e-03f /* integral gain per sample Ki*Ts, V/A */
-#define CCT_D_TI 2.333333250e-03f /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */
-/* q axis PI gains (method pi); the law below is what runs */
-#define CCT_Q_KP 4.059999883e-01f /* parallel proportional gain, V/A */
-#define CCT_Q_KI 8.700000000e+01f /* parallel integral gain, V/(A s) */
-#define CCT_Q_KI_TS 8.700000122e-03f /* integral gain per sample Ki*Ts, V/A */
-#define CCT_Q_TI 4.666666500e-03f /* series form Kp (1 + 1/(Ti s)): Ti = Kp/Ki, s */
+/* d axis PI gains (method pi), FOR INFORMATION ONLY: the code
+ *   runs the coefficients of the law below, derived from these gains at export;
+ *   to retune, change the spec and re-export (editing these numbers does nothing).
+ *   Kp = 0.203 V/A (parallel proportional gain)
+ *   Ki = 87 V/(A s) (parallel integral gain)
+ *   Ki Ts = 0.0087 V/A (integral gain per sample)
+ *   Ti = 0.00233333333 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
+ */
+/* q axis PI gains (method pi), FOR INFORMATION ONLY: the code
+ *   runs the coefficients of the law below, derived from these gains at export;
+ *   to retune, change the spec and re-export (editing these numbers does nothing).
+ *   Kp = 0.406 V/A (parallel proportional gain)
+ *   Ki = 87 V/(A s) (parallel integral gain)
+ *   Ki Ts = 0.0087 V/A (integral gain per sample)
+ *   Ti = 0.00466666667 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
+ */
 
 #define CCT_D_GAIN 2.073500007e-01f /* d axis SOS output gain, V/A */
 #define CCT_D_NUM_STAGES 1
@@ -90,8 +100,10 @@ typedef struct {
 #define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
 
 typedef struct {
-    float v_d;     /* V, to apply next period */
+    float v_d;     /* V, the law's output (limited), to apply next period */
     float v_q;     /* V */
+    float v_d_comp; /* V, = v_d (this design has no delay compensation): */
+    float v_q_comp; /* V, feed these to the inverse Park transform at theta_e */
     int saturated; /* 1 when the voltage limit acted */
     int status;    /* CCT_STATUS_* */
 } cct_output_t;
@@ -103,8 +115,12 @@ typedef struct {
     float q[2];
     float v_d_hold; /* V */
     float v_q_hold; /* V */
+    float v_d_comp_hold; /* V */
+    float v_q_comp_hold; /* V */
+    float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
 } cct_state_t;
 
+/* zero states and held outputs; voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
 static inline void cct_init(cct_state_t *s)
 {
     unsigned i;
@@ -112,6 +128,9 @@ static inline void cct_init(cct_state_t *s)
     for (i = 0u; i < 2u; ++i) { s->q[i] = 0.0f; }
     s->v_d_hold = 0.0f;
     s->v_q_hold = 0.0f;
+    s->v_d_comp_hold = 0.0f;
+    s->v_q_comp_hold = 0.0f;
+    s->v_max = CCT_V_MAX;
 }
 
 /* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that
@@ -121,6 +140,19 @@ static inline int cct_finite(float v)
     union { float f; uint32_t u; } b;
     b.f = v;
     return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+/* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
+ * circle's radius); call whenever a new bus measurement arrives (e.g. once per
+ * period, before cct_step). Returns CCT_STATUS_OK, or CCT_STATUS_BAD_INPUT
+ * (vdc not finite or not > 0) leaving the limit in use unchanged. */
+static inline int cct_set_vdc(cct_state_t *s, float vdc)
+{
+    if (!(cct_finite(vdc) && vdc > 0.0f)) {
+        return CCT_STATUS_BAD_INPUT;
+    }
+    s->v_max = CCT_V_MAX_PER_VDC * vdc;
+    return CCT_STATUS_OK;
 }
 
 static inline int cct_state_finite(const cct_state_t *s)
@@ -136,6 +168,8 @@ static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
 {
     out->v_d = s->v_d_hold;
     out->v_q = s->v_q_hold;
+    out->v_d_comp = s->v_d_comp_hold;
+    out->v_q_comp = s->v_q_comp_hold;
     out->saturated = 0;
     out->status = status;
 }
@@ -201,8 +235,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     float vqs = vq;
     int saturated = 0;
     const float mag2 = vd * vd + vq * vq;
-    if (mag2 > CCT_V_MAX * CCT_V_MAX) {
-        const float k = CCT_V_MAX / sqrtf(mag2);
+    if (mag2 > s->v_max * s->v_max) {
+        const float k = s->v_max / sqrtf(mag2);
         vds = vd * k;
         vqs = vq * k;
         saturated = 1;
@@ -214,11 +248,17 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
     }
+    const float vdr = vds; /* no delay compensation in this design */
+    const float vqr = vqs;
     nx.v_d_hold = vds;
     nx.v_q_hold = vqs;
+    nx.v_d_comp_hold = vdr;
+    nx.v_q_comp_hold = vqr;
     *s = nx;
     out->v_d = vds;
     out->v_q = vqs;
+    out->v_d_comp = vdr;
+    out->v_q_comp = vqr;
     out->saturated = saturated;
     out->status = CCT_STATUS_OK;
 }
@@ -239,7 +279,10 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
 #define CCT_Q31_V_BASE 5.120000000e+02f /* V at full scale */
 #define CCT_Q31_W_BASE 2.560000000e+02f /* mechanical rad/s at full scale */
-#define CCT_Q31_V_MAX 363237381L /* V_MAX / V_BASE in Q31 */
+#define CCT_Q31_I_MAX 2.000000000e+01f /* A, current range (cct_to_q31 clamps beyond) */
+#define CCT_Q31_W_MAX 2.300000000e+02f /* rad/s, speed range (cct_to_q31 clamps beyond) */
+#define CCT_Q31_V_MAX 363237381L /* V_MAX / V_BASE in Q31: the largest limit */
+#define CCT_Q31_VDC_BASE 8.868099976e+02f /* V of bus at full scale (cct_set_vdc_q31) */
 #define CCT_Q31_D_X0_BASE 1.024000000e+03f /* state 0 full scale */
 #define CCT_Q31_D_X1_BASE 1.000000000e+00f /* state 1 full scale */
 #define CCT_Q31_Q_X0_BASE 1.024000000e+03f /* state 0 full scale */
@@ -250,14 +293,16 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
 #define CCT_Q31_DEC_DQ_SHIFT 33u
 #define CCT_Q31_DEC_DE 1030792151L /* decoupling coefficient 0.24 p.u. = m / 2^shift */
 #define CCT_Q31_DEC_DE_SHIFT 32u
-#define CCT_Q31_D_KP_GAIN 871878361L /* per-unit KP: 0.0126875 */
-#define CCT_Q31_D_KP_DIV_LOG2 36 /* divisor 2^36 */
-#define CCT_Q31_D_KI_TS_GAIN 597859448L /* per-unit KI_TS: 0.00054375 */
-#define CCT_Q31_D_KI_TS_DIV_LOG2 40 /* divisor 2^40 */
-#define CCT_Q31_Q_KP_GAIN 871878361L /* per-unit KP: 0.025375 */
-#define CCT_Q31_Q_KP_DIV_LOG2 35 /* divisor 2^35 */
-#define CCT_Q31_Q_KI_TS_GAIN 597859448L /* per-unit KI_TS: 0.00054375 */
-#define CCT_Q31_Q_KI_TS_DIV_LOG2 40 /* divisor 2^40 */
+/* d axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY
+ * (the Q31 law below runs its own quantised coefficients):
+ *   Kp = 871878361L / 2^36 (0.0126875 p.u.)
+ *   Ki Ts = 597859448L / 2^40 (0.00054375 p.u.)
+ */
+/* q axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY
+ * (the Q31 law below runs its own quantised coefficients):
+ *   Kp = 871878361L / 2^35 (0.025375 p.u.)
+ *   Ki Ts = 597859448L / 2^40 (0.00054375 p.u.)
+ */
 
 typedef struct {
     int32_t i_d_ref; /* Q31 of Q31_I_BASE */
@@ -276,6 +321,7 @@ typedef struct {
 typedef struct {
     int32_t d[2];
     int32_t q[2];
+    int32_t v_max; /* voltage limit in use, Q31 of Q31_V_BASE (cct_set_vdc_q31) */
 } cct_state_q31_t;
 
 static inline void cct_init_q31(cct_state_q31_t *s)
@@ -283,6 +329,41 @@ static inline void cct_init_q31(cct_state_q31_t *s)
     unsigned i;
     for (i = 0u; i < 2u; ++i) { s->d[i] = 0; }
     for (i = 0u; i < 2u; ++i) { s->q[i] = 0; }
+    s->v_max = CCT_Q31_V_MAX;
+}
+
+/* measured DC-link voltage as Q31 of CCT_Q31_VDC_BASE (chosen so that the
+ * word IS the voltage limit in Q31 of Q31_V_BASE). The scaling and the state
+ * bounds were derived for the nominal bus: above it the limit is clamped to
+ * CCT_Q31_V_MAX and 1 is returned; a negative word is refused (-1, limit
+ * unchanged); 0 otherwise. */
+static inline int cct_set_vdc_q31(cct_state_q31_t *s, int32_t vdc)
+{
+    if (vdc < 0) { return -1; }
+    if (vdc > CCT_Q31_V_MAX) {
+        s->v_max = CCT_Q31_V_MAX;
+        return 1;
+    }
+    s->v_max = vdc;
+    return 0;
+}
+
+/* physical value -> Q31 word of base, clamped to +-range (the range the
+ * scaling and state bounds were derived for) with *clamped = 1 beyond it or
+ * for a non-finite value (then 0). E.g. currents: range CCT_Q31_I_MAX, base
+ * CCT_Q31_I_BASE; speed: CCT_Q31_W_MAX, CCT_Q31_W_BASE. */
+static inline int32_t cct_to_q31(float value, float range, float base, int *clamped)
+{
+    float v = value;
+    if (!(v == v)) { *clamped = 1; return 0; }
+    if (v > range) { v = range; *clamped = 1; }
+    if (v < -range) { v = -range; *clamped = 1; }
+    {
+        const float q = v / base * 2147483648.0f; /* truncated towards zero below */
+        if (q >= 2147483648.0f) { return INT32_MAX; }
+        if (q <= -2147483648.0f) { return -INT32_MAX; }
+        return (int32_t)q;
+    }
 }
 
 static inline int32_t cct_sat32(int64_t v)
@@ -391,10 +472,10 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
     int64_t vds = vdc;
     int64_t vqs = vqc;
     out->saturated = 0;
-    if (mag2 > (uint64_t)CCT_Q31_V_MAX * (uint64_t)CCT_Q31_V_MAX) {
+    if (mag2 > (uint64_t)s->v_max * (uint64_t)s->v_max) {
         const int64_t mag = (int64_t)cct_isqrt64(mag2);
-        vds = (vdc * CCT_Q31_V_MAX) / mag;
-        vqs = (vqc * CCT_Q31_V_MAX) / mag;
+        vds = (vdc * s->v_max) / mag;
+        vqs = (vqc * s->v_max) / mag;
         out->saturated = 1;
     }
     cct_d_antiwindup_q31(s->d, vds - vd);
@@ -403,5 +484,344 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
     out->v_q = (int32_t)vqs;
 }
 #endif /* CCT_FIXED_POINT */
+
+#if defined(CCT_MCSDK) || defined(CCT_IQMATH)
+/* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;
+ *   d: Kp = 0.20735 V/A, Ki = 0.0087 V/A per sample, Kaw = 0.041958042
+ *   q: Kp = 0.41035 V/A, Ki = 0.0087 V/A per sample, Kaw = 0.0212014134
+ * ranges: currents and speed beyond these are clamped (status CLAMPED) */
+#define CCT_MCSDK_I_FS 2.000000000e+01f /* A = 32768 digits (s16A) */
+#define CCT_MCSDK_V_FS 1.732050781e+02f /* V = 32768 digits (s16V) */
+#define CCT_MCSDK_W_FS 2.300000000e+02f /* mechanical rad/s = 32768 digits */
+#define CCT_MCSDK_V_MAX 16384 /* nominal voltage limit, s16V */
+#define CCT_IQ_I_BASE 2.000000000e+01f /* A = 1.0 p.u. */
+#define CCT_IQ_V_BASE 8.660253906e+01f /* V = 1.0 p.u. (nominal limit) */
+#define CCT_IQ_W_BASE 2.300000000e+02f /* mechanical rad/s = 1.0 p.u. */
+#endif
+#if defined(CCT_MCSDK) || defined(CCT_IQMATH)
+#include <stdint.h>
+#define CCT_STATUS_CLAMPED 3 /* integer variants: an input beyond its range was clamped */
+
+static inline uint64_t cct_isqrt_u64(uint64_t v)
+{
+    uint64_t r = 0u, bit = (uint64_t)1 << 62;
+    while (bit > v) { bit >>= 2; }
+    while (bit != 0u) {
+        if (v >= r + bit) { v -= r + bit; r = (r >> 1) + bit; } else { r >>= 1; }
+        bit >>= 2;
+    }
+    return r;
+}
+
+/* clamp v to [-lim, lim]; sets *flag when it acts */
+static inline int64_t cct_clamp64(int64_t v, int64_t lim, int *flag)
+{
+    if (v > lim) { *flag = 1; return lim; }
+    if (v < -lim) { *flag = 1; return -lim; }
+    return v;
+}
+
+/* radial limit of (vd, vq) to vmax; returns 1 when it acted */
+static inline int cct_limit64(int64_t *vd, int64_t *vq, int64_t vmax)
+{
+    const uint64_t mag2 = (uint64_t)(*vd * *vd) + (uint64_t)(*vq * *vq);
+    if (mag2 > (uint64_t)vmax * (uint64_t)vmax) {
+        const int64_t mag = (int64_t)cct_isqrt_u64(mag2);
+        *vd = (*vd * vmax) / mag;
+        *vq = (*vq * vmax) / mag;
+        return 1;
+    }
+    return 0;
+}
+#endif
+
+#ifdef CCT_MCSDK
+/*
+ * STM32 MCSDK-style PI (PI_Controller): signals in int16 digits,
+ *   current  s16A: CCT_MCSDK_I_FS A = 32768 digits
+ *   voltage  s16V: CCT_MCSDK_V_FS V = 32768 digits (twice the nominal limit)
+ *   speed:         CCT_MCSDK_W_FS rad/s (mechanical) = 32768 digits
+ * gains int16 with power-of-two divisors, v = (KP e >> KP_DIV) + (integral >> KI_DIV),
+ * integral += KI e (int32, clamped to +-V_FS), back-calculation anti-windup.
+ */
+#define CCT_MCSDK_D_KP_GAIN (785) /* d_kp: gain / 2^DIV */
+#define CCT_MCSDK_D_KP_DIV 15
+#define CCT_MCSDK_D_KI_GAIN (33) /* d_ki: gain / 2^DIV */
+#define CCT_MCSDK_D_KI_DIV 15
+#define CCT_MCSDK_D_KAW_GAIN (1375) /* d_kaw: gain / 2^DIV */
+#define CCT_MCSDK_D_KAW_DIV 15
+#define CCT_MCSDK_Q_KP_GAIN (1553) /* q_kp: gain / 2^DIV */
+#define CCT_MCSDK_Q_KP_DIV 15
+#define CCT_MCSDK_Q_KI_GAIN (33) /* q_ki: gain / 2^DIV */
+#define CCT_MCSDK_Q_KI_DIV 15
+#define CCT_MCSDK_Q_KAW_GAIN (695) /* q_kaw: gain / 2^DIV */
+#define CCT_MCSDK_Q_KAW_DIV 15
+#define CCT_MCSDK_DD_GAIN (-9747) /* dd: gain / 2^DIV */
+#define CCT_MCSDK_DD_DIV 15
+#define CCT_MCSDK_DQ_GAIN (4873) /* dq: gain / 2^DIV */
+#define CCT_MCSDK_DQ_DIV 15
+#define CCT_MCSDK_DE_GAIN (20886) /* de: gain / 2^DIV */
+#define CCT_MCSDK_DE_DIV 15
+
+typedef struct {
+    int16_t i_d_ref; /* s16A */
+    int16_t i_q_ref;
+    int16_t i_d;
+    int16_t i_q;
+    int16_t omega_m; /* digits of MCSDK_W_FS */
+} cct_input_s16_t;
+
+typedef struct {
+    int16_t v_d;   /* s16V */
+    int16_t v_q;
+    int saturated;
+    int status;    /* CCT_STATUS_OK or CCT_STATUS_CLAMPED (an input was at the rail) */
+} cct_output_s16_t;
+
+/* run-time gains of one axis (as the SDK's PI handle): the step reads these,
+ * so retuning in the field is writing them. Change KI_DIV only with the
+ * integral at 0 (it holds integral x 2^KI_DIV). */
+typedef struct {
+    int16_t kp_gain;
+    uint16_t kp_div;  /* log2 of the divisor, 0..15 */
+    int16_t ki_gain;
+    uint16_t ki_div;
+    int16_t kaw_gain;
+    uint16_t kaw_div;
+} cct_gains_s16_t;
+
+typedef struct {
+    int32_t int_d; /* integral term x 2^KI_DIV, s16V */
+    int32_t int_q;
+    int32_t v_max; /* voltage limit in use, s16V (cct_set_vdc_s16) */
+    cct_gains_s16_t gd; /* d-axis gains, CCT_MCSDK_D_* after init */
+    cct_gains_s16_t gq; /* q-axis gains */
+} cct_state_s16_t;
+
+static inline void cct_init_s16(cct_state_s16_t *s)
+{
+    s->int_d = 0;
+    s->int_q = 0;
+    s->v_max = CCT_MCSDK_V_MAX;
+    s->gd.kp_gain = CCT_MCSDK_D_KP_GAIN; s->gd.kp_div = CCT_MCSDK_D_KP_DIV;
+    s->gd.ki_gain = CCT_MCSDK_D_KI_GAIN; s->gd.ki_div = CCT_MCSDK_D_KI_DIV;
+    s->gd.kaw_gain = CCT_MCSDK_D_KAW_GAIN; s->gd.kaw_div = CCT_MCSDK_D_KAW_DIV;
+    s->gq.kp_gain = CCT_MCSDK_Q_KP_GAIN; s->gq.kp_div = CCT_MCSDK_Q_KP_DIV;
+    s->gq.ki_gain = CCT_MCSDK_Q_KI_GAIN; s->gq.ki_div = CCT_MCSDK_Q_KI_DIV;
+    s->gq.kaw_gain = CCT_MCSDK_Q_KAW_GAIN; s->gq.kaw_div = CCT_MCSDK_Q_KAW_DIV;
+}
+
+/* amps -> s16A digits, clamped to +-32767 with *clamped = 1 beyond range */
+static inline int16_t cct_to_s16a(float amps, int *clamped)
+{
+    const float d = amps * (32768.0f / CCT_MCSDK_I_FS);
+    if (!(d < 32767.0f)) { *clamped = 1; return (int16_t)32767; }
+    if (!(d > -32767.0f)) { *clamped = 1; return (int16_t)-32767; }
+    return (int16_t)(d >= 0.0f ? d + 0.5f : d - 0.5f);
+}
+
+/* bus voltage as s16V digits of MCSDK_V_FS / V_MAX_PER_VDC; clamped to the full scale */
+static inline int cct_set_vdc_s16(cct_state_s16_t *s, int32_t vmax_digits)
+{
+    if (vmax_digits < 0) { return -1; }
+    s->v_max = vmax_digits > 32767 ? 32767 : vmax_digits;
+    return vmax_digits > 32767 ? 1 : 0;
+}
+
+static inline int64_t cct_pi_s16(int32_t *integ, int32_t e, const cct_gains_s16_t *g)
+{
+    const int64_t v = (((int64_t)g->kp_gain * e) >> g->kp_div) + ((int64_t)*integ >> g->ki_div);
+    int flag = 0;
+    *integ = (int32_t)cct_clamp64((int64_t)*integ + (int64_t)g->ki_gain * e,
+                                    (int64_t)32767 << g->ki_div, &flag);
+    return v;
+}
+
+/* back-calculation: integral += KAW (v_sat - v), in integral units */
+static inline void cct_aw_s16(int32_t *integ, int64_t dv, const cct_gains_s16_t *g)
+{
+    int flag = 0;
+    *integ = (int32_t)cct_clamp64((int64_t)*integ
+        + (((int64_t)g->kaw_gain * dv * ((int64_t)1 << g->ki_div)) >> g->kaw_div),
+        (int64_t)32767 << g->ki_div, &flag);
+}
+
+static inline void cct_step_s16(cct_state_s16_t *s, const cct_input_s16_t *in, cct_output_s16_t *out)
+{
+    int clamped = 0;
+    const int64_t idr = cct_clamp64(in->i_d_ref, 32767, &clamped);
+    const int64_t iqr = cct_clamp64(in->i_q_ref, 32767, &clamped);
+    const int64_t idm = cct_clamp64(in->i_d, 32767, &clamped);
+    const int64_t iqm = cct_clamp64(in->i_q, 32767, &clamped);
+    const int64_t w = cct_clamp64(in->omega_m, 32767, &clamped);
+    int64_t vd = cct_pi_s16(&s->int_d, (int32_t)(idr - idm), &s->gd);
+    int64_t vq = cct_pi_s16(&s->int_q, (int32_t)(iqr - iqm), &s->gq);
+    vd += (CCT_MCSDK_DD_GAIN * ((w * iqm) >> 15)) >> CCT_MCSDK_DD_DIV;
+    vq += (CCT_MCSDK_DQ_GAIN * ((w * idm) >> 15)) >> CCT_MCSDK_DQ_DIV;
+    vq += (CCT_MCSDK_DE_GAIN * w) >> CCT_MCSDK_DE_DIV;
+    {
+        const int64_t ud = vd;
+        const int64_t uq = vq;
+        int flag = 0;
+        vd = cct_clamp64(vd, (int64_t)1 << 40, &flag);
+        vq = cct_clamp64(vq, (int64_t)1 << 40, &flag);
+        out->saturated = cct_limit64(&vd, &vq, s->v_max) | flag;
+        cct_aw_s16(&s->int_d, vd - ud, &s->gd);
+        cct_aw_s16(&s->int_q, vq - uq, &s->gq);
+    }
+    out->v_d = (int16_t)vd;
+    out->v_q = (int16_t)vq;
+    out->status = clamped ? CCT_STATUS_CLAMPED : CCT_STATUS_OK;
+}
+#endif /* CCT_MCSDK */
+
+#ifdef CCT_IQMATH
+/*
+ * TI IQmath-style: _IQ24 per-unit int32 words (value x 2^24, +-128 p.u.),
+ * bases CCT_IQ_I_BASE A, CCT_IQ_V_BASE V (the nominal limit),
+ * CCT_IQ_W_BASE rad/s (mechanical); _IQmpy(a, b) = (a b) >> 24 in int64.
+ * Currents and speed beyond +-1 p.u. are clamped (status CLAMPED).
+ */
+#define CCT_IQ_ONE ((int32_t)1 << 24)
+#define CCT_IQ_D_KP ((int32_t)803384L)
+#define CCT_IQ_D_KI ((int32_t)33708L)
+#define CCT_IQ_D_KAW ((int32_t)703939L)
+#define CCT_IQ_Q_KP ((int32_t)1589914L)
+#define CCT_IQ_Q_KI ((int32_t)33708L)
+#define CCT_IQ_Q_KAW ((int32_t)355701L)
+#define CCT_IQ_DD ((int32_t)-9980795L)
+#define CCT_IQ_DQ ((int32_t)4990397L)
+#define CCT_IQ_DE ((int32_t)21387417L)
+
+static inline int32_t cct_iqmpy(int64_t a, int64_t b) { return (int32_t)((a * b) >> 24); }
+
+typedef struct {
+    int32_t i_d_ref; /* _IQ24 p.u. of IQ_I_BASE */
+    int32_t i_q_ref;
+    int32_t i_d;
+    int32_t i_q;
+    int32_t omega_m; /* _IQ24 p.u. of IQ_W_BASE */
+} cct_input_iq_t;
+
+typedef struct {
+    int32_t v_d;   /* _IQ24 p.u. of IQ_V_BASE */
+    int32_t v_q;
+    int saturated;
+    int status;    /* CCT_STATUS_OK or CCT_STATUS_CLAMPED */
+} cct_output_iq_t;
+
+/* run-time gains of one axis (_IQ24 per unit): the step reads these */
+typedef struct {
+    int32_t kp;
+    int32_t ki;  /* per sample */
+    int32_t kaw;
+} cct_gains_iq_t;
+
+typedef struct {
+    int32_t int_d; /* integral term, _IQ24 p.u. V */
+    int32_t int_q;
+    int32_t v_max; /* voltage limit in use, _IQ24 p.u. (cct_set_vdc_iq) */
+    cct_gains_iq_t gd; /* d-axis gains, CCT_IQ_D_* after init */
+    cct_gains_iq_t gq;
+} cct_state_iq_t;
+
+static inline void cct_init_iq(cct_state_iq_t *s)
+{
+    s->int_d = 0;
+    s->int_q = 0;
+    s->v_max = CCT_IQ_ONE;
+    s->gd.kp = CCT_IQ_D_KP; s->gd.ki = CCT_IQ_D_KI; s->gd.kaw = CCT_IQ_D_KAW;
+    s->gq.kp = CCT_IQ_Q_KP; s->gq.ki = CCT_IQ_Q_KI; s->gq.kaw = CCT_IQ_Q_KAW;
+}
+
+/* bus voltage relative to nominal (_IQ24, 1.0 = DRIVE_VDC): limit = V_MAX x ratio, up to 2x */
+static inline int cct_set_vdc_iq(cct_state_iq_t *s, int32_t ratio)
+{
+    if (ratio < 0) { return -1; }
+    s->v_max = ratio > 2 * CCT_IQ_ONE ? 2 * CCT_IQ_ONE : ratio;
+    return ratio > 2 * CCT_IQ_ONE ? 1 : 0;
+}
+
+static inline void cct_step_iq(cct_state_iq_t *s, const cct_input_iq_t *in, cct_output_iq_t *out)
+{
+    int clamped = 0;
+    int flag = 0;
+    const int64_t idr = cct_clamp64(in->i_d_ref, CCT_IQ_ONE, &clamped);
+    const int64_t iqr = cct_clamp64(in->i_q_ref, CCT_IQ_ONE, &clamped);
+    const int64_t idm = cct_clamp64(in->i_d, CCT_IQ_ONE, &clamped);
+    const int64_t iqm = cct_clamp64(in->i_q, CCT_IQ_ONE, &clamped);
+    const int64_t w = cct_clamp64(in->omega_m, CCT_IQ_ONE, &clamped);
+    const int64_t ed = idr - idm;
+    const int64_t eq = iqr - iqm;
+    int64_t vd = (int64_t)cct_iqmpy(s->gd.kp, ed) + s->int_d;
+    int64_t vq = (int64_t)cct_iqmpy(s->gq.kp, eq) + s->int_q;
+    int64_t ud, uq;
+    vd += cct_iqmpy(CCT_IQ_DD, cct_iqmpy(w, iqm));
+    vq += (int64_t)cct_iqmpy(CCT_IQ_DQ, cct_iqmpy(w, idm)) + cct_iqmpy(CCT_IQ_DE, w);
+    ud = vd;
+    uq = vq;
+    out->saturated = cct_limit64(&vd, &vq, s->v_max);
+    s->int_d = (int32_t)cct_clamp64((int64_t)s->int_d + cct_iqmpy(s->gd.ki, ed)
+                                      + cct_iqmpy(s->gd.kaw, vd - ud), 64 * (int64_t)CCT_IQ_ONE, &flag);
+    s->int_q = (int32_t)cct_clamp64((int64_t)s->int_q + cct_iqmpy(s->gq.ki, eq)
+                                      + cct_iqmpy(s->gq.kaw, vq - uq), 64 * (int64_t)CCT_IQ_ONE, &flag);
+    out->v_d = (int32_t)vd;
+    out->v_q = (int32_t)vq;
+    out->status = clamped ? CCT_STATUS_CLAMPED : CCT_STATUS_OK;
+}
+#endif /* CCT_IQMATH */
+
+#if 0 /* usage example: copy the lines between BEGIN and END into main.c */
+// EXAMPLE main.c BEGIN
+#include <stdio.h>
+#include "controller.h"
+
+/* stand-ins for the board's drivers: ADC, encoder, PWM, fault output */
+static float adc_i_d(void) { return 0.0f; }
+static float adc_i_q(void) { return 0.0f; }
+static float adc_vdc(void) { return CCT_DRIVE_VDC; }
+static float encoder_speed(void) { return 0.0f; }
+static float encoder_theta_e(void) { return 0.0f; }
+static void pwm_apply(float v_d, float v_q, float theta_e)
+{
+    (void)v_d; (void)v_q; (void)theta_e; /* inverse Park at theta_e, then SVM */
+}
+static void fault_report(int status) { printf("controller status %d\n", status); }
+
+static cct_state_t ctl;
+
+/* once per controller period (CCT_SAMPLE_TIME s), e.g. in the ADC interrupt */
+static void control_isr(float i_d_ref, float i_q_ref)
+{
+    cct_input_t in;
+    cct_output_t out;
+    const float theta_e = encoder_theta_e();
+    if (cct_set_vdc(&ctl, adc_vdc()) != CCT_STATUS_OK) {
+        fault_report(CCT_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
+    }
+    in.i_d_ref = i_d_ref;
+    in.i_q_ref = i_q_ref;
+    in.i_d = adc_i_d();
+    in.i_q = adc_i_q();
+    in.omega_m = encoder_speed();
+
+    cct_step(&ctl, &in, &out);
+    if (out.status != CCT_STATUS_OK) {
+        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
+    }
+    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e); /* applied during the next period */
+}
+
+int main(void)
+{
+    int k;
+    cct_init(&ctl);
+    for (k = 0; k < 10; ++k) {
+        control_isr(0.0f, 1.0f);
+    }
+    return 0;
+}
+// EXAMPLE main.c END
+#endif /* usage example */
 
 #endif /* CCT_CONTROLLER_H */

@@ -526,9 +526,9 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
 
     \b
     Example:
-      cct campaign designs/campaign_003.toml --out out/campaign_003
-      cct campaign designs/campaign_003.toml --out out/c --scheduler tcp://scheduler-host:8786
-      cct campaign designs/campaign_003.toml --out out/c_pi --controller out/003_pi
+      cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/campaign_003
+      cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c --scheduler tcp://scheduler-host:8786
+      cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c_pi --controller out/003_pi
     """
     from ..campaign import run_campaign
     from ..spec import load_spec
