@@ -3,7 +3,7 @@
 Scenario (identical for every route): 1 s of an i_q step to 10 A at t = 0 with
 free acceleration (unloaded start) of the Le Pioufle 1992 motor (paper 000),
 dq PI current controllers (Kp = L wc, Ki = R wc, wc = 2000 rad/s, forward-Euler
-integrator, back-calculation anti-windup) with decoupling, Ts = 100 us, one
+integrator, Hanus anti-windup aw = Ts/Kp as toolbox.sim.discrete_pi) with decoupling, Ts = 100 us, one
 period of computation delay, circle voltage limit vdc/sqrt(2) (vdc = 150 V),
 plant integrated by RK4 at 1 us.
 
@@ -102,8 +102,8 @@ int main(void) {
     double vq = kpq * eq + kiq * xq + wm * Ld * idm + wm * FL;
     double mag = hypot(vd, vq), s = mag > vmax ? vmax / mag : 1.0;
     double vds = vd * s, vqs = vq * s;
-    xd += Ts * ed + (vds - vd) / kid;
-    xq += Ts * eq + (vqs - vq) / kiq;
+    xd += Ts * ed + (vds - vd) * Ts / kpd;   /* Hanus: aw = Ts / Kp */
+    xq += Ts * eq + (vqs - vq) * Ts / kpq;
     double vda = vd_app, vqa = vq_app;      /* one-period delay */
     vd_app = vds; vq_app = vqs;
     for (int j = 0; j < nsub; ++j) {
@@ -184,8 +184,8 @@ def bench_scipy(horizon=0.05):
         vq = kpq * eq + kiq * xq + wm * Ld * idm + wm * fl
         mag = math.hypot(vd, vq)
         s = V_MAX / mag if mag > V_MAX else 1.0
-        xd += TS * ed + (vd * s - vd) / kid
-        xq += TS * eq + (vq * s - vq) / kiq
+        xd += TS * ed + (vd * s - vd) * TS / kpd
+        xq += TS * eq + (vq * s - vq) * TS / kpq
         sol = solve_ivp(rhs, (k * TS, (k + 1) * TS), x, args=v_app, rtol=1e-8, atol=1e-10)
         x = sol.y[:, -1]
         v_app = (vd * s, vq * s)
@@ -201,7 +201,7 @@ def bench_gem(duration=DURATION, wc=WC):
     ConstantSpeedLoad, scipy ``ode`` dopri5 solver, tau = 100 us, random
     (Wiener-process) i_sd/i_sq references; episodes that hit its current limit
     are reset. The agent is a dq PI with decoupling (Kp = L wc, Ki = R wc,
-    back-calculation anti-windup, circle limit u_sup/2), inverse Park at the
+    Hanus anti-windup aw = tau/Kp, circle limit u_sup/2), inverse Park at the
     step's mean angle, duty cycles u_abc / (u_sup/2). ``duration / tau`` steps.
     The tracking error only shows that the agent closes the loop: the default
     random-walk references move ~1 A per step (median, up to ~30 A) and differ
@@ -237,8 +237,8 @@ def bench_gem(duration=DURATION, wc=WC):
         v_q = Lq * wc * e_q + R * wc * xq + w * (Ld * i_d + psi)
         mag = math.hypot(v_d, v_q)
         sc = min(1.0, u_half / mag) if mag > 0 else 1.0
-        xd += tau * e_d + (sc - 1.0) * v_d / (R * wc)
-        xq += tau * e_q + (sc - 1.0) * v_q / (R * wc)
+        xd += tau * e_d + (sc - 1.0) * v_d * tau / (Ld * wc)
+        xq += tau * e_q + (sc - 1.0) * v_q * tau / (Lq * wc)
         eps = state[ix["epsilon"]] * math.pi + 0.5 * w * tau
         u_abc = np.asarray(ps.dq_to_abc_space((sc * v_d, sc * v_q), eps)) / u_half
         (state, ref), _, term, trunc, _ = env.step(np.clip(u_abc, -1.0, 1.0))
