@@ -182,7 +182,7 @@ def test_export_under_a_regular_file(design_dir, tmp_path, fmt):
     res = run_cli("export", design_dir, "--format", fmt, "-o", target)
     assert res.exit_code == 2, res.output
     assert (f"cct: error: --output: expected a writable file path (its directory must be "
-            f'creatable), got "{target}"') in res.output
+            f'creatable), got "{target}" ({blocker} is a file, not a directory)') in res.output
     assert "Traceback" not in res.output
 
 

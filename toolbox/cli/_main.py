@@ -53,8 +53,12 @@ def _write_file(path: str | Path, data: str | bytes, option: str) -> None:
     try:
         write_atomic(path, data)
     except OSError as err:
+        # mkdir reports "File exists" for a parent that is a regular file: name it
+        blocking = next((p for p in Path(path).parents if p.exists() and not p.is_dir()), None)
+        hint = (f"{blocking} is a file, not a directory" if blocking is not None
+                else err.strerror or str(err))
         raise SpecError(option, "a writable file path (its directory must be creatable)",
-                        str(path), hint=err.strerror or str(err)) from None
+                        str(path), hint=hint) from None
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
