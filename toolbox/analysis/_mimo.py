@@ -23,6 +23,7 @@ from ..plant import max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_plant, decoupling_matrix
 from ..artifact import json_ready
 from ._laws import AXES, axis_law
+from ._sampling import DEFAULT_BOX, sample_parameters
 from ._siso import disk_variations, log_grid
 from ._statespace import freqresp, zoh_coupled
 
@@ -310,8 +311,6 @@ def multimodel_disk_margins(artifact, motors, speeds, *, n_grid: int = 300) -> n
                            n_grid).disk_margins(artifact)
 
 
-#: Default parameter box of :func:`mimo_over_box`: the robustness sweep's R, Ld, Lq ranges.
-DEFAULT_BOX = {"R": (0.5, 2.0), "Ld": (0.5, 2.0), "Lq": (0.5, 2.0)}
 
 
 @dataclass(frozen=True)
@@ -390,11 +389,8 @@ def mimo_over_box(artifact, motor, drive=None, *, box: dict | None = None, n_spe
     MimoBoxResult
     """
     box = {k: tuple(v) for k, v in (box or DEFAULT_BOX).items()}
-    names = list(box)
-    params = [{k: 1.0 for k in names}]
-    grid = np.array(np.meshgrid(*[[0, 1]] * len(names), indexing="ij"))
-    for corner in grid.reshape(len(names), -1).T:
-        params.append({k: float(box[k][c]) for k, c in zip(names, corner)})
+    P = sample_parameters({k: (lo, hi, "scale") for k, (lo, hi) in box.items()}, 0)
+    params = [{k: float(P[k][i]) for k in box} for i in range(len(P[next(iter(box))]))]
     motors = [motor.with_overrides(None, p) for p in params]
     wmax = max_speed_rad_s if max_speed_rad_s is not None else max_electrical_speed(motor, drive)
     speeds = np.linspace(0.0, wmax, n_speeds) if (wmax > 0 and n_speeds > 1) else np.zeros(1)

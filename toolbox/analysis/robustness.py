@@ -29,61 +29,14 @@ import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.stats import qmc
 
 from ..plant import max_electrical_speed
+from ._sampling import DEFAULT_BOX, DEFAULT_RANGES, sample_parameters
 from .margins import (AXES, axis_law, axis_margins, coupled_closed_loop, freqresp,
                       grid_margins, json_ready, make_axis_loop, zoh_axis)
 
-__all__ = ["DEFAULT_RANGES", "SweepResult", "sample_parameters", "robustness_sweep",
+__all__ = ["DEFAULT_BOX", "DEFAULT_RANGES", "SweepResult", "sample_parameters", "robustness_sweep",
            "batch_axis_margins", "batch_loop_margins"]
-
-#: name -> (low, high, kind): "scale" multiplies the nominal value
-#: (log-uniform), "offset" is an absolute value (uniform), "int" a count.
-DEFAULT_RANGES: dict[str, tuple] = {
-    "R": (0.5, 2.0, "scale"),
-    "Ld": (0.5, 2.0, "scale"),
-    "Lq": (0.5, 2.0, "scale"),
-    "flux": (0.8, 1.2, "scale"),
-    "speed_gain": (0.9, 1.1, "scale"),
-    "speed_offset": (-10.0, 10.0, "offset"),   # rad/s mechanical
-    "delay_samples": (0, 1, "int"),            # periods added to the design's delay
-}
-
-
-def sample_parameters(ranges: dict, n: int, seed: int = 0) -> dict[str, np.ndarray]:
-    """Nominal point, box corners and a Latin hypercube of ``n`` sets.
-
-    Returns ``{name: array}`` with scale factors (``scale``), offsets
-    (``offset``) or integers (``int``); nominal is 1, 0 or the lower integer.
-    """
-    names = list(ranges)
-    k = len(names)
-    corners = np.array(np.meshgrid(*[[0.0, 1.0]] * k, indexing="ij")).reshape(k, -1).T
-    u = qmc.LatinHypercube(d=k, seed=seed).random(n) if n > 0 else np.zeros((0, k))
-    nominal = []
-    for name in names:
-        lo, hi, kind = ranges[name]
-        if kind == "scale":
-            nominal.append((math.log(1.0) - math.log(lo)) / (math.log(hi) - math.log(lo))
-                           if lo <= 1 <= hi and hi > lo else 0.0)
-        elif kind == "offset":
-            nominal.append((0 - lo) / (hi - lo) if lo <= 0 <= hi and hi > lo else 0.0)
-        else:
-            nominal.append(0.0)
-    U = np.vstack([np.array(nominal)[None, :], corners, u])
-    out = {}
-    for j, name in enumerate(names):
-        lo, hi, kind = ranges[name]
-        x = U[:, j]
-        if kind == "scale":
-            out[name] = np.exp(math.log(lo) + x * (math.log(hi) - math.log(lo)))
-        elif kind == "offset":
-            out[name] = lo + x * (hi - lo)
-        else:
-            out[name] = np.minimum(np.floor(lo + x * (hi - lo + 1)), hi).astype(int)
-    return out
-
 
 def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.ndarray,
                        L: np.ndarray, Ts: float, d: np.ndarray) -> dict[str, np.ndarray]:

@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from ..analysis.robustness import DEFAULT_BOX, sample_parameters
 from ..errors import DesignInfeasible, SpecError
 from ..spec import Table
 from . import _defaults
@@ -62,7 +63,6 @@ __all__ = ["RobustPiCfg", "read_cfg", "design", "model_set", "tune"]
 _KEYS = ("disk_margin", "parameter_box", "max_speed", "n_speeds", "samples", "seed",
          "zero_ratios", "decoupling")
 _BOX_KEYS = ("R", "Ld", "Lq")
-DEFAULT_BOX = {"R": (0.5, 2.0), "Ld": (0.5, 2.0), "Lq": (0.5, 2.0)}
 N_GRID = 300          # frequency points of the search (the check uses 4x more)
 N_WC = 16             # log grid of the bandwidth per zero choice (factor 1.36)
 N_BISECT = 8          # bisection steps (a factor 1.3 bracket -> 0.1 %)
@@ -171,8 +171,6 @@ def model_set(motor, cfg: RobustPiCfg) -> tuple[list, list[dict], np.ndarray]:
     speeds : ndarray
         Electrical speeds (rad/s), ``linspace(0, p max_speed, n_speeds)``.
     """
-    from ..analysis.robustness import sample_parameters
-
     ranges = {k: (lo, hi, "scale") for k, (lo, hi) in cfg.parameter_box.items()}
     P = sample_parameters(ranges, cfg.samples, cfg.seed)
     n = len(P["R"])
