@@ -32,7 +32,7 @@ figure shows.
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 from scipy.linalg import eigvals

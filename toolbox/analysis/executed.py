@@ -18,7 +18,6 @@ checks judge the predictive loop.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 

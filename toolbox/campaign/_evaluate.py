@@ -24,7 +24,6 @@ value/bound for an upper bound, bound/value for a lower one; > 1 fails).
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 from dataclasses import dataclass
 from typing import Any
@@ -83,36 +82,23 @@ def make_plan(spec, artifact, numba_threads: int | None = None) -> Plan:
     Scenarios: those named in ``campaign.scenarios``, else every
     ``[[scenario]]``, else :func:`toolbox.sim.default_scenarios`.
     """
-    from ..sim import control_law, default_scenarios, drive_params
+    from ..sim import default_scenarios, scenario_setup
 
     cfg = spec.campaign
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
     if cfg.scenarios:
         scenarios = tuple(s for s in scenarios if (s.name or s.kind) in cfg.scenarios)
-    inverter_default = "fcs_mpc" if artifact.method == "fcs_mpc" else "average"
     runs, seen = [], set()
     for k, sc in enumerate(scenarios):
         slug = scenario_slug(sc.name or sc.kind)
         if slug in seen:
             slug = f"{slug}_{k}"
         seen.add(slug)
-        law = control_law(artifact, _speed_loop(sc, artifact.sample_time))
-        drive = drive_params(spec.drive, sc.inverter or inverter_default)
+        law, drive = scenario_setup(artifact, sc, spec.drive)
         runs.append((slug, dataclasses.replace(sc, keep_traces=False), law, drive))
     return Plan(cfg=cfg, motor=spec.motor, runs=tuple(runs),
                 bounds=dict(spec.requirements.bounds), artifact=artifact,
                 numba_threads=numba_threads)
-
-
-def _speed_loop(scenario, sample_time: float):
-    from ..sim import SpeedLoop
-
-    if scenario.kind not in ("load_step", "speed_step"):
-        return None
-    p = dict(scenario.speed_loop)
-    return SpeedLoop(kp=p["kp"], ki=p.get("ki", 0.0), kd=p.get("kd", 0.0),
-                     sample_time=p.get("sample_time", sample_time),
-                     iq_limit=p.get("iq_limit", math.inf))
 
 
 def chunk_range(cfg, chunk: int) -> tuple[int, int]:

@@ -474,7 +474,6 @@ def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     the ordered real Schur form of the Hamiltonian (eq 16/17) when scipy
     refuses.  Returns ``(X, "")`` or ``(None, reason)``.
     """
-    n = a.shape[0]
     try:
         X = sla.solve_continuous_are(a, b, q, r, s=s)
     except (np.linalg.LinAlgError, ValueError):

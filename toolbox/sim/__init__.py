@@ -10,7 +10,7 @@ __all__ = ["METRIC_NAMES", "step_metrics", "INVERTER_KINDS", "SCENARIO_KINDS", "
            "SimResult", "SpeedLoop", "discrete_pi", "simulate", "simulate_batch"]
 
 from ._verify import (NO_REQUIREMENTS, VERIFY_SCHEMA, ScenarioOutcome, VerifyResult, control_law,
-                      default_scenarios, drive_params, verify)
+                      default_scenarios, drive_params, scenario_setup, verify)
 
 __all__ += ["NO_REQUIREMENTS", "VERIFY_SCHEMA", "ScenarioOutcome", "VerifyResult", "control_law",
-            "default_scenarios", "drive_params", "verify"]
+            "default_scenarios", "drive_params", "scenario_setup", "verify"]

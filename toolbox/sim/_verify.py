@@ -18,7 +18,7 @@ from toolbox.spec import Motor
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
 from ._fcs_metrics import ripple_band_step_times
 from ._scenario import Scenario
-from ._simulate import (AxisLaw, ControlLaw, DriveParams, FcsWeights, SimResult, SpeedLoop,
+from ._simulate import (AxisLaw, ControlLaw, DriveParams, SimResult, SpeedLoop,
                         simulate)
 
 __all__ = ["VERIFY_SCHEMA", "control_law", "drive_params",
@@ -145,6 +145,27 @@ def _speed_loop(scenario: Scenario, sample_time: float) -> SpeedLoop | None:
     ts = sl.get("sample_time", sample_time)  # a whole multiple of Ts (checked at spec load)
     return SpeedLoop(kp=sl["kp"], ki=sl.get("ki", 0.0), kd=sl.get("kd", 0.0),
                      sample_time=ts, iq_limit=sl.get("iq_limit", math.inf))
+
+
+def scenario_setup(artifact, scenario: Scenario, drive) -> tuple[ControlLaw, DriveParams]:
+    """The simulator's law and drive for one scenario of ``artifact``.
+
+    The law executes the artifact (:func:`control_law`) under the scenario's
+    speed loop, if any; the inverter is the scenario's, else the predictive
+    switching law for ``fcs_mpc`` and the ideal average inverter otherwise.
+    Verification and the campaign (``toolbox.campaign``) both set up their
+    runs through it.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    scenario : Scenario
+    drive : Drive
+        The spec's validated drive.
+    """
+    inverter = scenario.inverter or ("fcs_mpc" if artifact.method == "fcs_mpc" else "average")
+    return (control_law(artifact, _speed_loop(scenario, artifact.sample_time)),
+            drive_params(drive, inverter))
 
 
 @dataclass
@@ -338,7 +359,6 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     """
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
     plant = spec.motor  # the true plant is the spec's Motor (one parameter type)
-    inverter_default = "fcs_mpc" if artifact.method == "fcs_mpc" else "average"
     margin_checks, stability, linear, warnings, info = _margin_verdict(artifact, spec, file)
     if artifact.fcs is not None:
         linear = _fcs_linear_figures(spec.drive)
@@ -346,8 +366,7 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
                        stability=stability, warnings=warnings, informational=info,
                        notice=None if spec.requirements.bounds else NO_REQUIREMENTS)
     for k, sc in enumerate(scenarios):
-        law = control_law(artifact, _speed_loop(sc, artifact.sample_time))
-        drive = drive_params(spec.drive, sc.inverter or inverter_default)
+        law, drive = scenario_setup(artifact, sc, spec.drive)
         # the reach check reads the traces at the controller instants (the kernel's 5 %
         # time also sees the switching ripple inside a period); they are kept when small
         rows = sc.duration / spec.drive.sample_time
