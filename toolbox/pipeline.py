@@ -9,6 +9,7 @@ stage succeeded (bad input writes nothing), each file atomically.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -18,8 +19,9 @@ from .artifact import ControllerArtifact
 from .errors import ArtifactError, CctError, ExportRefused, SpecError
 from .spec import Spec, load_spec, spec_from_dict
 
-__all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_data", "design_spec", "analyse", "run_verification", "build_outputs",
-           "write_outputs", "load_artifact", "load_analysis", "spec_of_artifact",
+__all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_data",
+           "design_spec", "analyse", "run_verification", "build_outputs", "write_outputs",
+           "load_artifact", "load_analysis", "header_agreement", "spec_of_artifact",
            "OUTPUT_FILES"]
 
 OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h",
@@ -318,6 +320,28 @@ def load_artifact(out_dir: str | Path) -> ControllerArtifact:
         raise ArtifactError("", "a UTF-8 text file", "undecodable bytes",
                             file=str(path)) from None
     return ControllerArtifact.loads(text, file=str(path))
+
+
+def header_agreement(out_dir: str | Path, artifact: ControllerArtifact) -> dict | None:
+    """Whether ``out_dir/controller.h`` was exported from ``artifact``: its
+    ``law sha256`` line against :meth:`ControllerArtifact.law_sha256` (None when
+    there is no controller.h). A header without the line (older toolbox) does
+    not match.
+
+    Returns
+    -------
+    dict or None
+        ``{"file": "controller.h", "law_sha256": <header's digest or None>,
+        "matches": bool}``.
+    """
+    path = Path(out_dir) / "controller.h"
+    if not path.is_file():
+        return None
+    head = read_limited(path, ArtifactError, what="controller.h file")[:4096]
+    found = re.search(rb"^ \* law sha256:\s+([0-9a-f]{64})\s*$", head, re.MULTILINE)
+    digest = found.group(1).decode() if found else None
+    return {"file": "controller.h", "law_sha256": digest,
+            "matches": digest == artifact.law_sha256()}
 
 
 def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | None:

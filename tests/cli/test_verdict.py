@@ -178,3 +178,30 @@ def test_report_says_why_a_check_failed(unstable_design):
     html = (out / "report.html").read_text()
     assert "default.stable" in html
     assert "the executed sampled loop of the d and q axis is unstable" in html
+
+
+def test_verify_fails_a_header_exported_from_another_controller_json(tmp_path):
+    """QA finding: after controller.json changed, `cct verify` passed the new law
+    while controller.h still held the old one. The header carries the law's
+    sha256 (ARCHITECTURE.md, controller.h); a header from another controller.json
+    is a failed verdict (exit 1) until `cct export` rewrites it."""
+    out = design_dir(tmp_path, BASE + "bandwidth = 1000.0\n" + STEP.format(duration=0.02))
+    assert run("export", out).exit_code == 0
+    res = run("verify", out)
+    assert res.exit_code == 0, res.output
+    header = json.loads((out / "verify.json").read_text())["header"]
+    assert header["matches"] is True and len(header["law_sha256"]) == 64
+    # a 1 % change of one output coefficient: still a sound (stable) law
+    path = out / "controller.json"
+    data = json.loads(path.read_text())
+    data["axes"]["q"]["law"]["C"][0][0] *= 1.01
+    path.write_text(json.dumps(data))
+    res = run("verify", out)
+    assert res.exit_code == 1, res.output
+    assert "FAIL  controller.h: exported from another controller.json" in res.output
+    assert "q axis: stable" in res.output
+    verify = json.loads((out / "verify.json").read_text())
+    assert verify["passed"] is False and verify["header"]["matches"] is False
+    assert verify["header"]["law_sha256"] == header["law_sha256"]
+    assert run("export", out).exit_code == 0
+    assert run("verify", out).exit_code == 0

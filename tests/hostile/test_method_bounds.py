@@ -56,6 +56,19 @@ CASES = [
     ("weight_5000_poles", hinf(weights={"d": {"w1": W1}, "q": {"w1": {
         "zeros": [], "poles": [-1.0] * 5000, "gain": 1.0}}}),
      'controller.hinf.weights.q.w1.poles: expected at most 20 roots, got "5000 roots"'),
+    # QA: w1 = 1e300 reached the synthesis and came back as "A3 fails"
+    ("weight_gain_1e300", hinf(weights={"d": {"w1": W1}, "q": {"w1": 1e300}}),
+     'controller.hinf.weights.q.w1: expected a weight whose gain stays below 1e+12, '
+     'got "a peak gain of 1e+300" (only the ratio of the weights to gamma matters: '
+     'scale them down)'),
+    ("weight_peak_1e13", hinf(weights={"d": {"w1": W1}, "q": {"w1": {
+        "num": [1e7], "den": [1.0, 1e-6]}}}),
+     'controller.hinf.weights.q.w1: expected a weight whose gain stays below 1e+12, '
+     'got "a peak gain of 1e+13" (only the ratio of the weights to gamma matters: '
+     'scale them down)'),
+    # QA: cct check accepted alpha = 1e300, which the header export then refused
+    ("fcs_alpha_1e300", {"method": "fcs_mpc", "fcs_mpc": {"alpha": 1e300}},
+     "controller.fcs_mpc.alpha: expected a number >= 0 and <= 1e+12, got 1e+300"),
     ("ilq_sigma_factor", {"method": "ilq", "ilq": {"poles": -1000.0, "sigma_factor": 1e300}},
      "controller.ilq.sigma_factor: expected a number > 0 and <= 1000, got 1e+300"),
     # sigma Ts = 1e300 x 1e-4: the bound is 100 / Ts = 1e6 1/s

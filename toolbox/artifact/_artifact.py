@@ -803,6 +803,17 @@ class ControllerArtifact:
             "provenance": json_ready(self.provenance),
         }
 
+    def law_sha256(self) -> str:
+        """SHA-256 of what the executed law is made of (method, spec, sample time,
+        delay, axes, decoupling, predictive weights), not of the stored margins or
+        provenance: controller.h carries it, and ``cct verify`` compares it with the
+        controller.json it verifies (ARCHITECTURE.md, "Artifacts")."""
+        data = self.to_json()
+        law = {k: data[k] for k in ("schema", "method", "spec", "sample_time",
+                                    "delay_samples", "axes", "decoupling", "fcs")}
+        text = json.dumps(law, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        return hashlib.sha256(text.encode()).hexdigest()
+
     def dumps(self) -> str:
         """Deterministic JSON text (sorted keys are not used: field order is fixed)."""
         return json.dumps(self.to_json(), indent=1, allow_nan=False) + "\n"

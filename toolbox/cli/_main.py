@@ -233,7 +233,10 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
     Example:
       cct verify out/003
     """
-    from ..pipeline import load_artifact, run_verification, spec_of_artifact, write_outputs
+    from dataclasses import replace
+
+    from ..pipeline import (header_agreement, load_artifact, run_verification,
+                            spec_of_artifact, write_outputs)
 
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
@@ -242,6 +245,7 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
     with StepBar(["verification"], quiet=quiet, desc="verify") as bar:
         bar("verification")
         result = run_verification(artifact, spec, file=file)
+    result = replace(result, header=header_agreement(out_dir, artifact))
     text = json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n"
     write_outputs({"verify.json": text}, out_dir)
     _notices(result.notice, result.warnings)
@@ -264,6 +268,10 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
             click.echo(f"{'pass' if check['pass'] else 'FAIL'}  {key}: "
                        f"{_fmt(check['value'])} (bound {_fmt(check['bound'])})"
                        + ("" if check["pass"] else f": {check.get('reason')}"))
+        if result.header is not None and not result.header["matches"]:
+            click.echo(f"FAIL  controller.h: exported from another controller.json (law "
+                       f"sha256 {result.header['law_sha256'] or 'missing'}, controller.json "
+                       f"{artifact.law_sha256()}): run cct export {out_dir} before flashing it")
     sys.exit(EXIT_OK if result.passed else EXIT_REQUIREMENT)
 
 

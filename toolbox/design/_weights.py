@@ -11,6 +11,7 @@ augmented plant of eq (50)-(64): finite coefficients, proper, stable.
 
 from __future__ import annotations
 
+import math
 from typing import Sequence
 
 import numpy as np
@@ -20,6 +21,11 @@ from toolbox.errors import SpecError
 
 #: Highest makeweight order (see :func:`makeweight`).
 MAX_MAKEWEIGHT_ORDER = 10
+#: Largest weight gain accepted: the Riccati solutions of the synthesis scale
+#: with the square of the weights, and beyond 1e12 (1e24 squared) double
+#: precision leaves no digit for the plant's own dynamics (the synthesis then
+#: fails with a misleading assumption message instead of a range error).
+MAX_WEIGHT_GAIN = 1e12
 
 __all__ = ["weight_from_tf", "weight_from_zpk", "makeweight", "validate_weight"]
 
@@ -90,7 +96,25 @@ def validate_weight(w: ct.TransferFunction, key: str = _DEFAULT_KEY,
                 if abs(p) == 0 else "weights must be stable")
         raise SpecError(key, "a stable weight (all poles with Re < 0)",
                         f"pole at s = {complex(p):.6g}", hint=hint)
+    peak = _peak_gain(num, den, poles)
+    if not peak <= MAX_WEIGHT_GAIN:
+        raise SpecError(key, f"a weight whose gain stays below {MAX_WEIGHT_GAIN:g}",
+                        f"a peak gain of {peak:.3g}",
+                        hint="only the ratio of the weights to gamma matters: scale them down")
     return w
+
+
+def _peak_gain(num: np.ndarray, den: np.ndarray, poles: np.ndarray) -> float:
+    """Largest |W(j w)| on a log grid refined at the break frequencies (a peak
+    between grid points is at most a few per cent higher: enough for a range check)."""
+    roots = np.concatenate([poles, np.roots(num) if num.size > 1 else []])
+    breaks = np.abs(roots[np.abs(roots) > 0])
+    # s = 0 itself only without an integrator (allow_integrator)
+    w = np.concatenate([[0.0] if den[-1] != 0 else [], np.logspace(-6, 12, 181), breaks])
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        gain = np.abs(np.polyval(num, 1j * w) / np.polyval(den, 1j * w))
+    hf = abs(num[0] / den[0]) if num.size == den.size else 0.0
+    return float(max(np.max(gain), hf)) if np.all(np.isfinite(gain)) else math.inf
 
 
 def weight_from_tf(num: Sequence[float], den: Sequence[float],

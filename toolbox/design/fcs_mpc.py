@@ -24,6 +24,10 @@ from ._common import decoupling_from_motor, make_artifact
 __all__ = ["FcsMpcCfg", "baseline_pi", "read_cfg", "design"]
 
 _KEY = "controller.fcs_mpc"
+#: Largest criterion weight: only the ratios alpha : beta : gamma matter, and the
+#: header evaluates alpha e_q^2 + beta e_d^2 + gamma n in float32 (max 3.4e38);
+#: with errors up to 1e3 A a weight of 1e12 keeps every term below 1e18.
+MAX_FCS_WEIGHT = 1e12
 
 
 @dataclass(frozen=True)
@@ -80,8 +84,8 @@ def baseline_pi(R: float, L: float) -> tuple[float, float]:
 
 
 def read_cfg(method: str, table, motor, drive) -> FcsMpcCfg:
-    """Validate ``[controller.fcs_mpc]``: ``alpha``, ``beta``, ``gamma`` (all >= 0,
-    defaults 1, 1, 0) with ``alpha + beta > 0``.
+    """Validate ``[controller.fcs_mpc]``: ``alpha``, ``beta``, ``gamma`` (all in
+    [0, :data:`MAX_FCS_WEIGHT`], defaults 1, 1, 0) with ``alpha + beta > 0``.
 
     Parameters: as :func:`toolbox.design.read_method_cfg`.
 
@@ -90,9 +94,9 @@ def read_cfg(method: str, table, motor, drive) -> FcsMpcCfg:
     FcsMpcCfg
     """
     t = Table(table.data, table.prefix, ("alpha", "beta", "gamma"))
-    alpha = t.number("alpha", 1.0, nonnegative=True)
-    beta = t.number("beta", 1.0, nonnegative=True)
-    gamma = t.number("gamma", 0.0, nonnegative=True)
+    alpha = t.number("alpha", 1.0, nonnegative=True, maximum=MAX_FCS_WEIGHT)
+    beta = t.number("beta", 1.0, nonnegative=True, maximum=MAX_FCS_WEIGHT)
+    gamma = t.number("gamma", 0.0, nonnegative=True, maximum=MAX_FCS_WEIGHT)
     if not alpha + beta > 0:
         raise SpecError(t.key("alpha"), "alpha + beta > 0 (criterion (23) must weight the "
                         "torque or the i_d error)", [alpha, beta])

@@ -769,7 +769,8 @@ def _provenance(artifact, title: str) -> dict:
     prov = artifact.provenance or {}
     return {"title": sanitise_comment(title), "method": sanitise_comment(artifact.method),
             **{k: sanitise_comment(prov.get(k, "unknown"))
-               for k in ("version", "spec_sha256", "created")}}
+               for k in ("version", "spec_sha256", "created")},
+            "law_sha256": artifact.law_sha256()}
 
 
 def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,

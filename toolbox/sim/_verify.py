@@ -209,6 +209,11 @@ class VerifyResult:
         margin checks, and the like.
     informational : dict
         Checks shown but not deciding (fcs_mpc's baseline PI margins).
+    header : dict or None
+        ``cct verify`` only, when a controller.h lies next to controller.json:
+        ``{"file", "law_sha256", "matches"}`` (the header's law digest against
+        :meth:`~toolbox.artifact.ControllerArtifact.law_sha256`); a header
+        exported from another controller.json fails the verdict.
     """
 
     method: str
@@ -218,11 +223,13 @@ class VerifyResult:
     notice: str | None = None
     warnings: list[str] = field(default_factory=list)
     informational: dict = field(default_factory=dict)
+    header: dict | None = None
 
     @property
     def passed(self) -> bool:
         return (all(s.passed for s in self.scenarios)
-                and all(c["pass"] for c in self.margin_checks.values()))
+                and all(c["pass"] for c in self.margin_checks.values())
+                and (self.header is None or self.header["matches"]))
 
     def to_json(self) -> dict:
         out = {"schema": VERIFY_SCHEMA, "method": self.method, "passed": self.passed,
@@ -234,6 +241,8 @@ class VerifyResult:
         if self.informational:
             out["informational_margin_requirements"] = {
                 k: finalise_check(c) for k, c in self.informational.items()}
+        if self.header is not None:
+            out["header"] = dict(self.header)
         return out
 
 
