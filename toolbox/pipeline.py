@@ -164,7 +164,7 @@ class DesignOutputs:
         """:data:`toolbox.sim.NO_REQUIREMENTS` when the spec has no requirements."""
         from .sim import NO_REQUIREMENTS
 
-        return None if self.spec.requirements.bounds else NO_REQUIREMENTS
+        return None if self.spec.requirements.given else NO_REQUIREMENTS
 
     @property
     def passed(self) -> bool:

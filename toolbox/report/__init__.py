@@ -257,10 +257,10 @@ def _checks_of(data: ReportData) -> list | None:
                      if data.analysis is not None
                      else (data.verification or {}).get("margin_requirements")) or {}
     checks += [{"key": k, **c} for k, c in margin_checks.items()]
-    if data.analysis is not None:  # verification's own verdicts (default.stable)
+    if data.analysis is not None:  # verification's own verdicts (default.stable, parameter_drift)
         checks += [{"key": k, **c} for k, c in
                    ((data.verification or {}).get("margin_requirements") or {}).items()
-                   if k.startswith("default.")]
+                   if k not in margin_checks]
     for sc in (data.verification or {}).get("scenarios", []):
         checks += [{"key": k, "scenario": sc.get("name"), **c}
                    for k, c in (sc.get("requirements") or {}).items()]

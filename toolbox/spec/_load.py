@@ -24,8 +24,8 @@ from ._bounds import (check_drive, check_motor, check_motor_drive, check_scenari
                       check_work)
 from ._fields import Collector, Table, check_keys
 from ._methods import read_method_cfg
-from ._model import (METHODS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor,
-                     Requirements, Spec)
+from ._model import (DRIFT_FACTOR_RANGE, DRIFT_PARAMETERS, METHODS, REQUIREMENT_KEYS,
+                     ControllerChoice, Drive, Motor, Requirements, Spec)
 
 __all__ = ["load_spec", "spec_from_dict", "motor_from_dict", "drive_from_dict"]
 
@@ -327,12 +327,28 @@ def _export_prefix(value: Any) -> str:
 
 
 def _requirements(value: Any) -> Requirements:
-    t = Table(value, "requirements", tuple(REQUIREMENT_KEYS))
+    t = Table(value, "requirements", (*REQUIREMENT_KEYS, "parameter_drift"))
     bounds = {}
     for key in t.data:
+        if key == "parameter_drift":
+            continue
         unit = REQUIREMENT_KEYS[key][3]
         bounds[key] = t.number(key, unit=unit, nonnegative=key != "min_gain_margin_db")
-    return Requirements(bounds)
+    drift = t.table("parameter_drift", DRIFT_PARAMETERS)
+    if t.has("parameter_drift") and not drift.data:
+        raise SpecError(drift.prefix, "factor ranges of at least one of "
+                        + ", ".join(DRIFT_PARAMETERS), {})
+    return Requirements(bounds, {name: _drift_range(drift, name) for name in drift.data})
+
+
+def _drift_range(table: Table, name: str) -> tuple[float, float]:
+    """``[low, high]`` factors around the nominal value: low <= 1 <= high."""
+    lo_max, hi_max = DRIFT_FACTOR_RANGE
+    low, high = table.numbers(name, length=2, unit="factors on the nominal value")
+    if not (lo_max <= low <= 1.0 <= high <= hi_max):
+        raise SpecError(table.key(name), f"[low, high] with {lo_max:g} <= low <= 1 <= high "
+                        f"<= {hi_max:g} (factors on the nominal value)", [low, high])
+    return (low, high)
 
 
 #: Longest verification scenario (s): the plant is integrated at about 1 us.

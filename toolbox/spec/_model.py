@@ -219,11 +219,34 @@ class ControllerChoice:
     cfg: Any
 
 
+#: Parameters ``[requirements] parameter_drift`` may name, and the widest
+#: factor range accepted (a drift beyond x0.1..x10 is another motor).
+DRIFT_PARAMETERS = ("R", "Ld", "Lq", "flux")
+DRIFT_FACTOR_RANGE = (0.1, 10.0)
+
+
 @dataclass(frozen=True)
 class Requirements:
-    """Bounds verification checks (``None`` = not required)."""
+    """Bounds verification checks (``None`` = not required).
+
+    Attributes
+    ----------
+    bounds : dict
+        ``REQUIREMENT_KEYS`` key -> bound.
+    parameter_drift : dict
+        ``{name: (low, high)}`` factors on the nominal R, Ld, Lq, flux that the
+        loop must stay stable over, at every speed up to ``drive.max_speed``
+        (``[requirements] parameter_drift``; checked by verification on the
+        coupled sampled loop, ARCHITECTURE.md "Spec file").
+    """
 
     bounds: dict = field(default_factory=dict)
+    parameter_drift: dict = field(default_factory=dict)
+
+    @property
+    def given(self) -> bool:
+        """Whether the spec states any requirement (else: default checks only)."""
+        return bool(self.bounds or self.parameter_drift)
 
     def check_margins(self, margins: dict) -> dict:
         """Pass/fail of the ``margins`` bounds against the worst axis of

@@ -154,8 +154,10 @@ def spec_to_toml(spec: Spec, source: str | None = None) -> str:
     drive = asdict(spec.drive)
     out += ["", "[drive]"] + list(_lines(drive, notes))
     out += _controller_lines(spec)
-    if spec.requirements.bounds:
-        out += ["", "[requirements]"] + list(_lines(spec.requirements.bounds, {}))
+    if spec.requirements.given:
+        drift = {name: list(r) for name, r in spec.requirements.parameter_drift.items()}
+        out += ["", "[requirements]"] + list(_lines(
+            {**spec.requirements.bounds, **({"parameter_drift": drift} if drift else {})}, {}))
     if spec.export_prefix != "cct_":
         out += ["", "[export]", f"prefix = {toml_value(spec.export_prefix)}"]
     for scenario in spec.scenarios:
