@@ -147,6 +147,41 @@ def test_flux_from_each_constant_matches_sympy(key, value, pp):
     assert m.flux == pytest.approx(_hand_flux(key, value, pp), rel=REL)
 
 
+def _dq_magnitude_per_rms(convention: str):
+    """|i_dq| / I_rms of balanced sinusoidal phase currents of peak I, by sympy:
+    the rms over one electrical period, and the Park transform of the chosen
+    convention (amplitude 2/3, power sqrt(2/3))."""
+    i = [I * sp.cos(THETA + s) for s in SHIFT]
+    period = 2 * sp.pi / (p * w)
+    rms = sp.sqrt(sp.integrate(i[0] ** 2, (t, 0, period)) / period)
+    k = sp.Rational(2, 3) if convention == "amplitude" else sp.sqrt(sp.Rational(2, 3))
+    i_d = k * sum(ik * sp.cos(THETA + s) for ik, s in zip(i, SHIFT))
+    i_q = -k * sum(ik * sp.sin(THETA + s) for ik, s in zip(i, SHIFT))
+    magnitude = sp.sqrt(sp.simplify(sp.expand_trig(i_d ** 2 + i_q ** 2)))
+    return float(sp.simplify(magnitude / rms))
+
+
+@pytest.mark.parametrize("convention", ["amplitude", "power"])
+def test_rms_currents_become_the_dq_magnitude_by_sympy(convention):
+    """Datasheets print rms phase currents (QA finding: rated_current was read
+    as given, i.e. as the dq magnitude): rated_current_rms / max_current_rms
+    convert by sqrt(2) (amplitude dq) or sqrt(3) (power dq)."""
+    ratio = _dq_magnitude_per_rms(convention)
+    assert ratio == pytest.approx(math.sqrt(2) if convention == "amplitude" else math.sqrt(3),
+                                  rel=1e-12)
+    m = motor(R=0.1, Ld=1e-3, Lq=1e-3, flux=0.05, pole_pairs=4, convention=convention,
+              rated_current_rms="2.7 A", max_current_rms=10.0)
+    assert m.rated_current == pytest.approx(ratio * 2.7, rel=REL)
+    assert m.max_current == pytest.approx(ratio * 10.0, rel=REL)
+
+
+def test_rms_and_dq_current_together_are_refused():
+    with pytest.raises(SpecError, match=r"motor\.rated_current_rms: expected only one of "
+                       r"motor\.rated_current, motor\.rated_current_rms"):
+        motor(R=0.1, Ld=1e-3, Lq=1e-3, flux=0.05, pole_pairs=4, rated_current=3.8,
+              rated_current_rms=2.7)
+
+
 def test_torque_and_emf_constants_identity_kt_rms_is_sqrt3_ke_ll_rms():
     # the datasheet identity (SI units): both give the same flux
     ke = 0.25

@@ -65,6 +65,7 @@ MOTOR_KINDS = {
     "kt_peak": "torque_constant", "kt_rms": "torque_constant",
     "J": "inertia", "friction": "friction",
     "rated_current": "current", "max_current": "current", "rated_speed": "speed",
+    "rated_current_rms": "current", "max_current_rms": "current",
 }
 
 #: Drive keys holding a physical quantity.
@@ -79,7 +80,12 @@ GROUPS = (
     ("the phase resistance", ("R",), ("R_ll",)),
     ("the dq inductances", ("Ld", "Lq"), ("L_ll",)),
     ("the PM flux linkage", ("flux",), ("ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms")),
+    ("the rated current", ("rated_current",), ("rated_current_rms",)),
+    ("the largest current", ("max_current",), ("max_current_rms",)),
 )
+
+#: Datasheet rms phase currents -> the model's dq current magnitude.
+RMS_CURRENTS = {"rated_current_rms": "rated_current", "max_current_rms": "max_current"}
 
 
 @dataclass(frozen=True)
@@ -125,6 +131,15 @@ def _flux_amplitude(key: str, value: float, p: int) -> tuple[float, str]:
     }
     rule, text = rules[key]
     return rule(value), text
+
+
+def _dq_current_per_rms(convention: str) -> tuple[float, str]:
+    """|i_dq| per A rms of balanced sinusoidal phase currents: the peak phase
+    current sqrt(2) I_rms (amplitude-invariant dq), sqrt(3/2) times more in the
+    power-invariant dq."""
+    if convention == "power":
+        return math.sqrt(3.0), "sqrt(3) (power-invariant dq: sqrt(3/2) x the peak sqrt(2) I_rms)"
+    return math.sqrt(2.0), "sqrt(2) (amplitude-invariant dq: the peak phase current)"
 
 
 def convert_units(table: Mapping[str, Any], kinds: Mapping[str, str], prefix: str,
@@ -233,7 +248,18 @@ def resolve_motor(user: Mapping[str, Any], catalog: Mapping[str, Any],
             log.append(Conversion("flux", psi, "Wb", {key: user[key], "pole_pairs": p}, text))
         else:  # the constant's or pole_pairs' own error says why; no second message
             merged["flux"] = _NOT_DERIVED
-    consumed = {"R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms"}
+    for key, model in RMS_CURRENTS.items():
+        if key in merged and model not in user:
+            i_rms = _positive(merged.pop(key), user[key], f"motor.{key}", "A", errors)
+            if i_rms is None:
+                merged[model] = _NOT_DERIVED
+                continue
+            factor, text = _dq_current_per_rms(merged.get("convention", "amplitude"))
+            merged[model] = factor * i_rms
+            log.append(Conversion(model, factor * i_rms, "A", {key: user[key]},
+                                  f"{model} = {text} x {key}"))
+    consumed = {"R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms",
+                *RMS_CURRENTS}
     return merged, [c for c in log if c.key not in consumed or c.formula.startswith(c.key)]
 
 

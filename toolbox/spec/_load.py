@@ -38,7 +38,8 @@ _C_PREFIX = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,30}$")
 MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "convention", "rated_current", "max_current", "rated_speed",
               # datasheet forms (toolbox/spec/_datasheet.py)
-              "R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms")
+              "R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms",
+              "rated_current_rms", "max_current_rms")
 DRIVE_KEYS = ("vdc", "sample_time", "delay_samples", "switching_frequency",
               "voltage_limit", "max_speed", "sample_frequency")
 
