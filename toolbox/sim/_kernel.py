@@ -73,7 +73,8 @@ LAYOUTS: dict[str, tuple[str, ...]] = {
     "SC": ("duration", "mech", "omega0", "acc", "id0", "iq0", "id1", "iq1",
            "t_step", "speed0", "speed1", "load", "load_time", "iq_amp", "f_sin",
            "ref_mode", "signal", "gain", "offset", "speed_noise", "noise_kind",
-           "current_noise", "current_quantum", "seed", "h", "trace_decim"),
+           "current_noise", "current_quantum", "seed", "h", "trace_decim",
+           "current_gain_d", "current_gain_q", "current_delay"),
 }
 
 # Generated module constants ``<PREFIX>_<NAME>`` (e.g. ``P_LD``, ``SC_T_STEP``):
@@ -300,6 +301,26 @@ def _sense(x, rng, SC):
     om_m = (1.0 + SC[SC_GAIN]) * x[2] + SC[SC_OFFSET] \
         + _noise(rng, SC[SC_SPEED_NOISE], kind)
     return i_d_m, i_q_m, om_m
+
+
+@njit(cache=True)
+def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
+    """Gain on each measured current and a measurement delay of
+    ``current_delay`` periods (paper 002 sect. 5: a gain and a time delay on
+    the state variables the predictive law reads); ``buf_d``, ``buf_q`` are
+    ring buffers of ``current_delay + 1`` samples. Before the first delayed
+    sample exists the sensor reads 0 (the currents start at 0)."""
+    i_d_m *= SC[SC_CURRENT_GAIN_D]
+    i_q_m *= SC[SC_CURRENT_GAIN_Q]
+    nd = int(SC[SC_CURRENT_DELAY])
+    if nd == 0:
+        return i_d_m, i_q_m
+    nb = nd + 1
+    buf_d[k % nb] = i_d_m
+    buf_q[k % nb] = i_q_m
+    if k < nd:
+        return 0.0, 0.0
+    return buf_d[(k - nd) % nb], buf_q[(k - nd) % nb]
 
 
 @njit(cache=True)
@@ -660,6 +681,8 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     nbuf = delay + 1  # ring buffer of the computation delay
     vd_buf = np.zeros(nbuf)
     vq_buf = np.zeros(nbuf)
+    cs_d = np.zeros(int(SC[SC_CURRENT_DELAY]) + 1)  # current-sensor delay line
+    cs_q = np.zeros(int(SC[SC_CURRENT_DELAY]) + 1)
     trdec = max(int(SC[SC_TRACE_DECIM]), 1)
     tr = np.empty(((n_per + trdec - 1) // trdec if keep_traces else 0, N_TRACE))
     # speed loop state
@@ -679,6 +702,7 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     for k in range(n_per):
         t = k * Ts
         i_d_m, i_q_m, om_m = _sense(x, rng, SC)
+        i_d_m, i_q_m = _current_sensor(i_d_m, i_q_m, k, cs_d, cs_q, SC)
         w_m = p * om_m
         th_m = x[3]
         idr, iqr, sr = _references(t, SC)

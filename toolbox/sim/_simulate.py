@@ -391,6 +391,8 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams)
         noise_kind=0.0 if scenario.noise == "uniform" else 1.0,
         current_noise=scenario.current_noise, current_quantum=scenario.current_quantum,
         seed=scenario.seed, h=scenario.plant_step,
+        current_gain_d=scenario.current_gain_d, current_gain_q=scenario.current_gain_q,
+        current_delay=scenario.current_delay_samples,
         trace_decim=1 if scenario.trace_step is None
         else max(1, round(scenario.trace_step / Ts)))
     return DP, SP, SC
