@@ -74,7 +74,7 @@ LAYOUTS: dict[str, tuple[str, ...]] = {
            "t_step", "speed0", "speed1", "load", "load_time", "iq_amp", "f_sin",
            "ref_mode", "signal", "gain", "offset", "speed_noise", "noise_kind",
            "current_noise", "current_quantum", "seed", "h", "trace_decim",
-           "current_gain_d", "current_gain_q", "current_delay"),
+           "current_gain_d", "current_gain_q", "current_delay_d", "current_delay_q"),
 }
 
 # Generated module constants ``<PREFIX>_<NAME>`` (e.g. ``P_LD``, ``SC_T_STEP``):
@@ -304,23 +304,25 @@ def _sense(x, rng, SC):
 
 
 @njit(cache=True)
-def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
-    """Gain on each measured current and a measurement delay of
-    ``current_delay`` periods (paper 002 sect. 5: a gain and a time delay on
-    the state variables the predictive law reads); ``buf_d``, ``buf_q`` are
-    ring buffers of ``current_delay + 1`` samples. Before the first delayed
-    sample exists the sensor reads 0 (the currents start at 0)."""
-    i_d_m *= SC[SC_CURRENT_GAIN_D]
-    i_q_m *= SC[SC_CURRENT_GAIN_Q]
-    nd = int(SC[SC_CURRENT_DELAY])
+def _delayed(v, k, nd, buf):
+    """``v`` measured ``nd`` periods ago (ring buffer ``buf`` of ``nd + 1``
+    samples); 0 before the first one exists (the currents start at 0)."""
     if nd == 0:
-        return i_d_m, i_q_m
+        return v
     nb = nd + 1
-    buf_d[k % nb] = i_d_m
-    buf_q[k % nb] = i_q_m
+    buf[k % nb] = v
     if k < nd:
-        return 0.0, 0.0
-    return buf_d[(k - nd) % nb], buf_q[(k - nd) % nb]
+        return 0.0
+    return buf[(k - nd) % nb]
+
+
+@njit(cache=True)
+def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
+    """Gain and measurement delay (whole periods) on each measured current
+    (paper 002 sect. 5: a gain and a time delay on the state variables
+    Phi_d, Phi_q that the predictive law reads)."""
+    return (_delayed(i_d_m * SC[SC_CURRENT_GAIN_D], k, int(SC[SC_CURRENT_DELAY_D]), buf_d),
+            _delayed(i_q_m * SC[SC_CURRENT_GAIN_Q], k, int(SC[SC_CURRENT_DELAY_Q]), buf_q))
 
 
 @njit(cache=True)
@@ -681,8 +683,8 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     nbuf = delay + 1  # ring buffer of the computation delay
     vd_buf = np.zeros(nbuf)
     vq_buf = np.zeros(nbuf)
-    cs_d = np.zeros(int(SC[SC_CURRENT_DELAY]) + 1)  # current-sensor delay line
-    cs_q = np.zeros(int(SC[SC_CURRENT_DELAY]) + 1)
+    cs_d = np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1)  # current-sensor delay lines
+    cs_q = np.zeros(int(SC[SC_CURRENT_DELAY_Q]) + 1)
     trdec = max(int(SC[SC_TRACE_DECIM]), 1)
     tr = np.empty(((n_per + trdec - 1) // trdec if keep_traces else 0, N_TRACE))
     # speed loop state

@@ -392,7 +392,7 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams)
         current_noise=scenario.current_noise, current_quantum=scenario.current_quantum,
         seed=scenario.seed, h=scenario.plant_step,
         current_gain_d=scenario.current_gain_d, current_gain_q=scenario.current_gain_q,
-        current_delay=scenario.current_delay_samples,
+        current_delay_d=scenario.current_delay_d, current_delay_q=scenario.current_delay_q,
         trace_decim=1 if scenario.trace_step is None
         else max(1, round(scenario.trace_step / Ts)))
     return DP, SP, SC
