@@ -208,3 +208,25 @@ def test_spec_hold_frame_is_validated():
     base["drive"]["hold_frame"] = "alphabeta"
     with pytest.raises(SpecError, match="hold_frame"):
         spec_from_dict(base)
+
+
+@pytest.mark.parametrize("fsw", [5000.0, 20000.0])
+def test_spec_drive_reaches_the_simulator(fsw):
+    """``[drive] switching_frequency`` and ``hold_frame`` of a spec reach the
+    simulator through ``drive_params``: an unsaturated svm run switches
+    every leg twice per carrier period, 12 f_sw switch commutations/s
+    (6 f_sw cell changes), whatever the sample rate (1e-9 relative: the
+    count is exact once no leg is at duty 0 or 1)."""
+    from toolbox.sim import drive_params
+
+    spec = spec_from_dict({
+        "motor": {"R": 1.0, "Ld": 5e-3, "Lq": 5e-3, "flux": 0.1, "pole_pairs": 4, "J": 1.0},
+        "drive": {"vdc": VDC, "sample_time": TS, "switching_frequency": fsw,
+                  "hold_frame": "stationary", "delay_samples": 1,
+                  "voltage_limit": "hexagon"},
+        "controller": {"method": "pi"}})
+    drive = drive_params(spec.drive, "svm")
+    assert drive.switching_frequency == fsw and drive.hold_frame == "stationary"
+    sc = Scenario(kind="current_step", duration=0.01, iq_ref=5.0, id_ref=2.0)
+    m = simulate(LAW, M, sc, drive).metrics
+    assert m["commutations_per_s"] == pytest.approx(12.0 * fsw, rel=1e-9)

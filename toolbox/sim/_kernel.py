@@ -16,6 +16,15 @@ is split at every switching instant, so RK4 never integrates across a
 discontinuity (local error O(h^5) on smooth pieces; the global error on a 1 s
 run is far below the 1e-6 relative level of the tests).
 
+Inverters: the average model holds the commanded voltage over the period
+in the rotor frame (constant ``v_dq``) or, with ``hold = 1``, in the
+stationary frame (constant ``v_alpha_beta`` at the mid-period angle, the
+fundamental of a PWM inverter); the ``svm`` model switches the legs, either
+one centred 0-k-l-7-l-k-0 pattern per sample (paper 002 eq (21)-(22)) or a
+regular-sampled triangle carrier with min-max injection at the drive's
+switching frequency (``half_periods`` carrier half periods per sample,
+:func:`_carrier_period`); ``fcs_mpc`` holds one of the eight states.
+
 Controller at ``Ts`` (an integer number of plant steps; the plant step is
 reduced to ``Ts / ceil(Ts / h)``), zero-order hold, computation delay of
 ``delay`` periods (Le Pioufle 1992, paper 000). The two current controllers are
