@@ -17,6 +17,9 @@ explains the choice; no delay; hexagon limit), built by
 ``toolbox.sim.control_law``. Scenario as in tests/sim/test_paper002.py: 36 N m
 (i_q = 100 A, i_d = 0) from standstill with free acceleration (J = 1 kg m^2),
 0.5 s; E_Gamma = ``mse_torque`` (N^2 m^2), E_Id = ``mse_id`` (A^2).
+Every printed row on its own, at 0.4 s (the gallery's run length), is
+tests/papers/test_002_rows.py; the assumptions searched are in
+tests/papers/README.md "Paper 002".
 
 Counting commutations. The simulator reports both ``commutations_per_s``
 (switch commutations, two per cell change) and ``cell_transitions_per_s``.

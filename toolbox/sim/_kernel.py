@@ -16,6 +16,15 @@ is split at every switching instant, so RK4 never integrates across a
 discontinuity (local error O(h^5) on smooth pieces; the global error on a 1 s
 run is far below the 1e-6 relative level of the tests).
 
+Inverters: the average model holds the commanded voltage over the period
+in the rotor frame (constant ``v_dq``) or, with ``hold = 1``, in the
+stationary frame (constant ``v_alpha_beta`` at the mid-period angle, the
+fundamental of a PWM inverter); the ``svm`` model switches the legs, either
+one centred 0-k-l-7-l-k-0 pattern per sample (paper 002 eq (21)-(22)) or a
+regular-sampled triangle carrier with min-max injection at the drive's
+switching frequency (``half_periods`` carrier half periods per sample,
+:func:`_carrier_period`); ``fcs_mpc`` holds one of the eight states.
+
 Controller at ``Ts`` (an integer number of plant steps; the plant step is
 reduced to ``Ts / ceil(Ts / h)``), zero-order hold, computation delay of
 ``delay`` periods (Le Pioufle 1992, paper 000). The two current controllers are
@@ -61,17 +70,20 @@ __all__ = ["run", "run_batch", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_
 #: prefix: plant ``P`` (true motor), law ``LP`` (controller model, decoupling
 #: flags, paper 002 criterion (23) weights), speed loop ``SP``, drive ``DP``
 #: (``vlim``: 0 none, 1 circle, 2 hexagon; ``inverter``: 0 average, 1 svm,
-#: 2 fcs_mpc) and scenario ``SC``. ``_simulate._pack*`` fill them by name
+#: 2 fcs_mpc; ``half_periods``: carrier half periods per sample of the svm
+#: inverter, 0 = one centred pattern per sample; ``hold``: frame in which the
+#: average inverter holds the voltage, 0 rotor dq, 1 stationary) and scenario ``SC``. ``_simulate._pack*`` fill them by name
 #: through :func:`pack_indices`.
 LAYOUTS: dict[str, tuple[str, ...]] = {
     "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor"),
     "LP": ("R_c", "Ld_c", "Lq_c", "flux_c", "cross", "emf", "alpha", "beta", "gamma"),
     "SP": ("enabled", "kp", "ki", "kd", "decim", "iq_limit"),
-    "DP": ("Ts", "delay", "vlim", "v_max", "r_hex", "inverter"),
+    "DP": ("Ts", "delay", "vlim", "v_max", "r_hex", "inverter", "half_periods", "hold"),
     "SC": ("duration", "mech", "omega0", "acc", "id0", "iq0", "id1", "iq1",
            "t_step", "speed0", "speed1", "load", "load_time", "iq_amp", "f_sin",
            "ref_mode", "signal", "gain", "offset", "speed_noise", "noise_kind",
-           "current_noise", "current_quantum", "seed", "h", "trace_decim"),
+           "current_noise", "current_quantum", "seed", "h", "trace_decim",
+           "current_gain_d", "current_gain_q", "current_delay_d", "current_delay_q"),
 }
 
 # Generated module constants ``<PREFIX>_<NAME>`` (e.g. ``P_LD``, ``SC_T_STEP``):
@@ -80,6 +92,8 @@ LAYOUTS: dict[str, tuple[str, ...]] = {
 for _prefix, _names in LAYOUTS.items():
     globals().update({f"{_prefix}_{_n.upper()}": _i for _i, _n in enumerate(_names)})
 del _prefix, _names
+
+_SQ3_2 = math.sqrt(3.0) / 2.0
 
 #: Length of the scenario array.
 N_SC = len(LAYOUTS["SC"])
@@ -299,6 +313,28 @@ def _sense(x, rng, SC):
 
 
 @njit(cache=True)
+def _delayed(v, k, nd, buf):
+    """``v`` measured ``nd`` periods ago (ring buffer ``buf`` of ``nd + 1``
+    samples); 0 before the first one exists (the currents start at 0)."""
+    if nd == 0:
+        return v
+    nb = nd + 1
+    buf[k % nb] = v
+    if k < nd:
+        return 0.0
+    return buf[(k - nd) % nb]
+
+
+@njit(cache=True)
+def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
+    """Gain and measurement delay (whole periods) on each measured current
+    (paper 002 sect. 5: a gain and a time delay on the state variables
+    Phi_d, Phi_q that the predictive law reads)."""
+    return (_delayed(i_d_m * SC[SC_CURRENT_GAIN_D], k, int(SC[SC_CURRENT_DELAY_D]), buf_d),
+            _delayed(i_q_m * SC[SC_CURRENT_GAIN_Q], k, int(SC[SC_CURRENT_DELAY_Q]), buf_q))
+
+
+@njit(cache=True)
 def _references(t, SC):
     """Current and speed references at sample time t: (id_ref, iq_ref, speed_ref)."""
     before = t < SC[SC_T_STEP]
@@ -461,6 +497,97 @@ def _svm_period(x, t, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, omega0,
     return t, x, conf
 
 
+@njit(cache=True)
+def _duties(va, vb, r_hex):
+    """Leg duty cycles (d_a, d_b, d_c) in [0, 1] of the stationary-frame voltage
+    (va, vb) by min-max (zero-sequence) injection: the regular-sampled carrier
+    equivalent of the centred space-vector pattern (``state_vector`` inverted,
+    the common offset chosen so that max and min duty are symmetric about 1/2)."""
+    xa = va / r_hex * (2.0 / 3.0)
+    xb = (-0.5 * va + _SQ3_2 * vb) / r_hex * (2.0 / 3.0)
+    xc = (-0.5 * va - _SQ3_2 * vb) / r_hex * (2.0 / 3.0)
+    off = 0.5 - 0.5 * (max(xa, xb, xc) + min(xa, xb, xc))
+    return (min(max(xa + off, 0.0), 1.0), min(max(xb + off, 0.0), 1.0),
+            min(max(xc + off, 0.0), 1.0))
+
+
+@njit(cache=True)
+def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, omega0,
+                  acc_m, refs, mset, r_hex):
+    """One half period ``th_dur`` of the symmetric triangle carrier.
+
+    A leg is on while its duty exceeds the carrier. Falling half (carrier
+    1 -> 0, ``rising`` False): leg x turns on at ``(1 - d_x) th_dur``; rising
+    half: it turns off at ``d_x th_dur``. Legs at duty 0 or 1 do not switch.
+    The plant is integrated segment by segment between the switching
+    instants; returns (time, state, inverter state at the end).
+    """
+    start = 0
+    for leg in range(3):
+        d = dts[leg]
+        if (rising and d > 0.0) or (not rising and d >= 1.0):
+            start |= 4 >> leg
+    acc_m[_A_CELLS] += bit_changes(conf, start)
+    conf = start
+    # switching instants of legs a, b, c, visited in increasing order
+    ta = dts[0] * th_dur if rising else (1.0 - dts[0]) * th_dur
+    tb = dts[1] * th_dur if rising else (1.0 - dts[1]) * th_dur
+    tc = dts[2] * th_dur if rising else (1.0 - dts[2]) * th_dur
+    t_prev = 0.0
+    for _ in range(3):
+        leg = 0
+        tj = ta
+        if tb < tj:
+            leg = 1
+            tj = tb
+        if tc < tj:
+            leg = 2
+            tj = tc
+        if leg == 0:
+            ta = math.inf
+        elif leg == 1:
+            tb = math.inf
+        else:
+            tc = math.inf
+        if tj <= 0.0 or tj >= th_dur:
+            continue
+        vx, vy = state_vector(conf, r_hex)
+        t, x = _advance(x, t, vx, vy, 1, tj - t_prev, h, pl, t_load, mech, acc, omega0,
+                        acc_m, refs, mset)
+        t_prev = tj
+        conf ^= 4 >> leg
+        acc_m[_A_CELLS] += 1
+    vx, vy = state_vector(conf, r_hex)
+    t, x = _advance(x, t, vx, vy, 1, th_dur - t_prev, h, pl, t_load, mech, acc, omega0,
+                    acc_m, refs, mset)
+    return t, x, conf
+
+
+@njit(cache=True)
+def _carrier_period(x, t, k, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, omega0,
+                    acc_m, refs, mset, DP):
+    """One controller period of carrier-based PWM at ``drive.switching_frequency``:
+    ``half_periods`` half periods of a symmetric triangle carrier whose peak
+    falls on the first sampling instant (regular sampling, duties loaded at
+    the sample and held over the period, as the shadow registers of a PWM
+    timer). The voltage is placed in the stationary frame at the mid-period
+    angle, as :func:`_svm_period` does; with two half periods per sample the
+    pattern is the centred 0-k-l-7-l-k-0 of that model. Returns (time, state,
+    inverter state at the end)."""
+    Ts = DP[DP_TS]
+    r_hex = DP[DP_R_HEX]
+    n = int(DP[DP_HALF_PERIODS])
+    tha = th_m + w_m * Ts * 0.5
+    va, vb = _to_ab(vd, vq, math.cos(tha), math.sin(tha))
+    dts = _duties(va, vb, r_hex)
+    th_dur = Ts / n
+    for i in range(n):
+        rising = (k * n + i) % 2 == 1
+        t, x, conf = _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech,
+                                   acc, omega0, acc_m, refs, mset, r_hex)
+    return t, x, conf
+
+
 # ---------------------------------------------------------------------- metrics
 @njit(cache=True)
 def _finalise(acc_m, n_per, Ts, om_final, t_step, mset):
@@ -515,9 +642,11 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
         Controller model R, Ld, Lq, flux; cross, emf flags; alpha, beta, gamma.
     SP : (6,)
         Speed loop: enabled, kp, ki, kd, period in current periods, iq limit.
-    DP : (6,)
+    DP : (8,)
         Ts (s), delay (periods), limit kind, circle radius (V), hexagon
-        vertex radius (V), inverter kind.
+        vertex radius (V), inverter kind, carrier half periods per sample
+        (0: one centred SVM pattern per sample), hold frame of the average
+        inverter (0 rotor, 1 stationary).
     SC : (N_SC,)
         Scenario (slots ``SC_*``; see :func:`pack_indices`).
     keep_traces : bool
@@ -536,6 +665,8 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     delay = int(DP[DP_DELAY])
     r_hex = DP[DP_R_HEX]
     inverter = int(DP[DP_INVERTER])
+    carrier = DP[DP_HALF_PERIODS] > 0.5
+    hold = int(DP[DP_HOLD])
     h = SC[SC_H]
     n_per = int(round(SC[SC_DURATION] / Ts))
     mech = int(SC[SC_MECH])
@@ -561,6 +692,8 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     nbuf = delay + 1  # ring buffer of the computation delay
     vd_buf = np.zeros(nbuf)
     vq_buf = np.zeros(nbuf)
+    cs_d = np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1)  # current-sensor delay lines
+    cs_q = np.zeros(int(SC[SC_CURRENT_DELAY_Q]) + 1)
     trdec = max(int(SC[SC_TRACE_DECIM]), 1)
     tr = np.empty(((n_per + trdec - 1) // trdec if keep_traces else 0, N_TRACE))
     # speed loop state
@@ -580,6 +713,7 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     for k in range(n_per):
         t = k * Ts
         i_d_m, i_q_m, om_m = _sense(x, rng, SC)
+        i_d_m, i_q_m = _current_sensor(i_d_m, i_q_m, k, cs_d, cs_q, SC)
         w_m = p * om_m
         th_m = x[3]
         idr, iqr, sr = _references(t, SC)
@@ -633,9 +767,18 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
             tr[row, 8] = iqr
             tr[row, 9] = om_m
         # ---- plant over one period
-        if inverter == 0:
+        if inverter == 0 and hold == 0:
             t, x = _advance(x, t, vd_app, vq_app, 0, Ts, h, pl, t_load, mech, acc, omega0,
                             acc_m, refs, mset)
+        elif inverter == 0:  # held in the stationary frame at the mid-period angle
+            tha = th_m + w_m * Ts * 0.5
+            vx, vy = _to_ab(vd_app, vq_app, math.cos(tha), math.sin(tha))
+            t, x = _advance(x, t, vx, vy, 1, Ts, h, pl, t_load, mech, acc, omega0,
+                            acc_m, refs, mset)
+        elif inverter == 1 and carrier:
+            t, x, conf_applied = _carrier_period(x, t, k, vd_app, vq_app, th_m, w_m,
+                                                 conf_applied, h, pl, t_load, mech, acc,
+                                                 omega0, acc_m, refs, mset, DP)
         elif inverter == 1:
             t, x, conf_applied = _svm_period(x, t, vd_app, vq_app, th_m, w_m, conf_applied,
                                              h, pl, t_load, mech, acc, omega0, acc_m,

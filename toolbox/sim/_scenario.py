@@ -87,6 +87,13 @@ class Scenario:
         Current-sensor noise amplitude (A), same distribution.
     current_quantum : float
         Current-sensor quantisation step (A), 0 = none.
+    current_gain_d, current_gain_q : float
+        Current-sensor gains: the controller reads ``gain * i`` (after noise
+        and quantisation), default 1 (paper 002 sect. 5).
+    current_delay_d, current_delay_q : int
+        Current-sensor delays (controller periods, 0 to 10): the controller
+        reads the current measured that many periods earlier (paper 002
+        sect. 5), on top of the computation delay of the drive.
     seed : int
         Seed of the sensor-noise generator (deterministic runs).
     plant_values : mapping
@@ -133,6 +140,10 @@ class Scenario:
     noise: str = "uniform"
     current_noise: float = 0.0
     current_quantum: float = 0.0
+    current_gain_d: float = 1.0
+    current_gain_q: float = 1.0
+    current_delay_d: int = 0
+    current_delay_q: int = 0
     seed: int = 0
     plant_values: Mapping[str, float] = field(default_factory=dict)
     plant_scale: Mapping[str, float] = field(default_factory=dict)
@@ -185,6 +196,13 @@ class Scenario:
                      "torque_frequency"):
             if getattr(self, name) < 0:
                 raise err(name, "a number >= 0", getattr(self, name))
+        for name in ("current_gain_d", "current_gain_q"):
+            if not getattr(self, name) > 0:
+                raise err(name, "a number > 0 (sensor gain)", getattr(self, name))
+        for name in ("current_delay_d", "current_delay_q"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= 10:
+                raise err(name, "an integer from 0 to 10 (periods)", v)
         if self.noise not in NOISE_KINDS:
             raise err("noise", '"uniform" or "gaussian"', self.noise,
                       _did_you_mean(self.noise, NOISE_KINDS))
@@ -268,7 +286,7 @@ def _check_type(path: str, name: str, v: Any) -> Any:
         if not isinstance(v, bool):
             raise SpecError(path, "true or false", v)
         return v
-    if name == "seed":
+    if name in ("seed", "current_delay_d", "current_delay_q"):
         if isinstance(v, bool) or not isinstance(v, int) or v < 0:
             raise SpecError(path, "an integer >= 0", v)
         return v

@@ -56,6 +56,20 @@ class DriveParams:
         Default ``2/3 vdc`` (torque_factor 1.5) or ``sqrt(2/3) vdc`` (torque_factor 1).
     inverter : str
         ``"average"``, ``"svm"`` or ``"fcs_mpc"``.
+    switching_frequency : float, optional
+        PWM carrier frequency (Hz) of the ``"svm"`` inverter: a symmetric
+        triangle carrier, regular sampled (duties loaded at each sample and
+        held over it), with min-max injection (the carrier form of the
+        centred space-vector pattern); ``sample_time`` must be a whole
+        number ``n`` of half carrier periods and each period switches over
+        ``n`` half periods. None: one centred pattern per sample (the
+        carrier at ``1 / sample_time``, paper 002 eq (21)-(22)).
+    hold_frame : str
+        Frame in which the ``"average"`` inverter holds the commanded voltage
+        over a period: ``"rotor"`` (constant ``v_dq``, the ideal average) or
+        ``"stationary"`` (constant ``v_alpha_beta``, placed at the mid-period
+        angle, so that ``v_dq(t) = R(-w (t - t_k - Ts/2)) v_dq``: what a PWM
+        inverter averages to).
     """
 
     vdc: float
@@ -65,6 +79,8 @@ class DriveParams:
     v_max: float | None = None
     hex_radius: float | None = None
     inverter: str = "average"
+    switching_frequency: float | None = None
+    hold_frame: str = "rotor"
 
     def radii(self, torque_factor: float) -> tuple[float, float]:
         """(hexagon vertex radius, circle radius) in V for a dq convention."""
@@ -290,6 +306,18 @@ def _pack_law(law: ControlLaw):
     return A, B, C, D, W, LP
 
 
+def _half_periods(drive: DriveParams) -> int:
+    """Carrier half periods per sample (0: no carrier given, one centred pattern)."""
+    fsw = drive.switching_frequency
+    if fsw is None:
+        return 0
+    n = drive.sample_time * 2.0 * fsw if (fsw > 0 and math.isfinite(fsw)) else 0.0
+    if n < 1 - 1e-9 or abs(n - round(n)) > 1e-6:
+        raise SpecError("drive.switching_frequency", "a carrier with a whole number of "
+                        f"half periods per sample ({drive.sample_time} s)", fsw)
+    return int(round(n))
+
+
 def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams):
     Ts = drive.sample_time
     if not (Ts > 0 and math.isfinite(Ts)):
@@ -315,8 +343,12 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams)
     if inv_code == 1 and vl == 0:
         vl = 2  # SVM cannot exceed its hexagon: let the anti-windup know it
     r_hex, v_max = drive.radii(plant.torque_factor)
+    hold = {"rotor": 0, "stationary": 1}.get(drive.hold_frame)
+    if hold is None:
+        raise SpecError("drive.hold_frame", '"rotor" or "stationary"', drive.hold_frame)
     DP = _packed("DP", Ts=Ts, delay=drive.delay_samples, vlim=vl, v_max=v_max, r_hex=r_hex,
-                 inverter=inv_code)
+                 inverter=inv_code, half_periods=_half_periods(drive) if inv_code == 1 else 0,
+                 hold=hold)
 
     kind = scenario.kind
     sl = law.speed_loop
@@ -359,6 +391,8 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams)
         noise_kind=0.0 if scenario.noise == "uniform" else 1.0,
         current_noise=scenario.current_noise, current_quantum=scenario.current_quantum,
         seed=scenario.seed, h=scenario.plant_step,
+        current_gain_d=scenario.current_gain_d, current_gain_q=scenario.current_gain_q,
+        current_delay_d=scenario.current_delay_d, current_delay_q=scenario.current_delay_q,
         trace_decim=1 if scenario.trace_step is None
         else max(1, round(scenario.trace_step / Ts)))
     return DP, SP, SC

@@ -41,7 +41,7 @@ MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms",
               "rated_current_rms", "max_current_rms")
 DRIVE_KEYS = ("vdc", "sample_time", "delay_samples", "switching_frequency",
-              "voltage_limit", "max_speed", "sample_frequency")
+              "voltage_limit", "max_speed", "sample_frequency", "hold_frame")
 
 
 def load_spec(path: str | Path) -> Spec:
@@ -263,6 +263,8 @@ def _drive_logged(value: Any) -> tuple[Drive, list]:
         voltage_limit=_collect(errors, t.string, "voltage_limit", "circle",
                                choices=("circle", "hexagon")),
         max_speed=_collect(errors, t.number, "max_speed", None, positive=True, unit="rad/s"),
+        hold_frame=_collect(errors, t.string, "hold_frame", "rotor",
+                            choices=("rotor", "stationary")),
     )
     if errors.failed:
         errors.raise_if_any()

@@ -173,6 +173,10 @@ class Drive:
         ``circle`` (inscribed circle, linear modulation) or ``hexagon``.
     max_speed : float or None
         Highest mechanical speed the analysis grids cover (rad/s).
+    hold_frame : str
+        Frame in which the simulated average inverter holds the voltage over
+        a period: ``rotor`` (constant dq voltage) or ``stationary``
+        (constant alpha-beta voltage, rotating in dq, as a PWM inverter).
     """
 
     vdc: float
@@ -181,6 +185,7 @@ class Drive:
     switching_frequency: float | None = None
     voltage_limit: str = "circle"
     max_speed: float | None = None
+    hold_frame: str = "rotor"
 
     def max_voltage(self, convention: str) -> float:
         """Largest dq voltage amplitude in linear modulation (V): the circle
