@@ -40,7 +40,7 @@ from typing import Any, Callable
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from ._statespace import freqresp
+from ._statespace import FreqResponse
 
 __all__ = ["MARGIN_KEYS", "FrequencyMargins", "disk_variations", "log_grid",
            "frequency_margins", "lti_loop_margins", "grid_margins", "SKEWS"]
@@ -269,11 +269,13 @@ def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
     else:
         discrete = discrete and math.isclose(float(w[-1]), math.pi / dt)
 
+    fr = FreqResponse(A, B, C, D)   # Hessenberg form once, for the grid and the refinements
+
     def response(x: np.ndarray) -> np.ndarray:
         pts = np.exp(1j * x * dt) if dt is not None else 1j * np.asarray(x, float)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return freqresp(A, B, C, D, pts)[:, 0, 0]
+            return fr(pts)[:, 0, 0]
 
     return frequency_margins(response, np.asarray(w, float), nyquist=discrete)
 

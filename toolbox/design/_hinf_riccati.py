@@ -36,6 +36,7 @@ import scipy.linalg as sla
 from scipy.linalg.lapack import dgees as _dgees
 import control as ct
 
+from ..analysis import FreqResponse
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -328,6 +329,11 @@ def _blame_mode(P: PartitionedPlant, lam: complex) -> str:
     return P.state_labels[idx]
 
 
+def _blocks2x2(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """[[a, b], [c, d]] (``np.block`` costs ~20 us of bookkeeping per call)."""
+    return np.concatenate([np.concatenate([a, b], axis=1), np.concatenate([c, d], axis=1)])
+
+
 def _where(lam: complex) -> str:
     return "s = 0" if abs(lam) < 1e-12 else f"s = {complex(0, lam.imag):.4g}"
 
@@ -375,12 +381,12 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionReport
                             f"that y does not see: move it to a small negative value "
                             f"(e.g. 1e-4 times the crossover frequency)")
     for lam in modes + [0j]:
-        M = P.A - 1j * lam.imag * np.eye(n)
+        M = P.A - 1j * lam.imag * np.eye(n) if lam.imag else P.A   # real at s = 0
         where = _where(lam)
-        if _rank_defect(np.block([[M, P.B2], [P.C1, P.D12]]), tol):
+        if _rank_defect(_blocks2x2(M, P.B2, P.C1, P.D12), tol):
             problems.append(f"A3 fails: the weighted plant has an invariant zero at {where}: "
                             f"move the pole or zero of w2/w3 (or of G) off the imaginary axis")
-        if _rank_defect(np.block([[M, P.B1], [P.C2, P.D21]]).conj().T, tol):
+        if _rank_defect(_blocks2x2(M, P.B1, P.C2, P.D21).conj().T, tol):
             problems.append(f"A4 fails: {_blame_mode(P, lam) if modes else 'the plant'} "
                             f"gives a rank loss at {where}: move its pole to a small "
                             f"negative value")
@@ -499,25 +505,27 @@ def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     method on the extended pencil, which does not invert the indefinite r, has
     the last word. Returns ``(X, "")`` or ``(None, reason)``.
     """
-    X = _ric_schur(a, b, q, r, s)
+    X, ev = _ric_schur(a, b, q, r, s)
     if X is None:
         try:
             X = sla.solve_continuous_are(a, b, q, r, s=s)
         except (np.linalg.LinAlgError, ValueError):
             return None, ("the Hamiltonian has eigenvalues on the imaginary axis "
                           "or no stabilising solution exists")
+        F = np.linalg.solve(r, b.T @ X + s.T)
+        ev = np.linalg.eigvals(a - b @ F)
     X = 0.5 * (X + X.T)
-    F = np.linalg.solve(r, b.T @ X + s.T)
-    ev = np.linalg.eigvals(a - b @ F)
     if np.any(ev.real >= -1e-12 * max(1.0, float(np.max(np.abs(ev))))):
         return None, "the solution is not stabilising"
     return X, ""
 
 
 def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
-               s: np.ndarray) -> np.ndarray | None:
-    """Hamiltonian (eq 16) ordered-Schur solution, ``None`` if it does not exist
-    or its basis Z11 is too ill-conditioned to give X = Z21 Z11^-1 accurately."""
+               s: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Hamiltonian (eq 16) ordered-Schur solution and the closed-loop poles
+    (the n selected eigenvalues of H, those of ``a - b r^-1 (b^T X + s^T)``);
+    ``(None, None)`` if it does not exist or its basis Z11 is too
+    ill-conditioned to give X = Z21 Z11^-1 accurately."""
     n = a.shape[0]
     rb = np.linalg.solve(r, np.hstack([b.T, s.T]))          # r^-1 [b^T, s^T]
     E = a - b @ rb[:, n:]
@@ -526,13 +534,13 @@ def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     H[:n, n:] = -b @ rb[:, :n]
     H[n:, :n] = s @ rb[:, n:] - q
     H[n:, n:] = -E.T
-    _, sdim, _, _, Z, _, info = _dgees(_lhp, H, sort_t=1, overwrite_a=1)
+    _, sdim, wr, wi, Z, _, info = _dgees(_lhp, H, sort_t=1, overwrite_a=1)
     if info != 0 or sdim != n:
-        return None
+        return None, None
     Z11, Z21 = Z[:n, :n], Z[n:, :n]
     if np.linalg.cond(Z11) > 1e14:
-        return None
-    return np.linalg.solve(Z11.T, Z21.T).T
+        return None, None
+    return np.linalg.solve(Z11.T, Z21.T).T, wr[:n] + 1j * wi[:n]
 
 @dataclass
 class HinfFeasibility:
@@ -1092,8 +1100,20 @@ class WeightBound:
 
 
 def _freqresp(sys: Any, w: np.ndarray) -> np.ndarray:
-    resp = ct.frequency_response(ct.ss(sys) if not np.isscalar(sys) else ct.ss([], [], [], sys), w)
-    return np.asarray(resp.complex).reshape(-1)
+    """SISO response at s = j w, all frequencies at once (issue 13: python-control
+    converted each weight to state space and called SLICOT tb05ad per frequency).
+    A transfer function is evaluated from its polynomials, as python-control
+    evaluates one; a state-space system through its Hessenberg form."""
+    if np.isscalar(sys):
+        return np.full(w.size, complex(sys))
+    s = 1j * w
+    if isinstance(sys, ct.TransferFunction):
+        if sys.ninputs != 1 or sys.noutputs != 1:
+            raise ValueError(f"weight_bound_check: expected a SISO system, "
+                             f"got {sys.noutputs}x{sys.ninputs}")
+        return np.polyval(sys.num_array[0, 0], s) / np.polyval(sys.den_array[0, 0], s)
+    ss = ct.ss(sys)
+    return FreqResponse(ss.A, ss.B, ss.C, ss.D)(s)[:, 0, 0]
 
 
 def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
