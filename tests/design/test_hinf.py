@@ -83,6 +83,24 @@ def test_augment_without_w2_w3():
     assert P.D12[1, 0] == pytest.approx(0.1)
 
 
+def test_weight_realisation_is_minimal_and_exact():
+    """Direct SLICOT td04ad realisation of a SISO weight (issue 13): a common
+    factor is removed (minimal, like python-control's ss), the response equals
+    num/den to rounding (1e-13 relative), a constant has no state and an
+    improper weight is refused with its degrees."""
+    A, B, C, D = H._tf_realisation([1.0, 1.0], [1.0, 3.0, 2.0])  # (s+1)/((s+1)(s+2))
+    assert A.shape == (1, 1) and A[0, 0] == pytest.approx(-2.0)
+    for num, den in (([0.66225, 117.4499], [1.0, 0.0117]), ([3.0, 1.0, 1.0], [1.0, 3.0, 2.5])):
+        A, B, C, D = H._tf_realisation(num, den)
+        x = 1j * np.logspace(-3, 7, 50)
+        got = np.array([(C @ np.linalg.solve(v * np.eye(len(A)) - A, B) + D)[0, 0] for v in x])
+        ref = np.polyval(num, x) / np.polyval(den, x)
+        assert np.max(np.abs(got - ref) / np.abs(ref)) <= 1e-13
+    assert H._tf_realisation([2.0], [4.0])[3][0, 0] == 0.5
+    with pytest.raises(ValueError, match="degree 2 over denominator degree 1"):
+        H._tf_realisation([1.0, 0.0, 0.0], [1.0, 1.0])
+
+
 # ---------------------------------------------------------------- (3)
 def test_assumptions_hold_for_paper_q_axis(Pq):
     rep = H.check_assumptions(Pq)

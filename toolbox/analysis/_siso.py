@@ -33,7 +33,6 @@ disk margin ``1/||(S - T)/2||_inf``.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -272,10 +271,10 @@ def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
     fr = FreqResponse(A, B, C, D)   # Hessenberg form once, for the grid and the refinements
 
     def response(x: np.ndarray) -> np.ndarray:
+        # FreqResponse silences its own division by zero on a pole; no
+        # warnings.catch_warnings here (~10 us for each of ~90 refinement calls)
         pts = np.exp(1j * x * dt) if dt is not None else 1j * np.asarray(x, float)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return fr(pts)[:, 0, 0]
+        return fr(pts)[:, 0, 0]
 
     return frequency_margins(response, np.asarray(w, float), nyquist=discrete)
 
