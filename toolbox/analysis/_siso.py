@@ -32,6 +32,7 @@ disk margin ``1/||(S - T)/2||_inf``.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -126,12 +127,17 @@ def disk_variations(alpha: float, skew: float = 0.0) -> tuple[float, float, floa
     return float(lo), float(hi), phase
 
 
+@functools.lru_cache(maxsize=32)
 def log_grid(w_lo: float, w_hi: float, n: int, discrete: bool) -> np.ndarray:
     """Logarithmic frequency grid (rad/s); in discrete time its last point is
-    exactly ``w_hi`` (the Nyquist frequency) so that ``L(-1)`` is evaluated."""
+    exactly ``w_hi`` (the Nyquist frequency) so that ``L(-1)`` is evaluated.
+
+    Read-only and cached: every margin computation of a design asks for the
+    same 20000-point grid (~0.5 ms of ``logspace`` each time, issue 13)."""
     w = np.logspace(math.log10(w_lo), math.log10(w_hi), n)
     if discrete:
         w[-1] = w_hi
+    w.flags.writeable = False
     return w
 
 

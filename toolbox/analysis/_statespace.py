@@ -59,6 +59,7 @@ class FreqResponse:
     def __init__(self, A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> None:
         self.A, self.B, self.C, self.D = (np.asarray(M, float) for M in (A, B, C, D))
         self.modal = None
+        self._siso = None
         n = self.A.shape[0]
         self._eye = np.eye(n)
         if n:
@@ -66,10 +67,22 @@ class FreqResponse:
             if np.linalg.cond(V) <= self.COND_MAX:
                 res = (self.C @ V)[:, :, None] * np.linalg.solve(V, self.B)[None, :, :]
                 self.modal = (lam, np.moveaxis(res, 1, 0).reshape(n, -1))   # residues (n, p m)
+                if self.D.size == 1:            # SISO: plain Python numbers for one point
+                    self._siso = (list(zip(res[0, :, 0].tolist(), lam.tolist())),
+                                  complex(self.D[0, 0]))
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         """Response at the complex points ``x``: shape ``(len(x), p, m)``."""
         x = np.asarray(x, complex).reshape(-1)
+        if x.size == 1 and self._siso is not None:
+            # one point of a SISO modal form: ~2 us of Python arithmetic, where any
+            # numpy call costs more (the margin refinements make ~90 such calls)
+            v = complex(x[0])
+            try:
+                val = sum(r / (v - lam) for r, lam in self._siso[0]) + self._siso[1]
+            except ZeroDivisionError:           # exactly on a pole
+                return freqresp(self.A, self.B, self.C, self.D, x)
+            return np.array([[[val]]])
         if x.size == 1 and self.A.size:         # one point: one LAPACK call, no stacking
             try:
                 y = np.linalg.solve(x[0] * self._eye - self.A, self.B)
@@ -79,8 +92,9 @@ class FreqResponse:
         if self.modal is None:
             return freqresp(self.A, self.B, self.C, self.D, x)
         lam, res = self.modal
+        inv = np.subtract.outer(x, lam)                                # (N, n)
         with np.errstate(divide="ignore", invalid="ignore"):         # a point on a pole
-            inv = 1.0 / (x[:, None] - lam[None, :])                   # (N, n)
+            np.reciprocal(inv, out=inv)
             return (inv @ res).reshape((x.size,) + self.D.shape) + self.D
 
 
