@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import control as ct
 import slycot
+import scipy.linalg as sla
 
 from toolbox.design import _hinf_riccati as H
 from toolbox.errors import SpecError
@@ -167,6 +168,40 @@ def test_riccati_residual(Pq):
            - (X @ B + n.C1.T @ D1s) @ np.linalg.solve(R, B.T @ X + D1s.T @ n.C1))
     scale = np.abs(n.C1.T @ n.C1).max()
     assert np.abs(res).max() <= 1e-8 * scale
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_hamiltonian_schur_route_matches_scipy_care(seed):
+    """The Riccati solver's first route (one ordered-Schur dgees call on the
+    Hamiltonian, issue 13) gives scipy's solve_continuous_are solution: indefinite
+    r as in eq (14), random stabilisable data of order 2..7; agreement 1e-8
+    relative to max|X| (both backward stable; the Hamiltonian route loses
+    cond(Z11) * eps, kept below 1e14 by the route itself)."""
+    rng = np.random.default_rng(seed)
+    n, m1, m2 = 2 + seed, 1 + seed % 2, 1
+    a = rng.standard_normal((n, n)) - 3.0 * np.eye(n)          # stable: stabilisable
+    b = rng.standard_normal((n, m1 + m2))
+    c1 = rng.standard_normal((n, n))
+    q = c1.T @ c1
+    s = np.zeros((n, m1 + m2))
+    r = np.diag([-25.0] * m1 + [1.0] * m2)                      # gamma = 5, eq (14) shape
+    X, ev = H._ric_schur(a, b, q, r, s)
+    assert X is not None
+    ref = sla.solve_continuous_are(a, b, q, r, s=s)
+    assert np.max(np.abs(X - ref)) <= 1e-8 * np.max(np.abs(ref))
+    F = np.linalg.solve(r, b.T @ X + s.T)                       # reported poles = a - b F
+    assert np.allclose(np.sort_complex(ev), np.sort_complex(np.linalg.eigvals(a - b @ F)),
+                       rtol=1e-8, atol=1e-10)
+
+
+def test_riccati_without_stabilising_solution_is_refused():
+    """x' = u with no state weight (q = 0) and an indefinite r whose u-part
+    makes the Hamiltonian's eigenvalues purely imaginary: both routes fail
+    and _ric names the reason."""
+    a, b = np.zeros((1, 1)), np.array([[1.0]])
+    q, r, s = np.array([[1.0]]), np.array([[-1.0]]), np.zeros((1, 1))
+    X, why = H._ric(a, b, q, r, s)
+    assert X is None and "imaginary axis" in why
 
 
 # ---------------------------------------------------------------- (6)
