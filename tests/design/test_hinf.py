@@ -204,6 +204,16 @@ def test_riccati_without_stabilising_solution_is_refused():
     assert X is None and "imaginary axis" in why
 
 
+def test_riccati_with_singular_r_is_refused_not_raised():
+    """A singular r (gamma on the boundary of condition (a)) gives a named
+    refusal from both routes, not a LinAlgError from inverting r."""
+    a, b, q = np.array([[-1.0]]), np.array([[1.0, 2.0]]), np.array([[1.0]])
+    r, s = np.ones((2, 2)), np.zeros((1, 2))
+    assert H._ric_schur(a, b, q, r, s) == (None, None)
+    X, why = H._ric(a, b, q, r, s)
+    assert X is None and why
+
+
 # ---------------------------------------------------------------- (6)
 def _slycot_fd(P, gamma):
     sys = P.to_statespace()

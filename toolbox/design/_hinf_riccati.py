@@ -556,7 +556,10 @@ def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     ``(None, None)`` if it does not exist or its basis Z11 is too
     ill-conditioned to give X = Z21 Z11^-1 accurately."""
     n = a.shape[0]
-    rb = np.linalg.solve(r, np.hstack([b.T, s.T]))          # r^-1 [b^T, s^T]
+    try:
+        rb = np.linalg.solve(r, np.hstack([b.T, s.T]))      # r^-1 [b^T, s^T]
+    except np.linalg.LinAlgError:                           # singular r: the pencil route
+        return None, None
     E = a - b @ rb[:, n:]
     H = np.empty((2 * n, 2 * n))
     H[:n, :n] = E
