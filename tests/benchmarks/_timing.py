@@ -8,6 +8,13 @@
   so that a slow spell of the shared machine hits every route alike;
   :func:`ratio` reports the per-round ratio A_i/B_i as its median and
   interquartile range, the spread the printed claims must respect.
+* The clock is the process's CPU time (``time.process_time``), not the wall
+  clock: on a shared machine the wall time of a single-threaded route also
+  counts the time the process waited for a core. That waiting is what made
+  the "slow spells" of issue 13 (the simulator at 70-85 ns per plant step for
+  tens of calls while its CPU time stayed at ~48 ns: the load average was 4-6
+  on 2 cores, other processes held them; wall/CPU reached 2-3). A
+  multi-threaded route (the parallel batch) must be timed on the wall clock.
 """
 
 from __future__ import annotations
@@ -24,24 +31,28 @@ BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
 def pin_blas_threads(n: int = 1) -> None:
     """Set the BLAS/OpenMP thread counts (only effective before ``import numpy``)."""
     for key in BLAS_ENV:
-        os.environ.setdefault(key, str(n))
+        os.environ[key] = str(n)
 
 
-def interleaved(routes: Mapping[str, Callable[[], object]],
-                rounds: int) -> dict[str, list[float]]:
-    """Run every route once per round, in turn; return each route's times (s).
+def interleaved(routes: Mapping[str, Callable[[], object]], rounds: int,
+                repeat: int = 1) -> dict[str, list[float]]:
+    """Run every route ``repeat`` times per round, in turn; return each route's
+    CPU seconds per call, one value per round.
 
     A route may return its own elapsed seconds as a ``float`` (e.g. a C
-    program timing its inner loop); anything else it returns is ignored and
-    its wall time is measured here.
+    program timing its inner loop with its own CPU clock); anything else it
+    returns is ignored and the process CPU time is measured here.
     """
     times: dict[str, list[float]] = {name: [] for name in routes}
     for _ in range(rounds):
         for name, func in routes.items():
-            t0 = time.perf_counter()
-            own = func()
-            wall = time.perf_counter() - t0
-            times[name].append(own if isinstance(own, float) else wall)
+            t0 = time.process_time()
+            own = 0.0
+            for _ in range(repeat):
+                r = func()
+                own += r if isinstance(r, float) else 0.0
+            cpu = time.process_time() - t0
+            times[name].append((own if own else cpu) / repeat)
     return times
 
 

@@ -2,7 +2,8 @@
 closed-loop simulation. ``python tests/benchmarks/run.py`` from the repository root.
 
 Routes are timed alternately (A B A B ..., medians and interquartile ranges of
-the per-round ratios); BLAS is pinned to one thread (small problems)."""
+the per-round ratios) on the process CPU clock (the machine may be shared: see
+``_timing``); BLAS is pinned to one thread (small problems)."""
 
 from __future__ import annotations
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import control as ct
 import slycot
+import scipy.linalg as sla
 
 from toolbox.design import _hinf_riccati as H
 from toolbox.errors import SpecError
@@ -83,6 +84,24 @@ def test_augment_without_w2_w3():
     assert P.D12[1, 0] == pytest.approx(0.1)
 
 
+def test_weight_realisation_is_minimal_and_exact():
+    """Direct SLICOT td04ad realisation of a SISO weight (issue 13): a common
+    factor is removed (minimal, like python-control's ss), the response equals
+    num/den to rounding (1e-13 relative), a constant has no state and an
+    improper weight is refused with its degrees."""
+    A, B, C, D = H._tf_realisation([1.0, 1.0], [1.0, 3.0, 2.0])  # (s+1)/((s+1)(s+2))
+    assert A.shape == (1, 1) and A[0, 0] == pytest.approx(-2.0)
+    for num, den in (([0.66225, 117.4499], [1.0, 0.0117]), ([3.0, 1.0, 1.0], [1.0, 3.0, 2.5])):
+        A, B, C, D = H._tf_realisation(num, den)
+        x = 1j * np.logspace(-3, 7, 50)
+        got = np.array([(C @ np.linalg.solve(v * np.eye(len(A)) - A, B) + D)[0, 0] for v in x])
+        ref = np.polyval(num, x) / np.polyval(den, x)
+        assert np.max(np.abs(got - ref) / np.abs(ref)) <= 1e-13
+    assert H._tf_realisation([2.0], [4.0])[3][0, 0] == 0.5
+    with pytest.raises(ValueError, match="degree 2 over denominator degree 1"):
+        H._tf_realisation([1.0, 0.0, 0.0], [1.0, 1.0])
+
+
 # ---------------------------------------------------------------- (3)
 def test_assumptions_hold_for_paper_q_axis(Pq):
     rep = H.check_assumptions(Pq)
@@ -149,6 +168,50 @@ def test_riccati_residual(Pq):
            - (X @ B + n.C1.T @ D1s) @ np.linalg.solve(R, B.T @ X + D1s.T @ n.C1))
     scale = np.abs(n.C1.T @ n.C1).max()
     assert np.abs(res).max() <= 1e-8 * scale
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_hamiltonian_schur_route_matches_scipy_care(seed):
+    """The Riccati solver's first route (one ordered-Schur dgees call on the
+    Hamiltonian, issue 13) gives scipy's solve_continuous_are solution: indefinite
+    r as in eq (14), random stabilisable data of order 2..7; agreement 1e-8
+    relative to max|X| (both backward stable; the Hamiltonian route loses
+    cond(Z11) * eps, kept below 1e14 by the route itself)."""
+    rng = np.random.default_rng(seed)
+    n, m1, m2 = 2 + seed, 1 + seed % 2, 1
+    a = rng.standard_normal((n, n)) - 3.0 * np.eye(n)          # stable: stabilisable
+    b = rng.standard_normal((n, m1 + m2))
+    c1 = rng.standard_normal((n, n))
+    q = c1.T @ c1
+    s = np.zeros((n, m1 + m2))
+    r = np.diag([-25.0] * m1 + [1.0] * m2)                      # gamma = 5, eq (14) shape
+    X, ev = H._ric_schur(a, b, q, r, s)
+    assert X is not None
+    ref = sla.solve_continuous_are(a, b, q, r, s=s)
+    assert np.max(np.abs(X - ref)) <= 1e-8 * np.max(np.abs(ref))
+    F = np.linalg.solve(r, b.T @ X + s.T)                       # reported poles = a - b F
+    assert np.allclose(np.sort_complex(ev), np.sort_complex(np.linalg.eigvals(a - b @ F)),
+                       rtol=1e-8, atol=1e-10)
+
+
+def test_riccati_without_stabilising_solution_is_refused():
+    """x' = u with no state weight (q = 0) and an indefinite r whose u-part
+    makes the Hamiltonian's eigenvalues purely imaginary: both routes fail
+    and _ric names the reason."""
+    a, b = np.zeros((1, 1)), np.array([[1.0]])
+    q, r, s = np.array([[1.0]]), np.array([[-1.0]]), np.zeros((1, 1))
+    X, why = H._ric(a, b, q, r, s)
+    assert X is None and "imaginary axis" in why
+
+
+def test_riccati_with_singular_r_is_refused_not_raised():
+    """A singular r (gamma on the boundary of condition (a)) gives a named
+    refusal from both routes, not a LinAlgError from inverting r."""
+    a, b, q = np.array([[-1.0]]), np.array([[1.0, 2.0]]), np.array([[1.0]])
+    r, s = np.ones((2, 2)), np.zeros((1, 2))
+    assert H._ric_schur(a, b, q, r, s) == (None, None)
+    X, why = H._ric(a, b, q, r, s)
+    assert X is None and why
 
 
 # ---------------------------------------------------------------- (6)

@@ -18,6 +18,7 @@ from __future__ import annotations
 from ._responses import loop_responses
 from .certificate import (CertificateResult, ParameterBox, certify,
                           largest_certified_scale)
+from ._statespace import FreqResponse
 from .margins import (MARGIN_KEYS, FrequencyMargins, MarginsResult, MimoBoxResult,
                       MimoMarginsResult, compute_margins, disk_variations, frequency_margins,
                       grid_margins, json_ready, lti_loop_margins, mimo_disk_margins,
@@ -29,7 +30,8 @@ __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "compute_margins
            "DEFAULT_RANGES", "SweepResult",
            "robustness_sweep", "CertificateResult", "ParameterBox", "certify",
            "largest_certified_scale", "analysis_report", "compare_designs", "ANALYSIS_SCHEMA",
-           "FrequencyMargins", "frequency_margins", "grid_margins", "lti_loop_margins"]
+           "FrequencyMargins", "frequency_margins", "grid_margins", "lti_loop_margins",
+           "FreqResponse"]
 
 ANALYSIS_SCHEMA = "cct.analysis/1"
 STEP_KEYS = ("response_time_5pct", "rise_time_10_90", "settling_time_2pct", "overshoot_pct")

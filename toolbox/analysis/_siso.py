@@ -32,15 +32,15 @@ disk margin ``1/||(S - T)/2||_inf``.
 
 from __future__ import annotations
 
+import functools
 import math
-import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from ._statespace import freqresp
+from ._statespace import FreqResponse
 
 __all__ = ["MARGIN_KEYS", "FrequencyMargins", "disk_variations", "log_grid",
            "frequency_margins", "lti_loop_margins", "grid_margins", "SKEWS"]
@@ -127,12 +127,17 @@ def disk_variations(alpha: float, skew: float = 0.0) -> tuple[float, float, floa
     return float(lo), float(hi), phase
 
 
+@functools.lru_cache(maxsize=32)
 def log_grid(w_lo: float, w_hi: float, n: int, discrete: bool) -> np.ndarray:
     """Logarithmic frequency grid (rad/s); in discrete time its last point is
-    exactly ``w_hi`` (the Nyquist frequency) so that ``L(-1)`` is evaluated."""
+    exactly ``w_hi`` (the Nyquist frequency) so that ``L(-1)`` is evaluated.
+
+    Read-only and cached: every margin computation of a design asks for the
+    same 20000-point grid (~0.5 ms of ``logspace`` each time, issue 13)."""
     w = np.logspace(math.log10(w_lo), math.log10(w_hi), n)
     if discrete:
         w[-1] = w_hi
+    w.flags.writeable = False
     return w
 
 
@@ -269,11 +274,13 @@ def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
     else:
         discrete = discrete and math.isclose(float(w[-1]), math.pi / dt)
 
+    fr = FreqResponse(A, B, C, D)   # Hessenberg form once, for the grid and the refinements
+
     def response(x: np.ndarray) -> np.ndarray:
+        # FreqResponse silences its own division by zero on a pole; no
+        # warnings.catch_warnings here (~10 us for each of ~90 refinement calls)
         pts = np.exp(1j * x * dt) if dt is not None else 1j * np.asarray(x, float)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return freqresp(A, B, C, D, pts)[:, 0, 0]
+        return fr(pts)[:, 0, 0]
 
     return frequency_margins(response, np.asarray(w, float), nyquist=discrete)
 

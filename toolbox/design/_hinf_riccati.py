@@ -33,8 +33,10 @@ from typing import Any, Literal
 
 import numpy as np
 import scipy.linalg as sla
+from scipy.linalg.lapack import dgees as _dgees
 import control as ct
 
+from ..analysis import FreqResponse
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -172,23 +174,65 @@ class PartitionedPlant:
 
     def replace(self, **blocks: Any) -> "PartitionedPlant":
         """Return a copy with some blocks replaced."""
-        data = {k: getattr(self, k) for k in
-                ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22")}
+        data = {k: getattr(self, k) for k in _BLOCKS}
         data["state_labels"] = self.state_labels
         data.update(blocks)
         return PartitionedPlant(**data)
+
+    def _derived(self, **blocks: np.ndarray) -> "PartitionedPlant":
+        """Copy with some blocks replaced by float arrays computed from valid ones
+        (similarity, rotation, scaling): same sizes by construction, so the
+        checks of ``__post_init__`` (tens of microseconds, per copy) are skipped.
+        Internal: the synthesis makes three such copies per call (issue 13)."""
+        new = object.__new__(PartitionedPlant)
+        for k in _BLOCKS:
+            object.__setattr__(new, k, blocks.get(k, getattr(self, k)))
+        object.__setattr__(new, "state_labels", self.state_labels)
+        return new
+
+
+_BLOCKS = ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22")
 
 
 def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """A, B, C, D of a SISO system or a scalar gain."""
     if isinstance(sys, (int, float, np.floating)):
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(sys)]])
+    if isinstance(sys, ct.TransferFunction) and sys.ninputs == 1 and sys.noutputs == 1:
+        return _tf_realisation(sys.num_array[0, 0], sys.den_array[0, 0])
     s = ct.ss(sys)
     if s.ninputs != 1 or s.noutputs != 1:
         raise ValueError(f"augment_mixed_sensitivity: expected a SISO system, "
                          f"got {s.noutputs}x{s.ninputs}")
     return (np.asarray(s.A, float), np.asarray(s.B, float),
             np.asarray(s.C, float), np.asarray(s.D, float))
+
+
+def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Minimal realisation (A, B, C, D) of the proper SISO ``num/den``.
+
+    SLICOT ``td04ad``, the routine python-control's ``ss(tf)`` ends in, called
+    directly: python-control first rebuilds a common denominator from the
+    poles and zeros (``_common_den``, ~0.6 ms per weight against ~30 us for
+    the conversion itself, issue 13). The states can differ from
+    python-control's by a diagonal scaling (it makes den monic first).
+    """
+    from slycot import td04ad
+
+    num = np.trim_zeros(np.asarray(num, float), "f")
+    den = np.trim_zeros(np.asarray(den, float), "f")
+    if den.size == 0 or num.size > den.size:
+        raise ValueError(f"augment_mixed_sensitivity: expected a proper transfer function, "
+                         f"got numerator degree {num.size - 1} over denominator degree "
+                         f"{den.size - 1}")
+    d = den.size - 1
+    if d == 0 or num.size == 0:
+        return (np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
+                np.array([[num[0] / den[0] if num.size else 0.0]]))
+    ucoeff = np.zeros((1, 1, d + 1))
+    ucoeff[0, 0, d + 1 - num.size:] = num
+    n, A, B, C, D = td04ad("C", 1, 1, np.array([d]), den[None, :], ucoeff, tol=0)
+    return A[:n, :n].copy(), B[:n, :1].copy(), C[:1, :n].copy(), np.asarray(D, float).reshape(1, 1)
 
 
 def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
@@ -314,6 +358,11 @@ def _blame_mode(P: PartitionedPlant, lam: complex) -> str:
     return P.state_labels[idx]
 
 
+def _blocks2x2(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """[[a, b], [c, d]] (``np.block`` costs ~20 us of bookkeeping per call)."""
+    return np.concatenate([np.concatenate([a, b], axis=1), np.concatenate([c, d], axis=1)])
+
+
 def _where(lam: complex) -> str:
     return "s = 0" if abs(lam) < 1e-12 else f"s = {complex(0, lam.imag):.4g}"
 
@@ -341,11 +390,14 @@ def check_assumptions(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionRepo
         remedy, e.g. "w1 has a pole at s = 0: move it to a small negative
         value".
     """
+    return _check_balanced(balance_plant(P)[0], tol)
+
+
+def _check_balanced(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionReport:
+    """:func:`check_assumptions` on a plant already balanced by :func:`balance_plant`
+    (rank tests on equilibrated data)."""
     problems: list[str] = []
     n = P.nx
-    labels = P.state_labels
-    P, _ = balance_plant(P)            # rank tests on equilibrated data
-    P = P.replace(state_labels=labels)
     modes = list(_imag_axis_modes(P.A, tol))
     for lam in modes:
         M = P.A - 1j * lam.imag * np.eye(n)
@@ -358,12 +410,12 @@ def check_assumptions(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionRepo
                             f"that y does not see: move it to a small negative value "
                             f"(e.g. 1e-4 times the crossover frequency)")
     for lam in modes + [0j]:
-        M = P.A - 1j * lam.imag * np.eye(n)
+        M = P.A - 1j * lam.imag * np.eye(n) if lam.imag else P.A   # real at s = 0
         where = _where(lam)
-        if _rank_defect(np.block([[M, P.B2], [P.C1, P.D12]]), tol):
+        if _rank_defect(_blocks2x2(M, P.B2, P.C1, P.D12), tol):
             problems.append(f"A3 fails: the weighted plant has an invariant zero at {where}: "
                             f"move the pole or zero of w2/w3 (or of G) off the imaginary axis")
-        if _rank_defect(np.block([[M, P.B1], [P.C2, P.D21]]).conj().T, tol):
+        if _rank_defect(_blocks2x2(M, P.B1, P.C2, P.D21).conj().T, tol):
             problems.append(f"A4 fails: {_blame_mode(P, lam) if modes else 'the plant'} "
                             f"gives a rank loss at {where}: move its pole to a small "
                             f"negative value")
@@ -413,8 +465,8 @@ def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
     M[n:n + p, :n] = C
     _, (scale, _) = sla.matrix_balance(M, permute=False, separate=True)
     t = 2.0 ** np.round(np.log2(scale[:n]))
-    Ps = P.replace(A=P.A * t[None, :] / t[:, None], B1=P.B1 / t[:, None],
-                   B2=P.B2 / t[:, None], C1=P.C1 * t[None, :], C2=P.C2 * t[None, :])
+    Ps = P._derived(A=P.A * t[None, :] / t[:, None], B1=P.B1 / t[:, None],
+                    B2=P.B2 / t[:, None], C1=P.C1 * t[None, :], C2=P.C2 * t[None, :])
     return Ps, t
 
 
@@ -445,9 +497,9 @@ def _normalise(P: PartitionedPlant) -> _Normalised:
     VwT = np.hstack([V[:, p2:], V[:, :p2]])         # D21 VwT = [0, U S]
     R21 = U21 @ np.diag(s21)
     R12inv, R21inv = np.linalg.inv(R12), np.linalg.inv(R21)
-    Pn = P.replace(B1=P.B1 @ VwT, B2=P.B2 @ R12inv, C1=Uz @ P.C1, C2=R21inv @ P.C2,
-                   D11=Uz @ P.D11 @ VwT, D12=Uz @ P.D12 @ R12inv,
-                   D21=R21inv @ P.D21 @ VwT, D22=np.zeros_like(P.D22))
+    Pn = P._derived(B1=P.B1 @ VwT, B2=P.B2 @ R12inv, C1=Uz @ P.C1, C2=R21inv @ P.C2,
+                    D11=Uz @ P.D11 @ VwT, D12=Uz @ P.D12 @ R12inv,
+                    D21=R21inv @ P.D21 @ VwT, D22=np.zeros_like(P.D22))
     return _Normalised(P=Pn, R12inv=R12inv, R21inv=R21inv)
 
 
@@ -465,45 +517,62 @@ def _sigma_max(M: np.ndarray) -> float:
 # --------------------------------------------------------------------------
 # Riccati equations, eq (14)-(19)
 # --------------------------------------------------------------------------
+def _lhp(wr: float, wi: float) -> bool:
+    """Selector of LAPACK dgees: eigenvalues in the open left half-plane first."""
+    return wr < 0.0
+
+
 def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
          s: np.ndarray) -> tuple[np.ndarray | None, str]:
     """Stabilising solution of a^T X + X a - (X b + s) r^-1 (b^T X + s^T) + q = 0.
 
-    Solved with scipy's ``solve_continuous_are`` (generalised Schur method on
-    the extended pencil, which does not invert the indefinite r); falls back to
-    the ordered real Schur form of the Hamiltonian (eq 16/17) when scipy
-    refuses.  Returns ``(X, "")`` or ``(None, reason)``.
+    First the ordered real Schur form of the Hamiltonian (eq 16/17), one LAPACK
+    ``dgees`` call sized for these problems (order <= ~10; scipy's
+    ``solve_continuous_are`` spends ~0.8 ms per call in argument validation and
+    the extended-pencil QZ, issue 13). When that route fails (no n stable
+    eigenvalues, or an ill-conditioned basis Z11), scipy's generalised Schur
+    method on the extended pencil, which does not invert the indefinite r, has
+    the last word. Returns ``(X, "")`` or ``(None, reason)``.
     """
-    try:
-        X = sla.solve_continuous_are(a, b, q, r, s=s)
-    except (np.linalg.LinAlgError, ValueError):
-        X = _ric_schur(a, b, q, r, s)
-        if X is None:
+    X, ev = _ric_schur(a, b, q, r, s)
+    if X is None:
+        try:
+            X = sla.solve_continuous_are(a, b, q, r, s=s)
+        except (np.linalg.LinAlgError, ValueError):
             return None, ("the Hamiltonian has eigenvalues on the imaginary axis "
                           "or no stabilising solution exists")
+        F = np.linalg.solve(r, b.T @ X + s.T)
+        ev = np.linalg.eigvals(a - b @ F)
     X = 0.5 * (X + X.T)
-    F = np.linalg.solve(r, b.T @ X + s.T)
-    ev = np.linalg.eigvals(a - b @ F)
     if np.any(ev.real >= -1e-12 * max(1.0, float(np.max(np.abs(ev))))):
         return None, "the solution is not stabilising"
     return X, ""
 
 
 def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
-               s: np.ndarray) -> np.ndarray | None:
-    """Hamiltonian (eq 16) ordered-Schur solution, ``None`` if it does not exist."""
+               s: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Hamiltonian (eq 16) ordered-Schur solution and the closed-loop poles
+    (the n selected eigenvalues of H, those of ``a - b r^-1 (b^T X + s^T)``);
+    ``(None, None)`` if it does not exist or its basis Z11 is too
+    ill-conditioned to give X = Z21 Z11^-1 accurately."""
     n = a.shape[0]
-    ri = np.linalg.inv(r)
-    E = a - b @ ri @ s.T
-    H = np.block([[E, -b @ ri @ b.T], [-(q - s @ ri @ s.T), -E.T]])
-    T, Z, sdim = sla.schur(H, output="real", sort="lhp")
-    if sdim != n:
-        return None
+    try:
+        rb = np.linalg.solve(r, np.hstack([b.T, s.T]))      # r^-1 [b^T, s^T]
+    except np.linalg.LinAlgError:                           # singular r: the pencil route
+        return None, None
+    E = a - b @ rb[:, n:]
+    H = np.empty((2 * n, 2 * n))
+    H[:n, :n] = E
+    H[:n, n:] = -b @ rb[:, :n]
+    H[n:, :n] = s @ rb[:, n:] - q
+    H[n:, n:] = -E.T
+    _, sdim, wr, wi, Z, _, info = _dgees(_lhp, H, sort_t=1, overwrite_a=1)
+    if info != 0 or sdim != n:
+        return None, None
     Z11, Z21 = Z[:n, :n], Z[n:, :n]
     if np.linalg.cond(Z11) > 1e14:
-        return None
-    return Z21 @ np.linalg.inv(Z11)
-
+        return None, None
+    return np.linalg.solve(Z11.T, Z21.T).T, wr[:n] + 1j * wi[:n]
 
 @dataclass
 class HinfFeasibility:
@@ -543,22 +612,52 @@ def _psd(X: np.ndarray, tol: float = 1e-9) -> bool:
     return bool(ev.size == 0 or ev[0] >= -tol * max(1.0, float(np.max(np.abs(ev)))))
 
 
-def _feasibility_normalised(Pn: PartitionedPlant, gamma: float) -> HinfFeasibility:
-    """Theorem 1 on an already normalised, balanced plant."""
-    m1, m2, p1, p2, n = Pn.nw, Pn.nu, Pn.nz, Pn.ny, Pn.nx
+@dataclass(frozen=True)
+class _GammaFree:
+    """The parts of eq (10)-(17) that do not depend on gamma, formed once per
+    plant and reused at every gamma of the iteration (issue 13)."""
+
+    B: np.ndarray       # eq (10)
+    C: np.ndarray       # eq (11)
+    D1s: np.ndarray     # eq (12)
+    Ds1: np.ndarray     # eq (13)
+    DtD: np.ndarray     # D1s^T D1s, eq (14) without gamma
+    DDt: np.ndarray     # Ds1 Ds1^T, eq (15) without gamma
+    Qx: np.ndarray      # C1^T C1
+    Sx: np.ndarray      # C1^T D1s
+    Qy: np.ndarray      # B1 B1^T
+    Sy: np.ndarray      # B1 Ds1^T
+    bound: float        # condition (a): max(sigma(D1111 D1112), sigma(D1111; D1121))
+
+
+def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     D1111, D1112, D1121, _ = _d11_blocks(Pn)
+    B = np.hstack([Pn.B1, Pn.B2])
+    C = np.vstack([Pn.C1, Pn.C2])
+    D1s = np.hstack([Pn.D11, Pn.D12])
+    Ds1 = np.vstack([Pn.D11, Pn.D21])
     bound = max(_sigma_max(np.hstack([D1111, D1112])), _sigma_max(np.vstack([D1111, D1121])))
-    if bound >= gamma:
+    return _GammaFree(B=B, C=C, D1s=D1s, Ds1=Ds1, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T,
+                      Qx=Pn.C1.T @ Pn.C1, Sx=Pn.C1.T @ D1s, Qy=Pn.B1 @ Pn.B1.T,
+                      Sy=Pn.B1 @ Ds1.T, bound=bound)
+
+
+def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
+                            gf: _GammaFree | None = None) -> HinfFeasibility:
+    """Theorem 1 on an already normalised, balanced plant (``gf``: its
+    gamma-free products, formed here when not given)."""
+    w = _gamma_free(Pn) if gf is None else gf
+    m1, p1, n = Pn.nw, Pn.nz, Pn.nx
+    if w.bound >= gamma:
         return HinfFeasibility(gamma, False, "D11",
                                f"condition (a) of Theorem 1 fails: max(sigma(D1111 D1112), "
-                               f"sigma(D1111; D1121)) = {bound:.6g} >= gamma = {gamma:.6g}")
-    B = np.hstack([Pn.B1, Pn.B2])                                   # eq (10)
-    C = np.vstack([Pn.C1, Pn.C2])                                   # eq (11)
-    D1s = np.hstack([Pn.D11, Pn.D12])                               # eq (12)
-    Ds1 = np.vstack([Pn.D11, Pn.D21])                               # eq (13)
-    Rnh = D1s.T @ D1s - sla.block_diag(gamma**2 * np.eye(m1), np.zeros((m2, m2)))  # (14)
-    Rnj = Ds1 @ Ds1.T - sla.block_diag(gamma**2 * np.eye(p1), np.zeros((p2, p2)))  # (15)
-    X, why = _ric(Pn.A, B, Pn.C1.T @ Pn.C1, Rnh, Pn.C1.T @ D1s)     # eq (16), (18)
+                               f"sigma(D1111; D1121)) = {w.bound:.6g} >= gamma = {gamma:.6g}")
+    g2 = gamma * gamma
+    Rnh = w.DtD.copy()                                               # eq (14)
+    Rnh[range(m1), range(m1)] -= g2
+    Rnj = w.DDt.copy()                                               # eq (15)
+    Rnj[range(p1), range(p1)] -= g2
+    X, why = _ric(Pn.A, w.B, w.Qx, Rnh, w.Sx)                        # eq (16), (18)
     if X is None:
         return HinfFeasibility(gamma, False, "X_not_stabilising",
                                f"the X Riccati equation (18) has no stabilising solution "
@@ -567,7 +666,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float) -> HinfFeasibili
         return HinfFeasibility(gamma, False, "X_not_psd",
                                f"X of eq (18) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X)
-    Y, why = _ric(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Rnj, Pn.B1 @ Ds1.T)  # eq (17), (19)
+    Y, why = _ric(Pn.A.T, w.C.T, w.Qy, Rnj, w.Sy)                    # eq (17), (19)
     if Y is None:
         return HinfFeasibility(gamma, False, "Y_not_stabilising",
                                f"the Y Riccati equation (19) has no stabilising solution "
@@ -577,11 +676,11 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float) -> HinfFeasibili
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, Y=Y)
     rho = float(np.max(np.abs(np.linalg.eigvals(X @ Y)))) if n else 0.0
-    if rho >= gamma**2:
+    if rho >= g2:
         return HinfFeasibility(gamma, False, "rho",
-                               f"rho(XY) = {rho:.6g} >= gamma^2 = {gamma**2:.6g}",
+                               f"rho(XY) = {rho:.6g} >= gamma^2 = {g2:.6g}",
                                X=X, Y=Y, rho=rho)
-    work = dict(B=B, C=C, D1s=D1s, Ds1=Ds1, Rnh=Rnh, Rnj=Rnj)
+    work = dict(B=w.B, C=w.C, D1s=w.D1s, Ds1=w.Ds1, Rnh=Rnh, Rnj=Rnj)
     return HinfFeasibility(gamma, True, None, "conditions (a) and (b) of Theorem 1 hold",
                            X=X, Y=Y, rho=rho, _work=work)
 
@@ -593,16 +692,22 @@ class _Prepared:
     P: PartitionedPlant
     t: np.ndarray
     norm: _Normalised
+    gf: _GammaFree
+
+    def feasibility(self, gamma: float) -> HinfFeasibility:
+        """Theorem 1 at ``gamma`` in balanced, normalised coordinates."""
+        return _feasibility_normalised(self.norm.P, gamma, self.gf)
 
 
 def _prepare(P: PartitionedPlant) -> _Prepared:
+    """Check A1-A4, balance and normalise P once (the plant is balanced once and
+    that copy serves both the rank tests and the synthesis)."""
     if not isinstance(P, PartitionedPlant):
         raise TypeError(f"expected a PartitionedPlant, got {type(P).__name__}")
-    report = check_assumptions(P)
-    report.raise_if_failed()
     Ps, t = balance_plant(P)
-    return _Prepared(P=P, t=t, norm=_normalise(Ps))
-
+    _check_balanced(Ps).raise_if_failed()
+    norm = _normalise(Ps)
+    return _Prepared(P=P, t=t, norm=norm, gf=_gamma_free(norm.P))
 
 def _unscale_xy(res: HinfFeasibility, t: np.ndarray) -> HinfFeasibility:
     """Map X, Y from balanced coordinates back to those of the given plant."""
@@ -640,7 +745,7 @@ def hinf_feasibility(P: PartitionedPlant, gamma: float) -> HinfFeasibility:
     """
     gamma = _check_gamma(gamma)
     prep = _prepare(P)
-    return _unscale_xy(_feasibility_normalised(prep.norm.P, gamma), prep.t)
+    return _unscale_xy(prep.feasibility(gamma), prep.t)
 
 
 def _check_gamma(gamma: Any) -> float:
@@ -713,7 +818,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
     """
     gamma = _check_gamma(gamma)
     prep = _prepare(P)
-    res = _feasibility_normalised(prep.norm.P, gamma)
+    res = prep.feasibility(gamma)
     if not res.feasible:
         raise DesignInfeasible(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
     return _controller_from(prep, res)
@@ -764,13 +869,15 @@ def gamma_iteration(P: PartitionedPlant, tol: float = 1e-4,
     SpecError
         No feasible gamma up to ``gamma_max`` (key ``controller.hinf.gamma``).
     """
-    prep = _prepare(P)
-    Pn = prep.norm.P
-    D1111, D1112, D1121, _ = _d11_blocks(Pn)
-    lo = max(_sigma_max(np.hstack([D1111, D1112])), _sigma_max(np.vstack([D1111, D1121])))
+    return _gamma_iteration(_prepare(P), tol, gamma_max)
+
+
+def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> float:
+    """:func:`gamma_iteration` on a prepared plant."""
+    lo = prep.gf.bound
     top = 1e8 if gamma_max is None else float(gamma_max)
     hi = min(max(1.0, 2.0 * lo), top)
-    while not _feasibility_normalised(Pn, hi).feasible:
+    while not prep.feasibility(hi).feasible:
         if hi >= top:
             raise DesignInfeasible(_GAMMA_KEY, f"a problem feasible for some gamma <= {top:g}",
                             hint="no controller reaches it: raise gamma_max or relax "
@@ -778,7 +885,7 @@ def gamma_iteration(P: PartitionedPlant, tol: float = 1e-4,
         lo, hi = hi, min(2.0 * hi, top)
     while hi - lo > tol * hi:
         mid = 0.5 * (lo + hi)
-        if _feasibility_normalised(Pn, mid).feasible:
+        if prep.feasibility(mid).feasible:
             hi = mid
         else:
             lo = mid
@@ -900,17 +1007,44 @@ class HinfResult:
 
 
 def closed_loop(P: PartitionedPlant, K: Any) -> ct.StateSpace:
-    """Closed loop F_l(P, K) (w -> z) through python-control's LFT."""
-    return P.to_statespace().lft(ct.ss(K), nu=P.nu, ny=P.ny)
+    """Closed loop F_l(P, K) (w -> z), states [x_P, x_K], with u = K y."""
+    return ct.ss(*_lft(P, K))
+
+
+def _lft(P: PartitionedPlant, K: Any) -> tuple[np.ndarray, ...]:
+    """Matrices of F_l(P, K): u = M (Dk C2 x + Ck xk + Dk D21 w), M = (I - Dk D22)^-1
+    (numpy; python-control's ``lft`` builds named systems, ~1.5 ms, issue 13)."""
+    Ks = ct.ss(K)
+    Ak, Bk, Ck, Dk = (np.asarray(m, float) for m in (Ks.A, Ks.B, Ks.C, Ks.D))
+    Mi = np.linalg.inv(np.eye(P.nu) - Dk @ P.D22)
+    Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
+    Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
+    A = np.block([[P.A + P.B2 @ Ux, P.B2 @ Uk], [Bk @ Yx, Ak + Bk @ Yk]])
+    B = np.vstack([P.B1 + P.B2 @ Uw, Bk @ Yw])
+    C = np.hstack([P.C1 + P.D12 @ Ux, P.D12 @ Uk])
+    return A, B, C, P.D11 + P.D12 @ Uw
 
 
 def hinf_norm(sys: ct.StateSpace) -> float:
-    """H-infinity norm with python-control (slycot ab13dd), inf when unstable."""
-    if sys.nstates and np.any(np.real(sys.poles()) >= 0):
+    """H-infinity norm (SLICOT ab13dd, as python-control's ``norm``), inf when
+    unstable or with a pole on the imaginary axis."""
+    A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
+    return _hinf_norm(A, B, C, D)
+
+
+def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> float:
+    from slycot import ab13dd
+
+    n = A.shape[0]
+    if n == 0:
+        return float(np.linalg.norm(D, 2)) if D.size else 0.0
+    ev = np.linalg.eigvals(A)
+    if np.any(ev.real >= 0) or np.any(np.isclose(ev.real, 0.0)):
         return float("inf")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return float(ct.norm(sys, p="inf"))
+    jobd = "Z" if not np.any(D) else "D"
+    gpeak, _ = ab13dd("C", "I", "S", jobd, n, B.shape[1], C.shape[0], A, np.eye(n), B, C, D,
+                      1e-6)             # python-control norm()'s tolerance
+    return float(gpeak)
 
 
 def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal",
@@ -956,16 +1090,15 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
     if not (isinstance(backoff, (int, float)) and np.isfinite(backoff) and backoff >= 0):
         raise SpecError("controller.hinf.backoff", "a number >= 0", backoff)
     prep = _prepare(P)
-    Pn = prep.norm.P
     notes: list[str] = []
     limit = pole_limit(sample_time) if sample_time is not None else None
     if isinstance(gamma, str):
         if gamma != "optimal":
             raise SpecError(_GAMMA_KEY, 'a number > 0 or "optimal"', gamma)
-        gamma_opt = gamma_iteration(P, tol=tol)
+        gamma_opt = _gamma_iteration(prep, tol, None)
         b = float(backoff)
         while True:
-            res = _feasibility_normalised(Pn, (1.0 + b) * gamma_opt)
+            res = prep.feasibility((1.0 + b) * gamma_opt)
             K = _controller_from(prep, res) if res.feasible else None
             ok = K is not None and (limit is None or fastest_pole_modulus(K) <= limit)
             if ok or b >= max_backoff:
@@ -976,9 +1109,9 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
                             hint=res.message)
     else:
         g = _check_gamma(gamma)
-        res = _feasibility_normalised(Pn, g)
+        res = prep.feasibility(g)
         if not res.feasible:
-            best = gamma_iteration(P, tol=tol)
+            best = _gamma_iteration(prep, tol, None)
             err = GammaBelowOptimum(_GAMMA_KEY, f"gamma >= the best achievable {best:.4g}", g,
                                     hint=f"{res.message}; set gamma above {best:.4g} or "
                                          "\"optimal\"")
@@ -991,7 +1124,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
                      f"limit pi/Ts = {limit:.4g} rad/s"
                      + (f" even with back-off {b:g}" if gamma_opt is not None else "")
                      + ": raise gamma (back-off) or lower the high-frequency weights")
-    cl_norm = hinf_norm(closed_loop(P, K))
+    cl_norm = _hinf_norm(*_lft(P, K))
     if not cl_norm <= res.gamma * (1 + 1e-6) + 1e-12:
         notes.append(f"recomputed closed-loop norm {cl_norm:.6g} exceeds the design "
                      f"gamma {res.gamma:.6g}: the Riccati solution is inaccurate")
@@ -1026,8 +1159,20 @@ class WeightBound:
 
 
 def _freqresp(sys: Any, w: np.ndarray) -> np.ndarray:
-    resp = ct.frequency_response(ct.ss(sys) if not np.isscalar(sys) else ct.ss([], [], [], sys), w)
-    return np.asarray(resp.complex).reshape(-1)
+    """SISO response at s = j w, all frequencies at once (issue 13: python-control
+    converted each weight to state space and called SLICOT tb05ad per frequency).
+    A transfer function is evaluated from its polynomials, as python-control
+    evaluates one; a state-space system through its Hessenberg form."""
+    if np.isscalar(sys):
+        return np.full(w.size, complex(sys))
+    s = 1j * w
+    if isinstance(sys, ct.TransferFunction):
+        if sys.ninputs != 1 or sys.noutputs != 1:
+            raise ValueError(f"weight_bound_check: expected a SISO system, "
+                             f"got {sys.noutputs}x{sys.ninputs}")
+        return np.polyval(sys.num_array[0, 0], s) / np.polyval(sys.den_array[0, 0], s)
+    ss = ct.ss(sys)
+    return FreqResponse(ss.A, ss.B, ss.C, ss.D)(s)[:, 0, 0]
 
 
 def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,

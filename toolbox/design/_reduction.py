@@ -23,6 +23,7 @@ import scipy.signal as sig
 import control as ct
 
 from ..analysis import lti_loop_margins
+from ._hinf_riccati import _ss_blocks
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -63,9 +64,13 @@ def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> ct.StateSpace:
 
 
 def _as_ss(sys: Any) -> ct.StateSpace:
-    """StateSpace of an LTI system or a scalar gain."""
+    """StateSpace of an LTI system or a scalar gain (a SISO transfer function
+    through SLICOT td04ad directly, as the synthesis realises its weights)."""
     if np.isscalar(sys):
         return ct.ss([], [], [], [[float(sys)]])
+    if isinstance(sys, ct.TransferFunction) and sys.ninputs == 1 and sys.noutputs == 1 \
+            and sys.isctime():
+        return ct.ss(*_ss_blocks(sys))
     return ct.ss(sys)
 
 
