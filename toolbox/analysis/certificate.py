@@ -414,16 +414,36 @@ def certify(artifact, box: ParameterBox, *, alpha: float = 0.0,
     return _certify(artifact, box, alpha, delay)[0]
 
 
+def _unstable_vertex(As: np.ndarray, alpha: float) -> bool:
+    """Some vertex has an eigenvalue with real part clearly above ``-alpha``.
+
+    Then no ``P > 0`` satisfies its LMI: for an eigenvector ``v`` of ``A_i``
+    with eigenvalue ``lambda``, ``v* (A_i' P + P A_i + 2 alpha P) v =
+    2 Re(lambda + alpha) v* P v`` is not negative. The margin (1e-9 of the
+    largest entry) keeps eigenvalue rounding from deciding.
+    """
+    lam = np.linalg.eigvals(As).real.max()
+    return bool(lam > -alpha + 1e-9 * float(np.max(np.abs(As))))
+
+
 def _certify(artifact, box: ParameterBox, alpha: float, delay: bool,
-             guess: np.ndarray | None = None) -> tuple[CertificateResult, np.ndarray | None]:
+             guess: np.ndarray | None = None,
+             prescreen: bool = False) -> tuple[CertificateResult, np.ndarray | None]:
     """:func:`certify` plus the Lyapunov matrix in the original coordinates.
 
     ``guess`` (a P in original coordinates, e.g. from a smaller box) is the
     warm start: when it passes the a posteriori check on this box's
     vertices, it is the certificate and no LMI is solved (status
-    ``"warm start"``); else the LMIs are solved as usual.
+    ``"warm start"``); else the LMIs are solved as usual. With ``prescreen``
+    a box with an unstable vertex (:func:`_unstable_vertex`) is declared not
+    certified without a solve (status ``"infeasible (unstable vertex)"``);
+    the bisection uses it, where an uncertified box only steers.
     """
     As = _vertices(artifact, box, delay)
+    if prescreen and _unstable_vertex(As, alpha):
+        return (CertificateResult(False, float(alpha), json_ready(asdict(box)),
+                                  int(As.shape[0]), "infeasible (unstable vertex)",
+                                  math.nan), None)
     # diagonal similarity from the box-centre matrix for conditioning
     centre = point_matrices(artifact, np.mean(box.corners(), axis=0), delay)[0]
     _, (scale_vec, _) = matrix_balance(centre, permute=False, separate=True)
@@ -482,15 +502,18 @@ def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5
     """
     wmax = max_electrical_speed(motor, drive) if omega_max is None else omega_max
 
-    def at(k, guess=None):
+    def at(k, guess=None, prescreen=True):
         box = ParameterBox.around(motor, k, R=R, L=L, omega_max=wmax, speed_gain=speed_gain)
-        res, P = _certify(artifact, box, alpha, delay, guess)
+        res, P = _certify(artifact, box, alpha, delay, guess, prescreen)
         return CertificateResult(**{**asdict(res), "scale": k}), P
 
     top, _ = at(max_scale)
     if top.certified:
         return top
-    nominal, P_best = at(0.0)
+    # the nominal result is reported when it fails: solved, never prescreened;
+    # elsewhere a box with an unstable vertex is infeasible without a solve
+    # (issue 13: 3 of the 6 solves of paper 003's H-infinity bisection)
+    nominal, P_best = at(0.0, prescreen=False)
     if not nominal.certified:
         return nominal
     # warm start: the Lyapunov matrix of the largest certified box so far is
