@@ -72,3 +72,34 @@ def test_check_imports_only_the_named_method():
             "assert 'toolbox.design.hinf' not in sys.modules\n")
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120,
                    cwd=__import__("pathlib").Path(__file__).resolve().parents[1])
+
+
+def test_design_analysis_and_report_equations_need_no_sympy_or_cvxpy(tmp_path):
+    """With the on-disk cache warm (toolbox/_cache.py), designing paper 003's
+    H-infinity controller, its certificate (Clarabel called directly) and the
+    report's typeset equations import neither sympy nor cvxpy (issue 13); the
+    first process, on an empty cache, fills it. matplotlib is not checked: the
+    design imports python-control, which imports it."""
+    code = ("import json, sys\n"
+            "from toolbox.spec import load_spec\n"
+            "from toolbox.pipeline import design_spec\n"
+            "from toolbox.analysis import largest_certified_scale\n"
+            "from toolbox.report import _equations\n"
+            "s = load_spec('designs/003_azaiz2007_hinf.toml')\n"
+            "art = design_spec(s)\n"
+            "largest_certified_scale(art, s.motor, s.drive, tol=0.5)\n"
+            "rows = _equations(s)\n"
+            "assert len(rows) == 6 and all(r['svg'] for r in rows)\n"
+            "print(json.dumps(sorted(m for m in ('sympy', 'cvxpy') if m in sys.modules)))\n")
+    env = {**__import__("os").environ, "CCT_CACHE_DIR": str(tmp_path)}
+    root = __import__("pathlib").Path(__file__).resolve().parents[1]
+
+    def loaded() -> list[str]:
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             check=True, timeout=300, cwd=root, env=env)
+        return json.loads(out.stdout.strip().splitlines()[-1])
+
+    assert loaded() == ["sympy"]  # empty cache: derived and typeset once
+    assert sorted(p.name.split("-")[0] for p in tmp_path.iterdir()) == [
+        "dq_model", "dq_numeric", "report_equations"]
+    assert loaded() == []

@@ -227,6 +227,39 @@ def test_mu_bound_matches_slicot_ab13md():
     np.testing.assert_allclose(M.sigma_max_2x2(Ms), np.linalg.norm(Ms, 2, axis=(1, 2)), rtol=1e-12)
 
 
+@pytest.mark.parametrize("grid", [(49, 40), (25, 12)])
+def test_mu_bound_equals_the_explicitly_scaled_matrices(grid):
+    """mu_upper_2x2 evaluates sigma_max(D M D^-1) from |M_ij| and det M (issue 13);
+    the reference rebuilds D M D^-1 at every d of the same grid and ternary search
+    (the implementation before issue 13). Equal to 1e-12 relative: the same
+    search on the same function, only the floating-point evaluation order differs
+    (observed 2e-14); a zero off-diagonal entry (optimum at the grid's end) included."""
+    import math
+
+    def reference(Mx, n_scale, n_refine):
+        def scaled(logd):
+            dsc = np.exp(logd)
+            Ms = np.array(Mx, complex, copy=True)
+            Ms[..., 0, 1] = Mx[..., 0, 1] * dsc
+            Ms[..., 1, 0] = Mx[..., 1, 0] / dsc
+            return M.sigma_max_2x2(Ms)
+        g = np.linspace(math.log(1e-6), math.log(1e6), n_scale)
+        vals = np.stack([scaled(np.full(Mx.shape[:-2], x)) for x in g], axis=-1)
+        j = np.argmin(vals, axis=-1)
+        lo, hi = g[j] - (g[1] - g[0]), g[j] + (g[1] - g[0])
+        for _ in range(n_refine):
+            m1, m2 = lo + (hi - lo) / 3, hi - (hi - lo) / 3
+            left = scaled(m1) < scaled(m2)
+            hi, lo = np.where(left, m2, hi), np.where(left, lo, m1)
+        return np.minimum(np.min(vals, axis=-1), scaled(0.5 * (lo + hi)))
+
+    rng = np.random.default_rng(7)
+    Ms = rng.normal(size=(6, 50, 2, 2)) + 1j * rng.normal(size=(6, 50, 2, 2))
+    Ms[0, :, 0, 1] = 0.0
+    Ms[1, :, 1, 0] *= 1e4
+    np.testing.assert_allclose(M.mu_upper_2x2(Ms, *grid), reference(Ms, *grid), rtol=1e-12)
+
+
 def test_mimo_disk_margin_at_zero_speed_and_worst_speed(pi):
     """At zero speed with exact decoupling the two loops are independent, so the
     multiloop disk margin is the smaller SISO disk margin (0.5 % : grids differ).

@@ -75,3 +75,49 @@ def test_grid_margins_checks_lengths():
     """A response not sampled on the grid is refused, naming both lengths."""
     with pytest.raises(ValueError, match="3 points, grid 4"):
         grid_margins(np.arange(1.0, 5.0), np.ones(3))
+
+
+@pytest.mark.parametrize("nyquist", [False, True])
+def test_grid_margins_equal_the_full_array_formulation(nyquist):
+    """grid_margins interpolates at the crossing cells only (issue 13); the
+    reference interpolates every cell and masks (the implementation before).
+    Bit-for-bit equal: the same operations on the same numbers, only not
+    carried out where they are discarded. Rows: random integrator-delay loops
+    (several crossings), a NaN sample and a loop without any crossing."""
+    from toolbox.analysis import _siso
+
+    def reference(Lw):
+        S = 1.0 / (1.0 + Lw)
+        sm = np.min(np.abs(1.0 + Lw), axis=1)
+        dm = 1.0 / np.max(np.abs(S - 0.5), axis=1)
+        lg = np.log(np.abs(Lw))
+        cr = np.sign(lg[:, :-1]) * np.sign(lg[:, 1:]) < 0
+        t = lg[:, :-1] / (lg[:, :-1] - lg[:, 1:])
+        Lc = Lw[:, :-1] + t * (Lw[:, 1:] - Lw[:, :-1])
+        pm = np.where(cr, np.degrees(np.angle(-Lc)), np.nan)
+        im = Lw.imag
+        cr2 = np.sign(im[:, :-1]) * np.sign(im[:, 1:]) < 0
+        t2 = im[:, :-1] / np.where(cr2, im[:, :-1] - im[:, 1:], 1.0)
+        re = Lw.real[:, :-1] + t2 * (Lw.real[:, 1:] - Lw.real[:, :-1])
+        cr2 &= re < 0
+        gm = np.where(cr2, -20 * np.log10(np.abs(np.where(cr2, re, 1.0))), np.nan)
+        if nyquist:
+            nyq = Lw[:, -1]
+            gm = np.hstack([gm, np.where(nyq.real < 0, -20 * np.log10(np.abs(nyq.real)),
+                                         np.nan)[:, None]])
+        return {"gain_margin_db": _siso._closest(gm), "phase_margin_deg": _siso._closest(pm),
+                "stability_margin": sm, "disk_margin": dm}
+
+    rng = np.random.default_rng(0)
+    w = np.logspace(-2, 4.5, 800)
+    k = rng.uniform(0.1, 1e4, size=(60, 1))
+    tau = rng.uniform(1e-5, 1e-3, size=(60, 1))
+    L = k / (1j * w) * np.exp(-1j * w * tau) / (1 + 1j * w * tau)
+    L[0, 5] = np.nan
+    L[1, :] = 0.5
+    with np.errstate(all="ignore"):
+        want = reference(L)
+    got = _siso.grid_margins(w, L, nyquist=nyquist)
+    assert np.isfinite(got["phase_margin_deg"][2:]).all()  # crossings were found
+    for key in want:
+        assert np.array_equal(got[key], want[key], equal_nan=True), key

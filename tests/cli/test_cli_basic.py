@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from toolbox.cli import main
@@ -56,3 +57,23 @@ def test_missing_design_dir_exits_2(tmp_path):
     res = run("verify", tmp_path / "nothing")
     assert res.exit_code == 2
     assert "controller.json: expected a design directory with controller.json" in res.output
+
+
+@pytest.mark.parametrize("preset", [None, "3"])
+def test_cli_runs_single_threaded_blas_unless_told(preset):
+    """``import toolbox.cli`` (the cct entry point) sets OPENBLAS_NUM_THREADS=1
+    before numpy loads (issue 13: small matrices, threads only cost); a value
+    the user exported is kept."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if preset is not None:
+        env["OPENBLAS_NUM_THREADS"] = preset
+    code = ("import sys, os, toolbox.cli\n"
+            "assert 'numpy' not in sys.modules\n"
+            "print(os.environ['OPENBLAS_NUM_THREADS'])\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=120, env=env)
+    assert out.stdout.strip() == (preset or "1")

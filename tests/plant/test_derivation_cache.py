@@ -1,4 +1,4 @@
-"""On-disk cache of the symbolic derivation (toolbox/plant/_cache.py, issue 13).
+"""On-disk cache of the symbolic derivation (toolbox/_cache.py, issue 13).
 
 The cached model must be *identical* to a fresh derivation: sympy
 expressions are compared structurally (``==``, no simplification, no
@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import pytest
 
-from toolbox.plant import _cache, _symbolic
+from toolbox import _cache
+from toolbox.plant import _symbolic
 from toolbox.plant._symbolic import DqModel, _derive_dq_model
 
 
@@ -123,3 +124,68 @@ def test_wrong_type_in_cache_is_recomputed(derivations):
     model = _symbolic.derive_dq_model("amplitude")
     assert isinstance(model, DqModel) and model.convention == "amplitude"
     assert calls == ["amplitude"]
+
+
+@pytest.mark.parametrize("convention", _symbolic.CONVENTIONS)
+def test_cached_numeric_model_equals_lambdify(tmp_path, monkeypatch, convention):
+    """The numeric A(omega), B, e(omega) re-created from the cached code of
+    lambdify (toolbox/plant/_numeric.py) return exactly, bit for bit, what the
+    functions lambdify returns do, at random parameter points; the second call
+    reads the cache (the code is not generated again)."""
+    import numpy as np
+    import sympy as sp
+
+    from toolbox.plant import _numeric
+
+    monkeypatch.setenv("CCT_CACHE_DIR", str(tmp_path))
+    generated: list[str] = []
+    real = _numeric._electrical_sources
+
+    def counting(c):
+        generated.append(c)
+        return real(c)
+
+    monkeypatch.setattr(_numeric, "_electrical_sources", counting)
+    _numeric._electrical_matrices.cache_clear()
+    first = _numeric._electrical_matrices(convention)
+    _numeric._electrical_matrices.cache_clear()
+    cached = _numeric._electrical_matrices(convention)
+    _numeric._electrical_matrices.cache_clear()
+    assert generated == [convention] and len(list(tmp_path.iterdir())) >= 1
+
+    S = _symbolic.SYMBOLS
+    model = _symbolic.derive_dq_model(convention)
+    x, u = sp.Matrix([S["i_d"], S["i_q"]]), sp.Matrix([S["v_d"], S["v_q"]])
+    A, B = model.di_dt.jacobian(x), model.di_dt.jacobian(u)
+    e = sp.simplify(model.di_dt - A * x - B * u)
+    args = (S["R"], S["L_d"], S["L_q"], S["psi_f"], S["omega"])
+    ref = [sp.lambdify(args, m, "numpy") for m in (A, B, e)]
+    rng = np.random.default_rng(3)
+    for point in rng.uniform([0.01, 1e-4, 1e-4, 0.01, -3000], [5, 0.05, 0.05, 1, 3000],
+                             size=(20, 5)):
+        for f_ref, f_cached, f_first in zip(ref, cached, first):
+            want = np.asarray(f_ref(*point), float)
+            assert np.array_equal(np.asarray(f_cached(*point), float), want)
+            assert np.array_equal(np.asarray(f_first(*point), float), want)
+
+
+def test_report_equations_cached_equal_derived(tmp_path, monkeypatch):
+    """The report's equation rows read from the cache are those derived and
+    typeset afresh (LaTeX, text and SVG strings identical)."""
+    import types
+
+    from toolbox.report import _derived_equations, _equations
+
+    monkeypatch.setenv("CCT_CACHE_DIR", str(tmp_path))
+    spec = types.SimpleNamespace(motor=types.SimpleNamespace(convention="amplitude"))
+    fresh = _derived_equations("amplitude")
+    assert _equations(spec) == fresh  # computed and written
+    path, = tmp_path.glob("report_equations-amplitude-*.pickle")
+    import toolbox.report
+
+    def no_derivation(_):
+        raise AssertionError("derived again instead of read from the cache")
+
+    monkeypatch.setattr(toolbox.report, "_derived_equations", no_derivation)
+    assert _equations(spec) == fresh  # read back
+    assert len(fresh) == 6 and all(r["svg"].lstrip().startswith("<svg") for r in fresh)

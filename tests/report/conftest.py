@@ -144,8 +144,8 @@ def hostile() -> str:
     return HOSTILE
 
 
-# Rendering takes seconds (matplotlib figures; the plant's sympy derivation on
-# first use), so each document is rendered once per session.
+# Rendering takes a second (typst; the plant's sympy derivation and the mathtext
+# equations on first use), so each document is rendered once per session.
 
 @pytest.fixture(scope="session")
 def full_context(full_data) -> dict:

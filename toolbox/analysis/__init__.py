@@ -5,7 +5,7 @@
 * :mod:`.robustness` - vectorised sweeps over parameter drift, speed-sensor
   errors and delay;
 * :mod:`.certificate` - common quadratic Lyapunov function over a parameter
-  box (cvxpy + CLARABEL).
+  box (vertex LMIs solved by Clarabel, called directly).
 
 :func:`analysis_report` assembles what the CLI writes to ``analysis.json``
 and :func:`compare_designs` the rows of ``cct compare``. The one margins API

@@ -89,12 +89,17 @@ def mu_upper_2x2(M: np.ndarray, n_scale: int = 49, n_refine: int = 40) -> np.nda
     convex in ``log d``). Every ``d`` gives a valid upper bound, so an
     unconverged search only adds conservatism.
     """
+    # D M D^-1 keeps |M00|, |M11| and det M; only |M01| d and |M10| / d change, so
+    # sigma_max (closed form of sigma_max_2x2) is evaluated from four real arrays
+    # instead of rebuilding the complex matrices at every d (issue 13: 5x faster)
+    diag2 = np.abs(M[..., 0, 0]) ** 2 + np.abs(M[..., 1, 1]) ** 2
+    up2, low2 = np.abs(M[..., 0, 1]) ** 2, np.abs(M[..., 1, 0]) ** 2
+    det2x4 = 4 * np.abs(M[..., 0, 0] * M[..., 1, 1] - M[..., 0, 1] * M[..., 1, 0]) ** 2
+
     def scaled(logd):
-        dsc = np.exp(logd)
-        Ms = np.array(M, complex, copy=True)
-        Ms[..., 0, 1] = M[..., 0, 1] * dsc
-        Ms[..., 1, 0] = M[..., 1, 0] / dsc
-        return sigma_max_2x2(Ms)
+        d2 = np.exp(2 * logd)
+        fro2 = diag2 + up2 * d2 + low2 / d2
+        return np.sqrt(0.5 * (fro2 + np.sqrt(np.maximum(fro2 ** 2 - det2x4, 0.0))))
 
     grid = np.linspace(math.log(1e-6), math.log(1e6), n_scale)
     vals = np.stack([scaled(np.full(M.shape[:-2], g)) for g in grid], axis=-1)

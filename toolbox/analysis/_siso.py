@@ -321,22 +321,25 @@ def grid_margins(w: np.ndarray, response: np.ndarray, *, nyquist: bool = False) 
 
 
 def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
-    S = 1.0 / (1.0 + Lw)
-    sm = np.min(np.abs(1.0 + Lw), axis=1)
-    dm = 1.0 / np.max(np.abs(S - 0.5), axis=1)
-    # phase margins at |L| = 1 crossings
+    one = 1.0 + Lw
+    sm = np.min(np.abs(one), axis=1)
+    dm = 1.0 / np.max(np.abs(1.0 / one - 0.5), axis=1)
+    # phase margins at |L| = 1 crossings; the interpolation is evaluated at the
+    # crossing cells only (issue 13: a handful per row of thousands of cells)
     lg = np.log(np.abs(Lw))
-    cr = np.sign(lg[:, :-1]) * np.sign(lg[:, 1:]) < 0
-    t = lg[:, :-1] / (lg[:, :-1] - lg[:, 1:])
-    Lc = Lw[:, :-1] + t * (Lw[:, 1:] - Lw[:, :-1])
-    pm = np.where(cr, np.degrees(np.angle(-Lc)), np.nan)
+    r, c = np.nonzero(np.sign(lg[:, :-1]) * np.sign(lg[:, 1:]) < 0)
+    t = lg[r, c] / (lg[r, c] - lg[r, c + 1])
+    Lc = Lw[r, c] + t * (Lw[r, c + 1] - Lw[r, c])
+    pm = np.full((Lw.shape[0], Lw.shape[1] - 1), np.nan)
+    pm[r, c] = np.degrees(np.angle(-Lc))
     # gain margins at Im L = 0, Re L < 0
     im = Lw.imag
-    cr2 = np.sign(im[:, :-1]) * np.sign(im[:, 1:]) < 0
-    t2 = im[:, :-1] / np.where(cr2, im[:, :-1] - im[:, 1:], 1.0)
-    re = Lw.real[:, :-1] + t2 * (Lw.real[:, 1:] - Lw.real[:, :-1])
-    cr2 &= re < 0
-    gm = np.where(cr2, -20 * np.log10(np.abs(np.where(cr2, re, 1.0))), np.nan)
+    r, c = np.nonzero(np.sign(im[:, :-1]) * np.sign(im[:, 1:]) < 0)
+    t2 = im[r, c] / (im[r, c] - im[r, c + 1])
+    re = Lw.real[r, c] + t2 * (Lw.real[r, c + 1] - Lw.real[r, c])
+    neg = re < 0
+    gm = np.full(pm.shape, np.nan)
+    gm[r[neg], c[neg]] = -20 * np.log10(np.abs(re[neg]))
     if nyquist:  # L(-1) is real: a phase crossover when negative
         nyq = Lw[:, -1]
         gm = np.hstack([gm, np.where(nyq.real < 0, -20 * np.log10(np.abs(nyq.real)),

@@ -39,7 +39,7 @@ corner argument; up to 512 vertices). This is still a continuous
 approximation of the sampled loop, which the robustness sweep evaluates
 exactly.
 
-The LMIs are solved with cvxpy + CLARABEL after a diagonal similarity
+The LMIs are solved with Clarabel (called directly) after a diagonal similarity
 (``scipy.linalg.matrix_balance`` of the nominal matrix), with ``P >= I`` and
 a margin ``eps`` on each vertex LMI, then checked a posteriori with numpy
 eigenvalues of the returned ``P`` (a certificate is only reported when that
@@ -303,85 +303,83 @@ def _vertices(artifact, box: ParameterBox, delay: bool = False) -> np.ndarray:
     return closed_loop_matrix(artifact, V)
 
 
-class _Lmi:
-    """The vertex LMIs assembled once, with the data as cvxpy Parameters.
+#: Clarabel status -> the status names reported (those cvxpy gave them, so that
+#: analysis.json reads as before issue 13).
+_STATUS = {"Solved": "optimal", "AlmostSolved": "optimal_inaccurate",
+           "PrimalInfeasible": "infeasible", "AlmostPrimalInfeasible": "infeasible_inaccurate",
+           "DualInfeasible": "unbounded", "AlmostDualInfeasible": "unbounded_inaccurate",
+           "MaxIterations": "user_limit", "MaxTime": "user_limit"}
 
-    ``A_i' P + P A_i + 2 alpha P << -eps I`` (i = 1..N), ``P >> I``: the
-    vertex matrices and ``alpha`` are :class:`cvxpy.Parameter` objects, so
-    the problem is canonicalised once (DPP) and every bisection step only
-    re-fills the numbers (issue 13: re-building the problem was 60 % of the
-    certificate's time). One instance per vertex count and state dimension.
+
+def _svec_index(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows, columns and weights of Clarabel's ``svec`` of an n x n symmetric
+    matrix: the upper triangle column by column, off-diagonal entries times
+    sqrt(2) (so that ``svec(X) . svec(Y) = trace(X Y)``)."""
+    rows, cols = zip(*[(i, j) for j in range(n) for i in range(j + 1)])
+    rows, cols = np.array(rows), np.array(cols)
+    return rows, cols, np.where(rows == cols, 1.0, math.sqrt(2.0))
+
+
+def _lmi_data(As: np.ndarray, alpha: float, eps: float = 1e-6):
+    """Clarabel's ``(A, b, cones)`` of the vertex LMIs (see :func:`_solve`)."""
+    import clarabel
+
+    N, n, _ = As.shape
+    rows, cols, w = _svec_index(n)
+    # unknowns: the upper triangle of P row by row, E_k its 0/1 symmetric basis
+    # (the variables cvxpy made of a symmetric matrix: a scaling Clarabel's
+    # equilibration handles on stiff loops where an orthonormal basis stalls)
+    ui, uj = np.triu_indices(n)
+    m = ui.size
+    E = np.zeros((m, n, n))
+    E[np.arange(m), ui, uj] = 1.0
+    E[np.arange(m), uj, ui] = 1.0
+    # L_i(E_k) for all vertices and basis matrices: (N, m, n, n)
+    AtE = np.einsum("vji,kjl->vkil", As, E)
+    L = AtE + np.transpose(AtE, (0, 1, 3, 2)) + 2 * alpha * E[None]
+    svec_E = E[:, rows, cols] * w  # (m, m): svec of each E_k
+    Amat = np.vstack([-svec_E.T] + [(L[v][:, rows, cols] * w).T for v in range(N)])
+    svec_eye = np.where(rows == cols, 1.0, 0.0)
+    bvec = np.concatenate([-svec_eye] + [-eps * svec_eye] * N)
+    return Amat, bvec, [clarabel.PSDTriangleConeT(n)] * (N + 1)
+
+
+def _solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
+    """Solve ``A_i' P + P A_i + 2 alpha P << -eps I`` (every vertex ``A_i``), ``P >> I``.
+
+    The semidefinite program is handed to Clarabel directly (issue 13: cvxpy's
+    canonicalisation was 60 % of the certificate's time and cvxpy's import
+    another second). The unknown ``x`` is the upper triangle of ``P``; ``P >> I`` is the
+    cone constraint ``svec(P) - svec(I)`` and each vertex LMI the cone constraint
+    ``-svec(A_i' E + E A_i + 2 alpha E) x - eps svec(I)`` (Clarabel form
+    ``b - A x`` in the PSD triangle cone). These are the matrices cvxpy
+    built for the constant-data problem (tested equal), with the same zero
+    objective and solver settings (defaults).
+
+    Returns ``(P, status)``; ``P`` is None unless the solver reports
+    (almost) solved; a numerical failure is status ``"solver error: ..."``
+    (cvxpy raised an exception there).
     """
+    import clarabel
+    from scipy import sparse
 
-    def __init__(self, n_vertices: int, n: int, eps: float = 1e-6) -> None:
-        import cvxpy as cp
-
-        self.P = cp.Variable((n, n), symmetric=True)
-        self.A = [cp.Parameter((n, n)) for _ in range(n_vertices)]
-        self.alpha = cp.Parameter(nonneg=True)
-        cons = [self.P >> np.eye(n)]
-        for A in self.A:
-            M = A.T @ self.P + self.P @ A + 2 * self.alpha * self.P
-            cons.append(0.5 * (M + M.T) << -eps * np.eye(n))
-        self.problem = cp.Problem(cp.Minimize(0), cons)
-
-    def solve(self, As: np.ndarray, alpha: float) -> tuple[np.ndarray | None, str]:
-        """``(P, status)`` for vertex matrices ``As`` (N, n, n); P None on failure."""
-        import cvxpy as cp
-
-        for param, A in zip(self.A, As):
-            param.value = A
-        self.alpha.value = alpha
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            try:
-                self.problem.solve(solver=cp.CLARABEL)
-            except cp.error.SolverError as err:
-                return None, f"solver error: {err}"
-        status = str(self.problem.status)
-        if self.P.value is None or status not in ("optimal", "optimal_inaccurate"):
-            return None, status
-        return np.array(self.P.value), status
-
-
-def _solve_once(As: np.ndarray, alpha: float, eps: float = 1e-6):
-    """Solve the vertex LMIs once, data as constants.
-
-    For a single solve this is cheaper than :class:`_Lmi`: canonicalising a
-    parametrised (DPP) problem costs about twice a constant one (512
-    vertices with ``delay=True``), which pays only when the problem is
-    re-solved, as in the bisection.
-    """
-    import cvxpy as cp
-
+    Amat, bvec, cones = _lmi_data(As, alpha, eps)
     n = As.shape[1]
-    P = cp.Variable((n, n), symmetric=True)
-    cons = [P >> np.eye(n)]
-    for A in As:
-        M = A.T @ P + P @ A + 2 * alpha * P
-        cons.append(0.5 * (M + M.T) << -eps * np.eye(n))
-    prob = cp.Problem(cp.Minimize(0), cons)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            prob.solve(solver=cp.CLARABEL)
-        except cp.error.SolverError as err:
-            return None, f"solver error: {err}"
-    if P.value is None or prob.status not in ("optimal", "optimal_inaccurate"):
-        return None, str(prob.status)
-    return np.array(P.value), str(prob.status)
-
-
-def _solve(As: np.ndarray, alpha: float, problems: dict | None = None):
-    """Solve the vertex LMIs: once with constant data when ``problems`` is
-    None, else with the assembled problem of ``problems`` (keyed by
-    ``As.shape``, built on first use)."""
-    if problems is None:
-        return _solve_once(As, alpha)
-    lmi = problems.get(As.shape)
-    if lmi is None:
-        lmi = problems[As.shape] = _Lmi(As.shape[0], As.shape[1])
-    return lmi.solve(As, alpha)
+    ui, uj = np.triu_indices(n)
+    m = ui.size
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    solver = clarabel.DefaultSolver(sparse.csc_matrix((m, m)), np.zeros(m),
+                                    sparse.csc_matrix(Amat), bvec, cones, settings)
+    sol = solver.solve()
+    status = _STATUS.get(str(sol.status), f"solver error: Clarabel {sol.status}")
+    if status not in ("optimal", "optimal_inaccurate"):
+        return None, status
+    x = np.asarray(sol.x, float)
+    P = np.zeros((n, n))
+    P[ui, uj] = x
+    P[uj, ui] = x
+    return P, status
 
 
 def _verified(As: np.ndarray, P: np.ndarray, alpha: float) -> bool:
@@ -416,18 +414,36 @@ def certify(artifact, box: ParameterBox, *, alpha: float = 0.0,
     return _certify(artifact, box, alpha, delay)[0]
 
 
+def _unstable_vertex(As: np.ndarray, alpha: float) -> bool:
+    """Some vertex has an eigenvalue with real part clearly above ``-alpha``.
+
+    Then no ``P > 0`` satisfies its LMI: for an eigenvector ``v`` of ``A_i``
+    with eigenvalue ``lambda``, ``v* (A_i' P + P A_i + 2 alpha P) v =
+    2 Re(lambda + alpha) v* P v`` is not negative. The margin (1e-9 of the
+    largest entry) keeps eigenvalue rounding from deciding.
+    """
+    lam = np.linalg.eigvals(As).real.max()
+    return bool(lam > -alpha + 1e-9 * float(np.max(np.abs(As))))
+
+
 def _certify(artifact, box: ParameterBox, alpha: float, delay: bool,
-             problems: dict | None = None,
-             guess: np.ndarray | None = None) -> tuple[CertificateResult, np.ndarray | None]:
+             guess: np.ndarray | None = None,
+             prescreen: bool = False) -> tuple[CertificateResult, np.ndarray | None]:
     """:func:`certify` plus the Lyapunov matrix in the original coordinates.
 
-    ``problems`` caches assembled LMIs (:class:`_Lmi`) across calls.
     ``guess`` (a P in original coordinates, e.g. from a smaller box) is the
     warm start: when it passes the a posteriori check on this box's
     vertices, it is the certificate and no LMI is solved (status
-    ``"warm start"``); else the LMIs are solved as usual.
+    ``"warm start"``); else the LMIs are solved as usual. With ``prescreen``
+    a box with an unstable vertex (:func:`_unstable_vertex`) is declared not
+    certified without a solve (status ``"infeasible (unstable vertex)"``);
+    the bisection uses it, where an uncertified box only steers.
     """
     As = _vertices(artifact, box, delay)
+    if prescreen and _unstable_vertex(As, alpha):
+        return (CertificateResult(False, float(alpha), json_ready(asdict(box)),
+                                  int(As.shape[0]), "infeasible (unstable vertex)",
+                                  math.nan), None)
     # diagonal similarity from the box-centre matrix for conditioning
     centre = point_matrices(artifact, np.mean(box.corners(), axis=0), delay)[0]
     _, (scale_vec, _) = matrix_balance(centre, permute=False, separate=True)
@@ -442,7 +458,7 @@ def _certify(artifact, box: ParameterBox, alpha: float, delay: bool,
                                       int(As.shape[0]), "warm start",
                                       float(np.linalg.cond(Pg))), guess)
     norm = max(1.0, float(np.max(np.abs(Ab))))
-    P, status = _solve(Ab / norm, alpha / norm, problems)
+    P, status = _solve(Ab / norm, alpha / norm)
     ok = P is not None and _verified(Ab, P, alpha)
     result = CertificateResult(bool(ok), float(alpha), json_ready(asdict(box)),
                                int(As.shape[0]), status,
@@ -485,17 +501,19 @@ def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5
         Include a first-order Pade model of the computation delay.
     """
     wmax = max_electrical_speed(motor, drive) if omega_max is None else omega_max
-    problems: dict = {}  # LMIs assembled once per vertex count (issue 13)
 
-    def at(k, guess=None):
+    def at(k, guess=None, prescreen=True):
         box = ParameterBox.around(motor, k, R=R, L=L, omega_max=wmax, speed_gain=speed_gain)
-        res, P = _certify(artifact, box, alpha, delay, problems, guess)
+        res, P = _certify(artifact, box, alpha, delay, guess, prescreen)
         return CertificateResult(**{**asdict(res), "scale": k}), P
 
     top, _ = at(max_scale)
     if top.certified:
         return top
-    nominal, P_best = at(0.0)
+    # the nominal result is reported when it fails: solved, never prescreened;
+    # elsewhere a box with an unstable vertex is infeasible without a solve
+    # (issue 13: 3 of the 6 solves of paper 003's H-infinity bisection)
+    nominal, P_best = at(0.0, prescreen=False)
     if not nominal.certified:
         return nominal
     # warm start: the Lyapunov matrix of the largest certified box so far is

@@ -1,11 +1,39 @@
-"""The plant: symbolic dq derivation and the numeric models made from it."""
+"""The plant: symbolic dq derivation and the numeric models made from it.
 
-from ._describe import describe_model
+The symbolic names (the derivation, its symbols, :func:`describe_model`) are
+imported on first access (PEP 562): they import sympy (about 0.7 s with the
+units module its ``simplify`` pulls in), which a design whose numeric model
+comes from the on-disk cache does not need (issue 13).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 from ._limits import max_electrical_speed
 from ._linear import (axis_coefficients, dq_matrices, steady_state_voltage,
                       voltage_limited_speed, zoh_first_order)
 from ._numeric import ElectricalPlant, axis_plants, linearise, numeric_plant
-from ._symbolic import SYMBOLS, DqModel, derive_dq_model, park_matrix
+
+#: public name -> defining private module, imported on first use
+_LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_symbolic",
+         "derive_dq_model": "_symbolic", "park_matrix": "_symbolic"}
+
+
+def __getattr__(name: str) -> Any:
+    """Import the module defining ``name`` on first use (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value  # later look-ups skip __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = ["describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
            "zoh_first_order", "steady_state_voltage", "voltage_limited_speed",

@@ -10,22 +10,34 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import control
 import numpy as np
-import sympy as sp
 
 from toolbox.spec import Motor
 
-from ._symbolic import SYMBOLS as S
-from ._symbolic import derive_dq_model
+from .._cache import cached
 
 __all__ = ["ElectricalPlant", "numeric_plant", "axis_plants", "linearise"]
 
+#: The modules the lambdified code is made from (its cache key, issue 13).
+_SOURCES = (Path(__file__).with_name("_symbolic.py"), Path(__file__))
 
-@lru_cache(maxsize=None)
-def _electrical_matrices(convention: str):
-    """Lambdified A(omega), B, e(omega) with di/dt = A i + B v + e."""
+
+def _electrical_sources(convention: str) -> tuple[str, str, str]:
+    """Source of the lambdified A(omega), B, e(omega) with di/dt = A i + B v + e.
+
+    Raises RuntimeError if the generated code names anything that is not a
+    numpy attribute (it could not be re-created from its text alone).
+    """
+    import inspect
+
+    import sympy as sp
+
+    from ._symbolic import SYMBOLS as S
+    from ._symbolic import derive_dq_model
+
     model = derive_dq_model(convention)
     x = sp.Matrix([S["i_d"], S["i_q"]])
     u = sp.Matrix([S["v_d"], S["v_q"]])
@@ -33,7 +45,37 @@ def _electrical_matrices(convention: str):
     B = model.di_dt.jacobian(u)
     e = sp.simplify(model.di_dt - A * x - B * u)
     args = (S["R"], S["L_d"], S["L_q"], S["psi_f"], S["omega"])
-    return tuple(sp.lambdify(args, m, "numpy") for m in (A, B, e))
+    out = []
+    for m in (A, B, e):
+        f = sp.lambdify(args, m, "numpy")
+        for name in f.__code__.co_names:
+            if getattr(np, name, None) is not f.__globals__.get(name):
+                raise RuntimeError(f"lambdified code uses {name!r}, not a numpy name")
+        out.append(inspect.getsource(f))
+    return tuple(out)
+
+
+def _compiled(source: str):
+    """The function defined by lambdify's generated ``source``, over numpy's
+    namespace (the namespace lambdify gave it: its names are numpy's)."""
+    namespace = dict(vars(np))
+    exec(compile(source, "<lambdified dq model>", "exec"), namespace)  # noqa: S102
+    return namespace["_lambdifygenerated"]
+
+
+@lru_cache(maxsize=None)
+def _electrical_matrices(convention: str):
+    """Lambdified A(omega), B, e(omega) with di/dt = A i + B v + e.
+
+    The generated code is cached on disk with the derivation
+    (:mod:`toolbox._cache`, keyed by this module's and the derivation's
+    sources): a cache hit needs neither sympy nor the derivation (issue 13).
+    """
+    sources = cached(f"dq_numeric-{convention}", _SOURCES,
+                     lambda: _electrical_sources(convention),
+                     lambda v: isinstance(v, tuple) and len(v) == 3
+                     and all(isinstance(x, str) for x in v))
+    return tuple(_compiled(src) for src in sources)
 
 
 @dataclass(frozen=True)
@@ -109,6 +151,11 @@ def axis_plants(motor) -> dict[str, control.TransferFunction]:
 
 @lru_cache(maxsize=None)
 def _full_jacobians(convention: str):
+    import sympy as sp
+
+    from ._symbolic import SYMBOLS as S
+    from ._symbolic import derive_dq_model
+
     model = derive_dq_model(convention)
     f = model.state_equations()
     x = sp.Matrix([S["i_d"], S["i_q"], S["Omega"]])
@@ -143,6 +190,9 @@ def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[control.S
     u0 : ndarray
         Operating-point inputs ``[v_d0, v_q0, T_L0]``.
     """
+    from ._symbolic import SYMBOLS as S
+    from ._symbolic import derive_dq_model
+
     jx, ju = _full_jacobians(motor.convention)
     model = derive_dq_model(motor.convention)
     w = motor.pole_pairs * Omega0

@@ -24,7 +24,7 @@ from functools import lru_cache
 
 import sympy as sp
 
-from ._cache import cached
+from .._cache import cached
 
 __all__ = ["SYMBOLS", "DqModel", "park_matrix", "derive_dq_model"]
 
@@ -140,7 +140,7 @@ def derive_dq_model(convention: str = "amplitude") -> DqModel:
     """Derive the dq model of a salient PMSM from its phase equations.
 
     The result is cached in memory and on disk, keyed by a hash of this
-    module's source and the sympy version (:mod:`toolbox.plant._cache`);
+    module's source and the sympy version (:mod:`toolbox._cache`);
     ``_derive_dq_model`` always derives.
 
     Parameters

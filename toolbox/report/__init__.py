@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -385,17 +386,36 @@ def _equations(spec, given: list | None = None) -> list[dict]:
     """Derived dq model as LaTeX, plain text and SVG (paper 000 eq (1)-(2), 003 eq (3)-(7)).
 
     ``given`` rows (``{"label", "latex", "text"}``) are rendered as they are;
-    otherwise the model is derived for the spec's dq convention.
+    otherwise the model is derived for the spec's dq convention. The derived
+    rows depend only on the convention and on source code, so they are cached
+    on disk (:mod:`toolbox._cache`, keyed by the derivation's, this module's
+    and the plotting module's sources and the sympy and matplotlib versions):
+    a cache hit imports neither sympy nor matplotlib (issue 13).
     """
     if given is not None:
         return [{"label": str(e["label"]), "latex": str(e["latex"]), "text": str(e["text"]),
                  "svg": plots.equation_svg(str(e["latex"]).replace(r"\frac", r"\dfrac"))}
                 for e in given]
+    from .._cache import cached
+
+    convention = spec.motor.convention
+    sources = (Path(__file__).parents[1] / "plant" / "_symbolic.py", Path(__file__),
+               Path(plots.__file__))
+    return cached(f"report_equations-{convention}", sources,
+                  lambda: _derived_equations(convention),
+                  lambda rows: isinstance(rows, list) and all(
+                      isinstance(r, dict) and set(r) == {"label", "latex", "text", "svg"}
+                      for r in rows),
+                  packages=("sympy", "matplotlib"))
+
+
+def _derived_equations(convention: str) -> list[dict]:
+    """The rows of :func:`_equations` for a dq convention, derived and typeset."""
     import sympy as sp
 
     from ..plant import derive_dq_model
 
-    model = derive_dq_model(spec.motor.convention)
+    model = derive_dq_model(convention)
     di_d, di_q = sp.symbols("di_d di_q", real=True)
     names = {di_d: r"\dot{i}_{d}", di_q: r"\dot{i}_{q}"}
     items = [

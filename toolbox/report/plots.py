@@ -1,11 +1,15 @@
 """Report figures as deterministic, self-contained SVG strings.
 
-All figures use matplotlib's object API (no pyplot state) with
-``svg.fonttype = "path"`` (glyphs as paths: no font needed by the viewer or by
-typst), a fixed ``svg.hashsalt`` and no date metadata, so equal inputs give
-byte-identical SVG. The XML prologue, DOCTYPE and metadata block are removed
-(the SVG is inlined in HTML and holds no external reference), and element ids
+The loop, scenario and robustness figures are written by the small SVG
+plotter :mod:`toolbox.report._svgplot` (issue 13: matplotlib's layout and
+text measurement took about 3.5 s per report); its output depends only on
+the numbers drawn, so equal inputs give byte-identical SVG, and element ids
 are prefixed per figure so several SVGs can share one HTML document.
+
+Equations are typeset by matplotlib's mathtext (:func:`equation_svg`,
+imported only there) with ``svg.fonttype = "path"`` (glyphs as paths), a
+fixed ``svg.hashsalt`` and no date metadata; :func:`svg_from_figure` is also
+what the campaign report uses for its matplotlib figures.
 
 The loop figures draw the numbers of ``analysis.json["responses"]``
 (:mod:`toolbox.analysis._responses`: the executed law, sampled, with the
@@ -22,9 +26,9 @@ import math
 import re
 from typing import Any, Mapping, Sequence
 
-import matplotlib
 import numpy as np
-from matplotlib.figure import Figure
+
+from ._svgplot import Figure
 
 __all__ = ["figures", "equation_svg", "scenario_svg", "robustness_svg", "traces_dict",
            "svg_from_figure", "STEP_FIGURES"]
@@ -62,7 +66,7 @@ _FIG_COUNTER_ATTR = "_cct_fig_counter"
 _ID_RE = re.compile(r'\bid="([^"]+)"')
 
 
-def svg_from_figure(fig: Figure, prefix: str, tight: bool = False) -> str:
+def svg_from_figure(fig, prefix: str, tight: bool = False) -> str:
     """Serialise ``fig`` to a cleaned, deterministic SVG string.
 
     Parameters
@@ -73,6 +77,8 @@ def svg_from_figure(fig: Figure, prefix: str, tight: bool = False) -> str:
     tight : bool
         Crop to the drawn content (used for equations).
     """
+    import matplotlib
+
     buf = io.StringIO()
     with matplotlib.rc_context(RC):
         fig.savefig(buf, format="svg", metadata={"Date": None},
@@ -92,9 +98,13 @@ def svg_from_figure(fig: Figure, prefix: str, tight: bool = False) -> str:
     return svg.strip() + "\n"
 
 
-def _figure(width_in: float, height_in: float) -> Figure:
+def _mpl_figure(width_in: float, height_in: float):
+    """A matplotlib figure with the report's style (equations only)."""
+    import matplotlib
+    from matplotlib.figure import Figure as MplFigure
+
     with matplotlib.rc_context(RC):
-        return Figure(figsize=(width_in, height_in), layout="constrained")
+        return MplFigure(figsize=(width_in, height_in))
 
 
 # --------------------------------------------------------------- stored data
@@ -129,6 +139,9 @@ def _axes(responses: Mapping) -> list[str]:
 
 # -------------------------------------------------------------------- figures
 
+DASH, DOT = "5 2.2", "1.2 2"
+
+
 def bode_svg(responses: Mapping, margins: Mapping | None, prefix: str = "bode") -> str:
     """Bode diagram of the stored loop ``L`` per axis, margins marked.
 
@@ -136,15 +149,16 @@ def bode_svg(responses: Mapping, margins: Mapping | None, prefix: str = "bode") 
     phase crossover, phase margin at the gain crossover), not a reading of
     the plotted grid.
     """
-    fig = _figure(7.2, 4.6)
-    ax_m, ax_p = fig.subplots(2, 1, sharex=True)
+    fig = Figure(7.2, 4.6, rows=2)
+    ax_m, ax_p = fig.axes
+    ax_m.xlog = ax_p.xlog = True
     lines: list[tuple[str, str]] = []
     for name in _axes(responses):
         r = responses[name]
         w, mag, phase = _arr(r["omega"]), _arr(r["loop"]["mag_db"]), _arr(r["loop"]["phase_deg"])
         c = AXIS_COLORS[name]
-        ax_m.semilogx(w, mag, color=c, label=f"{name} axis")
-        ax_p.semilogx(w, phase, color=c, label=f"{name} axis")
+        ax_m.line(w, mag, c, label=f"{name} axis")
+        ax_p.line(w, phase, c)
         m = (margins or {}).get(name) or {}
         pm, w_pm = _num(m.get("phase_margin_deg")), _num(m.get("gain_crossover_rad_s"))
         gm, w_gm = _num(m.get("gain_margin_db")), _num(m.get("phase_crossover_rad_s"))
@@ -154,49 +168,45 @@ def bode_svg(responses: Mapping, margins: Mapping | None, prefix: str = "bode") 
                  else "; no phase crossover")
         lines.append((c, text))
         if pm is not None and w_pm:
-            ax_m.plot([w_pm], [0.0], "o", color=c, ms=5)
+            ax_m.markers([w_pm], [0.0], c, size=5)
             ph_at = float(np.interp(math.log(w_pm), np.log(w), phase))
             # the margin is the distance to the nearest odd multiple of -180 deg
-            ax_p.vlines(w_pm, ph_at - pm, ph_at, color=c, lw=2.2, alpha=0.7)
+            ax_p.vsegment(w_pm, ph_at - pm, ph_at, c)
         if gm is not None and w_gm:
-            ax_m.vlines(w_gm, -gm, 0.0, color=c, lw=2.2, alpha=0.7)
+            ax_m.vsegment(w_gm, -gm, 0.0, c)
     for k, (c, text) in enumerate(lines):
-        ax_m.text(0.02, 0.05 + 0.11 * (len(lines) - 1 - k), text, transform=ax_m.transAxes,
-                  color=c, fontsize=8, bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1})
-    ax_m.axhline(0.0, color="k", lw=0.8)
-    ax_p.axhline(-180.0, color="k", lw=0.8)
-    ax_m.set_ylabel("|L| (dB)")
-    ax_p.set_ylabel("phase of L (deg)")
-    ax_p.set_xlabel("frequency (rad/s)")
-    ax_m.legend(loc="upper right")
-    ax_m.set_title("Open loop L = K G (executed law, sampled, ZOH and computation delay)")
-    return svg_from_figure(fig, prefix)
+        ax_m.text(0.02, 0.05 + 0.11 * (len(lines) - 1 - k), text, c, size=8, box=True)
+    ax_m.hline(0.0)
+    ax_p.hline(-180.0)
+    ax_m.ylabel = "|L| (dB)"
+    ax_p.ylabel = "phase of L (deg)"
+    ax_p.xlabel = "frequency (rad/s)"
+    ax_m.legend_loc = "upper right"
+    ax_m.title = "Open loop L = K G (executed law, sampled, ZOH and computation delay)"
+    return fig.svg(prefix)
 
 
 def nyquist_svg(responses: Mapping, margins: Mapping | None, prefix: str = "nyq") -> str:
     """Nyquist plot of the stored ``L`` near -1, with the circle of radius ``1/max|S|``."""
-    fig = _figure(5.6, 4.8)
-    ax = fig.subplots()
+    fig = Figure(5.6, 4.8)
+    ax = fig.axes[0]
     th = np.linspace(0, 2 * math.pi, 361)
     for name in _axes(responses):
         r, c = responses[name], AXIS_COLORS[name]
         re_, im = _arr(r["loop"]["re"]), _arr(r["loop"]["im"])
-        ax.plot(re_, im, color=c, label=f"{name} axis (w > 0)")
-        ax.plot(re_, -im, color=c, ls="--", lw=0.9)
+        ax.line(re_, im, c, label=f"{name} axis (w > 0)")
+        ax.line(re_, -im, c, dash=DASH, width=0.9)
         rad = _num(((margins or {}).get(name) or {}).get("stability_margin"))
         if rad is None:  # no margins given: the stored |S| peak
             rad = float(10 ** (-np.nanmax(_arr(r["S_db"])) / 20))
-        ax.plot(-1 + rad * np.cos(th), rad * np.sin(th), color=c, lw=0.8, ls=":",
+        ax.line(-1 + rad * np.cos(th), rad * np.sin(th), c, width=0.8, dash=DOT,
                 label=f"{name}: 1/max|S| = {rad:.2f}")
-    ax.plot([-1], [0], "k+", ms=12, mew=2)
-    ax.set_xlim(-3.0, 1.5)
-    ax.set_ylim(-2.5, 2.5)
-    ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel("Re L (1)")
-    ax.set_ylabel("Im L (1)")
-    ax.set_title("Nyquist plot (zoom on the critical point -1)")
-    ax.legend(loc="lower right")
-    return svg_from_figure(fig, prefix)
+    ax.markers([-1], [0], "#000000", shape="+", size=12)
+    ax.xlim, ax.ylim, ax.equal = (-3.0, 1.5), (-2.5, 2.5), True
+    ax.xlabel, ax.ylabel = "Re L (1)", "Im L (1)"
+    ax.title = "Nyquist plot (zoom on the critical point -1)"
+    ax.legend_loc = "lower right"
+    return fig.svg(prefix)
 
 
 def has_weight_bounds(responses: Mapping | None) -> bool:
@@ -206,25 +216,24 @@ def has_weight_bounds(responses: Mapping | None) -> bool:
 
 def sensitivity_svg(responses: Mapping, prefix: str = "sens") -> str:
     """Stored |S|, |KS|, |T| per axis, with the stored ``gamma/|W_i|`` bounds when present."""
-    fig = _figure(7.2, 6.4)
-    axs = fig.subplots(3, 1, sharex=True)
+    fig = Figure(7.2, 6.4, rows=3)
     keys = (("S", "w1", "|S| (dB)", "sensitivity S = 1/(1+L)"),
             ("KS", "w2", "|KS| (dB, V/A)", "control sensitivity KS"),
             ("T", "w3", "|T| (dB)", "complementary sensitivity T = L/(1+L)"))
-    for ax, (fn, wkey, ylabel, title) in zip(axs, keys):
+    for ax, (fn, wkey, ylabel, title) in zip(fig.axes, keys):
+        ax.xlog = True
         for name in _axes(responses):
             r, c = responses[name], AXIS_COLORS[name]
             w = _arr(r["omega"])
-            ax.semilogx(w, _arr(r[f"{fn}_db"]), color=c, label=f"{name} axis")
+            ax.line(w, _arr(r[f"{fn}_db"]), c, label=f"{name} axis")
             bound = (r.get("weight_bounds") or {}).get(fn)
             if bound is not None:
-                ax.semilogx(w, _arr(bound), color=c, ls="--", lw=1.0,
-                            label=f"{name}: gamma/|{wkey.upper()}|")
-        ax.set_ylabel(ylabel)
-        ax.set_title(title, fontsize=9)
-        ax.legend(loc="best", ncol=2)
-    axs[-1].set_xlabel("frequency (rad/s)")
-    return svg_from_figure(fig, prefix)
+                ax.line(w, _arr(bound), c, dash=DASH, width=1.0,
+                        label=f"{name}: gamma/|{wkey.upper()}|")
+        ax.ylabel, ax.title, ax.title_size = ylabel, title, 9.0
+        ax.legend_loc, ax.legend_cols = "lower right", 2
+    fig.axes[-1].xlabel = "frequency (rad/s)"
+    return fig.svg(prefix)
 
 
 def _simulated_steps(traces: Sequence[dict] | None) -> list[tuple[str, int, np.ndarray, np.ndarray]]:
@@ -272,48 +281,45 @@ def step_svg(responses: Mapping, traces: Sequence[dict] | None = None,
     Simulated step responses (verification traces,
     normalised by the reference) are overlaid, dashed, when given.
     """
-    fig = _figure(7.2, 3.4)
-    ax = fig.subplots()
+    fig = Figure(7.2, 3.4)
+    ax = fig.axes[0]
     t_end = 0.0
     for name in _axes(responses):
         st = responses[name]["step"]
         t, y = _arr(st["t"]), _arr(st["y"])
         t_end = max(t_end, float(t[-1]))
-        ax.plot(t * 1e3, y, color=AXIS_COLORS[name], label=f"{name} axis, linear")
+        ax.line(t * 1e3, y, AXIS_COLORS[name], label=f"{name} axis, linear")
     for axis, k, t, y in _simulated_steps(traces):
         keep = t <= t_end
-        ax.plot(t[keep] * 1e3, y[keep], color=AXIS_COLORS[axis], ls="--", lw=1.0,
+        ax.line(t[keep] * 1e3, y[keep], AXIS_COLORS[axis], dash=DASH, width=1.0,
                 label=f"{axis} axis, simulated (scenario {k})")
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.axhspan(0.95, 1.05, color="0.85", alpha=0.5, lw=0, label="+/- 5 % band")
-    ax.set_xlabel("time (ms)")
-    ax.set_ylabel("current / reference (A/A)")
-    ax.set_title("Linear reference step response of the executed loop (unit step)")
-    ax.legend(loc="lower right", fontsize=7)
-    return svg_from_figure(fig, prefix)
+    ax.hline(1.0)
+    ax.hband(0.95, 1.05, "#d9d9d9", opacity=0.5, label="+/- 5 % band")
+    ax.xlabel, ax.ylabel = "time (ms)", "current / reference (A/A)"
+    ax.title = "Linear reference step response of the executed loop (unit step)"
+    ax.legend_loc, ax.legend_size = "lower right", 7.0
+    return fig.svg(prefix)
 
 
 def pzmap_svg(responses: Mapping, prefix: str = "pz") -> str:
     """Stored closed-loop poles (x) and zeros (o) of ``i_ref -> i`` per axis, unit circle."""
-    fig = _figure(5.6, 5.0)
-    ax = fig.subplots()
+    fig = Figure(5.6, 5.0)
+    ax = fig.axes[0]
     th = np.linspace(0, 2 * math.pi, 361)
-    ax.plot(np.cos(th), np.sin(th), color="0.4", lw=0.8)
+    ax.line(np.cos(th), np.sin(th), "#666666", width=0.8)
     for name in _axes(responses):
         c, pz = AXIS_COLORS[name], responses[name]["pz"]
         p = np.array(pz["poles"], float).reshape(-1, 2)
         z = np.array(pz["zeros"], float).reshape(-1, 2)
-        ax.plot(p[:, 0], p[:, 1], "x", color=c, ms=8, mew=1.6, label=f"{name} poles")
+        ax.markers(p[:, 0], p[:, 1], c, shape="x", size=8, label=f"{name} poles")
         if z.size:
-            ax.plot(z[:, 0], z[:, 1], "o", color=c, mfc="none", ms=8, label=f"{name} zeros")
-    ax.set_xlim(-1.2, 1.2)
-    ax.set_ylim(-1.2, 1.2)
-    ax.set_aspect("equal", adjustable="box")
-    ax.set_xlabel("Re z (1)")
-    ax.set_ylabel("Im z (1)")
-    ax.set_title("Closed-loop pole-zero map (z-plane, reference to current)")
-    ax.legend(loc="lower left", fontsize=7)
-    return svg_from_figure(fig, prefix)
+            ax.markers(z[:, 0], z[:, 1], c, shape="o", size=8, filled=False,
+                       label=f"{name} zeros")
+    ax.xlim, ax.ylim, ax.equal = (-1.2, 1.2), (-1.2, 1.2), True
+    ax.xlabel, ax.ylabel = "Re z (1)", "Im z (1)"
+    ax.title = "Closed-loop pole-zero map (z-plane, reference to current)"
+    ax.legend_loc, ax.legend_size = "lower left", 7.0
+    return fig.svg(prefix)
 
 
 def figures(responses: Mapping | None, margins: Mapping | None = None,
@@ -369,8 +375,7 @@ def figures(responses: Mapping | None, margins: Mapping | None = None,
 def equation_svg(tex: str, prefix: str | None = None) -> str | None:
     """Render a LaTeX equation with matplotlib mathtext; ``None`` if unsupported."""
     prefix = prefix or "eq" + format(abs(hash_text(tex)) % 10**8, "08d")
-    fig = _figure(9.0, 0.6)
-    fig.set_layout_engine(None)
+    fig = _mpl_figure(9.0, 0.6)
     fig.text(0.01, 0.5, f"${tex}$", fontsize=17, va="center")
     try:
         return svg_from_figure(fig, prefix, tight=True)
@@ -408,23 +413,23 @@ def scenario_svg(traces: dict, prefix: str | None = None) -> str:
     prefix = prefix or "sc" + format(hash_text(repr(sorted(traces)) + repr(traces["t"][:3].tolist())
                                                + str(len(traces["t"]))) % 10**8, "08d")
     has_v = "vd" in traces or "vq" in traces
-    fig = _figure(7.2, 4.8 if has_v else 3.0)
-    axs = fig.subplots(2 if has_v else 1, 1, sharex=True, squeeze=False)[:, 0]
+    fig = Figure(7.2, 4.8 if has_v else 3.0, rows=2 if has_v else 1)
+    axs = fig.axes
     t = traces["t"] * 1e3
-    for key, c, ls in (("id", AXIS_COLORS["d"], "-"), ("iq", AXIS_COLORS["q"], "-"),
-                       ("id_ref", AXIS_COLORS["d"], ":"), ("iq_ref", AXIS_COLORS["q"], ":")):
+    for key, c, dash in (("id", AXIS_COLORS["d"], None), ("iq", AXIS_COLORS["q"], None),
+                         ("id_ref", AXIS_COLORS["d"], DOT), ("iq_ref", AXIS_COLORS["q"], DOT)):
         if key in traces:
-            axs[0].plot(t, traces[key], color=c, ls=ls, label=key.replace("_ref", " reference"))
-    axs[0].set_ylabel("current (A)")
-    axs[0].legend(loc="best", ncol=2)
+            axs[0].line(t, traces[key], c, dash=dash, label=key.replace("_ref", " reference"))
+    axs[0].ylabel = "current (A)"
+    axs[0].legend_loc, axs[0].legend_cols = "lower right", 2
     if has_v:
         for key, c in (("vd", AXIS_COLORS["d"]), ("vq", AXIS_COLORS["q"])):
             if key in traces:
-                axs[1].plot(t, traces[key], color=c, label=key)
-        axs[1].set_ylabel("voltage (V)")
-        axs[1].legend(loc="best")
-    axs[-1].set_xlabel("time (ms)")
-    return svg_from_figure(fig, prefix)
+                axs[1].line(t, traces[key], c, label=key)
+        axs[1].ylabel = "voltage (V)"
+        axs[1].legend_loc = "lower right"
+    axs[-1].xlabel = "time (ms)"
+    return fig.svg(prefix)
 
 
 def robustness_svg(cases: Sequence[Mapping], worst: Sequence[str], prefix: str = "rob") -> str:
@@ -435,20 +440,21 @@ def robustness_svg(cases: Sequence[Mapping], worst: Sequence[str], prefix: str =
             if m not in names:
                 names.append(m)
     names = names[:3] or ["(none)"]
-    fig = _figure(7.2, 1.2 + 1.9 * len(names))
-    axs = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    fig = Figure(7.2, 1.2 + 1.9 * len(names), rows=len(names))
+    axs = fig.axes
     idx = np.arange(len(cases))
     ok = np.array([c.get("pass") is not False for c in cases])
     is_worst = np.array([str(c.get("label")) in set(worst) for c in cases])
     for ax, m in zip(axs, names):
         vals = np.array([float((c.get("metrics") or {}).get(m, np.nan)) for c in cases])
-        ax.plot(idx[ok], vals[ok], "o", color="#2a7f3f", ms=4, label="pass")
+        ax.markers(idx[ok], vals[ok], "#2a7f3f", size=4, label="pass")
         if (~ok).any():
-            ax.plot(idx[~ok], vals[~ok], "o", color="#c23b22", ms=4, label="fail")
+            ax.markers(idx[~ok], vals[~ok], "#c23b22", size=4, label="fail")
         if is_worst.any():
-            ax.plot(idx[is_worst], vals[is_worst], "o", mfc="none", mec="k", ms=10, label="worst")
-        ax.set_ylabel(f"{m} ({METRIC_UNITS.get(m, '1')})", fontsize=8)
-        ax.legend(loc="best", fontsize=7)
-    axs[-1].set_xlabel("sweep case (index in the sweep)")
-    axs[0].set_title("Robustness sweep")
-    return svg_from_figure(fig, prefix)
+            ax.markers(idx[is_worst], vals[is_worst], "#000000", size=10, filled=False,
+                       label="worst")
+        ax.ylabel, ax.ylabel_size = f"{m} ({METRIC_UNITS.get(m, '1')})", 8.0
+        ax.legend_loc, ax.legend_size = "upper right", 7.0
+    axs[-1].xlabel = "sweep case (index in the sweep)"
+    axs[0].title = "Robustness sweep"
+    return fig.svg(prefix)

@@ -1,11 +1,13 @@
-"""On-disk cache of the symbolic dq derivation (issue 13).
+"""On-disk cache of results that depend only on source code (issue 13).
 
 :func:`~toolbox.plant.derive_dq_model` takes about 2.4 s of sympy work per
-Park convention, redone by every ``cct`` process. Its result depends only on
-the source of :mod:`toolbox.plant._symbolic` and on the sympy version, so it
+Park convention, redone by every ``cct`` process; the numeric functions
+lambdified from it and the report's typeset equations cost another second
+and the sympy and mathtext imports. Each depends only on the source of the
+modules that compute it and on the versions of the packages it uses, so it
 is cached on disk under a key hashing both:
 
-``$XDG_CACHE_HOME/current-control-toolbox/dq_model-<convention>-<key>.pickle``
+``$XDG_CACHE_HOME/current-control-toolbox/<name>-<key>.pickle``
 (``~/.cache`` when ``XDG_CACHE_HOME`` is unset; ``CCT_CACHE_DIR`` overrides
 the directory, ``CCT_CACHE_DIR=off`` disables the cache).
 
@@ -23,11 +25,11 @@ import hashlib
 import os
 import pickle
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence, Union
 
 __all__ = ["cache_dir", "cache_key", "cached"]
 
-_MAGIC = b"cct-dq-model v1"
+_MAGIC = b"cct-cache v1"
 _APP = "current-control-toolbox"
 
 
@@ -40,12 +42,28 @@ def cache_dir() -> Path | None:
     return Path(base) / _APP
 
 
-def cache_key(source_file: str | Path) -> str:
-    """SHA-256 (hex, 16 digits) of the derivation's source and the sympy version."""
-    import sympy
+Sources = Union[str, Path, Sequence[Union[str, Path]]]
 
-    h = hashlib.sha256(Path(source_file).read_bytes())
-    h.update(f"\0sympy {sympy.__version__}\0pickle {pickle.HIGHEST_PROTOCOL}".encode())
+
+def cache_key(sources: Sources, packages: Sequence[str] = ("sympy",)) -> str:
+    """SHA-256 (hex, 16 digits) of the source files and the packages' versions.
+
+    The versions are read from the installed distributions' metadata, so that
+    a cache hit imports none of the packages.
+    """
+    from importlib.metadata import PackageNotFoundError, version
+
+    files = [sources] if isinstance(sources, (str, Path)) else list(sources)
+    h = hashlib.sha256()
+    for f in files:
+        h.update(hashlib.sha256(Path(f).read_bytes()).digest())
+    for name in packages:
+        try:
+            v = version(name)
+        except PackageNotFoundError:
+            v = "?"
+        h.update(f"\0{name} {v}".encode())
+    h.update(f"\0pickle {pickle.HIGHEST_PROTOCOL}".encode())
     return h.hexdigest()[:16]
 
 
@@ -67,7 +85,7 @@ def _read(path: Path, key: str) -> Any | None:
 
 def _write(path: Path, key: str, value: Any) -> None:
     """Write atomically; a cache that cannot be written is not an error."""
-    from .._io import write_atomic
+    from ._io import write_atomic
 
     payload = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
     data = b"\n".join((_MAGIC + b" " + key.encode(),
@@ -78,25 +96,27 @@ def _write(path: Path, key: str, value: Any) -> None:
         pass  # read-only home, full disk: the derivation is simply redone next time
 
 
-def cached(name: str, source_file: str | Path, compute: Callable[[], Any],
-           check: Callable[[Any], bool]) -> Any:
+def cached(name: str, sources: Sources, compute: Callable[[], Any],
+           check: Callable[[Any], bool], packages: Sequence[str] = ("sympy",)) -> Any:
     """``compute()``, through the on-disk cache.
 
     Parameters
     ----------
     name : str
         File-name stem of the entry (e.g. ``dq_model-amplitude``).
-    source_file : path
-        Source whose hash keys the entry.
+    sources : path or sequence of paths
+        Sources whose hashes key the entry (every module the value depends on).
     compute : callable
         Produces the value when the cache has none.
     check : callable
         Accepts a loaded value (type check); a rejected one is recomputed.
+    packages : sequence of str
+        Distributions whose versions key the entry (those computing the value).
     """
     directory = cache_dir()
     if directory is None:
         return compute()
-    key = cache_key(source_file)
+    key = cache_key(sources, packages)
     path = directory / f"{name}-{key}.pickle"
     value = _read(path, key)
     if value is not None and check(value):
