@@ -70,10 +70,10 @@ def hostile_specs(draw):
 
 
 def _load_hostile_helpers():
-    """tests/hostile/conftest.py (its spec-dict TOML writer) under its own name:
-    ``import conftest`` would pick whichever conftest is first on sys.path."""
-    spec = importlib.util.spec_from_file_location("hostile_conftest",
-                                                  HOSTILE / "conftest.py")
+    """tests/hostile/hostile_helpers.py (its spec-dict TOML writer) from its
+    file: tests/hostile is on sys.path only once a test there was collected."""
+    spec = importlib.util.spec_from_file_location("hostile_helpers",
+                                                  HOSTILE / "hostile_helpers.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
