@@ -19,7 +19,7 @@ from toolbox.artifact import ControllerArtifact
 from toolbox.errors import ArtifactError
 from toolbox.pipeline import design_spec, load_analysis, spec_of_artifact
 
-from conftest import ROOT, run_cli, spec_dict
+from hostile_helpers import ROOT, run_cli, spec_dict
 
 FILE = "out/controller.json"
 

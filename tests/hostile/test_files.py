@@ -17,7 +17,7 @@ from toolbox._io import MAX_DEPTH, MAX_INPUT_BYTES, check_data_depth, check_text
 from toolbox.errors import ArtifactError, SpecError
 from toolbox.spec import load_spec, spec_from_dict
 
-from conftest import cct_subprocess, run_cli, spec_dict, to_toml
+from hostile_helpers import cct_subprocess, run_cli, spec_dict, to_toml
 
 
 def test_fifo_is_refused_without_blocking(tmp_path):

@@ -20,7 +20,7 @@ from toolbox.errors import CctError
 from toolbox.spec import METHODS, load_spec, spec_from_dict
 from toolbox.spec._load import DRIVE_KEYS, MOTOR_KEYS
 
-from conftest import BASE, to_toml
+from hostile_helpers import BASE, to_toml
 
 FUZZ = settings(derandomize=True, max_examples=200, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow,

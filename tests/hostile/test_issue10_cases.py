@@ -40,7 +40,7 @@ import pytest
 
 from toolbox.pipeline import design_spec
 
-from conftest import run_cli, spec_dict
+from hostile_helpers import run_cli, spec_dict
 
 STEP = {"kind": "current_step", "duration": 0.02}
 W1 = {"num": [0.66225, 117.4499], "den": [1.0, 0.0117]}  # paper 003 eq (44)

@@ -18,7 +18,7 @@ from toolbox.design._weights import makeweight
 from toolbox.errors import SpecError
 from toolbox.spec import spec_from_dict
 
-from conftest import run_cli, spec_dict
+from hostile_helpers import run_cli, spec_dict
 
 W1 = {"num": [0.66225, 117.4499], "den": [1.0, 0.0117]}  # paper 003 eq (44)
 

@@ -17,7 +17,7 @@ from toolbox.errors import SpecError
 from toolbox.spec import SpecErrors, load_spec, spec_from_dict
 from toolbox.spec._bounds import MAX_PLANT_STEPS, MAX_SCENARIOS, MAX_TRACE_ROWS
 
-from conftest import run_cli, spec_dict
+from hostile_helpers import run_cli, spec_dict
 
 STEP = {"kind": "current_step", "duration": 0.02}
 

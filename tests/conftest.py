@@ -1,0 +1,38 @@
+"""Suite-wide set-up: Hypothesis draws the same examples in any test order.
+
+Hypothesis (6.170 here) mixes into its generation numeric constants mined from
+the *local* modules loaded at draw time (every ``toolbox`` module that is
+imported; site-packages and test files are left out). The examples of a
+``derandomize=True`` test therefore depended on which toolbox modules earlier
+tests happened to import: running under pytest-xdist, or one directory
+alone, drew other motors than the full serial run (one of them broke a
+property test that the serial order never reached). Importing every toolbox
+module before the first test makes that pool the same in every order and
+every worker, so each derandomised test is one fixed set of examples again.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+import pytest
+
+_loaded = False
+
+
+def _import_all_toolbox_modules() -> None:
+    import toolbox
+
+    for info in pkgutil.walk_packages(toolbox.__path__, "toolbox."):
+        if not info.name.endswith(".__main__"):
+            importlib.import_module(info.name)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item) -> None:
+    # once per process that runs tests (not in pytest-xdist's controller)
+    global _loaded
+    if not _loaded:
+        _loaded = True
+        _import_all_toolbox_modules()
