@@ -2,8 +2,6 @@
 and costs O(N log N): at sample_time = 1e-7 the 20 ms horizon is 2e5 periods and
 the direct double sum made `cct design` run for hours (qa: sample_time 1e-7)."""
 
-import time
-
 import numpy as np
 
 from toolbox.export._fixed import propagate_bound
@@ -31,7 +29,20 @@ def test_bound_matches_the_direct_sum_from_above():
     assert np.max((fast - direct) / direct) < 1e-6
 
 
-def test_long_horizon_is_fast():
-    t0 = time.perf_counter()
-    out = propagate_bound(A, C, np.ones((200_000, 3)), np.ones(200_000))
-    assert time.perf_counter() - t0 < 20.0 and np.all(np.isfinite(out))
+def test_long_horizon_reaches_the_stationary_bound():
+    """2e5 periods (the horizon that ran for hours): with unit local errors the
+    bound tends to 1 + sum_j |C| |A^j| 1, summed here directly over 3000 terms
+    (spectral radius of A < 0.96: the tail is below 1e-50). The bound may
+    exceed it by its stated FFT widening, 1e-12 max|g| sum|delta_x| (about
+    1.2e-6 here), plus 1e-9 relative for the convolution's own rounding."""
+    N = 200_000
+    out = propagate_bound(A, C, np.ones((N, 3)), np.ones(N))
+    total, P, g_max = 1.0, np.eye(3), 0.0
+    for _ in range(3000):
+        g = np.abs(C[0]) @ np.abs(P)
+        total += float(g.sum())
+        g_max = max(g_max, float(g.max()))
+        P = P @ A
+    widening = 1e-12 * g_max * 3 * N
+    assert np.all(np.isfinite(out))
+    assert total * (1 - 1e-9) <= out[-1] <= total * (1 + 1e-9) + widening

@@ -10,7 +10,6 @@ pi.py, ilq.py, _weights.py).
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
 
@@ -79,11 +78,11 @@ CASES = [
 
 @pytest.mark.parametrize("name, controller, message", CASES, ids=[c[0] for c in CASES])
 def test_method_parameter_out_of_bounds(name, controller, message):
-    start = time.monotonic()
+    # refused by key while reading (an unbounded order or coefficient count
+    # made the weight construction or the design hang)
     with pytest.raises(SpecError) as info:
         spec_from_dict(spec_dict(controller=controller), file="s.toml")
     assert str(info.value) == f"s.toml: {message}"
-    assert time.monotonic() - start < 2.0  # refused while reading, not by a long design
 
 
 @pytest.mark.parametrize("controller", [
