@@ -366,8 +366,8 @@ def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | N
 
 def _check_analysis(data: dict, file: str) -> None:
     """The parts of analysis.json that the report reads have the right shape."""
-    for key in ("requirements", "sweep", "certificate", "mimo_at_speed", "mimo_over_box",
-                "margins"):
+    for key in ("requirements", "sweep", "certificate", "sampled_certificate",
+                "mimo_at_speed", "mimo_over_box", "margins"):
         if data.get(key) is not None and not isinstance(data[key], dict):
             raise ArtifactError(key, "an object", type(data[key]).__name__, file=file)
     for key, check in (data.get("requirements") or {}).items():

@@ -229,38 +229,71 @@ def _theta(points: np.ndarray, Ts: float) -> np.ndarray:
                      Ts * B[:, 0, 0], Ts * B[:, 1, 1]], axis=1)
 
 
+@dataclass(frozen=True)
+class _ZohLinearisation:
+    """``exp`` and ``Psi`` linearised at ``X_c`` with the remainder bound ``rho``
+    on ``||[Phi - Phi_lin, Psi - Psi_lin]||_2`` over ``||X - X_c||_2 <= dev``
+    (module docstring, step 2)."""
+
+    Xc: np.ndarray     # (2, 2)
+    eZ: np.ndarray     # exp([[X_c, I], [0, 0]]) (4, 4)
+    dZ: np.ndarray     # its Frechet derivatives along the four entries of X (4, 4, 4)
+    rho: float
+
+    @classmethod
+    def at(cls, Xc: np.ndarray, dev: float) -> "_ZohLinearisation":
+        """Linearisation at ``Xc`` valid for ``||X - Xc||_2 <= dev``."""
+        # Z = [[X, I], [0, 0]]: exp(Z) = [[exp X, Psi(X)], [0, I]]
+        Z = np.zeros((4, 4))
+        Z[:2, :2] = Xc
+        Z[:2, 2:] = np.eye(2)
+        # D exp_Z[E] is the top-right block of exp([[Z, E], [0, Z]])
+        big = np.zeros((4, 8, 8))
+        for j in range(4):
+            big[j, :4, :4] = Z
+            big[j, 4:, 4:] = Z
+            big[j, j // 2, 4 + j % 2] = 1.0
+        a = float(np.linalg.norm(Xc, 2))
+        rho = math.sqrt(2.0) * math.exp(a) * (math.expm1(dev) - dev)
+        return cls(np.array(Xc, float), expm(Z), expm(big)[:, :4, 4:], rho)
+
+    def parts(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Linear parts ``Phi_lin``, ``Psi_lin`` (N, 2, 2) at ``X`` (N, 2, 2)."""
+        D = (X - self.Xc).reshape(-1, 4)
+        Phi = self.eZ[:2, :2] + np.einsum("vj,jab->vab", D, self.dZ[:, :2, :2])
+        Psi = self.eZ[:2, 2:] + np.einsum("vj,jab->vab", D, self.dZ[:, :2, 2:])
+        return Phi, Psi
+
+
+def _theta_box(cell: SampledBox, Ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """``Theta``: ranges of the six coordinates over the cell (step 1)."""
+    th = _theta(cell.corners(), Ts)
+    return th.min(axis=0), th.max(axis=0)
+
+
+def _linearisation(cell: SampledBox, Ts: float) -> _ZohLinearisation:
+    """Linearisation at the centre of ``Theta``, valid on all of ``Theta``."""
+    lo, hi = _theta_box(cell, Ts)
+    Xv = np.array(list(itertools.product(*zip(lo[:4], hi[:4]))), float).reshape(-1, 2, 2)
+    Xc = (0.5 * (lo + hi))[:4].reshape(2, 2)
+    # ||X - X_c|| is convex in X: its maximum over the box is at a corner
+    dev = float(np.max(np.linalg.norm(Xv - Xc, 2, axis=(1, 2))))
+    return _ZohLinearisation.at(Xc, dev)
+
+
 def _zoh_polytope(cell: SampledBox, Ts: float):
     """Linear parts of ``Phi`` and ``Gamma`` at the 64 corners of ``Theta`` and
-    the remainder bound (module docstring, steps 1-2).
+    the remainder bound (module docstring, steps 1-3).
 
     Returns ``(Phi (64, 2, 2), Gamma (64, 2, 2), b (64, 2, 2) diagonal, rho)``.
     """
-    th = _theta(cell.corners(), Ts)
-    lo, hi = th.min(axis=0), th.max(axis=0)
+    lo, hi = _theta_box(cell, Ts)
+    lin = _linearisation(cell, Ts)
     V = np.array(list(itertools.product(*zip(lo, hi))), float)          # (64, 6)
-    Xv = V[:, :4].reshape(-1, 2, 2)
-    Xc = (0.5 * (lo + hi))[:4].reshape(2, 2)
-    # Z = [[X, I], [0, 0]]: exp(Z) = [[exp X, Psi(X)], [0, I]]
-    Z = np.zeros((4, 4))
-    Z[:2, :2] = Xc
-    Z[:2, 2:] = np.eye(2)
-    eZ = expm(Z)
-    # Frechet derivatives along the four entries of X (block-triangular exponential)
-    big = np.zeros((4, 8, 8))
-    for j in range(4):
-        big[j, :4, :4] = Z
-        big[j, 4:, 4:] = Z
-        big[j, j // 2, 4 + j % 2] = 1.0
-    dZ = expm(big)[:, :4, 4:]                                            # (4, 4, 4)
-    D = (Xv - Xc).reshape(-1, 4)                                         # (64, 4)
-    Phi = eZ[:2, :2] + np.einsum("vj,jab->vab", D, dZ[:, :2, :2])
-    Psi = eZ[:2, 2:] + np.einsum("vj,jab->vab", D, dZ[:, :2, 2:])
+    Phi, Psi = lin.parts(V[:, :4].reshape(-1, 2, 2))
     b = np.zeros((V.shape[0], 2, 2))
     b[:, 0, 0], b[:, 1, 1] = V[:, 4], V[:, 5]
-    a = float(np.linalg.norm(Xc, 2))
-    dev = float(np.max(np.linalg.norm(Xv - Xc, 2, axis=(1, 2))))
-    rho = math.sqrt(2.0) * math.exp(a) * (math.expm1(dev) - dev)
-    return Phi, Psi @ b, b, rho
+    return Phi, Psi @ b, b, lin.rho
 
 
 def _vertices(artifact, laws, cell: SampledBox):

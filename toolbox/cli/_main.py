@@ -463,6 +463,7 @@ _COLUMNS = (
     ("box MIMO", lambda r: r["mimo_box"]["worst_disk_margin"]),
     ("box worst at", lambda r: _box_where(r["mimo_box"])),
     ("cert. scale", lambda r: (r["certificate"] or {}).get("certified_scale")),
+    ("sampled cert.", lambda r: (r.get("sampled_certificate") or {}).get("certified_scale")),
     ("verdict", lambda r: "pass" if r.get("passed", True) else "FAIL"),
 )
 
@@ -481,7 +482,7 @@ def _worst(per_axis: dict, key: str, pick) -> float:
 def _print_table(rows: list[dict]) -> None:
     """Sampled-loop margins and step figures, robustness over the sweep."""
     informational = {"GM dB", "PM deg", "Mm", "worst GM dB", "unstable", "MIMO disk",
-                     "cert. scale"}
+                     "cert. scale", "sampled cert."}
     table = [[h for h, _ in _COLUMNS]] + [
         [_fmt(get(r)) + ("*" if h in informational and r.get("margins_basis") else "")
          for h, get in _COLUMNS] for r in rows]
