@@ -29,6 +29,9 @@ def test_compare_paper000_motor(tmp_path):
     for row in rows:
         assert set(row["margins"]) == {"d", "q"}
         assert "n_unstable" in row
+        # issue 17: the sampled-loop certificate's scale, next to the continuous one
+        assert 0 <= row["sampled_certificate"]["certified_scale"] <= 1
+    assert "sampled cert." in res.output
     # the paper 000 PI (no decoupling, Kp = 10.5 V/A at 100 us with one period of
     # delay) has a far smaller sampled gain margin than the H-infinity loop
     gm = {r["method"]: min(r["margins"][a]["gain_margin_db"] for a in "dq") for r in rows}

@@ -135,6 +135,8 @@ class SampledBox:
     def speed_cells(self, n: int) -> list["SampledBox"]:
         """The box with its speed range split into ``n`` equal cells, the
         fastest cells first (where a certificate usually fails)."""
+        if self.omega[0] == self.omega[1]:
+            return [self]          # one speed: one cell (the nominal point at scale 0)
         edges = np.linspace(self.omega[0], self.omega[1], n + 1)
         cells = [SampledBox(self.R, self.Ld, self.Lq, (float(a), float(b)), self.speed_gain,
                             self.speed_offset) for a, b in zip(edges[:-1], edges[1:])]
