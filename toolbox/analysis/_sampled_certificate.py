@@ -83,6 +83,8 @@ __all__ = ["SampledBox", "SampledCertificate", "certify_sampled",
 
 #: strict margin of the vertex LMIs (the data are normalised to order 1)
 _EPS = 1e-7
+#: corner matrices per cell: the 2^6 corners of Theta times the two measured-speed ends
+_N_VERTICES = 2 ** 6 * 2
 
 
 @dataclass(frozen=True)
@@ -545,7 +547,7 @@ def largest_certified_sampled_scale(artifact, motor, drive=None, *, R=DEFAULT_BO
             certified=bool(outcomes and all(o.certified for o in outcomes)), scale=k,
             box=json_ready(asdict(b)), speed_range_rad_s=list(b.omega),
             delay_samples=int(artifact.delay_samples), speed_cells=speed_cells,
-            n_vertices=128, remainder_bound=max((o.rho for o in ok), default=math.nan),
+            n_vertices=_N_VERTICES, remainder_bound=max((o.rho for o in ok), default=math.nan),
             condition_P=max((o.condition_P for o in ok), default=math.nan),
             first_uncertified=first)
 
