@@ -421,6 +421,11 @@ def _certify_cell(artifact, laws, cell: SampledBox,
         return _CellOutcome(False, "a corner of the cell is unstable", math.nan, math.nan,
                             *worst), None
     A, V, rho = _vertices(artifact, laws, cell)
+    # step 4's corner inequality implies A_i' P A_i < P: a corner matrix of the
+    # polytope that is not Schur makes the LMIs infeasible, no need to solve them
+    if np.max(np.abs(np.linalg.eigvals(A))) >= 1.0:
+        return _CellOutcome(False, "a corner of the polytope over the cell is unstable", rho,
+                            math.nan, *worst), None
     G = rho ** 2 * np.transpose(V, (0, 2, 1)) @ V
     n = A.shape[-1]
     U = np.zeros((n, 2))
