@@ -3,7 +3,7 @@
 designs/003_azaiz2007_hinf_at_speed.toml is paper 003's design with
 ``[controller.hinf.at_speed]``: the S weight of each axis gets the small-gain
 term of the residual cross-coupling (toolbox.design._hinf_speed). Paper 003's
-per-axis design loses 178 of the 1129 robustness-sweep sets (157 of them with
+per-axis design loses 178 of the 1129 robustness-sweep sets (148 of them with
 the design's own delay); the at-speed design must keep every set with the
 design delay, lose no set that the per-axis design keeps, and still have
 sensible margins at standstill.
