@@ -51,7 +51,8 @@ def design_spec(spec: Spec | str | Path | dict) -> ControllerArtifact:
     return design(spec)
 
 
-def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifact, dict]:
+def analyse(artifact: ControllerArtifact, spec: Spec, *,
+            sampled_certificate: bool = False) -> tuple[ControllerArtifact, dict]:
     """Margins (into the artifact) and the full analysis document.
 
     Parameters
@@ -60,6 +61,9 @@ def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifac
         The design.
     spec : Spec
         Motor, drive and requirements (the ``margins`` stage bounds).
+    sampled_certificate : bool
+        Also certify the sampled coupled loop (tens of seconds; see
+        :func:`toolbox.analysis.analysis_report`).
 
     Returns
     -------
@@ -71,7 +75,8 @@ def analyse(artifact: ControllerArtifact, spec: Spec) -> tuple[ControllerArtifac
     from .analysis import analysis_report
     from .analysis.executed import INFORMATIONAL_METHODS, loop_stability
 
-    report = analysis_report(artifact, spec.motor, spec.drive)
+    report = analysis_report(artifact, spec.motor, spec.drive,
+                             sampled_certificate=sampled_certificate)
     margins = report["margins"]["discrete"]
     # an unstable loop is a design that exists but fails (exit 1, outputs written,
     # no controller.h), not bad input: the report must show the user why
@@ -181,6 +186,7 @@ class DesignOutputs:
 
 def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = True,
                   report: bool = True, header: bool = True,
+                  sampled_certificate: bool = False,
                   progress: Progress = _quiet) -> DesignOutputs:
     """Run the pipeline in memory (no files written).
 
@@ -190,6 +196,8 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
         Validated spec.
     analysis, verification, report, header : bool
         Which stages after design to run (all by default).
+    sampled_certificate : bool
+        Add the sampled-loop certificate to the analysis (opt-in: tens of seconds).
     progress : callable
         Called with the name of each stage as it starts.
 
@@ -199,13 +207,14 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
         Bad input or a design that cannot be exported; nothing is produced.
     """
     try:
-        return _build(spec, analysis, verification, report, header, progress)
+        return _build(spec, analysis, verification, report, header, sampled_certificate,
+                      progress)
     except CctError as err:
         raise (err.with_file(spec.source) if spec.source and not err.file else err) from None
 
 
 def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header: bool,
-           progress: Progress) -> DesignOutputs:
+           sampled_certificate: bool, progress: Progress) -> DesignOutputs:
     progress("design")
     artifact = design_spec(spec)
     out = DesignOutputs(artifact=artifact, spec=spec)
@@ -213,7 +222,8 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
     out.warnings.extend(str(w) for w in artifact.design_parameters.get("design_warnings", []))
     if analysis:
         progress("analysis")
-        out.artifact, out.analysis = analyse(artifact, spec)
+        out.artifact, out.analysis = analyse(artifact, spec,
+                                             sampled_certificate=sampled_certificate)
     if verification:
         progress("verification")
         out.verification = run_verification(out.artifact, spec)
@@ -390,8 +400,8 @@ def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | N
 
 def _check_analysis(data: dict, file: str) -> None:
     """The parts of analysis.json that the report reads have the right shape."""
-    for key in ("requirements", "sweep", "certificate", "mimo_at_speed", "mimo_over_box",
-                "margins"):
+    for key in ("requirements", "sweep", "certificate", "sampled_certificate",
+                "mimo_at_speed", "mimo_over_box", "margins"):
         if data.get(key) is not None and not isinstance(data[key], dict):
             raise ArtifactError(key, "an object", type(data[key]).__name__, file=file)
     for key, check in (data.get("requirements") or {}).items():

@@ -17,8 +17,8 @@ def test_compare_paper000_motor(tmp_path):
     specs = [DESIGNS / "000_lepioufle1992_pi.toml", DESIGNS / "000_lepioufle1992_tci.toml",
              DESIGNS / "compare" / "000_lepioufle1992_hinf.toml"]
     out = tmp_path / "compare.json"
-    res = CliRunner().invoke(main, ["compare", *map(str, specs), "--json", str(out)],
-                             catch_exceptions=False)
+    res = CliRunner().invoke(main, ["compare", *map(str, specs), "--json", str(out),
+                                    "--sampled-certificate"], catch_exceptions=False)
     # paper 000's PI misses its own GM >= 6 dB / PM >= 45 deg requirements: since
     # issue 10 compare exits 1 when any design fails (the table is still written)
     assert res.exit_code == 1, res.output
@@ -29,6 +29,9 @@ def test_compare_paper000_motor(tmp_path):
     for row in rows:
         assert set(row["margins"]) == {"d", "q"}
         assert "n_unstable" in row
+        # issue 17: the sampled-loop certificate's scale, next to the continuous one
+        assert 0 <= row["sampled_certificate"]["certified_scale"] <= 1
+    assert "sampled cert." in res.output
     # the paper 000 PI (no decoupling, Kp = 10.5 V/A at 100 us with one period of
     # delay) has a far smaller sampled gain margin than the H-infinity loop
     gm = {r["method"]: min(r["margins"][a]["gain_margin_db"] for a in "dq") for r in rows}

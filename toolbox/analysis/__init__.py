@@ -5,7 +5,11 @@
 * :mod:`.robustness` - vectorised sweeps over parameter drift, speed-sensor
   errors and delay;
 * :mod:`.certificate` - common quadratic Lyapunov function over a parameter
-  box (vertex LMIs solved by Clarabel, called directly).
+  box (vertex LMIs solved by Clarabel, called directly), continuous loop;
+* :func:`largest_certified_sampled_scale` - the same question for the sampled
+  coupled dq loop as executed (ZOH, delay, decoupling with the controller's
+  parameters and the measured speed; ``_sampled_certificate``; opt-in: tens
+  of seconds).
 
 :func:`analysis_report` assembles what the CLI writes to ``analysis.json``
 and :func:`compare_designs` the rows of ``cct compare``. The one margins API
@@ -24,22 +28,29 @@ from .margins import (MARGIN_KEYS, FrequencyMargins, MarginsResult, MimoBoxResul
                       grid_margins, json_ready, lti_loop_margins, mimo_disk_margins,
                       mimo_over_box)
 from .robustness import DEFAULT_RANGES, SweepResult, robustness_sweep
+from ._sampled_certificate import (SampledBox, SampledCertificate, certify_sampled,
+                                   largest_certified_sampled_scale)
 
 __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "compute_margins",
            "disk_variations", "mimo_disk_margins", "MimoBoxResult", "mimo_over_box",
            "DEFAULT_RANGES", "SweepResult",
            "robustness_sweep", "CertificateResult", "ParameterBox", "certify",
-           "largest_certified_scale", "analysis_report", "compare_designs", "ANALYSIS_SCHEMA",
+           "largest_certified_scale", "SampledBox", "SampledCertificate", "certify_sampled",
+           "largest_certified_sampled_scale", "analysis_report", "compare_designs", "ANALYSIS_SCHEMA",
            "FrequencyMargins", "frequency_margins", "grid_margins", "lti_loop_margins",
            "FreqResponse"]
 
 ANALYSIS_SCHEMA = "cct.analysis/1"
+#: Bisection tolerance of the sampled certificate in analysis.json and compare: 1/8
+#: of the scale (four steps after the end points, about 15 s for paper 003's
+#: third-order H-infinity laws; the LMI solves dominate, 0.05 costs three times more)
+SAMPLED_CERTIFICATE_TOL = 0.125
 STEP_KEYS = ("response_time_5pct", "rise_time_10_90", "settling_time_2pct", "overshoot_pct")
 
 
 def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
                     certificate: bool = True, certificate_delay: bool = False,
-                    seed: int = 0) -> dict:
+                    sampled_certificate: bool = False, seed: int = 0) -> dict:
     """Everything ``analysis.json`` holds (JSON-ready dict).
 
     Parameters
@@ -52,10 +63,15 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
     sweep_sets : int
         Latin-hypercube sets of the robustness sweep.
     certificate : bool
-        Run the quadratic-stability certificate (a few seconds): largest
-        certified scale of the box R, L x0.5..x2, |omega| <= max speed.
+        Run the quadratic-stability certificate of the continuous loop: largest
+        certified scale of the box R, L x0.5..x2, |omega| <= max speed (about
+        a second).
     certificate_delay : bool
         Certificate with the Pade delay model (512 vertices, slower).
+    sampled_certificate : bool
+        Also certify the sampled coupled loop as executed (speed sensor gain
+        0.9..1.1 and offset +/-10 rad/s too): tens of seconds, so opt-in
+        (``cct design --sampled-certificate``); ``None`` in the output otherwise.
     seed : int
         Sweep seed (deterministic output).
 
@@ -69,7 +85,10 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
         "mimo_at_speed": {...}, "mimo_over_box": {...} (worst multiloop disk
         margin over the nominal plant and the corners of R, Ld, Lq x0.5..x2 at
         speeds 0..max, :func:`mimo_over_box`),
-        "sweep": {...}, "certificate": {...} or None}``; each margins entry is
+        "sweep": {...}, "certificate": {...} or None,
+        "sampled_certificate": {...} or None}`` (:class:`SampledCertificate`:
+        certified scale, box and speed range, first uncertified corner); each
+        margins entry is
         :meth:`MarginsResult.to_json`.
     """
     out = {
@@ -93,12 +112,15 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
         "certificate": (largest_certified_scale(artifact, motor, drive,
                                                 delay=certificate_delay).to_json()
                         if certificate else None),
+        "sampled_certificate": (largest_certified_sampled_scale(
+            artifact, motor, drive, tol=SAMPLED_CERTIFICATE_TOL).to_json()
+                                if sampled_certificate else None),
     }
     return json_ready(out)
 
 
 def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500,
-                    certificate: bool = True) -> list[dict]:
+                    certificate: bool = True, sampled_certificate: bool = False) -> list[dict]:
     """Side-by-side rows for ``cct compare``.
 
     Each row: ``method``, ``margins`` (per axis, the nine MARGINS keys of the
@@ -107,8 +129,9 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
     margins over the robustness sweep), ``n_unstable`` (sweep sets that lose
     stability), ``mimo_worst_disk_margin``, ``mimo_box`` (worst multiloop
     disk margin over the parameter box and the speeds, with its speed and
-    parameters, :func:`mimo_over_box`) and ``certificate``
-    (``{"certified_scale", "certified"}`` or None).
+    parameters, :func:`mimo_over_box`), ``certificate``
+    (``{"certified_scale", "certified"}`` or None) and ``sampled_certificate``
+    (the same for the sampled coupled loop, with ``speed_range_rad_s``, or None).
 
     Parameters
     ----------
@@ -122,6 +145,8 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
         Parameter sets per robustness sweep.
     certificate : bool
         Also search the largest certified parameter box (slower).
+    sampled_certificate : bool
+        Also certify the sampled coupled loop (tens of seconds per design).
     """
     rows = []
     for art in artifacts:
@@ -130,6 +155,8 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
         mimo = mimo_disk_margins(art, motor, drive)
         box = mimo_over_box(art, motor, drive)
         cert = largest_certified_scale(art, motor, drive) if certificate else None
+        scert = (largest_certified_sampled_scale(art, motor, drive, tol=SAMPLED_CERTIFICATE_TOL)
+                 if sampled_certificate else None)
         rows.append(json_ready({
             "method": art.method,
             "margins": {ax: r.to_json(extras=False) for ax, r in m.items()},
@@ -144,5 +171,9 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
                          "worst_params": box.worst_params, "n_unstable": box.n_unstable},
             "certificate": (None if cert is None else
                             {"certified_scale": cert.scale, "certified": cert.certified}),
+            "sampled_certificate": (None if scert is None else
+                                    {"certified_scale": scert.scale,
+                                     "certified": scert.certified,
+                                     "speed_range_rad_s": scert.speed_range_rad_s}),
         }))
     return rows

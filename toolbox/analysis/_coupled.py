@@ -16,7 +16,8 @@ import numpy as np
 from ..plant import dq_matrices
 from ._statespace import zoh_2x2
 
-__all__ = ["coupled_plant", "decoupling_matrix", "CoupledLoop", "coupled_closed_loop"]
+__all__ = ["coupled_plant", "decoupling_matrix", "CoupledLoop", "coupled_closed_loop",
+           "coupled_state_matrix"]
 
 
 def coupled_plant(R, Ld, Lq, omega) -> tuple[np.ndarray, np.ndarray]:
@@ -98,6 +99,50 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
     N = R.size
     Ac, Bc = coupled_plant(R, Ld, Lq, omega)
     Phi, Gam = zoh_2x2(Ac, Bc, Ts)
+    A, Kx, Kr = _state_matrix(laws, decoupling, d, Phi, Gam, omega_meas)
+    n = A.shape[-1]
+    nx = n - 2 * d
+    k0 = np.zeros((N, 2))
+    if decoupling.emf:
+        k0[:, 1] = omega_meas * decoupling.flux_c
+    emf = np.zeros((N, 2))
+    emf[:, 1] = -omega * flux          # back-EMF as a voltage
+    B = np.zeros((N, n, 2))
+    c = np.zeros((N, n))
+    c[:, :2] = (Gam @ emf[..., None])[..., 0]
+    ld, lq = laws["d"], laws["q"]
+    B[:, 2:2 + ld.n, 0] = ld.B[:, 0]
+    B[:, 2 + ld.n:nx, 1] = lq.B[:, 0]
+    if d == 0:
+        B[:, :2, :] += Gam @ Kr
+        c[:, :2] += (Gam @ k0[..., None])[..., 0]
+    else:
+        last = slice(nx + 2 * (d - 1), nx + 2 * d)      # q_d+ = v
+        B[:, last, :] = Kr
+        c[:, last] = k0
+    return CoupledLoop(A, B, c)
+
+
+def coupled_state_matrix(laws: dict, decoupling, delay_samples: int, Phi: np.ndarray,
+                         Gam: np.ndarray, omega_meas) -> np.ndarray:
+    """State matrix (N, n, n) of the executed coupled loop for given ZOH matrices.
+
+    The loop of :func:`coupled_closed_loop` (same states) with the plant's
+    ``Phi`` (N, 2, 2) and ``Gamma`` (N, 2, 2) given rather than computed from
+    parameters: the sampled-loop certificate evaluates it on matrices that
+    bound the exact discretisation. Affine in ``(Phi, Gamma)`` for a fixed
+    measured speed, and in the measured speed ``omega_meas`` (rad/s) for a
+    fixed ``Gamma``.
+    """
+    return _state_matrix(laws, decoupling, int(delay_samples), Phi, Gam,
+                         np.broadcast_to(np.asarray(omega_meas, float),
+                                         (Phi.shape[0],)))[0]
+
+
+def _state_matrix(laws, decoupling, d, Phi, Gam, omega_meas):
+    """``(A, Kx, Kr)``: the closed loop's state matrix, the commanded voltage's
+    state gain ``v = Kx x + Kr r + k0`` (N, 2, n) and reference gain (2, 2)."""
+    N = Phi.shape[0]
     W = decoupling_matrix(decoupling, omega_meas)
     ld, lq = laws["d"], laws["q"]
     nd, nq = ld.n, lq.n
@@ -111,33 +156,19 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
     Kx[:, 0, 2:2 + nd] = ld.C[0]
     Kx[:, 1, 2 + nd:nx] = lq.C[0]
     Kr = np.diag([ld.D[0, 0], lq.D[0, 0]])
-    k0 = np.zeros((N, 2))
-    if decoupling.emf:
-        k0[:, 1] = omega_meas * decoupling.flux_c
-    emf = np.zeros((N, 2))
-    emf[:, 1] = -omega * flux          # back-EMF as a voltage
     A = np.zeros((N, n, n))
-    B = np.zeros((N, n, 2))
-    c = np.zeros((N, n))
     A[:, :2, :2] = Phi
-    c[:, :2] = (Gam @ emf[..., None])[..., 0]
     # law states
     A[:, 2:2 + nd, 0] = ld.B[:, 1]
     A[:, 2:2 + nd, 2:2 + nd] = ld.A
-    B[:, 2:2 + nd, 0] = ld.B[:, 0]
     A[:, 2 + nd:nx, 1] = lq.B[:, 1]
     A[:, 2 + nd:nx, 2 + nd:nx] = lq.A
-    B[:, 2 + nd:nx, 1] = lq.B[:, 0]
     if d == 0:
         A[:, :2, :] += Gam @ Kx
-        B[:, :2, :] += Gam @ Kr
-        c[:, :2] += (Gam @ k0[..., None])[..., 0]
     else:
         A[:, :2, nx:nx + 2] = Gam                       # q_1 applied
         for j in range(d - 1):                          # q_j+ = q_{j+1}
             A[:, nx + 2 * j:nx + 2 * j + 2, nx + 2 * j + 2:nx + 2 * j + 4] = np.eye(2)
         last = slice(nx + 2 * (d - 1), nx + 2 * d)      # q_d+ = v
         A[:, last, :] = Kx
-        B[:, last, :] = Kr
-        c[:, last] = k0
-    return CoupledLoop(A, B, c)
+    return A, Kx, Kr

@@ -159,9 +159,13 @@ def derive(spec: str, fmt: str | None) -> None:
               help="Output directory.")
 @click.option("--only-controller", is_flag=True,
               help="Write controller.json only (no analysis, verification, report, header).")
+@click.option("--sampled-certificate", is_flag=True,
+              help="Also certify the sampled coupled dq loop over the parameter box and "
+                   "speeds (tens of seconds per design).")
 @_QUIET
 @_spec_errors
-def design(spec: str, out_dir: str, only_controller: bool, quiet: bool) -> None:
+def design(spec: str, out_dir: str, only_controller: bool, sampled_certificate: bool,
+           quiet: bool) -> None:
     """Design the controller of SPEC and write controller.json, analysis.json,
     verify.json, controller.h, report.html and report.pdf into OUT.
 
@@ -179,7 +183,7 @@ def design(spec: str, out_dir: str, only_controller: bool, quiet: bool) -> None:
     full = not only_controller
     with StepBar(design_stages(full, full, full, full), quiet=quiet, desc="design") as bar:
         out = build_outputs(s, analysis=full, verification=full, report=full, header=full,
-                            progress=bar)
+                            sampled_certificate=sampled_certificate, progress=bar)
     for path in write_outputs(out.files, out_dir):
         if not quiet:
             click.echo(f"wrote {path}", err=True)
@@ -380,9 +384,13 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
 @click.argument("specs", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option("--json", "json_path", type=click.Path(dir_okay=False),
               help="Also write the table as JSON to this file.")
+@click.option("--sampled-certificate", is_flag=True,
+              help="Also certify the sampled coupled dq loop over the parameter box and "
+                   "speeds (tens of seconds per design).")
 @_QUIET
 @_spec_errors
-def compare(specs: tuple[str, ...], json_path: str | None, quiet: bool) -> None:
+def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: bool,
+            quiet: bool) -> None:
     """Design every SPEC and print margins and robustness side by side.
 
     Each design is also verified (margins and stability of the executed law,
@@ -413,7 +421,8 @@ def compare(specs: tuple[str, ...], json_path: str | None, quiet: bool) -> None:
             bar(f"design {name}")
             artifacts.append(design_spec(s))
         bar("analysis")
-        rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive)
+        rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive,
+                               sampled_certificate=sampled_certificate)
         for name, spec_path, row, art, s in zip(names, specs, rows, artifacts, loaded):
             bar(f"verification {name}")
             row["spec"] = spec_path
@@ -471,6 +480,7 @@ _COLUMNS = (
     ("box MIMO", lambda r: r["mimo_box"]["worst_disk_margin"]),
     ("box worst at", lambda r: _box_where(r["mimo_box"])),
     ("cert. scale", lambda r: (r["certificate"] or {}).get("certified_scale")),
+    ("sampled cert.", lambda r: (r.get("sampled_certificate") or {}).get("certified_scale")),
     ("verdict", lambda r: "pass" if r.get("passed", True) else "FAIL"),
 )
 
@@ -489,7 +499,7 @@ def _worst(per_axis: dict, key: str, pick) -> float:
 def _print_table(rows: list[dict]) -> None:
     """Sampled-loop margins and step figures, robustness over the sweep."""
     informational = {"GM dB", "PM deg", "Mm", "worst GM dB", "unstable", "MIMO disk",
-                     "cert. scale"}
+                     "cert. scale", "sampled cert."}
     table = [[h for h, _ in _COLUMNS]] + [
         [_fmt(get(r)) + ("*" if h in informational and r.get("margins_basis") else "")
          for h, get in _COLUMNS] for r in rows]
@@ -589,9 +599,12 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
               type=click.Path(file_okay=False), help="Directory of spec files.")
 @click.option("--out", "out_dir", default="reports", show_default=True,
               type=click.Path(file_okay=False), help="Gallery directory.")
+@click.option("--sampled-certificate", is_flag=True,
+              help="Also certify the sampled coupled dq loop over the parameter box and "
+                   "speeds (tens of seconds per design).")
 @_QUIET
 @_spec_errors
-def gallery(designs_dir: str, out_dir: str, quiet: bool) -> None:
+def gallery(designs_dir: str, out_dir: str, sampled_certificate: bool, quiet: bool) -> None:
     """Regenerate the report gallery: every spec in DESIGNS into OUT/<name>/.
 
     Every design's outputs are written; exit 1 when any design fails.
@@ -608,7 +621,7 @@ def gallery(designs_dir: str, out_dir: str, quiet: bool) -> None:
     with StepBar([p.name for p in paths], quiet=quiet, desc="gallery") as bar:
         for path in paths:
             bar(path.name)
-            out = build_outputs(load_spec(path))
+            out = build_outputs(load_spec(path), sampled_certificate=sampled_certificate)
             write_outputs({**out.files, **_figures(out.html or "")}, Path(out_dir) / path.stem)
             if not out.passed:
                 failed.append(path.name)

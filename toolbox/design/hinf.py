@@ -52,6 +52,8 @@ from ..plant import axis_plants
 from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 from ._hinf_defaults import default_w2, w1_params, w2_params, w2_toml
+from ._hinf_speed import (WEIGHT_GAINS, AtSpeedCfg, coupled_weight, coupling_gains,
+                          read_at_speed, small_gain_peak)
 from ._hinf_riccati import (GammaBelowOptimum, augment_mixed_sensitivity, fastest_pole_modulus,
                             gamma_iteration, synthesize, weight_bound_check)
 from ._reduction import compare_margins, loop_margins, reduce_controller
@@ -63,7 +65,7 @@ __all__ = ["HinfCfg", "HinfAxisResult", "read_weight", "design_hinf_axis", "read
 _KEY = "controller.hinf"
 AXES = ("d", "q")
 CFG_KEYS = ("gamma", "backoff", "reduce_order", "integrator_tol", "margin_loss",
-            "on_margin_loss", "executed", "weights")
+            "on_margin_loss", "executed", "weights", "at_speed")
 _FORMS = {"tf": ("num", "den"), "zpk": ("zeros", "poles", "gain"),
           "makeweight": ("dc_gain", "crossover", "crossover_gain", "hf_gain", "order")}
 
@@ -96,6 +98,9 @@ class HinfCfg:
         Method-level defaults taken (``gamma``), stated in the artifact.
     stated : dict
         Per axis, the default weights used and the rule of each.
+    at_speed : AtSpeedCfg or None
+        Synthesis against the coupled plant at speed
+        (:mod:`toolbox.design._hinf_speed`), or None (paper 003's per-axis design).
     """
 
     gamma: float | str
@@ -108,6 +113,7 @@ class HinfCfg:
     weights: dict
     defaults: dict | None = None
     stated: dict = field(default_factory=dict)
+    at_speed: AtSpeedCfg | None = None
 
     def to_spec(self, spec=None) -> dict[str, Any]:
         """``[controller.hinf]`` keys that read back to this configuration.
@@ -150,6 +156,8 @@ class HinfCfg:
                     given = _given_weight(spec, ax, name)
                     weights[ax][name] = given if given is not None else _tf_table(W)
         out["weights"] = weights
+        if self.at_speed is not None:
+            out["at_speed"] = self.at_speed.to_spec()
         return out
 
 
@@ -255,7 +263,9 @@ def read_cfg(method: str, table, motor, drive) -> HinfCfg:
     (rad/s, default 0.1), ``margin_loss`` (0..1, default 0.1),
     ``on_margin_loss`` ("refuse" | "flag", default "refuse"), ``executed``
     ("reduced" | "full", default "reduced" when reduce_order is given),
-    ``[controller.hinf.weights.d|q]`` with ``w1`` (required), ``w2``, ``w3``.
+    ``[controller.hinf.weights.d|q]`` with ``w1`` (required), ``w2``, ``w3``,
+    and ``[controller.hinf.at_speed]`` (optional: synthesis against the coupled
+    plant at speed, :func:`toolbox.design._hinf_speed.read_at_speed`).
 
     Parameters: as :func:`toolbox.design.read_method_cfg`.
 
@@ -302,7 +312,7 @@ def read_cfg(method: str, table, motor, drive) -> HinfCfg:
             stated.setdefault(ax, {})["w1"] = "default, from requirements (see design)"
     return HinfCfg(gamma, backoff, order, itol, loss, on_loss, executed, weights,
                    defaults={"gamma": gamma} if not t.has("gamma") and not t.has("weights")
-                   else None, stated=stated)
+                   else None, stated=stated, at_speed=read_at_speed(t, motor, drive))
 
 
 def _hf_gain(W: Any) -> float:
@@ -483,14 +493,36 @@ def design(spec) -> ControllerArtifact:
     plants = axis_plants(spec.motor)
     weights, stated = _fill_default_w1(cfg, spec)
     cfg = replace(cfg, weights=weights, stated=stated)
+    decoupling = decoupling_from_motor(spec.motor)
+    at_speed = None
+    if cfg.at_speed is None:
+        results = _synthesise(cfg, plants, ts)
+    else:
+        cfg, results, at_speed = _synthesise_at_speed(cfg, plants, ts, spec.motor, decoupling)
+    axes = {ax: _executed_axis(r, ts, cfg.executed) for ax, r in results.items()}
+    weights = {ax: AxisWeights(gamma=float(r.synthesis.gamma),
+                               **{k: _weight_data(W) for k, W in cfg.weights[ax].items()})
+               for ax, r in results.items()}
+    eqs = ["003 eq (33)-(34)", "003 eq (35)-(40)", "003 eq (10)-(32)", "003 eq (65)-(67)",
+           "003 eq (41)-(43)"] + (["003 eq (71)-(72)"] if cfg.reduce_order else [])
+    params = _design_parameters(cfg, results)
+    if at_speed is not None:
+        params["at_speed"] = at_speed
+        eqs.append("coupled dq plant at speed, 003 eq (3)-(4): small-gain S weight "
+                   "w1 + k sqrt(c_d c_q) G (issue 17)")
+    return make_artifact(spec, axes, decoupling, params, eqs, weights=weights)
+
+
+def _synthesise(cfg: HinfCfg, plants: dict, ts: float) -> dict:
+    """Both axes' syntheses with the weights of ``cfg`` (one gamma for both)."""
     try:
-        results = {ax: design_hinf_axis(plants[ax], **cfg.weights[ax], gamma=cfg.gamma,
-                                        backoff=cfg.backoff, sample_time=ts,
-                                        reduce_order=cfg.reduce_order,
-                                        integrator_tol=cfg.integrator_tol,
-                                        margin_loss=cfg.margin_loss,
-                                        on_margin_loss=cfg.on_margin_loss, axis=ax)
-                   for ax in AXES}
+        return {ax: design_hinf_axis(plants[ax], **cfg.weights[ax], gamma=cfg.gamma,
+                                     backoff=cfg.backoff, sample_time=ts,
+                                     reduce_order=cfg.reduce_order,
+                                     integrator_tol=cfg.integrator_tol,
+                                     margin_loss=cfg.margin_loss,
+                                     on_margin_loss=cfg.on_margin_loss, axis=ax)
+                for ax in AXES}
     except GammaBelowOptimum as err:
         # one gamma serves both axes: quote the best achievable for both
         best = {ax: gamma_iteration(augment_mixed_sensitivity(plants[ax], **cfg.weights[ax]))
@@ -502,14 +534,57 @@ def design(spec) -> ControllerArtifact:
                         hint=f"{failed}; best per axis: "
                         + ", ".join(f"{ax} {g:.4g}" for ax, g in best.items())
                         + f'; set gamma above {worst:.4g} or "optimal"') from None
-    axes = {ax: _executed_axis(r, ts, cfg.executed) for ax, r in results.items()}
-    weights = {ax: AxisWeights(gamma=float(r.synthesis.gamma),
-                               **{k: _weight_data(W) for k, W in cfg.weights[ax].items()})
+
+
+def _synthesise_at_speed(cfg: HinfCfg, plants: dict, ts: float, motor,
+                         decoupling) -> tuple[HinfCfg, dict, dict]:
+    """Synthesis against the coupled plant at speed (:mod:`._hinf_speed`).
+
+    The S weight of each axis gets the coupling term ``k sqrt(c_d c_q) G_x``;
+    ``k`` runs through :data:`WEIGHT_GAINS` until the executed controllers
+    meet the small-gain condition of the coupled loop over the box.
+
+    Returns
+    -------
+    (HinfCfg, dict, dict)
+        The configuration with the weights used, the axis results and the
+        record for ``design_parameters["at_speed"]``.
+
+    Raises
+    ------
+    DesignInfeasible
+        No gain meets the condition (key ``controller.hinf.at_speed``).
+    """
+    c_d, c_q = coupling_gains(motor, decoupling, cfg.at_speed)
+    scale = math.sqrt(c_d * c_q)
+    tries = []
+    for k in WEIGHT_GAINS:
+        weights = {ax: dict(cfg.weights[ax], w1=coupled_weight(cfg.weights[ax]["w1"],
+                                                                plants[ax], k * scale))
+                   for ax in AXES}
+        trial = replace(cfg, weights=weights)
+        results = _synthesise(trial, plants, ts)
+        run = {ax: (r.Kr if r.Kr is not None and cfg.executed == "reduced" else r.K)
                for ax, r in results.items()}
-    eqs = ["003 eq (33)-(34)", "003 eq (35)-(40)", "003 eq (10)-(32)", "003 eq (65)-(67)",
-           "003 eq (41)-(43)"] + (["003 eq (71)-(72)"] if cfg.reduce_order else [])
-    return make_artifact(spec, axes, decoupling_from_motor(spec.motor),
-                         _design_parameters(cfg, results), eqs, weights=weights)
+        peak, freq = small_gain_peak(plants, run, c_d, c_q)
+        tries.append({"weight_gain": k, "small_gain_peak": peak, "at_rad_s": freq,
+                      "gamma": {ax: float(r.synthesis.gamma) for ax, r in results.items()}})
+        if peak < 1.0:
+            record = {"max_speed_rad_s": cfg.at_speed.max_speed,
+                      "max_electrical_speed_rad_s": cfg.at_speed.max_speed * motor.pole_pairs,
+                      "box": cfg.at_speed.to_spec(), "coupling_gain_d_ohm": c_d,
+                      "coupling_gain_q_ohm": c_q, "weight_gain": k,
+                      "small_gain_peak": peak, "small_gain_peak_rad_s": freq, "tries": tries,
+                      "basis": "continuous coupled loop (no sampling delay): "
+                               "c_d c_q |S_d G_d S_q G_q| < 1 on a 4001-point grid "
+                               "1e-2..1e6 rad/s"}
+            return trial, results, record
+    raise DesignInfeasible(f"{_KEY}.at_speed", "a speed range and box whose residual "
+                           "coupling the H-infinity loops can tolerate (small-gain peak < 1)",
+                           cfg.at_speed.to_spec(),
+                           hint=f"smallest peak {min(t['small_gain_peak'] for t in tries):.3g} "
+                                f"with coupling gains c_d = {c_d:.3g}, c_q = {c_q:.3g} ohm; "
+                                "lower max_speed, narrow inductance_box or relax w2")
 
 
 def _executed_axis(r: Any, ts: float, executed: str) -> AxisController:

@@ -293,8 +293,8 @@ def _robustness_of(analysis: Mapping | None) -> dict | None:
 
 
 def _certificate_of(analysis: Mapping | None) -> dict | None:
-    """Named facts of ``analysis.certificate``, ``analysis.mimo_at_speed`` and
-    ``analysis.mimo_over_box``."""
+    """Named facts of ``analysis.certificate``, ``analysis.sampled_certificate``,
+    ``analysis.mimo_at_speed`` and ``analysis.mimo_over_box``."""
     facts: dict[str, Any] = {}
     cert = (analysis or {}).get("certificate")
     if cert:
@@ -303,6 +303,7 @@ def _certificate_of(analysis: Mapping | None) -> dict | None:
         facts["largest certified box scale"] = cert.get("scale")
         for name, (lo, hi) in (cert.get("box") or {}).items():
             facts[f"box {name}"] = f"{lo:.4g} .. {hi:.4g}"
+    facts.update(_sampled_certificate_of((analysis or {}).get("sampled_certificate")))
     mimo = (analysis or {}).get("mimo_at_speed") or {}
     if mimo:
         facts["MIMO disk margin, worst electrical speed (rad/s)"] = mimo.get("worst_speed_rad_s")
@@ -319,6 +320,29 @@ def _certificate_of(analysis: Mapping | None) -> dict | None:
             f"{box.get('n_unstable')} of {box.get('n_models')} plants x "
             f"{len(box.get('speeds_rad_s') or [])} speeds")
     return facts or None
+
+
+def _sampled_certificate_of(cert: Mapping | None) -> dict[str, Any]:
+    """Named facts of ``analysis.sampled_certificate`` (empty when absent)."""
+    if not isinstance(cert, Mapping):
+        return {}
+    where = "sampled coupled loop as executed (ZOH, delay, decoupling)"
+    facts: dict[str, Any] = {
+        f"stability certificate, {where}": "certified" if cert.get("certified")
+        else "not certified, not even the nominal point",
+        "sampled loop: largest certified box scale": cert.get("scale")}
+    for name, (lo, hi) in (cert.get("box") or {}).items():
+        facts[f"sampled loop: box {name}"] = f"{lo:.4g} .. {hi:.4g}"
+    first = cert.get("first_uncertified")
+    if isinstance(first, Mapping):
+        c = first.get("corner") or {}
+        state = ("unstable" if c.get("unstable") else "stable there, not proven on its cell")
+        facts["sampled loop: first uncertified corner"] = (
+            f"scale {fmt(first.get('scale'))}: R x{fmt(c.get('R'))}, Ld x{fmt(c.get('Ld'))}, "
+            f"Lq x{fmt(c.get('Lq'))}, w {fmt(c.get('omega_rad_s'))} rad/s, speed gain "
+            f"{fmt(c.get('speed_gain'))}, offset {fmt(c.get('speed_offset_rad_s'))} rad/s; "
+            f"spectral radius {fmt(c.get('spectral_radius'))} ({state}); {first.get('reason')}")
+    return facts
 
 
 def _step_of(analysis: Mapping | None) -> dict | None:

@@ -1,0 +1,177 @@
+"""Certificate of the sampled coupled dq loop as executed (issue 17 item 1).
+
+toolbox.analysis._sampled_certificate: a common quadratic Lyapunov function
+per speed cell over a polytope that contains the exact ZOH loop. What must
+hold: (a) no parameter set of the certified box is unstable for the sampled
+sweep (the sweep restricted to the box, and random sets drawn by hypothesis),
+(b) the certified scale comes with the first uncertified corner, (c) where
+the continuous certificate certifies a box that the sampled loop loses
+(paper 002's PI, ``Kp Ts / L`` up to 3.6), the sampled one refuses it.
+"""
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from toolbox.analysis import (SampledBox, certify_sampled, largest_certified_sampled_scale,
+                              largest_certified_scale, robustness_sweep)
+from toolbox.analysis import _sampled_certificate as S
+from toolbox.analysis._coupled import coupled_closed_loop, coupled_state_matrix
+from toolbox.analysis._laws import axis_law
+from toolbox.analysis._statespace import zoh_2x2
+from toolbox.pipeline import design_spec
+from toolbox.plant import dq_matrices, max_electrical_speed
+from toolbox.spec import load_spec
+
+DESIGNS = {"pi002": "designs/002_cormerais2002_svm_pi.toml",
+           "hinf003": "designs/003_azaiz2007_hinf.toml"}
+PROFILE = settings(max_examples=60, deadline=None, derandomize=True,
+                   suppress_health_check=[HealthCheck.function_scoped_fixture])
+
+
+@pytest.fixture(scope="module", params=sorted(DESIGNS))
+def case(request):
+    """(spec, artifact, certificate) of a gallery design (one bisection each)."""
+    spec = load_spec(DESIGNS[request.param])
+    art = design_spec(spec)
+    return spec, art, largest_certified_sampled_scale(art, spec.motor, spec.drive)
+
+
+def _laws(art):
+    return {k: axis_law(art.axes[k], True) for k in "dq"}
+
+
+def test_state_matrix_is_the_executed_loop():
+    """coupled_state_matrix with the exact ZOH matrices is coupled_closed_loop's
+    state matrix (the certificate's loop is the sweep's loop), bit for bit."""
+    spec = load_spec(DESIGNS["hinf003"])
+    art = design_spec(spec)
+    rng = np.random.default_rng(3)
+    R, Ld, Lq = (v * np.exp(rng.uniform(-0.7, 0.7, 20))
+                 for v in (spec.motor.R, spec.motor.Ld, spec.motor.Lq))
+    w, wm = rng.uniform(-900, 900, 20), rng.uniform(-900, 900, 20)
+    loop = coupled_closed_loop(_laws(art), art.decoupling, art.sample_time, art.delay_samples,
+                               R=R, Ld=Ld, Lq=Lq, omega=w, omega_meas=wm)
+    Phi, Gam = zoh_2x2(*dq_matrices(R, Ld, Lq, w), art.sample_time)
+    A = coupled_state_matrix(_laws(art), art.decoupling, art.delay_samples, Phi, Gam, wm)
+    assert np.array_equal(A, loop.A)
+
+
+@PROFILE
+@given(st.lists(st.floats(0, 1), min_size=4, max_size=4))
+def test_remainder_bounds_the_exact_discretisation(u):
+    """Step 2: on the largest box (scale 1, 003's plant at 1e-4 s), the exact
+    ``[Phi, Psi]`` is within ``rho`` (2-norm) of the linear parts at every
+    point of the cell; ``rho`` is an over-bound (measured about 20x the worst
+    error), so the test fails only if the bound were wrong."""
+    spec = load_spec(DESIGNS["hinf003"])
+    Ts = spec.drive.sample_time
+    box = SampledBox.around(spec.motor, 1.0, omega_max=920.0)
+    lin = S._linearisation(box, Ts)
+    lo = np.array([box.R[0], box.Ld[0], box.Lq[0], box.omega[0]])
+    hi = np.array([box.R[1], box.Ld[1], box.Lq[1], box.omega[1]])
+    p = lo + np.array(u) * (hi - lo)
+    A, B = dq_matrices(*p)
+    Phi, Gam = zoh_2x2(A, B, Ts)
+    Psi = Gam @ np.linalg.inv(B * Ts)
+    Pl, Ql = lin.parts(A * Ts)
+    err = np.linalg.norm(np.concatenate([Phi - Pl, Psi - Ql], axis=2)[0], 2)
+    assert err <= lin.rho
+
+
+def test_certified_box_has_no_unstable_sweep_set(case):
+    """(a) The robustness sweep restricted to the certified box (its R, Ld, Lq
+    factors, speed-sensor gain and offset, the design delay, speeds up to the
+    certified one) finds no unstable set; the full default sweep does find
+    unstable sets, so the restriction is what keeps it clean."""
+    spec, art, cert = case
+    assert cert.certified and 0 < cert.scale < 1, cert
+    m, b = spec.motor, cert.box
+    ranges = {"R": [x / m.R for x in b["R"]], "Ld": [x / m.Ld for x in b["Ld"]],
+              "Lq": [x / m.Lq for x in b["Lq"]], "speed_gain": b["speed_gain"],
+              "speed_offset": [x / m.pole_pairs for x in b["speed_offset"]],
+              "delay_samples": None}
+    drive = dataclasses.replace(spec.drive, max_speed=b["omega"][1] / m.pole_pairs)
+    inside = robustness_sweep(art, m, ranges, n=300, drive=drive, n_speeds=5, n_grid=100)
+    assert inside.n_unstable == 0 and inside.worst_spectral_radius < 1
+    full = robustness_sweep(art, m, n=300, drive=spec.drive, n_grid=100)
+    assert full.n_unstable > 0
+
+
+@PROFILE
+@given(st.lists(st.floats(0, 1), min_size=6, max_size=6))
+def test_random_sets_in_the_certified_box_are_stable(case, u):
+    """(a) Any set drawn in the certified box (true R, Ld, Lq, speed, sensor
+    gain and offset) has a stable sampled coupled loop (exact eigenvalues)."""
+    spec, art, cert = case
+    b = cert.box
+    names = ("R", "Ld", "Lq", "omega", "speed_gain", "speed_offset")
+    R, Ld, Lq, w, g, o = (lo + x * (hi - lo) for x, (lo, hi) in zip(u, (b[k] for k in names)))
+    loop = coupled_closed_loop(_laws(art), art.decoupling, art.sample_time, art.delay_samples,
+                               R=R, Ld=Ld, Lq=Lq, omega=w, omega_meas=g * w + o)
+    assert loop.spectral_radius()[0] < 1
+
+
+def test_scale_reported_with_first_uncertified_corner(case):
+    """(b) The result names the certified scale and box, and the first refused
+    scale within one bisection tolerance (0.05) above it, with a corner inside
+    that refused box and its exact spectral radius; the JSON form is strict."""
+    spec, art, cert = case
+    first = cert.first_uncertified
+    assert first is not None and 0 < first["scale"] - cert.scale <= 0.05
+    c = first["corner"]
+    k = first["scale"]
+    for name in ("R", "Ld", "Lq"):
+        assert 1 - k * 0.5 - 1e-12 <= c[name] <= 1 + k * 1.0 + 1e-12
+    wmax = max_electrical_speed(spec.motor, spec.drive)
+    assert abs(c["omega_rad_s"]) <= k * wmax + 1e-9
+    radius = coupled_closed_loop(
+        _laws(art), art.decoupling, art.sample_time, art.delay_samples,
+        R=c["R"] * spec.motor.R, Ld=c["Ld"] * spec.motor.Ld, Lq=c["Lq"] * spec.motor.Lq,
+        omega=c["omega_rad_s"],
+        omega_meas=c["speed_gain"] * c["omega_rad_s"] + c["speed_offset_rad_s"],
+    ).spectral_radius()[0]
+    assert radius == pytest.approx(c["spectral_radius"], rel=1e-12)
+    assert c["unstable"] == bool(radius >= 1)
+    assert cert.speed_range_rad_s == [-cert.scale * wmax, cert.scale * wmax]
+    json.dumps(cert.to_json(), allow_nan=False)
+
+
+def test_continuous_certifies_where_sampled_refuses():
+    """(c) Paper 002's PI (Ts = 1 ms, Kp = 0.2, L = 0.11 mH: Kp Ts/L = 1.8 at
+    the nominal point) is certified by the continuous LMI on the whole default
+    box, but half the inductance doubles the sampled loop gain past 2: the
+    sampled certificate refuses that box and names an unstable corner."""
+    spec = load_spec(DESIGNS["pi002"])
+    art = design_spec(spec)
+    cont = largest_certified_scale(art, spec.motor, spec.drive)
+    assert cont.certified and cont.scale == 1.0
+    wmax = max_electrical_speed(spec.motor, spec.drive)
+    box = SampledBox.around(spec.motor, 1.0, omega_max=wmax)
+    ok, outcomes = certify_sampled(art, box)
+    assert not ok
+    assert outcomes[-1].worst_radius > 1 and "unstable" in outcomes[-1].reason
+
+
+def test_warm_start_and_fresh_solve_agree_on_nominal_point():
+    """The nominal point (scale 0) of a stable design is certified by a fresh
+    LMI solve, and the matrix found certifies it again as a warm start; a
+    Lyapunov matrix that is not one (indefinite) is rejected by the check."""
+    spec = load_spec(DESIGNS["hinf003"])
+    art = design_spec(spec)
+    box = SampledBox.around(spec.motor, 0.0)
+    guesses: dict = {}
+    ok, out = certify_sampled(art, box, speed_cells=1, guesses=guesses)
+    assert ok and out[0].reason in ("optimal", "optimal_inaccurate")
+    ok2, out2 = certify_sampled(art, box, speed_cells=1, guesses=dict(guesses))
+    assert ok2 and out2[0].reason == "warm start"
+    n = guesses[0].shape[0]
+    bad = np.eye(n)
+    bad[0, 0] = -1.0
+    assert not S._verified(np.zeros((1, n, n)), np.zeros((1, n, n)), np.zeros((n, 2)), bad, 1.0)
+    assert math.isfinite(out[0].condition_P)

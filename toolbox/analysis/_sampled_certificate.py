@@ -1,0 +1,573 @@
+"""Robust-stability certificate of the sampled coupled dq loop as executed (issue 17).
+
+The continuous certificate (:mod:`toolbox.analysis.certificate`) ignores the
+sampling and the computation delay, so it can certify a box on which the
+executed loop is unstable (paper 002's PI: ``Kp Ts / L`` reaches 3.6 at
+half the inductance). This certificate is about the loop the robustness
+sweep and the simulator run: :func:`toolbox.analysis.margins.coupled_closed_loop`
+(ZOH plant at constant speed, the executed discrete laws of both axes, the
+decoupling with the controller's parameters and the measured speed, the
+delay line of ``delay_samples`` periods).
+
+Uncertainty: true ``R``, ``Ld``, ``Lq``, electrical speed ``w``, and the
+measured speed ``w_m = g w + o`` of the decoupling (sensor gain ``g`` and
+offset ``o``), each in an interval (:class:`SampledBox`); constant in time.
+
+Soundness argument (every step is an over-bound, none an approximation):
+
+1. *Coordinates.* The continuous plant enters the ZOH model only through
+   ``X = Ts A(w)`` (4 entries) and ``b = Ts diag(B)`` (2 entries), from
+   :func:`toolbox.plant.dq_matrices`: ``Phi = exp(X)``,
+   ``Gamma = Psi(X) diag(b)`` with ``Psi(X) = sum_k X^k/(k+1)!``. Each
+   entry (``Ts R/Ld``, ``Ts w Lq/Ld``, ``Ts/Ld``, ...) is monotone in each
+   physical parameter, so its range over a cell is attained at the cell's
+   16 corners; the box ``Theta`` of these ranges contains the cell's image.
+2. *Linearisation with a remainder.* At the centre ``X_c`` of ``Theta``,
+   ``exp(X_c + D) = exp(X_c) + Dexp[D] + r`` and likewise for ``Psi`` with
+   the Frechet derivatives (block-triangular exponentials, exact), and
+   ``||r_Phi||, ||r_Psi|| <= e^a (e^b - 1 - b)``, ``a = ||X_c||_2``,
+   ``b = max ||X - X_c||_2`` over ``Theta`` (the series terms with two or
+   more factors ``D``; the norm is convex, so its maximum over ``Theta`` is
+   at a corner). Hence ``[r_Phi, r_Psi]`` has 2-norm at most
+   ``rho = sqrt(2) e^a (e^b - 1 - b)``.
+3. *Polytope.* With the linear parts, the closed-loop matrix is multi-affine
+   in (the ``X`` coordinates, the ``b`` coordinates, ``w_m``): the loop is
+   affine in ``(Phi, Gamma)`` and, through the decoupling, in ``w_m``
+   (:func:`~toolbox.analysis._coupled.coupled_state_matrix`), and
+   ``Gamma_lin = Psi_lin diag(b)``. A multi-affine function on a box is a
+   convex combination of its values at the box's corners (the same weights
+   for all factors), so ``A_cl = sum_i l_i A_i + U r V`` with the 64 x 2
+   corner matrices ``A_i``, ``U`` the current rows and ``V x = [i; diag(b) u]``
+   (``u``: the applied voltage's state map, same weights ``l_i``).
+4. *Lyapunov with the S-procedure.* For ``w = r V x``, ``|w| <= rho |V x|``;
+   if ``P > 0``, ``lam >= 0`` satisfy at every corner
+   ``[[P - lam rho^2 V_i'V_i, 0, A_i'P], [0, lam I, U'P], [P A_i, P U, P]] > 0``
+   then ``x'(.)x`` decreases along ``x+ = A_i x + U w`` for all such ``w``
+   (Schur complement of the S-procedure inequality). That inequality is
+   jointly matrix-convex in ``(A, V)`` (``[A U]'P[A U] + lam rho^2 V'V``),
+   so it holds for every convex combination, hence for every plant of the
+   cell and every remainder: every frozen set of the cell has a Schur
+   closed loop (in fact the cell is quadratically stable).
+5. *Cells and check.* The speed range is split into cells (a Lyapunov
+   matrix per cell: the certificate is for constant speed, as the sweep's
+   loops are). The LMIs are solved with cvxpy + CLARABEL and every corner
+   inequality is re-checked with numpy eigenvalues of the returned
+   ``P, lam`` (a cell counts as certified only when that check passes).
+
+The box at scale ``k`` interpolates from the nominal point (``k = 0``) to the
+given ranges (``k = 1``); the bisection on ``k`` reports the largest certified
+scale and, at the smallest refused scale, the "first uncertified corner": the
+corner of the refused cell with the largest exact spectral radius (``unstable``
+when that radius is >= 1, i.e. a true counterexample). The delay is the
+design's (``delay_samples``); a set with another delay is not covered.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import warnings
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy.linalg import expm, matrix_balance
+
+from ..artifact import json_ready
+from ..plant import dq_matrices, max_electrical_speed
+from ._coupled import coupled_closed_loop, coupled_state_matrix
+from ._laws import AXES, axis_law
+from ._sampling import DEFAULT_BOX, DEFAULT_RANGES
+
+__all__ = ["SampledBox", "SampledCertificate", "certify_sampled",
+           "largest_certified_sampled_scale"]
+
+#: strict margin of the vertex LMIs (the data are normalised to order 1)
+_EPS = 1e-7
+#: corner matrices per cell: the 2^6 corners of Theta times the two measured-speed ends
+_N_VERTICES = 2 ** 6 * 2
+
+
+@dataclass(frozen=True)
+class SampledBox:
+    """True parameters, true speed and speed-sensor errors of the sampled certificate.
+
+    Attributes
+    ----------
+    R, Ld, Lq : tuple
+        ``(low, high)`` in ohm, H, H.
+    omega : tuple
+        True electrical speed range (rad/s).
+    speed_gain : tuple
+        Speed-sensor gain ``g`` range (1).
+    speed_offset : tuple
+        Speed-sensor offset ``o`` range (electrical rad/s); measured ``g w + o``.
+    """
+
+    R: tuple
+    Ld: tuple
+    Lq: tuple
+    omega: tuple
+    speed_gain: tuple = (1.0, 1.0)
+    speed_offset: tuple = (0.0, 0.0)
+
+    @classmethod
+    def around(cls, motor, scale: float, *, R=DEFAULT_BOX["R"], L=DEFAULT_BOX["Ld"],
+               omega_max: float = 0.0, speed_gain=(1.0, 1.0),
+               speed_offset=(0.0, 0.0)) -> "SampledBox":
+        """Box interpolated from the nominal point (``scale`` 0) to the factor
+        ranges, ``|w| <= omega_max`` and the sensor ranges (``scale`` 1)."""
+        def f(nom, lo_hi):
+            lo, hi = lo_hi
+            return (nom * (1 + scale * (lo - 1)), nom * (1 + scale * (hi - 1)))
+        return cls(f(motor.R, R), f(motor.Ld, L), f(motor.Lq, L),
+                   (-scale * omega_max, scale * omega_max), f(1.0, speed_gain),
+                   (scale * speed_offset[0], scale * speed_offset[1]))
+
+    def corners(self) -> np.ndarray:
+        """All corners ``(R, Ld, Lq, w, g, o)`` (64, 6)."""
+        return np.array(list(itertools.product(self.R, self.Ld, self.Lq, self.omega,
+                                               self.speed_gain, self.speed_offset)), float)
+
+    def measured_speed(self) -> tuple[float, float]:
+        """Range of ``g w + o`` (bilinear: attained at corners)."""
+        c = self.corners()
+        wm = c[:, 4] * c[:, 3] + c[:, 5]
+        return float(wm.min()), float(wm.max())
+
+    def speed_cells(self, n: int) -> list["SampledBox"]:
+        """The box with its speed range split into ``n`` equal cells, the
+        fastest cells first (where a certificate usually fails)."""
+        if self.omega[0] == self.omega[1]:
+            return [self]          # one speed: one cell (the nominal point at scale 0)
+        edges = np.linspace(self.omega[0], self.omega[1], n + 1)
+        cells = [SampledBox(self.R, self.Ld, self.Lq, (float(a), float(b)), self.speed_gain,
+                            self.speed_offset) for a, b in zip(edges[:-1], edges[1:])]
+        return sorted(cells, key=lambda c: -max(abs(c.omega[0]), abs(c.omega[1])))
+
+    def contains(self, R, Ld, Lq, omega, speed_gain=1.0, speed_offset=0.0) -> np.ndarray:
+        """Which points lie in the box (bool array, bounds inclusive)."""
+        def inside(v, lo_hi):
+            return (np.asarray(v) >= lo_hi[0]) & (np.asarray(v) <= lo_hi[1])
+        return (inside(R, self.R) & inside(Ld, self.Ld) & inside(Lq, self.Lq)
+                & inside(omega, self.omega) & inside(speed_gain, self.speed_gain)
+                & inside(speed_offset, self.speed_offset))
+
+
+@dataclass(frozen=True)
+class SampledCertificate:
+    """Largest box on which the sampled coupled loop is certified stable.
+
+    Attributes
+    ----------
+    certified : bool
+        Some box (scale > 0, or the nominal point at scale 0) is certified.
+    scale : float
+        Largest certified box scale (0 nominal .. ``max_scale``).
+    box : dict
+        The certified :class:`SampledBox` (ohm, H, H, rad/s, 1, rad/s).
+    speed_range_rad_s : list
+        Certified true electrical speed range (rad/s).
+    delay_samples : int
+        Computation delay of the certified loop (the design's).
+    speed_cells : int
+        Speed cells (one Lyapunov matrix each).
+    n_vertices : int
+        Corner matrices per cell (64 plant coordinates x 2 measured speeds).
+    remainder_bound : float
+        Largest linearisation remainder ``rho`` of the certified cells.
+    condition_P : float
+        Largest condition number of the cells' Lyapunov matrices.
+    first_uncertified : dict or None
+        At the smallest refused scale: ``scale``, ``reason``, the refused
+        cell's worst ``corner`` (scale factors ``R``, ``Ld``, ``Lq``,
+        ``speed_gain``, offset ``speed_offset_rad_s``, ``omega_rad_s``),
+        its exact ``spectral_radius`` and ``unstable`` (radius >= 1);
+        None when the whole requested box is certified.
+    basis : str
+        What the certificate is about.
+    """
+
+    certified: bool
+    scale: float
+    box: dict
+    speed_range_rad_s: list
+    delay_samples: int
+    speed_cells: int
+    n_vertices: int
+    remainder_bound: float
+    condition_P: float
+    first_uncertified: dict | None = None
+    basis: str = field(default=(
+        "sampled coupled dq loop as executed (ZOH plant, computation delay, decoupling with "
+        "the controller's parameters and the measured speed): common quadratic Lyapunov "
+        "function per speed cell over a polytope containing the exact ZOH model "
+        "(linearisation plus a norm-bounded remainder, S-procedure)"))
+
+    def to_json(self) -> dict:
+        """JSON-ready dict of all attributes (non-finite floats as strings)."""
+        return json_ready(asdict(self))
+
+
+@dataclass(frozen=True)
+class _CellOutcome:
+    certified: bool
+    reason: str
+    rho: float
+    condition_P: float
+    worst_corner: np.ndarray      # (R, Ld, Lq, w, g, o) of the largest exact radius
+    worst_radius: float
+
+
+def _laws(artifact) -> dict:
+    return {k: axis_law(artifact.axes[k], True) for k in AXES}
+
+
+def _theta(points: np.ndarray, Ts: float) -> np.ndarray:
+    """``(X00, X01, X10, X11, b_d, b_q)`` with ``X = Ts A(w)``, ``b = Ts diag(B)``
+    from :func:`toolbox.plant.dq_matrices` at points ``(R, Ld, Lq, w, ...)``."""
+    A, B = dq_matrices(points[:, 0], points[:, 1], points[:, 2], points[:, 3])
+    if np.any(B[:, 0, 1] != 0) or np.any(B[:, 1, 0] != 0):
+        raise ValueError("the sampled certificate assumes a diagonal input matrix B")
+    X = Ts * A
+    return np.stack([X[:, 0, 0], X[:, 0, 1], X[:, 1, 0], X[:, 1, 1],
+                     Ts * B[:, 0, 0], Ts * B[:, 1, 1]], axis=1)
+
+
+@dataclass(frozen=True)
+class _ZohLinearisation:
+    """``exp`` and ``Psi`` linearised at ``X_c`` with the remainder bound ``rho``
+    on ``||[Phi - Phi_lin, Psi - Psi_lin]||_2`` over ``||X - X_c||_2 <= dev``
+    (module docstring, step 2)."""
+
+    Xc: np.ndarray     # (2, 2)
+    eZ: np.ndarray     # exp([[X_c, I], [0, 0]]) (4, 4)
+    dZ: np.ndarray     # its Frechet derivatives along the four entries of X (4, 4, 4)
+    rho: float
+
+    @classmethod
+    def at(cls, Xc: np.ndarray, dev: float) -> "_ZohLinearisation":
+        """Linearisation at ``Xc`` valid for ``||X - Xc||_2 <= dev``."""
+        # Z = [[X, I], [0, 0]]: exp(Z) = [[exp X, Psi(X)], [0, I]]
+        Z = np.zeros((4, 4))
+        Z[:2, :2] = Xc
+        Z[:2, 2:] = np.eye(2)
+        # D exp_Z[E] is the top-right block of exp([[Z, E], [0, Z]])
+        big = np.zeros((4, 8, 8))
+        for j in range(4):
+            big[j, :4, :4] = Z
+            big[j, 4:, 4:] = Z
+            big[j, j // 2, 4 + j % 2] = 1.0
+        a = float(np.linalg.norm(Xc, 2))
+        rho = math.sqrt(2.0) * math.exp(a) * (math.expm1(dev) - dev)
+        return cls(np.array(Xc, float), expm(Z), expm(big)[:, :4, 4:], rho)
+
+    def parts(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Linear parts ``Phi_lin``, ``Psi_lin`` (N, 2, 2) at ``X`` (N, 2, 2)."""
+        D = (X - self.Xc).reshape(-1, 4)
+        Phi = self.eZ[:2, :2] + np.einsum("vj,jab->vab", D, self.dZ[:, :2, :2])
+        Psi = self.eZ[:2, 2:] + np.einsum("vj,jab->vab", D, self.dZ[:, :2, 2:])
+        return Phi, Psi
+
+
+def _theta_box(cell: SampledBox, Ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """``Theta``: ranges of the six coordinates over the cell (step 1)."""
+    th = _theta(cell.corners(), Ts)
+    return th.min(axis=0), th.max(axis=0)
+
+
+def _linearisation(cell: SampledBox, Ts: float) -> _ZohLinearisation:
+    """Linearisation at the centre of ``Theta``, valid on all of ``Theta``."""
+    lo, hi = _theta_box(cell, Ts)
+    Xv = np.array(list(itertools.product(*zip(lo[:4], hi[:4]))), float).reshape(-1, 2, 2)
+    Xc = (0.5 * (lo + hi))[:4].reshape(2, 2)
+    # ||X - X_c|| is convex in X: its maximum over the box is at a corner
+    dev = float(np.max(np.linalg.norm(Xv - Xc, 2, axis=(1, 2))))
+    return _ZohLinearisation.at(Xc, dev)
+
+
+def _zoh_polytope(cell: SampledBox, Ts: float):
+    """Linear parts of ``Phi`` and ``Gamma`` at the 64 corners of ``Theta`` and
+    the remainder bound (module docstring, steps 1-3).
+
+    Returns ``(Phi (64, 2, 2), Gamma (64, 2, 2), b (64, 2, 2) diagonal, rho)``.
+    """
+    lo, hi = _theta_box(cell, Ts)
+    lin = _linearisation(cell, Ts)
+    V = np.array(list(itertools.product(*zip(lo, hi))), float)          # (64, 6)
+    Phi, Psi = lin.parts(V[:, :4].reshape(-1, 2, 2))
+    b = np.zeros((V.shape[0], 2, 2))
+    b[:, 0, 0], b[:, 1, 1] = V[:, 4], V[:, 5]
+    return Phi, Psi @ b, b, lin.rho
+
+
+def _vertices(artifact, laws, cell: SampledBox):
+    """Corner matrices ``A_i`` (N, n, n), ``V_i`` (N, 4, n) and ``rho`` (steps 1-3)."""
+    Ts, d = artifact.sample_time, int(artifact.delay_samples)
+    Phi, Gam, b, rho = _zoh_polytope(cell, Ts)
+    wm = np.array(cell.measured_speed())
+    k = Phi.shape[0]
+    Phi, Gam, b = (np.repeat(M, 2, axis=0) for M in (Phi, Gam, b))
+    wm = np.tile(wm, k)
+    dec = artifact.decoupling
+    A = coupled_state_matrix(laws, dec, d, Phi, Gam, wm)
+    n = A.shape[-1]
+    zero = np.zeros_like(Phi)
+    # the applied voltage's state map u(x): the current rows' gain on Gamma
+    S = (coupled_state_matrix(laws, dec, d, zero, np.broadcast_to(np.eye(2), Phi.shape), wm)
+         - coupled_state_matrix(laws, dec, d, zero, zero, wm))[:, :2, :]
+    V = np.zeros((A.shape[0], 4, n))
+    V[:, 0, 0] = V[:, 1, 1] = 1.0
+    V[:, 2:, :] = b @ S
+    return A, V, rho
+
+
+def _corner_matrices(A, G, U, P, lam) -> np.ndarray:
+    """``[A_i U]' P [A_i U] - diag(P - lam G_i, lam I)`` (N, n+2, n+2): negative
+    definite at every corner is step 4's condition (its Schur complement with
+    respect to ``P > 0``)."""
+    AU = np.concatenate([A, np.broadcast_to(U, (A.shape[0],) + U.shape)], axis=2)
+    M = np.transpose(AU, (0, 2, 1)) @ P @ AU
+    n = A.shape[-1]
+    M[:, :n, :n] -= P - lam * G
+    M[:, n:, n:] -= lam * np.eye(U.shape[1])
+    return 0.5 * (M + np.transpose(M, (0, 2, 1)))
+
+
+def _worst_eig(A, G, U, P, lam) -> float:
+    """Largest eigenvalue over the corners, relative to the matrices' size."""
+    ev = np.linalg.eigvalsh(_corner_matrices(A, G, U, P, lam))
+    return float(np.max(ev[:, -1] / np.max(np.abs(ev), axis=-1)))
+
+
+def _verified(A, G, U, P, lam) -> bool:
+    """A posteriori check of step 4 with numpy eigenvalues: ``P > 0``, ``lam >= 0``
+    and every corner matrix negative definite."""
+    P = 0.5 * (P + P.T)
+    if not lam >= 0 or np.min(np.linalg.eigvalsh(P)) <= 0:
+        return False
+    return _worst_eig(A, G, U, P, lam) < -1e-12
+
+
+def _multiplier(A, G, U, P) -> float:
+    """The S-procedure multiplier for a given ``P`` (warm start): the corners'
+    largest eigenvalue is convex in ``lam``, so a golden-section search on
+    ``log lam`` (unimodal) finds its minimiser."""
+    lo, hi = -12.0, 12.0
+    g = 0.5 * (math.sqrt(5.0) - 1.0)
+    f = lambda s: _worst_eig(A, G, U, P, 10.0 ** s)  # noqa: E731
+    a, b = hi - g * (hi - lo), lo + g * (hi - lo)
+    fa, fb = f(a), f(b)
+    for _ in range(40):
+        if fa < fb:
+            hi, b, fb = b, a, fa
+            a = hi - g * (hi - lo)
+            fa = f(a)
+        else:
+            lo, a, fa = a, b, fb
+            b = lo + g * (hi - lo)
+            fb = f(b)
+    return 10.0 ** (a if fa < fb else b)
+
+
+def _solve_lmi(A, G, U):
+    """``(P, lam, status)`` of step 4's corner LMIs (cvxpy + CLARABEL), data
+    constant; P None when the solver finds none. ``P >= I`` fixes the scale."""
+    import cvxpy as cp
+
+    N, n, _ = A.shape
+    m = U.shape[1]
+    P = cp.Variable((n, n), symmetric=True)
+    lam = cp.Variable(nonneg=True)
+    cons = [P >> np.eye(n)]
+    for Ai, Gi in zip(A, G):
+        AU = np.hstack([Ai, U])
+        M = AU.T @ P @ AU - cp.bmat([[P - lam * Gi, np.zeros((n, m))],
+                                     [np.zeros((m, n)), lam * np.eye(m)]])
+        cons.append(0.5 * (M + M.T) << -_EPS * np.eye(n + m))
+    problem = cp.Problem(cp.Minimize(0), cons)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            problem.solve(solver=cp.CLARABEL)
+        except cp.error.SolverError as err:
+            return None, 0.0, f"solver error: {err}"
+    status = str(problem.status)
+    if P.value is None or status not in ("optimal", "optimal_inaccurate"):
+        return None, 0.0, status
+    return np.array(P.value), float(lam.value), status
+
+
+def _exact_corners(artifact, laws, cell: SampledBox) -> tuple[np.ndarray, np.ndarray]:
+    """Exact spectral radii of the sampled loop at the cell's 64 corners."""
+    c = cell.corners()
+    loop = coupled_closed_loop(laws, artifact.decoupling, artifact.sample_time,
+                               int(artifact.delay_samples), R=c[:, 0], Ld=c[:, 1], Lq=c[:, 2],
+                               omega=c[:, 3], omega_meas=c[:, 4] * c[:, 3] + c[:, 5])
+    return c, loop.spectral_radius()
+
+
+def _certify_cell(artifact, laws, cell: SampledBox,
+                  guess: np.ndarray | None = None) -> tuple[_CellOutcome, np.ndarray | None]:
+    """Outcome of one cell and its Lyapunov matrix (original coordinates, or None).
+
+    ``guess`` (a Lyapunov matrix of a smaller nested cell) is tried first with
+    its best multiplier; the LMIs are solved only when it fails the check.
+    Either way a cell is certified only by the numpy check of step 4.
+    """
+    corners, radius = _exact_corners(artifact, laws, cell)
+    i = int(np.argmax(radius))
+    worst = (corners[i], float(radius[i]))
+    if radius[i] >= 1.0 - 1e-9:
+        return _CellOutcome(False, "a corner of the cell is unstable", math.nan, math.nan,
+                            *worst), None
+    A, V, rho = _vertices(artifact, laws, cell)
+    # step 4's corner inequality implies A_i' P A_i < P: a corner matrix of the
+    # polytope that is not Schur makes the LMIs infeasible, no need to solve them
+    if np.max(np.abs(np.linalg.eigvals(A))) >= 1.0:
+        return _CellOutcome(False, "a corner of the polytope over the cell is unstable", rho,
+                            math.nan, *worst), None
+    G = rho ** 2 * np.transpose(V, (0, 2, 1)) @ V
+    n = A.shape[-1]
+    U = np.zeros((n, 2))
+    U[0, 0] = U[1, 1] = 1.0
+    # diagonal similarity x = T x_b from the mean corner matrix, for conditioning
+    _, (t, _) = matrix_balance(np.mean(A, axis=0), permute=False, separate=True)
+    Ab = A * t[None, None, :] / t[None, :, None]
+    Gb = G * t[None, :, None] * t[None, None, :]
+    Ub = U / t[:, None]
+    if guess is not None:
+        Pg = guess * t[:, None] * t[None, :]
+        lam = _multiplier(Ab, Gb, Ub, Pg)
+        if _verified(Ab, Gb, Ub, Pg, lam):
+            return (_CellOutcome(True, "warm start", rho, float(np.linalg.cond(Pg)), *worst),
+                    guess)
+    P, lam, status = _solve_lmi(Ab, Gb, Ub)
+    if P is None:
+        return _CellOutcome(False, f"no Lyapunov matrix found ({status})", rho, math.nan,
+                            *worst), None
+    if not _verified(Ab, Gb, Ub, P, lam):
+        return _CellOutcome(False, "the solver's Lyapunov matrix fails the numpy check", rho,
+                            math.nan, *worst), None
+    return (_CellOutcome(True, status, rho, float(np.linalg.cond(P)), *worst),
+            P / t[:, None] / t[None, :])
+
+
+def certify_sampled(artifact, box: SampledBox, *, speed_cells: int = 2,
+                    guesses: dict | None = None) -> tuple[bool, list[_CellOutcome]]:
+    """Certify the sampled coupled loop on a box (module docstring).
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    box : SampledBox
+    speed_cells : int
+        Speed cells, each with its own Lyapunov matrix.
+    guesses : dict, optional
+        ``{cell index: P}`` warm starts, updated with the matrices found
+        (the bisection passes the same dict from box to box).
+
+    Returns
+    -------
+    (bool, list)
+        Whether every cell is certified, and the outcome of each cell tried
+        (fastest first; stops at the first refused cell).
+    """
+    laws = _laws(artifact)
+    guesses = {} if guesses is None else guesses
+    outcomes = []
+    for k, cell in enumerate(box.speed_cells(speed_cells)):
+        out, P = _certify_cell(artifact, laws, cell, guesses.get(k))
+        outcomes.append(out)
+        if not out.certified:
+            return False, outcomes
+        guesses[k] = P
+    return True, outcomes
+
+
+def _corner_dict(motor, corner: np.ndarray, radius: float) -> dict:
+    R, Ld, Lq, w, g, o = (float(v) for v in corner)
+    return {"R": R / motor.R, "Ld": Ld / motor.Ld, "Lq": Lq / motor.Lq, "omega_rad_s": w,
+            "speed_gain": g, "speed_offset_rad_s": o, "spectral_radius": radius,
+            "unstable": bool(radius >= 1.0 - 1e-9)}
+
+
+def largest_certified_sampled_scale(artifact, motor, drive=None, *, R=DEFAULT_BOX["R"],
+                                    L=DEFAULT_BOX["Ld"],
+                                    speed_gain=DEFAULT_RANGES["speed_gain"][:2],
+                                    speed_offset=DEFAULT_RANGES["speed_offset"][:2],
+                                    omega_max: float | None = None, speed_cells: int = 2,
+                                    tol: float = 0.05,
+                                    max_scale: float = 1.0) -> SampledCertificate:
+    """Bisection on the box scale of the sampled-loop certificate.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        Nominal plant (centre of the box).
+    drive : Drive, optional
+        Supplies the speed range when ``omega_max`` is None
+        (:func:`toolbox.plant.max_electrical_speed`).
+    R, L : tuple
+        Factor ranges of the resistance and of both inductances at scale 1
+        (default the robustness sweep's, x0.5..x2).
+    speed_gain : tuple
+        Speed-sensor gain range at scale 1 (default the sweep's, 0.9..1.1).
+    speed_offset : tuple
+        Speed-sensor offset range at scale 1, **mechanical** rad/s as in the
+        sweep (default +/-10).
+    omega_max : float, optional
+        Largest electrical speed at scale 1 (rad/s).
+    speed_cells : int
+        Speed cells per box.
+    tol : float
+        Bisection tolerance on the scale.
+    max_scale : float
+        Largest scale tried.
+
+    Returns
+    -------
+    SampledCertificate
+    """
+    wmax = max_electrical_speed(motor, drive) if omega_max is None else omega_max
+    off = tuple(motor.pole_pairs * v for v in speed_offset)
+    guesses: dict = {}
+
+    def box(k):
+        return SampledBox.around(motor, k, R=R, L=L, omega_max=wmax, speed_gain=speed_gain,
+                                 speed_offset=off)
+
+    def at(k):
+        return certify_sampled(artifact, box(k), speed_cells=speed_cells, guesses=guesses)
+
+    def refused(k, outcomes):
+        o = outcomes[-1]
+        return {"scale": k, "reason": o.reason,
+                "corner": _corner_dict(motor, o.worst_corner, o.worst_radius)}
+
+    def result(k, outcomes, first):
+        b = box(k)
+        ok = [o for o in outcomes if o.certified]
+        return SampledCertificate(
+            certified=bool(outcomes and all(o.certified for o in outcomes)), scale=k,
+            box=json_ready(asdict(b)), speed_range_rad_s=list(b.omega),
+            delay_samples=int(artifact.delay_samples), speed_cells=speed_cells,
+            n_vertices=_N_VERTICES, remainder_bound=max((o.rho for o in ok), default=math.nan),
+            condition_P=max((o.condition_P for o in ok), default=math.nan),
+            first_uncertified=first)
+
+    ok_top, out_top = at(max_scale)
+    if ok_top:
+        return result(max_scale, out_top, None)
+    ok0, out0 = at(0.0)
+    if not ok0:
+        return result(0.0, out0, refused(0.0, out0))
+    lo, hi, best, first = 0.0, max_scale, out0, refused(max_scale, out_top)
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        ok, out = at(mid)
+        if ok:
+            lo, best = mid, out
+        else:
+            hi, first = mid, refused(mid, out)
+    return result(lo, best, first)
