@@ -3,8 +3,9 @@
  * title:       Paper 002 (Cormerais 2002): Boolean predictive control at 10 kHz with switching penalty (sect. 4, simulation 3)
  * method:      fcs_mpc
  * version:     0.1.0
- * spec sha256: 764735388f07add1db7a6690e4c806ddc8b3258a48198ac21af4b984d8d15319
- * created:     2026-11-24T08:28:08+00:00
+ * spec sha256: 600c2c7e54f2d6f6e865680421b0620963b931525a29cc6dcbde689c5dbfef36
+ * law sha256:  76832c23801c4a5f51cf5863f9a23ecd5dbbfa8cdbfa2b4d4b6a579b2beff5d4
+ * created:     2026-11-24T14:07:19+00:00
  *
  * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no
  * fixed-point variant: CCT_FIXED_POINT is an error).

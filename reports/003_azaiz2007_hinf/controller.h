@@ -4,7 +4,8 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: 725ca7e47e8fb783e32a98f3530d9f7f87e8372a8e40b66b26c2473ca062b79f
- * created:     2026-11-24T08:28:15+00:00
+ * law sha256:  60e039328366585fc22cbf0998016e5d07e1518fc4bdab33d7581d73f25fa5ea
+ * created:     2026-11-24T14:07:24+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -65,9 +66,9 @@
 #define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
 
-#define CCT_D_GAIN 4.345258640e-04f /* d axis SOS output gain, V/A */
+#define CCT_D_GAIN 4.345249326e-04f /* d axis SOS output gain, V/A */
 #define CCT_D_NUM_STAGES 2
-#define CCT_Q_GAIN 6.996609736e-03f /* q axis SOS output gain, V/A */
+#define CCT_Q_GAIN 6.996612996e-03f /* q axis SOS output gain, V/A */
 #define CCT_Q_NUM_STAGES 2
 
 /* inputs: currents in A, measured MECHANICAL speed in rad/s */
@@ -183,7 +184,7 @@ static inline float cct_q_linear(float *x, float r, float y)
 {
     /* 2 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_Q_GAIN */
     static const float c[10] = {
-        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.569386482e+00f, -6.180329919e-01f,
+        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.569386482e+00f, -6.180329323e-01f,
         1.000000000e+00f, -9.787985682e-01f, 0.0f, 1.000000000e+00f, 0.0f,
     };
     float in = r - y;
@@ -228,12 +229,12 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         saturated = 1;
     }
     /* back-calculation anti-windup */
-    nx.d[0] += 4.058355957e+03f * (vds - vd);
-    nx.d[1] += -1.804889404e+03f * (vds - vd);
-    nx.d[2] += 9.656051636e+01f * (vds - vd);
-    nx.q[0] += 2.233436737e+02f * (vqs - vq);
-    nx.q[1] += -8.833321381e+01f * (vqs - vq);
-    nx.q[2] += 3.030241013e+00f * (vqs - vq);
+    nx.d[0] += 4.058364502e+03f * (vds - vd);
+    nx.d[1] += -1.804893188e+03f * (vds - vd);
+    nx.d[2] += 9.656072235e+01f * (vds - vd);
+    nx.q[0] += 2.233435669e+02f * (vqs - vq);
+    nx.q[1] += -8.833316040e+01f * (vqs - vq);
+    nx.q[2] += 3.030239582e+00f * (vqs - vq);
     if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
@@ -262,8 +263,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 86.6025 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.0126 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00167 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.00921 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00202 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
@@ -376,11 +377,11 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 238883120L, 0L, 59720780L, 0L, 3645L, -3645L };
+    static const int32_t co[6] = { 238882612L, 0L, 59720653L, 0L, 3645L, -3645L };
     static const int32_t ca[28] = {
-        118796013L, 16777216L, 0L, 0L, 3276L, -3276L, 265968412L,
-        -105263085L, 0L, 0L, 0L, -728L, 728L, -236570456L,
-        22526052L, 0L, 134217728L, 256L, 344L, -344L, 50625520L,
+        118796014L, 16777216L, 0L, 0L, 3276L, -3276L, 265968978L,
+        -105263086L, 0L, 0L, 0L, -728L, 728L, -236570961L,
+        22526052L, 0L, 134217728L, 256L, 344L, -344L, 50625628L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[4] = { 26u, 25u, 27u, 31u };
@@ -401,7 +402,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 265968412L, -236570456L, 50625520L, 0L };
+    static const int32_t aw[4] = { 265968978L, -236570961L, 50625628L, 0L };
     static const unsigned fa[4] = { 26u, 25u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
@@ -412,11 +413,11 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 240401684L, 0L, 60100421L, 0L, 58692L, -58692L };
+    static const int32_t co[6] = { 240401795L, 0L, 60100449L, 0L, 58692L, -58692L };
     static const int32_t ca[28] = {
-        105319745L, 33554432L, 0L, 0L, 49119L, -49119L, 234192817L,
-        -82950987L, 0L, 0L, 0L, -6208L, 6208L, -185248169L,
-        11382422L, 0L, 134217728L, 4096L, 2779L, -2779L, 25419503L,
+        105319740L, 33554432L, 0L, 0L, 49119L, -49119L, 234192698L,
+        -82950980L, 0L, 0L, 0L, -6208L, 6208L, -185248068L,
+        11382422L, 0L, 134217728L, 4096L, 2779L, -2779L, 25419491L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
@@ -437,7 +438,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 234192817L, -185248169L, 25419503L, 0L };
+    static const int32_t aw[4] = { 234192698L, -185248068L, 25419491L, 0L };
     static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {

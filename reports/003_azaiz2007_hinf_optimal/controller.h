@@ -4,7 +4,8 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: fe6722ab3d8aaf89f7f3af7cde13d4df131e24c702653ac07366c33f1f6f30b5
- * created:     2026-11-24T08:28:20+00:00
+ * law sha256:  4ddde6208ccdca3efff7e5f951ed6dff65197a474930730d321abb5a9dcb7762
+ * created:     2026-11-24T14:07:39+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -65,9 +66,9 @@
 #define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
 
-#define CCT_D_GAIN 2.415856812e-03f /* d axis SOS output gain, V/A */
+#define CCT_D_GAIN 2.415857278e-03f /* d axis SOS output gain, V/A */
 #define CCT_D_NUM_STAGES 2
-#define CCT_Q_GAIN 7.069703657e-03f /* q axis SOS output gain, V/A */
+#define CCT_Q_GAIN 7.069702726e-03f /* q axis SOS output gain, V/A */
 #define CCT_Q_NUM_STAGES 2
 
 /* inputs: currents in A, measured MECHANICAL speed in rad/s */
@@ -163,7 +164,7 @@ static inline float cct_d_linear(float *x, float r, float y)
 {
     /* 2 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_D_GAIN */
     static const float c[10] = {
-        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.645424962e+00f, -6.866726279e-01f,
+        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.645424962e+00f, -6.866725683e-01f,
         1.000000000e+00f, -9.580419660e-01f, 0.0f, 1.000000000e+00f, 0.0f,
     };
     float in = r - y;
@@ -183,7 +184,7 @@ static inline float cct_q_linear(float *x, float r, float y)
 {
     /* 2 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_Q_GAIN */
     static const float c[10] = {
-        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.567629218e+00f, -6.167452931e-01f,
+        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.567629337e+00f, -6.167452931e-01f,
         1.000000000e+00f, -9.787985682e-01f, 0.0f, 1.000000000e+00f, 0.0f,
     };
     float in = r - y;
@@ -228,12 +229,12 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         saturated = 1;
     }
     /* back-calculation anti-windup */
-    nx.d[0] += 6.783046875e+02f * (vds - vd);
-    nx.d[1] += -2.842356262e+02f * (vds - vd);
-    nx.d[2] += 1.736776733e+01f * (vds - vd);
-    nx.q[0] += 2.207859650e+02f * (vqs - vq);
-    nx.q[1] += -8.723778534e+01f * (vqs - vq);
-    nx.q[2] += 2.998911142e+00f * (vqs - vq);
+    nx.d[0] += 6.783045654e+02f * (vds - vd);
+    nx.d[1] += -2.842355652e+02f * (vds - vd);
+    nx.d[2] += 1.736776543e+01f * (vds - vd);
+    nx.q[0] += 2.207859955e+02f * (vqs - vq);
+    nx.q[1] += -8.723780060e+01f * (vqs - vq);
+    nx.q[2] += 2.998911619e+00f * (vqs - vq);
     if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
@@ -262,8 +263,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 86.6025 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.00289 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000986 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.00412 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00134 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
@@ -376,11 +377,11 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 166016423L, 0L, 41504106L, 0L, 20266L, -20266L };
+    static const int32_t co[6] = { 166016451L, 0L, 41504113L, 0L, 20266L, -20266L };
     static const int32_t ca[28] = {
-        55211300L, 16777216L, 0L, 0L, 12591L, -12591L, 177813499L,
-        -46081819L, 0L, 0L, 0L, -2114L, 2114L, -149021329L,
-        22526052L, 0L, 134217728L, 2048L, 2750L, -2750L, 72845698L,
+        55211300L, 16777216L, 0L, 0L, 12591L, -12591L, 177813466L,
+        -46081818L, 0L, 0L, 0L, -2114L, 2114L, -149021301L,
+        22526052L, 0L, 134217728L, 2048L, 2750L, -2750L, 72845686L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[4] = { 25u, 25u, 27u, 31u };
@@ -401,7 +402,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 177813499L, -149021329L, 72845698L, 0L };
+    static const int32_t aw[4] = { 177813466L, -149021301L, 72845686L, 0L };
     static const unsigned fa[4] = { 25u, 25u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
@@ -412,11 +413,11 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 242913165L, 0L, 60728291L, 0L, 59305L, -59305L };
+    static const int32_t co[6] = { 242913139L, 0L, 60728285L, 0L, 59305L, -59305L };
     static const int32_t ca[28] = {
-        105201819L, 33554432L, 0L, 0L, 49090L, -49090L, 231510863L,
-        -82778151L, 0L, 0L, 0L, -6166L, 6166L, -182950897L,
-        11382422L, 0L, 134217728L, 4096L, 2779L, -2779L, 25156691L,
+        105201820L, 33554432L, 0L, 0L, 49090L, -49090L, 231510890L,
+        -82778153L, 0L, 0L, 0L, -6166L, 6166L, -182950920L,
+        11382422L, 0L, 134217728L, 4096L, 2779L, -2779L, 25156693L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
@@ -437,7 +438,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 231510863L, -182950897L, 25156691L, 0L };
+    static const int32_t aw[4] = { 231510890L, -182950920L, 25156693L, 0L };
     static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
