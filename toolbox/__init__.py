@@ -11,9 +11,7 @@ The pipeline as function calls::
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
+from ._lazy import lazy_attributes
 from .errors import ArtifactError, CctError, DesignInfeasible, ExportRefused, SpecError
 from .spec import Spec, load_spec, spec_from_dict
 from . import design as _design  # noqa: F401  registers the methods' parameter readers with spec
@@ -29,18 +27,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """Import the module defining ``name`` on first use (PEP 562)."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value  # later look-ups skip __getattr__
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
 
 __all__ = ["ArtifactError", "CctError", "ControllerArtifact", "DesignInfeasible",
            "ExportRefused", "SpecError", "analyse", "build_outputs", "design_spec",

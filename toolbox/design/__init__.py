@@ -11,9 +11,7 @@ the sample time and the delay (``default_bandwidth``, ``current_scale``,
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
+from .._lazy import lazy_attributes
 # light (math only): imported eagerly, toolbox.sim's default scenarios use it
 from ._defaults import (current_scale, default_bandwidth, largest_stable_pi_bandwidth,
                         speed_scale)
@@ -34,18 +32,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """Import the submodule defining ``name`` on first use (PEP 562)."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value  # later look-ups skip __getattr__
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
 
 
 __all__ = ["METHOD_MODULES", "design", "read_method_cfg", "design_hinf_axis", "design_ilq",

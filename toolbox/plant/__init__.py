@@ -8,9 +8,7 @@ comes from the on-disk cache does not need (issue 13).
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
-
+from .._lazy import lazy_attributes
 from ._limits import max_electrical_speed
 from ._linear import (axis_coefficients, dq_matrices, steady_state_voltage,
                       voltage_limited_speed, zoh_first_order)
@@ -21,18 +19,7 @@ _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_sym
          "derive_dq_model": "_symbolic", "park_matrix": "_symbolic"}
 
 
-def __getattr__(name: str) -> Any:
-    """Import the module defining ``name`` on first use (PEP 562)."""
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value  # later look-ups skip __getattr__
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
 
 
 __all__ = ["describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
