@@ -193,7 +193,6 @@ def to_q31(values: np.ndarray, base: float) -> np.ndarray:
 def fixed_bound(check, artifact, inputs) -> np.ndarray:
     """(N, 2) worst-case |v_Q31 - v_exact| (V) of the fixed-point path."""
     plan = check.fixed
-    dec = artifact.decoupling
     lsb = 2.0 ** -31
     wn = np.abs(inputs[:, 4]) / plan.W_BASE
     idn = np.abs(inputs[:, 2]) / plan.I_BASE

@@ -22,7 +22,7 @@ import pytest
 from toolbox._io import remove_stale, write_set
 from toolbox.pipeline import OUTPUT_FILES, write_outputs
 
-from hostile_helpers import ROOT, cct_subprocess, run_cli, spec_dict, to_toml
+from hostile_helpers import ROOT, run_cli, spec_dict, to_toml
 
 #: The child rewrites the whole output set in a loop, generation after
 #: generation, each file tagged with its generation; 4 MB per file makes one

@@ -22,7 +22,7 @@ import pytest
 from toolbox.artifact import Decoupling
 from toolbox.sim._metrics import step_metrics
 from toolbox.sim._scenario import Scenario
-from toolbox.sim._simulate import (AxisLaw, ControlLaw, DriveParams, discrete_pi,
+from toolbox.sim._simulate import (ControlLaw, DriveParams, discrete_pi,
                                    simulate)
 
 from sim_helpers import PAPER000 as M, tc_law, tci_law

@@ -21,7 +21,7 @@ from toolbox.cli import main
 from toolbox.design import design
 from toolbox.errors import SpecError
 from toolbox.sim import verify
-from toolbox.spec import spec_from_dict
+from toolbox.spec import Spec, spec_from_dict
 
 WIDE = {"R": [0.5, 2.0], "Ld": [0.5, 2.0], "Lq": [0.5, 2.0]}
 NARROW = {"R": [0.9, 1.1], "Ld": [0.9, 1.1], "Lq": [0.9, 1.1]}
@@ -29,7 +29,7 @@ NARROW = {"R": [0.9, 1.1], "Ld": [0.9, 1.1], "Lq": [0.9, 1.1]}
 STEP = [{"kind": "current_step", "duration": 0.03, "iq_ref": 5.0, "step_time": 0.001}]
 
 
-def make_spec(method: str, cfg: dict, drift: dict) -> "Spec":
+def make_spec(method: str, cfg: dict, drift: dict) -> Spec:
     return spec_from_dict({
         "motor": {"catalog": "azaiz2007"},
         "drive": {"vdc": 400, "sample_time": 1e-4, "delay_samples": 1, "max_speed": 230.0},

@@ -13,7 +13,7 @@ from toolbox.artifact import Decoupling
 from toolbox.sim._simulate import (ControlLaw, DriveParams, SpeedLoop, discrete_pi, simulate,
                                    simulate_batch)
 
-from sim_helpers import PAPER000 as M, tc_law, tci_law
+from sim_helpers import PAPER000 as M, tc_law
 
 Ts = 1e-4
 DRIVE = DriveParams(vdc=150, sample_time=Ts, delay_samples=1)

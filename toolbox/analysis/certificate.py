@@ -50,7 +50,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import warnings
 from dataclasses import asdict, dataclass
 
 import numpy as np
