@@ -169,7 +169,7 @@ def test_discrete_connections_keep_dt_and_refuse_mixed():
 def test_tf2ss_and_ss2tf_match_control(num, den_roots):
     den = np.poly(-np.asarray(den_roots))
     ref = ct.tf(num, den)
-    g = L.as_statespace(ref)
+    g = L.tf2ss(num, den)
     assert _close(g.freqresp(W), _fresp(ref))
     n2, d2 = L.ss2tf(g)
     assert np.allclose(d2, den, rtol=1e-9)
@@ -188,13 +188,80 @@ def test_ss2tf_equals_control_on_a_minimal_system():
     assert np.allclose(num[-rn.size:], rn, rtol=1e-8, atol=1e-8 * np.abs(rn).max())
 
 
+@pytest.mark.parametrize("seed", range(20))
+def test_ss2zpk_equals_scipy_bitwise(seed):
+    """Same polynomials, same trimming rule, same roots as scipy.signal.ss2zpk."""
+    import scipy.signal
+
+    rng = np.random.default_rng(seed)
+    sys = _rss(seed, int(rng.integers(1, 6)), 1, 1)
+    if seed % 2:                                         # strictly proper
+        sys = ct.ss(sys.A, sys.B, sys.C, 0.0)
+    sd = L.c2d(L.as_statespace(sys), 1e-3, "tustin" if seed % 3 else "zoh")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", scipy.signal.BadCoefficients)
+        z, p, k = scipy.signal.ss2zpk(sd.A, sd.B, sd.C, sd.D)
+    ours = L.ss2zpk(sd)
+    assert np.array_equal(ours[0], z) and np.array_equal(ours[1], p) and ours[2] == k
+
+
+class _DuckTf:
+    """A transfer function that is not python-control's (num/den lists)."""
+
+    def __init__(self, num, den, dt=None):
+        self.num, self.den, self.dt = num, den, dt
+
+
 def test_mimo_transfer_function_and_improper_refused():
-    s = ct.tf("s")
-    G = ct.tf([[[1.0], [2.0, 1.0]], [[1.0, 0.0], [3.0]]],
-              [[[1.0, 1.0], [1.0, 5.0]], [[1.0, 2.0, 2.0], [1.0, 10.0]]])
+    num = [[[1.0], [2.0, 1.0]], [[1.0, 0.0], [3.0]]]
+    den = [[[1.0, 1.0], [1.0, 5.0]], [[1.0, 2.0, 2.0], [1.0, 10.0]]]
+    G = ct.tf(num, den)
+    assert _close(L.as_statespace(_DuckTf(num, den)).freqresp(W), _fresp(G))
     assert _close(L.as_statespace(G).freqresp(W), _fresp(G))
+    s = ct.tf("s")
     with pytest.raises(ValueError):
-        L.as_statespace(s * s / (s + 1))
+        L.as_statespace(_DuckTf([[[1.0, 0.0, 0.0]]], [[[1.0, 1.0]]]))
+    with pytest.raises(ValueError):
+        L.tf2ss([1.0, 0.0, 0.0], [1.0, 1.0])
+    assert L.as_statespace(1 / (s + 1)).nstates == 1
+
+
+def test_control_transfer_functions_keep_python_controls_realisation():
+    """A user's python-control TF gets python-control's states (td04ad), so
+    artifacts built from it are the numbers they were before toolbox._lti."""
+    tf = ct.tf([2.0, 30.0], [1.0, 0.0])
+    ref = ct.ss(tf)
+    g = L.as_statespace(tf)
+    for k in "ABCD":
+        assert np.array_equal(getattr(g, k), np.asarray(getattr(ref, k)))
+
+
+def test_minreal_removes_unreachable_and_unobservable_states():
+    """A 3-state system with one unreachable and one unobservable mode added,
+    in random coordinates: 3 states stay, the response is unchanged (rtol 1e-9),
+    and python-control's minreal (SLICOT tb01pd) keeps as many. A minimal
+    system loses nothing."""
+    rng = np.random.default_rng(4)
+    core = ct.ss(np.diag([-1.0, -10.0, -100.0]), rng.standard_normal((3, 1)),
+                 rng.standard_normal((1, 3)), [[0.5]])
+    A = scipy_block_diag(core.A, [[-7.0]], [[-11.0]])
+    B = np.vstack([core.B, [[0.0]], [[1.0]]])            # mode -7 unreachable
+    C = np.hstack([core.C, [[1.0]], [[0.0]]])            # mode -11 unobservable
+    T = rng.standard_normal((5, 5)) + 3 * np.eye(5)
+    Ti = np.linalg.inv(T)
+    g = L.StateSpace(Ti @ A @ T, Ti @ B, C @ T, core.D)
+    m = L.minreal(g)
+    assert m.nstates == 3
+    assert _close(m.freqresp(W), _fresp(core), 1e-9)
+    # SLICOT's default tolerance (N^2 eps) misses the unobservable mode here; 1e-10 does not
+    assert ct.minreal(g.to_control(), tol=1e-10, verbose=False).nstates == 3
+    assert L.minreal(L.as_statespace(core)).nstates == 3
+
+
+def scipy_block_diag(*blocks):
+    import scipy.linalg
+
+    return scipy.linalg.block_diag(*blocks)
 
 
 def test_as_statespace_reads_duck_types_and_round_trips_through_control():
@@ -205,6 +272,8 @@ def test_as_statespace_reads_duck_types_and_round_trips_through_control():
     assert isinstance(back, ct.StateSpace) and _close(_fresp(back), _fresp(sys), 1e-15)
     gd = L.c2d(g, 1e-3, "tustin")
     assert gd.to_control().dt == 1e-3 and L.as_statespace(gd.to_control()).dt == 1e-3
+    assert sys.__class__ is ct.StateSpace
+    assert np.allclose(g(1j * 10.0), sys(1j * 10.0)) and g(1j * np.ones(3)).shape == (1, 2, 3)
     assert L.as_statespace(2.5).D.tolist() == [[2.5]]
     assert L.as_statespace(np.eye(2)).D.shape == (2, 2)
     with pytest.raises(TypeError):

@@ -24,13 +24,14 @@ Conventions follow python-control so that ported code reads the same:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from sys import modules as sys_modules
 from typing import Any, Sequence
 
 import numpy as np
 import scipy.linalg
 
-__all__ = ["StateSpace", "as_statespace", "tf2ss", "ss2tf", "c2d", "pade", "acker",
-           "series", "parallel", "feedback", "append", "static_gain", "C2D_METHODS"]
+__all__ = ["StateSpace", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d", "pade", "acker",
+           "minreal", "series", "parallel", "feedback", "append", "static_gain", "C2D_METHODS"]
 
 #: Discretisation methods of :func:`c2d` (python-control / scipy names); the
 #: generalised bilinear transform of each is ``_GBT_ALPHA``.
@@ -146,6 +147,15 @@ class StateSpace:
             except np.linalg.LinAlgError:
                 y = np.stack([_solve_or_inf(Mi, self.B) for Mi in M])
             return np.moveaxis(self.C @ y + self.D, 0, -1)
+
+    def __call__(self, x: Any) -> Any:
+        """Response at complex point(s) ``x`` as python-control's ``sys(x)``:
+        a SISO system gives a scalar or a 1-D array, else ``(p, m[, N])``."""
+        scalar = np.ndim(x) == 0
+        out = self.evaluate(x)
+        if self.noutputs == self.ninputs == 1:
+            out = out[0, 0]
+        return out[..., 0] if scalar else out
 
     def freqresp(self, omega: Any) -> np.ndarray:
         """Frequency response at ``omega`` (rad/s): shape ``(p, m, len(omega))``.
@@ -359,26 +369,58 @@ def ss2tf(sys: Any) -> tuple[np.ndarray, np.ndarray]:
     return num, den
 
 
+#: Numerator coefficients at most this large (after normalising the
+#: denominator to be monic) are round-off of a leading zero (scipy's rule in
+#: ``scipy.signal.normalize``).
+_NUM_ZERO = 1e-14
+
+
+def ss2zpk(sys: Any) -> tuple[np.ndarray, np.ndarray, float]:
+    """Zeros, poles and gain of a SISO system, as ``scipy.signal.ss2zpk``.
+
+    Roots of :func:`ss2tf`'s polynomials; leading numerator coefficients of
+    magnitude <= 1e-14 are dropped as round-off (``ss2tf`` leaves them where
+    the relative degree exceeds the number of exact cancellations), silently
+    where scipy warns ``BadCoefficients``. The gain is the leading numerator
+    coefficient (the denominator is monic).
+    """
+    num, den = ss2tf(sys)
+    lead = np.flatnonzero(np.abs(num) > _NUM_ZERO)
+    num = num[lead[0]:] if lead.size else num[-1:]
+    k = num[0]
+    return np.roots(num / k), np.roots(den), float(k)
+
+
 def as_statespace(sys: Any) -> StateSpace:
     """Our :class:`StateSpace` from a system of any supported kind.
 
-    Accepts our own systems (returned as is), scalars and matrices (static
-    gains), objects with ``A, B, C, D`` attributes and an optional ``dt``
-    (python-control ``StateSpace``, :class:`toolbox.artifact.StateSpaceData`)
-    and objects with ``num``/``den`` indexable as ``[i][j]`` (python-control
-    ``TransferFunction``, SISO or MIMO) - all without importing
-    python-control. python-control's ``dt = 0`` means continuous.
+    Accepts our own systems (returned as is), scalars and matrices (arrays
+    or nested lists: static gains), objects with ``A, B, C, D`` attributes
+    and an optional ``dt`` (python-control ``StateSpace``,
+    :class:`toolbox.artifact.StateSpaceData`) and objects with ``num``/``den``
+    indexable as ``[i][j]`` (python-control ``TransferFunction``, SISO or
+    MIMO), without importing python-control: a python-control transfer
+    function is realised by python-control (already imported, since the
+    object exists), others by :func:`tf2ss`. python-control's ``dt = 0``
+    means continuous.
     """
     if isinstance(sys, StateSpace):
         return sys
     if isinstance(sys, (int, float, np.integer, np.floating)) and not isinstance(sys, bool):
         return static_gain([[float(sys)]])
-    if isinstance(sys, (np.ndarray, list, tuple)):
+    if isinstance(sys, (np.ndarray, list)):
         return static_gain(sys)
     dt = _read_dt(getattr(sys, "dt", None))
     if all(hasattr(sys, k) for k in "ABCD"):
         return StateSpace(sys.A, sys.B, sys.C, sys.D, dt)
     if hasattr(sys, "num") and hasattr(sys, "den"):
+        control = sys_modules.get("control")
+        if control is not None and isinstance(sys, control.TransferFunction):
+            # python-control is imported (the object exists): its own
+            # realisation (SLICOT td04ad), so that a user's transfer function
+            # gives the same states as before this module existed
+            ss = control.ss(sys)
+            return StateSpace(ss.A, ss.B, ss.C, ss.D, dt)
         return _tf_to_ss(sys, dt)
     raise TypeError(f"cannot read {type(sys).__name__} as a linear system")
 
@@ -490,3 +532,56 @@ def acker(A: Any, B: Any, poles: Sequence[complex]) -> np.ndarray:
     p = np.real(np.poly(poles))
     pmat = sum(p[n - i] * np.linalg.matrix_power(A, i) for i in range(n + 1))
     return np.linalg.solve(ctrb, pmat)[-1:, :]
+
+
+# -- minimal realisation -------------------------------------------------------
+def _reachable(A: np.ndarray, B: np.ndarray, tol: float) -> tuple[int, np.ndarray]:
+    """Dimension and orthogonal basis of the reachable subspace of ``(A, B)``.
+
+    Staircase algorithm (Varga 1981, "Minimal realization procedures based on
+    balancing and related techniques"; the reduction SLICOT ``TB01UD``
+    performs): each step keeps the directions in which the newest input block
+    has singular values above ``tol`` and passes the rest on. Returns
+    ``(r, T)`` with T orthogonal (n x n) and the first r columns spanning the
+    reachable subspace, so ``T^T A T`` is block upper triangular.
+    """
+    n = A.shape[0]
+    T = np.eye(n)
+    done = 0                                   # states known reachable
+    block = B
+    while done < n:
+        U, sv, _ = np.linalg.svd(block, full_matrices=True)
+        rank = int(np.sum(sv > tol))
+        if rank == 0:
+            break
+        T[:, done:] = T[:, done:] @ U          # reached directions first
+        if done + rank == n:
+            return n, T
+        At = T.T @ A @ T
+        block = At[done + rank:, done:done + rank]
+        done += rank
+    return done, T
+
+
+def minreal(sys: Any, tol: float | None = None) -> StateSpace:
+    """Remove the unreachable, then the unobservable states of a system.
+
+    Rank decisions are absolute: a singular value at most ``tol`` counts as
+    zero (default ``sqrt(eps) max(|A|, |B|, |C|)``, 2-norms: the round-off
+    of a similarity transform with a condition number up to ~1e6 stays
+    below it); scale B and C first when their units differ from A's. The transfer function is unchanged; the
+    kept coordinates are orthogonal projections of the original ones.
+    """
+    g = as_statespace(sys)
+    n = g.nstates
+    if n == 0:
+        return g
+    if tol is None:
+        tol = np.sqrt(np.finfo(float).eps) * max(np.linalg.norm(M, 2)
+                                                 for M in (g.A, g.B, g.C) if M.size)
+    r, T = _reachable(g.A, g.B, tol)
+    Tr = T[:, :r]
+    A, B, C = Tr.T @ g.A @ Tr, Tr.T @ g.B, g.C @ Tr
+    o, S = _reachable(A.T, C.T, tol)           # observable = reachable of the dual
+    So = S[:, :o]
+    return StateSpace(So.T @ A @ So, So.T @ B, C @ So, g.D, g.dt)

@@ -23,7 +23,7 @@ def _pc_closed_loop_poles(art, R, Ld, Lq, om, g=1.0):
     dec = art.decoupling
     W = g * om * np.array([[0, -dec.Lq_c], [dec.Ld_c, 0]])
     Pw = ct.feedback(P, ct.ss([], [], [], W), sign=+1)       # plant with v = u + W i
-    K = ct.append(*[art.axes[k].continuous.to_statespace() for k in "dq"])
+    K = ct.append(*[art.axes[k].continuous.to_statespace().to_control() for k in "dq"])
     return ct.feedback(Pw * K, np.eye(2)).poles()
 
 
@@ -92,7 +92,7 @@ def test_delay_model_and_certificate(pi):
     Pd = ct.ss(A[0], B[0], np.eye(2), np.zeros((2, 2))) * ct.append(Dl, Dl)
     W = g * om * np.array([[0, -pi.decoupling.Lq_c], [pi.decoupling.Ld_c, 0]])
     Pw = ct.feedback(Pd, ct.ss([], [], [], W), sign=+1)
-    K = ct.append(*[pi.axes[k].continuous.to_statespace() for k in "dq"])
+    K = ct.append(*[pi.axes[k].continuous.to_statespace().to_control() for k in "dq"])
     ref = np.sort_complex(ct.feedback(Pw * K, np.eye(2)).poles())
     np.testing.assert_allclose(ours, ref, rtol=1e-8)
     box = ParameterBox.around(AZAIZ, 0.3, omega_max=920.0)

@@ -28,8 +28,8 @@ def _pc_loop(artifact, axis, discrete):
     G = ct.tf([1], [L_, AZAIZ.R])
     ax = artifact.axes[axis]
     if not discrete:
-        return ct.ss(ax.continuous.to_statespace()) * ct.ss(G)
-    law = ax.law.to_statespace()
+        return ax.continuous.to_statespace().to_control() * ct.ss(G)
+    law = ax.law.to_statespace().to_control()
     K = -law[0, 1]
     Gd = ct.sample_system(ct.ss(G), TS, method="zoh")
     z1 = ct.tf([1], [1, 0], TS)
@@ -295,7 +295,7 @@ def test_coupled_loop_at_speed_matches_python_control_interconnection(hinf):
     Pd = ct.sample_system(ct.ss(A[0], B[0], np.eye(2), np.zeros((2, 2))), TS, method="zoh")
     z1 = ct.ss([[0]], [[1]], [[1]], [[0]], TS)
     Pd = Pd * ct.append(z1, z1)
-    Km = ct.append(*[hinf.axes[k].law.to_statespace()[0, 1] for k in "dq"])   # v = Km i
+    Km = ct.append(*[hinf.axes[k].law.to_statespace().to_control()[0, 1] for k in "dq"])   # v = Km i
     W = M.decoupling_matrix(hinf.decoupling, g * om)[0]
     Cm = Km + ct.ss([], [], [], W, TS)
     cl = ct.feedback(Pd, Cm, sign=+1)                     # v = (Km + W) i, positive loop

@@ -96,7 +96,7 @@ def test_step_is_the_reference_response_of_the_executed_law(tc):
         assert t[k] <= m[ax].response_time_5pct + 1e-12 <= t[k + 1] + 1e-12
         # the 1-DOF rebuild feedback(K_m G z^-1, 1) settles elsewhere: that was the old bug
         G = ct.sample_system(ct.tf([1.0], [L_h, AZAIZ.R]), ts, method="zoh")
-        K = ct.ss(tc.axes[ax].to_statespace(discrete=True))
+        K = tc.axes[ax].to_statespace(discrete=True).to_control()
         wrong = ct.feedback(K * G * ct.tf([1.0], [1.0, 0.0], ts), 1)
         assert abs(ct.dcgain(wrong) - 1) > 0.01 > abs(y[-1] - 1)
 

@@ -55,7 +55,7 @@ def test_characteristic_equation_eq4_matches_assembled_loop(axis):
     # of eq (4) (the sampled proportional feedback shifts them by O(sigma Ts) = 3 %)
     ts = 1e-5
     art = design(spec(poles={"d": -800.0, "q": -1000.0}, sigma={"d": 3000.0, "q": 2500.0}, ts=ts))
-    law = art.axes[axis].law.to_statespace()
+    law = art.axes[axis].law.to_statespace().to_control()
     Gd = ct.sample_system(ct.ss(G), ts, "zoh")
     cld = ct.feedback(Gd, law[0, 1], sign=1)
     zp = cld.poles()

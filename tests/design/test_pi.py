@@ -120,7 +120,7 @@ def test_bandwidth_rule_is_open_loop_crossover():
     """|L(j wc)| = 1 for L = (Kp + Ki/s)/(R + L s) with cancellation gains."""
     spec = make_spec("pi", {"rule": "bandwidth", "bandwidth": 1500})
     art = design(spec)
-    loop = art.axes["q"].to_statespace() * axis_plants(spec.motor)["q"]
+    loop = art.axes["q"].to_statespace().to_control() * axis_plants(spec.motor)["q"]
     mag = abs(ct.frequency_response(loop, [1500.0]).complex.ravel()[0])
     assert mag == pytest.approx(1.0, rel=1e-9)
 
@@ -180,7 +180,7 @@ def test_complex_vector_2dof_motulator_gains_and_tracking():
     assert cfg.Ki[0] == pytest.approx(a_c * a_i * 1.4e-3, rel=1e-14)
     w = np.array([30.0, 700.0, 9000.0])
     for k, ax in enumerate("dq"):
-        law = P.pi_law(cfg.Kp[k], cfg.Ki[k], "pi", Kt=cfg.Kt[k])
+        law = P.pi_law(cfg.Kp[k], cfg.Ki[k], "pi", Kt=cfg.Kt[k]).to_control()
         G = ct.frequency_response(axis_plants(spec.motor)[ax], w).complex.ravel()
         Cr = ct.frequency_response(law[0, 0], w).complex.ravel()
         Cy = ct.frequency_response(law[0, 1], w).complex.ravel()
@@ -222,7 +222,7 @@ def test_plant_RL_reads_axis_plant():
 
 # ---------------------------------------------------------------- (2) laws
 def test_ip_law_has_no_proportional_action_on_reference():
-    law = P.pi_law(2.0, 600.0, "ip")
+    law = P.pi_law(2.0, 600.0, "ip").to_control()
     assert np.asarray(law.D).tolist() == [[0.0, -2.0]]
     # error controller (minus the measurement channel) is the PI Kp + Ki/s
     w = np.array([10.0, 1e3])
@@ -240,7 +240,7 @@ def test_ip_with_cancellation_gains_warns_about_slow_reference_response():
 def test_pi_lag_filters_measurement_not_reference():
     """001 Fig. 2b: the lag acts on the measured currents (feedback path)."""
     Kp, Ki, Td = 2.8, 600.0, 2e-4
-    law = P.pi_law(Kp, Ki, "pi_lag", Td)
+    law = P.pi_law(Kp, Ki, "pi_lag", Td).to_control()
     w = np.array([10.0, 300.0, 5e3])
     pi = Kp + Ki / (1j * w)
     r_ch = ct.frequency_response(law[0, 0], w).complex.ravel()

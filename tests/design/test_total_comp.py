@@ -155,7 +155,7 @@ def test_tc_law_has_resistance_feedback_in_measurement_channel():
 
 def test_tci_error_controller_is_pi_minus_resistance():
     art = design(make_spec("tci", {"K11": 3000, "K12": 4e5, "K21": 3000, "K22": 4e5}))
-    K = art.axes["d"].to_statespace()
+    K = art.axes["d"].to_statespace().to_control()
     w = np.array([50.0, 2000.0])
     ref = 3000 * LD + 4e5 * LD / (1j * w) - R
     assert np.allclose(ct.frequency_response(K, w).complex.ravel(), ref, rtol=1e-12)
@@ -313,7 +313,7 @@ def test_tc_sampled_response_time_vs_paper():
     100 us grid, so +/- 0.1 ms). DISCREPANCY: the paper's 2.5 ms is about
     2/K (86 %), not a 5 % time of a first-order loop with K = 800."""
     spec = make_spec("tc", {"K1": 800, "K2": 800}, delay=1)
-    law = design(spec).axes["q"].law.to_statespace()
+    law = design(spec).axes["q"].law.to_statespace().to_control()
     G = ct.c2d(axis_plants(spec.motor)["q"], TS, "zoh") * ct.tf([1], [1, 0], TS)
     Cr, Cy = ct.ss2tf(law[0, 0]), ct.ss2tf(law[0, 1])
     T = ct.minreal(G * Cr / (1 - G * Cy), verbose=False)

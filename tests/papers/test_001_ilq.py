@@ -93,7 +93,7 @@ def test_design_files_agree_with_the_test():
     assert pi.controller.cfg.lag_time_constant == 2e-4
     m = pi.motor
     ours = pi_lag_law(m.Lq, m.R)
-    art = design(pi).axes["q"].law.to_statespace()
+    art = design(pi).axes["q"].law.to_statespace().to_control()
     w = np.logspace(1, 4.4, 30)
     for j in (0, 1):
         assert np.allclose(ct.frequency_response(art[0, j], w).complex,
@@ -109,7 +109,7 @@ def test_ilq_less_sensitive_to_inductance_than_pi_with_lag(Td, ratio_t5, m_pi_re
     m = sp.motor
     art = design(sp)
     assert art.design_parameters["optimal"] and art.design_parameters["sigma_bound"]["q"] == pytest.approx(1552.53, rel=1e-5)
-    ilq_law = art.axes["q"].law.to_statespace()
+    ilq_law = art.axes["q"].law.to_statespace().to_control()
     m_ilq, y_ilq = merit(ilq_law, m.Lq, m.R)
     m_pi, y_pi = merit(pi_lag_law(m.Lq, m.R, Td=Td), m.Lq, m.R)
     print(f"\nT_d {Td * 1e3:.1f} ms: ILQ: M_0.5 = {m_ilq[0.5]:.3f}, M_2 = {m_ilq[2.0]:.3f}, "
@@ -160,7 +160,7 @@ def test_simulator_agrees_with_linear_analysis():
 
     sp = ilq_spec()
     art = design(sp)
-    law = art.axes["q"].law.to_statespace()
+    law = art.axes["q"].law.to_statespace().to_control()
     sc = Scenario.from_dict({"kind": "current_step", "duration": 0.02, "iq_ref": 5.0,
                              "keep_traces": True}, sample_time=TS)
     sim, lin = {}, {}

@@ -69,7 +69,7 @@ def _margins(art, motor):
     out = {}
     ts = art.sample_time
     for name, G in axis_plants(motor).items():
-        K = art.axes[name].to_statespace(discrete=True)
+        K = art.axes[name].to_statespace(discrete=True).to_control()
         Gd = control.sample_system(control.ss(G), ts, "zoh")
         L = K * Gd * control.tf([1], [1, 0], ts)
         gm, pm, sm, wpc, wgc, _ = control.stability_margins(L)

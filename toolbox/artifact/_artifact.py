@@ -22,15 +22,13 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import warnings
 from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
-import control
 import numpy as np
-from scipy.signal import BadCoefficients
 
 from .._io import check_data_depth, check_text_depth
+from .._lti import StateSpace, acker, as_statespace, c2d, ss2tf
 from ..errors import ArtifactError
 from ._fields import AxisWeights, FcsWeights, TransferFunctionData
 
@@ -117,21 +115,18 @@ class StateSpaceData:
         return self.A.shape[0]
 
     @classmethod
-    def from_statespace(cls, sys: control.StateSpace,
-                        method: str | None = None) -> "StateSpaceData":
-        """Wrap a python-control system (``sys.dt`` 0 or None means continuous)."""
-        dt = None if not sys.dt else float(sys.dt)
-        return cls(np.array(sys.A, float).reshape(sys.nstates, sys.nstates),
-                   np.array(sys.B, float).reshape(sys.nstates, sys.ninputs),
-                   np.array(sys.C, float).reshape(sys.noutputs, sys.nstates),
-                   np.array(sys.D, float).reshape(sys.noutputs, sys.ninputs),
-                   dt, method if dt else None)
+    def from_statespace(cls, sys: Any, method: str | None = None) -> "StateSpaceData":
+        """Wrap a system: a :class:`toolbox._lti.StateSpace` or anything
+        :func:`toolbox._lti.as_statespace` reads (python-control systems:
+        ``dt`` 0 or None means continuous)."""
+        g = as_statespace(sys)
+        return cls(np.array(g.A), np.array(g.B), np.array(g.C), np.array(g.D),
+                   g.dt, method if g.dt else None)
 
-    def to_statespace(self) -> control.StateSpace:
-        """The python-control system (continuous when ``dt`` is None)."""
-        if self.dt is None:
-            return control.ss(self.A, self.B, self.C, self.D)
-        return control.ss(self.A, self.B, self.C, self.D, self.dt)
+    def to_statespace(self) -> StateSpace:
+        """The system as a :class:`toolbox._lti.StateSpace` (continuous when
+        ``dt`` is None; ``.to_control()`` gives the python-control one)."""
+        return StateSpace(self.A, self.B, self.C, self.D, self.dt)
 
     def to_json(self) -> dict:
         out: dict[str, Any] = {"A": _list(self.A), "B": _list(self.B),
@@ -185,14 +180,10 @@ class Zpk:
     gain: float
 
     @classmethod
-    def from_statespace(cls, sys: control.StateSpace) -> "Zpk":
-        with warnings.catch_warnings():
-            # scipy warns when a numerator's leading coefficients are tiny
-            # relative to the others, which is normal for wide-band controllers
-            warnings.simplefilter("ignore", BadCoefficients)
-            tf = control.ss2tf(sys)
-        num = np.trim_zeros(np.atleast_1d(np.squeeze(tf.num[0][0])), "f")
-        den = np.trim_zeros(np.atleast_1d(np.squeeze(tf.den[0][0])), "f")
+    def from_statespace(cls, sys: Any) -> "Zpk":
+        """Zeros, poles and gain of a SISO system (:func:`toolbox._lti.ss2tf`)."""
+        num, den = ss2tf(sys)
+        num = np.trim_zeros(num, "f")
         if num.size == 0:
             return cls(np.zeros(0, complex), np.roots(den).astype(complex), 0.0)
         gain = float(num[0] / den[0])
@@ -332,7 +323,7 @@ def _antiwindup_gain(A: np.ndarray, B_r: np.ndarray, C: np.ndarray, D_r: float,
     target = np.array([p if m is None else m for p, m in zip(poles, moved)])
     # conjugate symmetry: a relocated complex pair maps to a conjugate pair
     try:
-        gain = control.acker(A.T, C.T, np.sort_complex(target))
+        gain = acker(A.T, C.T, np.sort_complex(target))
     except (ValueError, np.linalg.LinAlgError):
         return np.real(aw)
     aw_new = np.real(np.asarray(gain, float).reshape(n, 1))
@@ -436,8 +427,7 @@ class AxisController:
         return Zpk.from_statespace((self.continuous or self.discrete).to_statespace())
 
     @classmethod
-    def from_error_controller(cls, K: control.StateSpace | control.TransferFunction,
-                              sample_time: float, method: str = "tustin",
+    def from_error_controller(cls, K: Any, sample_time: float, method: str = "tustin",
                               antiwindup: bool = True) -> "AxisController":
         """Build an axis from a continuous one-degree-of-freedom controller.
 
@@ -446,16 +436,16 @@ class AxisController:
         if the reference had been the one that produces the saturated voltage),
         with bad saturated modes relocated (:func:`_antiwindup_gain`).
         """
-        Kc = control.ss(K)
-        Kd = control.sample_system(Kc, sample_time, method=method)
-        law = control.ss(Kd.A, np.hstack([Kd.B, -Kd.B]), Kd.C,
-                         np.hstack([Kd.D, -Kd.D]), sample_time)
+        Kc = as_statespace(K)
+        Kd = c2d(Kc, sample_time, method)
+        law = StateSpace(Kd.A, np.hstack([Kd.B, -Kd.B]), Kd.C, np.hstack([Kd.D, -Kd.D]),
+                         sample_time)
         return cls.from_law(law, error_controller=Kc, sample_time=sample_time,
                             method=method, antiwindup=antiwindup)
 
     @classmethod
-    def from_law(cls, law: control.StateSpace, *, sample_time: float, method: str,
-                 error_controller: control.StateSpace | None = None,
+    def from_law(cls, law: Any, *, sample_time: float, method: str,
+                 error_controller: Any = None,
                  antiwindup: bool | np.ndarray = True) -> "AxisController":
         """Build an axis from a two-input law ``[i_ref, i_meas] -> v``.
 
@@ -463,30 +453,30 @@ class AxisController:
         discrete at ``sample_time`` (``method`` then says how it was obtained).
         The error controller of the loop is minus the measurement channel.
         """
-        if not law.dt:
-            law_c = control.ss(law)
-            law = control.sample_system(law_c, sample_time, method=method)
+        law = as_statespace(law)
+        if not law.discrete:
+            law_c = law
+            law = c2d(law_c, sample_time, method)
             if error_controller is None:
                 error_controller = -law_c[0, 1]
-        law = control.ss(law)
         if isinstance(antiwindup, np.ndarray):
             aw = antiwindup.reshape(law.nstates, 1)
         elif antiwindup and law.nstates:
-            aw = _antiwindup_gain(np.asarray(law.A, float), np.asarray(law.B[:, 0:1], float),
-                                  np.asarray(law.C, float), float(law.D[0, 0]),
-                                  np.asarray(law.B[:, 1:2], float), float(law.D[0, 1]),
+            aw = _antiwindup_gain(law.A, law.B[:, 0:1], law.C, float(law.D[0, 0]),
+                                  law.B[:, 1:2], float(law.D[0, 1]),
                                   sample_time=sample_time, method=method)
         else:
             aw = None
         return cls(
             law=StateSpaceData.from_statespace(law, method),
             continuous=(None if error_controller is None
-                        else StateSpaceData.from_statespace(control.ss(error_controller))),
+                        else StateSpaceData.from_statespace(error_controller)),
             antiwindup=aw,
         )
 
-    def to_statespace(self, discrete: bool = False) -> control.StateSpace:
-        """The error -> voltage controller as a python-control system."""
+    def to_statespace(self, discrete: bool = False) -> StateSpace:
+        """The error -> voltage controller (:class:`toolbox._lti.StateSpace`;
+        ``.to_control()`` gives the python-control one)."""
         if discrete or self.continuous is None:
             return self.discrete.to_statespace()
         return self.continuous.to_statespace()

@@ -14,8 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control as ct
-
+from .._lti import StateSpace
 from ..artifact import AxisController, ControllerArtifact, FcsWeights
 from ..errors import SpecError
 from ..spec import Table
@@ -117,12 +116,12 @@ def design(spec) -> ControllerArtifact:
     """
     cfg: FcsMpcCfg = spec.controller.cfg
     m, ts = spec.motor, spec.drive.sample_time
-    s = ct.tf("s")
     axes, pis = {}, {}
     for ax, L in (("d", m.Ld), ("q", m.Lq)):
         Kp, Ki = baseline_pi(m.R, L)
         pis[ax] = {"Kp": Kp, "Ki": Ki}
-        axes[ax] = AxisController.from_error_controller(Kp + Ki / s, ts, method="tustin")
+        pi = StateSpace([[0.0]], [[1.0]], [[Ki]], [[Kp]])          # Kp + Ki/s
+        axes[ax] = AxisController.from_error_controller(pi, ts, method="tustin")
     params = {"baseline": "002 eq (19)-(20)", "baseline_pi": pis}
     return make_artifact(spec, axes, decoupling_from_motor(m), params,
                          ["002 eq (19)-(20)", "002 eq (23)"],

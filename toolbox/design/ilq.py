@@ -34,10 +34,10 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
-import control
 import numpy as np
 import scipy.linalg as sla
 
+from .._lti import StateSpace, as_statespace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
@@ -259,13 +259,13 @@ class IlqAxis:
     P: np.ndarray | None = None
     care_error: float | None = None
 
-    def law(self) -> control.StateSpace:
+    def law(self) -> StateSpace:
         """Continuous two-input law ``[i_ref, i] -> u`` (state ``z``), Fig. 2(a)."""
-        return control.ss([[0.0]], [[1.0, -1.0]], [[self.K_I]], [[0.0, -self.K_F]])
+        return StateSpace([[0.0]], [[1.0, -1.0]], [[self.K_I]], [[0.0, -self.K_F]])
 
-    def error_controller(self) -> control.StateSpace:
+    def error_controller(self) -> StateSpace:
         """Equivalent error -> voltage controller ``K_F + K_I/s`` (V/A)."""
-        return control.ss([[0.0]], [[1.0]], [[self.K_I]], [[self.K_F]])
+        return StateSpace([[0.0]], [[1.0]], [[self.K_I]], [[self.K_F]])
 
 
 def ilq_axis(R: float, L: float, s_star: float, sigma: float, *, axis: str = "q",
@@ -320,7 +320,7 @@ def first_order_coefficients(G: Any) -> tuple[float, float]:
 
     Parameters
     ----------
-    G : control.LTI
+    G : toolbox._lti.StateSpace or python-control LTI
         SISO, one state, no feedthrough (A/V).
 
     Returns
@@ -335,7 +335,7 @@ def first_order_coefficients(G: Any) -> tuple[float, float]:
     ValueError
         G is not a strictly proper first-order SISO system.
     """
-    sys = control.ss(G)
+    sys = as_statespace(G)
     if sys.ninputs != 1 or sys.noutputs != 1 or sys.nstates != 1 or abs(float(sys.D[0, 0])) > 0:
         raise ValueError("first_order_coefficients: expected a strictly proper first-order "
                          f"SISO plant b/(s - a), got {sys.nstates} states, "
@@ -344,11 +344,11 @@ def first_order_coefficients(G: Any) -> tuple[float, float]:
 
 
 def ilq_axis_from_plant(G: Any, s_star: float, sigma: float, **options: Any) -> IlqAxis:
-    """ILQ design of one axis from a python-control plant ``1/(R + s L)``.
+    """ILQ design of one axis from a plant ``1/(R + s L)``.
 
     Parameters
     ----------
-    G : control.LTI
+    G : toolbox._lti.StateSpace or python-control LTI
         First-order plant (A/V), e.g. ``axis_plants(motor)["q"]``.
     s_star : float
         Assigned pole (rad/s), < 0.

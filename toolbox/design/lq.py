@@ -32,10 +32,10 @@ import warnings
 from dataclasses import dataclass
 from typing import Any
 
-import control
 import numpy as np
 import scipy.linalg as sla
 
+from .._lti import StateSpace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
@@ -160,13 +160,13 @@ class LqAxis:
     sample_time: float
     delay_samples: int
 
-    def law(self) -> control.StateSpace:
+    def law(self) -> StateSpace:
         """Two-input law ``[i_ref, i] -> u`` (continuous for the CARE design,
         discrete at ``sample_time`` for the DARE design)."""
         k = self.K.ravel()
         if self.domain == "continuous":
             # state z, z' = i_ref - i, u = -k_i i - k_z z
-            return control.ss([[0.0]], [[1.0, -1.0]], [[-k[1]]], [[0.0, -k[0]]])
+            return StateSpace([[0.0]], [[1.0, -1.0]], [[-k[1]]], [[0.0, -k[0]]])
         d, ts = self.delay_samples, self.sample_time
         n = 1 + d                                      # [z, u_{k-1}, ..., u_{k-d}]
         C = -k[1:].reshape(1, n)                       # u = C xi - k_i i
@@ -180,7 +180,7 @@ class LqAxis:
             B[1] = D
             for j in range(2, n):
                 A[j, j - 1] = 1.0                      # shift register
-        return control.ss(A, B, C, D, ts)
+        return StateSpace(A, B, C, D, ts)
 
 
 def lqi_continuous(a: float, b: float, Q: tuple[float, float], R: float) -> LqAxis:
@@ -314,11 +314,11 @@ def lqi_discrete(a: float, b: float, Q: tuple[float, float], R: float,
 
 def lqi_from_plant(G: Any, Q: tuple[float, float], R: float, *, domain: str = "discrete",
                    sample_time: float | None = None, delay_samples: int = 1) -> LqAxis:
-    """LQI design of one axis from a python-control plant ``1/(R + s L)``.
+    """LQI design of one axis from a plant ``1/(R + s L)``.
 
     Parameters
     ----------
-    G : control.LTI
+    G : toolbox._lti.StateSpace or python-control LTI
         First-order plant (A/V).
     Q : (float, float)
         ``(q_i, q_z)``.

@@ -96,9 +96,9 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
-import control
 import numpy as np
 
+from .._lti import StateSpace, as_statespace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..spec import Table
@@ -279,18 +279,23 @@ def gains_from_normalised(Kp_n: float, Ki_n: float, voltage_gain: float,
 
 
 def plant_RL(plant: Any) -> tuple[float, float]:
-    """``(R, L)`` of a first-order axis plant ``1/(R + L s)`` (python-control)."""
-    tf = control.tf(plant)
-    num = np.trim_zeros(np.atleast_1d(np.squeeze(tf.num[0][0])), "f")
-    den = np.trim_zeros(np.atleast_1d(np.squeeze(tf.den[0][0])), "f")
-    if num.size != 1 or den.size != 2:
-        raise SpecError("plant", "a first-order plant 1/(R + L s)", str(tf))
-    return float(den[1] / num[0]), float(den[0] / num[0])
+    """``(R, L)`` of a first-order axis plant ``1/(R + L s)``.
+
+    ``plant`` is anything :func:`toolbox._lti.as_statespace` reads (e.g.
+    :func:`toolbox.plant.axis_plants`, a python-control system): one state,
+    no feedthrough, ``G = c b/(s - a)`` so ``L = 1/(c b)`` and ``R = -a L``.
+    """
+    g = as_statespace(plant)
+    if (g.nstates, g.ninputs, g.noutputs) != (1, 1, 1) or g.D[0, 0] != 0.0 \
+            or g.B[0, 0] * g.C[0, 0] == 0.0:
+        raise SpecError("plant", "a first-order plant 1/(R + L s)", repr(g))
+    gain = float(g.C[0, 0] * g.B[0, 0])
+    return float(-g.A[0, 0] / gain), 1.0 / gain
 
 
 def pi_law(Kp: float, Ki: float, structure: str = "pi",
            lag_time_constant: float | None = None,
-           Kt: float | None = None) -> control.StateSpace:
+           Kt: float | None = None) -> StateSpace:
     """Continuous two-input law ``[i_ref, i_meas] -> v`` of one axis.
 
     Parameters
@@ -312,18 +317,18 @@ def pi_law(Kp: float, Ki: float, structure: str = "pi",
 
     Returns
     -------
-    control.StateSpace
+    toolbox._lti.StateSpace
         Continuous, states ``[x]`` or ``[x, y_f]``.
     """
     if structure == "pi":
-        return control.ss([[0.0]], [[1.0, -1.0]], [[Ki]], [[Kp if Kt is None else Kt, -Kp]])
+        return StateSpace([[0.0]], [[1.0, -1.0]], [[Ki]], [[Kp if Kt is None else Kt, -Kp]])
     if structure == "ip":
-        return control.ss([[0.0]], [[1.0, -1.0]], [[Ki]], [[0.0, -Kp]])
+        return StateSpace([[0.0]], [[1.0, -1.0]], [[Ki]], [[0.0, -Kp]])
     if structure == "pi_lag":
         if lag_time_constant is None or not lag_time_constant > 0:
             raise SpecError("lag_time_constant", "a number > 0 (s)", lag_time_constant)
         Td = lag_time_constant
-        return control.ss([[0.0, -1.0], [0.0, -1.0 / Td]], [[1.0, 0.0], [0.0, 1.0 / Td]],
+        return StateSpace([[0.0, -1.0], [0.0, -1.0 / Td]], [[1.0, 0.0], [0.0, 1.0 / Td]],
                           [[Ki, -Kp]], [[Kp, 0.0]])
     raise SpecError("structure", f"one of {list(STRUCTURES)}", structure)
 

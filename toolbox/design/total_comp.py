@@ -36,9 +36,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-import control
 import numpy as np
 
+from .._lti import StateSpace, static_gain
 from ..artifact import AxisController, ControllerArtifact, Decoupling
 from ..errors import SpecError
 from ..spec import Table
@@ -159,16 +159,15 @@ def designed_poles(K_prop: float, K_int: float | None = None) -> np.ndarray:
 
 
 def total_comp_law(K_prop: float, L_c: float, R_c: float,
-                   K_int: float | None = None) -> control.StateSpace:
+                   K_int: float | None = None) -> StateSpace:
     """Continuous two-input law ``[i_ref, i_meas] -> v`` of one axis (Omega terms excluded).
 
     ``v = R_c y + K_prop L_c (r - y) [+ K_int L_c int (r - y)]`` (V), 000 eq
     (11) / (20) without the speed terms (those are the Decoupling).
     """
     if K_int is None:
-        return control.ss(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)),
-                          [[K_prop * L_c, R_c - K_prop * L_c]])
-    return control.ss([[0.0]], [[1.0, -1.0]], [[K_int * L_c]],
+        return static_gain([[K_prop * L_c, R_c - K_prop * L_c]])
+    return StateSpace([[0.0]], [[1.0, -1.0]], [[K_int * L_c]],
                       [[K_prop * L_c, R_c - K_prop * L_c]])
 
 
@@ -201,11 +200,8 @@ def design_total_compensation(K_prop: tuple[float, float], sample_time: float, *
         Ki = None if K_int is None else K_int[k]
         law = total_comp_law(K_prop[k], L_c, R_c, Ki)
         if law.nstates == 0:
-            D = np.asarray(law.D, float)
-            law_d = control.ss(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), D,
-                               sample_time)
-            err = control.ss(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
-                             [[-D[0, 1]]])
+            law_d = static_gain(law.D, sample_time)
+            err = static_gain([[-law.D[0, 1]]])
             axes[name] = AxisController.from_law(law_d, sample_time=sample_time,
                                                  method="native", error_controller=err)
         else:

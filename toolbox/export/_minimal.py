@@ -17,8 +17,9 @@ look like 1e14 and refuse a sound controller.
    1e-14 round-off seen in practice, six below any coefficient that matters
    at float32 precision, 6e-8);
 3. removes unreachable/unobservable states of the system
-   ``(A, [B aw], C, [D 0])`` with :func:`control.minreal` (SLICOT ``TB01PD``)
-   at a tolerance relative to the system norm. The anti-windup vector is an
+   ``(A, [B aw], C, [D 0])`` with :func:`toolbox._lti.minreal` (orthogonal
+   staircase, the reduction of SLICOT ``TB01PD``) at a tolerance relative to
+   the system norm. The anti-windup vector is an
    input here, so the reduced law equals the executed law *including* the
    back-calculation path, not only its linear part;
 4. accepts the result only if its frequency response equals the original one
@@ -33,6 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+
+from .._lti import StateSpace, minreal
 
 __all__ = ["MinimalLaw", "minimal_law", "ROUNDOFF_REL", "EQUIV_RTOL"]
 
@@ -126,15 +129,13 @@ def _balance(A, Bx, C):
 
 
 def _minreal(A, Bx, C, Dx, ts: float):
-    """control.minreal on the law with unit-norm input and output maps, or None.
+    """:func:`toolbox._lti.minreal` on the law with unit-norm input and output
+    maps, or None when no state goes.
 
-    Controllability and observability do not depend on the scale of B and C
-    (nor on D), so they are normalised before SLICOT's TB01PD sees them: its
-    rank decisions then use a tolerance relative to A alone, and a tampered
-    law with huge entries cannot reach it (TB01PD aborts the process on
-    overflowing input instead of raising).
+    Reachability and observability do not depend on the scale of B and C (nor
+    on D), so they are normalised first: the rank decisions then use a
+    tolerance relative to A alone.
     """
-    import control as ct
     n = A.shape[0]
     norm_a = float(np.linalg.norm(A, 2)) if n else 0.0
     if n == 0 or not np.isfinite(norm_a) or norm_a > A_NORM_MAX:
@@ -143,15 +144,13 @@ def _minreal(A, Bx, C, Dx, ts: float):
     c_scale = float(np.linalg.norm(C, 2)) or 1.0
     with np.errstate(all="ignore"):
         try:
-            red = ct.minreal(ct.ss(A, Bx / b_scale, C / c_scale, np.zeros_like(Dx), ts),
-                             tol=ROUNDOFF_REL * max(norm_a, 1.0), verbose=False)
-        except Exception:        # slycot/numpy failures: keep the full law
+            red = minreal(StateSpace(A, Bx / b_scale, C / c_scale, np.zeros_like(Dx), ts),
+                          tol=ROUNDOFF_REL * max(norm_a, 1.0))
+        except np.linalg.LinAlgError:          # SVD did not converge: keep the full law
             return None
     if red.nstates >= n:
         return None
-    return (np.asarray(red.A, float).reshape(red.nstates, red.nstates),
-            np.asarray(red.B, float).reshape(red.nstates, Bx.shape[1]) * b_scale,
-            np.asarray(red.C, float).reshape(1, red.nstates) * c_scale, Dx)
+    return red.A, red.B * b_scale, red.C * c_scale, Dx
 
 
 def minimal_law(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
@@ -184,8 +183,8 @@ def minimal_law(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     Dx = np.column_stack([D, [[0.0]]])
     original = MinimalLaw(A, B, C, D, aw)
     if n == 0 or not all(np.all(np.abs(m) < CLEANABLE_MAX) for m in (A, Bx, C, D)):
-        # non-finite or absurd entries (tampered file): SLICOT's TB01PD is not
-        # defined on them (it aborts the process); the range check refuses the law
+        # non-finite or absurd entries (tampered file): no rank decision is
+        # meaningful on them; the range check refuses the law
         return original
     Ab, Bb, Cb = _balance(A, Bx, C)
     Ac, z1 = _zero_small(Ab)

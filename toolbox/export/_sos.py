@@ -24,7 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-import scipy.signal
+
+from .._lti import StateSpace, ss2zpk
 
 __all__ = ["Realisation", "realise_axis", "is_one_dof"]
 
@@ -105,6 +106,108 @@ def _cascade(sos: np.ndarray, gain: float) -> tuple[np.ndarray, ...]:
     return A, B, gain * cx.reshape(1, n), np.array([[gain * du]])
 
 
+# -- scipy.signal.zpk2sos(z, p, 1.0, pairing="nearest"), digital --------------
+# scipy.signal is not imported for it: importing it costs ~0.4 s of every
+# `cct design` (issue 13). The port keeps scipy's operations (same sections,
+# same floating-point numbers: tests/export/test_sos.py compares with ==) for
+# the case used here, equal numbers of zeros and poles.
+def _cplxreal(z: np.ndarray, tol: float = 100 * np.finfo(float).eps) -> tuple[np.ndarray, ...]:
+    """Complex roots with positive imaginary part (pairs averaged) and real
+    roots, each sorted as ``scipy.signal._filter_design._cplxreal`` does."""
+    z = np.atleast_1d(z)
+    if z.size == 0:
+        return z, z
+    z = z[np.lexsort((abs(z.imag), z.real))]
+    real = abs(z.imag) <= tol * abs(z)
+    zr = z[real].real
+    if len(zr) == len(z):
+        return np.array([]), zr
+    z = z[~real]
+    zp, zn = z[z.imag > 0], z[z.imag < 0]
+    if len(zp) != len(zn):
+        raise ValueError("Array contains complex value with no matching conjugate.")
+    same_real = np.diff(zp.real) <= tol * abs(zp[:-1])
+    diffs = np.diff(np.concatenate(([0], same_real, [0])))
+    for start, stop in zip(np.nonzero(diffs > 0)[0], np.nonzero(diffs < 0)[0] + 1):
+        for chunk in (zp[start:stop], zn[start:stop]):
+            chunk[...] = chunk[np.lexsort([abs(chunk.imag)])]
+    if any(abs(zp - zn.conj()) > tol * abs(zn)):
+        raise ValueError("Array contains complex value with no matching conjugate.")
+    return (zp + zn.conj()) / 2, zr
+
+
+def _nearest_idx(fro: np.ndarray, to: complex, which: str) -> int:
+    """Index of the element of ``fro`` nearest ``to`` (of the kind ``which``)."""
+    order = np.argsort(np.abs(fro - to))
+    if which == "any":
+        return order[0]
+    mask = np.isreal(fro[order])
+    if which == "complex":
+        mask = ~mask
+    return order[np.nonzero(mask)[0][0]]
+
+
+def _section(z: list, p: list) -> np.ndarray:
+    """One second-order section ``[b0, b1, b2, 1, a1, a2]`` from <= 2 zeros and poles."""
+    sos = np.zeros(6)
+    b, a = np.atleast_1d(1.0 * np.poly(z)), np.atleast_1d(np.poly(p))
+    sos[3 - len(b):3] = b
+    sos[6 - len(a):6] = a
+    return sos
+
+
+def _worst(p: np.ndarray) -> int:
+    """The pole nearest the unit circle."""
+    return int(np.argmin(np.abs(1 - np.abs(p))))
+
+
+def zpk2sos_nearest(z: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Unit-gain second-order sections of a digital filter: the poles nearest
+    the unit circle last, each paired with its nearest zeros (scipy's
+    ``pairing="nearest"``; its steps and special cases in the same order)."""
+    p = np.concatenate((p, np.zeros(max(len(z) - len(p), 0))))
+    z = np.concatenate((z, np.zeros(max(len(p) - len(z), 0))))
+    n_sections = (len(p) + 1) // 2
+    if len(p) % 2 == 1:
+        p, z = np.concatenate((p, [0.0])), np.concatenate((z, [0.0]))
+    z, p = np.concatenate(_cplxreal(z)), np.concatenate(_cplxreal(p))
+    sos = np.zeros((n_sections, 6))
+    for si in range(n_sections - 1, -1, -1):
+        i = _worst(p)
+        p1, p = p[i], np.delete(p, i)
+        if np.isreal(p1) and np.isreal(p).sum() == 0:        # the last real pole
+            i = _nearest_idx(z, p1, "real")
+            z1, z = z[i], np.delete(z, i)
+            sos[si] = _section([z1, 0], [p1, 0])
+        elif (len(p) + 1 == len(z) and not np.isreal(p1)
+              and np.isreal(p).sum() == 1 and np.isreal(z).sum() == 1):
+            # one real pole and one real zero left: they must end up together
+            i = _nearest_idx(z, p1, "complex")
+            z1, z = z[i], np.delete(z, i)
+            sos[si] = _section([z1, z1.conj()], [p1, p1.conj()])
+        else:
+            if np.isreal(p1):
+                real = np.flatnonzero(np.isreal(p))
+                i = real[_worst(p[real])]
+                p2, p = p[i], np.delete(p, i)
+            else:
+                p2 = p1.conj()
+            if len(z) == 0:
+                sos[si] = _section([], [p1, p2])
+                continue
+            i = _nearest_idx(z, p1, "any")
+            z1, z = z[i], np.delete(z, i)
+            if not np.isreal(z1):
+                sos[si] = _section([z1, z1.conj()], [p1, p2])
+            elif len(z) == 0:
+                sos[si] = _section([z1], [p1, p2])
+            else:
+                i = _nearest_idx(z, p1, "real")
+                z2, z = z[i], np.delete(z, i)
+                sos[si] = _section([z1, z2], [p1, p2])
+    return sos
+
+
 def _similarity(A1, B1, C1, A2, B2, C2) -> np.ndarray | None:
     """T with ``x1 = T x2`` (T A2 = A1 T, T B2 = B1, C1 T = C2), or None."""
     n = A1.shape[0]
@@ -130,13 +233,13 @@ def _sos_realisation(A, B, C, D, aw) -> Realisation | None:
     if n == 0:
         return Realisation("sos", np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)),
                            np.array([[d, -d]]), np.zeros(0), np.zeros((0, 6)), d)
-    z, p, k = scipy.signal.ss2zpk(A, b1, C, np.array([[d]]))
+    z, p, k = ss2zpk(StateSpace(A, b1, C, np.array([[d]])))
     z = z[np.isfinite(z)]
     if z.size != p.size:
-        # strictly proper (D = 0, e.g. ZOH): scipy's zpk2sos would drop the
-        # numerator delay; such laws are exported in state-space form
+        # strictly proper (D = 0, e.g. ZOH): zpk2sos would drop the numerator
+        # delay; such laws are exported in state-space form
         return None
-    sos = scipy.signal.zpk2sos(z, p, 1.0, pairing="nearest")
+    sos = zpk2sos_nearest(z, p)
     Ac, Bc, Cc, Dc = _cascade(sos, float(k))
     # the s2 state of a first-order stage (b2 = a2 = 0) stays at zero: leave it
     # out of the similarity (its anti-windup entry is zero)

@@ -86,6 +86,7 @@ from typing import Any
 
 import numpy as np
 
+from .._lti import StateSpace, ss2zpk
 from ..errors import CctError, ExportRefused, SpecError
 from . import _fixed, _vendor
 from ._minimal import MinimalLaw, minimal_law
@@ -497,15 +498,10 @@ def check_fixed(plan, sample_time: float, key: str = "controller") -> dict:
 
 def _law_zeros(law) -> np.ndarray:
     """Transmission zeros of the reference channel (the error channel for 1-DOF laws)."""
-    import scipy.signal
     if law.A.shape[0] == 0:
         return np.zeros(0)
-    with warnings.catch_warnings():
-        # ss2tf leaves round-off leading numerator coefficients (zeros at infinity)
-        # that tf2zpk trims with BadCoefficients; the finite zeros are unaffected
-        warnings.simplefilter("ignore", scipy.signal.BadCoefficients)
-        z, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, :1], law.C, law.D[:, :1])
-        z2, _, _ = scipy.signal.ss2zpk(law.A, law.B[:, 1:], law.C, law.D[:, 1:])
+    z, _, _ = ss2zpk(StateSpace(law.A, law.B[:, :1], law.C, law.D[:, :1]))
+    z2, _, _ = ss2zpk(StateSpace(law.A, law.B[:, 1:], law.C, law.D[:, 1:]))
     return np.concatenate([z[np.isfinite(z)], z2[np.isfinite(z2)]])
 
 

@@ -12,7 +12,7 @@ from .._lazy import lazy_attributes
 from ._limits import max_electrical_speed
 from ._linear import (axis_coefficients, dq_matrices, steady_state_voltage,
                       voltage_limited_speed, zoh_first_order)
-from ._numeric import ElectricalPlant, axis_plants, linearise, numeric_plant
+from ._numeric import ElectricalPlant, axis_plant_models, axis_plants, linearise, numeric_plant
 
 #: public name -> defining private module, imported on first use
 _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_symbolic",
@@ -24,5 +24,5 @@ __getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
 
 __all__ = ["describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
            "zoh_first_order", "steady_state_voltage", "voltage_limited_speed",
-           "ElectricalPlant", "axis_plants", "linearise", "numeric_plant",
+           "ElectricalPlant", "axis_plant_models", "axis_plants", "linearise", "numeric_plant",
            "SYMBOLS", "DqModel", "derive_dq_model", "park_matrix"]

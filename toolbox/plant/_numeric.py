@@ -12,14 +12,14 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-import control
 import numpy as np
 
 from toolbox.spec import Motor
 
 from .._cache import cached
+from .._lti import StateSpace
 
-__all__ = ["ElectricalPlant", "numeric_plant", "axis_plants", "linearise"]
+__all__ = ["ElectricalPlant", "numeric_plant", "axis_plant_models", "axis_plants", "linearise"]
 
 #: The modules the lambdified code is made from (its cache key, issue 13).
 _SOURCES = (Path(__file__).with_name("_symbolic.py"), Path(__file__))
@@ -118,9 +118,10 @@ class ElectricalPlant:
         """Back-EMF disturbance term of di/dt (A/s), ``[0, -omega flux/Lq]``."""
         return np.array(self._matrices()[2](*self._args(omega)), float).reshape(2)
 
-    def statespace(self, omega: float = 0.0) -> control.StateSpace:
-        """Two-input two-output system v -> i at fixed electrical speed."""
-        return control.ss(self.A(omega), self.B(), np.eye(2), np.zeros((2, 2)))
+    def statespace(self, omega: float = 0.0) -> StateSpace:
+        """Two-input two-output system v -> i at fixed electrical speed
+        (:class:`toolbox._lti.StateSpace`)."""
+        return StateSpace(self.A(omega), self.B(), np.eye(2), np.zeros((2, 2)))
 
 
 def numeric_plant(motor: Motor) -> ElectricalPlant:
@@ -134,18 +135,53 @@ def numeric_plant(motor: Motor) -> ElectricalPlant:
     return ElectricalPlant(motor)
 
 
-def axis_plants(motor) -> dict[str, control.TransferFunction]:
+def axis_plant_models(motor) -> dict[str, StateSpace]:
     """Decoupled per-axis plants ``1/(R + s L)`` (A/V), paper 003 eq (33)-(34).
 
-    Read off the diagonal of ``(sI - A(0))^{-1} B`` of the derived model.
+    Read off the diagonal of the derived model at standstill, where the axes
+    decouple (``A(0)`` and ``B`` diagonal): one state each, ``x = i``,
+    ``A = -R/L``, ``B = 1/L``, ``C = 1``, ``D = 0``.
 
     Parameters
     ----------
     motor : Motor
         Parameters of the plant.
+
+    Returns
+    -------
+    dict
+        ``{"d": StateSpace, "q": StateSpace}`` (:class:`toolbox._lti.StateSpace`).
     """
     plant = numeric_plant(motor)
-    sys = plant.statespace(0.0)
+    A, B = plant.A(0.0), plant.B()
+    if A[0, 1] != 0.0 or A[1, 0] != 0.0 or B[0, 1] != 0.0 or B[1, 0] != 0.0:
+        raise RuntimeError(f"the derived dq model is coupled at standstill: A(0) = {A}, B = {B}")
+    return {ax: StateSpace(A[k:k + 1, k:k + 1], B[k:k + 1, k:k + 1], [[1.0]], [[0.0]])
+            for k, ax in enumerate(("d", "q"))}
+
+
+def axis_plants(motor) -> dict:
+    """The plants of :func:`axis_plant_models` as python-control transfer functions.
+
+    Imports python-control (about 1 s with the scipy.signal and
+    matplotlib.pyplot it pulls in): for users and for the H-infinity design
+    until it reads :func:`axis_plant_models` (issue 13). The transfer
+    functions are SLICOT's (``tb04ad``) of the two-state model's diagonal
+    entries, as before that function existed.
+
+    Parameters
+    ----------
+    motor : Motor
+        Parameters of the plant.
+
+    Returns
+    -------
+    dict
+        ``{"d": control.TransferFunction, "q": control.TransferFunction}``.
+    """
+    import control
+
+    sys = numeric_plant(motor).statespace(0.0).to_control()
     return {"d": control.ss2tf(sys[0, 0]), "q": control.ss2tf(sys[1, 1])}
 
 
@@ -166,7 +202,7 @@ def _full_jacobians(convention: str):
             sp.lambdify(args, f.jacobian(u), "numpy"))
 
 
-def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[control.StateSpace, np.ndarray]:
+def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[StateSpace, np.ndarray]:
     """Linearise the electromechanical model at an operating point.
 
     States ``[i_d, i_q, Omega]`` (A, A, rad/s mechanical), inputs
@@ -185,7 +221,7 @@ def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[control.S
 
     Returns
     -------
-    sys : control.StateSpace
+    sys : toolbox._lti.StateSpace
         The small-signal model.
     u0 : ndarray
         Operating-point inputs ``[v_d0, v_q0, T_L0]``.
@@ -206,4 +242,4 @@ def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[control.S
              motor.friction, i_d0, i_q0, Omega0, v0[0], v0[1], T_L0)
     A = np.array(jx(*point), float)
     B = np.array(ju(*point), float)
-    return control.ss(A, B, np.eye(3), np.zeros((3, 3))), np.array([*v0, T_L0])
+    return StateSpace(A, B, np.eye(3), np.zeros((3, 3))), np.array([*v0, T_L0])
