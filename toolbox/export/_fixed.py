@@ -293,6 +293,8 @@ def _fftconvolve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     every ``cct design``, issue 13): same transform length, same pocketfft
     transforms, so the same numbers (tests/export/test_propagate_bound.py).
     """
+    if a.size == 1 or b.size == 1:          # scipy multiplies directly (no transform)
+        return a * b
     size = a.size + b.size - 1
     L = _fast_length(size)
     return np.fft.irfft(np.fft.rfft(a, L) * np.fft.rfft(b, L), L)[:size]
