@@ -17,9 +17,8 @@ from .spec import Spec, load_spec, spec_from_dict
 from . import design as _design  # noqa: F401  registers the methods' parameter readers with spec
 
 #: public name -> defining module, imported on first access (PEP 562): the
-#: artifact and pipeline import python-control, which imports matplotlib.pyplot
-#: and scipy.signal (about 1 s); ``import toolbox`` and ``cct --help`` must not
-#: pay for it (issue 13).
+#: artifact and pipeline import scipy (its linear algebra, for toolbox._lti);
+#: ``import toolbox`` and ``cct --help`` must not pay for it (issue 13).
 _LAZY = {
     "ControllerArtifact": "artifact",
     "analyse": "pipeline", "build_outputs": "pipeline", "design_spec": "pipeline",

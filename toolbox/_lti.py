@@ -135,12 +135,13 @@ class StateSpace:
         p, m, n = self.noutputs, self.ninputs, self.nstates
         if n == 0:
             return np.repeat(self.D.astype(complex)[:, :, None], x.size, axis=2)
-        lam, V = np.linalg.eig(self.A)
         with np.errstate(divide="ignore", invalid="ignore"):
-            if x.size > 1 and np.linalg.cond(V) <= _MODAL_COND_MAX:
-                res = (self.C @ V)[:, :, None] * np.linalg.solve(V, self.B)[None, :, :]
-                inv = 1.0 / (x[None, :] - lam[:, None])                  # (n, N)
-                return np.einsum("pkm,kN->pmN", res, inv) + self.D[:, :, None]
+            if x.size > 1:                       # one point: one LU solve is cheaper
+                lam, V = np.linalg.eig(self.A)
+                if np.linalg.cond(V) <= _MODAL_COND_MAX:
+                    res = (self.C @ V)[:, :, None] * np.linalg.solve(V, self.B)[None, :, :]
+                    inv = 1.0 / (x[None, :] - lam[:, None])              # (n, N)
+                    return np.einsum("pkm,kN->pmN", res, inv) + self.D[:, :, None]
             M = x[:, None, None] * np.eye(n) - self.A
             try:
                 y = np.linalg.solve(M, np.broadcast_to(self.B.astype(complex), (x.size, n, m)))

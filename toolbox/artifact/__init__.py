@@ -1,4 +1,4 @@
-"""Controller artifact (controller.json) and its python-control conversions."""
+"""Controller artifact (controller.json) and its state-space views (toolbox._lti)."""
 
 from ._artifact import (SCHEMA, AxisController, ControllerArtifact, Decoupling,
                         StateSpaceData, Zpk, json_ready, spec_sha256)
