@@ -71,18 +71,25 @@ class FreqResponse:
                     self._siso = (list(zip(res[0, :, 0].tolist(), lam.tolist())),
                                   complex(self.D[0, 0]))
 
+    def at(self, x: complex) -> complex:
+        """Response of a SISO system at one point ``x`` (a Python complex).
+
+        The modal form is summed in plain Python arithmetic (~2 us, where any
+        numpy call costs more: the margin refinements make hundreds of such
+        calls, issue 13); otherwise, or exactly on a pole, one LU solve.
+        """
+        if self._siso is not None:
+            try:
+                return sum(r / (x - lam) for r, lam in self._siso[0]) + self._siso[1]
+            except ZeroDivisionError:           # exactly on a pole
+                pass
+        return complex(freqresp(self.A, self.B, self.C, self.D, np.array([x]))[0, 0, 0])
+
     def __call__(self, x: np.ndarray) -> np.ndarray:
         """Response at the complex points ``x``: shape ``(len(x), p, m)``."""
         x = np.asarray(x, complex).reshape(-1)
         if x.size == 1 and self._siso is not None:
-            # one point of a SISO modal form: ~2 us of Python arithmetic, where any
-            # numpy call costs more (the margin refinements make ~90 such calls)
-            v = complex(x[0])
-            try:
-                val = sum(r / (v - lam) for r, lam in self._siso[0]) + self._siso[1]
-            except ZeroDivisionError:           # exactly on a pole
-                return freqresp(self.A, self.B, self.C, self.D, x)
-            return np.array([[[val]]])
+            return np.array([[[self.at(complex(x[0]))]]])
         if x.size == 1 and self.A.size:         # one point: one LAPACK call, no stacking
             try:
                 y = np.linalg.solve(x[0] * self._eye - self.A, self.B)
