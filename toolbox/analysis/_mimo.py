@@ -25,7 +25,8 @@ from ..artifact import json_ready
 from ._laws import AXES, axis_law
 from ._sampling import DEFAULT_BOX, sample_parameters
 from ._siso import disk_variations, log_grid
-from ._statespace import freqresp, zoh_coupled
+from ._statespace import freqresp, pade, zoh_coupled
+from .._lti import StateSpace, append, feedback, static_gain
 
 __all__ = ["MimoMarginsResult", "sigma_max_2x2", "mu_upper_2x2", "mimo_loop_response",
            "mimo_disk_margins", "multimodel_disk_margins", "MultiModelLoops",
@@ -194,22 +195,15 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
 
 def _continuous_coupled_stable(artifact, motor, omega: float, pade_order: int = 3) -> bool:
     """Closed-loop stability of the continuous coupled loop (Pade delay)."""
-    import control
-
     Ts, d = artifact.sample_time, artifact.delay_samples
     Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
-    P = control.ss(Ac[0], Bc[0], np.eye(2), np.zeros((2, 2)))
-    num, den = control.pade((d + 0.5) * Ts, pade_order)
-    Dl = control.ss(control.tf(num, den))
-    P = P * control.append(Dl, Dl)
-    Ks = []
-    for name in AXES:
-        law = axis_law(artifact.axes[name], False)
-        Ks.append(control.ss(*law.error_controller()))
-    C = control.append(*Ks) - control.ss([], [], [], decoupling_matrix(artifact.decoupling, omega)[0])
-    cl = control.feedback(P * C, np.eye(2))
+    P = StateSpace(Ac[0], Bc[0], np.eye(2), np.zeros((2, 2)))
+    Dl = StateSpace(*pade((d + 0.5) * Ts, pade_order))
+    P = P * append(Dl, Dl)
+    Ks = [StateSpace(*axis_law(artifact.axes[name], False).error_controller()) for name in AXES]
+    C = append(*Ks) - static_gain(decoupling_matrix(artifact.decoupling, omega)[0])
+    cl = feedback(P * C, np.eye(2))
     return bool(np.all(np.real(cl.poles()) < 0))
-
 
 
 class MultiModelLoops:

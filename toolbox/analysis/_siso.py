@@ -7,8 +7,9 @@ Every margin the toolbox reports comes from here:
   (Brent root finding on ``log|L|`` and ``Im L``, bounded scalar search for
   the peaks); used by the per-axis analysis
   (:func:`toolbox.analysis.margins.axis_margins`);
-* :func:`lti_loop_margins` - the same for a python-control LTI loop
-  (continuous or discrete); used by the H-infinity order-reduction guard;
+* :func:`lti_loop_margins` - the same for an LTI loop (a
+  :class:`toolbox._lti.StateSpace` or a python-control system; continuous or
+  discrete); used by the H-infinity order-reduction guard;
 * :func:`grid_margins` - a response already sampled on a grid, possibly
   stacked (N loops x Nw points), with linear interpolation between grid
   points instead of refinement; used by the robustness sweep (thousands of
@@ -41,6 +42,7 @@ from typing import Any, Callable
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
+from .._lti import as_statespace
 from ._statespace import FreqResponse
 
 __all__ = ["MARGIN_KEYS", "FrequencyMargins", "disk_variations", "log_grid",
@@ -250,12 +252,14 @@ def _frequency_margins(loop, L1, w: np.ndarray, nyquist: bool) -> FrequencyMargi
 
 def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
                      n_grid: int = 20000) -> FrequencyMargins:
-    """Margins of a python-control LTI loop ``L`` (continuous or discrete).
+    """Margins of an LTI loop ``L`` (continuous or discrete).
 
     Parameters
     ----------
-    L : control.LTI
-        The loop transfer (SISO), e.g. ``G * K``.
+    L : toolbox._lti.StateSpace, python-control LTI, or anything
+        :func:`toolbox._lti.as_statespace` reads (without importing
+        python-control; a transfer function is realised in controllable
+        canonical form). The loop transfer (SISO), e.g. ``G * K``.
     w : ndarray, optional
         Grid (rad/s). Default: ``n_grid`` log points from 1e-3 rad/s to
         1e8 rad/s (continuous) or to the Nyquist frequency ``pi/dt``
@@ -270,14 +274,12 @@ def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
         Same numbers as :func:`control.stability_margins` (checked in the
         tests), plus the disk margins.
     """
-    import control
-
-    sys = control.ss(L)
-    A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
+    sys = as_statespace(L)
+    A, B, C, D = sys.A, sys.B, sys.C, sys.D
     if D.shape != (1, 1):
         raise ValueError(f"lti_loop_margins: expected a SISO loop, got {D.shape[0]} outputs x "
                          f"{D.shape[1]} inputs")
-    dt = sys.dt if control.isdtime(sys, strict=True) else None
+    dt = sys.dt
     discrete = dt is not None
     if w is None:
         w = log_grid(1e-3, math.pi / dt if discrete else 1e8, n_grid, discrete)
