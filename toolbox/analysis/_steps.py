@@ -13,7 +13,6 @@ import numpy as np
 from scipy.linalg import expm
 
 from ..plant import zoh_first_order
-from ..sim import step_metrics
 
 if TYPE_CHECKING:
     from ._axis import AxisLoop
@@ -91,6 +90,10 @@ def _settled(y: np.ndarray) -> bool:
 def step_figures(loop: "AxisLoop", cl: tuple) -> dict:
     """Response time, rise time, settling time and overshoot of the reference
     step of ``cl`` (the definitions of :func:`toolbox.sim.step_metrics`)."""
+    # imported here: toolbox.sim loads the numba kernel (~0.4 s), which the
+    # design methods that use the analysis (H-infinity, robust PI) do not need
+    from ..sim import step_metrics
+
     t, y = step_response(loop, *cl)
     figs = step_metrics(t, y, 0.0, 1.0, 0.0)
     return {k: float(v) for k, v in figs.items()}
