@@ -41,8 +41,9 @@ def _cvxpy_solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
     return np.array(P.value), str(prob.status)
 
 
-def _full_cvxpy_solve(As: np.ndarray, alpha: float):
-    """All vertex LMIs at once through cvxpy, normalised as before issue 13."""
+def _full_cvxpy_solve(As: np.ndarray, alpha: float, guess=None):
+    """All vertex LMIs at once through cvxpy, normalised as before issue 13
+    (``guess``, the active set's seed, is not used)."""
     norm = max(1.0, float(np.max(np.abs(As))))
     return _cvxpy_solve(As / norm, alpha / norm)
 
