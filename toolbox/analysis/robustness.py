@@ -38,6 +38,10 @@ from .margins import (AXES, axis_law, axis_margins, coupled_closed_loop, freqres
 __all__ = ["DEFAULT_BOX", "DEFAULT_RANGES", "SweepResult", "sample_parameters", "robustness_sweep",
            "batch_axis_margins", "batch_loop_margins"]
 
+#: Parameter sets per block of :func:`batch_axis_margins`.
+BLOCK_ROWS = 64
+
+
 def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.ndarray,
                        L: np.ndarray, Ts: float, d: np.ndarray) -> dict[str, np.ndarray]:
     """Grid margins of ``L = K b/(z - a) z^-d`` for N plants at once.
@@ -68,10 +72,16 @@ def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.nda
     # real arithmetic (numpy's complex division of (N, Nw) arrays cost 4x, issue 13)
     delays, which = np.unique(d, return_inverse=True)
     Kz = K_fr[None, :] * z[None, :] ** (-delays[:, None].astype(float))
-    qr, qi = z.real[None, :] - a, z.imag[None, :]
-    Lw = Kz[which] * (qr - 1j * qi) * (b / (qr * qr + qi * qi))
-    # the last grid point is the Nyquist frequency (robustness_sweep builds it so)
-    return grid_margins(w, Lw, nyquist=True)
+    qi = z.imag[None, :]
+    parts = []
+    # blocks of sets: each temporary then stays in the cache (1.5x faster than
+    # whole (N, Nw) arrays, the same numbers: the rows are independent)
+    for rows in np.array_split(np.arange(R.size), max(1, -(-R.size // BLOCK_ROWS))):
+        qr = z.real[None, :] - a[rows]
+        Lw = Kz[which[rows]] * (qr - 1j * qi) * (b[rows] / (qr * qr + qi * qi))
+        # the last grid point is the Nyquist frequency (robustness_sweep builds it so)
+        parts.append(grid_margins(w, Lw, nyquist=True))
+    return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
 
 
 def batch_loop_margins(artifact, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
