@@ -25,7 +25,7 @@ from ..artifact import json_ready
 from ._laws import AXES, axis_law
 from ._sampling import DEFAULT_BOX, sample_parameters
 from ._siso import disk_variations, log_grid
-from ._statespace import freqresp, pade, zoh_coupled
+from ._statespace import FreqResponse, pade, zoh_coupled
 from .._lti import StateSpace, append, feedback, static_gain
 
 __all__ = ["MimoMarginsResult", "sigma_max_2x2", "mu_upper_2x2", "mimo_loop_response",
@@ -144,7 +144,7 @@ def mimo_loop_response(artifact, motor, omega: float, w: np.ndarray, *,
     C = np.zeros((w.size, 2, 2), complex)
     for k, name in enumerate(AXES):
         law = axis_law(artifact.axes[name], discrete)
-        C[:, k, k] = freqresp(*law.error_controller(), x)[:, 0, 0]
+        C[:, k, k] = FreqResponse(*law.error_controller())(x)[:, 0, 0]
     W = decoupling_matrix(artifact.decoupling, omega if omega_meas is None else omega_meas)[0]
     return (C - W) @ P
 
@@ -283,7 +283,7 @@ class MultiModelLoops:
             stable[:, j] = loop.spectral_radius() < 1 - 1e-9
         C = np.zeros((self.w.size, 2, 2), complex)
         for k, name in enumerate(AXES):
-            C[:, k, k] = freqresp(*laws[name].error_controller(), self.z)[:, 0, 0]
+            C[:, k, k] = FreqResponse(*laws[name].error_controller())(self.z)[:, 0, 0]
         W = decoupling_matrix(artifact.decoupling, np.tile(self.speeds, self.shape[0]))
         Li = (C[None] - W[:, None]) @ self.P
         M = inv_2x2(np.eye(2) + Li) - 0.5 * np.eye(2)

@@ -32,7 +32,8 @@ import numpy as np
 
 from ..plant import max_electrical_speed
 from ._sampling import DEFAULT_BOX, DEFAULT_RANGES, sample_parameters
-from .margins import (AXES, axis_law, axis_margins, coupled_closed_loop, freqresp,
+from ._statespace import FreqResponse
+from .margins import (AXES, axis_law, axis_margins, coupled_closed_loop,
                       grid_margins, json_ready, make_axis_loop, zoh_axis)
 
 __all__ = ["DEFAULT_BOX", "DEFAULT_RANGES", "SweepResult", "sample_parameters", "robustness_sweep",
@@ -115,7 +116,7 @@ def batch_loop_margins(artifact, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
     z = np.exp(1j * w * Ts)
     margins = {}
     for name, L in (("d", Ld), ("q", Lq)):
-        K_fr = freqresp(*axis_law(artifact.axes[name], True).error_controller(), z)[:, 0, 0]
+        K_fr = FreqResponse(*axis_law(artifact.axes[name], True).error_controller())(z)[:, 0, 0]
         margins[name] = batch_axis_margins(K_fr, z, w, R, L, Ts, d)
     return margins
 
