@@ -113,9 +113,16 @@ def mu_upper_2x2(M: np.ndarray) -> np.ndarray:
     approached as ``d -> 0`` or ``inf``; it is still an upper bound of mu,
     which for two scalar complex blocks equals it.
     """
-    a0, a1 = np.abs(M[..., 0, 0]), np.abs(M[..., 1, 1])
-    f = a0 * a0 + a1 * a1 + 2.0 * np.abs(M[..., 0, 1]) * np.abs(M[..., 1, 0])
-    det = np.abs(M[..., 0, 0] * M[..., 1, 1] - M[..., 0, 1] * M[..., 1, 0])
+    return mu_upper_entries(M[..., 0, 0], M[..., 0, 1], M[..., 1, 0], M[..., 1, 1])
+
+
+def mu_upper_entries(m00: np.ndarray, m01: np.ndarray, m10: np.ndarray,
+                     m11: np.ndarray) -> np.ndarray:
+    """:func:`mu_upper_2x2` of the matrices ``[[m00, m01], [m10, m11]]`` given
+    entry by entry (arrays of one shape)."""
+    a0, a1 = np.abs(m00), np.abs(m11)
+    f = a0 * a0 + a1 * a1 + 2.0 * np.abs(m01) * np.abs(m10)
+    det = np.abs(m00 * m11 - m01 * m10)
     return np.sqrt(0.5 * (f + np.sqrt(np.maximum(f * f - 4.0 * det * det, 0.0))))
 
 
@@ -263,9 +270,16 @@ class MultiModelLoops:
                          np.repeat(self.Lq, ns), np.tile(self.speeds, nm))
         Ac, Bc = coupled_plant(R, Ld, Lq, om)
         Phi, Gam = zoh_coupled(Ac, Bc, self.Ts)
-        x = self.z[None, :, None, None]
-        P = inv_2x2(x * np.eye(2) - Phi[:, None]) @ Gam[:, None]
-        self.P = P * (self.z ** (-self.d))[None, :, None, None]   # (nm*ns, Nw, 2, 2)
+        # P = (z I - Phi)^-1 Gamma z^-d entry by entry, as contiguous (nm*ns, Nw)
+        # arrays (issue 13: stacked 2x2 products and inverses cost 3x more)
+        z = self.z[None, :]
+        a, b = z - Phi[:, 0, 0, None], -Phi[:, 0, 1, None]
+        c, d = -Phi[:, 1, 0, None], z - Phi[:, 1, 1, None]
+        g = z ** (-self.d) / (a * d - b * c)
+        G = Gam[:, :, :, None]
+        #: entries ``(P_00, P_01, P_10, P_11)`` of the plant responses, each (nm*ns, Nw)
+        self.P = ((d * G[:, 0, 0] - b * G[:, 1, 0]) * g, (d * G[:, 0, 1] - b * G[:, 1, 1]) * g,
+                  (a * G[:, 1, 0] - c * G[:, 0, 0]) * g, (a * G[:, 1, 1] - c * G[:, 0, 1]) * g)
         self.shape = (nm, ns)
 
     def disk_margins(self, artifact) -> np.ndarray:
@@ -281,14 +295,18 @@ class MultiModelLoops:
             loop = coupled_closed_loop(laws, artifact.decoupling, self.Ts, self.d,
                                        R=self.R, Ld=self.Ld, Lq=self.Lq, omega=om)
             stable[:, j] = loop.spectral_radius() < 1 - 1e-9
-        C = np.zeros((self.w.size, 2, 2), complex)
-        for k, name in enumerate(AXES):
-            C[:, k, k] = FreqResponse(*laws[name].error_controller())(self.z)[:, 0, 0]
+        kd, kq = (FreqResponse(*laws[name].error_controller())(self.z)[:, 0, 0] for name in AXES)
+        # L_i = (K - W) P with K = diag(K_d, K_q) and the off-diagonal W, entry by entry
         W = decoupling_matrix(artifact.decoupling, np.tile(self.speeds, self.shape[0]))
-        Li = (C[None] - W[:, None]) @ self.P
-        M = inv_2x2(np.eye(2) + Li) - 0.5 * np.eye(2)
-        mu = np.max(mu_upper_2x2(M), axis=-1).reshape(self.shape)
-        return np.where(stable, 1.0 / mu, 0.0)
+        w01, w10 = W[:, 0, 1, None], W[:, 1, 0, None]
+        p00, p01, p10, p11 = self.P
+        l00, l01 = kd * p00 - w01 * p10, kd * p01 - w01 * p11
+        l10, l11 = kq * p10 - w10 * p00, kq * p11 - w10 * p01
+        # S_i - I/2 with S_i = (I + L_i)^-1 = adj(I + L_i)/det
+        det = (1.0 + l00) * (1.0 + l11) - l01 * l10
+        mu = mu_upper_entries((1.0 + l11) / det - 0.5, -l01 / det, -l10 / det,
+                              (1.0 + l00) / det - 0.5)
+        return np.where(stable, 1.0 / np.max(mu, axis=-1).reshape(self.shape), 0.0)
 
 
 def multimodel_disk_margins(artifact, motors, speeds, *, n_grid: int = 300) -> np.ndarray:
