@@ -13,7 +13,6 @@ import numpy as np
 from scipy.linalg import expm, matrix_balance
 
 from .._lti import pade as lti_pade, tf2ss
-
 from ..plant import zoh_first_order
 
 if TYPE_CHECKING:
