@@ -234,9 +234,11 @@ def test_mu_bound_equals_the_explicitly_scaled_matrices(grid):
     and refines by ternary search (the implementation before issue 13, with its
     two grid sizes): the closed form is never above it (it is the infimum) and,
     against the fine search, equal to 1e-12 relative where the optimum lies
-    inside the grid (observed 1e-15). A zero off-diagonal entry puts the infimum at d -> 0: the grid's end
-    is then above it by |M_10|^2 1e-12 at most; the bound stays an upper bound
-    of ab13md's mu (test above)."""
+    inside the grid (observed 1e-15); the coarse search stops up to 0.25 %
+    above it. A zero off-diagonal entry puts the infimum at d -> 0: the grid's
+    end is then above it by |M_10|^2 1e-12 at most (1e-9 relative here). The
+    optimal d of the closed form attains it (1e-13). The bound stays an upper
+    bound of ab13md's mu (test above)."""
     import math
 
     def scaled(Mx, logd):
@@ -263,7 +265,7 @@ def test_mu_bound_equals_the_explicitly_scaled_matrices(grid):
     Ms[1, :, 1, 0] *= 1e4
     ours, ref = M.mu_upper_2x2(Ms), reference(Ms, *grid)
     assert np.all(ours <= ref * (1 + 1e-13))
-    if grid == (49, 40):    # the coarse search stops early (up to 0.25 % above)
+    if grid == (49, 40):
         np.testing.assert_allclose(ours[1:], ref[1:], rtol=1e-12)
         np.testing.assert_allclose(ours[0], ref[0], rtol=1e-9)
     # the closed form's d^2 = |M10|/|M01| attains it: sigma_max of the scaled matrix

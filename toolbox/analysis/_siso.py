@@ -213,7 +213,7 @@ def _frequency_margins(loop, L1, w: np.ndarray, nyquist: bool) -> FrequencyMargi
     # L(-1) of a loop with a zero at z = -1 (Tustin) is rounding noise of any
     # sign, not a phase crossover: it counts only above 1e-14 of the loop's peak
     if (nyquist and abs(Lw[-1].imag) <= 1e-9 * abs(Lw[-1]) and w[-1] not in wpc
-            and abs(Lw[-1]) > 1e-14 * np.max(np.abs(Lw))):
+            and abs(Lw[-1]) > 1e-14 * np.max(np.abs(Lw), initial=0.0, where=np.isfinite(Lw))):
         wpc.append(float(w[-1]))
     gms = []
     for x in wpc:
