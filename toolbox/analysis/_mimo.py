@@ -5,8 +5,9 @@ multiloop (input, diagonal uncertainty) version with the upper bound of the
 structured singular value obtained by D-scaling:
 ``mu(M) <= min_{d>0} sigma_max(D M D^-1)``, ``D = diag(d, 1)``,
 ``M = S_i + (sigma - 1)/2 I``, ``S_i = (I + C P)^-1`` - a guaranteed
-(possibly conservative) multiloop disk margin ``alpha = 1/max_w mu_ub``; the
-unstructured ``1/max_w sigma_max(M)`` is reported next to it.
+multiloop disk margin ``alpha = 1/max_w mu_ub``; the minimum over ``d`` has a
+closed form (:func:`mu_upper_2x2`), and for two scalar complex blocks the bound
+equals mu. The unstructured ``1/max_w sigma_max(M)`` is reported next to it.
 
 Disk margins after Seiler, Packard, Gahinet, "An introduction to disk
 margins", IEEE Control Systems Magazine 40(5), 2020.
