@@ -1,8 +1,8 @@
 """The certificate's LMIs handed to Clarabel directly, with a warm-started bisection (issue 13).
 
 The reference is the route of before issue 13: the same vertex LMIs written in
-cvxpy (constant data, a fresh problem per scale) and solved by cvxpy's
-Clarabel interface, with a plain cold bisection. The bisection grid is dyadic
+cvxpy (constant data, a fresh problem per scale, all vertices) and solved by
+cvxpy's Clarabel interface, with a plain cold bisection. The bisection grid is dyadic
 (scales k/2^m), so the certified scales are compared *exactly*: any change in
 a single feasibility verdict moves the scale by at least ``tol/2``.
 """
@@ -41,11 +41,19 @@ def _cvxpy_solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
     return np.array(P.value), str(prob.status)
 
 
+def _full_cvxpy_solve(As: np.ndarray, alpha: float, guess=None):
+    """All vertex LMIs at once through cvxpy, normalised as before issue 13
+    (``guess``, the active set's seed, is not used)."""
+    norm = max(1.0, float(np.max(np.abs(As))))
+    return _cvxpy_solve(As / norm, alpha / norm)
+
+
 def _reference_scale(art, motor, drive, monkeypatch, *, tol: float, alpha: float = 0.0) -> float:
-    """Cold bisection, every LMI solved through cvxpy (no warm start)."""
+    """Cold bisection, the LMIs of every vertex solved through cvxpy (no warm
+    start, no active vertex set)."""
     wmax = max_electrical_speed(motor, drive)
     with monkeypatch.context() as m:
-        m.setattr(C, "_solve", _cvxpy_solve)
+        m.setattr(C, "_solve_active", _full_cvxpy_solve)
 
         def ok(k: float) -> bool:
             box = C.ParameterBox.around(motor, k, omega_max=wmax)
@@ -130,6 +138,26 @@ def test_solution_is_symmetric_and_satisfies_the_lmis(pi):
     assert np.min(np.linalg.eigvalsh(P)) >= 1 - 1e-7
     M = np.transpose(As, (0, 2, 1)) @ P + P @ As
     assert np.max(np.linalg.eigvalsh(M)) <= -1e-6 * (1 - 1e-1)
+
+
+@pytest.mark.parametrize("design", ["pi", "hinf"])
+def test_active_vertex_set_gives_the_full_solve_verdict(design, request):
+    """Constraint generation (a few vertices, the violated ones added) reaches
+    the verdict of the solve over all vertices on every box of a scale sweep,
+    its certificate holds on all vertices, and it solves fewer vertex LMIs.
+    The sweep must contain certified and uncertified (solved) boxes."""
+    art = request.getfixturevalue(design)
+    verdicts = set()
+    for k in np.linspace(0.0, 1.0, 9):
+        for alpha in (0.0, 200.0):
+            As = C._vertices(art, C.ParameterBox.around(AZAIZ, k, omega_max=920.0))
+            norm = max(1.0, float(np.max(np.abs(As))))
+            P_full, _ = C._solve(As / norm, alpha / norm)
+            full = P_full is not None and C._verified(As, P_full, alpha)
+            P, _ = C._solve_active(As, alpha)
+            assert (P is not None and C._verified(As, P, alpha)) == full, (k, alpha)
+            verdicts.add(full)
+    assert verdicts == {True, False}
 
 
 def test_warm_start_is_used_and_checked(pi):

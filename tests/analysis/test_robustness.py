@@ -161,3 +161,16 @@ def test_sampling_includes_nominal_and_corners_and_is_deterministic(pi):
     # its speed is the benchmark's business (tests/benchmarks), not a test's
     r = robustness_sweep(pi, AZAIZ, n=2000, drive=DRIVE)
     assert r.n_sets == 2000 + 1 + 2 ** 7
+
+
+@pytest.mark.parametrize("n, d, seed", [(1, 1, 0), (10, 2, 0), (1000, 7, 0), (37, 3, 12345)])
+def test_latin_hypercube_equals_scipy_qmc(n, d, seed):
+    """The toolbox's Latin hypercube (no scipy.stats import, issue 13) draws
+    exactly scipy.stats.qmc.LatinHypercube's points (bit for bit: the same
+    generator calls in the same order), so the sweep's sets are unchanged."""
+    from scipy.stats import qmc
+
+    from toolbox.analysis._sampling import latin_hypercube
+
+    want = qmc.LatinHypercube(d=d, seed=seed).random(n)
+    assert np.array_equal(latin_hypercube(n, d, seed), want)

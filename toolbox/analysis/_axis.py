@@ -22,8 +22,10 @@ closed-loop figures (stability, bandwidth, static error, steps).
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy.optimize import brentq
@@ -32,7 +34,8 @@ from ..plant import axis_coefficients
 from ..artifact import json_ready
 from ._laws import Law, axis_law
 from ._siso import MARGIN_KEYS, frequency_margins, log_grid
-from ._statespace import closed_loop, freqresp, is_stable, pade, plant_chain, series, zoh_axis
+from ._statespace import (FreqResponse, closed_loop, is_stable, pade, plant_chain, series,
+                          zoh_axis)
 from ._steps import step_figures
 
 __all__ = ["AxisLoop", "make_axis_loop", "MarginsResult", "axis_margins", "compute_margins"]
@@ -75,32 +78,80 @@ class AxisLoop:
     w_max: float
     exact_delay: bool
 
+    # The controllers' and the plant's responses are built once per loop: the
+    # margins, the bandwidth, the responses and the sweep's exact recomputations
+    # evaluate one loop thousands of times (issue 13). cached_property writes
+    # the instance __dict__ directly, which a frozen dataclass allows.
+    @cached_property
+    def _controller(self) -> FreqResponse:
+        return FreqResponse(*self.law.error_controller())
+
+    @cached_property
+    def _reference_controller(self) -> FreqResponse:
+        law = self.law
+        return FreqResponse(law.A, law.B[:, 0:1], law.C, law.D[:, 0:1])
+
+    @cached_property
+    def _plant_fr(self) -> FreqResponse:
+        return FreqResponse(*self.plant)
+
+    @cached_property
+    def _first_order(self) -> tuple[float, float]:
+        """``(a, b)`` of ``b/(x - a)``: the ZOH plant (discrete) or ``1/(R + s L)``."""
+        if self.discrete:
+            a, b = zoh_axis(self.R, self.L, self.sample_time)
+        else:
+            a, b = axis_coefficients(self.R, self.L)
+        return float(a), float(b)
+
     def _x(self, w: np.ndarray) -> np.ndarray:
         w = np.atleast_1d(np.asarray(w, float))
         return np.exp(1j * w * self.sample_time) if self.discrete else 1j * w
+
+    def _x_at(self, w: float) -> complex:
+        return cmath.exp(1j * w * self.sample_time) if self.discrete else 1j * w
 
     def plant_response(self, w: np.ndarray) -> np.ndarray:
         """Plant with delay, voltage -> current (A/V), at ``w`` (rad/s)."""
         w = np.atleast_1d(np.asarray(w, float))
         x = self._x(w)
+        a, b = self._first_order
         if self.discrete:
-            a, b = zoh_axis(self.R, self.L, self.sample_time)
             return b / (x - a) * x ** (-self.delay_samples)
         if self.exact_delay or self.tau == 0:
-            a_c, b_c = axis_coefficients(self.R, self.L)     # the plant 1/(R + s L)
-            return np.exp(-1j * w * self.tau) * b_c / (1j * w - a_c)
-        return freqresp(*self.plant, x)[:, 0, 0]
+            return np.exp(-1j * w * self.tau) * b / (1j * w - a)
+        return self._plant_fr(x)[:, 0, 0]
+
+    def _plant_at(self, w: float, x: complex) -> complex:
+        """:meth:`plant_response` at one frequency, in Python arithmetic."""
+        a, b = self._first_order
+        if self.discrete:
+            return b / (x - a) * x ** (-self.delay_samples)
+        if self.exact_delay or self.tau == 0:
+            return cmath.exp(-1j * w * self.tau) * b / (x - a)
+        return self._plant_fr.at(x)
 
     def loop(self, w: np.ndarray) -> np.ndarray:
         """``L(j w)`` (dimensionless) at the frequencies ``w`` (rad/s)."""
-        K = freqresp(*self.law.error_controller(), self._x(w))[:, 0, 0]
-        return K * self.plant_response(w)
+        return self._controller(self._x(w))[:, 0, 0] * self.plant_response(w)
+
+    def loop_at(self, w: float) -> complex:
+        """:meth:`loop` at one frequency ``w`` (rad/s)."""
+        x = self._x_at(w)
+        return self._controller.at(x) * self._plant_at(w, x)
 
     def reference(self, w: np.ndarray) -> np.ndarray:
         """Reference -> current response ``G K_r/(1 + L)`` at ``w`` (rad/s)."""
         x = self._x(w)
-        Kr = freqresp(self.law.A, self.law.B[:, 0:1], self.law.C, self.law.D[:, 0:1], x)[:, 0, 0]
-        return self.plant_response(w) * Kr / (1.0 + self.loop(w))
+        G = self.plant_response(w)
+        Kr = self._reference_controller(x)[:, 0, 0]
+        return G * Kr / (1.0 + self._controller(x)[:, 0, 0] * G)
+
+    def reference_at(self, w: float) -> complex:
+        """:meth:`reference` at one frequency ``w`` (rad/s)."""
+        x = self._x_at(w)
+        G = self._plant_at(w, x)
+        return G * self._reference_controller.at(x) / (1.0 + self._controller.at(x) * G)
 
     def reference_loop(self) -> tuple[np.ndarray, ...]:
         """Reference -> current closed loop (state space)."""
@@ -255,7 +306,7 @@ def axis_margins(loop: AxisLoop, *, n_grid: int = 6000, w_min: float = 1e-3,
 
 def _axis_margins(loop: AxisLoop, n_grid: int, w_min: float, step: bool) -> MarginsResult:
     w = log_grid(w_min, loop.w_max, n_grid, loop.discrete)
-    fm = frequency_margins(loop.loop, w, nyquist=loop.discrete)
+    fm = frequency_margins(loop.loop, w, nyquist=loop.discrete, loop_at=loop.loop_at)
     cl = loop.reference_loop()
     if loop.discrete or loop.tau == 0 or not loop.exact_delay:
         stable = is_stable(cl[0], loop.discrete)
@@ -296,7 +347,7 @@ def _bandwidth(loop: AxisLoop, w: np.ndarray, cl: tuple, stable: bool) -> float:
     i = below[0]
     if i == 0:
         return float(w[0])
-    f = lambda v: float(abs(loop.reference(np.array([v]))[0])) - dc / math.sqrt(2)  # noqa: E731
+    f = lambda v: abs(loop.reference_at(v)) - dc / math.sqrt(2)  # noqa: E731
     return math.exp(brentq(lambda lw: f(math.exp(lw)), math.log(w[i - 1]), math.log(w[i])))
 
 

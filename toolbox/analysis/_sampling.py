@@ -11,9 +11,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.stats import qmc
 
-__all__ = ["DEFAULT_RANGES", "DEFAULT_BOX", "sample_parameters"]
+__all__ = ["DEFAULT_RANGES", "DEFAULT_BOX", "latin_hypercube", "sample_parameters"]
 
 #: name -> (low, high, kind): "scale" multiplies the nominal value
 #: (log-uniform), "offset" is an absolute value (uniform), "int" a count.
@@ -28,6 +27,24 @@ DEFAULT_RANGES: dict[str, tuple] = {
 }
 
 
+def latin_hypercube(n: int, d: int, seed: int) -> np.ndarray:
+    """``n`` points of a scrambled Latin hypercube in ``[0, 1)^d`` (n, d).
+
+    Each column puts one point in each of the ``n`` strata ``[(k-1)/n, k/n)``,
+    at a uniform position inside it, the strata permuted independently per
+    column (McKay, Beckman, Conover 1979). The same draws in the same order
+    as ``scipy.stats.qmc.LatinHypercube(d, seed=seed).random(n)`` (tested
+    equal), without importing scipy.stats (0.5 to 1 s of every ``cct``
+    process, issue 13).
+    """
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(size=(n, d))
+    perms = np.tile(np.arange(1, n + 1), (d, 1))
+    for row in perms:
+        rng.shuffle(row)
+    return (perms.T - u) / n
+
+
 def sample_parameters(ranges: dict, n: int, seed: int = 0) -> dict[str, np.ndarray]:
     """Nominal point, box corners and a Latin hypercube of ``n`` sets.
 
@@ -37,7 +54,7 @@ def sample_parameters(ranges: dict, n: int, seed: int = 0) -> dict[str, np.ndarr
     names = list(ranges)
     k = len(names)
     corners = np.array(np.meshgrid(*[[0.0, 1.0]] * k, indexing="ij")).reshape(k, -1).T
-    u = qmc.LatinHypercube(d=k, seed=seed).random(n) if n > 0 else np.zeros((0, k))
+    u = latin_hypercube(n, k, seed) if n > 0 else np.zeros((0, k))
     nominal = []
     for name in names:
         lo, hi, kind = ranges[name]

@@ -7,8 +7,9 @@ Every margin the toolbox reports comes from here:
   (Brent root finding on ``log|L|`` and ``Im L``, bounded scalar search for
   the peaks); used by the per-axis analysis
   (:func:`toolbox.analysis.margins.axis_margins`);
-* :func:`lti_loop_margins` - the same for a python-control LTI loop
-  (continuous or discrete); used by the H-infinity order-reduction guard;
+* :func:`lti_loop_margins` - the same for an LTI loop (a
+  :class:`toolbox._lti.StateSpace` or a python-control system; continuous or
+  discrete); used by the H-infinity order-reduction guard;
 * :func:`grid_margins` - a response already sampled on a grid, possibly
   stacked (N loops x Nw points), with linear interpolation between grid
   points instead of refinement; used by the robustness sweep (thousands of
@@ -32,6 +33,7 @@ disk margin ``1/||(S - T)/2||_inf``.
 
 from __future__ import annotations
 
+import cmath
 import functools
 import math
 from dataclasses import dataclass, field
@@ -40,6 +42,7 @@ from typing import Any, Callable
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
+from .._lti import as_statespace
 from ._statespace import FreqResponse
 
 __all__ = ["MARGIN_KEYS", "FrequencyMargins", "disk_variations", "log_grid",
@@ -170,7 +173,8 @@ def _peak(fun: Callable[[float], float], w: np.ndarray, vals: np.ndarray) -> tup
 
 
 def frequency_margins(loop: Callable[[np.ndarray], np.ndarray], w: np.ndarray, *,
-                      nyquist: bool = False) -> FrequencyMargins:
+                      nyquist: bool = False,
+                      loop_at: Callable[[float], complex] | None = None) -> FrequencyMargins:
     """Margins of a loop given by its frequency response function.
 
     Parameters
@@ -184,24 +188,32 @@ def frequency_margins(loop: Callable[[np.ndarray], np.ndarray], w: np.ndarray, *
     nyquist : bool
         Discrete loop whose last grid point is the Nyquist frequency: a real
         negative ``L(-1)`` is a phase crossover even without a sign change.
+    loop_at : callable, optional
+        ``w -> L`` at one frequency (float -> complex), the same loop: the
+        refinements evaluate it a few hundred times, where a one-point array
+        call of ``loop`` costs ten times more (default: ``loop`` itself).
 
     Returns
     -------
     FrequencyMargins
     """
+    if loop_at is None:
+        loop_at = lambda x: complex(loop(np.array([x]))[0])  # noqa: E731
     with np.errstate(divide="ignore", invalid="ignore"):
-        return _frequency_margins(loop, np.asarray(w, float), nyquist)
+        return _frequency_margins(loop, loop_at, np.asarray(w, float), nyquist)
 
 
-def _frequency_margins(loop, w: np.ndarray, nyquist: bool) -> FrequencyMargins:
+def _frequency_margins(loop, L1, w: np.ndarray, nyquist: bool) -> FrequencyMargins:
     Lw = loop(w)
-    L1 = lambda x: complex(loop(np.array([x]))[0])  # noqa: E731
     # gain crossovers (|L| = 1) -> phase margins
     pms = [[math.degrees(np.angle(-L1(x))), x]
            for x in _roots_in_grid(lambda x: math.log(abs(L1(x))), w, np.log(np.abs(Lw)))]
     # phase crossovers (Im L = 0, Re L < 0) -> gain margins
     wpc = _roots_in_grid(lambda x: L1(x).imag, w, Lw.imag)
-    if nyquist and abs(Lw[-1].imag) <= 1e-9 * abs(Lw[-1]) and w[-1] not in wpc:
+    # L(-1) of a loop with a zero at z = -1 (Tustin) is rounding noise of any
+    # sign, not a phase crossover: it counts only above 1e-14 of the loop's peak
+    if (nyquist and abs(Lw[-1].imag) <= 1e-9 * abs(Lw[-1]) and w[-1] not in wpc
+            and abs(Lw[-1]) > 1e-14 * np.max(np.abs(Lw), initial=0.0, where=np.isfinite(Lw))):
         wpc.append(float(w[-1]))
     gms = []
     for x in wpc:
@@ -240,12 +252,14 @@ def _frequency_margins(loop, w: np.ndarray, nyquist: bool) -> FrequencyMargins:
 
 def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
                      n_grid: int = 20000) -> FrequencyMargins:
-    """Margins of a python-control LTI loop ``L`` (continuous or discrete).
+    """Margins of an LTI loop ``L`` (continuous or discrete).
 
     Parameters
     ----------
-    L : control.LTI
-        The loop transfer (SISO), e.g. ``G * K``.
+    L : toolbox._lti.StateSpace, python-control LTI, or anything
+        :func:`toolbox._lti.as_statespace` reads (without importing
+        python-control; a transfer function is realised in controllable
+        canonical form). The loop transfer (SISO), e.g. ``G * K``.
     w : ndarray, optional
         Grid (rad/s). Default: ``n_grid`` log points from 1e-3 rad/s to
         1e8 rad/s (continuous) or to the Nyquist frequency ``pi/dt``
@@ -260,14 +274,12 @@ def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
         Same numbers as :func:`control.stability_margins` (checked in the
         tests), plus the disk margins.
     """
-    import control
-
-    sys = control.ss(L)
-    A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
+    sys = as_statespace(L)
+    A, B, C, D = sys.A, sys.B, sys.C, sys.D
     if D.shape != (1, 1):
         raise ValueError(f"lti_loop_margins: expected a SISO loop, got {D.shape[0]} outputs x "
                          f"{D.shape[1]} inputs")
-    dt = sys.dt if control.isdtime(sys, strict=True) else None
+    dt = sys.dt
     discrete = dt is not None
     if w is None:
         w = log_grid(1e-3, math.pi / dt if discrete else 1e8, n_grid, discrete)
@@ -282,7 +294,11 @@ def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
         pts = np.exp(1j * x * dt) if dt is not None else 1j * np.asarray(x, float)
         return fr(pts)[:, 0, 0]
 
-    return frequency_margins(response, np.asarray(w, float), nyquist=discrete)
+    def response_at(x: float) -> complex:
+        return fr.at(cmath.exp(1j * x * dt) if dt is not None else 1j * x)
+
+    return frequency_margins(response, np.asarray(w, float), nyquist=discrete,
+                             loop_at=response_at)
 
 
 def grid_margins(w: np.ndarray, response: np.ndarray, *, nyquist: bool = False) -> dict[str, np.ndarray]:
@@ -321,36 +337,48 @@ def grid_margins(w: np.ndarray, response: np.ndarray, *, nyquist: bool = False) 
 
 
 def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
-    one = 1.0 + Lw
-    sm = np.min(np.abs(one), axis=1)
-    dm = 1.0 / np.max(np.abs(1.0 / one - 0.5), axis=1)
-    # phase margins at |L| = 1 crossings; the interpolation is evaluated at the
-    # crossing cells only (issue 13: a handful per row of thousands of cells)
-    lg = np.log(np.abs(Lw))
-    r, c = np.nonzero(np.sign(lg[:, :-1]) * np.sign(lg[:, 1:]) < 0)
-    t = lg[r, c] / (lg[r, c] - lg[r, c + 1])
+    # issue 13: thousands of loops of a thousand points each; every full-size
+    # pass counts, so the complex divisions are replaced by real arithmetic and
+    # everything else is evaluated only at the crossing cells
+    re, im = Lw.real, Lw.imag
+    one2 = (1.0 + re) ** 2 + im * im                       # |1 + L|^2
+    sm = np.sqrt(np.min(one2, axis=1))
+    # |S - 1/2| = |1 - L|/(2 |1 + L|), S = 1/(1 + L)
+    dm = 2.0 / np.sqrt(np.max(((1.0 - re) ** 2 + im * im) / one2, axis=1))
+    n = Lw.shape[0]
+    # phase margins at |L| = 1 crossings: sign(|L| - 1) is sign(log |L|)
+    mag = np.abs(Lw)
+    sg = np.sign(mag - 1.0)
+    r, c = np.nonzero(sg[:, :-1] * sg[:, 1:] < 0)
+    lg0, lg1 = np.log(mag[r, c]), np.log(mag[r, c + 1])
+    t = lg0 / (lg0 - lg1)
     Lc = Lw[r, c] + t * (Lw[r, c + 1] - Lw[r, c])
-    pm = np.full((Lw.shape[0], Lw.shape[1] - 1), np.nan)
-    pm[r, c] = np.degrees(np.angle(-Lc))
+    pm = _closest(n, r, c, np.degrees(np.angle(-Lc)))
     # gain margins at Im L = 0, Re L < 0
-    im = Lw.imag
-    r, c = np.nonzero(np.sign(im[:, :-1]) * np.sign(im[:, 1:]) < 0)
+    sg = np.sign(im)
+    r, c = np.nonzero(sg[:, :-1] * sg[:, 1:] < 0)
     t2 = im[r, c] / (im[r, c] - im[r, c + 1])
-    re = Lw.real[r, c] + t2 * (Lw.real[r, c + 1] - Lw.real[r, c])
-    neg = re < 0
-    gm = np.full(pm.shape, np.nan)
-    gm[r[neg], c[neg]] = -20 * np.log10(np.abs(re[neg]))
+    rc = re[r, c] + t2 * (re[r, c + 1] - re[r, c])
+    neg = rc < 0
+    r, c, gm = r[neg], c[neg], -20 * np.log10(np.abs(rc[neg]))
     if nyquist:  # L(-1) is real: a phase crossover when negative
-        nyq = Lw[:, -1]
-        gm = np.hstack([gm, np.where(nyq.real < 0, -20 * np.log10(np.abs(nyq.real)),
-                                     np.nan)[:, None]])
-    return {"gain_margin_db": _closest(gm), "phase_margin_deg": _closest(pm),
+        k = np.nonzero(re[:, -1] < 0)[0]
+        r = np.concatenate([r, k])
+        c = np.concatenate([c, np.full(k.size, Lw.shape[1] - 1)])
+        gm = np.concatenate([gm, -20 * np.log10(np.abs(re[k, -1]))])
+    return {"gain_margin_db": _closest(n, r, c, gm), "phase_margin_deg": pm,
             "stability_margin": sm, "disk_margin": dm}
 
 
-def _closest(x: np.ndarray) -> np.ndarray:
-    """Per row, the entry of smallest magnitude (inf for an all-NaN row)."""
-    mag = np.where(np.isnan(x), np.inf, np.abs(x))
-    j = np.argmin(mag, axis=1)
-    v = x[np.arange(x.shape[0]), j]
-    return np.where(np.isinf(mag[np.arange(x.shape[0]), j]), np.inf, v)
+def _closest(n: int, rows: np.ndarray, cols: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Per row of ``n``, the value of smallest magnitude among the entries
+    ``(rows, cols, values)`` (the first column on a tie); inf for a row
+    without entries (NaN values are no entries)."""
+    ok = ~np.isnan(values)
+    rows, cols, values = rows[ok], cols[ok], values[ok]
+    out = np.full(n, np.inf)
+    order = np.lexsort((cols, np.abs(values), rows))
+    first = order[np.unique(rows[order], return_index=True)[1]]
+    v = values[first]
+    out[rows[first]] = np.where(np.isinf(v), np.inf, v)
+    return out

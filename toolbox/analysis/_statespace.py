@@ -6,11 +6,13 @@ stability tests and zero-order-hold discretisations (single and stacked 2x2).
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.linalg import expm
+from scipy.linalg import expm, matrix_balance
 
+from .._lti import pade as lti_pade, tf2ss
 from ..plant import zoh_first_order
 
 if TYPE_CHECKING:
@@ -71,18 +73,25 @@ class FreqResponse:
                     self._siso = (list(zip(res[0, :, 0].tolist(), lam.tolist())),
                                   complex(self.D[0, 0]))
 
+    def at(self, x: complex) -> complex:
+        """Response of a SISO system at one point ``x`` (a Python complex).
+
+        The modal form is summed in plain Python arithmetic (~2 us, where any
+        numpy call costs more: the margin refinements make hundreds of such
+        calls, issue 13); otherwise, or exactly on a pole, one LU solve.
+        """
+        if self._siso is not None:
+            try:
+                return sum(r / (x - lam) for r, lam in self._siso[0]) + self._siso[1]
+            except ZeroDivisionError:           # exactly on a pole
+                pass
+        return complex(freqresp(self.A, self.B, self.C, self.D, np.array([x]))[0, 0, 0])
+
     def __call__(self, x: np.ndarray) -> np.ndarray:
         """Response at the complex points ``x``: shape ``(len(x), p, m)``."""
         x = np.asarray(x, complex).reshape(-1)
         if x.size == 1 and self._siso is not None:
-            # one point of a SISO modal form: ~2 us of Python arithmetic, where any
-            # numpy call costs more (the margin refinements make ~90 such calls)
-            v = complex(x[0])
-            try:
-                val = sum(r / (v - lam) for r, lam in self._siso[0]) + self._siso[1]
-            except ZeroDivisionError:           # exactly on a pole
-                return freqresp(self.A, self.B, self.C, self.D, x)
-            return np.array([[[val]]])
+            return np.array([[[self.at(complex(x[0]))]]])
         if x.size == 1 and self.A.size:         # one point: one LAPACK call, no stacking
             try:
                 y = np.linalg.solve(x[0] * self._eye - self.A, self.B)
@@ -123,13 +132,25 @@ def plant_chain(a: float, b: float, d: int, Ts: float) -> tuple[np.ndarray, ...]
 
 
 def pade(tau: float, order: int) -> tuple[np.ndarray, ...]:
-    """State space of the ``order`` Pade approximation of ``exp(-s tau)``."""
-    import control
+    """State space of the ``order`` Pade approximation of ``exp(-s tau)``.
 
-    num, den = control.pade(tau, order)
-    sys = control.ss(control.tf(num, den))
-    return (np.array(sys.A, float), np.array(sys.B, float), np.array(sys.C, float),
-            np.array(sys.D, float))
+    The controllable canonical form of :func:`toolbox._lti.tf2ss` holds the
+    coefficients ``tau^-k`` (1e13 for a third-order 150 us delay), so it is
+    balanced by a diagonal similarity (``scipy.linalg.matrix_balance`` on A,
+    then a common factor for B and C; powers of two: exact), as
+    python-control's slycot realisation was.
+    """
+    sys = tf2ss(*lti_pade(tau, order))
+    A, B, C, D = (np.array(M) for M in (sys.A, sys.B, sys.C, sys.D))    # writable copies
+    if A.size:
+        _, (scale, _) = matrix_balance(A, permute=False, separate=True)
+        # then B and C to equal norms by a common power of two (the similarity c I)
+        c = 2.0 ** round(0.5 * math.log2(np.linalg.norm(B / scale[:, None])
+                                         / np.linalg.norm(C * scale[None, :])))
+        A = A * scale[None, :] / scale[:, None]
+        B = B / (c * scale[:, None])
+        C = C * (c * scale[None, :])
+    return A, B, C, D
 
 
 def series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:

@@ -13,7 +13,6 @@ import numpy as np
 from scipy.linalg import expm
 
 from ..plant import zoh_first_order
-from ..sim import step_metrics
 
 if TYPE_CHECKING:
     from ._axis import AxisLoop
@@ -28,15 +27,7 @@ def step_response(loop: "AxisLoop", A, B, C, D) -> tuple[np.ndarray, np.ndarray]
     if loop.discrete:
         n_steps = 2000
         while True:
-            x = np.zeros(A.shape[0])
-            X = np.empty((n_steps + 1, A.shape[0]))
-            Bv = B[:, 0]
-            # an unstable loop's response overflows to inf: expected, and judged
-            # by the stability verdict, not a warning for the user
-            with np.errstate(over="ignore", invalid="ignore"):
-                for k in range(n_steps + 1):
-                    X[k] = x
-                    x = A @ x + Bv
+            X = _affine_orbit(A, B[:, 0], n_steps)
             # intersample: i(t_k + s) = e^{-R s/L} i_k + (1 - e^{-R s/L})/R u_k
             nl = loop.law.n
             i_k = X[:, nl]
@@ -62,14 +53,32 @@ def step_response(loop: "AxisLoop", A, B, C, D) -> tuple[np.ndarray, np.ndarray]
         M[:n, :n] = A * h
         M[:n, n:] = B * h
         E = expm(M)
-        x = np.zeros(n)
-        y = np.empty(t.size)
-        for k in range(t.size):
-            y[k] = C[0] @ x + D[0, 0]
-            x = E[:n, :n] @ x + E[:n, n]
+        y = _affine_orbit(E[:n, :n], E[:n, n], t.size - 1) @ C[0] + D[0, 0]
         if _settled(y) or t_end >= 3.2:
             return t, y
         t_end *= 2
+
+
+def _affine_orbit(A: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
+    """States ``x_0 .. x_n`` (n + 1, dim) of ``x_{k+1} = A x_k + b``, ``x_0 = 0``.
+
+    Filled in blocks of doubling length, ``x_{k+m} = A^m x_k + x_m``: about
+    ``log2 n`` stacked products instead of ``n`` Python-level steps (issue 13:
+    8000-step responses cost 8 ms each). The blocks round differently from
+    the step-by-step recursion (observed 1e-15 relative on settled loops). An
+    unstable loop's response overflows to inf or nan: expected, and judged
+    by the stability verdict, not a warning for the user.
+    """
+    X = np.empty((n + 1, A.shape[0]))
+    X[0] = 0.0
+    m, Am = 1, A
+    with np.errstate(over="ignore", invalid="ignore"):
+        while m <= n:
+            X[m] = A @ X[m - 1] + b
+            k = min(m, n + 1 - m)
+            X[m + 1:m + k] = X[1:k] @ Am.T + X[m]
+            m, Am = m + k, Am @ Am
+    return X
 
 
 def _settled(y: np.ndarray) -> bool:
@@ -81,6 +90,10 @@ def _settled(y: np.ndarray) -> bool:
 def step_figures(loop: "AxisLoop", cl: tuple) -> dict:
     """Response time, rise time, settling time and overshoot of the reference
     step of ``cl`` (the definitions of :func:`toolbox.sim.step_metrics`)."""
+    # imported here: toolbox.sim loads the numba kernel (~0.4 s), which the
+    # design methods that use the analysis (H-infinity, robust PI) do not need
+    from ..sim import step_metrics
+
     t, y = step_response(loop, *cl)
     figs = step_metrics(t, y, 0.0, 1.0, 0.0)
     return {k: float(v) for k, v in figs.items()}

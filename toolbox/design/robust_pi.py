@@ -230,8 +230,6 @@ def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
 
     def margins(wc, ratio, loops=coarse):
         art = _candidate(spec, cfg, *_gains(motor, wc, ratio))
-        if loops is coarse:   # search: a cruder D-scaling (a valid, larger mu bound)
-            return loops.disk_margins(art, n_scale=25, n_refine=12)
         return loops.disk_margins(art)
 
     grid = np.geomspace(wc_max / 100.0, wc_max * 0.999, N_WC)
