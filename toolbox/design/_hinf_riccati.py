@@ -27,13 +27,16 @@ Damaged or wrong equations of the paper, re-derived here:
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.linalg.lapack import dgees as _dgees
+from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
+                                 dgesv as _dgesv, dgetrf as _dgetrf, dgetrs as _dgetrs,
+                                 dggev as _dggev, dsyevd as _dsyevd)
 import control as ct
 
 from ..analysis import FreqResponse
@@ -191,6 +194,53 @@ class PartitionedPlant:
         return new
 
 
+# --------------------------------------------------------------------------
+# LAPACK called directly: the matrices here have order <= ~12, where numpy's and
+# scipy's wrappers (argument checks, dispatch) cost 3-10 times the LAPACK work
+# itself (issue 13). Inputs must be finite float arrays (they are built here).
+# --------------------------------------------------------------------------
+def _eigvals(A: np.ndarray) -> np.ndarray:
+    """Eigenvalues of a real square matrix (LAPACK dgeev)."""
+    if A.shape[0] == 0:
+        return np.zeros(0, complex)
+    wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
+    return wr + 1j * wi
+
+
+def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A^-1 B (LAPACK dgesv); LinAlgError when A is exactly singular."""
+    _, _, x, info = _dgesv(A, B)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"singular matrix (dgesv info {info})")
+    return x
+
+
+def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
+    ones (|beta| <= 1e-13 |alpha|) are dropped."""
+    ar, ai, beta, _, _, _, info = _dggev(M, N, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dggev failed (info {info})")
+    alpha = ar + 1j * ai
+    fin = np.abs(beta) > 1e-13 * np.abs(alpha)
+    return alpha[fin] / beta[fin]
+
+
+def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """Invariant zeros: SLICOT ab08nd's reduced pencil and its QZ eigenvalues,
+    the route of python-control's ``zeros()`` without building a system."""
+    from slycot import ab08nd
+
+    n = A.shape[0]
+    if n == 0:
+        return np.zeros(0, complex)
+    out = ab08nd(n, B.shape[1], C.shape[0], A, B, C, D)
+    nu = out[0]
+    return _pencil_eigvals(out[8][:nu, :nu], out[9][:nu, :nu]) if nu else np.zeros(0, complex)
+
+
 _BLOCKS = ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22")
 
 
@@ -200,10 +250,10 @@ def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(sys)]])
     if isinstance(sys, ct.TransferFunction) and sys.ninputs == 1 and sys.noutputs == 1:
         return _tf_realisation(sys.num_array[0, 0], sys.den_array[0, 0])
-    s = ct.ss(sys)
-    if s.ninputs != 1 or s.noutputs != 1:
+    s = sys if all(hasattr(sys, m) for m in "ABCD") else ct.ss(sys)
+    if np.shape(s.D) != (1, 1):
         raise ValueError(f"augment_mixed_sensitivity: expected a SISO system, "
-                         f"got {s.noutputs}x{s.ninputs}")
+                         f"got {np.shape(s.D)[0]}x{np.shape(s.D)[1]}")
     return (np.asarray(s.A, float), np.asarray(s.B, float),
             np.asarray(s.C, float), np.asarray(s.D, float))
 
@@ -544,7 +594,7 @@ def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
         F = np.linalg.solve(r, b.T @ X + s.T)
         ev = np.linalg.eigvals(a - b @ F)
     X = 0.5 * (X + X.T)
-    if np.any(ev.real >= -1e-12 * max(1.0, float(np.max(np.abs(ev))))):
+    if ev.size and ev.real.max() >= -1e-12 * max(1.0, float(np.abs(ev).max())):
         return None, "the solution is not stabilising"
     return X, ""
 
@@ -554,10 +604,11 @@ def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     """Hamiltonian (eq 16) ordered-Schur solution and the closed-loop poles
     (the n selected eigenvalues of H, those of ``a - b r^-1 (b^T X + s^T)``);
     ``(None, None)`` if it does not exist or its basis Z11 is too
-    ill-conditioned to give X = Z21 Z11^-1 accurately."""
+    ill-conditioned to give X = Z21 Z11^-1 accurately (1-norm condition
+    estimate above 1e14)."""
     n = a.shape[0]
     try:
-        rb = np.linalg.solve(r, np.hstack([b.T, s.T]))      # r^-1 [b^T, s^T]
+        rb = _solve(r, np.concatenate([b.T, s.T], axis=1))   # r^-1 [b^T, s^T]
     except np.linalg.LinAlgError:                           # singular r: the pencil route
         return None, None
     E = a - b @ rb[:, n:]
@@ -569,10 +620,16 @@ def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     _, sdim, wr, wi, Z, _, info = _dgees(_lhp, H, sort_t=1, overwrite_a=1)
     if info != 0 or sdim != n:
         return None, None
-    Z11, Z21 = Z[:n, :n], Z[n:, :n]
-    if np.linalg.cond(Z11) > 1e14:
+    Z11t = Z[:n, :n].T
+    lu, piv, info = _dgetrf(Z11t)
+    if info != 0:
         return None, None
-    return np.linalg.solve(Z11.T, Z21.T).T, wr[:n] + 1j * wi[:n]
+    rcond, _ = _dgecon(lu, float(np.abs(Z11t).sum(axis=0).max()))
+    if not rcond >= 1e-14:
+        return None, None
+    Xt, _ = _dgetrs(lu, piv, Z[n:, :n].T)                  # X^T = Z11^-T Z21^T
+    return Xt.T, wr[:n] + 1j * wi[:n]
+
 
 @dataclass
 class HinfFeasibility:
@@ -608,8 +665,12 @@ class HinfFeasibility:
 
 
 def _psd(X: np.ndarray, tol: float = 1e-9) -> bool:
-    ev = np.linalg.eigvalsh(X)
-    return bool(ev.size == 0 or ev[0] >= -tol * max(1.0, float(np.max(np.abs(ev)))))
+    if X.size == 0:
+        return True
+    ev, _, info = _dsyevd(X, compute_v=0)                  # ascending
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
+    return bool(ev[0] >= -tol * max(1.0, -ev[0], ev[-1]))
 
 
 @dataclass(frozen=True)
@@ -675,7 +736,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "Y_not_psd",
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, Y=Y)
-    rho = float(np.max(np.abs(np.linalg.eigvals(X @ Y)))) if n else 0.0
+    rho = float(np.abs(_eigvals(X @ Y)).max()) if n else 0.0
     if rho >= g2:
         return HinfFeasibility(gamma, False, "rho",
                                f"rho(XY) = {rho:.6g} >= gamma^2 = {g2:.6g}",
@@ -821,21 +882,24 @@ def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
     res = prep.feasibility(gamma)
     if not res.feasible:
         raise DesignInfeasible(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
-    return _controller_from(prep, res)
+    return ct.ss(*_controller_from(prep, res))
 
 
-def _controller_from(prep: _Prepared, res: HinfFeasibility) -> ct.StateSpace:
+def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray, ...]:
+    """A, B, C, D of the central controller in the coordinates of the given plant."""
     Ah, Bh, Ch, Dh = _central_normalised(prep.norm.P, res)
     # undo u = R12^-1 u~ and y~ = R21^-1 y
     Bh, Ch, Dh = Bh @ prep.norm.R21inv, prep.norm.R12inv @ Ch, prep.norm.R12inv @ Dh @ prep.norm.R21inv
     # undo the state balancing x = T x_s (controller states live in plant coordinates)
     t = prep.t
     Ah, Bh, Ch = Ah * t[:, None] / t[None, :], Bh * t[:, None], Ch / t[None, :]
-    K = ct.ss(Ah, Bh, Ch, Dh)
     D22 = prep.P.D22
-    if np.any(D22 != 0):                           # loop shift: K = K0 (I + D22 K0)^-1
-        K = ct.feedback(K, ct.ss([], [], [], D22), sign=-1)
-    return K
+    if np.any(D22 != 0):
+        # loop shift u = K0 (y - D22 u): M = (I + Dk D22)^-1, u = M (Ck xk + Dk y)
+        M = np.linalg.inv(np.eye(Dh.shape[0]) + Dh @ D22)
+        Ah, Bh = Ah - Bh @ D22 @ M @ Ch, Bh @ (np.eye(D22.shape[0]) - D22 @ M @ Dh)
+        Ch, Dh = M @ Ch, M @ Dh
+    return Ah, Bh, Ch, Dh
 
 
 # --------------------------------------------------------------------------
@@ -943,10 +1007,15 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
     ndarray of complex
         The remaining poles (rad/s).
     """
-    p = list(np.atleast_1d(K.poles()))
-    z = list(np.atleast_1d(K.zeros()))
+    A, B, C, D = _ss_blocks(K)
+    return _effective_poles(_eigvals(A), _zeros(A, B, C, D), cancel_tol)
+
+
+def _effective_poles(poles: np.ndarray, zeros: np.ndarray, cancel_tol: float) -> np.ndarray:
+    """:func:`effective_poles` of the given poles and zeros."""
+    z = list(zeros)
     keep = []
-    for pi in sorted(p, key=abs):
+    for pi in sorted(poles, key=abs):
         d = [abs(zi - pi) for zi in z]
         if d and min(d) <= cancel_tol * max(abs(pi), 1e-300):
             z.pop(int(np.argmin(d)))
@@ -961,7 +1030,13 @@ def fastest_pole_modulus(K: Any) -> float:
     Compared with :func:`pole_limit` (``pi/Ts``) to decide whether ``K`` can
     be discretised at the sample time (paper 003 sect. 4 trap at the optimum).
     """
-    ep = effective_poles(K)
+    return _fastest(_ss_blocks(K))
+
+
+def _fastest(K: tuple[np.ndarray, ...]) -> float:
+    """:func:`fastest_pole_modulus` of the realisation ``K = (A, B, C, D)``."""
+    A, B, C, D = K
+    ep = _effective_poles(_eigvals(A), _zeros(A, B, C, D), 1e-2)
     return float(np.max(np.abs(ep))) if ep.size else 0.0
 
 
@@ -1008,18 +1083,19 @@ class HinfResult:
 
 def closed_loop(P: PartitionedPlant, K: Any) -> ct.StateSpace:
     """Closed loop F_l(P, K) (w -> z), states [x_P, x_K], with u = K y."""
-    return ct.ss(*_lft(P, K))
-
-
-def _lft(P: PartitionedPlant, K: Any) -> tuple[np.ndarray, ...]:
-    """Matrices of F_l(P, K): u = M (Dk C2 x + Ck xk + Dk D21 w), M = (I - Dk D22)^-1
-    (numpy; python-control's ``lft`` builds named systems, ~1.5 ms, issue 13)."""
     Ks = ct.ss(K)
-    Ak, Bk, Ck, Dk = (np.asarray(m, float) for m in (Ks.A, Ks.B, Ks.C, Ks.D))
+    return ct.ss(*_lft(P, tuple(np.asarray(m, float) for m in (Ks.A, Ks.B, Ks.C, Ks.D))))
+
+
+def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    """Matrices of F_l(P, K) for ``K = (Ak, Bk, Ck, Dk)``: u = M (Dk C2 x + Ck xk +
+    Dk D21 w), M = (I - Dk D22)^-1 (numpy; python-control's ``lft`` builds named
+    systems, ~1.5 ms, issue 13)."""
+    Ak, Bk, Ck, Dk = K
     Mi = np.linalg.inv(np.eye(P.nu) - Dk @ P.D22)
     Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
     Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
-    A = np.block([[P.A + P.B2 @ Ux, P.B2 @ Uk], [Bk @ Yx, Ak + Bk @ Yk]])
+    A = _blocks2x2(P.A + P.B2 @ Ux, P.B2 @ Uk, Bk @ Yx, Ak + Bk @ Yk)
     B = np.vstack([P.B1 + P.B2 @ Uw, Bk @ Yw])
     C = np.hstack([P.C1 + P.D12 @ Ux, P.D12 @ Uk])
     return A, B, C, P.D11 + P.D12 @ Uw
@@ -1100,8 +1176,9 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
         while True:
             res = prep.feasibility((1.0 + b) * gamma_opt)
             K = _controller_from(prep, res) if res.feasible else None
-            ok = K is not None and (limit is None or fastest_pole_modulus(K) <= limit)
-            if ok or b >= max_backoff:
+            fast = _fastest(K) if K is not None else math.inf
+            ok = limit is None or fast <= limit
+            if (K is not None and ok) or b >= max_backoff:
                 break
             b = min(max(2.0 * b, 0.01), max_backoff)
         if K is None:
@@ -1118,7 +1195,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
             err.condition, err.best = res.message, best
             raise err
         K, gamma_opt, b = _controller_from(prep, res), None, 0.0
-    fast = fastest_pole_modulus(K)
+        fast = _fastest(K)
     if limit is not None and fast > limit:
         notes.append(f"controller pole at |s| = {fast:.4g} rad/s exceeds the realisability "
                      f"limit pi/Ts = {limit:.4g} rad/s"
@@ -1131,7 +1208,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
     for msg in notes:
         warnings.warn(msg, RuntimeWarning, stacklevel=2)
     prep_res = _unscale_xy(res, prep.t)
-    return HinfResult(K=K, gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
+    return HinfResult(K=ct.ss(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
                       X=prep_res.X, Y=prep_res.Y, closed_loop_norm=cl_norm,
                       fastest_pole=fast, pole_limit=limit, warnings=notes)
 
