@@ -665,6 +665,7 @@ class HinfFeasibility:
 
 
 def _psd(X: np.ndarray, tol: float = 1e-9) -> bool:
+    """X >= 0 up to ``tol`` relative to its largest eigenvalue (LAPACK dsyevd)."""
     if X.size == 0:
         return True
     ev, _, info = _dsyevd(X, compute_v=0)                  # ascending
@@ -1235,21 +1236,42 @@ class WeightBound:
     worst_freq: float
 
 
-def _freqresp(sys: Any, w: np.ndarray) -> np.ndarray:
-    """SISO response at s = j w, all frequencies at once (issue 13: python-control
-    converted each weight to state space and called SLICOT tb05ad per frequency).
-    A transfer function is evaluated from its polynomials, as python-control
-    evaluates one; a state-space system through its Hessenberg form."""
-    if np.isscalar(sys):
-        return np.full(w.size, complex(sys))
-    s = 1j * w
-    if isinstance(sys, ct.TransferFunction):
-        if sys.ninputs != 1 or sys.noutputs != 1:
-            raise ValueError(f"weight_bound_check: expected a SISO system, "
-                             f"got {sys.noutputs}x{sys.ninputs}")
-        return np.polyval(sys.num_array[0, 0], s) / np.polyval(sys.den_array[0, 0], s)
-    ss = ct.ss(sys)
-    return FreqResponse(ss.A, ss.B, ss.C, ss.D)(s)[:, 0, 0]
+#: default grid of :func:`weight_bound_check` (rad/s), read-only and built once
+_BOUND_GRID = np.logspace(-4, 9, 4000)
+_BOUND_GRID.flags.writeable = False
+
+
+def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
+    """SISO responses at the points ``s``, all frequencies at once (issue 13:
+    python-control converted each weight to state space and called SLICOT
+    tb05ad per frequency). The transfer functions are evaluated together from
+    their polynomials: one table of powers ``s^j`` and one matrix product for
+    every numerator and denominator; a state-space system goes through its
+    modal form (:class:`~toolbox.analysis.FreqResponse`); a number is constant."""
+    polys, out = [], []
+    for sys in systems:
+        if np.isscalar(sys):
+            out.append(np.full(s.size, complex(sys)))
+        elif isinstance(sys, ct.TransferFunction):
+            if sys.ninputs != 1 or sys.noutputs != 1:
+                raise ValueError(f"weight_bound_check: expected a SISO system, "
+                                 f"got {sys.noutputs}x{sys.ninputs}")
+            out.append(len(polys))
+            polys += [sys.num_array[0, 0], sys.den_array[0, 0]]
+        else:
+            out.append(FreqResponse(*_ss_blocks(sys))(s)[:, 0, 0])
+    if polys:
+        deg = max(len(c) for c in polys) - 1
+        coef = np.zeros((deg + 1, len(polys)))
+        for j, c in enumerate(polys):
+            coef[:len(c), j] = np.asarray(c, float)[::-1]     # ascending powers
+        powers = np.empty((s.size, deg + 1), complex)
+        powers[:, 0] = 1.0
+        for j in range(1, deg + 1):
+            powers[:, j] = powers[:, j - 1] * s
+        vals = powers @ coef
+        out = [vals[:, o] / vals[:, o + 1] if isinstance(o, int) else o for o in out]
+    return out
 
 
 def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
@@ -1271,15 +1293,17 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
     dict of str to WeightBound
         Keys ``"S"``, ``"KS"``, ``"T"`` for the weights given.
     """
-    w = np.logspace(-4, 9, 4000) if freqs is None else np.asarray(freqs, float)
-    g, k = _freqresp(G, w), _freqresp(K, w)
+    w = _BOUND_GRID if freqs is None else np.asarray(freqs, float)
+    s = 1j * w
+    weights = [wt for wt in (w1, w2, w3) if wt is not None]
+    g, k, *wv = _freqresps([G, K] + weights, s)
     S = 1.0 / (1.0 + g * k)
     funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (g * k * S, w3)}
     out = {}
     for name, (f, wt) in funcs.items():
         if wt is None:
             continue
-        r = np.abs(f * _freqresp(wt, w))
+        r = np.abs(f * wv.pop(0))
         i = int(np.argmax(r))
         out[name] = WeightBound(name, float(r[i]), float(w[i]))
     return out
