@@ -1,0 +1,492 @@
+"""The toolbox's own linear time-invariant systems (numpy and scipy.linalg only).
+
+``import control`` pulls scipy.signal and matplotlib.pyplot (0.8-1.0 s of
+every ``cct design``, issue 13), while the toolbox needs only a handful of
+operations on small systems: this module provides them. python-control stays
+the independent route of the tests (``tests/test_lti.py``) and what users may
+pass in: :func:`as_statespace` duck-types its ``StateSpace`` and
+``TransferFunction`` objects without importing it, and
+:meth:`StateSpace.to_control` hands a system back (lazy import).
+
+Conventions follow python-control so that ported code reads the same:
+
+* ``dt is None`` means continuous time; a discrete system has ``dt > 0`` (s).
+* ``g2 * g1`` is the series connection "``g1`` then ``g2``", with the states
+  of ``g1`` first (python-control's order); ``g1 + g2`` the parallel one
+  (states of ``g1`` first); ``feedback(g, h, sign=-1)`` closes
+  ``u = r + sign * h y`` around ``g``.
+* :func:`c2d` reproduces ``scipy.signal.cont2discrete`` operation by
+  operation (the route of ``control.sample_system`` without pre-warping), so
+  that discretised laws are the same floating-point numbers as before.
+* Polynomials are coefficient sequences, highest power first.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+import scipy.linalg
+
+__all__ = ["StateSpace", "as_statespace", "tf2ss", "ss2tf", "c2d", "pade", "acker",
+           "series", "parallel", "feedback", "append", "static_gain", "C2D_METHODS"]
+
+#: Discretisation methods of :func:`c2d` (python-control / scipy names); the
+#: generalised bilinear transform of each is ``_GBT_ALPHA``.
+_GBT_ALPHA = {"tustin": 0.5, "bilinear": 0.5, "euler": 0.0, "forward_diff": 0.0,
+              "backward_diff": 1.0}
+C2D_METHODS = ("zoh", "foh", *_GBT_ALPHA)
+
+#: Largest condition number of the eigenvector matrix for which a frequency
+#: response is evaluated as a modal sum (relative error ~cond(V) eps, so
+#: <= ~1e-10); a nearly defective A takes per-point LU solves instead.
+_MODAL_COND_MAX = 1e6
+
+
+def _matrix(value: Any, name: str) -> np.ndarray:
+    """A read-only 2-D float copy of ``value`` (scalars and vectors promoted)."""
+    arr = np.array(value, dtype=float)
+    if arr.ndim > 2:
+        raise ValueError(f"{name} must be at most 2-D, got shape {arr.shape}")
+    if arr.ndim < 2:
+        arr = arr.reshape(1, -1) if arr.size else arr.reshape(0, 0)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class StateSpace:
+    """``x' = A x + B u, y = C x + D u`` (continuous) or ``x+ = ...`` (discrete).
+
+    Parameters
+    ----------
+    A, B, C, D : array_like
+        (n, n), (n, m), (p, n), (p, m); stored as read-only float arrays. A
+        static gain has ``n = 0`` (give A as ``np.zeros((0, 0))`` and B, C
+        with the matching zero dimension, or use :func:`static_gain`).
+    dt : float or None
+        Sample time (s) of a discrete system; None for continuous time.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    dt: float | None = None
+
+    def __post_init__(self) -> None:
+        A, B, C, D = (_matrix(getattr(self, k), k) for k in "ABCD")
+        n = A.shape[0]
+        if A.shape != (n, n):
+            raise ValueError(f"A must be square, got shape {A.shape}")
+        if n == 0:
+            # python-control style empty blocks: take the I/O sizes from D
+            B, C = B.reshape(0, D.shape[1]), C.reshape(D.shape[0], 0)
+        if B.shape[0] != n or C.shape[1] != n or D.shape != (C.shape[0], B.shape[1]):
+            raise ValueError(f"inconsistent shapes A {A.shape}, B {B.shape}, C {C.shape}, "
+                             f"D {D.shape}")
+        dt = self.dt
+        if dt is not None:
+            dt = float(dt)
+            if not (np.isfinite(dt) and dt > 0):
+                raise ValueError(f"dt must be None (continuous) or > 0, got {self.dt!r}")
+        for k, v in zip("ABCD", (A, B, C, D)):
+            object.__setattr__(self, k, v)
+        object.__setattr__(self, "dt", dt)
+
+    # -- sizes -----------------------------------------------------------
+    @property
+    def nstates(self) -> int:
+        return self.A.shape[0]
+
+    @property
+    def ninputs(self) -> int:
+        return self.B.shape[1]
+
+    @property
+    def noutputs(self) -> int:
+        return self.C.shape[0]
+
+    @property
+    def discrete(self) -> bool:
+        """True for a discrete-time system (``dt`` set)."""
+        return self.dt is not None
+
+    def __repr__(self) -> str:
+        kind = f"dt={self.dt}" if self.discrete else "continuous"
+        return (f"StateSpace(n={self.nstates}, inputs={self.ninputs}, "
+                f"outputs={self.noutputs}, {kind})")
+
+    # -- analysis --------------------------------------------------------
+    def poles(self) -> np.ndarray:
+        """Eigenvalues of A (s-plane or z-plane)."""
+        return np.linalg.eigvals(self.A) if self.nstates else np.zeros(0, complex)
+
+    def evaluate(self, x: Any) -> np.ndarray:
+        """``C (x I - A)^-1 B + D`` at complex points ``x``: shape ``(p, m, len(x))``.
+
+        One eigen-decomposition of A serves every point (modal sum) while its
+        eigenvectors are well conditioned; otherwise one stacked LU solve. A
+        point exactly on a pole gives inf/nan entries.
+        """
+        x = np.asarray(x, complex).reshape(-1)
+        p, m, n = self.noutputs, self.ninputs, self.nstates
+        if n == 0:
+            return np.repeat(self.D.astype(complex)[:, :, None], x.size, axis=2)
+        lam, V = np.linalg.eig(self.A)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if x.size > 1 and np.linalg.cond(V) <= _MODAL_COND_MAX:
+                res = (self.C @ V)[:, :, None] * np.linalg.solve(V, self.B)[None, :, :]
+                inv = 1.0 / (x[None, :] - lam[:, None])                  # (n, N)
+                return np.einsum("pkm,kN->pmN", res, inv) + self.D[:, :, None]
+            M = x[:, None, None] * np.eye(n) - self.A
+            try:
+                y = np.linalg.solve(M, np.broadcast_to(self.B.astype(complex), (x.size, n, m)))
+            except np.linalg.LinAlgError:
+                y = np.stack([_solve_or_inf(Mi, self.B) for Mi in M])
+            return np.moveaxis(self.C @ y + self.D, 0, -1)
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response at ``omega`` (rad/s): shape ``(p, m, len(omega))``.
+
+        Evaluated at ``j omega`` (continuous) or ``exp(j omega dt)`` (discrete).
+        """
+        w = np.asarray(omega, float).reshape(-1)
+        return self.evaluate(np.exp(1j * w * self.dt) if self.discrete else 1j * w)
+
+    def dcgain(self) -> np.ndarray:
+        """Steady-state gain ``G(0)`` (continuous) or ``G(1)`` (discrete), (p, m)."""
+        return self.evaluate([1.0 if self.discrete else 0.0])[:, :, 0].real
+
+    # -- interconnections (python-control operator conventions) ----------
+    def __neg__(self) -> "StateSpace":
+        return StateSpace(self.A, self.B, -self.C, -self.D, self.dt)
+
+    def __mul__(self, other: Any) -> "StateSpace":
+        """``self * other``: ``other`` first, then ``self``."""
+        return series(_operand(other, self, "right"), self)
+
+    def __rmul__(self, other: Any) -> "StateSpace":
+        return series(self, _operand(other, self, "left"))
+
+    def __add__(self, other: Any) -> "StateSpace":
+        return parallel(self, _operand(other, self, "parallel"))
+
+    def __radd__(self, other: Any) -> "StateSpace":
+        return parallel(_operand(other, self, "parallel"), self)
+
+    def __sub__(self, other: Any) -> "StateSpace":
+        return parallel(self, -_operand(other, self, "parallel"))
+
+    def __rsub__(self, other: Any) -> "StateSpace":
+        return parallel(_operand(other, self, "parallel"), -self)
+
+    def __getitem__(self, key: tuple) -> "StateSpace":
+        """Subsystem ``sys[outputs, inputs]`` (ints or slices; states kept)."""
+        rows, cols = (k if isinstance(k, slice) else slice(k, k + 1) for k in key)
+        return StateSpace(self.A, self.B[:, cols], self.C[rows, :], self.D[rows, cols], self.dt)
+
+    def feedback(self, other: Any = 1.0, sign: int = -1) -> "StateSpace":
+        """:func:`feedback` of ``self`` with ``other`` in the return path."""
+        return feedback(self, other, sign)
+
+    def to_control(self) -> Any:
+        """The same system as a ``control.StateSpace`` (imports python-control)."""
+        import control
+
+        if self.discrete:
+            return control.ss(self.A, self.B, self.C, self.D, self.dt)
+        return control.ss(self.A, self.B, self.C, self.D)
+
+
+def _solve_or_inf(M: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``M^-1 B``, or inf where M is singular (a point exactly on a pole)."""
+    try:
+        return np.linalg.solve(M, B.astype(complex))
+    except np.linalg.LinAlgError:
+        return np.full(B.shape, np.inf + 0j)
+
+
+def static_gain(D: Any, dt: float | None = None) -> StateSpace:
+    """A memoryless system ``y = D u``."""
+    D = np.atleast_2d(np.asarray(D, float))
+    return StateSpace(np.zeros((0, 0)), np.zeros((0, D.shape[1])), np.zeros((D.shape[0], 0)),
+                      D, dt)
+
+
+def _operand(value: Any, like: StateSpace, role: str) -> StateSpace:
+    """Promote a scalar or matrix operand of an interconnection with ``like``.
+
+    A scalar becomes ``k I`` of the size the connection needs (python-control
+    semantics: ``2 * G`` scales every channel).
+    """
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+        size = {"right": like.ninputs, "left": like.noutputs}.get(role)
+        if size is None:                               # parallel: y = k u needs p == m
+            size = like.ninputs
+            if like.ninputs != like.noutputs:
+                return static_gain(np.full((like.noutputs, like.ninputs), float(value)), like.dt)
+        return static_gain(float(value) * np.eye(size), like.dt)
+    sys = as_statespace(value)
+    if sys.nstates == 0 and sys.dt is None and like.dt is not None:
+        sys = StateSpace(sys.A, sys.B, sys.C, sys.D, like.dt)
+    return sys
+
+
+def _common_dt(a: StateSpace, b: StateSpace) -> float | None:
+    """The sample time of a connection of ``a`` and ``b`` (static gains adapt)."""
+    if a.nstates == 0 and a.dt is None:
+        return b.dt
+    if b.nstates == 0 and b.dt is None:
+        return a.dt
+    if a.dt != b.dt:
+        raise ValueError(f"cannot connect systems with dt={a.dt} and dt={b.dt}")
+    return a.dt
+
+
+def series(first: Any, second: Any) -> StateSpace:
+    """``second * first``: the output of ``first`` drives ``second``.
+
+    States are ``[x_first; x_second]``.
+    """
+    g1, g2 = as_statespace(first), as_statespace(second)
+    if g1.noutputs != g2.ninputs:
+        raise ValueError(f"series: {g1.noutputs} outputs into {g2.ninputs} inputs")
+    n1, n2 = g1.nstates, g2.nstates
+    A = np.block([[g1.A, np.zeros((n1, n2))], [g2.B @ g1.C, g2.A]])
+    B = np.vstack([g1.B, g2.B @ g1.D])
+    C = np.hstack([g2.D @ g1.C, g2.C])
+    return StateSpace(A, B, C, g2.D @ g1.D, _common_dt(g1, g2))
+
+
+def parallel(g1: Any, g2: Any) -> StateSpace:
+    """``g1 + g2`` (same input, outputs added); states ``[x1; x2]``."""
+    a, b = as_statespace(g1), as_statespace(g2)
+    if (a.ninputs, a.noutputs) != (b.ninputs, b.noutputs):
+        raise ValueError(f"parallel: shapes {a.noutputs}x{a.ninputs} and "
+                         f"{b.noutputs}x{b.ninputs} differ")
+    return StateSpace(scipy.linalg.block_diag(a.A, b.A), np.vstack([a.B, b.B]),
+                      np.hstack([a.C, b.C]), a.D + b.D, _common_dt(a, b))
+
+
+def append(*systems: Any) -> StateSpace:
+    """Block-diagonal connection: inputs and outputs stacked, states in order."""
+    gs = [as_statespace(g) for g in systems]
+    dts = {g.dt for g in gs if g.nstates or g.dt is not None}    # static gains adapt
+    if len(dts) > 1:
+        raise ValueError(f"append: systems with different sample times {sorted(map(str, dts))}")
+    dt = dts.pop() if dts else None
+    return StateSpace(scipy.linalg.block_diag(*[g.A for g in gs]),
+                      scipy.linalg.block_diag(*[g.B for g in gs]),
+                      scipy.linalg.block_diag(*[g.C for g in gs]),
+                      scipy.linalg.block_diag(*[g.D for g in gs]), dt)
+
+
+def feedback(plant: Any, other: Any = 1.0, sign: int = -1) -> StateSpace:
+    """Closed loop ``y = G u1``, ``u1 = r + sign * H y``: ``r -> y``.
+
+    ``other`` (H) may be a scalar (``k I``), a matrix or a system. The
+    algebraic loop is solved with ``F = I - sign D_G D_H`` (error when
+    singular). States are ``[x_G; x_H]``.
+    """
+    G = as_statespace(plant)
+    H = _operand(other, G, "left") if np.isscalar(other) else as_statespace(other)
+    if (H.ninputs, H.noutputs) != (G.noutputs, G.ninputs):
+        raise ValueError(f"feedback: H must be {G.ninputs}x{G.noutputs}, "
+                         f"got {H.noutputs}x{H.ninputs}")
+    dt = _common_dt(G, H)
+    F = np.eye(G.noutputs) - sign * G.D @ H.D
+    Fi_C = np.linalg.solve(F, np.hstack([G.C, sign * G.D @ H.C]))   # y in terms of x
+    Fi_D = np.linalg.solve(F, G.D)                                  # y in terms of r
+    U_x = np.hstack([np.zeros((G.ninputs, G.nstates)), sign * H.C]) + sign * H.D @ Fi_C
+    U_r = np.eye(G.ninputs) + sign * H.D @ Fi_D
+    A = scipy.linalg.block_diag(G.A, H.A) + np.vstack([G.B @ U_x, H.B @ Fi_C])
+    B = np.vstack([G.B @ U_r, H.B @ Fi_D])
+    return StateSpace(A, B, Fi_C, Fi_D, dt)
+
+
+# -- transfer functions -------------------------------------------------------
+def _poly(coeffs: Any) -> np.ndarray:
+    """A 1-D float polynomial with leading zeros trimmed (zero -> ``[0.]``)."""
+    p = np.trim_zeros(np.atleast_1d(np.asarray(coeffs, float)).ravel(), "f")
+    return p if p.size else np.zeros(1)
+
+
+def tf2ss(num: Any, den: Any, dt: float | None = None) -> StateSpace:
+    """Controllable canonical realisation of a proper SISO ``num/den``.
+
+    Same form as ``scipy.signal.tf2ss``: ``A`` has ``-den[1:]/den[0]`` as its
+    first row, ``B = e1``, ``C = num' - num'_0 den'`` and ``D = num'_0``
+    (primes: normalised so that ``den[0] = 1``, ``num`` padded to its degree).
+    """
+    num, den = _poly(num), _poly(den)
+    if not den.any():
+        raise ValueError("tf2ss: zero denominator")
+    if num.size > den.size:
+        raise ValueError(f"tf2ss: improper transfer function (numerator degree "
+                         f"{num.size - 1} > denominator degree {den.size - 1})")
+    num = np.concatenate([np.zeros(den.size - num.size), num]) / den[0]
+    den = den / den[0]
+    n = den.size - 1
+    D = np.array([[num[0]]])
+    if n == 0:
+        return static_gain(D, dt)
+    A = np.zeros((n, n))
+    A[0, :] = -den[1:]
+    A[1:, :-1] = np.eye(n - 1)
+    B = np.zeros((n, 1))
+    B[0, 0] = 1.0
+    C = (num[1:] - num[0] * den[1:]).reshape(1, n)
+    return StateSpace(A, B, C, D, dt)
+
+
+def ss2tf(sys: Any) -> tuple[np.ndarray, np.ndarray]:
+    """``(num, den)`` of a SISO system, with ``den`` monic of degree n.
+
+    ``den = det(s I - A)`` and ``num = det(s I - A + B C) + (D - 1) den``
+    (the identity behind ``scipy.signal.ss2tf``): no states are cancelled, so
+    a non-minimal system gives common roots in num and den.
+    """
+    g = as_statespace(sys)
+    if (g.noutputs, g.ninputs) != (1, 1):
+        raise ValueError(f"ss2tf needs a SISO system, got {g.noutputs}x{g.ninputs}")
+    d = float(g.D[0, 0])
+    if g.nstates == 0:
+        return np.array([d]), np.array([1.0])
+    den = np.poly(g.A)
+    num = np.poly(g.A - g.B @ g.C) + (d - 1.0) * den
+    return num, den
+
+
+def as_statespace(sys: Any) -> StateSpace:
+    """Our :class:`StateSpace` from a system of any supported kind.
+
+    Accepts our own systems (returned as is), scalars and matrices (static
+    gains), objects with ``A, B, C, D`` attributes and an optional ``dt``
+    (python-control ``StateSpace``, :class:`toolbox.artifact.StateSpaceData`)
+    and objects with ``num``/``den`` indexable as ``[i][j]`` (python-control
+    ``TransferFunction``, SISO or MIMO) - all without importing
+    python-control. python-control's ``dt = 0`` means continuous.
+    """
+    if isinstance(sys, StateSpace):
+        return sys
+    if isinstance(sys, (int, float, np.integer, np.floating)) and not isinstance(sys, bool):
+        return static_gain([[float(sys)]])
+    if isinstance(sys, (np.ndarray, list, tuple)):
+        return static_gain(sys)
+    dt = _read_dt(getattr(sys, "dt", None))
+    if all(hasattr(sys, k) for k in "ABCD"):
+        return StateSpace(sys.A, sys.B, sys.C, sys.D, dt)
+    if hasattr(sys, "num") and hasattr(sys, "den"):
+        return _tf_to_ss(sys, dt)
+    raise TypeError(f"cannot read {type(sys).__name__} as a linear system")
+
+
+def _read_dt(dt: Any) -> float | None:
+    """python-control's ``dt`` (0/None continuous, True unspecified) as ours."""
+    if dt is None or dt is False or dt == 0:
+        return None
+    if dt is True:
+        raise ValueError("a discrete system with unspecified sample time (dt=True)")
+    return float(dt)
+
+
+def _tf_to_ss(tf: Any, dt: float | None) -> StateSpace:
+    """Realise a (MIMO) transfer function entry by entry.
+
+    SISO: :func:`tf2ss`. MIMO: the block-diagonal union of the entries'
+    realisations (not minimal; the toolbox's MIMO systems are built in state
+    space, this serves users' inputs).
+    """
+    p, m = len(tf.num), len(tf.num[0])
+    entries = [[tf2ss(tf.num[i][j], tf.den[i][j], dt) for j in range(m)] for i in range(p)]
+    if p == m == 1:
+        return entries[0][0]
+    A = scipy.linalg.block_diag(*[e.A for row in entries for e in row])
+    n = A.shape[0]
+    B, C, D = np.zeros((n, m)), np.zeros((p, n)), np.zeros((p, m))
+    k = 0
+    for i in range(p):
+        for j in range(m):
+            e = entries[i][j]
+            B[k:k + e.nstates, j] = e.B[:, 0]
+            C[i, k:k + e.nstates] = e.C[0]
+            D[i, j] = e.D[0, 0]
+            k += e.nstates
+    return StateSpace(A, B, C, D, dt)
+
+
+# -- discretisation, delay, pole placement ------------------------------------
+def c2d(sys: Any, dt: float, method: str = "zoh") -> StateSpace:
+    """Discretise a continuous system at sample time ``dt``.
+
+    ``method`` is ``zoh``, ``foh`` or a generalised bilinear transform
+    (``tustin``/``bilinear``, ``euler``/``forward_diff``, ``backward_diff``).
+    The arithmetic is that of ``scipy.signal.cont2discrete`` (same operations
+    in the same order), so results equal ``control.sample_system`` without
+    pre-warping to the last bit.
+    """
+    g = as_statespace(sys)
+    if g.discrete:
+        raise ValueError("c2d: the system is already discrete")
+    dt = float(dt)
+    a, b, c, d = g.A, g.B, g.C, g.D
+    n, m = b.shape
+    if method == "zoh":
+        em = np.vstack([np.hstack([a, b]), np.zeros((m, n + m))])
+        ms = scipy.linalg.expm(dt * em)[:n, :]
+        return StateSpace(ms[:, :n], ms[:, n:], c, d, dt)
+    if method == "foh":
+        em_upper = scipy.linalg.block_diag(np.block([a, b]) * dt, np.eye(m))
+        em = np.block([[em_upper], [np.zeros((m, n + 2 * m))]])
+        ms = scipy.linalg.expm(em)
+        ms11, ms12, ms13 = ms[:n, :n], ms[:n, n:n + m], ms[:n, n + m:]
+        return StateSpace(ms11, ms12 - ms13 + ms11 @ ms13, c, d + c @ ms13, dt)
+    if method in _GBT_ALPHA:
+        alpha = _GBT_ALPHA[method]
+        ima = np.eye(n) - alpha * dt * a
+        ad = scipy.linalg.solve(ima, np.eye(n) + (1.0 - alpha) * dt * a)
+        bd = scipy.linalg.solve(ima, dt * b)
+        cd = scipy.linalg.solve(ima.transpose(), c.transpose()).transpose()
+        return StateSpace(ad, bd, cd, d + alpha * np.dot(c, bd), dt)
+    raise ValueError(f"c2d: unknown method {method!r}; one of {list(C2D_METHODS)}")
+
+
+def pade(T: float, n: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """``(num, den)`` of the order-``n`` Pade approximation of ``exp(-s T)``.
+
+    Golub and Van Loan's accumulated coefficients (the recurrence of
+    ``control.pade``), normalised so that ``den[0] = 1``.
+    """
+    if T < 0 or n < 0:
+        raise ValueError(f"pade: need T >= 0 and n >= 0, got T={T}, n={n}")
+    if T == 0:
+        return np.array([1.0]), np.array([1.0])
+    num, den = np.zeros(n + 1), np.zeros(n + 1)
+    num[-1] = den[-1] = 1.0
+    cn = cd = 1.0
+    for k in range(1, n + 1):
+        cn *= -T * (n - k + 1) / (2 * n - k + 1) / k
+        cd *= T * (n - k + 1) / (2 * n - k + 1) / k
+        num[-k - 1], den[-k - 1] = cn, cd
+    return num / den[0], den / den[0]
+
+
+def acker(A: Any, B: Any, poles: Sequence[complex]) -> np.ndarray:
+    """Ackermann's gain K (1 x n) placing ``eig(A - B K)`` at ``poles``.
+
+    ``K = e_n^T ctrb(A, B)^-1 p(A)`` with ``p`` the monic polynomial of the
+    poles (single input). Raises ValueError when (A, B) is not controllable.
+    """
+    A, B = np.atleast_2d(np.asarray(A, float)), np.asarray(B, float).reshape(-1, 1)
+    n = A.shape[0]
+    ctrb = np.zeros((n, n))
+    ctrb[:, :1] = B
+    for k in range(1, n):                  # A^k B by repeated products, as control.ctrb
+        ctrb[:, k:k + 1] = A @ ctrb[:, k - 1:k]
+    if np.linalg.matrix_rank(ctrb) != n:
+        raise ValueError("System not reachable; pole placement invalid")
+    p = np.real(np.poly(poles))
+    pmat = sum(p[n - i] * np.linalg.matrix_power(A, i) for i in range(n + 1))
+    return np.linalg.solve(ctrb, pmat)[-1:, :]
