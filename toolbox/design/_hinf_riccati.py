@@ -35,10 +35,11 @@ from typing import Any, Literal
 import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
-                                 dgesv as _dgesv, dgetrf as _dgetrf, dgetrs as _dgetrs,
-                                 dggev as _dggev, dsyevd as _dsyevd)
-import control as ct
+                                 dgesdd as _dgesdd, dgesv as _dgesv, dgetrf as _dgetrf,
+                                 dgetrs as _dgetrs, dggev as _dggev, dpotrf as _dpotrf,
+                                 dsyevd as _dsyevd)
 
+from .._lti import StateSpace, as_statespace
 from ..analysis import FreqResponse
 from ..errors import DesignInfeasible, SpecError
 
@@ -166,14 +167,12 @@ class PartitionedPlant:
         """Number of measurements y (p2)."""
         return self.C2.shape[0]
 
-    def to_statespace(self) -> ct.StateSpace:
-        """Return P as a python-control StateSpace, inputs [w, u], outputs [z, y]."""
+    def to_statespace(self) -> StateSpace:
+        """Return P as a :class:`toolbox._lti.StateSpace`, inputs [w, u], outputs [z, y]."""
         B = np.hstack([self.B1, self.B2])
         C = np.vstack([self.C1, self.C2])
         D = np.block([[self.D11, self.D12], [self.D21, self.D22]])
-        inputs = [f"w[{i}]" for i in range(self.nw)] + [f"u[{i}]" for i in range(self.nu)]
-        outputs = [f"z[{i}]" for i in range(self.nz)] + [f"y[{i}]" for i in range(self.ny)]
-        return ct.ss(self.A, B, C, D, inputs=inputs, outputs=outputs)
+        return StateSpace(self.A, B, C, D)
 
     def replace(self, **blocks: Any) -> "PartitionedPlant":
         """Return a copy with some blocks replaced."""
@@ -217,6 +216,39 @@ def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     return x
 
 
+def _inv(A: np.ndarray) -> np.ndarray:
+    """A^-1 (LAPACK dgesv on the identity, as numpy's ``inv``)."""
+    return _solve(A, np.eye(A.shape[0]))
+
+
+def _svdvals(M: np.ndarray) -> np.ndarray:
+    """Singular values, decreasing (LAPACK dgesdd, as numpy's ``svd``)."""
+    if M.size == 0:
+        return np.zeros(0)
+    _, s, _, info = _dgesdd(M, compute_uv=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
+    return s
+
+
+def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Full SVD ``M = U diag(s) Vt`` (LAPACK dgesdd, as numpy's ``svd``)."""
+    U, s, Vt, info = _dgesdd(M, compute_uv=1, full_matrices=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
+    return U, s, Vt
+
+
+def _cholesky(M: np.ndarray) -> np.ndarray:
+    """Lower Cholesky factor (LAPACK dpotrf, as numpy's ``cholesky``)."""
+    if M.size == 0:
+        return M.copy()
+    c, info = _dpotrf(M, lower=1, clean=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"matrix not positive definite (dpotrf info {info})")
+    return c
+
+
 def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
     """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
     ones (|beta| <= 1e-13 |alpha|) are dropped."""
@@ -248,14 +280,21 @@ def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     """A, B, C, D of a SISO system or a scalar gain."""
     if isinstance(sys, (int, float, np.floating)):
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(sys)]])
-    if isinstance(sys, ct.TransferFunction) and sys.ninputs == 1 and sys.noutputs == 1:
-        return _tf_realisation(sys.num_array[0, 0], sys.den_array[0, 0])
-    s = sys if all(hasattr(sys, m) for m in "ABCD") else ct.ss(sys)
+    if _is_siso_tf(sys):
+        return _tf_realisation(sys.num[0][0], sys.den[0][0])
+    s = sys if all(hasattr(sys, m) for m in "ABCD") else as_statespace(sys)
     if np.shape(s.D) != (1, 1):
         raise ValueError(f"augment_mixed_sensitivity: expected a SISO system, "
                          f"got {np.shape(s.D)[0]}x{np.shape(s.D)[1]}")
     return (np.asarray(s.A, float), np.asarray(s.B, float),
             np.asarray(s.C, float), np.asarray(s.D, float))
+
+
+def _is_siso_tf(sys: Any) -> bool:
+    """A SISO transfer function (python-control's or any object with
+    ``num[0][0]`` and ``den[0][0]``, read without importing python-control)."""
+    return (hasattr(sys, "num") and hasattr(sys, "den") and not hasattr(sys, "A")
+            and len(sys.num) == 1 and len(sys.num[0]) == 1)
 
 
 def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -296,7 +335,7 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
 
     Parameters
     ----------
-    G : control.LTI
+    G : LTI system (python-control or toolbox._lti)
         SISO plant, e.g. eq (34) :math:`G_q = 1/(r_s + L_q s)` (A/V).
     w1, w2, w3 : control.LTI or float or None
         Weights on S, KS, T; ``w2``/``w3`` may be ``None``.
@@ -383,7 +422,7 @@ class AssumptionReport:
 
 
 def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
-    ev = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
+    ev = _eigvals(A)
     scale = max(1.0, float(np.max(np.abs(ev)))) if ev.size else 1.0
     return ev[np.abs(ev.real) <= tol * scale]
 
@@ -394,7 +433,7 @@ def _rank_defect(M: np.ndarray, tol: float) -> bool:
         return False
     if M.shape[0] < M.shape[1]:
         return True
-    sv = np.linalg.svd(M, compute_uv=False)
+    sv = _svdvals(M)
     return bool(sv[-1] <= tol * max(sv[0], 1e-300))
 
 
@@ -539,14 +578,14 @@ def _normalise(P: PartitionedPlant) -> _Normalised:
     :func:`central_controller`.
     """
     m2, p2 = P.nu, P.ny
-    U, s12, V12t = np.linalg.svd(P.D12)            # D12 = U [S;0] V^T
+    U, s12, V12t = _svd(P.D12)            # D12 = U [S;0] V^T
     Uz = np.vstack([U[:, m2:].T, U[:, :m2].T])      # Uz D12 = [0; S V^T]
     R12 = np.diag(s12) @ V12t
-    U21, s21, V21t = np.linalg.svd(P.D21)           # D21 = U [S 0] V^T
+    U21, s21, V21t = _svd(P.D21)           # D21 = U [S 0] V^T
     V = V21t.T
     VwT = np.hstack([V[:, p2:], V[:, :p2]])         # D21 VwT = [0, U S]
     R21 = U21 @ np.diag(s21)
-    R12inv, R21inv = np.linalg.inv(R12), np.linalg.inv(R21)
+    R12inv, R21inv = _inv(R12), _inv(R21)
     Pn = P._derived(B1=P.B1 @ VwT, B2=P.B2 @ R12inv, C1=Uz @ P.C1, C2=R21inv @ P.C2,
                     D11=Uz @ P.D11 @ VwT, D12=Uz @ P.D12 @ R12inv,
                     D21=R21inv @ P.D21 @ VwT, D22=np.zeros_like(P.D22))
@@ -561,7 +600,7 @@ def _d11_blocks(Pn: PartitionedPlant) -> tuple[np.ndarray, ...]:
 
 
 def _sigma_max(M: np.ndarray) -> float:
-    return float(np.linalg.norm(M, 2)) if M.size else 0.0
+    return float(_svdvals(M)[0]) if M.size else 0.0
 
 
 # --------------------------------------------------------------------------
@@ -830,29 +869,29 @@ def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.
     X, Y = res.X, res.Y
     m1, m2, p1, p2, n = Pn.nw, Pn.nu, Pn.nz, Pn.ny, Pn.nx
     D1111, D1112, D1121, D1122 = _d11_blocks(Pn)
-    F = -np.linalg.solve(w["Rnh"], w["D1s"].T @ Pn.C1 + w["B"].T @ X)   # eq (20)
-    L = -np.linalg.solve(w["Rnj"].T, (Pn.B1 @ w["Ds1"].T + Y @ w["C"].T).T).T  # eq (21)
+    F = -_solve(w["Rnh"], w["D1s"].T @ Pn.C1 + w["B"].T @ X)   # eq (20)
+    L = -_solve(w["Rnj"].T, (Pn.B1 @ w["Ds1"].T + Y @ w["C"].T).T).T  # eq (21)
     F12, F2 = F[m1 - p2:m1], F[m1:]
     L12, L2 = L[:, p1 - m2:p1], L[:, p1:]
     r = D1111.shape[0]
-    inv_a = np.linalg.inv(g2 * np.eye(r) - D1111 @ D1111.T) if r else np.zeros((0, 0))
-    inv_b = (np.linalg.inv(g2 * np.eye(D1111.shape[1]) - D1111.T @ D1111)
+    inv_a = _inv(g2 * np.eye(r) - D1111 @ D1111.T) if r else np.zeros((0, 0))
+    inv_b = (_inv(g2 * np.eye(D1111.shape[1]) - D1111.T @ D1111)
              if D1111.shape[1] else np.zeros((0, 0)))
     D11h = -D1121 @ D1111.T @ inv_a @ D1112 - D1122                   # eq (24)
     T2 = np.eye(m2) - D1121 @ inv_b @ D1121.T                         # eq (25)
     T3 = np.eye(p2) - D1112.T @ inv_a @ D1112                         # eq (26)
-    D12h = np.linalg.cholesky(T2)                                     # D12h D12h^T = T2
-    D21h = np.linalg.cholesky(T3).T                                   # D21h^T D21h = T3
-    Z = np.linalg.inv(np.eye(n) - Y @ X / g2)                         # eq (27)
+    D12h = _cholesky(T2)                                     # D12h D12h^T = T2
+    D21h = _cholesky(T3).T                                   # D21h^T D21h = T3
+    Z = _inv(np.eye(n) - Y @ X / g2)                         # eq (27)
     B2h = Z @ (Pn.B2 + L12) @ D12h                                    # eq (27)
     C2h = -D21h @ (Pn.C2 + F12)                                       # eq (28), D21h
-    B1h = -Z @ L2 + B2h @ np.linalg.solve(D12h, D11h)                 # eq (29)
-    C1h = F2 + D11h @ np.linalg.solve(D21h, C2h)                      # eq (30), no U12
-    Ah = Pn.A + w["B"] @ F + B1h @ np.linalg.solve(D21h, C2h)         # eq (31)
+    B1h = -Z @ L2 + B2h @ _solve(D12h, D11h)                 # eq (29)
+    C1h = F2 + D11h @ _solve(D21h, C2h)                      # eq (30), no U12
+    Ah = Pn.A + w["B"] @ F + B1h @ _solve(D21h, C2h)         # eq (31)
     return Ah, B1h, C1h, D11h                                         # eq (32)
 
 
-def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
+def central_controller(P: PartitionedPlant, gamma: float) -> StateSpace:
     """Central H-infinity controller K = [Ahat, B1hat; C1hat, D11hat], eq (32).
 
     Uses the general Glover-Doyle formulae (eq 20-31, D11 != 0 allowed) on
@@ -869,7 +908,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
 
     Returns
     -------
-    control.StateSpace
+    toolbox._lti.StateSpace
         The controller, of the order of P.
 
     Raises
@@ -883,7 +922,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
     res = prep.feasibility(gamma)
     if not res.feasible:
         raise DesignInfeasible(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
-    return ct.ss(*_controller_from(prep, res))
+    return StateSpace(*_controller_from(prep, res))
 
 
 def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray, ...]:
@@ -998,7 +1037,7 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
 
     Parameters
     ----------
-    K : control.LTI
+    K : LTI system (python-control or toolbox._lti)
         SISO controller.
     cancel_tol : float
         Relative distance below which a pole-zero pair is a cancellation.
@@ -1050,7 +1089,7 @@ class HinfResult:
 
     Attributes
     ----------
-    K : control.StateSpace
+    K : toolbox._lti.StateSpace
         Central controller, error (A) -> voltage (V).
     gamma : float
         Level the controller was designed for.
@@ -1070,7 +1109,7 @@ class HinfResult:
         Every oddity found (also issued through ``warnings.warn``).
     """
 
-    K: ct.StateSpace
+    K: StateSpace
     gamma: float
     gamma_opt: float | None
     backoff: float
@@ -1082,10 +1121,10 @@ class HinfResult:
     warnings: list[str] = field(default_factory=list)
 
 
-def closed_loop(P: PartitionedPlant, K: Any) -> ct.StateSpace:
+def closed_loop(P: PartitionedPlant, K: Any) -> StateSpace:
     """Closed loop F_l(P, K) (w -> z), states [x_P, x_K], with u = K y."""
-    Ks = ct.ss(K)
-    return ct.ss(*_lft(P, tuple(np.asarray(m, float) for m in (Ks.A, Ks.B, Ks.C, Ks.D))))
+    Ks = as_statespace(K)
+    return StateSpace(*_lft(P, (Ks.A, Ks.B, Ks.C, Ks.D)))
 
 
 def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
@@ -1093,7 +1132,7 @@ def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ..
     Dk D21 w), M = (I - Dk D22)^-1 (numpy; python-control's ``lft`` builds named
     systems, ~1.5 ms, issue 13)."""
     Ak, Bk, Ck, Dk = K
-    Mi = np.linalg.inv(np.eye(P.nu) - Dk @ P.D22)
+    Mi = _inv(np.eye(P.nu) - Dk @ P.D22)
     Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
     Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
     A = _blocks2x2(P.A + P.B2 @ Ux, P.B2 @ Uk, Bk @ Yx, Ak + Bk @ Yk)
@@ -1102,7 +1141,7 @@ def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ..
     return A, B, C, P.D11 + P.D12 @ Uw
 
 
-def hinf_norm(sys: ct.StateSpace) -> float:
+def hinf_norm(sys: Any) -> float:
     """H-infinity norm (SLICOT ab13dd, as python-control's ``norm``), inf when
     unstable or with a pole on the imaginary axis."""
     A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
@@ -1115,7 +1154,7 @@ def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> fl
     n = A.shape[0]
     if n == 0:
         return float(np.linalg.norm(D, 2)) if D.size else 0.0
-    ev = np.linalg.eigvals(A)
+    ev = _eigvals(A)
     if np.any(ev.real >= 0) or np.any(np.isclose(ev.real, 0.0)):
         return float("inf")
     jobd = "Z" if not np.any(D) else "D"
@@ -1209,7 +1248,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
     for msg in notes:
         warnings.warn(msg, RuntimeWarning, stacklevel=2)
     prep_res = _unscale_xy(res, prep.t)
-    return HinfResult(K=ct.ss(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
+    return HinfResult(K=StateSpace(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
                       X=prep_res.X, Y=prep_res.Y, closed_loop_norm=cl_norm,
                       fastest_pole=fast, pole_limit=limit, warnings=notes)
 
@@ -1252,12 +1291,9 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
     for sys in systems:
         if np.isscalar(sys):
             out.append(np.full(s.size, complex(sys)))
-        elif isinstance(sys, ct.TransferFunction):
-            if sys.ninputs != 1 or sys.noutputs != 1:
-                raise ValueError(f"weight_bound_check: expected a SISO system, "
-                                 f"got {sys.noutputs}x{sys.ninputs}")
+        elif _is_siso_tf(sys):
             out.append(len(polys))
-            polys += [sys.num_array[0, 0], sys.den_array[0, 0]]
+            polys += [np.atleast_1d(sys.num[0][0]), np.atleast_1d(sys.den[0][0])]
         else:
             out.append(FreqResponse(*_ss_blocks(sys))(s)[:, 0, 0])
     if polys:
@@ -1280,7 +1316,7 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
 
     Parameters
     ----------
-    G, K : control.LTI
+    G, K : LTI system (python-control or toolbox._lti)
         Plant (A/V) and controller (V/A).
     w1, w2, w3 : control.LTI or float or None
         Weights; ``None`` skips the function.

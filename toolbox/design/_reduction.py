@@ -20,8 +20,8 @@ from typing import Any, Literal
 
 import numpy as np
 import scipy.linalg as sla
-import control as ct
 
+from .._lti import StateSpace, as_statespace, parallel
 from ._hinf_riccati import _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
 
 __all__ = [
@@ -46,9 +46,9 @@ def _zpk(K: Any) -> tuple[np.ndarray, np.ndarray, float]:
     return z, p, float(k.real)
 
 
-def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> ct.StateSpace:
+def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
     """Well-scaled state-space realisation of k prod(s - z)/prod(s - p)."""
-    return ct.ss(*_zpk_realisation(z, p, k))
+    return StateSpace(*_zpk_realisation(z, p, k))
 
 
 def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray, ...]:
@@ -83,7 +83,7 @@ def _real_conj(r: np.ndarray) -> np.ndarray:
 # elementary steps
 # --------------------------------------------------------------------------
 def remove_cancellations(K: Any, tol: float = 1e-2,
-                         keep: Literal["dc", "hf"] = "dc") -> tuple[ct.StateSpace, list[str]]:
+                         keep: Literal["dc", "hf"] = "dc") -> tuple[StateSpace, list[str]]:
     """Remove pole-zero pairs with |z - p| <= tol |p|.
 
     Each removed factor (s - z)/(s - p) is replaced by a constant: ``z/p``
@@ -93,7 +93,7 @@ def remove_cancellations(K: Any, tol: float = 1e-2,
 
     Parameters
     ----------
-    K : control.LTI
+    K : LTI system (python-control or toolbox._lti)
         SISO controller.
     tol : float
         Relative distance defining a cancellation.
@@ -102,7 +102,7 @@ def remove_cancellations(K: Any, tol: float = 1e-2,
 
     Returns
     -------
-    Kr : control.StateSpace
+    Kr : toolbox._lti.StateSpace
     actions : list of str
         One line per removed pair.
     """
@@ -127,7 +127,7 @@ def _cancel(Kz: tuple, tol: float, keep: str) -> tuple[tuple, list[str]]:
     return (np.array(zl, complex), np.array(pl, complex), k), actions
 
 
-def replace_integrators(K: Any, tol: float) -> tuple[ct.StateSpace, list[str]]:
+def replace_integrators(K: Any, tol: float) -> tuple[StateSpace, list[str]]:
     """Replace poles with |p| < tol (rad/s) by exact integrators, eq (71)-(72).
 
     The leading gain is kept, as in paper 003 (eq 68 -> 71: 49.70 stays
@@ -136,14 +136,14 @@ def replace_integrators(K: Any, tol: float) -> tuple[ct.StateSpace, list[str]]:
 
     Parameters
     ----------
-    K : control.LTI
+    K : LTI system (python-control or toolbox._lti)
         SISO controller.
     tol : float
         Magnitude below which a pole is taken as an integrator (rad/s).
 
     Returns
     -------
-    Kr : control.StateSpace
+    Kr : toolbox._lti.StateSpace
     actions : list of str
     """
     Kz, actions = _integrators(_zpk(K), tol)
@@ -160,7 +160,7 @@ def _integrators(Kz: tuple, tol: float) -> tuple[tuple, list[str]]:
     return (z, p, k), actions
 
 
-def stable_split(K: Any, tol: float = 1e-12) -> tuple[ct.StateSpace, ct.StateSpace]:
+def stable_split(K: Any, tol: float = 1e-12) -> tuple[StateSpace, StateSpace]:
     """Additive split K = K_s + K_u into stable part and the rest.
 
     Ordered real Schur form, then a Sylvester equation block-diagonalises A.
@@ -169,19 +169,19 @@ def stable_split(K: Any, tol: float = 1e-12) -> tuple[ct.StateSpace, ct.StateSpa
 
     Parameters
     ----------
-    K : control.LTI
+    K : LTI system (python-control or toolbox._lti)
     tol : float
         Relative margin defining "stable".
 
     Returns
     -------
-    Ks, Ku : control.StateSpace
+    Ks, Ku : toolbox._lti.StateSpace
     """
-    Kss = ct.ss(K)
+    Kss = as_statespace(K)
     A, B, C, D = (np.asarray(x, float) for x in (Kss.A, Kss.B, Kss.C, Kss.D))
     n = A.shape[0]
     if n == 0:
-        return Kss, ct.ss(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[0.0]])
+        return Kss, StateSpace(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[0.0]])
     lim = tol * max(1.0, float(np.max(np.abs(np.linalg.eigvals(A)))))
     T, U, ns = sla.schur(A, output="real", sort=lambda x, y: x < -lim)
     A11, A12, A22 = T[:ns, :ns], T[:ns, ns:], T[ns:, ns:]
@@ -189,8 +189,8 @@ def stable_split(K: Any, tol: float = 1e-12) -> tuple[ct.StateSpace, ct.StateSpa
     Bt, Ct = U.T @ B, C @ U
     B1 = Bt[:ns] - X @ Bt[ns:]
     C2 = Ct[:, ns:] + Ct[:, :ns] @ X
-    Ks = ct.ss(A11, B1, Ct[:, :ns], D)
-    Ku = ct.ss(A22, Bt[ns:], C2, np.zeros_like(D))
+    Ks = StateSpace(A11, B1, Ct[:, :ns], D)
+    Ku = StateSpace(A22, Bt[ns:], C2, np.zeros_like(D))
     return Ks, Ku
 
 
@@ -200,7 +200,7 @@ def _gramian_factor(M: np.ndarray) -> np.ndarray:
     return V * np.sqrt(np.clip(w, 0.0, None))[None, :]
 
 
-def balanced_truncation(K: Any, order: int) -> tuple[ct.StateSpace, np.ndarray, float]:
+def balanced_truncation(K: Any, order: int) -> tuple[StateSpace, np.ndarray, float]:
     r"""Square-root balanced truncation of a stable system.
 
     Gramians :math:`AP + PA^T + BB^T = 0`, :math:`A^TQ + QA + C^TC = 0`
@@ -211,20 +211,20 @@ def balanced_truncation(K: Any, order: int) -> tuple[ct.StateSpace, np.ndarray, 
 
     Parameters
     ----------
-    K : control.LTI
+    K : LTI system (python-control or toolbox._lti)
         Stable system.
     order : int
         States kept.
 
     Returns
     -------
-    Kr : control.StateSpace
+    Kr : toolbox._lti.StateSpace
     hsv : ndarray
         Hankel singular values, decreasing.
     bound : float
         2 * sum of the discarded Hankel singular values.
     """
-    Kss = ct.ss(K)
+    Kss = as_statespace(K)
     A, B, C, D = (np.asarray(x, float) for x in (Kss.A, Kss.B, Kss.C, Kss.D))
     n = A.shape[0]
     if np.any(np.linalg.eigvals(A).real >= 0):
@@ -241,11 +241,11 @@ def balanced_truncation(K: Any, order: int) -> tuple[ct.StateSpace, np.ndarray, 
     sr = 1.0 / np.sqrt(hsv[:r])
     Tr = Lp @ Vt[:r].T * sr[None, :]
     Wr = Lq @ U[:, :r] * sr[None, :]
-    Kr = ct.ss(Wr.T @ A @ Tr, Wr.T @ B, C @ Tr, D)
+    Kr = StateSpace(Wr.T @ A @ Tr, Wr.T @ B, C @ Tr, D)
     return Kr, hsv, float(2.0 * np.sum(hsv[r:]))
 
 
-def residualise(K: Any, fast: float) -> tuple[ct.StateSpace, list[str]]:
+def residualise(K: Any, fast: float) -> tuple[StateSpace, list[str]]:
     """Singular-perturbation reduction of modes with |p| > fast (rad/s).
 
     The fast block of the (block-diagonalised) modal form is set to its
@@ -254,16 +254,16 @@ def residualise(K: Any, fast: float) -> tuple[ct.StateSpace, list[str]]:
 
     Parameters
     ----------
-    K : control.LTI
+    K : LTI system (python-control or toolbox._lti)
     fast : float
         Threshold (rad/s).
 
     Returns
     -------
-    Kr : control.StateSpace
+    Kr : toolbox._lti.StateSpace
     actions : list of str
     """
-    Kss = ct.ss(K)
+    Kss = as_statespace(K)
     A, B, C, D = (np.asarray(x, float) for x in (Kss.A, Kss.B, Kss.C, Kss.D))
     if A.shape[0] == 0:
         return Kss, []
@@ -278,7 +278,7 @@ def residualise(K: Any, fast: float) -> tuple[ct.StateSpace, list[str]]:
     C1, C2 = Ct[:, :ns], Ct[:, ns:] + Ct[:, :ns] @ X
     Dr = D - C2 @ np.linalg.solve(A22, B2)
     gone = ev[np.abs(ev) > fast]
-    return ct.ss(A11, B1, C1, Dr), [f"residualised fast mode(s) {', '.join(f'{g:.4g}' for g in gone)}"]
+    return StateSpace(A11, B1, C1, Dr), [f"residualised fast mode(s) {', '.join(f'{g:.4g}' for g in gone)}"]
 
 
 # --------------------------------------------------------------------------
@@ -290,7 +290,7 @@ class ReductionResult:
 
     Attributes
     ----------
-    K : control.StateSpace
+    K : toolbox._lti.StateSpace
         Reduced controller (V/A).
     order_before, order_after : int
         Number of states before and after.
@@ -303,7 +303,7 @@ class ReductionResult:
         What was done, in order.
     """
 
-    K: ct.StateSpace
+    K: StateSpace
     order_before: int
     order_after: int
     hankel_sv: np.ndarray | None = None
@@ -325,7 +325,7 @@ def reduce_controller(K: Any, order: int | None = None,
 
     Parameters
     ----------
-    K : control.LTI
+    K : LTI system (python-control or toolbox._lti)
         SISO controller.
     order : int, optional
         Target number of states.
@@ -348,7 +348,7 @@ def reduce_controller(K: Any, order: int | None = None,
 
     >>> # res = reduce_controller(Kq, integrator_tol=0.1)   # 4 -> 3 states
     """
-    Kc = ct.ss(K)
+    Kc = as_statespace(K)
     n0 = Kc.nstates
     acts: list[str] = []
     hsv, bound = None, None
@@ -377,7 +377,7 @@ def reduce_controller(K: Any, order: int | None = None,
                 warnings.warn(f"reduce_controller: {Ku.nstates} unstable/integrating "
                               f"states kept; order {order} not reachable", RuntimeWarning)
             Kr, hsv, bound = balanced_truncation(Ks, keep)
-            Kc = ct.parallel(Kr, Ku) if Ku.nstates else Kr
+            Kc = parallel(Kr, Ku) if Ku.nstates else Kr
             acts.append(f"balanced truncation of the stable part to {keep} states "
                         f"(error bound {bound:.3g})")
         else:
@@ -516,7 +516,7 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
 
     Parameters
     ----------
-    G, K : control.LTI or float
+    G, K : LTI system (python-control or toolbox._lti) or float
         Plant (A/V) and controller (V/A), SISO.
 
     Returns
@@ -595,7 +595,7 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
 
     Parameters
     ----------
-    G, K, Kr : control.LTI
+    G, K, Kr : LTI system (python-control or toolbox._lti)
         Plant, full and reduced controllers.
     max_loss : float
         Allowed relative loss, default 0.1 (10 %).

@@ -342,9 +342,9 @@ class HinfAxisResult:
     ----------
     G : control.TransferFunction
         Plant (A/V).
-    K : control.StateSpace
+    K : toolbox._lti.StateSpace
         Central controller (V/A).
-    Kr : control.StateSpace or None
+    Kr : toolbox._lti.StateSpace or None
         Reduced controller.
     synthesis : HinfResult
     bounds : dict
@@ -595,10 +595,11 @@ def _executed_axis(r: Any, ts: float, executed: str) -> AxisController:
     ``full_order``. ``"full"``: the full-order law, the reduced candidate (if
     any) in ``reduced``.
     """
-    full = AxisController.from_error_controller(r.K, ts, method="tustin")
+    # the artifact still reads python-control systems (toolbox._lti's to_control)
+    full = AxisController.from_error_controller(r.K.to_control(), ts, method="tustin")
     if r.Kr is None:
         return full
-    red = AxisController.from_error_controller(r.Kr, ts, method="tustin")
+    red = AxisController.from_error_controller(r.Kr.to_control(), ts, method="tustin")
     if executed == "reduced":
         return replace(red, full_order=full)
     return replace(full, reduced=red)
