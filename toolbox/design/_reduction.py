@@ -22,7 +22,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from .._lti import StateSpace, as_statespace, parallel
-from ._hinf_riccati import _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
+from ._hinf_riccati import _balancing, _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -440,8 +440,7 @@ def _balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, 
     n = A.shape[0]
     M = np.zeros((n + 1, n + 1))
     M[:n, :n], M[:n, n:], M[n:, :n] = A, B, C
-    _, (sc, _) = sla.matrix_balance(M, permute=False, separate=True)
-    t = 2.0 ** np.round(np.log2(sc[:n]))
+    t = 2.0 ** np.round(np.log2(_balancing(M)[:n]))
     return A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
 
 
