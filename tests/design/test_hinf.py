@@ -256,6 +256,38 @@ def test_gamma_iteration_brackets_and_meets_tolerance(Pq):
     assert not H.hinf_feasibility(Pq, g * (1 - 2e-4)).feasible
 
 
+def _plain_bisection(P, tol=1e-4):
+    """The bisection of gamma_iteration's docstring, Theorem 1 tested at every midpoint."""
+    lo = H._prepare(P).gf.bound                  # condition (a) fails here
+    hi = max(1.0, 2.0 * lo)
+    while not H.hinf_feasibility(P, hi).feasible:
+        lo, hi = hi, 2.0 * hi
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if H.hinf_feasibility(P, mid).feasible else (mid, hi)
+    return hi
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_gamma_iteration_equals_plain_bisection(Pq, seed):
+    """The bracketing shortcut (extrapolated boundary, replayed midpoints) returns
+    the very float of the plain bisection: paper 003's q axis and random
+    first-order loops and weights (with and without w3, constant or dynamic w2)."""
+    if seed == 0:
+        P = Pq
+    else:
+        rng = np.random.default_rng(seed)
+        wc, M, A = 10 ** rng.uniform(1, 3.5), rng.uniform(1.2, 3), 10 ** rng.uniform(-5, -2)
+        w2 = (ct.tf([rng.uniform(1e-4, 1e-2), rng.uniform(0.05, 1)], [10 ** rng.uniform(-6, -3), 1])
+              if seed % 2 else rng.uniform(0.05, 1))
+        w3 = ct.tf([1, wc * rng.uniform(0.5, 5)], [1, wc * 10 ** rng.uniform(2, 4)]) \
+            if seed % 3 == 0 else None
+        P = H.augment_mixed_sensitivity(ct.tf([1], [10 ** rng.uniform(-4, -1),
+                                                    rng.uniform(0.05, 2)]),
+                                        ct.tf([1 / M, wc], [1, wc * A]), w2, w3)
+    assert H.gamma_iteration(P) == _plain_bisection(P)
+
+
 def test_gamma_iteration_gives_up_at_gamma_max(Pq):
     with pytest.raises(SpecError) as err:
         H.gamma_iteration(Pq, gamma_max=0.7)

@@ -994,23 +994,104 @@ def gamma_iteration(P: PartitionedPlant, tol: float = 1e-4,
 
 
 def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> float:
-    """:func:`gamma_iteration` on a prepared plant."""
+    """:func:`gamma_iteration` on a prepared plant.
+
+    Returns the answer of the plain bisection with fewer Riccati solutions
+    (issue 13): feasibility is monotone in gamma (a level above an achievable
+    one is achievable), so a midpoint above a level already found feasible is
+    feasible and one below a level found infeasible is not. :func:`_narrow`
+    first brackets the optimum by extrapolation; the bisection then replays
+    its midpoints and solves the Riccati equations only for those the
+    bracket [a, b] leaves undecided.
+    """
     lo = prep.gf.bound
     top = 1e8 if gamma_max is None else float(gamma_max)
     hi = min(max(1.0, 2.0 * lo), top)
-    while not prep.feasibility(hi).feasible:
+    tested = []
+    while not (res := prep.feasibility(hi)).feasible:
         if hi >= top:
             raise DesignInfeasible(_GAMMA_KEY, f"a problem feasible for some gamma <= {top:g}",
                             hint="no controller reaches it: raise gamma_max or relax "
                                  "the weights w1/w3")
+        tested.append(res)
         lo, hi = hi, min(2.0 * hi, top)
+    a, b = _narrow(prep, lo, hi, tested, 0.25 * tol)
     while hi - lo > tol * hi:
         mid = 0.5 * (lo + hi)
-        if prep.feasibility(mid).feasible:
+        if a < mid < b:
+            feasible = prep.feasibility(mid).feasible
+            a, b = (a, mid) if feasible else (mid, b)
+        else:
+            feasible = mid >= b
+        if feasible:
             hi = mid
         else:
             lo = mid
     return hi
+
+
+#: tests :func:`_narrow` may spend (paper 003's axes need 5-7)
+_NARROW_STEPS = 10
+
+
+def _boundary_distance(res: HinfFeasibility) -> tuple[str, float] | None:
+    """Which condition of Theorem 1 failed at an infeasible gamma, and a number
+    that goes to zero about linearly as gamma rises to that condition's
+    boundary: ``1/lambda_min`` of X or Y when it is not >= 0 (its negative
+    eigenvalue runs off to -inf there), ``1 - rho(XY)/gamma^2`` for the
+    coupling condition; None when a Riccati equation had no solution."""
+    if res.failed in ("X_not_psd", "Y_not_psd"):
+        M = res.X if res.failed == "X_not_psd" else res.Y
+        ev, _, _ = _dsyevd(M, compute_v=0)
+        return res.failed, 1.0 / ev[0]
+    if res.failed == "rho":
+        return "rho", 1.0 - res.rho / res.gamma ** 2
+    return None
+
+
+def _narrow(prep: _Prepared, a: float, b: float, tested: list,
+            rel: float) -> tuple[float, float]:
+    """A bracket [a, b] of the optimal gamma (a infeasible, b feasible, both
+    known from tests), narrowed towards ``b - a <= rel * b``.
+
+    Secant extrapolation of :func:`_boundary_distance` over the last two
+    infeasible levels that failed the same condition predicts the optimum; a
+    level just above the prediction is tested and, if feasible, one just
+    below. Bisection when there is no prediction or a prediction missed.
+    """
+    seen = [(r.gamma, d) for r in tested if (d := _boundary_distance(r)) is not None]
+    step = "predict"
+    for _ in range(_NARROW_STEPS):
+        if b - a <= rel * b:
+            break
+        guess = _extrapolate(seen) if step == "predict" else None
+        if step == "below":
+            c = b * (1.0 - 0.9 * rel)
+        elif guess is not None and a < guess < b:
+            c = min(max(guess + 0.45 * rel * b, a + 0.45 * rel * b), b - 0.45 * rel * b)
+        else:
+            c, guess = 0.5 * (a + b), None
+        res = prep.feasibility(c)
+        if res.feasible:
+            b = c
+            # a hit just above a prediction calls for the test just below; a
+            # feasible test just below means the prediction was high: bisect once
+            step = "below" if guess is not None else ("bisect" if step == "below" else "predict")
+        else:
+            a, step = c, "predict"
+            if (d := _boundary_distance(res)) is not None:
+                seen.append((c, d))
+    return a, b
+
+
+def _extrapolate(seen: list) -> float | None:
+    """Zero of the line through the last two distances of the same condition."""
+    if len(seen) < 2 or seen[-1][1][0] != seen[-2][1][0]:
+        return None
+    (g1, (_, v1)), (g2, (_, v2)) = seen[-2], seen[-1]
+    if v1 == v2:
+        return None
+    return g2 - v2 * (g2 - g1) / (v2 - v1)
 
 
 # --------------------------------------------------------------------------
