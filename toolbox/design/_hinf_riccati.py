@@ -38,7 +38,7 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dgebal as _dgebal, dgesdd as _dgesdd, dgesv as _dgesv,
                                  dgetrf as _dgetrf,
                                  dgetrs as _dgetrs, dggev as _dggev, dpotrf as _dpotrf,
-                                 dsyevd as _dsyevd)
+                                 dsyevd as _dsyevd, dtrsen as _dtrsen)
 
 from .._lti import StateSpace, as_statespace
 from ..analysis import FreqResponse
@@ -188,9 +188,7 @@ class PartitionedPlant:
         checks of ``__post_init__`` (tens of microseconds, per copy) are skipped.
         Internal: the synthesis makes three such copies per call (issue 13)."""
         new = object.__new__(PartitionedPlant)
-        for k in _BLOCKS:
-            object.__setattr__(new, k, blocks.get(k, getattr(self, k)))
-        object.__setattr__(new, "state_labels", self.state_labels)
+        new.__dict__.update(self.__dict__, **blocks)    # frozen: no __setattr__ per block
         return new
 
 
@@ -622,9 +620,9 @@ def _sigma_max(M: np.ndarray) -> float:
 # --------------------------------------------------------------------------
 # Riccati equations, eq (14)-(19)
 # --------------------------------------------------------------------------
-def _lhp(wr: float, wi: float) -> bool:
-    """Selector of LAPACK dgees: eigenvalues in the open left half-plane first."""
-    return wr < 0.0
+def _no_select(wr: float, wi: float) -> bool:
+    """The selector scipy's dgees wrapper requires (unused: no sorting there)."""
+    return False
 
 
 def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
@@ -672,7 +670,13 @@ def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     H[:n, n:] = -b @ rb[:, :n]
     H[n:, :n] = s @ rb[:, n:] - q
     H[n:, n:] = -E.T
-    _, sdim, wr, wi, Z, _, info = _dgees(_lhp, H, sort_t=1, overwrite_a=1)
+    # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
+    # dgees's own sorting does, without a Python callback per eigenvalue
+    T, _, wr, wi, Z, _, info = _dgees(_no_select, H, sort_t=0, overwrite_a=1)
+    if info != 0:
+        return None, None
+    _, Z, wr, wi, sdim, _, _, info = _dtrsen((wr < 0.0).astype(np.int32), T, Z, job="N",
+                                             overwrite_t=1, overwrite_q=1)
     if info != 0 or sdim != n:
         return None, None
     Z11t = Z[:n, :n].T
@@ -772,9 +776,9 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
                                f"sigma(D1111; D1121)) = {w.bound:.6g} >= gamma = {gamma:.6g}")
     g2 = gamma * gamma
     Rnh = w.DtD.copy()                                               # eq (14)
-    Rnh[range(m1), range(m1)] -= g2
+    Rnh.flat[:m1 * (Rnh.shape[0] + 1):Rnh.shape[0] + 1] -= g2        # first m1 diagonal
     Rnj = w.DDt.copy()                                               # eq (15)
-    Rnj[range(p1), range(p1)] -= g2
+    Rnj.flat[:p1 * (Rnj.shape[0] + 1):Rnj.shape[0] + 1] -= g2
     X, why = _ric(Pn.A, w.B, w.Qx, Rnh, w.Sx)                        # eq (16), (18)
     if X is None:
         return HinfFeasibility(gamma, False, "X_not_stabilising",
