@@ -93,3 +93,31 @@ def test_loop_margins_static_error():
     m = R.loop_margins(G, 9.0)
     assert m.static_error == pytest.approx(0.1)
     assert R.loop_margins(G, 9.0 / s).static_error == 0.0
+
+
+@pytest.mark.parametrize("K", [50 * (s + 214.3) / (s * (s + 3000)),
+                               50 * (s + 214.3) / (s * (s + 300)),
+                               49.7 * (s + 5e4) * (s + 214.3) / ((s + 0.0117) * (s * s + 4793 * s + 6.104e6)),
+                               2e3 * (s + 10) / ((s + 1) * (s + 40) * (s + 500))])
+def test_loop_margins_match_the_grid_route_and_python_control(K):
+    """The exact crossings and ab13dd's M_m give the numbers of the toolbox's grid
+    route (lti_loop_margins: 20000 points, refined crossings and peak) to 1e-7
+    (both are converged: Brent to 1e-13, ab13dd to 1e-10) and python-control's
+    stability_margins to 1e-5 (its polynomial route loses digits)."""
+    from toolbox.analysis import lti_loop_margins
+
+    G = 1 / (0.6 + 2.8e-3 * s)
+    m = R.loop_margins(G, K)
+    L = ct.ss(G) * ct.ss(K)
+    g = lti_loop_margins(L)
+    gm, pm, sm, wpc, wgc, _ = ct.stability_margins(L)
+    for ours, grid, theirs in ((m.gain_margin_db, g.gain_margin_db, 20 * np.log10(gm)),
+                               (m.phase_crossover_rad_s, g.phase_crossover_rad_s, wpc),
+                               (m.phase_margin_deg, g.phase_margin_deg, pm),
+                               (m.gain_crossover_rad_s, g.gain_crossover_rad_s, wgc),
+                               (m.stability_margin, g.stability_margin, sm)):
+        if np.isnan(grid) or np.isinf(grid):
+            assert (np.isnan(ours) and np.isnan(grid)) or ours == grid
+            continue
+        assert ours == pytest.approx(grid, rel=1e-7)
+        assert ours == pytest.approx(theirs, rel=1e-5)
