@@ -41,7 +41,6 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dsyevd as _dsyevd, dtrsen as _dtrsen)
 
 from .._lti import StateSpace, as_statespace
-from ..analysis import FreqResponse
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -1386,9 +1385,11 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
     """SISO responses at the points ``s``, all frequencies at once (issue 13:
     python-control converted each weight to state space and called SLICOT
     tb05ad per frequency). The transfer functions are evaluated together from
-    their polynomials: one table of powers ``s^j`` and one matrix product for
-    every numerator and denominator; a state-space system goes through its
-    modal form (:class:`~toolbox.analysis.FreqResponse`); a number is constant."""
+    their polynomials by Horner's rule on one (points x polynomials) array, with
+    elementwise operations only (a multi-threaded BLAS product of this shape
+    costs milliseconds on a loaded machine); a state-space system goes through
+    its modal form (:meth:`toolbox._lti.StateSpace.evaluate`); a number is
+    constant."""
     polys, out = [], []
     for sys in systems:
         if np.isscalar(sys):
@@ -1397,17 +1398,16 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
             out.append(len(polys))
             polys += [np.atleast_1d(sys.num[0][0]), np.atleast_1d(sys.den[0][0])]
         else:
-            out.append(FreqResponse(*_ss_blocks(sys))(s)[:, 0, 0])
+            out.append(as_statespace(sys).evaluate(s)[0, 0])
     if polys:
         deg = max(len(c) for c in polys) - 1
         coef = np.zeros((deg + 1, len(polys)))
         for j, c in enumerate(polys):
-            coef[:len(c), j] = np.asarray(c, float)[::-1]     # ascending powers
-        powers = np.empty((s.size, deg + 1), complex)
-        powers[:, 0] = 1.0
-        for j in range(1, deg + 1):
-            powers[:, j] = powers[:, j - 1] * s
-        vals = powers @ coef
+            coef[deg + 1 - len(c):, j] = np.asarray(c, float)    # highest power first
+        vals = np.broadcast_to(coef[0], (s.size, len(polys))).astype(complex)
+        for row in coef[1:]:
+            vals *= s[:, None]
+            vals += row
         out = [vals[:, o] / vals[:, o + 1] if isinstance(o, int) else o for o in out]
     return out
 
