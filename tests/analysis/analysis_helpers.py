@@ -42,7 +42,7 @@ def hinf_artifact(Ts=1e-4, d=1):
                weight_from_tf([25, 25e3], [1, 5e4]), weight_from_tf([1e4, 1e4 * 577.3503], [1, 1.1547e7]))}
     ax, weights = {}, {}
     for n, (G, w1, w2, w3) in W.items():
-        K = H.central_controller(H.augment_mixed_sensitivity(G, w1, w2, w3), 1.0)
+        K = H.central_controller(H.augment_mixed_sensitivity(G, w1, w2, w3), 1.0).to_control()
         ax[n] = AxisController.from_error_controller(K, Ts)
         weights[n] = AxisWeights(1.0, _tf_data(w1), _tf_data(w2), _tf_data(w3))
     return art("hinf", ax, AZAIZ, Ts, d, weights=weights)

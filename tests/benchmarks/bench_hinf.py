@@ -20,7 +20,7 @@ median of the per-round ratios with its interquartile range:
    call at gamma = 1, each on its augmented plant built beforehand (the
    solvers alone: neither ``control.augw`` nor our augmentation is timed).
    Ours includes the A1-A4 checks, balancing and normalisation at every call
-   (as sb10fd does its own), and returns a python-control StateSpace.
+   (as sb10fd does its own), and returns a ``toolbox._lti.StateSpace``.
 
 Run: ``python tests/benchmarks/bench_hinf.py`` from the repository root.
 """
@@ -123,7 +123,7 @@ def main() -> None:
     print(f"  ratio ours/mixsyn, both axes stage:    {fmt_ratio(design['design'], design['mixsyn'])}")
     print(f"  ratio ours/mixsyn, q synthesis only:   "
           f"{fmt_ratio(design['synthesis'], design['mixsyn'])}")
-    print(f"  ours: central controller alone at gamma = 1 (with checks, StateSpace out) "
+    print(f"  ours: central controller alone at gamma = 1 (with checks, _lti system out) "
           f"{ms(fixed['ours'])}")
     print(f"  SLICOT sb10fd alone at gamma = 1                                          "
           f"{ms(fixed['sb10fd'])}")

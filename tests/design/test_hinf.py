@@ -27,7 +27,12 @@ def Pq():
 
 
 def freq(sys, w):
-    return np.asarray(ct.frequency_response(ct.ss(sys), w).complex)
+    return np.asarray(ct.frequency_response(ct.ss(ctl(sys)), w).complex)
+
+
+def ctl(sys):
+    """python-control's view of a system (ours are toolbox._lti.StateSpace)."""
+    return sys.to_control() if hasattr(sys, "to_control") else sys
 
 
 def tf_close(K1, K2, w, rtol):
@@ -66,7 +71,7 @@ def test_augmented_transfer_matrix(Pq):
     """P maps [r, u] to [w1 e, w2 u, w3 G u, e] with e = r - G u (eq 35-40, 54)."""
     w = np.logspace(-3, 7, 60)
     P = Pq.to_statespace()
-    Pw = np.asarray(ct.frequency_response(P, w).complex)       # (outputs, inputs, freqs)
+    Pw = np.asarray(ct.frequency_response(ctl(P), w).complex)       # (outputs, inputs, freqs)
     g, w1, w2, w3 = (freq(x, w).ravel() for x in (G, W1, W2, W3))
     expect = {(0, 0): w1, (0, 1): -w1 * g, (1, 0): 0 * g, (1, 1): w2,
               (2, 0): 0 * g, (2, 1): w3 * g, (3, 0): 1 + 0 * g, (3, 1): -g}
@@ -129,8 +134,8 @@ def test_balancing_is_a_power_of_two_similarity(Pq):
     Ps, t = H.balance_plant(Pq)
     assert np.all(np.log2(t) == np.round(np.log2(t)))
     w = np.logspace(-2, 7, 30)
-    a = np.asarray(ct.frequency_response(Pq.to_statespace(), w).complex)
-    b = np.asarray(ct.frequency_response(Ps.to_statespace(), w).complex)
+    a = np.asarray(ct.frequency_response(ctl(Pq.to_statespace()), w).complex)
+    b = np.asarray(ct.frequency_response(ctl(Ps.to_statespace()), w).complex)
     # same rational functions; 1e-10 of the largest entry covers evaluation rounding
     assert np.max(np.abs(a - b)) <= 1e-10 * np.max(np.abs(a))
 
@@ -251,6 +256,38 @@ def test_gamma_iteration_brackets_and_meets_tolerance(Pq):
     assert not H.hinf_feasibility(Pq, g * (1 - 2e-4)).feasible
 
 
+def _plain_bisection(P, tol=1e-4):
+    """The bisection of gamma_iteration's docstring, Theorem 1 tested at every midpoint."""
+    lo = H._prepare(P).gf.bound                  # condition (a) fails here
+    hi = max(1.0, 2.0 * lo)
+    while not H.hinf_feasibility(P, hi).feasible:
+        lo, hi = hi, 2.0 * hi
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if H.hinf_feasibility(P, mid).feasible else (mid, hi)
+    return hi
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_gamma_iteration_equals_plain_bisection(Pq, seed):
+    """The bracketing shortcut (extrapolated boundary, replayed midpoints) returns
+    the very float of the plain bisection: paper 003's q axis and random
+    first-order loops and weights (with and without w3, constant or dynamic w2)."""
+    if seed == 0:
+        P = Pq
+    else:
+        rng = np.random.default_rng(seed)
+        wc, M, A = 10 ** rng.uniform(1, 3.5), rng.uniform(1.2, 3), 10 ** rng.uniform(-5, -2)
+        w2 = (ct.tf([rng.uniform(1e-4, 1e-2), rng.uniform(0.05, 1)], [10 ** rng.uniform(-6, -3), 1])
+              if seed % 2 else rng.uniform(0.05, 1))
+        w3 = ct.tf([1, wc * rng.uniform(0.5, 5)], [1, wc * 10 ** rng.uniform(2, 4)]) \
+            if seed % 3 == 0 else None
+        P = H.augment_mixed_sensitivity(ct.tf([1], [10 ** rng.uniform(-4, -1),
+                                                    rng.uniform(0.05, 2)]),
+                                        ct.tf([1 / M, wc], [1, wc * A]), w2, w3)
+    assert H.gamma_iteration(P) == _plain_bisection(P)
+
+
 def test_gamma_iteration_gives_up_at_gamma_max(Pq):
     with pytest.raises(SpecError) as err:
         H.gamma_iteration(Pq, gamma_max=0.7)
@@ -317,7 +354,7 @@ def test_rho_condition_and_sb10ad_optimum():
     g = H.gamma_iteration(P)
     r = H.hinf_feasibility(P, 0.99 * g)
     assert r.failed == "rho" and r.rho >= (0.99 * g) ** 2 and "rho(XY)" in r.message
-    _, _, g_sl, *_ = ct.hinfsyn(P.to_statespace(), 1, 1)
+    _, _, g_sl, *_ = ct.hinfsyn(ctl(P.to_statespace()), 1, 1)
     assert g == pytest.approx(float(g_sl), rel=3e-4)
 
 

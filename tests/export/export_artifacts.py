@@ -79,7 +79,7 @@ def hinf_controller() -> ct.StateSpace:
     w1 = weight_from_tf([1 / 1.51, 177.3493 / 1.51], [1, 0.0117])   # eq (44)
     w2 = weight_from_tf([0.5e-3, 0.5], [2e-5, 1])                   # eq (45)
     w3 = weight_from_tf([1e4, 1e4 * 135.68], [1, 2.7135e6])         # eq (46)
-    return H.central_controller(H.augment_mixed_sensitivity(G, w1, w2, w3), 1.0)
+    return H.central_controller(H.augment_mixed_sensitivity(G, w1, w2, w3), 1.0).to_control()
 
 
 def hinf_artifact() -> ControllerArtifact:

@@ -53,6 +53,11 @@ PAPER_LOOP = {
 }
 
 
+def ctl(sys):
+    """python-control's view of a system (ours are toolbox._lti.StateSpace)."""
+    return sys.to_control() if hasattr(sys, "to_control") else sys
+
+
 def plant(axis):
     a = AXES[axis]
     return H.augment_mixed_sensitivity(a["G"], a["w1"], a["w2"], a["w3"])
@@ -145,8 +150,8 @@ def test_augmented_q_plant_matches_eq_56_63():
       (0.002 % apart; we use eq (46)).
     """
     w = np.logspace(-3, 7, 80)
-    ours = np.asarray(ct.frequency_response(plant("q").to_statespace(), w).complex)
-    paper = np.asarray(ct.frequency_response(paper_plant_q().to_statespace(), w).complex)
+    ours = np.asarray(ct.frequency_response(ctl(plant("q").to_statespace()), w).complex)
+    paper = np.asarray(ct.frequency_response(ctl(paper_plant_q().to_statespace()), w).complex)
     for i in range(4):
         for j in range(2):
             # u -> z3 (w3 G) at low frequency is a difference of two ~1e4 times larger
@@ -155,7 +160,7 @@ def test_augmented_q_plant_matches_eq_56_63():
             scale = np.max(np.abs(ours[i, j]))
             assert np.max(np.abs(ours[i, j] - paper[i, j])) <= rel * scale + 1e-3, (i, j)
     printed = np.asarray(ct.frequency_response(
-        paper_plant_q(c1_12=-117.4421, c1_34=-2.7134e10).to_statespace(), w).complex)
+        ctl(paper_plant_q(c1_12=-117.4421, c1_34=-2.7134e10).to_statespace()), w).complex)
     assert np.max(np.abs(printed[0, 0] - ours[0, 0])) > 0.1      # wrong sign of C1[0,1]
     assert abs(printed[2, 1, 0] - ours[2, 1, 0]) > 0.05           # DC of w3 G off by 8 %
 
@@ -206,7 +211,7 @@ def test_loop_margins_and_step(axis, K1):
     """
     a, ref = AXES[axis], PAPER_LOOP[axis]
     m = R.loop_margins(a["G"], K1[axis])
-    info = ct.step_info(ct.feedback(ct.ss(a["G"]) * K1[axis], 1))
+    info = ct.step_info(ct.feedback(ct.ss(a["G"]) * ctl(K1[axis]), 1))
     print(f"\n{axis}: GM {m.gain_margin_db:.2f} dB at {m.phase_crossover_rad_s:.0f} rad/s, "
           f"PM {m.phase_margin_deg:.2f} deg at {m.gain_crossover_rad_s:.1f} rad/s, "
           f"Mm {m.stability_margin:.4f}, ess {m.static_error:.3g}, ts {info['SettlingTime']:.4f} s, "
@@ -241,7 +246,7 @@ def test_reduced_controller_matches_eq_71_72(axis, K1):
     Kr, acts2 = R.replace_integrators(Kr, tol=0.1)
     assert Kr.nstates == 3 and len(acts) == 1 and len(acts2) == 1
     w = np.logspace(0, 5, 200)
-    a = np.asarray(ct.frequency_response(Kr, w).complex).ravel()
+    a = np.asarray(ct.frequency_response(ctl(Kr), w).complex).ravel()
     b = np.asarray(ct.frequency_response(ct.ss(PAPER_KR[axis]), w).complex).ravel()
     err = float(np.max(np.abs(a - b) / np.abs(b)))
     print(f"\n{axis}: max relative difference to eq (71/72) = {err:.2e}")
@@ -286,7 +291,7 @@ def test_same_controller_as_slycot_sb10fd(axis, K1):
     Ak, Bk, Ck, Dk, _ = slycot.sb10fd(P.nx, 2, 4, 1, 1, 1.0, sysP.A, sysP.B, sysP.C, sysP.D)
     Ks = ct.ss(Ak, Bk, Ck, Dk)
     w = np.logspace(-3, 7, 200)
-    a = np.asarray(ct.frequency_response(K1[axis], w).complex).ravel()
+    a = np.asarray(ct.frequency_response(ctl(K1[axis]), w).complex).ravel()
     b = np.asarray(ct.frequency_response(Ks, w).complex).ravel()
     err = float(np.max(np.abs(a - b) / np.abs(b)))
     print(f"\n{axis}: max relative difference to sb10fd = {err:.2e}")

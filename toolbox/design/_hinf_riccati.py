@@ -27,16 +27,20 @@ Damaged or wrong equations of the paper, re-derived here:
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.linalg.lapack import dgees as _dgees
-import control as ct
+from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
+                                 dgebal as _dgebal, dgesdd as _dgesdd, dgesv as _dgesv,
+                                 dgetrf as _dgetrf,
+                                 dgetrs as _dgetrs, dggev as _dggev, dpotrf as _dpotrf,
+                                 dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd)
 
-from ..analysis import FreqResponse
+from .._lti import StateSpace, as_statespace
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -163,14 +167,12 @@ class PartitionedPlant:
         """Number of measurements y (p2)."""
         return self.C2.shape[0]
 
-    def to_statespace(self) -> ct.StateSpace:
-        """Return P as a python-control StateSpace, inputs [w, u], outputs [z, y]."""
+    def to_statespace(self) -> StateSpace:
+        """Return P as a :class:`toolbox._lti.StateSpace`, inputs [w, u], outputs [z, y]."""
         B = np.hstack([self.B1, self.B2])
         C = np.vstack([self.C1, self.C2])
         D = np.block([[self.D11, self.D12], [self.D21, self.D22]])
-        inputs = [f"w[{i}]" for i in range(self.nw)] + [f"u[{i}]" for i in range(self.nu)]
-        outputs = [f"z[{i}]" for i in range(self.nz)] + [f"y[{i}]" for i in range(self.ny)]
-        return ct.ss(self.A, B, C, D, inputs=inputs, outputs=outputs)
+        return StateSpace(self.A, B, C, D)
 
     def replace(self, **blocks: Any) -> "PartitionedPlant":
         """Return a copy with some blocks replaced."""
@@ -185,10 +187,98 @@ class PartitionedPlant:
         checks of ``__post_init__`` (tens of microseconds, per copy) are skipped.
         Internal: the synthesis makes three such copies per call (issue 13)."""
         new = object.__new__(PartitionedPlant)
-        for k in _BLOCKS:
-            object.__setattr__(new, k, blocks.get(k, getattr(self, k)))
-        object.__setattr__(new, "state_labels", self.state_labels)
+        new.__dict__.update(self.__dict__, **blocks)    # frozen: no __setattr__ per block
         return new
+
+
+# --------------------------------------------------------------------------
+# LAPACK called directly: the matrices here have order <= ~12, where numpy's and
+# scipy's wrappers (argument checks, dispatch) cost 3-10 times the LAPACK work
+# itself (issue 13). Inputs must be finite float arrays (they are built here).
+# --------------------------------------------------------------------------
+def _eigvals(A: np.ndarray) -> np.ndarray:
+    """Eigenvalues of a real square matrix (LAPACK dgeev)."""
+    if A.shape[0] == 0:
+        return np.zeros(0, complex)
+    wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
+    return wr + 1j * wi
+
+
+def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A^-1 B (LAPACK dgesv); LinAlgError when A is exactly singular."""
+    _, _, x, info = _dgesv(A, B)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"singular matrix (dgesv info {info})")
+    return x
+
+
+def _inv(A: np.ndarray) -> np.ndarray:
+    """A^-1 (LAPACK dgesv on the identity, as numpy's ``inv``)."""
+    return _solve(A, np.eye(A.shape[0]))
+
+
+def _svdvals(M: np.ndarray) -> np.ndarray:
+    """Singular values, decreasing (LAPACK dgesdd, as numpy's ``svd``)."""
+    if M.size == 0:
+        return np.zeros(0)
+    # complex at an imaginary-axis mode (A - j w I) in the A1-A4 rank tests
+    _, s, _, info = (_zgesdd if np.iscomplexobj(M) else _dgesdd)(M, compute_uv=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
+    return s
+
+
+def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Full SVD ``M = U diag(s) Vt`` (LAPACK dgesdd, as numpy's ``svd``)."""
+    U, s, Vt, info = _dgesdd(M, compute_uv=1, full_matrices=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
+    return U, s, Vt
+
+
+def _cholesky(M: np.ndarray) -> np.ndarray:
+    """Lower Cholesky factor (LAPACK dpotrf, as numpy's ``cholesky``)."""
+    if M.size == 0:
+        return M.copy()
+    c, info = _dpotrf(M, lower=1, clean=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"matrix not positive definite (dpotrf info {info})")
+    return c
+
+
+def _balancing(M: np.ndarray) -> np.ndarray:
+    """Diagonal scaling of LAPACK dgebal without permutation (powers of two),
+    as ``scipy.linalg.matrix_balance(M, permute=False, separate=True)``."""
+    _, _, _, scale, info = _dgebal(M, scale=1, permute=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgebal failed (info {info})")
+    return scale
+
+
+def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
+    ones (|beta| <= 1e-13 |alpha|) are dropped."""
+    ar, ai, beta, _, _, _, info = _dggev(M, N, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dggev failed (info {info})")
+    alpha = ar + 1j * ai
+    fin = np.abs(beta) > 1e-13 * np.abs(alpha)
+    return alpha[fin] / beta[fin]
+
+
+def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """Invariant zeros: SLICOT ab08nd's reduced pencil and its QZ eigenvalues,
+    the route of python-control's ``zeros()`` without building a system."""
+    from slycot import ab08nd
+
+    n = A.shape[0]
+    if n == 0:
+        return np.zeros(0, complex)
+    out = ab08nd(n, B.shape[1], C.shape[0], A, B, C, D)
+    nu = out[0]
+    return _pencil_eigvals(out[8][:nu, :nu], out[9][:nu, :nu]) if nu else np.zeros(0, complex)
 
 
 _BLOCKS = ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22")
@@ -198,14 +288,29 @@ def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     """A, B, C, D of a SISO system or a scalar gain."""
     if isinstance(sys, (int, float, np.floating)):
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(sys)]])
-    if isinstance(sys, ct.TransferFunction) and sys.ninputs == 1 and sys.noutputs == 1:
-        return _tf_realisation(sys.num_array[0, 0], sys.den_array[0, 0])
-    s = ct.ss(sys)
-    if s.ninputs != 1 or s.noutputs != 1:
+    if _is_siso_tf(sys):
+        return _tf_realisation(sys.num[0][0], sys.den[0][0])
+    s = sys if all(hasattr(sys, m) for m in "ABCD") else as_statespace(sys)
+    if np.shape(s.D) != (1, 1):
         raise ValueError(f"augment_mixed_sensitivity: expected a SISO system, "
-                         f"got {s.noutputs}x{s.ninputs}")
+                         f"got {np.shape(s.D)[0]}x{np.shape(s.D)[1]}")
     return (np.asarray(s.A, float), np.asarray(s.B, float),
             np.asarray(s.C, float), np.asarray(s.D, float))
+
+
+def _is_siso_tf(sys: Any) -> bool:
+    """A SISO transfer function (python-control's or any object with
+    ``num[0][0]`` and ``den[0][0]``, read without importing python-control)."""
+    return (hasattr(sys, "num") and hasattr(sys, "den") and not hasattr(sys, "A")
+            and len(sys.num) == 1 and len(sys.num[0]) == 1)
+
+
+def _strip(c: Any) -> np.ndarray:
+    """1-D float coefficients without leading zeros (``np.trim_zeros`` costs
+    ~15 us a call in its generic form)."""
+    c = np.atleast_1d(np.asarray(c, float))
+    nz = np.flatnonzero(c)
+    return c[nz[0]:] if nz.size else c[:0]
 
 
 def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -219,8 +324,7 @@ def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
     """
     from slycot import td04ad
 
-    num = np.trim_zeros(np.asarray(num, float), "f")
-    den = np.trim_zeros(np.asarray(den, float), "f")
+    num, den = _strip(num), _strip(den)
     if den.size == 0 or num.size > den.size:
         raise ValueError(f"augment_mixed_sensitivity: expected a proper transfer function, "
                          f"got numerator degree {num.size - 1} over denominator degree "
@@ -246,7 +350,7 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
 
     Parameters
     ----------
-    G : control.LTI
+    G : LTI system (python-control or toolbox._lti)
         SISO plant, e.g. eq (34) :math:`G_q = 1/(r_s + L_q s)` (A/V).
     w1, w2, w3 : control.LTI or float or None
         Weights on S, KS, T; ``w2``/``w3`` may be ``None``.
@@ -333,7 +437,7 @@ class AssumptionReport:
 
 
 def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
-    ev = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
+    ev = _eigvals(A)
     scale = max(1.0, float(np.max(np.abs(ev)))) if ev.size else 1.0
     return ev[np.abs(ev.real) <= tol * scale]
 
@@ -344,7 +448,7 @@ def _rank_defect(M: np.ndarray, tol: float) -> bool:
         return False
     if M.shape[0] < M.shape[1]:
         return True
-    sv = np.linalg.svd(M, compute_uv=False)
+    sv = _svdvals(M)
     return bool(sv[-1] <= tol * max(sv[0], 1e-300))
 
 
@@ -463,8 +567,7 @@ def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
     M[:n, :n] = P.A
     M[:n, n:n + m] = B
     M[n:n + p, :n] = C
-    _, (scale, _) = sla.matrix_balance(M, permute=False, separate=True)
-    t = 2.0 ** np.round(np.log2(scale[:n]))
+    t = 2.0 ** np.round(np.log2(_balancing(M)[:n]))
     Ps = P._derived(A=P.A * t[None, :] / t[:, None], B1=P.B1 / t[:, None],
                     B2=P.B2 / t[:, None], C1=P.C1 * t[None, :], C2=P.C2 * t[None, :])
     return Ps, t
@@ -489,14 +592,14 @@ def _normalise(P: PartitionedPlant) -> _Normalised:
     :func:`central_controller`.
     """
     m2, p2 = P.nu, P.ny
-    U, s12, V12t = np.linalg.svd(P.D12)            # D12 = U [S;0] V^T
+    U, s12, V12t = _svd(P.D12)            # D12 = U [S;0] V^T
     Uz = np.vstack([U[:, m2:].T, U[:, :m2].T])      # Uz D12 = [0; S V^T]
     R12 = np.diag(s12) @ V12t
-    U21, s21, V21t = np.linalg.svd(P.D21)           # D21 = U [S 0] V^T
+    U21, s21, V21t = _svd(P.D21)           # D21 = U [S 0] V^T
     V = V21t.T
     VwT = np.hstack([V[:, p2:], V[:, :p2]])         # D21 VwT = [0, U S]
     R21 = U21 @ np.diag(s21)
-    R12inv, R21inv = np.linalg.inv(R12), np.linalg.inv(R21)
+    R12inv, R21inv = _inv(R12), _inv(R21)
     Pn = P._derived(B1=P.B1 @ VwT, B2=P.B2 @ R12inv, C1=Uz @ P.C1, C2=R21inv @ P.C2,
                     D11=Uz @ P.D11 @ VwT, D12=Uz @ P.D12 @ R12inv,
                     D21=R21inv @ P.D21 @ VwT, D22=np.zeros_like(P.D22))
@@ -511,15 +614,15 @@ def _d11_blocks(Pn: PartitionedPlant) -> tuple[np.ndarray, ...]:
 
 
 def _sigma_max(M: np.ndarray) -> float:
-    return float(np.linalg.norm(M, 2)) if M.size else 0.0
+    return float(_svdvals(M)[0]) if M.size else 0.0
 
 
 # --------------------------------------------------------------------------
 # Riccati equations, eq (14)-(19)
 # --------------------------------------------------------------------------
-def _lhp(wr: float, wi: float) -> bool:
-    """Selector of LAPACK dgees: eigenvalues in the open left half-plane first."""
-    return wr < 0.0
+def _no_select(wr: float, wi: float) -> bool:
+    """The selector scipy's dgees wrapper requires (unused: no sorting there)."""
+    return False
 
 
 def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
@@ -544,7 +647,7 @@ def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
         F = np.linalg.solve(r, b.T @ X + s.T)
         ev = np.linalg.eigvals(a - b @ F)
     X = 0.5 * (X + X.T)
-    if np.any(ev.real >= -1e-12 * max(1.0, float(np.max(np.abs(ev))))):
+    if ev.size and ev.real.max() >= -1e-12 * max(1.0, float(np.abs(ev).max())):
         return None, "the solution is not stabilising"
     return X, ""
 
@@ -554,10 +657,11 @@ def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     """Hamiltonian (eq 16) ordered-Schur solution and the closed-loop poles
     (the n selected eigenvalues of H, those of ``a - b r^-1 (b^T X + s^T)``);
     ``(None, None)`` if it does not exist or its basis Z11 is too
-    ill-conditioned to give X = Z21 Z11^-1 accurately."""
+    ill-conditioned to give X = Z21 Z11^-1 accurately (1-norm condition
+    estimate above 1e14)."""
     n = a.shape[0]
     try:
-        rb = np.linalg.solve(r, np.hstack([b.T, s.T]))      # r^-1 [b^T, s^T]
+        rb = _solve(r, np.concatenate([b.T, s.T], axis=1))   # r^-1 [b^T, s^T]
     except np.linalg.LinAlgError:                           # singular r: the pencil route
         return None, None
     E = a - b @ rb[:, n:]
@@ -566,13 +670,25 @@ def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     H[:n, n:] = -b @ rb[:, :n]
     H[n:, :n] = s @ rb[:, n:] - q
     H[n:, n:] = -E.T
-    _, sdim, wr, wi, Z, _, info = _dgees(_lhp, H, sort_t=1, overwrite_a=1)
+    # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
+    # dgees's own sorting does, without a Python callback per eigenvalue
+    T, _, wr, wi, Z, _, info = _dgees(_no_select, H, sort_t=0, overwrite_a=1)
+    if info != 0:
+        return None, None
+    _, Z, wr, wi, sdim, _, _, info = _dtrsen((wr < 0.0).astype(np.int32), T, Z, job="N",
+                                             overwrite_t=1, overwrite_q=1)
     if info != 0 or sdim != n:
         return None, None
-    Z11, Z21 = Z[:n, :n], Z[n:, :n]
-    if np.linalg.cond(Z11) > 1e14:
+    Z11t = Z[:n, :n].T
+    lu, piv, info = _dgetrf(Z11t)
+    if info != 0:
         return None, None
-    return np.linalg.solve(Z11.T, Z21.T).T, wr[:n] + 1j * wi[:n]
+    rcond, _ = _dgecon(lu, float(np.abs(Z11t).sum(axis=0).max()))
+    if not rcond >= 1e-14:
+        return None, None
+    Xt, _ = _dgetrs(lu, piv, Z[n:, :n].T)                  # X^T = Z11^-T Z21^T
+    return Xt.T, wr[:n] + 1j * wi[:n]
+
 
 @dataclass
 class HinfFeasibility:
@@ -608,8 +724,13 @@ class HinfFeasibility:
 
 
 def _psd(X: np.ndarray, tol: float = 1e-9) -> bool:
-    ev = np.linalg.eigvalsh(X)
-    return bool(ev.size == 0 or ev[0] >= -tol * max(1.0, float(np.max(np.abs(ev)))))
+    """X >= 0 up to ``tol`` relative to its largest eigenvalue (LAPACK dsyevd)."""
+    if X.size == 0:
+        return True
+    ev, _, info = _dsyevd(X, compute_v=0)                  # ascending
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
+    return bool(ev[0] >= -tol * max(1.0, -ev[0], ev[-1]))
 
 
 @dataclass(frozen=True)
@@ -632,11 +753,12 @@ class _GammaFree:
 
 def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     D1111, D1112, D1121, _ = _d11_blocks(Pn)
-    B = np.hstack([Pn.B1, Pn.B2])
-    C = np.vstack([Pn.C1, Pn.C2])
-    D1s = np.hstack([Pn.D11, Pn.D12])
-    Ds1 = np.vstack([Pn.D11, Pn.D21])
-    bound = max(_sigma_max(np.hstack([D1111, D1112])), _sigma_max(np.vstack([D1111, D1121])))
+    B = np.concatenate([Pn.B1, Pn.B2], axis=1)
+    C = np.concatenate([Pn.C1, Pn.C2])
+    D1s = np.concatenate([Pn.D11, Pn.D12], axis=1)
+    Ds1 = np.concatenate([Pn.D11, Pn.D21])
+    bound = max(_sigma_max(np.concatenate([D1111, D1112], axis=1)),
+                _sigma_max(np.concatenate([D1111, D1121])))
     return _GammaFree(B=B, C=C, D1s=D1s, Ds1=Ds1, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T,
                       Qx=Pn.C1.T @ Pn.C1, Sx=Pn.C1.T @ D1s, Qy=Pn.B1 @ Pn.B1.T,
                       Sy=Pn.B1 @ Ds1.T, bound=bound)
@@ -654,9 +776,9 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
                                f"sigma(D1111; D1121)) = {w.bound:.6g} >= gamma = {gamma:.6g}")
     g2 = gamma * gamma
     Rnh = w.DtD.copy()                                               # eq (14)
-    Rnh[range(m1), range(m1)] -= g2
+    Rnh.flat[:m1 * (Rnh.shape[0] + 1):Rnh.shape[0] + 1] -= g2        # first m1 diagonal
     Rnj = w.DDt.copy()                                               # eq (15)
-    Rnj[range(p1), range(p1)] -= g2
+    Rnj.flat[:p1 * (Rnj.shape[0] + 1):Rnj.shape[0] + 1] -= g2
     X, why = _ric(Pn.A, w.B, w.Qx, Rnh, w.Sx)                        # eq (16), (18)
     if X is None:
         return HinfFeasibility(gamma, False, "X_not_stabilising",
@@ -675,7 +797,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "Y_not_psd",
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, Y=Y)
-    rho = float(np.max(np.abs(np.linalg.eigvals(X @ Y)))) if n else 0.0
+    rho = float(np.abs(_eigvals(X @ Y)).max()) if n else 0.0
     if rho >= g2:
         return HinfFeasibility(gamma, False, "rho",
                                f"rho(XY) = {rho:.6g} >= gamma^2 = {g2:.6g}",
@@ -768,29 +890,29 @@ def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.
     X, Y = res.X, res.Y
     m1, m2, p1, p2, n = Pn.nw, Pn.nu, Pn.nz, Pn.ny, Pn.nx
     D1111, D1112, D1121, D1122 = _d11_blocks(Pn)
-    F = -np.linalg.solve(w["Rnh"], w["D1s"].T @ Pn.C1 + w["B"].T @ X)   # eq (20)
-    L = -np.linalg.solve(w["Rnj"].T, (Pn.B1 @ w["Ds1"].T + Y @ w["C"].T).T).T  # eq (21)
+    F = -_solve(w["Rnh"], w["D1s"].T @ Pn.C1 + w["B"].T @ X)   # eq (20)
+    L = -_solve(w["Rnj"].T, (Pn.B1 @ w["Ds1"].T + Y @ w["C"].T).T).T  # eq (21)
     F12, F2 = F[m1 - p2:m1], F[m1:]
     L12, L2 = L[:, p1 - m2:p1], L[:, p1:]
     r = D1111.shape[0]
-    inv_a = np.linalg.inv(g2 * np.eye(r) - D1111 @ D1111.T) if r else np.zeros((0, 0))
-    inv_b = (np.linalg.inv(g2 * np.eye(D1111.shape[1]) - D1111.T @ D1111)
+    inv_a = _inv(g2 * np.eye(r) - D1111 @ D1111.T) if r else np.zeros((0, 0))
+    inv_b = (_inv(g2 * np.eye(D1111.shape[1]) - D1111.T @ D1111)
              if D1111.shape[1] else np.zeros((0, 0)))
     D11h = -D1121 @ D1111.T @ inv_a @ D1112 - D1122                   # eq (24)
     T2 = np.eye(m2) - D1121 @ inv_b @ D1121.T                         # eq (25)
     T3 = np.eye(p2) - D1112.T @ inv_a @ D1112                         # eq (26)
-    D12h = np.linalg.cholesky(T2)                                     # D12h D12h^T = T2
-    D21h = np.linalg.cholesky(T3).T                                   # D21h^T D21h = T3
-    Z = np.linalg.inv(np.eye(n) - Y @ X / g2)                         # eq (27)
+    D12h = _cholesky(T2)                                     # D12h D12h^T = T2
+    D21h = _cholesky(T3).T                                   # D21h^T D21h = T3
+    Z = _inv(np.eye(n) - Y @ X / g2)                         # eq (27)
     B2h = Z @ (Pn.B2 + L12) @ D12h                                    # eq (27)
     C2h = -D21h @ (Pn.C2 + F12)                                       # eq (28), D21h
-    B1h = -Z @ L2 + B2h @ np.linalg.solve(D12h, D11h)                 # eq (29)
-    C1h = F2 + D11h @ np.linalg.solve(D21h, C2h)                      # eq (30), no U12
-    Ah = Pn.A + w["B"] @ F + B1h @ np.linalg.solve(D21h, C2h)         # eq (31)
+    B1h = -Z @ L2 + B2h @ _solve(D12h, D11h)                 # eq (29)
+    C1h = F2 + D11h @ _solve(D21h, C2h)                      # eq (30), no U12
+    Ah = Pn.A + w["B"] @ F + B1h @ _solve(D21h, C2h)         # eq (31)
     return Ah, B1h, C1h, D11h                                         # eq (32)
 
 
-def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
+def central_controller(P: PartitionedPlant, gamma: float) -> StateSpace:
     """Central H-infinity controller K = [Ahat, B1hat; C1hat, D11hat], eq (32).
 
     Uses the general Glover-Doyle formulae (eq 20-31, D11 != 0 allowed) on
@@ -807,7 +929,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
 
     Returns
     -------
-    control.StateSpace
+    toolbox._lti.StateSpace
         The controller, of the order of P.
 
     Raises
@@ -821,21 +943,24 @@ def central_controller(P: PartitionedPlant, gamma: float) -> ct.StateSpace:
     res = prep.feasibility(gamma)
     if not res.feasible:
         raise DesignInfeasible(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
-    return _controller_from(prep, res)
+    return StateSpace(*_controller_from(prep, res))
 
 
-def _controller_from(prep: _Prepared, res: HinfFeasibility) -> ct.StateSpace:
+def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray, ...]:
+    """A, B, C, D of the central controller in the coordinates of the given plant."""
     Ah, Bh, Ch, Dh = _central_normalised(prep.norm.P, res)
     # undo u = R12^-1 u~ and y~ = R21^-1 y
     Bh, Ch, Dh = Bh @ prep.norm.R21inv, prep.norm.R12inv @ Ch, prep.norm.R12inv @ Dh @ prep.norm.R21inv
     # undo the state balancing x = T x_s (controller states live in plant coordinates)
     t = prep.t
     Ah, Bh, Ch = Ah * t[:, None] / t[None, :], Bh * t[:, None], Ch / t[None, :]
-    K = ct.ss(Ah, Bh, Ch, Dh)
     D22 = prep.P.D22
-    if np.any(D22 != 0):                           # loop shift: K = K0 (I + D22 K0)^-1
-        K = ct.feedback(K, ct.ss([], [], [], D22), sign=-1)
-    return K
+    if np.any(D22 != 0):
+        # loop shift u = K0 (y - D22 u): M = (I + Dk D22)^-1, u = M (Ck xk + Dk y)
+        M = np.linalg.inv(np.eye(Dh.shape[0]) + Dh @ D22)
+        Ah, Bh = Ah - Bh @ D22 @ M @ Ch, Bh @ (np.eye(D22.shape[0]) - D22 @ M @ Dh)
+        Ch, Dh = M @ Ch, M @ Dh
+    return Ah, Bh, Ch, Dh
 
 
 # --------------------------------------------------------------------------
@@ -873,23 +998,104 @@ def gamma_iteration(P: PartitionedPlant, tol: float = 1e-4,
 
 
 def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> float:
-    """:func:`gamma_iteration` on a prepared plant."""
+    """:func:`gamma_iteration` on a prepared plant.
+
+    Returns the answer of the plain bisection with fewer Riccati solutions
+    (issue 13): feasibility is monotone in gamma (a level above an achievable
+    one is achievable), so a midpoint above a level already found feasible is
+    feasible and one below a level found infeasible is not. :func:`_narrow`
+    first brackets the optimum by extrapolation; the bisection then replays
+    its midpoints and solves the Riccati equations only for those the
+    bracket [a, b] leaves undecided.
+    """
     lo = prep.gf.bound
     top = 1e8 if gamma_max is None else float(gamma_max)
     hi = min(max(1.0, 2.0 * lo), top)
-    while not prep.feasibility(hi).feasible:
+    tested = []
+    while not (res := prep.feasibility(hi)).feasible:
         if hi >= top:
             raise DesignInfeasible(_GAMMA_KEY, f"a problem feasible for some gamma <= {top:g}",
                             hint="no controller reaches it: raise gamma_max or relax "
                                  "the weights w1/w3")
+        tested.append(res)
         lo, hi = hi, min(2.0 * hi, top)
+    a, b = _narrow(prep, lo, hi, tested, 0.25 * tol)
     while hi - lo > tol * hi:
         mid = 0.5 * (lo + hi)
-        if prep.feasibility(mid).feasible:
+        if a < mid < b:
+            feasible = prep.feasibility(mid).feasible
+            a, b = (a, mid) if feasible else (mid, b)
+        else:
+            feasible = mid >= b
+        if feasible:
             hi = mid
         else:
             lo = mid
     return hi
+
+
+#: tests :func:`_narrow` may spend (paper 003's axes need 5-7)
+_NARROW_STEPS = 10
+
+
+def _boundary_distance(res: HinfFeasibility) -> tuple[str, float] | None:
+    """Which condition of Theorem 1 failed at an infeasible gamma, and a number
+    that goes to zero about linearly as gamma rises to that condition's
+    boundary: ``1/lambda_min`` of X or Y when it is not >= 0 (its negative
+    eigenvalue runs off to -inf there), ``1 - rho(XY)/gamma^2`` for the
+    coupling condition; None when a Riccati equation had no solution."""
+    if res.failed in ("X_not_psd", "Y_not_psd"):
+        M = res.X if res.failed == "X_not_psd" else res.Y
+        ev, _, _ = _dsyevd(M, compute_v=0)
+        return res.failed, 1.0 / ev[0]
+    if res.failed == "rho":
+        return "rho", 1.0 - res.rho / res.gamma ** 2
+    return None
+
+
+def _narrow(prep: _Prepared, a: float, b: float, tested: list,
+            rel: float) -> tuple[float, float]:
+    """A bracket [a, b] of the optimal gamma (a infeasible, b feasible, both
+    known from tests), narrowed towards ``b - a <= rel * b``.
+
+    Secant extrapolation of :func:`_boundary_distance` over the last two
+    infeasible levels that failed the same condition predicts the optimum; a
+    level just above the prediction is tested and, if feasible, one just
+    below. Bisection when there is no prediction or a prediction missed.
+    """
+    seen = [(r.gamma, d) for r in tested if (d := _boundary_distance(r)) is not None]
+    step = "predict"
+    for _ in range(_NARROW_STEPS):
+        if b - a <= rel * b:
+            break
+        guess = _extrapolate(seen) if step == "predict" else None
+        if step == "below":
+            c = b * (1.0 - 0.9 * rel)
+        elif guess is not None and a < guess < b:
+            c = min(max(guess + 0.45 * rel * b, a + 0.45 * rel * b), b - 0.45 * rel * b)
+        else:
+            c, guess = 0.5 * (a + b), None
+        res = prep.feasibility(c)
+        if res.feasible:
+            b = c
+            # a hit just above a prediction calls for the test just below; a
+            # feasible test just below means the prediction was high: bisect once
+            step = "below" if guess is not None else ("bisect" if step == "below" else "predict")
+        else:
+            a, step = c, "predict"
+            if (d := _boundary_distance(res)) is not None:
+                seen.append((c, d))
+    return a, b
+
+
+def _extrapolate(seen: list) -> float | None:
+    """Zero of the line through the last two distances of the same condition."""
+    if len(seen) < 2 or seen[-1][1][0] != seen[-2][1][0]:
+        return None
+    (g1, (_, v1)), (g2, (_, v2)) = seen[-2], seen[-1]
+    if v1 == v2:
+        return None
+    return g2 - v2 * (g2 - g1) / (v2 - v1)
 
 
 # --------------------------------------------------------------------------
@@ -933,7 +1139,7 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
 
     Parameters
     ----------
-    K : control.LTI
+    K : LTI system (python-control or toolbox._lti)
         SISO controller.
     cancel_tol : float
         Relative distance below which a pole-zero pair is a cancellation.
@@ -943,10 +1149,15 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
     ndarray of complex
         The remaining poles (rad/s).
     """
-    p = list(np.atleast_1d(K.poles()))
-    z = list(np.atleast_1d(K.zeros()))
+    A, B, C, D = _ss_blocks(K)
+    return _effective_poles(_eigvals(A), _zeros(A, B, C, D), cancel_tol)
+
+
+def _effective_poles(poles: np.ndarray, zeros: np.ndarray, cancel_tol: float) -> np.ndarray:
+    """:func:`effective_poles` of the given poles and zeros."""
+    z = list(zeros)
     keep = []
-    for pi in sorted(p, key=abs):
+    for pi in sorted(poles, key=abs):
         d = [abs(zi - pi) for zi in z]
         if d and min(d) <= cancel_tol * max(abs(pi), 1e-300):
             z.pop(int(np.argmin(d)))
@@ -961,7 +1172,13 @@ def fastest_pole_modulus(K: Any) -> float:
     Compared with :func:`pole_limit` (``pi/Ts``) to decide whether ``K`` can
     be discretised at the sample time (paper 003 sect. 4 trap at the optimum).
     """
-    ep = effective_poles(K)
+    return _fastest(_ss_blocks(K))
+
+
+def _fastest(K: tuple[np.ndarray, ...]) -> float:
+    """:func:`fastest_pole_modulus` of the realisation ``K = (A, B, C, D)``."""
+    A, B, C, D = K
+    ep = _effective_poles(_eigvals(A), _zeros(A, B, C, D), 1e-2)
     return float(np.max(np.abs(ep))) if ep.size else 0.0
 
 
@@ -974,7 +1191,7 @@ class HinfResult:
 
     Attributes
     ----------
-    K : control.StateSpace
+    K : toolbox._lti.StateSpace
         Central controller, error (A) -> voltage (V).
     gamma : float
         Level the controller was designed for.
@@ -994,7 +1211,7 @@ class HinfResult:
         Every oddity found (also issued through ``warnings.warn``).
     """
 
-    K: ct.StateSpace
+    K: StateSpace
     gamma: float
     gamma_opt: float | None
     backoff: float
@@ -1006,26 +1223,27 @@ class HinfResult:
     warnings: list[str] = field(default_factory=list)
 
 
-def closed_loop(P: PartitionedPlant, K: Any) -> ct.StateSpace:
+def closed_loop(P: PartitionedPlant, K: Any) -> StateSpace:
     """Closed loop F_l(P, K) (w -> z), states [x_P, x_K], with u = K y."""
-    return ct.ss(*_lft(P, K))
+    Ks = as_statespace(K)
+    return StateSpace(*_lft(P, (Ks.A, Ks.B, Ks.C, Ks.D)))
 
 
-def _lft(P: PartitionedPlant, K: Any) -> tuple[np.ndarray, ...]:
-    """Matrices of F_l(P, K): u = M (Dk C2 x + Ck xk + Dk D21 w), M = (I - Dk D22)^-1
-    (numpy; python-control's ``lft`` builds named systems, ~1.5 ms, issue 13)."""
-    Ks = ct.ss(K)
-    Ak, Bk, Ck, Dk = (np.asarray(m, float) for m in (Ks.A, Ks.B, Ks.C, Ks.D))
-    Mi = np.linalg.inv(np.eye(P.nu) - Dk @ P.D22)
+def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    """Matrices of F_l(P, K) for ``K = (Ak, Bk, Ck, Dk)``: u = M (Dk C2 x + Ck xk +
+    Dk D21 w), M = (I - Dk D22)^-1 (numpy; python-control's ``lft`` builds named
+    systems, ~1.5 ms, issue 13)."""
+    Ak, Bk, Ck, Dk = K
+    Mi = _inv(np.eye(P.nu) - Dk @ P.D22)
     Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
     Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
-    A = np.block([[P.A + P.B2 @ Ux, P.B2 @ Uk], [Bk @ Yx, Ak + Bk @ Yk]])
+    A = _blocks2x2(P.A + P.B2 @ Ux, P.B2 @ Uk, Bk @ Yx, Ak + Bk @ Yk)
     B = np.vstack([P.B1 + P.B2 @ Uw, Bk @ Yw])
     C = np.hstack([P.C1 + P.D12 @ Ux, P.D12 @ Uk])
     return A, B, C, P.D11 + P.D12 @ Uw
 
 
-def hinf_norm(sys: ct.StateSpace) -> float:
+def hinf_norm(sys: Any) -> float:
     """H-infinity norm (SLICOT ab13dd, as python-control's ``norm``), inf when
     unstable or with a pole on the imaginary axis."""
     A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
@@ -1038,7 +1256,7 @@ def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> fl
     n = A.shape[0]
     if n == 0:
         return float(np.linalg.norm(D, 2)) if D.size else 0.0
-    ev = np.linalg.eigvals(A)
+    ev = _eigvals(A)
     if np.any(ev.real >= 0) or np.any(np.isclose(ev.real, 0.0)):
         return float("inf")
     jobd = "Z" if not np.any(D) else "D"
@@ -1100,8 +1318,9 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
         while True:
             res = prep.feasibility((1.0 + b) * gamma_opt)
             K = _controller_from(prep, res) if res.feasible else None
-            ok = K is not None and (limit is None or fastest_pole_modulus(K) <= limit)
-            if ok or b >= max_backoff:
+            fast = _fastest(K) if K is not None else math.inf
+            ok = limit is None or fast <= limit
+            if (K is not None and ok) or b >= max_backoff:
                 break
             b = min(max(2.0 * b, 0.01), max_backoff)
         if K is None:
@@ -1118,7 +1337,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
             err.condition, err.best = res.message, best
             raise err
         K, gamma_opt, b = _controller_from(prep, res), None, 0.0
-    fast = fastest_pole_modulus(K)
+        fast = _fastest(K)
     if limit is not None and fast > limit:
         notes.append(f"controller pole at |s| = {fast:.4g} rad/s exceeds the realisability "
                      f"limit pi/Ts = {limit:.4g} rad/s"
@@ -1131,7 +1350,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
     for msg in notes:
         warnings.warn(msg, RuntimeWarning, stacklevel=2)
     prep_res = _unscale_xy(res, prep.t)
-    return HinfResult(K=K, gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
+    return HinfResult(K=StateSpace(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
                       X=prep_res.X, Y=prep_res.Y, closed_loop_norm=cl_norm,
                       fastest_pole=fast, pole_limit=limit, warnings=notes)
 
@@ -1158,21 +1377,40 @@ class WeightBound:
     worst_freq: float
 
 
-def _freqresp(sys: Any, w: np.ndarray) -> np.ndarray:
-    """SISO response at s = j w, all frequencies at once (issue 13: python-control
-    converted each weight to state space and called SLICOT tb05ad per frequency).
-    A transfer function is evaluated from its polynomials, as python-control
-    evaluates one; a state-space system through its Hessenberg form."""
-    if np.isscalar(sys):
-        return np.full(w.size, complex(sys))
-    s = 1j * w
-    if isinstance(sys, ct.TransferFunction):
-        if sys.ninputs != 1 or sys.noutputs != 1:
-            raise ValueError(f"weight_bound_check: expected a SISO system, "
-                             f"got {sys.noutputs}x{sys.ninputs}")
-        return np.polyval(sys.num_array[0, 0], s) / np.polyval(sys.den_array[0, 0], s)
-    ss = ct.ss(sys)
-    return FreqResponse(ss.A, ss.B, ss.C, ss.D)(s)[:, 0, 0]
+#: default grid of :func:`weight_bound_check` (rad/s), read-only and built once
+_BOUND_GRID = np.logspace(-4, 9, 4000)
+_BOUND_GRID.flags.writeable = False
+
+
+def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
+    """SISO responses at the points ``s``, all frequencies at once (issue 13:
+    python-control converted each weight to state space and called SLICOT
+    tb05ad per frequency). The transfer functions are evaluated together from
+    their polynomials by Horner's rule on one (points x polynomials) array, with
+    elementwise operations only (a multi-threaded BLAS product of this shape
+    costs milliseconds on a loaded machine); a state-space system goes through
+    its modal form (:meth:`toolbox._lti.StateSpace.evaluate`); a number is
+    constant."""
+    polys, out = [], []
+    for sys in systems:
+        if np.isscalar(sys):
+            out.append(np.full(s.size, complex(sys)))
+        elif _is_siso_tf(sys):
+            out.append(len(polys))
+            polys += [np.atleast_1d(sys.num[0][0]), np.atleast_1d(sys.den[0][0])]
+        else:
+            out.append(as_statespace(sys).evaluate(s)[0, 0])
+    if polys:
+        deg = max(len(c) for c in polys) - 1
+        coef = np.zeros((deg + 1, len(polys)))
+        for j, c in enumerate(polys):
+            coef[deg + 1 - len(c):, j] = np.asarray(c, float)    # highest power first
+        vals = np.broadcast_to(coef[0], (s.size, len(polys))).astype(complex)
+        for row in coef[1:]:
+            vals *= s[:, None]
+            vals += row
+        out = [vals[:, o] / vals[:, o + 1] if isinstance(o, int) else o for o in out]
+    return out
 
 
 def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
@@ -1181,7 +1419,7 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
 
     Parameters
     ----------
-    G, K : control.LTI
+    G, K : LTI system (python-control or toolbox._lti)
         Plant (A/V) and controller (V/A).
     w1, w2, w3 : control.LTI or float or None
         Weights; ``None`` skips the function.
@@ -1194,15 +1432,17 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
     dict of str to WeightBound
         Keys ``"S"``, ``"KS"``, ``"T"`` for the weights given.
     """
-    w = np.logspace(-4, 9, 4000) if freqs is None else np.asarray(freqs, float)
-    g, k = _freqresp(G, w), _freqresp(K, w)
+    w = _BOUND_GRID if freqs is None else np.asarray(freqs, float)
+    s = 1j * w
+    weights = [wt for wt in (w1, w2, w3) if wt is not None]
+    g, k, *wv = _freqresps([G, K] + weights, s)
     S = 1.0 / (1.0 + g * k)
     funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (g * k * S, w3)}
     out = {}
     for name, (f, wt) in funcs.items():
         if wt is None:
             continue
-        r = np.abs(f * _freqresp(wt, w))
+        r = np.abs(f * wv.pop(0))
         i = int(np.argmax(r))
         out[name] = WeightBound(name, float(r[i]), float(w[i]))
     return out

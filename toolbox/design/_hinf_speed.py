@@ -39,6 +39,8 @@ from typing import Any
 import control as ct
 import numpy as np
 
+from .._lti import feedback
+
 from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES
 from ..errors import SpecError
 from ..spec import Table
@@ -151,8 +153,7 @@ def small_gain_peak(plants: dict, controllers: dict, c_d: float,
     run; below 1 the coupled loop is stable over the box (module docstring).
     """
     def sg(ax):
-        loop = ct.feedback(ct.ss(plants[ax]), ct.ss(controllers[ax]))
-        return np.abs(np.asarray(ct.frequency_response(loop, _GRID).magnitude)).ravel()
+        return np.abs(feedback(plants[ax], controllers[ax]).freqresp(_GRID)[0, 0])
 
     prod = c_d * c_q * sg("d") * sg("q")
     i = int(np.argmax(prod))

@@ -46,6 +46,7 @@ from typing import Any, Mapping
 import control as ct
 import numpy as np
 
+from .._lti import StateSpace
 from ..artifact import AxisController, AxisWeights, ControllerArtifact, TransferFunctionData
 from ..errors import DesignInfeasible, SpecError
 from ..plant import axis_plants
@@ -54,7 +55,8 @@ from ._common import decoupling_from_motor, make_artifact
 from ._hinf_defaults import default_w2, w1_params, w2_params, w2_toml
 from ._hinf_speed import (WEIGHT_GAINS, AtSpeedCfg, coupled_weight, coupling_gains,
                           read_at_speed, small_gain_peak)
-from ._hinf_riccati import (GammaBelowOptimum, augment_mixed_sensitivity, fastest_pole_modulus,
+from ._hinf_riccati import (GammaBelowOptimum, _ss_blocks, augment_mixed_sensitivity,
+                            fastest_pole_modulus,
                             gamma_iteration, synthesize, weight_bound_check)
 from ._reduction import compare_margins, loop_margins, reduce_controller
 from ._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
@@ -342,9 +344,9 @@ class HinfAxisResult:
     ----------
     G : control.TransferFunction
         Plant (A/V).
-    K : control.StateSpace
+    K : toolbox._lti.StateSpace
         Central controller (V/A).
-    Kr : control.StateSpace or None
+    Kr : toolbox._lti.StateSpace or None
         Reduced controller.
     synthesis : HinfResult
     bounds : dict
@@ -398,7 +400,8 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
         ``controller.hinf.gamma`` (infeasible, with the best achievable gamma),
         ``controller.hinf.reduce_order`` (margins lost beyond ``margin_loss``).
     """
-    P = augment_mixed_sensitivity(G, w1, w2, w3)
+    Gs = StateSpace(*_ss_blocks(G))   # realised once (SLICOT td04ad) for synthesis and margins
+    P = augment_mixed_sensitivity(Gs, w1, w2, w3)
     try:
         with warnings.catch_warnings(record=True):
             warnings.simplefilter("always")
@@ -412,7 +415,7 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
             warnings.simplefilter("ignore")
             red = reduce_controller(res.K, order=reduce_order, integrator_tol=integrator_tol)
         Kr = red.K
-        margins = compare_margins(G, res.K, Kr, max_loss=margin_loss)
+        margins = compare_margins(Gs, res.K, Kr, max_loss=margin_loss)
         if not margins.ok and on_margin_loss == "refuse":
             raise DesignInfeasible(f"{_KEY}.reduce_order",
                             f"an order whose {axis}-axis controller keeps GM, PM and M_m "
@@ -421,7 +424,7 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
                             hint="; ".join(margins.flags) + '; raise reduce_order or set '
                                  'on_margin_loss = "flag"')
     else:
-        margins = loop_margins(G, res.K)
+        margins = loop_margins(Gs, res.K)
     _refuse_unrealisable(res, Kr, gamma, axis)
     return HinfAxisResult(G, res.K, Kr, res, bounds, red, margins)
 
@@ -595,10 +598,11 @@ def _executed_axis(r: Any, ts: float, executed: str) -> AxisController:
     ``full_order``. ``"full"``: the full-order law, the reduced candidate (if
     any) in ``reduced``.
     """
-    full = AxisController.from_error_controller(r.K, ts, method="tustin")
+    # the artifact still reads python-control systems (toolbox._lti's to_control)
+    full = AxisController.from_error_controller(r.K.to_control(), ts, method="tustin")
     if r.Kr is None:
         return full
-    red = AxisController.from_error_controller(r.Kr, ts, method="tustin")
+    red = AxisController.from_error_controller(r.Kr.to_control(), ts, method="tustin")
     if executed == "reduced":
         return replace(red, full_order=full)
     return replace(full, reduced=red)
