@@ -41,13 +41,25 @@ anti-windup and voltage limit, predictive choice, inverter and plant RK4);
 the plant state lives in local scalars, not in an array, so that LLVM keeps
 it in registers across the RK4 stages (issue 13).
 
-No ``fastmath``: allowing FMA contraction and reciprocal division
-(``{"contract", "arcp"}`` on the plant helpers) saved 5-8 % per step on the
-issue 13 benchmark, but it changes results in the last bits and makes them
-depend on whether the host CPU has FMA, while ``verify.json`` must be the same
-bytes on every machine (toolbox/ARCHITECTURE.md "Reliability rules"). The
-kernel has no NaN checks of its own; the flags that assume finite values
-("nnan", "ninf") would break the divergence detection of the metrics anyway.
+Arithmetic (issue 13). The 1 us loop is bound by the latency of one
+dependency chain (the four RK4 stages in sequence, each ending in a
+division), so the plant multiplies by ``1/Ld``, ``1/Lq``, ``1/J`` computed once
+per run (:func:`_plant`) instead of dividing: a division costs ~13 cycles, a
+multiplication 3, and the loop runs ~30 % faster. Each derivative then
+carries one more rounding (<= 1 ulp instead of 0.5), 1e-16 relative, far below
+the RK4 truncation error; results moved by that much once, when this was
+introduced, and are plain IEEE operations in a fixed order, the same on every
+x86-64 CPU. No ``fastmath``: ``{"contract"}`` on the substep loop (FMA) saved
+another 9 % (29.1 -> 26.5 ns per step), and is deterministic run to run and
+between :func:`run` and :func:`run_batch`, but whether LLVM may fuse depends on
+the host CPU (the numba cache is compiled for it), so verify.json's digits of
+the dq-frame scenarios would differ between machines with and without FMA,
+which today they do not ("same spec, same bytes", toolbox/ARCHITECTURE.md).
+(The angle-dependent scenarios already differ there in the last bits: glibc
+picks FMA variants of sin, cos, log by CPU, which numba calls: with FMA
+disabled through GLIBC_TUNABLES, 1 in 1,300 sines differed by 1 ulp.) ``reassoc``/``arcp`` would let LLVM choose the
+evaluation order; the flags that assume finite values ("nnan", "ninf") would
+break the divergence detection of the metrics.
 Metrics are accumulated online (see :mod:`toolbox.sim._metrics` for their
 definitions); traces are optional and decimated, so memory is flat in the
 simulated duration when only metrics are requested.
@@ -174,10 +186,15 @@ def _to_ab(vd, vq, c, s):
 
 @_jit
 def _plant(P):
-    """The plant array as a tuple (R, Ld, Lq, flux, p, J, friction, tf): passed by
-    value, so the parameters stay in registers inside the RK4 loop."""
-    return (P[P_R], P[P_LD], P[P_LQ], P[P_FLUX], P[P_POLE_PAIRS], P[P_J],
-            P[P_FRICTION], P[P_TORQUE_FACTOR])
+    """The plant array as a tuple (R, Ld, Lq, flux, p, J, friction, tf, 1/Ld,
+    1/Lq, 1/J): passed by value, so the parameters stay in registers inside the
+    RK4 loop. The reciprocals are computed once per run: each RK4 stage then
+    multiplies instead of dividing (module docstring, "Arithmetic")."""
+    Ld = P[P_LD]
+    Lq = P[P_LQ]
+    J = P[P_J]
+    return (P[P_R], Ld, Lq, P[P_FLUX], P[P_POLE_PAIRS], J, P[P_FRICTION],
+            P[P_TORQUE_FACTOR], 1.0 / Ld, 1.0 / Lq, 1.0 / J)
 
 
 @_jit_inline
@@ -189,20 +206,20 @@ def _torque(pl, i_d, i_q):
 @_jit_inline
 def _deriv(i_d, i_q, om, th, vx, vy, frame, pl, t_load, mech, acc):
     """Right-hand side of the plant (module docstring); frame 1: (vx, vy) stationary."""
-    R, Ld, Lq, flux, p, J, friction, tf = pl
+    R, Ld, Lq, flux, p, _, friction, tf, inv_Ld, inv_Lq, inv_J = pl
     w = p * om
     if frame == 0:
         vd = vx
         vq = vy
     else:  # stationary-frame voltage held constant: rotate into dq
         vd, vq = _to_dq(vx, vy, math.cos(th), math.sin(th))
-    did = (vd - R * i_d + w * Lq * i_q) / Ld
-    diq = (vq - R * i_q - w * Ld * i_d - w * flux) / Lq
+    did = (vd - R * i_d + w * Lq * i_q) * inv_Ld
+    diq = (vq - R * i_q - w * Ld * i_d - w * flux) * inv_Lq
     if mech == 1:
         dom = acc
     else:
         torque = tf * p * (flux * i_q + (Ld - Lq) * i_d * i_q)
-        dom = (torque - friction * om - t_load) / J
+        dom = (torque - friction * om - t_load) * inv_J
     return did, diq, dom, w
 
 
