@@ -20,11 +20,12 @@
   the "slow spells" of issue 13 (the simulator at 70-85 ns per plant step for
   tens of calls while its CPU time stayed at ~48 ns: the load average was 4-6
   on 2 cores, other processes held them; wall/CPU reached 2-3). Reproduced
-  once the kernel ran at ~29.5 ns per step of CPU time: 60 consecutive 1 s
-  simulations, with 5-8 runnable processes on the 2 cores, took 46-80 ns per
-  step of wall time (median 58) while their CPU time stayed within
-  28.7-32.5 ns; /proc/stat showed no steal time. ``bench_sim`` prints both
-  per call. A multi-threaded route (the parallel batch) must be timed on the
+  once the kernel ran at ~29 ns per step of CPU time: 60 consecutive 1 s
+  simulations, with 5-8 runnable processes on the 2 cores, took a median
+  58 ns per step of wall time (max 80) while their CPU time stayed within
+  28.7-32.5 ns, no steal time in /proc/stat; 60 more beside a pytest run
+  (5-9 runnable) took 100-183 ns of wall time and 28.7-31.8 ns of CPU time.
+  ``bench_sim`` prints both per call. A multi-threaded route (the parallel batch) must be timed on the
   wall clock.
 """
 
