@@ -179,7 +179,7 @@ def agreement(ours: tuple[float, float], other: tuple[float, float]) -> str:
     """'same bits' or the largest relative difference of (final speed, mse_torque)."""
     if ours == other:
         return "same bits as ours"
-    rel = max(abs(a - b) / abs(a) for a, b in zip(ours, other))
+    rel = max(abs(a - b) / max(abs(a), abs(b)) for a, b in zip(ours, other))
     return f"differs from ours by {rel:.1e} relative"
 
 
