@@ -3,7 +3,13 @@
 * :func:`pin_blas_threads` must run before numpy is first imported: the
   problems here are tiny (matrices of order <= 10), where a multi-threaded
   BLAS only adds variance (one ``mixsyn`` call once took 9 s under OpenBLAS
-  thread contention).
+  thread contention). It also makes idle OpenMP workers sleep
+  (``OMP_WAIT_POLICY=PASSIVE``): numba's parallel batch runs on libgomp,
+  whose workers otherwise spin for milliseconds after each parallel region,
+  and their spinning is CPU time of this process. Measured (issue 13): the
+  first 0.1 s simulation after a 64-plant batch took 52-65 ns per plant step
+  of CPU time against ~31 before the batch (and 150-220 ns of wall time: the
+  spinning threads held both cores); 31 with the passive policy.
 * :func:`interleaved` times the routes alternately in one run (A B A B ...),
   so that a slow spell of the shared machine hits every route alike;
   :func:`ratio` reports the per-round ratio A_i/B_i as its median and
@@ -13,8 +19,14 @@
   counts the time the process waited for a core. That waiting is what made
   the "slow spells" of issue 13 (the simulator at 70-85 ns per plant step for
   tens of calls while its CPU time stayed at ~48 ns: the load average was 4-6
-  on 2 cores, other processes held them; wall/CPU reached 2-3). A
-  multi-threaded route (the parallel batch) must be timed on the wall clock.
+  on 2 cores, other processes held them; wall/CPU reached 2-3). Reproduced
+  once the kernel ran at ~29 ns per step of CPU time: 60 consecutive 1 s
+  simulations, with 5-8 runnable processes on the 2 cores, took a median
+  58 ns per step of wall time (max 80) while their CPU time stayed within
+  28.7-32.5 ns, no steal time in /proc/stat; 60 more beside a pytest run
+  (5-9 runnable) took 100-183 ns of wall time and 28.7-31.8 ns of CPU time.
+  ``bench_sim`` prints both per call. A multi-threaded route (the parallel batch) must be timed on the
+  wall clock.
 """
 
 from __future__ import annotations
@@ -29,9 +41,12 @@ BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
 
 
 def pin_blas_threads(n: int = 1) -> None:
-    """Set the BLAS/OpenMP thread counts (only effective before ``import numpy``)."""
+    """Set the BLAS/OpenMP thread counts (only effective before ``import numpy``)
+    and let idle OpenMP workers sleep instead of spinning (module docstring;
+    effective until numba first starts its threads)."""
     for key in BLAS_ENV:
         os.environ[key] = str(n)
+    os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
 
 
 def interleaved(routes: Mapping[str, Callable[[], object]], rounds: int,

@@ -91,7 +91,7 @@ def test_kernel_rhs_is_the_derived_model(convention):
     args = (S["R"], S["L_d"], S["L_q"], S["psi_f"], S["p"], S["J"], S["F"], S["i_d"],
             S["i_q"], S["Omega"], S["v_d"], S["v_q"], S["T_L"])
     rhs = sp.lambdify(args, f, "numpy")
-    pl = tuple(_plant_array(motor))
+    pl = _kernel._plant(_plant_array(motor))  # the tuple run() passes, reciprocals included
     for i_d, i_q, om, th, vd, vq, tl in _points():
         did, diq, dom, w = _kernel._deriv(i_d, i_q, om, th, vd, vq, 0, pl, tl, 0, 0.0)
         ref = np.array(rhs(motor.R, motor.Ld, motor.Lq, motor.flux, motor.pole_pairs,
@@ -106,7 +106,7 @@ def test_kernel_rhs_stationary_frame_and_imposed_speed():
     (inverse of ``_to_ab``); mech = 1 imposes dOmega/dt = acc."""
     motor = MOTORS["amplitude"]
     plant = numeric_plant(motor)
-    pl = tuple(_plant_array(motor))
+    pl = _kernel._plant(_plant_array(motor))  # the tuple run() passes, reciprocals included
     for i_d, i_q, om, th, vd, vq, tl in _points(seed=2):
         va, vb = _kernel._to_ab(vd, vq, math.cos(th), math.sin(th))
         did, diq, dom, _ = _kernel._deriv(i_d, i_q, om, th, va, vb, 1, pl, tl, 1, 123.0)

@@ -41,13 +41,25 @@ anti-windup and voltage limit, predictive choice, inverter and plant RK4);
 the plant state lives in local scalars, not in an array, so that LLVM keeps
 it in registers across the RK4 stages (issue 13).
 
-No ``fastmath``: allowing FMA contraction and reciprocal division
-(``{"contract", "arcp"}`` on the plant helpers) saved 5-8 % per step on the
-issue 13 benchmark, but it changes results in the last bits and makes them
-depend on whether the host CPU has FMA, while ``verify.json`` must be the same
-bytes on every machine (toolbox/ARCHITECTURE.md "Reliability rules"). The
-kernel has no NaN checks of its own; the flags that assume finite values
-("nnan", "ninf") would break the divergence detection of the metrics anyway.
+Arithmetic (issue 13). The 1 us loop is bound by the latency of one
+dependency chain (the four RK4 stages in sequence, each ending in a
+division), so the plant multiplies by ``1/Ld``, ``1/Lq``, ``1/J`` computed once
+per run (:func:`_plant`) instead of dividing: a division costs ~13 cycles, a
+multiplication 3, and the loop runs ~30 % faster. Each derivative then
+carries one more rounding (<= 1 ulp instead of 0.5), 1e-16 relative, far below
+the RK4 truncation error; results moved by that much once, when this was
+introduced, and are plain IEEE operations in a fixed order, the same on every
+x86-64 CPU. No ``fastmath``: ``{"contract"}`` on the substep loop (FMA) saved
+another 9 % (29.1 -> 26.5 ns per step), and is deterministic run to run and
+between :func:`run` and :func:`run_batch`, but whether LLVM may fuse depends on
+the host CPU (the numba cache is compiled for it), so verify.json's digits of
+the dq-frame scenarios would differ between machines with and without FMA,
+which today they do not ("same spec, same bytes", toolbox/ARCHITECTURE.md).
+(The angle-dependent scenarios already differ there in the last bits: glibc
+picks FMA variants of sin, cos, log by CPU, which numba calls: with FMA
+disabled through GLIBC_TUNABLES, 1 in 1,300 sines differed by 1 ulp.) ``reassoc``/``arcp`` would let LLVM choose the
+evaluation order; the flags that assume finite values ("nnan", "ninf") would
+break the divergence detection of the metrics.
 Metrics are accumulated online (see :mod:`toolbox.sim._metrics` for their
 definitions); traces are optional and decimated, so memory is flat in the
 simulated duration when only metrics are requested.
@@ -122,8 +134,20 @@ def pack_indices(array: str = "SC") -> dict[str, int]:
     return {n: i for i, n in enumerate(LAYOUTS[array])}
 
 
+#: Decorator of the kernel's functions. ``error_model="numpy"``: a division by
+#: zero gives inf/nan (IEEE) instead of a Python ZeroDivisionError, which drops
+#: a compare-and-branch before every division of the 1 us loop; every divisor
+#: there is a validated positive parameter or guarded (issue 13).
+_jit = njit(cache=True, error_model="numpy")
+#: The helpers of the 1 us substep loop, inlined into it in numba's IR: called
+#: as separate functions, each RK4 step passed ~20 arguments through the stack
+#: and returned its state through memory (issue 13: 43.3 -> 41.5 ns per step).
+#: The law step too, once per period (its fixed cost per period ~170 -> ~110 ns).
+_jit_inline = njit(cache=True, error_model="numpy", inline="always")
+
+
 # --------------------------------------------------------------------------- RNG
-@njit(cache=True)
+@_jit
 def _splitmix(st):
     """splitmix64 step on the 1-element uint64 state array; returns a float in [0, 1)."""
     z = st[0] + np.uint64(0x9E3779B97F4A7C15)
@@ -134,7 +158,7 @@ def _splitmix(st):
     return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@njit(cache=True)
+@_jit
 def _noise(st, amp, kind):
     """Uniform noise in [-amp, amp] (kind 0) or Gaussian of std amp (kind 1, Box-Muller)."""
     if amp == 0.0:
@@ -149,53 +173,58 @@ def _noise(st, amp, kind):
 
 
 # ------------------------------------------------------------ frames and plant
-@njit(cache=True)
+@_jit
 def _to_dq(va, vb, c, s):
     """Park rotation of a stationary-frame vector by the angle whose cos, sin are c, s."""
     return va * c + vb * s, -va * s + vb * c
 
 
-@njit(cache=True)
+@_jit
 def _to_ab(vd, vq, c, s):
     """Inverse Park rotation (dq -> stationary frame)."""
     return vd * c - vq * s, vd * s + vq * c
 
 
-@njit(cache=True)
+@_jit
 def _plant(P):
-    """The plant array as a tuple (R, Ld, Lq, flux, p, J, friction, tf): passed by
-    value, so the parameters stay in registers inside the RK4 loop."""
-    return (P[P_R], P[P_LD], P[P_LQ], P[P_FLUX], P[P_POLE_PAIRS], P[P_J],
-            P[P_FRICTION], P[P_TORQUE_FACTOR])
+    """The plant array as a tuple (R, Ld, Lq, flux, p, J, friction, tf, 1/Ld,
+    1/Lq, 1/J): passed by value, so the parameters stay in registers inside the
+    RK4 loop. The reciprocals are computed once per run: each RK4 stage then
+    multiplies instead of dividing (module docstring, "Arithmetic")."""
+    Ld = P[P_LD]
+    Lq = P[P_LQ]
+    J = P[P_J]
+    return (P[P_R], Ld, Lq, P[P_FLUX], P[P_POLE_PAIRS], J, P[P_FRICTION],
+            P[P_TORQUE_FACTOR], 1.0 / Ld, 1.0 / Lq, 1.0 / J)
 
 
-@njit(cache=True)
+@_jit_inline
 def _torque(pl, i_d, i_q):
     """Electromagnetic torque ``tf p (flux iq + (Ld - Lq) id iq)`` (N m)."""
     return pl[7] * pl[4] * (pl[3] * i_q + (pl[1] - pl[2]) * i_d * i_q)
 
 
-@njit(cache=True)
+@_jit_inline
 def _deriv(i_d, i_q, om, th, vx, vy, frame, pl, t_load, mech, acc):
     """Right-hand side of the plant (module docstring); frame 1: (vx, vy) stationary."""
-    R, Ld, Lq, flux, p, J, friction, tf = pl
+    R, Ld, Lq, flux, p, _, friction, tf, inv_Ld, inv_Lq, inv_J = pl
     w = p * om
     if frame == 0:
         vd = vx
         vq = vy
     else:  # stationary-frame voltage held constant: rotate into dq
         vd, vq = _to_dq(vx, vy, math.cos(th), math.sin(th))
-    did = (vd - R * i_d + w * Lq * i_q) / Ld
-    diq = (vq - R * i_q - w * Ld * i_d - w * flux) / Lq
+    did = (vd - R * i_d + w * Lq * i_q) * inv_Ld
+    diq = (vq - R * i_q - w * Ld * i_d - w * flux) * inv_Lq
     if mech == 1:
         dom = acc
     else:
         torque = tf * p * (flux * i_q + (Ld - Lq) * i_d * i_q)
-        dom = (torque - friction * om - t_load) / J
+        dom = (torque - friction * om - t_load) * inv_J
     return did, diq, dom, w
 
 
-@njit(cache=True)
+@_jit_inline
 def _rk4(i_d, i_q, om, th, vx, vy, frame, dt, pl, t_load, mech, acc):
     """One classical RK4 step of the plant state (id, iq, Omega, theta); returns the new state."""
     a1, b1, c1, d1 = _deriv(i_d, i_q, om, th, vx, vy, frame, pl, t_load, mech, acc)
@@ -214,7 +243,7 @@ def _rk4(i_d, i_q, om, th, vx, vy, frame, dt, pl, t_load, mech, acc):
 
 
 # ---------------------------------------------------------------- online metrics
-@njit(cache=True)
+@_jit
 def _metric_setup(SC):
     """Constants of the step metrics: (signal, y0, yf, steady-state start, t_step).
 
@@ -233,7 +262,7 @@ def _metric_setup(SC):
     return sig, y0, yf, 0.9 * SC[SC_DURATION] - 1e-12, SC[SC_T_STEP] - 1e-12
 
 
-@njit(cache=True)
+@_jit_inline
 def _accumulate(acc_m, i_d, i_q, om, t, dt, pl, refs, mset):
     """Online metrics at the start of a plant step of length dt (time-weighted)."""
     idr, iqr, sr, tref = refs
@@ -274,7 +303,7 @@ def _accumulate(acc_m, i_d, i_q, om, t, dt, pl, refs, mset):
             acc_m[_A_OVER] = over
 
 
-@njit(cache=True)
+@_jit
 def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, refs,
              mset):
     """Integrate the state x = (id, iq, Omega, theta) over ``dur`` with ceil(dur/h)
@@ -296,7 +325,7 @@ def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, 
 
 
 # ------------------------------------------------------------------- controller
-@njit(cache=True)
+@_jit
 def _sense(x, rng, SC):
     """Sampled sensors (paper 000: gain/offset/noise on the speed; noise and
     quantisation on the currents); returns (id_m, iq_m, Omega_m)."""
@@ -312,7 +341,7 @@ def _sense(x, rng, SC):
     return i_d_m, i_q_m, om_m
 
 
-@njit(cache=True)
+@_jit
 def _delayed(v, k, nd, buf):
     """``v`` measured ``nd`` periods ago (ring buffer ``buf`` of ``nd + 1``
     samples); 0 before the first one exists (the currents start at 0)."""
@@ -325,7 +354,7 @@ def _delayed(v, k, nd, buf):
     return buf[(k - nd) % nb]
 
 
-@njit(cache=True)
+@_jit
 def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
     """Gain and measurement delay (whole periods) on each measured current
     (paper 002 sect. 5: a gain and a time delay on the state variables
@@ -334,7 +363,7 @@ def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
             _delayed(i_q_m * SC[SC_CURRENT_GAIN_Q], k, int(SC[SC_CURRENT_DELAY_Q]), buf_q))
 
 
-@njit(cache=True)
+@_jit
 def _references(t, SC):
     """Current and speed references at sample time t: (id_ref, iq_ref, speed_ref)."""
     before = t < SC[SC_T_STEP]
@@ -351,7 +380,7 @@ def _references(t, SC):
     return idr, iqr, sr
 
 
-@njit(cache=True)
+@_jit
 def _speed_pid(e, e_prev, integ, Tsp, SP):
     """One step of the speed PID with conditional integration (anti-windup).
 
@@ -370,30 +399,29 @@ def _speed_pid(e, e_prev, integ, Tsp, SP):
     return u, integ
 
 
-@njit(cache=True)
-def _linear(A, B, C, D, x, r, y):
-    """Output (without anti-windup) of one discrete axis controller."""
-    n = x.shape[0]
-    u = D[0] * r + D[1] * y
-    for i in range(n):
-        u += C[i] * x[i]
+@_jit_inline
+def _linear(C, D, ax, x, r, y):
+    """Output (without anti-windup) of the axis ``ax`` controller (0 d, 1 q)."""
+    u = D[ax, 0] * r + D[ax, 1] * y
+    for i in range(x.shape[0]):
+        u += C[ax, i] * x[i]
     return u
 
 
-@njit(cache=True)
-def _update(A, B, Baw, x, xn, r, y, dv):
-    """Next state ``A x + B [r, y] + Baw dv`` of one axis controller, in place."""
+@_jit_inline
+def _update(A, B, Baw, ax, x, xn, r, y, dv):
+    """Next state ``A x + B [r, y] + Baw dv`` of the axis ``ax`` controller, in place."""
     n = x.shape[0]
     for i in range(n):
-        v = B[i, 0] * r + B[i, 1] * y + Baw[i] * dv
+        v = B[ax, i, 0] * r + B[ax, i, 1] * y + Baw[ax, i] * dv
         for j in range(n):
-            v += A[i, j] * x[j]
+            v += A[ax, i, j] * x[j]
         xn[i] = v
     for i in range(n):
         x[i] = xn[i]
 
 
-@njit(cache=True)
+@_jit_inline
 def _voltage_limit(vd_u, vq_u, th_m, w_m, DP):
     """Saturated dq voltage: circle of radius v_max, or the SVM hexagon at the
     angle where the voltage will be applied (theta + w (delay + 1/2) Ts)."""
@@ -411,23 +439,23 @@ def _voltage_limit(vd_u, vq_u, th_m, w_m, DP):
     return vd_u, vq_u
 
 
-@njit(cache=True)
+@_jit_inline
 def _law_step(A, B, C, D, Baw, xd, xq, xn, idr, iqr, i_d_m, i_q_m, w_m, th_m, LP, DP):
     """Linear current laws + decoupling (paper 000 eq (11)/(20)), voltage limit and
     back-calculation anti-windup; updates the law states, returns
     (vd, vq saturated, saturated?)."""
     cross = LP[LP_CROSS]
-    ud = _linear(A[0], B[0], C[0], D[0], xd, idr, i_d_m)
-    uq = _linear(A[1], B[1], C[1], D[1], xq, iqr, i_q_m)
+    ud = _linear(C, D, 0, xd, idr, i_d_m)
+    uq = _linear(C, D, 1, xq, iqr, i_q_m)
     vd_u = ud - cross * w_m * LP[LP_LQ_C] * i_q_m
     vq_u = uq + cross * w_m * LP[LP_LD_C] * i_d_m + LP[LP_EMF] * w_m * LP[LP_FLUX_C]
     vd_s, vq_s = _voltage_limit(vd_u, vq_u, th_m, w_m, DP)
-    _update(A[0], B[0], Baw[0], xd, xn, idr, i_d_m, vd_s - vd_u)
-    _update(A[1], B[1], Baw[1], xq, xn, iqr, i_q_m, vq_s - vq_u)
+    _update(A, B, Baw, 0, xd, xn, idr, i_d_m, vd_s - vd_u)
+    _update(A, B, Baw, 1, xq, xn, iqr, i_q_m, vq_s - vq_u)
     return vd_s, vq_s, (vd_s != vd_u or vq_s != vq_u)
 
 
-@njit(cache=True)
+@_jit
 def _euler_predict(i_d, i_q, vd, vq, w, Ts, LP):
     """One forward-Euler step of the controller's dq model (paper 002 eq (23) predictor)."""
     R_c = LP[LP_R_C]
@@ -437,7 +465,7 @@ def _euler_predict(i_d, i_q, vd, vq, w, Ts, LP):
             i_q + Ts / Lq_c * (vq - R_c * i_q - w * Ld_c * i_d - w * LP[LP_FLUX_C]))
 
 
-@njit(cache=True)
+@_jit
 def _fcs_choice(i_d_m, i_q_m, w_m, th_m, idr, iqr, conf_prev, predict, Ts, r_hex, LP):
     """Boolean predictive control, paper 002 criterion (23): the switch state of
     least ``alpha (iq - iq_ref)^2 + beta (id - id_ref)^2 + gamma commutations``.
@@ -474,7 +502,7 @@ def _fcs_choice(i_d_m, i_q_m, w_m, th_m, idr, iqr, conf_prev, predict, Ts, r_hex
     return best
 
 
-@njit(cache=True)
+@_jit
 def _svm_period(x, t, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, omega0, acc_m,
                 refs, mset, DP):
     """One period of space-vector modulation, paper 002 eq (21)-(22): the symmetric
@@ -497,7 +525,7 @@ def _svm_period(x, t, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, omega0,
     return t, x, conf
 
 
-@njit(cache=True)
+@_jit
 def _duties(va, vb, r_hex):
     """Leg duty cycles (d_a, d_b, d_c) in [0, 1] of the stationary-frame voltage
     (va, vb) by min-max (zero-sequence) injection: the regular-sampled carrier
@@ -511,7 +539,7 @@ def _duties(va, vb, r_hex):
             min(max(xc + off, 0.0), 1.0))
 
 
-@njit(cache=True)
+@_jit
 def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, omega0,
                   acc_m, refs, mset, r_hex):
     """One half period ``th_dur`` of the symmetric triangle carrier.
@@ -563,7 +591,7 @@ def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, ome
     return t, x, conf
 
 
-@njit(cache=True)
+@_jit
 def _carrier_period(x, t, k, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, omega0,
                     acc_m, refs, mset, DP):
     """One controller period of carrier-based PWM at ``drive.switching_frequency``:
@@ -589,7 +617,7 @@ def _carrier_period(x, t, k, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, 
 
 
 # ---------------------------------------------------------------------- metrics
-@njit(cache=True)
+@_jit
 def _finalise(acc_m, n_per, Ts, om_final, t_step, mset):
     """Metrics (order of ``_metrics.METRIC_NAMES``) from the accumulators."""
     M = np.full(N_METRICS, np.nan)
@@ -625,7 +653,7 @@ def _finalise(acc_m, n_per, Ts, om_final, t_step, mset):
 
 
 # ------------------------------------------------------------------ simulation
-@njit(cache=True)
+@_jit
 def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     """One closed-loop simulation.
 
@@ -792,7 +820,7 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     return _finalise(acc_m, n_per, Ts, x[2], SC[SC_T_STEP], mset), tr
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, error_model="numpy")
 def run_batch(P, A, B, C, D, Baw, LP, SP, DP, SC):
     """Metrics of N simulations, one per row of the plant-parameter array P (N, 8).
 
