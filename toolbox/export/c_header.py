@@ -872,8 +872,11 @@ def _environment():
     global _ENV
     if _ENV is None:
         import jinja2
+
+        from .._cache import template_bytecode_cache
         _ENV = jinja2.Environment(
             loader=jinja2.FileSystemLoader(str(TEMPLATES)), autoescape=False,
+            bytecode_cache=template_bytecode_cache(__file__),
             trim_blocks=True, lstrip_blocks=True, undefined=jinja2.StrictUndefined)
     return _ENV
 

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import jinja2
 
+from .._cache import template_bytecode_cache
+
 __all__ = ["write_html", "render_html"]
 
 TEMPLATES = Path(__file__).parent / "templates"
@@ -21,6 +23,7 @@ TEMPLATES = Path(__file__).parent / "templates"
 def _environment() -> jinja2.Environment:
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(TEMPLATES)),
+        bytecode_cache=template_bytecode_cache(__file__),
         autoescape=True,  # every template, whatever its extension
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,

@@ -26,6 +26,8 @@ from pathlib import Path
 
 import jinja2
 
+from .._cache import template_bytecode_cache
+
 __all__ = ["write_pdf", "render_typst", "typst_string", "escape_markup"]
 
 TEMPLATES = Path(__file__).parent / "templates"
@@ -72,6 +74,7 @@ def escape_markup(value: object) -> str:
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(TEMPLATES)),
+        bytecode_cache=template_bytecode_cache(__file__),
         autoescape=False,  # typst, not HTML: strings go through the ``ts`` filter
         undefined=jinja2.StrictUndefined,
         block_start_string="<%", block_end_string="%>",
