@@ -10,6 +10,7 @@ the continuous certificate certifies a box that the sampled loop loses
 """
 
 import dataclasses
+import functools
 import json
 import math
 
@@ -34,11 +35,28 @@ PROFILE = settings(max_examples=60, deadline=None, derandomize=True,
                    suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
+@functools.cache
+def gallery_design(name: str):
+    """(spec, artifact) of a gallery design, designed once per process
+    (both are frozen; the tests only read them)."""
+    spec = load_spec(DESIGNS[name])
+    return spec, design_spec(spec)
+
+
+@functools.cache
+def largest_box_linearisation():
+    """(Ts, box, linearisation) of 003's plant on the largest box (scale 1): the
+    same for every example of the remainder test, so computed once."""
+    spec = load_spec(DESIGNS["hinf003"])
+    Ts = spec.drive.sample_time
+    box = SampledBox.around(spec.motor, 1.0, omega_max=920.0)
+    return Ts, box, S._linearisation(box, Ts)
+
+
 @pytest.fixture(scope="module", params=sorted(DESIGNS))
 def case(request):
     """(spec, artifact, certificate) of a gallery design (one bisection each)."""
-    spec = load_spec(DESIGNS[request.param])
-    art = design_spec(spec)
+    spec, art = gallery_design(request.param)
     return spec, art, largest_certified_sampled_scale(art, spec.motor, spec.drive)
 
 
@@ -49,8 +67,7 @@ def _laws(art):
 def test_state_matrix_is_the_executed_loop():
     """coupled_state_matrix with the exact ZOH matrices is coupled_closed_loop's
     state matrix (the certificate's loop is the sweep's loop), bit for bit."""
-    spec = load_spec(DESIGNS["hinf003"])
-    art = design_spec(spec)
+    spec, art = gallery_design("hinf003")
     rng = np.random.default_rng(3)
     R, Ld, Lq = (v * np.exp(rng.uniform(-0.7, 0.7, 20))
                  for v in (spec.motor.R, spec.motor.Ld, spec.motor.Lq))
@@ -69,10 +86,7 @@ def test_remainder_bounds_the_exact_discretisation(u):
     ``[Phi, Psi]`` is within ``rho`` (2-norm) of the linear parts at every
     point of the cell; ``rho`` is an over-bound (measured about 20x the worst
     error), so the test fails only if the bound were wrong."""
-    spec = load_spec(DESIGNS["hinf003"])
-    Ts = spec.drive.sample_time
-    box = SampledBox.around(spec.motor, 1.0, omega_max=920.0)
-    lin = S._linearisation(box, Ts)
+    Ts, box, lin = largest_box_linearisation()
     lo = np.array([box.R[0], box.Ld[0], box.Lq[0], box.omega[0]])
     hi = np.array([box.R[1], box.Ld[1], box.Lq[1], box.omega[1]])
     p = lo + np.array(u) * (hi - lo)
@@ -147,8 +161,7 @@ def test_continuous_certifies_where_sampled_refuses():
     the nominal point) is certified by the continuous LMI on the whole default
     box, but half the inductance doubles the sampled loop gain past 2: the
     sampled certificate refuses that box and names an unstable corner."""
-    spec = load_spec(DESIGNS["pi002"])
-    art = design_spec(spec)
+    spec, art = gallery_design("pi002")
     cont = largest_certified_scale(art, spec.motor, spec.drive)
     assert cont.certified and cont.scale == 1.0
     wmax = max_electrical_speed(spec.motor, spec.drive)
@@ -162,8 +175,7 @@ def test_warm_start_and_fresh_solve_agree_on_nominal_point():
     """The nominal point (scale 0) of a stable design is certified by a fresh
     LMI solve, and the matrix found certifies it again as a warm start; a
     Lyapunov matrix that is not one (indefinite) is rejected by the check."""
-    spec = load_spec(DESIGNS["hinf003"])
-    art = design_spec(spec)
+    spec, art = gallery_design("hinf003")
     box = SampledBox.around(spec.motor, 0.0)
     guesses: dict = {}
     ok, out = certify_sampled(art, box, speed_cells=1, guesses=guesses)

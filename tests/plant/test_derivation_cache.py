@@ -127,11 +127,13 @@ def test_wrong_type_in_cache_is_recomputed(derivations):
 
 
 @pytest.mark.parametrize("convention", _symbolic.CONVENTIONS)
-def test_cached_numeric_model_equals_lambdify(tmp_path, monkeypatch, convention):
+def test_cached_numeric_model_equals_lambdify(derivations, tmp_path, monkeypatch, convention):
     """The numeric A(omega), B, e(omega) re-created from the cached code of
     lambdify (toolbox/plant/_numeric.py) return exactly, bit for bit, what the
     functions lambdify returns do, at random parameter points; the second call
-    reads the cache (the code is not generated again)."""
+    reads the cache (the code is not generated again). The symbolic model is
+    the module's reference derivation (``derivations``): the private cache
+    directory is empty, so it would otherwise be derived again (2 s each)."""
     import numpy as np
     import sympy as sp
 
