@@ -443,7 +443,9 @@ def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
 
 
 def _rank_defect(M: np.ndarray, tol: float) -> bool:
-    """True when the tall-or-square matrix M loses column rank."""
+    """True when the tall-or-square matrix M loses column rank (a row-rank test
+    passes the transpose: its singular values are those of the conjugate
+    transpose, so no conjugated copy is made)."""
     if M.shape[1] == 0:
         return False
     if M.shape[0] < M.shape[1]:
@@ -506,7 +508,7 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionReport
     for lam in modes:
         M = P.A - 1j * lam.imag * np.eye(n)
         src, where = _blame_mode(P, lam), _where(lam)
-        if _rank_defect(np.hstack([M, P.B2]).conj().T, tol):
+        if _rank_defect(np.concatenate([M, P.B2], axis=1).T, tol):
             problems.append(f"A1 fails (not stabilisable): {src} has a pole at {where} "
                             f"that u cannot move: move it to a small negative value")
         if _rank_defect(np.vstack([M, P.C2]), tol):
@@ -519,7 +521,7 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionReport
         if _rank_defect(_blocks2x2(M, P.B2, P.C1, P.D12), tol):
             problems.append(f"A3 fails: the weighted plant has an invariant zero at {where}: "
                             f"move the pole or zero of w2/w3 (or of G) off the imaginary axis")
-        if _rank_defect(_blocks2x2(M, P.B1, P.C2, P.D21).conj().T, tol):
+        if _rank_defect(_blocks2x2(M, P.B1, P.C2, P.D21).T, tol):
             problems.append(f"A4 fails: {_blame_mode(P, lam) if modes else 'the plant'} "
                             f"gives a rank loss at {where}: move its pole to a small "
                             f"negative value")
@@ -559,17 +561,17 @@ def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
     n = P.nx
     if n == 0:
         return P, np.ones(0)
-    B = np.hstack([P.B1, P.B2])
-    C = np.vstack([P.C1, P.C2])
-    m, p = B.shape[1], C.shape[0]
-    N = n + max(m, p)
-    M = np.zeros((N, N))
+    m1, p1 = P.nw, P.nz
+    m, p = m1 + P.nu, p1 + P.ny
+    M = np.zeros((n + max(m, p),) * 2)
     M[:n, :n] = P.A
-    M[:n, n:n + m] = B
-    M[n:n + p, :n] = C
+    M[:n, n:n + m1] = P.B1
+    M[:n, n + m1:n + m] = P.B2
+    M[n:n + p1, :n] = P.C1
+    M[n + p1:n + p, :n] = P.C2
     t = 2.0 ** np.round(np.log2(_balancing(M)[:n]))
-    Ps = P._derived(A=P.A * t[None, :] / t[:, None], B1=P.B1 / t[:, None],
-                    B2=P.B2 / t[:, None], C1=P.C1 * t[None, :], C2=P.C2 * t[None, :])
+    ti = (1.0 / t)[:, None]                  # exact: t holds powers of two
+    Ps = P._derived(A=P.A * (ti * t), B1=P.B1 * ti, B2=P.B2 * ti, C1=P.C1 * t, C2=P.C2 * t)
     return Ps, t
 
 
@@ -593,13 +595,12 @@ def _normalise(P: PartitionedPlant) -> _Normalised:
     """
     m2, p2 = P.nu, P.ny
     U, s12, V12t = _svd(P.D12)            # D12 = U [S;0] V^T
-    Uz = np.vstack([U[:, m2:].T, U[:, :m2].T])      # Uz D12 = [0; S V^T]
-    R12 = np.diag(s12) @ V12t
+    Uz = np.concatenate([U[:, m2:], U[:, :m2]], axis=1).T   # Uz D12 = [0; S V^T]
     U21, s21, V21t = _svd(P.D21)           # D21 = U [S 0] V^T
-    V = V21t.T
-    VwT = np.hstack([V[:, p2:], V[:, :p2]])         # D21 VwT = [0, U S]
-    R21 = U21 @ np.diag(s21)
-    R12inv, R21inv = _inv(R12), _inv(R21)
+    VwT = np.concatenate([V21t[p2:], V21t[:p2]]).T           # D21 VwT = [0, U S]
+    # R12 = S V^T and R21 = U S are inverted from their factors (orthogonal
+    # transposes, 1/s), not by an LU of the product
+    R12inv, R21inv = V12t.T / s12, U21.T / s21[:, None]
     Pn = P._derived(B1=P.B1 @ VwT, B2=P.B2 @ R12inv, C1=Uz @ P.C1, C2=R21inv @ P.C2,
                     D11=Uz @ P.D11 @ VwT, D12=Uz @ P.D12 @ R12inv,
                     D21=R21inv @ P.D21 @ VwT, D22=np.zeros_like(P.D22))
@@ -733,7 +734,7 @@ def _psd(X: np.ndarray, tol: float = 1e-9) -> bool:
     return bool(ev[0] >= -tol * max(1.0, -ev[0], ev[-1]))
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _GammaFree:
     """The parts of eq (10)-(17) that do not depend on gamma, formed once per
     plant and reused at every gamma of the iteration (issue 13)."""
@@ -884,31 +885,45 @@ def _check_gamma(gamma: Any) -> float:
 # central controller, Theorem 2, eq (20)-(32)
 # --------------------------------------------------------------------------
 def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.ndarray, ...]:
-    """Eq (20)-(32) of paper 003 (Zhou-Doyle-Glover general formulae)."""
-    g2 = res.gamma**2
+    """Eq (20)-(32) of paper 003 (Zhou-Doyle-Glover general formulae).
+
+    The inverses of eq (24)-(27) enter as linear solves, each solved once for
+    all the right-hand sides that need it; with an empty D1111 (paper 003:
+    w and y are both scalar) the gamma^2 I - D1111 D1111^T of eq (24)-(26) is
+    gamma^2 I exactly and no system is solved for it.
+    """
+    g2 = res.gamma * res.gamma
     w = res._work
     X, Y = res.X, res.Y
-    m1, m2, p1, p2, n = Pn.nw, Pn.nu, Pn.nz, Pn.ny, Pn.nx
+    m1, m2, p1, p2 = Pn.nw, Pn.nu, Pn.nz, Pn.ny
     D1111, D1112, D1121, D1122 = _d11_blocks(Pn)
-    F = -_solve(w["Rnh"], w["D1s"].T @ Pn.C1 + w["B"].T @ X)   # eq (20)
-    L = -_solve(w["Rnj"].T, (Pn.B1 @ w["Ds1"].T + Y @ w["C"].T).T).T  # eq (21)
+    B, C, A = w["B"], w["C"], Pn.A
+    F = -_solve(w["Rnh"], w["D1s"].T @ Pn.C1 + B.T @ X)               # eq (20)
+    # eq (21): L = -(B1 Ds1^T + Y C^T) Rnj^-1, Rnj symmetric (eq 15)
+    L = -_solve(w["Rnj"], w["Ds1"] @ Pn.B1.T + C @ Y.T).T
     F12, F2 = F[m1 - p2:m1], F[m1:]
     L12, L2 = L[:, p1 - m2:p1], L[:, p1:]
-    r = D1111.shape[0]
-    inv_a = _inv(g2 * np.eye(r) - D1111 @ D1111.T) if r else np.zeros((0, 0))
-    inv_b = (_inv(g2 * np.eye(D1111.shape[1]) - D1111.T @ D1111)
-             if D1111.shape[1] else np.zeros((0, 0)))
-    D11h = -D1121 @ D1111.T @ inv_a @ D1112 - D1122                   # eq (24)
-    T2 = np.eye(m2) - D1121 @ inv_b @ D1121.T                         # eq (25)
-    T3 = np.eye(p2) - D1112.T @ inv_a @ D1112                         # eq (26)
+    if D1111.size:
+        r, c = D1111.shape
+        Ka = _solve(g2 * np.eye(r) - D1111 @ D1111.T, D1112)         # (g2 I - D D^T)^-1 D1112
+        Kb = _solve(g2 * np.eye(c) - D1111.T @ D1111, D1121.T)
+        D11h = -D1121 @ D1111.T @ Ka - D1122                          # eq (24)
+        T2 = np.eye(m2) - D1121 @ Kb                                  # eq (25)
+        T3 = np.eye(p2) - D1112.T @ Ka                                # eq (26)
+    else:
+        D11h = -D1122                                                 # eq (24)
+        T2 = np.eye(m2)                                               # eq (25)
+        T3 = np.eye(p2) - (D1112.T @ D1112) / g2                      # eq (26)
     D12h = _cholesky(T2)                                     # D12h D12h^T = T2
     D21h = _cholesky(T3).T                                   # D21h^T D21h = T3
-    Z = _inv(np.eye(n) - Y @ X / g2)                         # eq (27)
-    B2h = Z @ (Pn.B2 + L12) @ D12h                                    # eq (27)
+    # eq (27): Z = (I - Y X / gamma^2)^-1, applied to both B2 + L12 and L2 at once
+    ZB = _solve(np.eye(A.shape[0]) - (Y @ X) / g2, np.concatenate([Pn.B2 + L12, L2], axis=1))
+    B2h = ZB[:, :m2] @ D12h                                           # eq (27)
     C2h = -D21h @ (Pn.C2 + F12)                                       # eq (28), D21h
-    B1h = -Z @ L2 + B2h @ _solve(D12h, D11h)                 # eq (29)
-    C1h = F2 + D11h @ _solve(D21h, C2h)                      # eq (30), no U12
-    Ah = Pn.A + w["B"] @ F + B1h @ _solve(D21h, C2h)         # eq (31)
+    B1h = B2h @ _solve(D12h, D11h) - ZB[:, m2:]                       # eq (29)
+    S = _solve(D21h, C2h)                                    # D21h^-1 C2h of eq (30), (31)
+    C1h = F2 + D11h @ S                                      # eq (30), no U12
+    Ah = A + B @ F + B1h @ S                                 # eq (31)
     return Ah, B1h, C1h, D11h                                         # eq (32)
 
 
@@ -952,10 +967,10 @@ def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray,
     # undo u = R12^-1 u~ and y~ = R21^-1 y
     Bh, Ch, Dh = Bh @ prep.norm.R21inv, prep.norm.R12inv @ Ch, prep.norm.R12inv @ Dh @ prep.norm.R21inv
     # undo the state balancing x = T x_s (controller states live in plant coordinates)
-    t = prep.t
-    Ah, Bh, Ch = Ah * t[:, None] / t[None, :], Bh * t[:, None], Ch / t[None, :]
+    t = prep.t[:, None]
+    Ah, Bh, Ch = Ah * (t / prep.t), Bh * t, Ch / prep.t      # exact: powers of two
     D22 = prep.P.D22
-    if np.any(D22 != 0):
+    if D22.any():
         # loop shift u = K0 (y - D22 u): M = (I + Dk D22)^-1, u = M (Ck xk + Dk y)
         M = np.linalg.inv(np.eye(Dh.shape[0]) + Dh @ D22)
         Ah, Bh = Ah - Bh @ D22 @ M @ Ch, Bh @ (np.eye(D22.shape[0]) - D22 @ M @ Dh)
