@@ -224,7 +224,7 @@ def _svdvals(M: np.ndarray) -> np.ndarray:
     if M.size == 0:
         return np.zeros(0)
     # complex at an imaginary-axis mode (A - j w I) in the A1-A4 rank tests
-    _, s, _, info = (_zgesdd if np.iscomplexobj(M) else _dgesdd)(M, compute_uv=0)
+    _, s, _, info = (_zgesdd if M.dtype.kind == "c" else _dgesdd)(M, compute_uv=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
     return s
@@ -437,9 +437,15 @@ class AssumptionReport:
 
 
 def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
-    ev = _eigvals(A)
-    scale = max(1.0, float(np.max(np.abs(ev)))) if ev.size else 1.0
-    return ev[np.abs(ev.real) <= tol * scale]
+    """Eigenvalues of A within ``tol`` (relative to max(1, the largest |eigenvalue|))
+    of the imaginary axis."""
+    if A.shape[0] == 0:
+        return np.zeros(0, complex)
+    wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
+    on_axis = np.abs(wr) <= tol * max(1.0, np.hypot(wr, wi).max())
+    return (wr[on_axis] + 1j * wi[on_axis]) if on_axis.any() else np.zeros(0, complex)
 
 
 def _rank_defect(M: np.ndarray, tol: float) -> bool:
@@ -626,9 +632,47 @@ def _no_select(wr: float, wi: float) -> bool:
     return False
 
 
+@dataclass(slots=True)
+class _Hamiltonian:
+    """The gamma-free parts of the Hamiltonian (eq 16/17) of one Riccati equation
+    ``a^T X + X a - (X b + s) r^-1 (b^T X + s^T) + q = 0``: with them the
+    Hamiltonian at a given r is one solve and one product,
+
+    ``H = [[a, 0], [-q, -a^T]] - [b; -s] r^-1 [s^T, b^T]``
+
+    (whose blocks are ``a - b r^-1 s^T``, ``-b r^-1 b^T``, ``-(q - s r^-1 s^T)``
+    and ``-(a - b r^-1 s^T)^T`` for a symmetric r), formed once per plant for the
+    whole gamma iteration (issue 13)."""
+
+    a: np.ndarray
+    b: np.ndarray
+    q: np.ndarray
+    s: np.ndarray
+    H0: np.ndarray      # [[a, 0], [-q, -a^T]]
+    W: np.ndarray       # [b; -s]
+    V: np.ndarray       # [s^T, b^T]
+
+
+def _hamiltonian(a: np.ndarray, b: np.ndarray, q: np.ndarray, s: np.ndarray) -> _Hamiltonian:
+    n = a.shape[0]
+    H0 = np.zeros((2 * n, 2 * n))
+    H0[:n, :n] = a
+    H0[n:, :n] = -q
+    H0[n:, n:] = -a.T
+    return _Hamiltonian(a=a, b=b, q=q, s=s, H0=H0, W=np.concatenate([b, -s]),
+                        V=np.concatenate([s.T, b.T], axis=1))
+
+
 def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
          s: np.ndarray) -> tuple[np.ndarray | None, str]:
-    """Stabilising solution of a^T X + X a - (X b + s) r^-1 (b^T X + s^T) + q = 0.
+    """Stabilising solution of a^T X + X a - (X b + s) r^-1 (b^T X + s^T) + q = 0
+    (``r`` symmetric). Returns ``(X, "")`` or ``(None, reason)``; see
+    :func:`_ric_h`."""
+    return _ric_h(_hamiltonian(a, b, q, s), r)
+
+
+def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """:func:`_ric` of the equation with gamma-free parts ``h`` at ``r``.
 
     First the ordered real Schur form of the Hamiltonian (eq 16/17), one LAPACK
     ``dgees`` call sized for these problems (order <= ~10; scipy's
@@ -636,12 +680,13 @@ def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     the extended-pencil QZ, issue 13). When that route fails (no n stable
     eigenvalues, or an ill-conditioned basis Z11), scipy's generalised Schur
     method on the extended pencil, which does not invert the indefinite r, has
-    the last word. Returns ``(X, "")`` or ``(None, reason)``.
+    the last word.
     """
-    X, ev = _ric_schur(a, b, q, r, s)
+    X, ev = _ric_schur_h(h, r)
     if X is None:
+        a, b, s = h.a, h.b, h.s
         try:
-            X = sla.solve_continuous_are(a, b, q, r, s=s)
+            X = sla.solve_continuous_are(a, b, h.q, r, s=s)
         except (np.linalg.LinAlgError, ValueError):
             return None, ("the Hamiltonian has eigenvalues on the imaginary axis "
                           "or no stabilising solution exists")
@@ -655,22 +700,23 @@ def _ric(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
 
 def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
                s: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Hamiltonian (eq 16) ordered-Schur solution of the equation of :func:`_ric`
+    and the closed-loop poles; see :func:`_ric_schur_h`."""
+    return _ric_schur_h(_hamiltonian(a, b, q, s), r)
+
+
+def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Hamiltonian (eq 16) ordered-Schur solution and the closed-loop poles
     (the n selected eigenvalues of H, those of ``a - b r^-1 (b^T X + s^T)``);
     ``(None, None)`` if it does not exist or its basis Z11 is too
     ill-conditioned to give X = Z21 Z11^-1 accurately (1-norm condition
     estimate above 1e14)."""
-    n = a.shape[0]
+    n = h.a.shape[0]
     try:
-        rb = _solve(r, np.concatenate([b.T, s.T], axis=1))   # r^-1 [b^T, s^T]
+        rv = _solve(r, h.V)                                 # r^-1 [s^T, b^T]
     except np.linalg.LinAlgError:                           # singular r: the pencil route
         return None, None
-    E = a - b @ rb[:, n:]
-    H = np.empty((2 * n, 2 * n))
-    H[:n, :n] = E
-    H[:n, n:] = -b @ rb[:, :n]
-    H[n:, :n] = s @ rb[:, n:] - q
-    H[n:, n:] = -E.T
+    H = h.H0 - h.W @ rv
     # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
     # dgees's own sorting does, without a Python callback per eigenvalue
     T, _, wr, wi, Z, _, info = _dgees(_no_select, H, sort_t=0, overwrite_a=1)
@@ -684,7 +730,7 @@ def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
     lu, piv, info = _dgetrf(Z11t)
     if info != 0:
         return None, None
-    rcond, _ = _dgecon(lu, float(np.abs(Z11t).sum(axis=0).max()))
+    rcond, _ = _dgecon(lu, np.abs(Z11t).sum(axis=0).max())    # 1-norm
     if not rcond >= 1e-14:
         return None, None
     Xt, _ = _dgetrs(lu, piv, Z[n:, :n].T)                  # X^T = Z11^-T Z21^T
@@ -745,10 +791,8 @@ class _GammaFree:
     Ds1: np.ndarray     # eq (13)
     DtD: np.ndarray     # D1s^T D1s, eq (14) without gamma
     DDt: np.ndarray     # Ds1 Ds1^T, eq (15) without gamma
-    Qx: np.ndarray      # C1^T C1
-    Sx: np.ndarray      # C1^T D1s
-    Qy: np.ndarray      # B1 B1^T
-    Sy: np.ndarray      # B1 Ds1^T
+    Hx: _Hamiltonian    # eq (16): a = A, b = B, q = C1^T C1, s = C1^T D1s
+    Hy: _Hamiltonian    # eq (17): a = A^T, b = C^T, q = B1 B1^T, s = B1 Ds1^T
     bound: float        # condition (a): max(sigma(D1111 D1112), sigma(D1111; D1121))
 
 
@@ -761,8 +805,9 @@ def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     bound = max(_sigma_max(np.concatenate([D1111, D1112], axis=1)),
                 _sigma_max(np.concatenate([D1111, D1121])))
     return _GammaFree(B=B, C=C, D1s=D1s, Ds1=Ds1, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T,
-                      Qx=Pn.C1.T @ Pn.C1, Sx=Pn.C1.T @ D1s, Qy=Pn.B1 @ Pn.B1.T,
-                      Sy=Pn.B1 @ Ds1.T, bound=bound)
+                      Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),
+                      Hy=_hamiltonian(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Pn.B1 @ Ds1.T),
+                      bound=bound)
 
 
 def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
@@ -780,7 +825,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
     Rnh.flat[:m1 * (Rnh.shape[0] + 1):Rnh.shape[0] + 1] -= g2        # first m1 diagonal
     Rnj = w.DDt.copy()                                               # eq (15)
     Rnj.flat[:p1 * (Rnj.shape[0] + 1):Rnj.shape[0] + 1] -= g2
-    X, why = _ric(Pn.A, w.B, w.Qx, Rnh, w.Sx)                        # eq (16), (18)
+    X, why = _ric_h(w.Hx, Rnh)                                       # eq (16), (18)
     if X is None:
         return HinfFeasibility(gamma, False, "X_not_stabilising",
                                f"the X Riccati equation (18) has no stabilising solution "
@@ -789,7 +834,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "X_not_psd",
                                f"X of eq (18) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X)
-    Y, why = _ric(Pn.A.T, w.C.T, w.Qy, Rnj, w.Sy)                    # eq (17), (19)
+    Y, why = _ric_h(w.Hy, Rnj)                                       # eq (17), (19)
     if Y is None:
         return HinfFeasibility(gamma, False, "Y_not_stabilising",
                                f"the Y Riccati equation (19) has no stabilising solution "
@@ -798,7 +843,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "Y_not_psd",
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, Y=Y)
-    rho = float(np.abs(_eigvals(X @ Y)).max()) if n else 0.0
+    rho = _spectral_radius(X @ Y) if n else 0.0
     if rho >= g2:
         return HinfFeasibility(gamma, False, "rho",
                                f"rho(XY) = {rho:.6g} >= gamma^2 = {g2:.6g}",
@@ -806,6 +851,14 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
     work = dict(B=w.B, C=w.C, D1s=w.D1s, Ds1=w.Ds1, Rnh=Rnh, Rnj=Rnj)
     return HinfFeasibility(gamma, True, None, "conditions (a) and (b) of Theorem 1 hold",
                            X=X, Y=Y, rho=rho, _work=work)
+
+
+def _spectral_radius(M: np.ndarray) -> float:
+    """max |eigenvalue| of a non-empty real square matrix (LAPACK dgeev)."""
+    wr, wi, _, _, info = _dgeev(M, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
+    return float(np.hypot(wr, wi).max())
 
 
 @dataclass
