@@ -791,6 +791,8 @@ class _GammaFree:
     Ds1: np.ndarray     # eq (13)
     DtD: np.ndarray     # D1s^T D1s, eq (14) without gamma
     DDt: np.ndarray     # Ds1 Ds1^T, eq (15) without gamma
+    Ew: np.ndarray      # diag(I_m1, 0): eq (14) is DtD - gamma^2 Ew
+    Ez: np.ndarray      # diag(I_p1, 0): eq (15) is DDt - gamma^2 Ez
     Hx: _Hamiltonian    # eq (16): a = A, b = B, q = C1^T C1, s = C1^T D1s
     Hy: _Hamiltonian    # eq (17): a = A^T, b = C^T, q = B1 B1^T, s = B1 Ds1^T
     bound: float        # condition (a): max(sigma(D1111 D1112), sigma(D1111; D1121))
@@ -804,7 +806,9 @@ def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     Ds1 = np.concatenate([Pn.D11, Pn.D21])
     bound = max(_sigma_max(np.concatenate([D1111, D1112], axis=1)),
                 _sigma_max(np.concatenate([D1111, D1121])))
-    return _GammaFree(B=B, C=C, D1s=D1s, Ds1=Ds1, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T,
+    m1, p1 = Pn.nw, Pn.nz
+    Ew, Ez = np.diag([1.0] * m1 + [0.0] * Pn.nu), np.diag([1.0] * p1 + [0.0] * Pn.ny)
+    return _GammaFree(B=B, C=C, D1s=D1s, Ds1=Ds1, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
                       Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),
                       Hy=_hamiltonian(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Pn.B1 @ Ds1.T),
                       bound=bound)
@@ -815,16 +819,14 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
     """Theorem 1 on an already normalised, balanced plant (``gf``: its
     gamma-free products, formed here when not given)."""
     w = _gamma_free(Pn) if gf is None else gf
-    m1, p1, n = Pn.nw, Pn.nz, Pn.nx
+    n = Pn.nx
     if w.bound >= gamma:
         return HinfFeasibility(gamma, False, "D11",
                                f"condition (a) of Theorem 1 fails: max(sigma(D1111 D1112), "
                                f"sigma(D1111; D1121)) = {w.bound:.6g} >= gamma = {gamma:.6g}")
     g2 = gamma * gamma
-    Rnh = w.DtD.copy()                                               # eq (14)
-    Rnh.flat[:m1 * (Rnh.shape[0] + 1):Rnh.shape[0] + 1] -= g2        # first m1 diagonal
-    Rnj = w.DDt.copy()                                               # eq (15)
-    Rnj.flat[:p1 * (Rnj.shape[0] + 1):Rnj.shape[0] + 1] -= g2
+    Rnh = w.DtD - g2 * w.Ew                                          # eq (14)
+    Rnj = w.DDt - g2 * w.Ez                                          # eq (15)
     X, why = _ric_h(w.Hx, Rnh)                                       # eq (16), (18)
     if X is None:
         return HinfFeasibility(gamma, False, "X_not_stabilising",
