@@ -448,15 +448,16 @@ def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
     return (wr[on_axis] + 1j * wi[on_axis]) if on_axis.any() else np.zeros(0, complex)
 
 
-def _rank_defect(M: np.ndarray, tol: float) -> bool:
+def _rank_defect(M: np.ndarray, tol: float, sv: np.ndarray | None = None) -> bool:
     """True when the tall-or-square matrix M loses column rank (a row-rank test
     passes the transpose: its singular values are those of the conjugate
-    transpose, so no conjugated copy is made)."""
+    transpose, so no conjugated copy is made); ``sv``: M's singular values
+    when already computed."""
     if M.shape[1] == 0:
         return False
     if M.shape[0] < M.shape[1]:
         return True
-    sv = _svdvals(M)
+    sv = _svdvals(M) if sv is None else sv
     return bool(sv[-1] <= tol * max(sv[0], 1e-300))
 
 
@@ -505,9 +506,11 @@ def check_assumptions(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionRepo
     return _check_balanced(balance_plant(P)[0], tol)
 
 
-def _check_balanced(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionReport:
+def _check_balanced(P: PartitionedPlant, tol: float = 1e-12,
+                    d_sv: tuple[np.ndarray, np.ndarray] | None = None) -> AssumptionReport:
     """:func:`check_assumptions` on a plant already balanced by :func:`balance_plant`
-    (rank tests on equilibrated data)."""
+    (rank tests on equilibrated data); ``d_sv``: the singular values of D12 and
+    D21 when already computed (by the SVDs the normalisation uses)."""
     problems: list[str] = []
     n = P.nx
     modes = list(_imag_axis_modes(P.A, tol))
@@ -531,10 +534,11 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12) -> AssumptionReport
             problems.append(f"A4 fails: {_blame_mode(P, lam) if modes else 'the plant'} "
                             f"gives a rank loss at {where}: move its pole to a small "
                             f"negative value")
-    if _rank_defect(P.D12, tol):
+    s12, s21 = (None, None) if d_sv is None else d_sv
+    if _rank_defect(P.D12, tol, s12):
         problems.append("A2 fails: D12 has not full column rank: give the control weight "
                         "w2 a non-zero high-frequency gain (u must be weighted directly)")
-    if _rank_defect(P.D21.T, tol):
+    if _rank_defect(P.D21.T, tol, s21):
         problems.append("A2 fails: D21 has not full row rank: the measurement must contain "
                         "the exogenous input directly (y = r - G u gives D21 = 1)")
     problems = list(dict.fromkeys(problems))
@@ -591,18 +595,19 @@ class _Normalised:
     R21inv: np.ndarray           # y~ = R21inv y
 
 
-def _normalise(P: PartitionedPlant) -> _Normalised:
+def _normalise(P: PartitionedPlant, svds: tuple[tuple, tuple] | None = None) -> _Normalised:
     """Rotate/scale w, z, u, y so that D12 = [0; I] and D21 = [0 I] (eq 65-67).
 
     Orthogonal rotations of z and w keep the norm of T_zw; the invertible
     scalings of u and y are undone on the controller (K = R12^-1 K~ R21^-1).
     D22 is set to zero here; it is restored by a loop shift in
-    :func:`central_controller`.
+    :func:`central_controller`. ``svds``: the full SVDs of D12 and D21 when
+    already computed.
     """
     m2, p2 = P.nu, P.ny
-    U, s12, V12t = _svd(P.D12)            # D12 = U [S;0] V^T
+    # D12 = U [S;0] V^T, D21 = U21 [S 0] V21^T
+    (U, s12, V12t), (U21, s21, V21t) = svds or (_svd(P.D12), _svd(P.D21))
     Uz = np.concatenate([U[:, m2:], U[:, :m2]], axis=1).T   # Uz D12 = [0; S V^T]
-    U21, s21, V21t = _svd(P.D21)           # D21 = U [S 0] V^T
     VwT = np.concatenate([V21t[p2:], V21t[:p2]]).T           # D21 VwT = [0, U S]
     # R12 = S V^T and R21 = U S are inverted from their factors (orthogonal
     # transposes, 1/s), not by an LU of the product
@@ -657,8 +662,8 @@ def _hamiltonian(a: np.ndarray, b: np.ndarray, q: np.ndarray, s: np.ndarray) -> 
     n = a.shape[0]
     H0 = np.zeros((2 * n, 2 * n))
     H0[:n, :n] = a
-    H0[n:, :n] = -q
-    H0[n:, n:] = -a.T
+    np.negative(q, out=H0[n:, :n])
+    np.negative(a.T, out=H0[n:, n:])
     return _Hamiltonian(a=a, b=b, q=q, s=s, H0=H0, W=np.concatenate([b, -s]),
                         V=np.concatenate([s.T, b.T], axis=1))
 
@@ -807,7 +812,8 @@ def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     bound = max(_sigma_max(np.concatenate([D1111, D1112], axis=1)),
                 _sigma_max(np.concatenate([D1111, D1121])))
     m1, p1 = Pn.nw, Pn.nz
-    Ew, Ez = np.diag([1.0] * m1 + [0.0] * Pn.nu), np.diag([1.0] * p1 + [0.0] * Pn.ny)
+    Ew, Ez = np.eye(m1 + Pn.nu), np.eye(p1 + Pn.ny)
+    Ew[m1:, m1:] = Ez[p1:, p1:] = 0.0
     return _GammaFree(B=B, C=C, D1s=D1s, Ds1=Ds1, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
                       Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),
                       Hy=_hamiltonian(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Pn.B1 @ Ds1.T),
@@ -883,8 +889,9 @@ def _prepare(P: PartitionedPlant) -> _Prepared:
     if not isinstance(P, PartitionedPlant):
         raise TypeError(f"expected a PartitionedPlant, got {type(P).__name__}")
     Ps, t = balance_plant(P)
-    _check_balanced(Ps).raise_if_failed()
-    norm = _normalise(Ps)
+    svds = (_svd(Ps.D12), _svd(Ps.D21))          # for both A2 and the normalisation
+    _check_balanced(Ps, d_sv=(svds[0][1], svds[1][1])).raise_if_failed()
+    norm = _normalise(Ps, svds)
     return _Prepared(P=P, t=t, norm=norm, gf=_gamma_free(norm.P))
 
 def _unscale_xy(res: HinfFeasibility, t: np.ndarray) -> HinfFeasibility:
@@ -1456,8 +1463,8 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
     """SISO responses at the points ``s``, all frequencies at once (issue 13:
     python-control converted each weight to state space and called SLICOT
     tb05ad per frequency). The transfer functions are evaluated together from
-    their polynomials by Horner's rule on one (points x polynomials) array, with
-    elementwise operations only (a multi-threaded BLAS product of this shape
+    their polynomials by Horner's rule on one (polynomials x points) array (rows
+    contiguous: the quotients read whole rows), with elementwise operations only (a multi-threaded BLAS product of this shape
     costs milliseconds on a loaded machine); a state-space system goes through
     its modal form (:meth:`toolbox._lti.StateSpace.evaluate`); a number is
     constant."""
@@ -1472,14 +1479,18 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
             out.append(as_statespace(sys).evaluate(s)[0, 0])
     if polys:
         deg = max(len(c) for c in polys) - 1
-        coef = np.zeros((deg + 1, len(polys)))
+        coef = np.zeros((len(polys), deg + 1))
         for j, c in enumerate(polys):
-            coef[deg + 1 - len(c):, j] = np.asarray(c, float)    # highest power first
-        vals = np.broadcast_to(coef[0], (s.size, len(polys))).astype(complex)
-        for row in coef[1:]:
-            vals *= s[:, None]
-            vals += row
-        out = [vals[:, o] / vals[:, o + 1] if isinstance(o, int) else o for o in out]
+            coef[j, deg + 1 - len(c):] = np.asarray(c, float)    # highest power first
+        if deg == 0:
+            vals = np.broadcast_to(coef, (len(polys), s.size)).astype(complex)
+        else:
+            vals = coef[:, :1] * s                              # first Horner step fused
+            vals += coef[:, 1:2]
+        for k in range(2, deg + 1):
+            vals *= s
+            vals += coef[:, k:k + 1]
+        out = [vals[o] / vals[o + 1] if isinstance(o, int) else o for o in out]
     return out
 
 
