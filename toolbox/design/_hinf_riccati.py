@@ -36,7 +36,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
                                  dgebal as _dgebal, dgesdd as _dgesdd, dgesv as _dgesv,
-                                 dgetrf as _dgetrf,
+                                 dgetrf as _dgetrf, dlange as _dlange,
                                  dgetrs as _dgetrs, dggev as _dggev, dpotrf as _dpotrf,
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd)
 
@@ -735,7 +735,7 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, np.
     lu, piv, info = _dgetrf(Z11t)
     if info != 0:
         return None, None
-    rcond, _ = _dgecon(lu, np.abs(Z11t).sum(axis=0).max())    # 1-norm
+    rcond, _ = _dgecon(lu, _dlange("1", Z11t))
     if not rcond >= 1e-14:
         return None, None
     Xt, _ = _dgetrs(lu, piv, Z[n:, :n].T)                  # X^T = Z11^-T Z21^T
