@@ -938,7 +938,7 @@ def _check_gamma(gamma: Any) -> float:
         g = float(gamma)
     except (TypeError, ValueError):
         raise SpecError(_GAMMA_KEY, 'a number > 0 or "optimal"', gamma) from None
-    if not np.isfinite(g) or g <= 0:
+    if not math.isfinite(g) or g <= 0:
         raise SpecError(_GAMMA_KEY, 'a number > 0 or "optimal"', gamma)
     return g
 
