@@ -687,7 +687,7 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
     method on the extended pencil, which does not invert the indefinite r, has
     the last word.
     """
-    X, ev = _ric_schur_h(h, r)
+    X, wr, wi = _ric_schur_h(h, r)
     if X is None:
         a, b, s = h.a, h.b, h.s
         try:
@@ -697,8 +697,9 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
                           "or no stabilising solution exists")
         F = np.linalg.solve(r, b.T @ X + s.T)
         ev = np.linalg.eigvals(a - b @ F)
+        wr, wi = ev.real, ev.imag
     X = 0.5 * (X + X.T)
-    if ev.size and ev.real.max() >= -1e-12 * max(1.0, float(np.abs(ev).max())):
+    if wr.size and wr.max() >= -1e-12 * max(1.0, np.hypot(wr, wi).max()):
         return None, "the solution is not stabilising"
     return X, ""
 
@@ -706,40 +707,42 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
 def _ric_schur(a: np.ndarray, b: np.ndarray, q: np.ndarray, r: np.ndarray,
                s: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Hamiltonian (eq 16) ordered-Schur solution of the equation of :func:`_ric`
-    and the closed-loop poles; see :func:`_ric_schur_h`."""
-    return _ric_schur_h(_hamiltonian(a, b, q, s), r)
+    and the closed-loop poles (see :func:`_ric_schur_h`); ``(None, None)``
+    when that route fails."""
+    X, wr, wi = _ric_schur_h(_hamiltonian(a, b, q, s), r)
+    return (None, None) if X is None else (X, wr + 1j * wi)
 
 
-def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Hamiltonian (eq 16) ordered-Schur solution and the closed-loop poles
-    (the n selected eigenvalues of H, those of ``a - b r^-1 (b^T X + s^T)``);
-    ``(None, None)`` if it does not exist or its basis Z11 is too
-    ill-conditioned to give X = Z21 Z11^-1 accurately (1-norm condition
-    estimate above 1e14)."""
+def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...]:
+    """Hamiltonian (eq 16) ordered-Schur solution and the real and imaginary
+    parts of the closed-loop poles (the n selected eigenvalues of H, those of
+    ``a - b r^-1 (b^T X + s^T)``); ``(None, None, None)`` if it does not exist
+    or its basis Z11 is too ill-conditioned to give X = Z21 Z11^-1 accurately
+    (1-norm condition estimate above 1e14)."""
     n = h.a.shape[0]
     try:
         rv = _solve(r, h.V)                                 # r^-1 [s^T, b^T]
     except np.linalg.LinAlgError:                           # singular r: the pencil route
-        return None, None
+        return None, None, None
     H = h.H0 - h.W @ rv
     # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
     # dgees's own sorting does, without a Python callback per eigenvalue
     T, _, wr, wi, Z, _, info = _dgees(_no_select, H, sort_t=0, overwrite_a=1)
     if info != 0:
-        return None, None
+        return None, None, None
     _, Z, wr, wi, sdim, _, _, info = _dtrsen((wr < 0.0).astype(np.int32), T, Z, job="N",
                                              overwrite_t=1, overwrite_q=1)
     if info != 0 or sdim != n:
-        return None, None
+        return None, None, None
     Z11t = Z[:n, :n].T
     lu, piv, info = _dgetrf(Z11t)
     if info != 0:
-        return None, None
+        return None, None, None
     rcond, _ = _dgecon(lu, _dlange("1", Z11t))
     if not rcond >= 1e-14:
-        return None, None
+        return None, None, None
     Xt, _ = _dgetrs(lu, piv, Z[n:, :n].T)                  # X^T = Z11^-T Z21^T
-    return Xt.T, wr[:n] + 1j * wi[:n]
+    return Xt.T, wr[:n], wi[:n]
 
 
 @dataclass
@@ -1464,8 +1467,9 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
     python-control converted each weight to state space and called SLICOT
     tb05ad per frequency). The transfer functions are evaluated together from
     their polynomials by Horner's rule on one (polynomials x points) array (rows
-    contiguous: the quotients read whole rows), with elementwise operations only (a multi-threaded BLAS product of this shape
-    costs milliseconds on a loaded machine); a state-space system goes through
+    contiguous: the quotients read whole rows), with elementwise operations
+    only (a multi-threaded BLAS product of this shape costs milliseconds on a
+    loaded machine); a state-space system goes through
     its modal form (:meth:`toolbox._lti.StateSpace.evaluate`); a number is
     constant."""
     polys, out = [], []
