@@ -29,6 +29,7 @@ from typing import Any, Sequence
 
 import numpy as np
 import scipy.linalg
+from scipy.linalg.lapack import dgeev as _dgeev
 
 __all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d", "pade", "acker",
            "minreal", "series", "parallel", "feedback", "append", "static_gain", "linf_norm",
@@ -320,9 +321,23 @@ def feedback(plant: Any, other: Any = 1.0, sign: int = -1) -> StateSpace:
 
 # -- transfer functions -------------------------------------------------------
 def _poly(coeffs: Any) -> np.ndarray:
-    """A 1-D float polynomial with leading zeros trimmed (zero -> ``[0.]``)."""
-    p = np.trim_zeros(np.atleast_1d(np.asarray(coeffs, float)).ravel(), "f")
-    return p if p.size else np.zeros(1)
+    """A 1-D float polynomial with leading zeros trimmed (zero -> ``[0.]``).
+
+    A fresh array (``np.trim_zeros`` would cost ~5 us a call in its generic form).
+    """
+    p = np.array(coeffs, float).ravel()
+    nz = np.flatnonzero(p)
+    return p[nz[0]:] if nz.size else np.zeros(1)
+
+
+def _roots(p: np.ndarray) -> np.ndarray:
+    """Roots of a trimmed polynomial; a first-order one without ``np.roots``'s
+    companion-matrix eigenvalues (weights are mostly first-order)."""
+    if p.size <= 1:
+        return np.zeros(0, complex)
+    if p.size == 2:
+        return np.array([-p[1] / p[0]], complex)
+    return np.roots(p)
 
 
 def tf2ss(num: Any, den: Any, dt: float | None = None) -> StateSpace:
@@ -500,11 +515,11 @@ class TransferFunction:
 
     def poles(self) -> np.ndarray:
         """Roots of the denominator."""
-        return np.roots(self.den)
+        return _roots(self.den)
 
     def zeros(self) -> np.ndarray:
         """Roots of the numerator (none for a constant or zero numerator)."""
-        return np.roots(self.num) if self.num.any() else np.zeros(0, complex)
+        return _roots(self.num) if self.num.any() else np.zeros(0, complex)
 
     def __call__(self, x: Any) -> Any:
         """``num(x) / den(x)`` at complex point(s) ``x`` (scalar or array)."""
@@ -554,6 +569,8 @@ class TransferFunction:
         """Cancel the poles and zeros closer than ``tol max(1, |z|)`` (the
         rule of python-control's transfer-function ``minreal``); unchanged
         coefficients when nothing cancels (roots are not re-expanded)."""
+        if self.num.size == 1 or self.den.size == 1:
+            return self                        # no zero or no pole: nothing to cancel
         zeros, poles = list(self.zeros()), list(self.poles())
         kept = []
         for z in zeros:
@@ -570,6 +587,13 @@ class TransferFunction:
     def to_statespace(self) -> StateSpace:
         """Controllable canonical realisation (:func:`tf2ss`)."""
         return tf2ss(self.num, self.den)
+
+    def to_control(self) -> Any:
+        """The same transfer function as a ``control.TransferFunction``
+        (imports python-control)."""
+        import control
+
+        return control.tf(self.num, self.den)
 
 
 def _read_dt(dt: Any) -> float | None:
@@ -735,13 +759,26 @@ def minreal(sys: Any, tol: float | None = None) -> StateSpace:
 
 
 # -- norms ---------------------------------------------------------------------
-def _peak_gain_at(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
-                  w: np.ndarray) -> tuple[float, float]:
-    """Largest ``sigma_max(G(j w))`` over the frequencies ``w`` and where."""
-    G = StateSpace(A, B, C, D).freqresp(w)
-    sv = np.linalg.svd(np.moveaxis(G, -1, 0), compute_uv=False)[:, 0]
-    i = int(np.argmax(sv))
-    return float(sv[i]), float(w[i])
+def _peak_gain_at(g: StateSpace, modal: tuple | None, w: np.ndarray) -> float:
+    """Largest ``sigma_max(G(j w))`` over the frequencies ``w``."""
+    if modal is None:
+        G = np.moveaxis(g.freqresp(w), -1, 0)
+    else:
+        lam, left, right = modal
+        G = np.einsum("pk,kN,km->Npm", left, 1.0 / (1j * w[None, :] - lam[:, None]), right)
+        G += g.D
+    if G.shape[1] == G.shape[2] == 1:
+        return float(np.max(np.abs(G)))
+    return float(np.max(np.linalg.svd(G, compute_uv=False)[:, 0]))
+
+
+def _modal(g: StateSpace) -> tuple | None:
+    """``(lam, C V, V^-1 B)`` of a diagonalisable A with well-conditioned
+    eigenvectors (the modal sum of :meth:`StateSpace.evaluate`), else None."""
+    lam, V = np.linalg.eig(g.A)
+    if np.linalg.cond(V) > _MODAL_COND_MAX:
+        return None
+    return lam, g.C @ V, np.linalg.solve(V, g.B)
 
 
 def linf_norm(sys: Any, tol: float = 1e-10) -> float:
@@ -765,18 +802,15 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
     lam = np.linalg.eigvals(A)
     if np.any(np.abs(lam.real) <= 1e-12 * np.maximum(1.0, np.abs(lam))):
         return float("inf")
-    cand = np.concatenate([[0.0], np.abs(lam)])
-    best, _ = _peak_gain_at(A, B, C, D, cand)
-    best = max(best, dnorm)
+    modal = _modal(g)
+    best = max(_peak_gain_at(g, modal, np.concatenate([[0.0], np.abs(lam)])), dnorm)
     if best == 0.0:
         return 0.0
     for _ in range(100):
-        level = (1.0 + 2.0 * tol) * best
-        w = _hamiltonian_crossings(A, B, C, D, level)
+        w = _hamiltonian_crossings(A, B, C, D, (1.0 + 2.0 * tol) * best)
         if w.size < 2:
             return best
-        mid = 0.5 * (w[:-1] + w[1:])
-        peak, _ = _peak_gain_at(A, B, C, D, mid)
+        peak = _peak_gain_at(g, modal, 0.5 * (w[:-1] + w[1:]))
         if peak <= best:
             return best
         best = peak
@@ -788,14 +822,17 @@ def _hamiltonian_crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.nd
     """Sorted frequencies ``w >= 0`` where a singular value of ``G(j w)``
     equals ``level``: the imaginary eigenvalues of the Hamiltonian of the
     Bounded Real Lemma (``level`` above ``sigma_max(D)``)."""
-    m, p = B.shape[1], C.shape[0]
+    n, m, p = A.shape[0], B.shape[1], C.shape[0]
     R = D.T @ D - level ** 2 * np.eye(m)
     S = D @ D.T - level ** 2 * np.eye(p)
-    Ri = np.linalg.inv(R)
-    Ah = A - B @ Ri @ D.T @ C
-    H = np.block([[Ah, -level * B @ Ri @ B.T],
-                  [level * C.T @ np.linalg.solve(S, C), -Ah.T]])
-    ev = np.linalg.eigvals(H)
-    scale = max(1.0, float(np.max(np.abs(ev))))
-    w = ev.imag[(np.abs(ev.real) <= 1e-8 * scale) & (ev.imag >= 0)]
-    return np.unique(np.sort(w))
+    RiB = np.linalg.solve(R, B.T).T                  # B R^-1 (R symmetric)
+    H = np.empty((2 * n, 2 * n))
+    H[:n, :n] = A - RiB @ (D.T @ C)
+    H[:n, n:] = -level * RiB @ B.T
+    H[n:, :n] = level * C.T @ np.linalg.solve(S, C)
+    H[n:, n:] = -H[:n, :n].T
+    wr, wi, _, _, info = _dgeev(H, compute_vl=0, compute_vr=0, overwrite_a=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
+    scale = max(1.0, float(np.max(np.hypot(wr, wi))))
+    return np.sort(wi[(np.abs(wr) <= 1e-8 * scale) & (wi >= 0)])

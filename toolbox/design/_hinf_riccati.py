@@ -290,7 +290,8 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     if n == 0:
         return np.zeros(0, complex)
     A, B, C = _balanced(A, B, C)
-    M = np.block([[A, B], [C, D]])
+    M = np.zeros((n + C.shape[0], n + B.shape[1]))
+    M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
     N = np.zeros_like(M)
     N[range(n), range(n)] = 1.0
     return _pencil_eigvals(M, N)
