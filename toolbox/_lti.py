@@ -764,9 +764,11 @@ def _gains(g: StateSpace, modal: tuple | None, w: np.ndarray) -> np.ndarray:
     if modal is None:
         G = np.moveaxis(g.freqresp(w), -1, 0)
     else:
-        lam, left, right = modal
-        G = np.einsum("pk,kN,km->Npm", left, 1.0 / (1j * w[None, :] - lam[:, None]), right)
-        G += g.D
+        lam, res = modal                             # res: residues (p, m, n)
+        inv = 1.0 / (1j * w[None, :] - lam[:, None])
+        if res.shape[:2] == (1, 1):
+            return np.abs(res[0, 0] @ inv + g.D[0, 0])
+        G = np.einsum("pmk,kN->Npm", res, inv) + g.D
     if G.shape[1] == G.shape[2] == 1:
         return np.abs(G[:, 0, 0])
     return np.linalg.svd(G, compute_uv=False)[:, 0]
@@ -777,26 +779,25 @@ def _refined_peak(g: StateSpace, modal: tuple | None, lo: np.ndarray, hi: np.nda
     (SLICOT ab13dd's points) and at the vertex of the parabola (in log w)
     through the gains at the mean and at two close neighbours: the peak is
     then often found to the tolerance before the next Hamiltonian."""
-    mid = np.where(lo > 0, np.sqrt(lo * hi), 0.5 * hi)
-    r = np.where(lo > 0, (hi / np.where(lo > 0, lo, 1.0)) ** 0.125, 1.1)
-    x = np.log(mid)
-    h = np.log(r)
-    y = _gains(g, modal, np.concatenate([mid / r, mid, mid * r])).reshape(3, -1)
+    lo = np.maximum(lo, 1e-6 * hi)                   # a crossing at w = 0
+    x, h = 0.5 * np.log(lo * hi), 0.125 * np.log(hi / lo)
+    y = _gains(g, modal, np.exp(np.concatenate([x - h, x, x + h]))).reshape(3, -1)
     curv = y[0] - 2 * y[1] + y[2]
     with np.errstate(divide="ignore", invalid="ignore"):
         step = np.where(curv < 0, 0.5 * h * (y[0] - y[2]) / curv, 0.0)
-    vertex = np.exp(np.clip(x + step, np.log(np.maximum(lo, 1e-300)), np.log(hi)))
+    vertex = np.exp(np.clip(x + step, np.log(lo), np.log(hi)))
     return float(max(y.max(), _gains(g, modal, vertex).max()))
 
 
 def _modal(g: StateSpace) -> tuple[np.ndarray, tuple | None]:
     """Eigenvalues of A and, when A is diagonalisable with well-conditioned
-    eigenvectors, ``(lam, C V, V^-1 B)`` for the modal sum of
-    :meth:`StateSpace.evaluate` (else None)."""
+    eigenvectors, ``(lam, residues)`` (shape ``(p, m, n)``) for the modal sum
+    of :meth:`StateSpace.evaluate` (else None)."""
     lam, V = np.linalg.eig(g.A)
     if np.linalg.cond(V) > _MODAL_COND_MAX:
         return lam, None
-    return lam, (lam, g.C @ V, np.linalg.solve(V, g.B))
+    res = (g.C @ V)[:, None, :] * np.linalg.solve(V, g.B).T[None, :, :]
+    return lam, (lam, res)
 
 
 def linf_norm(sys: Any, tol: float = 1e-10) -> float:
