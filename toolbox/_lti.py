@@ -31,9 +31,9 @@ import numpy as np
 import scipy.linalg
 from scipy.linalg.lapack import dgeev as _dgeev
 
-__all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d", "pade", "acker",
-           "minreal", "series", "parallel", "feedback", "append", "static_gain", "linf_norm",
-           "C2D_METHODS"]
+__all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d",
+           "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
+           "linf_norm", "C2D_METHODS"]
 
 #: Discretisation methods of :func:`c2d` (python-control / scipy names); the
 #: generalised bilinear transform of each is ``_GBT_ALPHA``.

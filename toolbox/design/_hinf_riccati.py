@@ -1211,7 +1211,7 @@ class HinfResult:
     X, Y : ndarray
         Riccati solutions of eq (18)-(19) at ``gamma``.
     closed_loop_norm : float
-        ||F_l(P, K)||_inf recomputed with python-control (LFT + ``norm``).
+        ||F_l(P, K)||_inf recomputed (LFT + :func:`toolbox._lti.linf_norm`).
     fastest_pole : float
         Largest |pole| of K that is not nearly cancelled (rad/s).
     pole_limit : float or None

@@ -491,8 +491,9 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     ``Re L < 0``), sought in :data:`MARGIN_BAND`; the headline margins follow
     the rule of :func:`toolbox.analysis.frequency_margins` (python-control's:
     the crossing closest to instability), and
-    ``M_m = 1/||S||_inf`` is the L-infinity norm (Bruinsma-Steinbuch, as SLICOT ab13dd) of
-    ``S = 1/(1 + L)`` (relative tolerance 1e-10). The tests check the numbers
+    ``M_m = 1/||S||_inf`` is the L-infinity norm of ``S = 1/(1 + L)``
+    (:func:`toolbox._lti.linf_norm`, Bruinsma-Steinbuch as SLICOT ab13dd,
+    relative tolerance 1e-10). The tests check the numbers
     against :func:`toolbox.analysis.lti_loop_margins` (the toolbox's grid
     route, 20000 points and refinement, ~20 times slower) and python-control.
 
