@@ -838,7 +838,7 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
 
 def _hamiltonian_crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
                            level: float) -> np.ndarray:
-    """Sorted frequencies ``w >= 0`` where a singular value of ``G(j w)``
+    """Distinct sorted frequencies ``w >= 0`` where a singular value of ``G(j w)``
     equals ``level``: the imaginary eigenvalues of the Hamiltonian of the
     Bounded Real Lemma (``level`` above ``sigma_max(D)``)."""
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
@@ -857,4 +857,5 @@ def _hamiltonian_crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.nd
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
     scale = max(1.0, float(np.max(np.hypot(wr, wi))))
-    return np.sort(wi[(np.abs(wr) <= 1e-8 * scale) & (wi >= 0)])
+    # sorted, each once (a crossing at w = 0 is a double eigenvalue)
+    return np.unique(wi[(np.abs(wr) <= 1e-8 * scale) & (wi >= 0)])
