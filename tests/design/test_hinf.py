@@ -90,8 +90,9 @@ def test_augment_without_w2_w3():
 
 
 def test_weight_realisation_is_minimal_and_exact():
-    """Direct SLICOT td04ad realisation of a SISO weight (issue 13): a common
-    factor is removed (minimal, like python-control's ss), the response equals
+    """Realisation of a SISO weight without python-control or SLICOT (issue 13:
+    cancellation, tf2ss, power-of-two scaling): a common factor is removed
+    (minimal, like python-control's ss), the response equals
     num/den to rounding (1e-13 relative), a constant has no state and an
     improper weight is refused with its degrees."""
     A, B, C, D = H._tf_realisation([1.0, 1.0], [1.0, 3.0, 2.0])  # (s+1)/((s+1)(s+2))

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import control as ct
 
+from toolbox._lti import TransferFunction
 from toolbox.design._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
 from toolbox.errors import SpecError
 
@@ -16,7 +17,7 @@ def mag(w, freq):
 
 def test_from_tf_returns_transfer_function():
     w = weight_from_tf([1e4, 1.3568e6], [1, 2.7135e6], key=KEY)
-    assert isinstance(w, ct.TransferFunction)
+    assert isinstance(w, TransferFunction)      # toolbox._lti's: no python-control needed
     # DC gain 1e4 * 135.68 / 2.7135e6 = 0.5 (exact to the 5 digits given)
     assert mag(w, 0.0) == pytest.approx(0.5, rel=1e-4)
 
@@ -93,5 +94,8 @@ def test_nan_rejected():
 
 
 def test_validate_weight_allows_integrator_when_asked():
-    w = ct.tf([1, 1], [1, 0])
+    w = TransferFunction([1, 1], [1, 0])
     assert validate_weight(w, allow_integrator=True) is w
+    # a user's python-control weight is read into the toolbox's form, unchanged
+    got = validate_weight(ct.tf([1, 1], [1, 0]), allow_integrator=True)
+    assert (got.num.tolist(), got.den.tolist()) == ([1.0, 1.0], [1.0, 0.0])

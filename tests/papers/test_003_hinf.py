@@ -303,7 +303,7 @@ def test_optimal_gamma_matches_sb10ad(axis):
     """Our bisection (tol 1e-4 relative) vs SLICOT sb10ad through python-control
     mixsyn: agreement within 3e-4 (sum of both tolerances with margin)."""
     a = AXES[axis]
-    _, _, info = ct.mixsyn(a["G"], a["w1"], a["w2"], a["w3"])
+    _, _, info = ct.mixsyn(a["G"], *(a[w].to_control() for w in ("w1", "w2", "w3")))
     g_sl = float(info[0])
     g_us = H.gamma_iteration(plant(axis), tol=1e-4)
     print(f"\n{axis}: gamma_opt ours {g_us:.6f}, sb10ad/mixsyn {g_sl:.6f}")
@@ -322,7 +322,7 @@ def test_mixsyn_fast_pole_and_our_backoff():
     bounds (41)-(43) at (1 + backoff) gamma_opt, and whose recomputed norm is
     below the design gamma."""
     a = AXES["q"]
-    Km, _, info = ct.mixsyn(a["G"], a["w1"], a["w2"], a["w3"])
+    Km, _, info = ct.mixsyn(a["G"], *(a[w].to_control() for w in ("w1", "w2", "w3")))
     fastest_mixsyn = float(np.max(np.abs(Km.poles())))
     assert info[0] == pytest.approx(0.952, abs=1e-3)
     assert fastest_mixsyn > 1e9

@@ -2,7 +2,7 @@
 
 One module per method (``pi``, ``total_comp``, ``ilq``, ``lq``, ``hinf``,
 ``fcs_mpc``, ``robust_pi``), each with ``read_cfg`` (validates ``[controller.<method>]``),
-``design(spec)`` and a plain API on python-control plants and numbers,
+``design(spec)`` and a plain API on toolbox._lti or python-control plants and numbers,
 re-exported here. ``steady_state`` holds the symbolic steady-state analysis
 of paper 000. ``_defaults`` derives the parameters a spec leaves out from
 the sample time and the delay (``default_bandwidth``, ``current_scale``,
@@ -17,9 +17,9 @@ from ._defaults import (current_scale, default_bandwidth, largest_stable_pi_band
                         speed_scale)
 from ._registry import METHOD_MODULES, design, read_method_cfg
 
-#: public name -> defining submodule. The method modules import python-control
-#: (which imports matplotlib.pyplot): they are loaded on first attribute access
-#: (PEP 562) so that ``import toolbox`` stays light (issue 13).
+#: public name -> defining submodule. The method modules import scipy (and
+#: steady_state sympy): they are loaded on first attribute access (PEP 562)
+#: so that ``import toolbox`` stays light (issue 13).
 _LAZY = {
     "design_hinf_axis": "hinf",
     "design_ilq": "ilq", "inverse_lq": "ilq", "inverse_lq_sdp": "ilq", "sigma_bound": "ilq",

@@ -40,7 +40,7 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dgetrs as _dgetrs, dggev as _dggev, dpotrf as _dpotrf,
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd)
 
-from .._lti import StateSpace, as_statespace
+from .._lti import StateSpace, TransferFunction, as_statespace, linf_norm
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -257,6 +257,19 @@ def _balancing(M: np.ndarray) -> np.ndarray:
     return scale
 
 
+def _balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Diagonal state scaling (powers of two, exact) equilibrating [A B; C 0]:
+    controllers come back in the plant's coordinates with entries over ~12
+    decades, and a companion-form weight has B = e1 against C up to ~1e10."""
+    n = A.shape[0]
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n], M[:n, n:], M[n:, :n] = A, B, C
+    scale = _balancing(M)
+    # relative to the input/output's own scale: B and C equilibrated as well
+    t = 2.0 ** np.round(np.log2(scale[:n] / scale[n]))
+    return A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
+
+
 def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
     """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
     ones (|beta| <= 1e-13 |alpha|) are dropped."""
@@ -269,16 +282,19 @@ def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
 
 
 def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """Invariant zeros: SLICOT ab08nd's reduced pencil and its QZ eigenvalues,
-    the route of python-control's ``zeros()`` without building a system."""
-    from slycot import ab08nd
-
+    """Invariant zeros: the finite eigenvalues of the system pencil
+    ``([A B; C D], diag(I, 0))`` (QZ), after a power-of-two diagonal scaling of
+    its states (exact) that evens the entries of controllers spanning many
+    decades; the infinite eigenvalues (relative degree) are dropped."""
     n = A.shape[0]
     if n == 0:
         return np.zeros(0, complex)
-    out = ab08nd(n, B.shape[1], C.shape[0], A, B, C, D)
-    nu = out[0]
-    return _pencil_eigvals(out[8][:nu, :nu], out[9][:nu, :nu]) if nu else np.zeros(0, complex)
+    A, B, C = _balanced(A, B, C)
+    M = np.zeros((n + C.shape[0], n + B.shape[1]))
+    M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
+    N = np.zeros_like(M)
+    N[range(n), range(n)] = 1.0
+    return _pencil_eigvals(M, N)
 
 
 _BLOCKS = ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22")
@@ -288,8 +304,9 @@ def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     """A, B, C, D of a SISO system or a scalar gain."""
     if isinstance(sys, (int, float, np.floating)):
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(sys)]])
-    if _is_siso_tf(sys):
-        return _tf_realisation(sys.num[0][0], sys.den[0][0])
+    coeffs = _tf_coeffs(sys)
+    if coeffs is not None:
+        return _tf_realisation(*coeffs)
     s = sys if all(hasattr(sys, m) for m in "ABCD") else as_statespace(sys)
     if np.shape(s.D) != (1, 1):
         raise ValueError(f"augment_mixed_sensitivity: expected a SISO system, "
@@ -298,45 +315,37 @@ def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
             np.asarray(s.C, float), np.asarray(s.D, float))
 
 
-def _is_siso_tf(sys: Any) -> bool:
-    """A SISO transfer function (python-control's or any object with
-    ``num[0][0]`` and ``den[0][0]``, read without importing python-control)."""
-    return (hasattr(sys, "num") and hasattr(sys, "den") and not hasattr(sys, "A")
-            and len(sys.num) == 1 and len(sys.num[0]) == 1)
-
-
-def _strip(c: Any) -> np.ndarray:
-    """1-D float coefficients without leading zeros (``np.trim_zeros`` costs
-    ~15 us a call in its generic form)."""
-    c = np.atleast_1d(np.asarray(c, float))
-    nz = np.flatnonzero(c)
-    return c[nz[0]:] if nz.size else c[:0]
+def _tf_coeffs(sys: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(num, den)`` of a SISO transfer function (ours, python-control's or
+    any object with ``num[0][0]`` and ``den[0][0]``, read without importing
+    python-control); None for anything else."""
+    if isinstance(sys, TransferFunction):
+        return sys.num, sys.den
+    if (hasattr(sys, "num") and hasattr(sys, "den") and not hasattr(sys, "A")
+            and len(sys.num) == 1 and len(sys.num[0]) == 1):
+        return np.atleast_1d(sys.num[0][0]), np.atleast_1d(sys.den[0][0])
+    return None
 
 
 def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
     """Minimal realisation (A, B, C, D) of the proper SISO ``num/den``.
 
-    SLICOT ``td04ad``, the routine python-control's ``ss(tf)`` ends in, called
-    directly: python-control first rebuilds a common denominator from the
-    poles and zeros (``_common_den``, ~0.6 ms per weight against ~30 us for
-    the conversion itself, issue 13). The states can differ from
-    python-control's by a diagonal scaling (it makes den monic first).
+    Common roots of num and den are cancelled first
+    (:meth:`toolbox._lti.TransferFunction.minreal`, python-control's rule),
+    then :func:`toolbox._lti.tf2ss` gives the controllable canonical form,
+    whose states are scaled by powers of two (:func:`_balanced`: exact) so that
+    B and C have comparable entries (paper 003's w3 has C ~ -2.7e10 for
+    B = 1 otherwise).
     """
-    from slycot import td04ad
-
-    num, den = _strip(num), _strip(den)
-    if den.size == 0 or num.size > den.size:
+    tf = TransferFunction(num, den)
+    if not tf.proper:
         raise ValueError(f"augment_mixed_sensitivity: expected a proper transfer function, "
-                         f"got numerator degree {num.size - 1} over denominator degree "
-                         f"{den.size - 1}")
-    d = den.size - 1
-    if d == 0 or num.size == 0:
-        return (np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)),
-                np.array([[num[0] / den[0] if num.size else 0.0]]))
-    ucoeff = np.zeros((1, 1, d + 1))
-    ucoeff[0, 0, d + 1 - num.size:] = num
-    n, A, B, C, D = td04ad("C", 1, 1, np.array([d]), den[None, :], ucoeff, tol=0)
-    return A[:n, :n].copy(), B[:n, :1].copy(), C[:1, :n].copy(), np.asarray(D, float).reshape(1, 1)
+                         f"got numerator degree {tf.num.size - 1} over denominator degree "
+                         f"{tf.order}")
+    if not tf.num.any():
+        return _ss_blocks(0.0)
+    g = tf.minreal().to_statespace()
+    return (*_balanced(g.A, g.B, g.C), np.array(g.D))
 
 
 def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
@@ -1282,7 +1291,7 @@ class HinfResult:
     X, Y : ndarray
         Riccati solutions of eq (18)-(19) at ``gamma``.
     closed_loop_norm : float
-        ||F_l(P, K)||_inf recomputed with python-control (LFT + ``norm``).
+        ||F_l(P, K)||_inf recomputed (LFT + :func:`toolbox._lti.linf_norm`).
     fastest_pole : float
         Largest |pole| of K that is not nearly cancelled (rad/s).
     pole_limit : float or None
@@ -1324,25 +1333,21 @@ def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ..
 
 
 def hinf_norm(sys: Any) -> float:
-    """H-infinity norm (SLICOT ab13dd, as python-control's ``norm``), inf when
-    unstable or with a pole on the imaginary axis."""
+    """H-infinity norm (:func:`toolbox._lti.linf_norm`, the algorithm of SLICOT
+    ab13dd behind python-control's ``norm``), inf when unstable or with a pole
+    on the imaginary axis."""
     A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
     return _hinf_norm(A, B, C, D)
 
 
 def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> float:
-    from slycot import ab13dd
-
     n = A.shape[0]
     if n == 0:
         return float(np.linalg.norm(D, 2)) if D.size else 0.0
     ev = _eigvals(A)
     if np.any(ev.real >= 0) or np.any(np.isclose(ev.real, 0.0)):
         return float("inf")
-    jobd = "Z" if not np.any(D) else "D"
-    gpeak, _ = ab13dd("C", "I", "S", jobd, n, B.shape[1], C.shape[0], A, np.eye(n), B, C, D,
-                      1e-6)             # python-control norm()'s tolerance
-    return float(gpeak)
+    return linf_norm(StateSpace(A, B, C, D))
 
 
 def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal",
@@ -1476,9 +1481,9 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
     for sys in systems:
         if np.isscalar(sys):
             out.append(np.full(s.size, complex(sys)))
-        elif _is_siso_tf(sys):
+        elif (coeffs := _tf_coeffs(sys)) is not None:
             out.append(len(polys))
-            polys += [np.atleast_1d(sys.num[0][0]), np.atleast_1d(sys.den[0][0])]
+            polys += list(coeffs)
         else:
             out.append(as_statespace(sys).evaluate(s)[0, 0])
     if polys:

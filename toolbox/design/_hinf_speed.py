@@ -36,10 +36,9 @@ import itertools
 from dataclasses import dataclass
 from typing import Any
 
-import control as ct
 import numpy as np
 
-from .._lti import feedback
+from .._lti import TransferFunction, feedback
 
 from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES
 from ..errors import SpecError
@@ -140,9 +139,11 @@ def coupling_gains(motor, decoupling, cfg: AtSpeedCfg) -> tuple[float, float]:
     return best[0], best[1]
 
 
-def coupled_weight(w1: Any, G: Any, gain: float) -> ct.TransferFunction:
-    """The S weight ``w1 + gain G`` of the synthesis at speed (minimal form)."""
-    return ct.minreal(ct.tf(w1) + gain * ct.tf(G), verbose=False)
+def coupled_weight(w1: Any, G: Any, gain: float) -> TransferFunction:
+    """The S weight ``w1 + gain G`` of the synthesis at speed (common poles
+    and zeros cancelled)."""
+    w = TransferFunction.from_system(w1) + gain * TransferFunction.from_system(G)
+    return w.minreal()
 
 
 def small_gain_peak(plants: dict, controllers: dict, c_d: float,

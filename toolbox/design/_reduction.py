@@ -22,8 +22,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import StateSpace, as_statespace, parallel
-from ._hinf_riccati import _balancing, _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
+from .._lti import StateSpace, as_statespace, linf_norm, parallel
+from ._hinf_riccati import _balanced, _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -435,16 +435,6 @@ def _series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:
     return (A, np.vstack([B1, B2 @ D1]), np.hstack([D2 @ C1, C2]), D2 @ D1)
 
 
-def _balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Diagonal state scaling (powers of two) equilibrating [A B; C 0]: the
-    controllers come back in the plant's coordinates, entries over ~12 decades."""
-    n = A.shape[0]
-    M = np.zeros((n + 1, n + 1))
-    M[:n, :n], M[:n, n:], M[n:, :n] = A, B, C
-    t = 2.0 ** np.round(np.log2(_balancing(M)[:n]))
-    return A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
-
-
 def _imag_axis_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float) -> np.ndarray:
     """Frequencies w in :data:`MARGIN_BAND` with ``F(jw) = 0`` for the SISO
     ``F = (A, B, C, d)``, from the finite eigenvalues of the system pencil
@@ -497,17 +487,10 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
 
 
 def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> float:
-    """``sup_w |F(jw)|`` (SLICOT ab13dd, python-control norm()'s tolerance; the
-    L-infinity norm, also of an unstable F), inf with a pole on the axis."""
-    from slycot import ab13dd
-    from slycot.exceptions import SlycotArithmeticError
-
-    n = A.shape[0]
-    try:
-        gpeak, _ = ab13dd("C", "I", "S", "D", n, 1, 1, A, np.eye(n), B, C, D, 1e-10)
-    except SlycotArithmeticError:
-        return float("inf")
-    return float(gpeak)
+    """``sup_w |F(jw)|`` (:func:`toolbox._lti.linf_norm`, the algorithm of SLICOT
+    ab13dd, relative tolerance 1e-10; the L-infinity norm, also of an
+    unstable F), inf with a pole on the axis."""
+    return linf_norm(StateSpace(A, B, C, D), tol=1e-10)
 
 
 def loop_margins(G: Any, K: Any) -> LoopMargins:
@@ -518,8 +501,9 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     ``Re L < 0``), sought in :data:`MARGIN_BAND`; the headline margins follow
     the rule of :func:`toolbox.analysis.frequency_margins` (python-control's:
     the crossing closest to instability), and
-    ``M_m = 1/||S||_inf`` is SLICOT ab13dd's L-infinity norm of
-    ``S = 1/(1 + L)`` (relative tolerance 1e-10). The tests check the numbers
+    ``M_m = 1/||S||_inf`` is the L-infinity norm of ``S = 1/(1 + L)``
+    (:func:`toolbox._lti.linf_norm`, Bruinsma-Steinbuch as SLICOT ab13dd,
+    relative tolerance 1e-10). The tests check the numbers
     against :func:`toolbox.analysis.lti_loop_margins` (the toolbox's grid
     route, 20000 points and refinement, ~20 times slower) and python-control.
 

@@ -44,10 +44,9 @@ def design(spec) -> Any:
 class _LazyReader:
     """A method's ``read_cfg`` that imports its module on first call.
 
-    Importing every method module at registration would pull scipy, and for
-    H-infinity python-control (with matplotlib.pyplot and scipy.signal, about
-    1 s), into every ``import toolbox``, ``cct --help`` and ``cct check``
-    (issue 13); only the method a spec names is imported, when the spec is read.
+    Importing every method module at registration would pull scipy into every
+    ``import toolbox``, ``cct --help`` and ``cct check`` (issue 13); only the
+    method a spec names is imported, when the spec is read.
     """
 
     def __init__(self, method: str) -> None:

@@ -4,19 +4,19 @@ The filters of paper 003 (Azaiz et al., "H-infinity design of controllers
 ensuring the regulation of currents ... applied to a PMS motor") are given as
 explicit rational functions, eq (44)-(49); others are most easily specified by
 their low-frequency gain, crossover and high-frequency gain, as MATLAB's
-``makeweight`` does.  Every constructor here returns a python-control
-:class:`~control.TransferFunction` and checks that the weight is usable in the
-augmented plant of eq (50)-(64): finite coefficients, proper, stable.
+``makeweight`` does.  Every constructor here returns a
+:class:`toolbox._lti.TransferFunction` and checks that the weight is usable in
+the augmented plant of eq (50)-(64): finite coefficients, proper, stable.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
-import control as ct
 
+from toolbox._lti import TransferFunction
 from toolbox.errors import SpecError
 
 #: Highest makeweight order (see :func:`makeweight`).
@@ -49,14 +49,15 @@ def _as_coeffs(values: Sequence[float], key: str, what: str) -> np.ndarray:
     return arr[nz[0]:]
 
 
-def validate_weight(w: ct.TransferFunction, key: str = _DEFAULT_KEY,
-                    allow_integrator: bool = False) -> ct.TransferFunction:
+def validate_weight(w: Any, key: str = _DEFAULT_KEY,
+                    allow_integrator: bool = False) -> TransferFunction:
     """Check that a weight is SISO, finite, proper and stable.
 
     Parameters
     ----------
-    w : control.TransferFunction
-        The weighting filter (dimensionless or in the unit ratio it weights).
+    w : TransferFunction, python-control system or number
+        The weighting filter (dimensionless or in the unit ratio it weights),
+        SISO and continuous.
     key : str
         Dotted spec key used in the error message, e.g.
         ``controller.hinf.weights.q.w1``.
@@ -67,8 +68,9 @@ def validate_weight(w: ct.TransferFunction, key: str = _DEFAULT_KEY,
 
     Returns
     -------
-    control.TransferFunction
-        ``w`` itself.
+    TransferFunction
+        ``w`` as a :class:`toolbox._lti.TransferFunction` (the same object if
+        it was one).
 
     Raises
     ------
@@ -76,14 +78,15 @@ def validate_weight(w: ct.TransferFunction, key: str = _DEFAULT_KEY,
         When ``w`` has NaN/inf coefficients, is improper (more zeros than
         poles) or has a pole with non-negative real part.
     """
-    if not isinstance(w, ct.TransferFunction):
-        w = ct.tf(w)
-    if w.ninputs != 1 or w.noutputs != 1:
-        raise SpecError(key, "a SISO weight", f"{w.noutputs}x{w.ninputs}")
-    num = np.atleast_1d(np.squeeze(w.num[0][0]))
-    den = np.atleast_1d(np.squeeze(w.den[0][0]))
-    num = _as_coeffs(num, key, "num")
-    den = _as_coeffs(den, key, "den")
+    shape = (getattr(w, "noutputs", 1), getattr(w, "ninputs", 1))
+    if shape != (1, 1):
+        raise SpecError(key, "a SISO weight", f"{shape[0]}x{shape[1]}")
+    try:
+        w = TransferFunction.from_system(w)
+    except (TypeError, ValueError) as err:
+        raise SpecError(key, "a SISO continuous transfer function", str(err)) from None
+    num = _as_coeffs(w.num, key, "num")
+    den = _as_coeffs(w.den, key, "den")
     if num.size > den.size:
         raise SpecError(key, "a proper weight (degree of num <= degree of den)",
                         f"num degree {num.size - 1} > den degree {den.size - 1}",
@@ -118,7 +121,7 @@ def _peak_gain(num: np.ndarray, den: np.ndarray, poles: np.ndarray) -> float:
 
 
 def weight_from_tf(num: Sequence[float], den: Sequence[float],
-                   key: str = _DEFAULT_KEY) -> ct.TransferFunction:
+                   key: str = _DEFAULT_KEY) -> TransferFunction:
     """Build a weight from polynomial coefficients in s, highest power first.
 
     Parameters
@@ -132,7 +135,7 @@ def weight_from_tf(num: Sequence[float], den: Sequence[float],
 
     Returns
     -------
-    control.TransferFunction
+    TransferFunction
 
     Raises
     ------
@@ -145,11 +148,11 @@ def weight_from_tf(num: Sequence[float], den: Sequence[float],
     """
     n = _as_coeffs(num, key, "num")
     d = _as_coeffs(den, key, "den")
-    return validate_weight(ct.tf(n, d), key)
+    return validate_weight(TransferFunction(n, d), key)
 
 
 def weight_from_zpk(zeros: Sequence[complex], poles: Sequence[complex],
-                    gain: float, key: str = _DEFAULT_KEY) -> ct.TransferFunction:
+                    gain: float, key: str = _DEFAULT_KEY) -> TransferFunction:
     """Build a weight ``gain * prod(s - z) / prod(s - p)``.
 
     Parameters
@@ -163,7 +166,7 @@ def weight_from_zpk(zeros: Sequence[complex], poles: Sequence[complex],
 
     Returns
     -------
-    control.TransferFunction
+    TransferFunction
 
     Raises
     ------
@@ -186,7 +189,7 @@ def weight_from_zpk(zeros: Sequence[complex], poles: Sequence[complex],
 
 def makeweight(dc_gain: float, crossover_freq: float, crossover_gain: float,
                hf_gain: float, order: int = 1,
-               key: str = _DEFAULT_KEY) -> ct.TransferFunction:
+               key: str = _DEFAULT_KEY) -> TransferFunction:
     r"""First- or n-th-order weight from three gains, like MATLAB's ``makeweight``.
 
     The weight has magnitude ``dc_gain`` at s = 0, ``hf_gain`` as
@@ -217,7 +220,7 @@ def makeweight(dc_gain: float, crossover_freq: float, crossover_gain: float,
 
     Returns
     -------
-    control.TransferFunction
+    TransferFunction
 
     Raises
     ------
@@ -247,7 +250,7 @@ def makeweight(dc_gain: float, crossover_freq: float, crossover_gain: float,
                         crossover_gain)
     d, h, c = (g ** (1.0 / order) for g in (dc_gain, hf_gain, crossover_gain))
     w0 = crossover_freq * np.sqrt((h * h - c * c) / (c * c - d * d))
-    first = ct.tf([h, w0 * d], [1.0, w0])
+    first = TransferFunction([h, w0 * d], [1.0, w0])
     w = first
     for _ in range(order - 1):
         w = w * first

@@ -43,13 +43,12 @@ import warnings
 from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
-import control as ct
 import numpy as np
 
-from .._lti import StateSpace
+from .._lti import StateSpace, TransferFunction
 from ..artifact import AxisController, AxisWeights, ControllerArtifact, TransferFunctionData
 from ..errors import DesignInfeasible, SpecError
-from ..plant import axis_plants
+from ..plant import axis_plant_models
 from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 from ._hinf_defaults import default_w2, w1_params, w2_params, w2_toml
@@ -165,9 +164,8 @@ class HinfCfg:
 
 def _tf_table(W: Any) -> dict[str, list[float]]:
     """A SISO weight as the spec's ``{num = [..], den = [..]}`` (highest power first)."""
-    tf = ct.tf(W)
-    return {"num": [float(c) for c in np.atleast_1d(np.squeeze(tf.num[0][0]))],
-            "den": [float(c) for c in np.atleast_1d(np.squeeze(tf.den[0][0]))]}
+    tf = TransferFunction.from_system(W)
+    return {"num": [float(c) for c in tf.num], "den": [float(c) for c in tf.den]}
 
 
 def _given_weight(spec, ax: str, name: str) -> Any:
@@ -187,7 +185,7 @@ def _root(value: Any, key: str) -> complex:
     raise SpecError(key, "a number or a pair [re, im] (rad/s)", value)
 
 
-def read_weight(value: Any, key: str) -> ct.TransferFunction:
+def read_weight(value: Any, key: str) -> TransferFunction:
     """A weight from spec data (paper 003 eq (44)-(49) style).
 
     Parameters
@@ -203,7 +201,7 @@ def read_weight(value: Any, key: str) -> ct.TransferFunction:
 
     Returns
     -------
-    control.TransferFunction
+    toolbox._lti.TransferFunction
 
     Raises
     ------
@@ -213,7 +211,7 @@ def read_weight(value: Any, key: str) -> ct.TransferFunction:
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         if not (math.isfinite(value) and value > 0):
             raise SpecError(key, "a constant weight > 0", value)
-        return validate_weight(ct.tf([float(value)], [1.0]), key)
+        return validate_weight(TransferFunction([float(value)], [1.0]), key)
     if not isinstance(value, Mapping):
         raise SpecError(key, "a number or a table {num, den} | {zeros, poles, gain} | "
                         "{dc_gain, crossover, crossover_gain, hf_gain, order}", value)
@@ -319,7 +317,7 @@ def read_cfg(method: str, table, motor, drive) -> HinfCfg:
 
 def _hf_gain(W: Any) -> float:
     """``|W(j inf)|`` of a proper weight (0 for a strictly proper one)."""
-    return float(np.abs(np.asarray(ct.ss(W).D)).max())
+    return TransferFunction.from_system(W).hf_gain()
 
 
 def _fill_default_w1(cfg: HinfCfg, spec) -> tuple[dict, dict]:
@@ -342,8 +340,8 @@ class HinfAxisResult:
 
     Attributes
     ----------
-    G : control.TransferFunction
-        Plant (A/V).
+    G : LTI system
+        Plant (A/V), as given (:func:`toolbox.plant.axis_plant_models` in a design).
     K : toolbox._lti.StateSpace
         Central controller (V/A).
     Kr : toolbox._lti.StateSpace or None
@@ -373,9 +371,9 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
 
     Parameters
     ----------
-    G : control.LTI
+    G : LTI system (toolbox._lti or python-control)
         Plant, e.g. ``1/(R + s Lq)`` (A/V).
-    w1, w2, w3 : control.LTI or None
+    w1, w2, w3 : TransferFunction, python-control system, number or None
         Weights on S, KS, T (eq 35-40).
     gamma : float or "optimal"
     backoff : float
@@ -400,7 +398,7 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
         ``controller.hinf.gamma`` (infeasible, with the best achievable gamma),
         ``controller.hinf.reduce_order`` (margins lost beyond ``margin_loss``).
     """
-    Gs = StateSpace(*_ss_blocks(G))   # realised once (SLICOT td04ad) for synthesis and margins
+    Gs = StateSpace(*_ss_blocks(G))   # realised once for synthesis and margins
     P = augment_mixed_sensitivity(Gs, w1, w2, w3)
     try:
         with warnings.catch_warnings(record=True):
@@ -468,9 +466,8 @@ def _weight_data(W: Any) -> TransferFunctionData | None:
     """
     if W is None:
         return None
-    tf = ct.tf(W)
-    return TransferFunctionData(np.array(np.atleast_1d(tf.num[0][0]), float),
-                                np.array(np.atleast_1d(tf.den[0][0]), float))
+    tf = TransferFunction.from_system(W)
+    return TransferFunctionData(np.array(tf.num), np.array(tf.den))
 
 
 def _margins_json(m: Any) -> dict:
@@ -493,7 +490,7 @@ def design(spec) -> ControllerArtifact:
     """
     cfg: HinfCfg = spec.controller.cfg
     ts = spec.drive.sample_time
-    plants = axis_plants(spec.motor)
+    plants = axis_plant_models(spec.motor)
     weights, stated = _fill_default_w1(cfg, spec)
     cfg = replace(cfg, weights=weights, stated=stated)
     decoupling = decoupling_from_motor(spec.motor)
@@ -598,11 +595,10 @@ def _executed_axis(r: Any, ts: float, executed: str) -> AxisController:
     ``full_order``. ``"full"``: the full-order law, the reduced candidate (if
     any) in ``reduced``.
     """
-    # the artifact still reads python-control systems (toolbox._lti's to_control)
-    full = AxisController.from_error_controller(r.K.to_control(), ts, method="tustin")
+    full = AxisController.from_error_controller(r.K, ts, method="tustin")
     if r.Kr is None:
         return full
-    red = AxisController.from_error_controller(r.Kr.to_control(), ts, method="tustin")
+    red = AxisController.from_error_controller(r.Kr, ts, method="tustin")
     if executed == "reduced":
         return replace(red, full_order=full)
     return replace(full, reduced=red)
