@@ -66,7 +66,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -76,6 +75,8 @@ from ..artifact import json_ready
 from ..plant import dq_matrices, max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_state_matrix
 from ._laws import AXES, axis_law
+from ._lmi import (lmi_rows, problem_data, solve_by_constraint_generation, solve_feasibility,
+                   symmetric_basis, symmetric_matrix)
 from ._sampling import DEFAULT_BOX, DEFAULT_RANGES
 
 __all__ = ["SampledBox", "SampledCertificate", "certify_sampled",
@@ -333,10 +334,19 @@ def _corner_matrices(A, G, U, P, lam) -> np.ndarray:
     return 0.5 * (M + np.transpose(M, (0, 2, 1)))
 
 
+def _corner_slack(A, G, U, P, lam) -> np.ndarray:
+    """Largest eigenvalue of each corner matrix, relative to its size (N,)."""
+    ev = np.linalg.eigvalsh(_corner_matrices(A, G, U, P, lam))
+    return ev[:, -1] / np.max(np.abs(ev), axis=-1)
+
+
 def _worst_eig(A, G, U, P, lam) -> float:
     """Largest eigenvalue over the corners, relative to the matrices' size."""
-    ev = np.linalg.eigvalsh(_corner_matrices(A, G, U, P, lam))
-    return float(np.max(ev[:, -1] / np.max(np.abs(ev), axis=-1)))
+    return float(np.max(_corner_slack(A, G, U, P, lam)))
+
+
+#: a corner's inequality holds when its relative slack is below -_CHECK_MARGIN
+_CHECK_MARGIN = 1e-12
 
 
 def _verified(A, G, U, P, lam) -> bool:
@@ -345,7 +355,7 @@ def _verified(A, G, U, P, lam) -> bool:
     P = 0.5 * (P + P.T)
     if not lam >= 0 or np.min(np.linalg.eigvalsh(P)) <= 0:
         return False
-    return _worst_eig(A, G, U, P, lam) < -1e-12
+    return _worst_eig(A, G, U, P, lam) < -_CHECK_MARGIN
 
 
 def _multiplier(A, G, U, P) -> float:
@@ -369,32 +379,58 @@ def _multiplier(A, G, U, P) -> float:
     return 10.0 ** (a if fa < fb else b)
 
 
-def _solve_lmi(A, G, U):
-    """``(P, lam, status)`` of step 4's corner LMIs (cvxpy + CLARABEL), data
-    constant; P None when the solver finds none. ``P >= I`` fixes the scale."""
-    import cvxpy as cp
+def _lmi_blocks(A, G, U):
+    """Clarabel rows of step 4's LMIs, assembled once per cell
+    (:mod:`toolbox.analysis._lmi`): unknowns ``x = [upper triangle of P, lam]``.
 
+    Returns ``(P >> I block, corner blocks (A (N, s, m+1), b (N, s)))``;
+    corner ``i`` is ``-M_i(P, lam) - eps I >> 0`` with the corner matrix
+    ``M_i`` of :func:`_corner_matrices`, linear in ``(P, lam)``.
+    """
     N, n, _ = A.shape
     m = U.shape[1]
-    P = cp.Variable((n, n), symmetric=True)
-    lam = cp.Variable(nonneg=True)
-    cons = [P >> np.eye(n)]
-    for Ai, Gi in zip(A, G):
-        AU = np.hstack([Ai, U])
-        M = AU.T @ P @ AU - cp.bmat([[P - lam * Gi, np.zeros((n, m))],
-                                     [np.zeros((m, n)), lam * np.eye(m)]])
-        cons.append(0.5 * (M + M.T) << -_EPS * np.eye(n + m))
-    problem = cp.Problem(cp.Minimize(0), cons)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            problem.solve(solver=cp.CLARABEL)
-        except cp.error.SolverError as err:
-            return None, 0.0, f"solver error: {err}"
-    status = str(problem.status)
-    if P.value is None or status not in ("optimal", "optimal_inaccurate"):
-        return None, 0.0, status
-    return np.array(P.value), float(lam.value), status
+    E = symmetric_basis(n)
+    AU = np.concatenate([A, np.broadcast_to(U, (N, n, m))], axis=2)
+    # M_i(E_k) = [A_i U]' E_k [A_i U] - diag(E_k, 0); M_i(lam) = diag(G_i, -I)
+    C = np.zeros((N, E.shape[0] + 1, n + m, n + m))
+    C[:, :-1] = np.einsum("vji,kjl,vlo->vkio", AU, E, AU)
+    C[:, :-1, :n, :n] -= E[None]
+    C[:, -1, :n, :n] = G
+    C[:, -1, n:, n:] = -np.eye(m)
+    corners = lmi_rows(np.broadcast_to(-_EPS * np.eye(n + m), (N, n + m, n + m)), -C)
+    Cp = np.zeros((1, E.shape[0] + 1, n, n))
+    Cp[0, :-1] = E
+    Ap, bp = lmi_rows(-np.eye(n)[None], Cp)
+    return (Ap[0], bp[0]), corners
+
+
+def _solve_lmi(A, G, U, order: np.ndarray):
+    """``(P, lam, status)`` of step 4's corner LMIs (Clarabel, called directly),
+    by constraint generation over the corners, most likely binding first
+    (``order``); P None when the solver finds none. ``P >= I`` fixes the
+    scale. A P is returned only when it holds at every corner, and the
+    verdict is then the solve over all corners'
+    (:func:`toolbox.analysis._lmi.solve_by_constraint_generation`)."""
+    n = A.shape[-1]
+    identity, (Ac, bc) = _lmi_blocks(A, G, U)
+    n_x = Ac.shape[-1]
+
+    def solve(idx):
+        x, status = solve_feasibility(*problem_data(
+            [identity] + list(zip(Ac[idx], bc[idx])), n_x, nonneg=[n_x - 1]))
+        return (None if x is None else (symmetric_matrix(x[:-1], n), float(x[-1]))), status
+
+    sol, status = solve_by_constraint_generation(
+        solve, lambda s: _corner_slack(A, G, U, *s), order, margin=_CHECK_MARGIN)
+    return (None, 0.0, status) if sol is None else (*sol, status)
+
+
+def _distinct_corners(A, G) -> np.ndarray:
+    """Indices of the distinct corner pairs ``(A_i, G_i)`` (in their order): the
+    box is degenerate in the coordinates that do not vary (all of them at
+    scale 0), and a repeated corner is a repeated LMI."""
+    flat = np.concatenate([A.reshape(A.shape[0], -1), G.reshape(G.shape[0], -1)], axis=1)
+    return np.sort(np.unique(flat, axis=0, return_index=True)[1])
 
 
 def _exact_corners(artifact, laws, cell: SampledBox) -> tuple[np.ndarray, np.ndarray]:
@@ -423,7 +459,8 @@ def _certify_cell(artifact, laws, cell: SampledBox,
     A, V, rho = _vertices(artifact, laws, cell)
     # step 4's corner inequality implies A_i' P A_i < P: a corner matrix of the
     # polytope that is not Schur makes the LMIs infeasible, no need to solve them
-    if np.max(np.abs(np.linalg.eigvals(A))) >= 1.0:
+    radii = np.max(np.abs(np.linalg.eigvals(A)), axis=1)
+    if np.max(radii) >= 1.0:
         return _CellOutcome(False, "a corner of the polytope over the cell is unstable", rho,
                             math.nan, *worst), None
     G = rho ** 2 * np.transpose(V, (0, 2, 1)) @ V
@@ -432,16 +469,22 @@ def _certify_cell(artifact, laws, cell: SampledBox,
     U[0, 0] = U[1, 1] = 1.0
     # diagonal similarity x = T x_b from the mean corner matrix, for conditioning
     _, (t, _) = matrix_balance(np.mean(A, axis=0), permute=False, separate=True)
+    keep = _distinct_corners(A, G)
+    A, G, radii = A[keep], G[keep], radii[keep]
     Ab = A * t[None, None, :] / t[None, :, None]
     Gb = G * t[None, :, None] * t[None, None, :]
     Ub = U / t[:, None]
+    # constraint generation starts with the corners a rejected warm start
+    # violates most, else with the least stable ones
+    order = np.argsort(-radii)
     if guess is not None:
         Pg = guess * t[:, None] * t[None, :]
         lam = _multiplier(Ab, Gb, Ub, Pg)
         if _verified(Ab, Gb, Ub, Pg, lam):
             return (_CellOutcome(True, "warm start", rho, float(np.linalg.cond(Pg)), *worst),
                     guess)
-    P, lam, status = _solve_lmi(Ab, Gb, Ub)
+        order = np.argsort(-_corner_slack(Ab, Gb, Ub, Pg, lam))
+    P, lam, status = _solve_lmi(Ab, Gb, Ub, order)
     if P is None:
         return _CellOutcome(False, f"no Lyapunov matrix found ({status})", rho, math.nan,
                             *worst), None
