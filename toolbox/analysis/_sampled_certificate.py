@@ -75,8 +75,8 @@ from ..artifact import json_ready
 from ..plant import dq_matrices, max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_state_matrix
 from ._laws import AXES, axis_law
-from ._lmi import (lmi_rows, problem_data, solve_by_constraint_generation, solve_feasibility,
-                   symmetric_basis, symmetric_matrix)
+from ._lmi import (ACTIVE_STEP, lmi_rows, problem_data, solve_by_constraint_generation,
+                   solve_feasibility, symmetric_basis, symmetric_matrix)
 from ._sampling import DEFAULT_BOX, DEFAULT_RANGES
 
 __all__ = ["SampledBox", "SampledCertificate", "certify_sampled",
@@ -390,10 +390,14 @@ def _lmi_blocks(A, G, U):
     N, n, _ = A.shape
     m = U.shape[1]
     E = symmetric_basis(n)
+    ui, uj = np.triu_indices(n)
     AU = np.concatenate([A, np.broadcast_to(U, (N, n, m))], axis=2)
-    # M_i(E_k) = [A_i U]' E_k [A_i U] - diag(E_k, 0); M_i(lam) = diag(G_i, -I)
+    # M_i(E_k) = [A_i U]' E_k [A_i U] - diag(E_k, 0); M_i(lam) = diag(G_i, -I).
+    # E_k = e_u e_v' + e_v e_u' (u < v) or e_u e_u': the first term is the
+    # outer product of rows u and v of [A_i U]
     C = np.zeros((N, E.shape[0] + 1, n + m, n + m))
-    C[:, :-1] = np.einsum("vji,kjl,vlo->vkio", AU, E, AU)
+    outer = AU[:, ui, :, None] * AU[:, uj, None, :]
+    C[:, :-1] = outer + np.swapaxes(outer, -1, -2) * (ui != uj)[None, :, None, None]
     C[:, :-1, :n, :n] -= E[None]
     C[:, -1, :n, :n] = G
     C[:, -1, n:, n:] = -np.eye(m)
@@ -404,12 +408,13 @@ def _lmi_blocks(A, G, U):
     return (Ap[0], bp[0]), corners
 
 
-def _solve_lmi(A, G, U, order: np.ndarray):
+def _solve_lmi(A, G, U, order: np.ndarray, step: int = ACTIVE_STEP):
     """``(P, lam, status)`` of step 4's corner LMIs (Clarabel, called directly),
     by constraint generation over the corners, most likely binding first
-    (``order``); P None when the solver finds none. ``P >= I`` fixes the
-    scale. A P is returned only when it holds at every corner, and the
-    verdict is then the solve over all corners'
+    (``order``, ``step`` corners added per round; all at once when ``step``
+    is at least their number); P None when the solver finds none. ``P >= I``
+    fixes the scale. A P is returned only when it holds at every corner, and
+    the verdict is then the solve over all corners'
     (:func:`toolbox.analysis._lmi.solve_by_constraint_generation`)."""
     n = A.shape[-1]
     identity, (Ac, bc) = _lmi_blocks(A, G, U)
@@ -421,7 +426,7 @@ def _solve_lmi(A, G, U, order: np.ndarray):
         return (None if x is None else (symmetric_matrix(x[:-1], n), float(x[-1]))), status
 
     sol, status = solve_by_constraint_generation(
-        solve, lambda s: _corner_slack(A, G, U, *s), order, margin=_CHECK_MARGIN)
+        solve, lambda s: _corner_slack(A, G, U, *s), order, margin=_CHECK_MARGIN, step=step)
     return (None, 0.0, status) if sol is None else (*sol, status)
 
 
@@ -442,6 +447,36 @@ def _exact_corners(artifact, laws, cell: SampledBox) -> tuple[np.ndarray, np.nda
     return c, loop.spectral_radius()
 
 
+@dataclass(frozen=True)
+class _CellLMI:
+    """Step 4's data of one cell: the distinct corner matrices ``A`` (N, n, n),
+    ``G = rho^2 V'V`` and ``U`` after the diagonal similarity ``x = diag(t) x_b``
+    (for conditioning), the corners' spectral radii and the remainder bound."""
+
+    A: np.ndarray
+    G: np.ndarray
+    U: np.ndarray
+    t: np.ndarray
+    radii: np.ndarray
+    rho: float
+
+
+def _cell_lmi(artifact, laws, cell: SampledBox) -> _CellLMI:
+    """The corner data of a cell (steps 1-4), balanced, repeated corners dropped."""
+    A, V, rho = _vertices(artifact, laws, cell)
+    G = rho ** 2 * np.transpose(V, (0, 2, 1)) @ V
+    n = A.shape[-1]
+    U = np.zeros((n, 2))
+    U[0, 0] = U[1, 1] = 1.0
+    # diagonal similarity x = T x_b from the mean corner matrix, for conditioning
+    _, (t, _) = matrix_balance(np.mean(A, axis=0), permute=False, separate=True)
+    keep = _distinct_corners(A, G)
+    A, G = A[keep], G[keep]
+    return _CellLMI(A * t[None, None, :] / t[None, :, None],
+                    G * t[None, :, None] * t[None, None, :], U / t[:, None], t,
+                    np.max(np.abs(np.linalg.eigvals(A)), axis=1), rho)
+
+
 def _certify_cell(artifact, laws, cell: SampledBox,
                   guess: np.ndarray | None = None) -> tuple[_CellOutcome, np.ndarray | None]:
     """Outcome of one cell and its Lyapunov matrix (original coordinates, or None).
@@ -456,43 +491,31 @@ def _certify_cell(artifact, laws, cell: SampledBox,
     if radius[i] >= 1.0 - 1e-9:
         return _CellOutcome(False, "a corner of the cell is unstable", math.nan, math.nan,
                             *worst), None
-    A, V, rho = _vertices(artifact, laws, cell)
+    c = _cell_lmi(artifact, laws, cell)
     # step 4's corner inequality implies A_i' P A_i < P: a corner matrix of the
     # polytope that is not Schur makes the LMIs infeasible, no need to solve them
-    radii = np.max(np.abs(np.linalg.eigvals(A)), axis=1)
-    if np.max(radii) >= 1.0:
-        return _CellOutcome(False, "a corner of the polytope over the cell is unstable", rho,
+    if np.max(c.radii) >= 1.0:
+        return _CellOutcome(False, "a corner of the polytope over the cell is unstable", c.rho,
                             math.nan, *worst), None
-    G = rho ** 2 * np.transpose(V, (0, 2, 1)) @ V
-    n = A.shape[-1]
-    U = np.zeros((n, 2))
-    U[0, 0] = U[1, 1] = 1.0
-    # diagonal similarity x = T x_b from the mean corner matrix, for conditioning
-    _, (t, _) = matrix_balance(np.mean(A, axis=0), permute=False, separate=True)
-    keep = _distinct_corners(A, G)
-    A, G, radii = A[keep], G[keep], radii[keep]
-    Ab = A * t[None, None, :] / t[None, :, None]
-    Gb = G * t[None, :, None] * t[None, None, :]
-    Ub = U / t[:, None]
     # constraint generation starts with the corners a rejected warm start
     # violates most, else with the least stable ones
-    order = np.argsort(-radii)
+    order = np.argsort(-c.radii)
     if guess is not None:
-        Pg = guess * t[:, None] * t[None, :]
-        lam = _multiplier(Ab, Gb, Ub, Pg)
-        if _verified(Ab, Gb, Ub, Pg, lam):
-            return (_CellOutcome(True, "warm start", rho, float(np.linalg.cond(Pg)), *worst),
+        Pg = guess * c.t[:, None] * c.t[None, :]
+        lam = _multiplier(c.A, c.G, c.U, Pg)
+        if _verified(c.A, c.G, c.U, Pg, lam):
+            return (_CellOutcome(True, "warm start", c.rho, float(np.linalg.cond(Pg)), *worst),
                     guess)
-        order = np.argsort(-_corner_slack(Ab, Gb, Ub, Pg, lam))
-    P, lam, status = _solve_lmi(Ab, Gb, Ub, order)
+        order = np.argsort(-_corner_slack(c.A, c.G, c.U, Pg, lam))
+    P, lam, status = _solve_lmi(c.A, c.G, c.U, order)
     if P is None:
-        return _CellOutcome(False, f"no Lyapunov matrix found ({status})", rho, math.nan,
+        return _CellOutcome(False, f"no Lyapunov matrix found ({status})", c.rho, math.nan,
                             *worst), None
-    if not _verified(Ab, Gb, Ub, P, lam):
-        return _CellOutcome(False, "the solver's Lyapunov matrix fails the numpy check", rho,
+    if not _verified(c.A, c.G, c.U, P, lam):
+        return _CellOutcome(False, "the solver's Lyapunov matrix fails the numpy check", c.rho,
                             math.nan, *worst), None
-    return (_CellOutcome(True, status, rho, float(np.linalg.cond(P)), *worst),
-            P / t[:, None] / t[None, :])
+    return (_CellOutcome(True, status, c.rho, float(np.linalg.cond(P)), *worst),
+            P / c.t[:, None] / c.t[None, :])
 
 
 def certify_sampled(artifact, box: SampledBox, *, speed_cells: int = 2,
