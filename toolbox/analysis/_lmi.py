@@ -21,6 +21,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+__all__ = ["ACTIVE_STEP", "STATUS", "lmi_rows", "problem_data", "solve_by_constraint_generation",
+           "solve_feasibility", "svec_index", "symmetric_basis", "symmetric_matrix"]
+
 #: Clarabel status -> the status names reported (those cvxpy gave them, so that
 #: analysis.json reads as before issue 13).
 STATUS = {"Solved": "optimal", "AlmostSolved": "optimal_inaccurate",

@@ -50,8 +50,10 @@ Soundness argument (every step is an over-bound, none an approximation):
    closed loop (in fact the cell is quadratically stable).
 5. *Cells and check.* The speed range is split into cells (a Lyapunov
    matrix per cell: the certificate is for constant speed, as the sweep's
-   loops are). The LMIs are solved with cvxpy + CLARABEL and every corner
-   inequality is re-checked with numpy eigenvalues of the returned
+   loops are). The LMIs are handed to Clarabel directly
+   (:mod:`toolbox.analysis._lmi`, issue 13) and solved by constraint
+   generation over the corners (its verdict is the full solve's), and every
+   corner inequality is re-checked with numpy eigenvalues of the returned
    ``P, lam`` (a cell counts as certified only when that check passes).
 
 The box at scale ``k`` interpolates from the nominal point (``k = 0``) to the
