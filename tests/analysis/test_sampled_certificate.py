@@ -221,9 +221,12 @@ def _cvxpy_solve_lmi(A, G, U, order=None, step=None):
     return np.array(P.value), float(lam.value), status
 
 
-def _reference_scale(art, motor, drive, tol: float) -> float:
-    """Cold bisection (no warm start: fresh guesses per box), every corner LMI
-    of every cell solved at once through cvxpy."""
+def _reference_scale(art, motor, drive, tol: float, monkeypatch) -> float:
+    """Cold bisection (no warm start, neither from a smaller box nor from the
+    mirror cell), every corner LMI of every cell solved at once through cvxpy."""
+    cold = S._certify_cell
+    monkeypatch.setattr(S, "_certify_cell", lambda a, laws, cell, guesses=(): cold(a, laws, cell))
+    monkeypatch.setattr(S, "_solve_lmi", _cvxpy_solve_lmi)
     wmax = max_electrical_speed(motor, drive)
     off = tuple(motor.pole_pairs * v for v in S.DEFAULT_RANGES["speed_offset"][:2])
 
@@ -251,8 +254,7 @@ def test_same_scale_as_cvxpy_route(name, monkeypatch):
     single changed verdict would move the scale by at least 1/16."""
     spec, art = gallery_design(name)
     with monkeypatch.context() as m:
-        m.setattr(S, "_solve_lmi", _cvxpy_solve_lmi)
-        ref = _reference_scale(art, spec.motor, spec.drive, tol=0.125)
+        ref = _reference_scale(art, spec.motor, spec.drive, 0.125, m)
     res = largest_certified_sampled_scale(art, spec.motor, spec.drive, tol=0.125)
     assert res.scale == ref
 
@@ -304,3 +306,29 @@ def test_constraint_generation_gives_the_full_solve_verdict():
         assert (P is not None and S._verified(c.A, c.G, c.U, P, lam)) == full, (k, cell)
         verdicts.add(full)
     assert verdicts == {True, False}
+
+
+def test_mirror_signs_map_a_cell_to_its_mirror():
+    """The warm start of a speed cell from its mirror image is exact: at opposite
+    true and measured speeds the executed loop is ``S A S`` (the sign of i_q,
+    of the q law's states and of the delayed q voltages flipped); shown on
+    random sets of 003's H-infinity design (3 law states per axis, one delay)."""
+    spec, art = gallery_design("hinf003")
+    rng = np.random.default_rng(5)
+    R, Ld, Lq = (v * np.exp(rng.uniform(-0.7, 0.7, 20))
+                 for v in (spec.motor.R, spec.motor.Ld, spec.motor.Lq))
+    w, wm = rng.uniform(-900, 900, 20), rng.uniform(-900, 900, 20)
+
+    def loop(sign):
+        return coupled_closed_loop(_laws(art), art.decoupling, art.sample_time,
+                                   art.delay_samples, R=R, Ld=Ld, Lq=Lq, omega=sign * w,
+                                   omega_meas=sign * wm).A
+
+    s = S._mirror_signs(_laws(art), art.delay_samples)
+    assert art.delay_samples >= 1 and np.any(s < 0)
+    np.testing.assert_allclose(s[:, None] * loop(1.0) * s[None, :], loop(-1.0),
+                               rtol=1e-12, atol=1e-12)
+    cell = SampledBox((0.1, 0.2), (1e-3, 2e-3), (1e-3, 3e-3), (100.0, 200.0), (0.9, 1.1),
+                      (-20.0, 30.0))
+    assert S._mirror(cell) == SampledBox(cell.R, cell.Ld, cell.Lq, (-200.0, -100.0),
+                                         cell.speed_gain, (-30.0, 20.0))

@@ -55,6 +55,8 @@ Soundness argument (every step is an over-bound, none an approximation):
    generation over the corners (its verdict is the full solve's), and every
    corner inequality is re-checked with numpy eigenvalues of the returned
    ``P, lam`` (a cell counts as certified only when that check passes).
+   Warm starts (a smaller box's ``P``, the mirror image of the opposite
+   speed cell's) pass the same check or are not used.
 
 The box at scale ``k`` interpolates from the nominal point (``k = 0``) to the
 given ranges (``k = 1``); the bisection on ``k`` reports the largest certified
@@ -479,45 +481,68 @@ def _cell_lmi(artifact, laws, cell: SampledBox) -> _CellLMI:
                     np.max(np.abs(np.linalg.eigvals(A)), axis=1), rho)
 
 
-def _certify_cell(artifact, laws, cell: SampledBox,
-                  guess: np.ndarray | None = None) -> tuple[_CellOutcome, np.ndarray | None]:
-    """Outcome of one cell and its Lyapunov matrix (original coordinates, or None).
+def _mirror_signs(laws, delay_samples: int) -> np.ndarray:
+    """``S = diag(s)`` that maps the loop at ``(w, w_m)`` to the loop at
+    ``(-w, -w_m)``: ``S A S``. Flipping the sign of ``i_q`` does
+    (``dq_matrices``: ``S2 A(w) S2 = A(-w)``, and the decoupling likewise), with
+    the q axis's law states and delayed voltages (the state order of
+    :func:`~toolbox.analysis._coupled.coupled_state_matrix`)."""
+    nd, nq = laws["d"].n, laws["q"].n
+    s = np.ones(2 + nd + nq + 2 * delay_samples)
+    s[1] = -1.0
+    s[2 + nd:2 + nd + nq] = -1.0
+    s[2 + nd + nq + 1::2] = -1.0
+    return s
 
-    ``guess`` (a Lyapunov matrix of a smaller nested cell) is tried first with
-    its best multiplier; the LMIs are solved only when it fails the check.
-    Either way a cell is certified only by the numpy check of step 4.
+
+def _mirror(cell: SampledBox) -> SampledBox:
+    """The cell of opposite speeds and sensor offsets."""
+    return SampledBox(cell.R, cell.Ld, cell.Lq, (-cell.omega[1], -cell.omega[0]),
+                      cell.speed_gain, (-cell.speed_offset[1], -cell.speed_offset[0]))
+
+
+def _certify_cell(artifact, laws, cell: SampledBox, guesses=()):
+    """Outcome of one cell, its Lyapunov matrix (original coordinates, or None)
+    and multiplier.
+
+    ``guesses``: ``(P, lam)`` pairs tried first, in order - the mirror image
+    of the opposite cell's certificate (an exact symmetry up to rounding, see
+    :func:`_mirror_signs`; ``lam`` kept) and a Lyapunov matrix of a smaller
+    nested cell (``lam`` None: its best multiplier). The LMIs are solved
+    only when all fail the check. Either way a cell is certified only by the
+    numpy check of step 4.
     """
     corners, radius = _exact_corners(artifact, laws, cell)
     i = int(np.argmax(radius))
     worst = (corners[i], float(radius[i]))
     if radius[i] >= 1.0 - 1e-9:
         return _CellOutcome(False, "a corner of the cell is unstable", math.nan, math.nan,
-                            *worst), None
+                            *worst), None, 0.0
     c = _cell_lmi(artifact, laws, cell)
     # step 4's corner inequality implies A_i' P A_i < P: a corner matrix of the
     # polytope that is not Schur makes the LMIs infeasible, no need to solve them
     if np.max(c.radii) >= 1.0:
         return _CellOutcome(False, "a corner of the polytope over the cell is unstable", c.rho,
-                            math.nan, *worst), None
+                            math.nan, *worst), None, 0.0
     # constraint generation starts with the corners a rejected warm start
     # violates most, else with the least stable ones
     order = np.argsort(-c.radii)
-    if guess is not None:
+    for guess, lam in guesses:
         Pg = guess * c.t[:, None] * c.t[None, :]
-        lam = _multiplier(c.A, c.G, c.U, Pg)
+        lam = _multiplier(c.A, c.G, c.U, Pg) if lam is None else lam
         if _verified(c.A, c.G, c.U, Pg, lam):
             return (_CellOutcome(True, "warm start", c.rho, float(np.linalg.cond(Pg)), *worst),
-                    guess)
+                    guess, lam)
         order = np.argsort(-_corner_slack(c.A, c.G, c.U, Pg, lam))
     P, lam, status = _solve_lmi(c.A, c.G, c.U, order)
     if P is None:
         return _CellOutcome(False, f"no Lyapunov matrix found ({status})", c.rho, math.nan,
-                            *worst), None
+                            *worst), None, 0.0
     if not _verified(c.A, c.G, c.U, P, lam):
         return _CellOutcome(False, "the solver's Lyapunov matrix fails the numpy check", c.rho,
-                            math.nan, *worst), None
+                            math.nan, *worst), None, 0.0
     return (_CellOutcome(True, status, c.rho, float(np.linalg.cond(P)), *worst),
-            P / c.t[:, None] / c.t[None, :])
+            P / c.t[:, None] / c.t[None, :], lam)
 
 
 def certify_sampled(artifact, box: SampledBox, *, speed_cells: int = 2,
@@ -541,14 +566,23 @@ def certify_sampled(artifact, box: SampledBox, *, speed_cells: int = 2,
         (fastest first; stops at the first refused cell).
     """
     laws = _laws(artifact)
+    signs = _mirror_signs(laws, int(artifact.delay_samples))
     guesses = {} if guesses is None else guesses
+    certified: dict = {}       # cell -> (P, lam) of this box, for its mirror image
     outcomes = []
     for k, cell in enumerate(box.speed_cells(speed_cells)):
-        out, P = _certify_cell(artifact, laws, cell, guesses.get(k))
+        tries = []
+        if _mirror(cell) in certified:
+            P, lam = certified[_mirror(cell)]
+            tries.append((signs[:, None] * P * signs[None, :], lam))
+        if guesses.get(k) is not None:
+            tries.append((guesses[k], None))
+        out, P, lam = _certify_cell(artifact, laws, cell, tries)
         outcomes.append(out)
         if not out.certified:
             return False, outcomes
         guesses[k] = P
+        certified[cell] = (P, lam)
     return True, outcomes
 
 
