@@ -283,19 +283,22 @@ def test_clarabel_rows_are_the_corner_matrices():
     np.testing.assert_allclose(bp - Ap @ x, (P - np.eye(n))[r, c] * w, rtol=0, atol=1e-14)
 
 
-def test_constraint_generation_gives_the_full_solve_verdict():
+#: scales around each design's refusal: certified below, refused by the solver
+#: (the polytope's corners stable) above
+CUT_SCALES = {"pi002": (0.0, 0.203125, 0.21875), "hinf003": (0.27, 0.28)}
+
+
+@pytest.mark.parametrize("name", sorted(CUT_SCALES))
+def test_constraint_generation_gives_the_full_solve_verdict(name):
     """Constraint generation over the corners (a few, the violated ones added)
-    reaches the verdict of the solve over all corners on every cell of a scale
-    sweep of 003's H-infinity design, and its certificate passes the numpy
-    check at every corner. The sweep must hold certified and refused (solved)
-    cells for the test to mean anything."""
-    spec, art = gallery_design("hinf003")
+    reaches the verdict of the solve over all corners on cells certified and
+    refused, and its certificate passes the numpy check at every corner."""
+    spec, art = gallery_design(name)
     laws = _laws(art)
     wmax = max_electrical_speed(spec.motor, spec.drive)
     verdicts = set()
-    # one cell per scale: the two speed cells are mirror images (w -> -w);
-    # certified up to 0.27, refused from 0.28 on with a stable polytope
-    for k in (0.0, 0.27, 0.28):
+    # one cell per scale: the two speed cells are mirror images (w -> -w)
+    for k in CUT_SCALES[name]:
         cell = SampledBox.around(spec.motor, k, omega_max=wmax).speed_cells(2)[0]
         c = S._cell_lmi(art, laws, cell)
         assert np.max(c.radii) < 1.0
