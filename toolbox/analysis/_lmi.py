@@ -21,8 +21,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-__all__ = ["ACTIVE_STEP", "STATUS", "lmi_rows", "problem_data", "solve_by_constraint_generation",
-           "solve_feasibility", "svec_index", "symmetric_basis", "symmetric_matrix"]
+__all__ = ["ACTIVE_STEP", "STATUS", "above_identity", "lmi_rows", "problem_data",
+           "solve_by_constraint_generation", "solve_feasibility", "svec_index", "symmetric_basis",
+           "symmetric_matrix"]
 
 #: Clarabel status -> the status names reported (those cvxpy gave them, so that
 #: analysis.json reads as before issue 13).
@@ -73,6 +74,17 @@ def lmi_rows(D: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     rows, cols, w = svec_index(D.shape[-1])
     return -np.swapaxes(C[..., rows, cols] * w, -1, -2), D[..., rows, cols] * w
+
+
+def above_identity(n: int, n_x: int) -> tuple[np.ndarray, np.ndarray]:
+    """Clarabel rows ``(A (s, n_x), b (s,))`` of ``P >> I``, ``P`` (n x n) the
+    symmetric matrix of the first ``n (n + 1) / 2`` unknowns (the
+    normalisation of a Lyapunov matrix: its LMIs are homogeneous in ``P``)."""
+    E = symmetric_basis(n)
+    C = np.zeros((1, n_x, n, n))
+    C[0, :E.shape[0]] = E
+    A, b = lmi_rows(-np.eye(n)[None], C)
+    return A[0], b[0]
 
 
 def problem_data(blocks: Sequence[tuple[np.ndarray, np.ndarray]], n_x: int,

@@ -70,6 +70,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -79,8 +80,9 @@ from ..artifact import json_ready
 from ..plant import dq_matrices, max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_state_matrix
 from ._laws import AXES, axis_law
-from ._lmi import (ACTIVE_STEP, lmi_rows, problem_data, solve_by_constraint_generation,
-                   solve_feasibility, symmetric_basis, symmetric_matrix)
+from ._lmi import (ACTIVE_STEP, above_identity, lmi_rows, problem_data,
+                   solve_by_constraint_generation, solve_feasibility, symmetric_basis,
+                   symmetric_matrix)
 from ._sampling import DEFAULT_BOX, DEFAULT_RANGES
 
 __all__ = ["SampledBox", "SampledCertificate", "certify_sampled",
@@ -406,10 +408,7 @@ def _lmi_blocks(A, G, U):
     C[:, -1, :n, :n] = G
     C[:, -1, n:, n:] = -np.eye(m)
     corners = lmi_rows(np.broadcast_to(-_EPS * np.eye(n + m), (N, n + m, n + m)), -C)
-    Cp = np.zeros((1, E.shape[0] + 1, n, n))
-    Cp[0, :-1] = E
-    Ap, bp = lmi_rows(-np.eye(n)[None], Cp)
-    return (Ap[0], bp[0]), corners
+    return above_identity(n, E.shape[0] + 1), corners
 
 
 def _solve_lmi(A, G, U, order: np.ndarray, step: int = ACTIVE_STEP):
@@ -501,7 +500,8 @@ def _mirror(cell: SampledBox) -> SampledBox:
                       cell.speed_gain, (-cell.speed_offset[1], -cell.speed_offset[0]))
 
 
-def _certify_cell(artifact, laws, cell: SampledBox, guesses=()):
+def _certify_cell(artifact, laws, cell: SampledBox, guesses: Sequence[tuple] = ()
+                  ) -> tuple[_CellOutcome, np.ndarray | None, float]:
     """Outcome of one cell, its Lyapunov matrix (original coordinates, or None)
     and multiplier.
 

@@ -56,8 +56,8 @@ import numpy as np
 from scipy.linalg import matrix_balance
 
 from ..plant import dq_matrices, max_electrical_speed
-from ._lmi import (lmi_rows, problem_data, solve_by_constraint_generation, solve_feasibility,
-                   symmetric_basis, symmetric_matrix)
+from ._lmi import (above_identity, lmi_rows, problem_data, solve_by_constraint_generation,
+                   solve_feasibility, symmetric_basis, symmetric_matrix)
 from .margins import AXES, axis_law, json_ready
 
 __all__ = ["CertificateResult", "ParameterBox", "closed_loop_matrix",
@@ -311,11 +311,9 @@ def _lmi_data(As: np.ndarray, alpha: float, eps: float = 1e-6):
     # L_i(E_k) = A_i' E_k + E_k A_i + 2 alpha E_k for all vertices and basis matrices
     AtE = np.einsum("vji,kjl->vkil", As, E)
     L = AtE + np.transpose(AtE, (0, 1, 3, 2)) + 2 * alpha * E[None]
-    I = np.eye(n)
     # P - I >> 0, then -L_i(P) - eps I >> 0 at every vertex
-    A_p, b_p = lmi_rows(-I[None], E[None])
-    A_v, b_v = lmi_rows(np.broadcast_to(-eps * I, (N, n, n)), -L)
-    return problem_data([(A_p[0], b_p[0])] + list(zip(A_v, b_v)), E.shape[0])
+    A_v, b_v = lmi_rows(np.broadcast_to(-eps * np.eye(n), (N, n, n)), -L)
+    return problem_data([above_identity(n, E.shape[0])] + list(zip(A_v, b_v)), E.shape[0])
 
 
 def _solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
