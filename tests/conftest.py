@@ -14,7 +14,16 @@ every worker, so each derandomised test is one fixed set of examples again.
 from __future__ import annotations
 
 import importlib
+import os
 import pkgutil
+
+# The same BLAS regime as the cct command (toolbox/cli/__init__.py): the
+# toolbox's matrices are small, and OpenBLAS threads in each of the suite's
+# pytest-xdist workers oversubscribe the cores (issue 13: one in-process
+# analysis of paper 003 took 0.45 s with the default threads on a busy
+# 2-core machine, 0.26 s with one). Read when numpy first loads OpenBLAS,
+# which no pytest plugin does before this file.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import pytest
 

@@ -62,7 +62,7 @@ def analyse(artifact: ControllerArtifact, spec: Spec, *,
     spec : Spec
         Motor, drive and requirements (the ``margins`` stage bounds).
     sampled_certificate : bool
-        Also certify the sampled coupled loop (tens of seconds; see
+        Also certify the sampled coupled loop (up to about a second; see
         :func:`toolbox.analysis.analysis_report`).
 
     Returns
@@ -197,7 +197,7 @@ def build_outputs(spec: Spec, *, analysis: bool = True, verification: bool = Tru
     analysis, verification, report, header : bool
         Which stages after design to run (all by default).
     sampled_certificate : bool
-        Add the sampled-loop certificate to the analysis (opt-in: tens of seconds).
+        Add the sampled-loop certificate to the analysis (opt-in: up to about a second).
     progress : callable
         Called with the name of each stage as it starts.
 

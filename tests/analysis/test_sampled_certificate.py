@@ -187,3 +187,151 @@ def test_warm_start_and_fresh_solve_agree_on_nominal_point():
     bad[0, 0] = -1.0
     assert not S._verified(np.zeros((1, n, n)), np.zeros((1, n, n)), np.zeros((n, 2)), bad, 1.0)
     assert math.isfinite(out[0].condition_P)
+
+
+# --- the corner LMIs handed to Clarabel directly (issue 13) -----------------------------
+
+def _cvxpy_solve_lmi(A, G, U, order=None, step=None):
+    """Step 4's corner LMIs as the certificate wrote them in cvxpy before issue 13
+    (every corner at once; ``order`` and ``step`` are not used)."""
+    import warnings
+
+    import cvxpy as cp
+
+    N, n, _ = A.shape
+    m = U.shape[1]
+    P = cp.Variable((n, n), symmetric=True)
+    lam = cp.Variable(nonneg=True)
+    cons = [P >> np.eye(n)]
+    for Ai, Gi in zip(A, G):
+        AU = np.hstack([Ai, U])
+        M = AU.T @ P @ AU - cp.bmat([[P - lam * Gi, np.zeros((n, m))],
+                                     [np.zeros((m, n)), lam * np.eye(m)]])
+        cons.append(0.5 * (M + M.T) << -S._EPS * np.eye(n + m))
+    problem = cp.Problem(cp.Minimize(0), cons)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            problem.solve(solver=cp.CLARABEL)
+        except cp.error.SolverError as err:
+            return None, 0.0, f"solver error: {err}"
+    status = str(problem.status)
+    if P.value is None or status not in ("optimal", "optimal_inaccurate"):
+        return None, 0.0, status
+    return np.array(P.value), float(lam.value), status
+
+
+def _reference_scale(art, motor, drive, tol: float, monkeypatch) -> float:
+    """Cold bisection (no warm start, neither from a smaller box nor from the
+    mirror cell), every corner LMI of every cell solved at once through cvxpy."""
+    cold = S._certify_cell
+    monkeypatch.setattr(S, "_certify_cell", lambda a, laws, cell, guesses=(): cold(a, laws, cell))
+    monkeypatch.setattr(S, "_solve_lmi", _cvxpy_solve_lmi)
+    wmax = max_electrical_speed(motor, drive)
+    off = tuple(motor.pole_pairs * v for v in S.DEFAULT_RANGES["speed_offset"][:2])
+
+    def ok(k: float) -> bool:
+        box = SampledBox.around(motor, k, omega_max=wmax,
+                                speed_gain=S.DEFAULT_RANGES["speed_gain"][:2], speed_offset=off)
+        return certify_sampled(art, box, guesses={})[0]
+
+    if ok(1.0):
+        return 1.0
+    if not ok(0.0):
+        return 0.0
+    lo, hi = 0.0, 1.0
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo
+
+
+@pytest.mark.parametrize("name", sorted(DESIGNS))
+def test_same_scale_as_cvxpy_route(name, monkeypatch):
+    """Direct Clarabel, constraint generation and warm starts give exactly the
+    scale of the cold bisection through cvxpy (all corners per solve) on the
+    gallery designs' boxes: the grid is dyadic (tol 1/8, analysis.json's), so a
+    single changed verdict would move the scale by at least 1/16."""
+    spec, art = gallery_design(name)
+    with monkeypatch.context() as m:
+        ref = _reference_scale(art, spec.motor, spec.drive, 0.125, m)
+    res = largest_certified_sampled_scale(art, spec.motor, spec.drive, tol=0.125)
+    assert res.scale == ref
+
+
+def test_clarabel_rows_are_the_corner_matrices():
+    """The rows handed to Clarabel are step 4's corner matrices: for any
+    ``x = [upper triangle of P, lam]``, ``b - A x`` is the svec of
+    ``-M_i(P, lam) - eps I`` (:func:`_corner_matrices`, numpy) at every corner,
+    and the first block is ``svec(P - I)``."""
+    from toolbox.analysis._lmi import svec_index, symmetric_matrix
+
+    rng = np.random.default_rng(0)
+    N, n = 6, 7
+    A = rng.normal(size=(N, n, n))
+    V = rng.normal(size=(N, 4, n))
+    G = np.transpose(V, (0, 2, 1)) @ V
+    U = np.zeros((n, 2))
+    U[0, 0] = U[1, 1] = 1.0
+    (Ap, bp), (Ac, bc) = S._lmi_blocks(A, G, U)
+    x = rng.normal(size=n * (n + 1) // 2 + 1)
+    P, lam = symmetric_matrix(x[:-1], n), x[-1]
+    r, c, w = svec_index(n + 2)
+    ref = (-S._corner_matrices(A, G, U, P, lam) - S._EPS * np.eye(n + 2))[:, r, c] * w
+    np.testing.assert_allclose(bc - Ac @ x, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    r, c, w = svec_index(n)
+    np.testing.assert_allclose(bp - Ap @ x, (P - np.eye(n))[r, c] * w, rtol=0, atol=1e-14)
+
+
+#: scales around each design's refusal: certified below, refused by the solver
+#: (the polytope's corners stable) above
+CUT_SCALES = {"pi002": (0.0, 0.203125, 0.21875), "hinf003": (0.27, 0.28)}
+
+
+@pytest.mark.parametrize("name", sorted(CUT_SCALES))
+def test_constraint_generation_gives_the_full_solve_verdict(name):
+    """Constraint generation over the corners (a few, the violated ones added)
+    reaches the verdict of the solve over all corners on cells certified and
+    refused, and its certificate passes the numpy check at every corner."""
+    spec, art = gallery_design(name)
+    laws = _laws(art)
+    wmax = max_electrical_speed(spec.motor, spec.drive)
+    verdicts = set()
+    # one cell per scale: the two speed cells are mirror images (w -> -w)
+    for k in CUT_SCALES[name]:
+        cell = SampledBox.around(spec.motor, k, omega_max=wmax).speed_cells(2)[0]
+        c = S._cell_lmi(art, laws, cell)
+        assert np.max(c.radii) < 1.0
+        order = np.argsort(-c.radii)
+        P_full, lam_full, _ = S._solve_lmi(c.A, c.G, c.U, order, step=c.A.shape[0])
+        full = P_full is not None and S._verified(c.A, c.G, c.U, P_full, lam_full)
+        P, lam, _ = S._solve_lmi(c.A, c.G, c.U, order)
+        assert (P is not None and S._verified(c.A, c.G, c.U, P, lam)) == full, (k, cell)
+        verdicts.add(full)
+    assert verdicts == {True, False}
+
+
+def test_mirror_signs_map_a_cell_to_its_mirror():
+    """The warm start of a speed cell from its mirror image is exact: at opposite
+    true and measured speeds the executed loop is ``S A S`` (the sign of i_q,
+    of the q law's states and of the delayed q voltages flipped); shown on
+    random sets of 003's H-infinity design (3 law states per axis, one delay)."""
+    spec, art = gallery_design("hinf003")
+    rng = np.random.default_rng(5)
+    R, Ld, Lq = (v * np.exp(rng.uniform(-0.7, 0.7, 20))
+                 for v in (spec.motor.R, spec.motor.Ld, spec.motor.Lq))
+    w, wm = rng.uniform(-900, 900, 20), rng.uniform(-900, 900, 20)
+
+    def loop(sign):
+        return coupled_closed_loop(_laws(art), art.decoupling, art.sample_time,
+                                   art.delay_samples, R=R, Ld=Ld, Lq=Lq, omega=sign * w,
+                                   omega_meas=sign * wm).A
+
+    s = S._mirror_signs(_laws(art), art.delay_samples)
+    assert art.delay_samples >= 1 and np.any(s < 0)
+    np.testing.assert_allclose(s[:, None] * loop(1.0) * s[None, :], loop(-1.0),
+                               rtol=1e-12, atol=1e-12)
+    cell = SampledBox((0.1, 0.2), (1e-3, 2e-3), (1e-3, 3e-3), (100.0, 200.0), (0.9, 1.1),
+                      (-20.0, 30.0))
+    assert S._mirror(cell) == SampledBox(cell.R, cell.Ld, cell.Lq, (-200.0, -100.0),
+                                         cell.speed_gain, (-30.0, 20.0))

@@ -70,7 +70,7 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = 1000,
         Certificate with the Pade delay model (512 vertices, slower).
     sampled_certificate : bool
         Also certify the sampled coupled loop as executed (speed sensor gain
-        0.9..1.1 and offset +/-10 rad/s too): tens of seconds, so opt-in
+        0.9..1.1 and offset +/-10 rad/s too): up to about a second, so opt-in
         (``cct design --sampled-certificate``); ``None`` in the output otherwise.
     seed : int
         Sweep seed (deterministic output).
@@ -147,7 +147,7 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
     certificate : bool
         Also search the largest certified parameter box (slower).
     sampled_certificate : bool
-        Also certify the sampled coupled loop (tens of seconds per design).
+        Also certify the sampled coupled loop (up to about a second per design).
     """
     rows = []
     for art in artifacts:

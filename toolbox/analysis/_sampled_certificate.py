@@ -50,9 +50,13 @@ Soundness argument (every step is an over-bound, none an approximation):
    closed loop (in fact the cell is quadratically stable).
 5. *Cells and check.* The speed range is split into cells (a Lyapunov
    matrix per cell: the certificate is for constant speed, as the sweep's
-   loops are). The LMIs are solved with cvxpy + CLARABEL and every corner
-   inequality is re-checked with numpy eigenvalues of the returned
+   loops are). The LMIs are handed to Clarabel directly
+   (:mod:`toolbox.analysis._lmi`, issue 13) and solved by constraint
+   generation over the corners (its verdict is the full solve's), and every
+   corner inequality is re-checked with numpy eigenvalues of the returned
    ``P, lam`` (a cell counts as certified only when that check passes).
+   Warm starts (a smaller box's ``P``, the mirror image of the opposite
+   speed cell's) pass the same check or are not used.
 
 The box at scale ``k`` interpolates from the nominal point (``k = 0``) to the
 given ranges (``k = 1``); the bisection on ``k`` reports the largest certified
@@ -66,7 +70,7 @@ from __future__ import annotations
 
 import itertools
 import math
-import warnings
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -76,6 +80,9 @@ from ..artifact import json_ready
 from ..plant import dq_matrices, max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_state_matrix
 from ._laws import AXES, axis_law
+from ._lmi import (ACTIVE_STEP, above_identity, lmi_rows, problem_data,
+                   solve_by_constraint_generation, solve_feasibility, symmetric_basis,
+                   symmetric_matrix)
 from ._sampling import DEFAULT_BOX, DEFAULT_RANGES
 
 __all__ = ["SampledBox", "SampledCertificate", "certify_sampled",
@@ -333,10 +340,19 @@ def _corner_matrices(A, G, U, P, lam) -> np.ndarray:
     return 0.5 * (M + np.transpose(M, (0, 2, 1)))
 
 
+def _corner_slack(A, G, U, P, lam) -> np.ndarray:
+    """Largest eigenvalue of each corner matrix, relative to its size (N,)."""
+    ev = np.linalg.eigvalsh(_corner_matrices(A, G, U, P, lam))
+    return ev[:, -1] / np.max(np.abs(ev), axis=-1)
+
+
 def _worst_eig(A, G, U, P, lam) -> float:
     """Largest eigenvalue over the corners, relative to the matrices' size."""
-    ev = np.linalg.eigvalsh(_corner_matrices(A, G, U, P, lam))
-    return float(np.max(ev[:, -1] / np.max(np.abs(ev), axis=-1)))
+    return float(np.max(_corner_slack(A, G, U, P, lam)))
+
+
+#: a corner's inequality holds when its relative slack is below -_CHECK_MARGIN
+_CHECK_MARGIN = 1e-12
 
 
 def _verified(A, G, U, P, lam) -> bool:
@@ -345,7 +361,7 @@ def _verified(A, G, U, P, lam) -> bool:
     P = 0.5 * (P + P.T)
     if not lam >= 0 or np.min(np.linalg.eigvalsh(P)) <= 0:
         return False
-    return _worst_eig(A, G, U, P, lam) < -1e-12
+    return _worst_eig(A, G, U, P, lam) < -_CHECK_MARGIN
 
 
 def _multiplier(A, G, U, P) -> float:
@@ -369,32 +385,60 @@ def _multiplier(A, G, U, P) -> float:
     return 10.0 ** (a if fa < fb else b)
 
 
-def _solve_lmi(A, G, U):
-    """``(P, lam, status)`` of step 4's corner LMIs (cvxpy + CLARABEL), data
-    constant; P None when the solver finds none. ``P >= I`` fixes the scale."""
-    import cvxpy as cp
+def _lmi_blocks(A, G, U):
+    """Clarabel rows of step 4's LMIs, assembled once per cell
+    (:mod:`toolbox.analysis._lmi`): unknowns ``x = [upper triangle of P, lam]``.
 
+    Returns ``(P >> I block, corner blocks (A (N, s, m+1), b (N, s)))``;
+    corner ``i`` is ``-M_i(P, lam) - eps I >> 0`` with the corner matrix
+    ``M_i`` of :func:`_corner_matrices`, linear in ``(P, lam)``.
+    """
     N, n, _ = A.shape
     m = U.shape[1]
-    P = cp.Variable((n, n), symmetric=True)
-    lam = cp.Variable(nonneg=True)
-    cons = [P >> np.eye(n)]
-    for Ai, Gi in zip(A, G):
-        AU = np.hstack([Ai, U])
-        M = AU.T @ P @ AU - cp.bmat([[P - lam * Gi, np.zeros((n, m))],
-                                     [np.zeros((m, n)), lam * np.eye(m)]])
-        cons.append(0.5 * (M + M.T) << -_EPS * np.eye(n + m))
-    problem = cp.Problem(cp.Minimize(0), cons)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            problem.solve(solver=cp.CLARABEL)
-        except cp.error.SolverError as err:
-            return None, 0.0, f"solver error: {err}"
-    status = str(problem.status)
-    if P.value is None or status not in ("optimal", "optimal_inaccurate"):
-        return None, 0.0, status
-    return np.array(P.value), float(lam.value), status
+    E = symmetric_basis(n)
+    ui, uj = np.triu_indices(n)
+    AU = np.concatenate([A, np.broadcast_to(U, (N, n, m))], axis=2)
+    # M_i(E_k) = [A_i U]' E_k [A_i U] - diag(E_k, 0); M_i(lam) = diag(G_i, -I).
+    # E_k = e_u e_v' + e_v e_u' (u < v) or e_u e_u': the first term is the
+    # outer product of rows u and v of [A_i U]
+    C = np.zeros((N, E.shape[0] + 1, n + m, n + m))
+    outer = AU[:, ui, :, None] * AU[:, uj, None, :]
+    C[:, :-1] = outer + np.swapaxes(outer, -1, -2) * (ui != uj)[None, :, None, None]
+    C[:, :-1, :n, :n] -= E[None]
+    C[:, -1, :n, :n] = G
+    C[:, -1, n:, n:] = -np.eye(m)
+    corners = lmi_rows(np.broadcast_to(-_EPS * np.eye(n + m), (N, n + m, n + m)), -C)
+    return above_identity(n, E.shape[0] + 1), corners
+
+
+def _solve_lmi(A, G, U, order: np.ndarray, step: int = ACTIVE_STEP):
+    """``(P, lam, status)`` of step 4's corner LMIs (Clarabel, called directly),
+    by constraint generation over the corners, most likely binding first
+    (``order``, ``step`` corners added per round; all at once when ``step``
+    is at least their number); P None when the solver finds none. ``P >= I``
+    fixes the scale. A P is returned only when it holds at every corner, and
+    the verdict is then the solve over all corners'
+    (:func:`toolbox.analysis._lmi.solve_by_constraint_generation`)."""
+    n = A.shape[-1]
+    identity, (Ac, bc) = _lmi_blocks(A, G, U)
+    n_x = Ac.shape[-1]
+
+    def solve(idx):
+        x, status = solve_feasibility(*problem_data(
+            [identity] + list(zip(Ac[idx], bc[idx])), n_x, nonneg=[n_x - 1]))
+        return (None if x is None else (symmetric_matrix(x[:-1], n), float(x[-1]))), status
+
+    sol, status = solve_by_constraint_generation(
+        solve, lambda s: _corner_slack(A, G, U, *s), order, margin=_CHECK_MARGIN, step=step)
+    return (None, 0.0, status) if sol is None else (*sol, status)
+
+
+def _distinct_corners(A, G) -> np.ndarray:
+    """Indices of the distinct corner pairs ``(A_i, G_i)`` (in their order): the
+    box is degenerate in the coordinates that do not vary (all of them at
+    scale 0), and a repeated corner is a repeated LMI."""
+    flat = np.concatenate([A.reshape(A.shape[0], -1), G.reshape(G.shape[0], -1)], axis=1)
+    return np.sort(np.unique(flat, axis=0, return_index=True)[1])
 
 
 def _exact_corners(artifact, laws, cell: SampledBox) -> tuple[np.ndarray, np.ndarray]:
@@ -406,50 +450,99 @@ def _exact_corners(artifact, laws, cell: SampledBox) -> tuple[np.ndarray, np.nda
     return c, loop.spectral_radius()
 
 
-def _certify_cell(artifact, laws, cell: SampledBox,
-                  guess: np.ndarray | None = None) -> tuple[_CellOutcome, np.ndarray | None]:
-    """Outcome of one cell and its Lyapunov matrix (original coordinates, or None).
+@dataclass(frozen=True)
+class _CellLMI:
+    """Step 4's data of one cell: the distinct corner matrices ``A`` (N, n, n),
+    ``G = rho^2 V'V`` and ``U`` after the diagonal similarity ``x = diag(t) x_b``
+    (for conditioning), the corners' spectral radii and the remainder bound."""
 
-    ``guess`` (a Lyapunov matrix of a smaller nested cell) is tried first with
-    its best multiplier; the LMIs are solved only when it fails the check.
-    Either way a cell is certified only by the numpy check of step 4.
-    """
-    corners, radius = _exact_corners(artifact, laws, cell)
-    i = int(np.argmax(radius))
-    worst = (corners[i], float(radius[i]))
-    if radius[i] >= 1.0 - 1e-9:
-        return _CellOutcome(False, "a corner of the cell is unstable", math.nan, math.nan,
-                            *worst), None
+    A: np.ndarray
+    G: np.ndarray
+    U: np.ndarray
+    t: np.ndarray
+    radii: np.ndarray
+    rho: float
+
+
+def _cell_lmi(artifact, laws, cell: SampledBox) -> _CellLMI:
+    """The corner data of a cell (steps 1-4), balanced, repeated corners dropped."""
     A, V, rho = _vertices(artifact, laws, cell)
-    # step 4's corner inequality implies A_i' P A_i < P: a corner matrix of the
-    # polytope that is not Schur makes the LMIs infeasible, no need to solve them
-    if np.max(np.abs(np.linalg.eigvals(A))) >= 1.0:
-        return _CellOutcome(False, "a corner of the polytope over the cell is unstable", rho,
-                            math.nan, *worst), None
     G = rho ** 2 * np.transpose(V, (0, 2, 1)) @ V
     n = A.shape[-1]
     U = np.zeros((n, 2))
     U[0, 0] = U[1, 1] = 1.0
     # diagonal similarity x = T x_b from the mean corner matrix, for conditioning
     _, (t, _) = matrix_balance(np.mean(A, axis=0), permute=False, separate=True)
-    Ab = A * t[None, None, :] / t[None, :, None]
-    Gb = G * t[None, :, None] * t[None, None, :]
-    Ub = U / t[:, None]
-    if guess is not None:
-        Pg = guess * t[:, None] * t[None, :]
-        lam = _multiplier(Ab, Gb, Ub, Pg)
-        if _verified(Ab, Gb, Ub, Pg, lam):
-            return (_CellOutcome(True, "warm start", rho, float(np.linalg.cond(Pg)), *worst),
-                    guess)
-    P, lam, status = _solve_lmi(Ab, Gb, Ub)
+    keep = _distinct_corners(A, G)
+    A, G = A[keep], G[keep]
+    return _CellLMI(A * t[None, None, :] / t[None, :, None],
+                    G * t[None, :, None] * t[None, None, :], U / t[:, None], t,
+                    np.max(np.abs(np.linalg.eigvals(A)), axis=1), rho)
+
+
+def _mirror_signs(laws, delay_samples: int) -> np.ndarray:
+    """``S = diag(s)`` that maps the loop at ``(w, w_m)`` to the loop at
+    ``(-w, -w_m)``: ``S A S``. Flipping the sign of ``i_q`` does
+    (``dq_matrices``: ``S2 A(w) S2 = A(-w)``, and the decoupling likewise), with
+    the q axis's law states and delayed voltages (the state order of
+    :func:`~toolbox.analysis._coupled.coupled_state_matrix`)."""
+    nd, nq = laws["d"].n, laws["q"].n
+    s = np.ones(2 + nd + nq + 2 * delay_samples)
+    s[1] = -1.0
+    s[2 + nd:2 + nd + nq] = -1.0
+    s[2 + nd + nq + 1::2] = -1.0
+    return s
+
+
+def _mirror(cell: SampledBox) -> SampledBox:
+    """The cell of opposite speeds and sensor offsets."""
+    return SampledBox(cell.R, cell.Ld, cell.Lq, (-cell.omega[1], -cell.omega[0]),
+                      cell.speed_gain, (-cell.speed_offset[1], -cell.speed_offset[0]))
+
+
+def _certify_cell(artifact, laws, cell: SampledBox, guesses: Sequence[tuple] = ()
+                  ) -> tuple[_CellOutcome, np.ndarray | None, float]:
+    """Outcome of one cell, its Lyapunov matrix (original coordinates, or None)
+    and multiplier.
+
+    ``guesses``: ``(P, lam)`` pairs tried first, in order - the mirror image
+    of the opposite cell's certificate (an exact symmetry up to rounding, see
+    :func:`_mirror_signs`; ``lam`` kept) and a Lyapunov matrix of a smaller
+    nested cell (``lam`` None: its best multiplier). The LMIs are solved
+    only when all fail the check. Either way a cell is certified only by the
+    numpy check of step 4.
+    """
+    corners, radius = _exact_corners(artifact, laws, cell)
+    i = int(np.argmax(radius))
+    worst = (corners[i], float(radius[i]))
+    if radius[i] >= 1.0 - 1e-9:
+        return _CellOutcome(False, "a corner of the cell is unstable", math.nan, math.nan,
+                            *worst), None, 0.0
+    c = _cell_lmi(artifact, laws, cell)
+    # step 4's corner inequality implies A_i' P A_i < P: a corner matrix of the
+    # polytope that is not Schur makes the LMIs infeasible, no need to solve them
+    if np.max(c.radii) >= 1.0:
+        return _CellOutcome(False, "a corner of the polytope over the cell is unstable", c.rho,
+                            math.nan, *worst), None, 0.0
+    # constraint generation starts with the corners a rejected warm start
+    # violates most, else with the least stable ones
+    order = np.argsort(-c.radii)
+    for guess, lam in guesses:
+        Pg = guess * c.t[:, None] * c.t[None, :]
+        lam = _multiplier(c.A, c.G, c.U, Pg) if lam is None else lam
+        if _verified(c.A, c.G, c.U, Pg, lam):
+            return (_CellOutcome(True, "warm start", c.rho, float(np.linalg.cond(Pg)), *worst),
+                    guess, lam)
+        order = np.argsort(-_corner_slack(c.A, c.G, c.U, Pg, lam))
+    P, lam, status = _solve_lmi(c.A, c.G, c.U, order)
     if P is None:
-        return _CellOutcome(False, f"no Lyapunov matrix found ({status})", rho, math.nan,
-                            *worst), None
-    if not _verified(Ab, Gb, Ub, P, lam):
-        return _CellOutcome(False, "the solver's Lyapunov matrix fails the numpy check", rho,
-                            math.nan, *worst), None
-    return (_CellOutcome(True, status, rho, float(np.linalg.cond(P)), *worst),
-            P / t[:, None] / t[None, :])
+        return _CellOutcome(False, f"no Lyapunov matrix found ({status})", c.rho, math.nan,
+                            *worst), None, 0.0
+    if not _verified(c.A, c.G, c.U, P, lam):
+        return _CellOutcome(False, "the solver's Lyapunov matrix fails the numpy check", c.rho,
+                            math.nan, *worst), None, 0.0
+    return (_CellOutcome(True, status, c.rho, float(np.linalg.cond(P)), *worst),
+            P / c.t[:, None] / c.t[None, :], lam)
 
 
 def certify_sampled(artifact, box: SampledBox, *, speed_cells: int = 2,
@@ -473,14 +566,23 @@ def certify_sampled(artifact, box: SampledBox, *, speed_cells: int = 2,
         (fastest first; stops at the first refused cell).
     """
     laws = _laws(artifact)
+    signs = _mirror_signs(laws, int(artifact.delay_samples))
     guesses = {} if guesses is None else guesses
+    certified: dict = {}       # cell -> (P, lam) of this box, for its mirror image
     outcomes = []
     for k, cell in enumerate(box.speed_cells(speed_cells)):
-        out, P = _certify_cell(artifact, laws, cell, guesses.get(k))
+        tries = []
+        if _mirror(cell) in certified:
+            P, lam = certified[_mirror(cell)]
+            tries.append((signs[:, None] * P * signs[None, :], lam))
+        if guesses.get(k) is not None:
+            tries.append((guesses[k], None))
+        out, P, lam = _certify_cell(artifact, laws, cell, tries)
         outcomes.append(out)
         if not out.certified:
             return False, outcomes
         guesses[k] = P
+        certified[cell] = (P, lam)
     return True, outcomes
 
 

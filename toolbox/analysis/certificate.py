@@ -56,6 +56,8 @@ import numpy as np
 from scipy.linalg import matrix_balance
 
 from ..plant import dq_matrices, max_electrical_speed
+from ._lmi import (above_identity, lmi_rows, problem_data, solve_by_constraint_generation,
+                   solve_feasibility, symmetric_basis, symmetric_matrix)
 from .margins import AXES, axis_law, json_ready
 
 __all__ = ["CertificateResult", "ParameterBox", "closed_loop_matrix",
@@ -302,45 +304,16 @@ def _vertices(artifact, box: ParameterBox, delay: bool = False) -> np.ndarray:
     return closed_loop_matrix(artifact, V)
 
 
-#: Clarabel status -> the status names reported (those cvxpy gave them, so that
-#: analysis.json reads as before issue 13).
-_STATUS = {"Solved": "optimal", "AlmostSolved": "optimal_inaccurate",
-           "PrimalInfeasible": "infeasible", "AlmostPrimalInfeasible": "infeasible_inaccurate",
-           "DualInfeasible": "unbounded", "AlmostDualInfeasible": "unbounded_inaccurate",
-           "MaxIterations": "user_limit", "MaxTime": "user_limit"}
-
-
-def _svec_index(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rows, columns and weights of Clarabel's ``svec`` of an n x n symmetric
-    matrix: the upper triangle column by column, off-diagonal entries times
-    sqrt(2) (so that ``svec(X) . svec(Y) = trace(X Y)``)."""
-    rows, cols = zip(*[(i, j) for j in range(n) for i in range(j + 1)])
-    rows, cols = np.array(rows), np.array(cols)
-    return rows, cols, np.where(rows == cols, 1.0, math.sqrt(2.0))
-
-
 def _lmi_data(As: np.ndarray, alpha: float, eps: float = 1e-6):
     """Clarabel's ``(A, b, cones)`` of the vertex LMIs (see :func:`_solve`)."""
-    import clarabel
-
     N, n, _ = As.shape
-    rows, cols, w = _svec_index(n)
-    # unknowns: the upper triangle of P row by row, E_k its 0/1 symmetric basis
-    # (the variables cvxpy made of a symmetric matrix: a scaling Clarabel's
-    # equilibration handles on stiff loops where an orthonormal basis stalls)
-    ui, uj = np.triu_indices(n)
-    m = ui.size
-    E = np.zeros((m, n, n))
-    E[np.arange(m), ui, uj] = 1.0
-    E[np.arange(m), uj, ui] = 1.0
-    # L_i(E_k) for all vertices and basis matrices: (N, m, n, n)
+    E = symmetric_basis(n)
+    # L_i(E_k) = A_i' E_k + E_k A_i + 2 alpha E_k for all vertices and basis matrices
     AtE = np.einsum("vji,kjl->vkil", As, E)
     L = AtE + np.transpose(AtE, (0, 1, 3, 2)) + 2 * alpha * E[None]
-    svec_E = E[:, rows, cols] * w  # (m, m): svec of each E_k
-    Amat = np.vstack([-svec_E.T] + [(L[v][:, rows, cols] * w).T for v in range(N)])
-    svec_eye = np.where(rows == cols, 1.0, 0.0)
-    bvec = np.concatenate([-svec_eye] + [-eps * svec_eye] * N)
-    return Amat, bvec, [clarabel.PSDTriangleConeT(n)] * (N + 1)
+    # P - I >> 0, then -L_i(P) - eps I >> 0 at every vertex
+    A_v, b_v = lmi_rows(np.broadcast_to(-eps * np.eye(n), (N, n, n)), -L)
+    return problem_data([above_identity(n, E.shape[0])] + list(zip(A_v, b_v)), E.shape[0])
 
 
 def _solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
@@ -348,8 +321,9 @@ def _solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
 
     The semidefinite program is handed to Clarabel directly (issue 13: cvxpy's
     canonicalisation was 60 % of the certificate's time and cvxpy's import
-    another second). The unknown ``x`` is the upper triangle of ``P``; ``P >> I`` is the
-    cone constraint ``svec(P) - svec(I)`` and each vertex LMI the cone constraint
+    another second; :mod:`toolbox.analysis._lmi`). The unknown ``x`` is the
+    upper triangle of ``P``; ``P >> I`` is the cone constraint
+    ``svec(P) - svec(I)`` and each vertex LMI the cone constraint
     ``-svec(A_i' E + E A_i + 2 alpha E) x - eps svec(I)`` (Clarabel form
     ``b - A x`` in the PSD triangle cone). These are the matrices cvxpy
     built for the constant-data problem (tested equal), with the same zero
@@ -359,26 +333,8 @@ def _solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
     (almost) solved; a numerical failure is status ``"solver error: ..."``
     (cvxpy raised an exception there).
     """
-    import clarabel
-    from scipy import sparse
-
-    Amat, bvec, cones = _lmi_data(As, alpha, eps)
-    n = As.shape[1]
-    ui, uj = np.triu_indices(n)
-    m = ui.size
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    solver = clarabel.DefaultSolver(sparse.csc_matrix((m, m)), np.zeros(m),
-                                    sparse.csc_matrix(Amat), bvec, cones, settings)
-    sol = solver.solve()
-    status = _STATUS.get(str(sol.status), f"solver error: Clarabel {sol.status}")
-    if status not in ("optimal", "optimal_inaccurate"):
-        return None, status
-    x = np.asarray(sol.x, float)
-    P = np.zeros((n, n))
-    P[ui, uj] = x
-    P[uj, ui] = x
-    return P, status
+    x, status = solve_feasibility(*_lmi_data(As, alpha, eps))
+    return (None if x is None else symmetric_matrix(x, As.shape[1])), status
 
 
 def _vertex_slack(As: np.ndarray, P: np.ndarray, alpha: float) -> np.ndarray:
@@ -387,27 +343,15 @@ def _vertex_slack(As: np.ndarray, P: np.ndarray, alpha: float) -> np.ndarray:
     return np.linalg.eigvalsh(0.5 * (M + np.transpose(M, (0, 2, 1))))[:, -1]
 
 
-#: Vertices added to the active set per round of :func:`_solve_active`.
-ACTIVE_STEP = 8
-
-
 def _solve_active(As: np.ndarray, alpha: float, guess: np.ndarray | None = None):
     """:func:`_solve` on the vertices that matter, found by constraint generation.
 
-    The LMIs of a few vertices (first the :data:`ACTIVE_STEP` that a rejected
-    warm start ``guess`` - the certificate of the last smaller box - violates
-    most, else those of largest spectral abscissa) are solved; the vertices
-    whose LMI the solution violates are added, and so on, until the solution
-    holds on every vertex (issue 13: paper 003's H-infinity boxes need 8 to
-    12 of their 64 vertices, a solve costs about linearly in the vertices,
-    and one or two small solves take a third to a half of the full one's time). A subset the solver
-    proves infeasible has no solution for all vertices either (status
-    ``"infeasible"``). Any other failure on a subset (an inaccurate status, a
-    numerical error: a few vertices leave P poorly bounded) or a solution
-    violating only vertices already in the set (solver tolerance) ends in
-    the solve over all vertices, whose verdict it then is, as before; a P
-    from a subset is returned only when it holds on every vertex (what
-    :func:`_verified` checks again).
+    :func:`toolbox.analysis._lmi.solve_by_constraint_generation`, starting with
+    the vertices that a rejected warm start ``guess`` - the certificate of the
+    last smaller box - violates most, else those of largest spectral abscissa
+    (paper 003's H-infinity boxes need 8 to 12 of their 64 vertices). Its
+    verdict is the full solve's; a P from a subset is returned only when it
+    holds on every vertex (what :func:`_verified` checks again).
 
     Returns ``(P, status)`` as :func:`_solve`, on the data ``As`` (normalised
     here by the largest entry of all vertices, as before; ``guess`` in the
@@ -416,21 +360,9 @@ def _solve_active(As: np.ndarray, alpha: float, guess: np.ndarray | None = None)
     norm = max(1.0, float(np.max(np.abs(As))))
     worst = (_vertex_slack(As, guess, alpha) if guess is not None
              else np.linalg.eigvals(As).real.max(axis=1))
-    active = [int(i) for i in np.argsort(-worst)[:ACTIVE_STEP]]
-    while len(active) < As.shape[0]:
-        P, status = _solve(As[active] / norm, alpha / norm)
-        if status == "infeasible":      # a subset without solution: none for all
-            return P, status
-        if P is None:
-            break
-        slack = _vertex_slack(As, P, alpha)
-        new = [int(i) for i in np.argsort(-slack) if slack[i] >= 0 and i not in active]
-        if not np.any(slack >= 0):
-            return P, status
-        if not new:
-            break
-        active += new[:ACTIVE_STEP]
-    return _solve(As / norm, alpha / norm)
+    return solve_by_constraint_generation(
+        lambda idx: _solve(As[idx] / norm, alpha / norm),
+        lambda P: _vertex_slack(As, P, alpha), np.argsort(-worst))
 
 
 def _verified(As: np.ndarray, P: np.ndarray, alpha: float) -> bool:

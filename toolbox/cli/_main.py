@@ -161,7 +161,7 @@ def derive(spec: str, fmt: str | None) -> None:
               help="Write controller.json only (no analysis, verification, report, header).")
 @click.option("--sampled-certificate", is_flag=True,
               help="Also certify the sampled coupled dq loop over the parameter box and "
-                   "speeds (tens of seconds per design).")
+                   "speeds (up to about a second more per design).")
 @_QUIET
 @_spec_errors
 def design(spec: str, out_dir: str, only_controller: bool, sampled_certificate: bool,
@@ -386,7 +386,7 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
               help="Also write the table as JSON to this file.")
 @click.option("--sampled-certificate", is_flag=True,
               help="Also certify the sampled coupled dq loop over the parameter box and "
-                   "speeds (tens of seconds per design).")
+                   "speeds (up to about a second more per design).")
 @_QUIET
 @_spec_errors
 def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: bool,
@@ -601,7 +601,7 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
               type=click.Path(file_okay=False), help="Gallery directory.")
 @click.option("--sampled-certificate", is_flag=True,
               help="Also certify the sampled coupled dq loop over the parameter box and "
-                   "speeds (tens of seconds per design).")
+                   "speeds (up to about a second more per design).")
 @_QUIET
 @_spec_errors
 def gallery(designs_dir: str, out_dir: str, sampled_certificate: bool, quiet: bool) -> None:
