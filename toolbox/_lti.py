@@ -142,9 +142,12 @@ class StateSpace:
             if x.size > 1:                       # one point: one LU solve is cheaper
                 lam, V = np.linalg.eig(self.A)
                 if np.linalg.cond(V) <= _MODAL_COND_MAX:
-                    res = (self.C @ V)[:, :, None] * np.linalg.solve(V, self.B)[None, :, :]
+                    CV, ViB = self.C @ V, np.linalg.solve(V, self.B)
                     inv = 1.0 / (x[None, :] - lam[:, None])              # (n, N)
-                    return np.einsum("pkm,kN->pmN", res, inv) + self.D[:, :, None]
+                    if p == m == 1:                  # a product, 2-3x faster than einsum
+                        return ((CV[0] * ViB[:, 0]) @ inv + self.D[0, 0])[None, None, :]
+                    return (np.einsum("pkm,kN->pmN", CV[:, :, None] * ViB[None, :, :], inv)
+                            + self.D[:, :, None])
             M = x[:, None, None] * np.eye(n) - self.A
             try:
                 y = np.linalg.solve(M, np.broadcast_to(self.B.astype(complex), (x.size, n, m)))
