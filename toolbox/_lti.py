@@ -24,7 +24,7 @@ Conventions follow python-control so that ported code reads the same:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from math import hypot, log, sqrt
+from math import hypot, log
 from sys import modules as sys_modules
 from typing import Any, Callable, Sequence
 
@@ -768,9 +768,9 @@ def _gain_function(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     """Eigenvalues of A and ``w -> sigma_max(G(j w))``.
 
     ``numpy.linalg.eig`` gives the modal form; when its eigenvectors are well
-    conditioned (a bound of the 1-norm condition number, within a factor
-    n of the 2-norm's, at most :data:`_MODAL_COND_MAX`) the response is the modal sum
-    ``sum_k r_k / (j w - lam_k) + D``, else a stacked LU solve
+    conditioned (``n ||V^-1||_1``, a bound of their 2-norm condition number
+    cheaper than an SVD, at most :data:`_MODAL_COND_MAX`) the response is the
+    modal sum ``sum_k r_k / (j w - lam_k) + D``, else a stacked LU solve
     (:meth:`StateSpace.freqresp`). A single row or column needs no SVD: its
     largest singular value is its 2-norm.
     """
@@ -779,8 +779,8 @@ def _gain_function(A: np.ndarray, B: np.ndarray, C: np.ndarray,
         Vi = np.linalg.inv(V)
     except np.linalg.LinAlgError:                    # defective A
         Vi = None
-    # eig's columns have unit 2-norm, so ||V||_1 <= sqrt(n)
-    if Vi is None or sqrt(A.shape[0]) * np.abs(Vi).sum(0).max() > _MODAL_COND_MAX:
+    # eig's columns have unit 2-norm: cond_2(V) <= ||V||_F ||Vi||_2 <= n ||Vi||_1
+    if Vi is None or A.shape[0] * np.abs(Vi).sum(0).max() > _MODAL_COND_MAX:
         g = StateSpace(A, B, C, D)
         return lam, lambda w: _largest_sv(np.moveaxis(g.freqresp(w), -1, 0))
     CV, ViB = C @ V, Vi @ B
