@@ -857,7 +857,9 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     ``[-b_i; 0][c_i; 0]'`` and ``[0; c_i][0; b_i]'`` with ``s_i/(s_i^2 - g^2)``,
     ``[b_i; 0][0; -b_i]'`` with ``g/(s_i^2 - g^2)`` and ``[0; c_j][c_j; 0]'``
     with ``g/(s_j^2 - g^2)``. Each level costs one product and one real
-    ``dgeev``.
+    ``dgeev``; and a level just above ``sigma_max(D)`` (the first lower bound
+    is often ``||D||``) scales one exact rank-one term instead of going
+    through a solve with a nearly singular R, which lost the crossings.
     """
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
     if D.shape == (1, 1):                            # SISO: the SVD by hand, 5x cheaper
