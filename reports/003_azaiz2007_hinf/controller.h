@@ -4,8 +4,8 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: 725ca7e47e8fb783e32a98f3530d9f7f87e8372a8e40b66b26c2473ca062b79f
- * law sha256:  60e039328366585fc22cbf0998016e5d07e1518fc4bdab33d7581d73f25fa5ea
- * created:     2026-11-24T14:07:24+00:00
+ * law sha256:  90ba78e33eff6fa13763b45b362bfe70b6a195854dbd4c79ee92e9c291e339e7
+ * created:     2026-11-25T10:46:10+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -68,7 +68,7 @@
 
 #define CCT_D_GAIN 4.345249326e-04f /* d axis SOS output gain, V/A */
 #define CCT_D_NUM_STAGES 2
-#define CCT_Q_GAIN 6.996612996e-03f /* q axis SOS output gain, V/A */
+#define CCT_Q_GAIN 6.996610668e-03f /* q axis SOS output gain, V/A */
 #define CCT_Q_NUM_STAGES 2
 
 /* inputs: currents in A, measured MECHANICAL speed in rad/s */
@@ -184,7 +184,7 @@ static inline float cct_q_linear(float *x, float r, float y)
 {
     /* 2 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_Q_GAIN */
     static const float c[10] = {
-        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.569386482e+00f, -6.180329323e-01f,
+        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.569386482e+00f, -6.180329919e-01f,
         1.000000000e+00f, -9.787985682e-01f, 0.0f, 1.000000000e+00f, 0.0f,
     };
     float in = r - y;
@@ -232,9 +232,9 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     nx.d[0] += 4.058364502e+03f * (vds - vd);
     nx.d[1] += -1.804893188e+03f * (vds - vd);
     nx.d[2] += 9.656072235e+01f * (vds - vd);
-    nx.q[0] += 2.233435669e+02f * (vqs - vq);
-    nx.q[1] += -8.833316040e+01f * (vqs - vq);
-    nx.q[2] += 3.030239582e+00f * (vqs - vq);
+    nx.q[0] += 2.233436432e+02f * (vqs - vq);
+    nx.q[1] += -8.833319855e+01f * (vqs - vq);
+    nx.q[2] += 3.030240536e+00f * (vqs - vq);
     if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
@@ -263,8 +263,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 86.6025 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.00921 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00202 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.0093 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00192 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
@@ -377,11 +377,11 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 238882612L, 0L, 59720653L, 0L, 3645L, -3645L };
+    static const int32_t co[6] = { 238882606L, 0L, 59720652L, 0L, 3645L, -3645L };
     static const int32_t ca[28] = {
-        118796014L, 16777216L, 0L, 0L, 3276L, -3276L, 265968978L,
-        -105263086L, 0L, 0L, 0L, -728L, 728L, -236570961L,
-        22526052L, 0L, 134217728L, 256L, 344L, -344L, 50625628L,
+        118796013L, 16777216L, 0L, 0L, 3276L, -3276L, 265968983L,
+        -105263085L, 0L, 0L, 0L, -728L, 728L, -236570964L,
+        22526052L, 0L, 134217728L, 256L, 344L, -344L, 50625629L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[4] = { 26u, 25u, 27u, 31u };
@@ -402,7 +402,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 265968978L, -236570961L, 50625628L, 0L };
+    static const int32_t aw[4] = { 265968983L, -236570964L, 50625629L, 0L };
     static const unsigned fa[4] = { 26u, 25u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
@@ -413,11 +413,11 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 240401795L, 0L, 60100449L, 0L, 58692L, -58692L };
+    static const int32_t co[6] = { 240401717L, 0L, 60100429L, 0L, 58692L, -58692L };
     static const int32_t ca[28] = {
-        105319740L, 33554432L, 0L, 0L, 49119L, -49119L, 234192698L,
-        -82950980L, 0L, 0L, 0L, -6208L, 6208L, -185248068L,
-        11382422L, 0L, 134217728L, 4096L, 2779L, -2779L, 25419491L,
+        105319744L, 33554432L, 0L, 0L, 49119L, -49119L, 234192782L,
+        -82950985L, 0L, 0L, 0L, -6208L, 6208L, -185248139L,
+        11382422L, 0L, 134217728L, 4096L, 2779L, -2779L, 25419500L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
@@ -438,7 +438,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 234192698L, -185248068L, 25419491L, 0L };
+    static const int32_t aw[4] = { 234192782L, -185248139L, 25419500L, 0L };
     static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {

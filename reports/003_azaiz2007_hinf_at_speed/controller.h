@@ -4,8 +4,8 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: 3d54e1585f891859bcd0067354f5511ea79262f496eb1149a44680506a72995a
- * law sha256:  ba133fae0088a91b38d7828723f03476bc8ed52bd07a9d48ce1ef94b14cfa347
- * created:     2026-11-24T14:07:31+00:00
+ * law sha256:  3179b08b03553ef3db7e3fb2c925e9b09360940322433d593a1b847cc3e4253d
+ * created:     2026-11-25T10:46:11+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72); coupled dq plant at speed, 003 eq (3)-(4): small-gain S weight w1 + k sqrt(c_d c_q) G (issue 17)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -160,11 +160,11 @@ static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
 /* d axis linear law: returns v (V); updates the state to A x + B u */
 static inline float cct_d_linear(float *x, float r, float y)
 {
-    static const float a[9] = { 6.352065504e-02f, -3.053568006e-01f, 0.0f, 4.356180727e-01f, 8.749258518e-01f, 0.0f, 6.969888927e-04f, 2.999881282e-03f, 1.000000000e+00f };
-    static const float b[6] = { 1.661751071e-06f, -1.661751071e-06f, 6.806532156e-07f, -6.806532156e-07f, 1.089045187e-09f, -1.089045187e-09f };
-    static const float c[3] = { 8.589810938e+04f, 2.570611406e+05f, 4.492508203e+04f };
+    static const float a[9] = { 6.352062523e-02f, -3.053568006e-01f, 0.0f, 4.356180429e-01f, 8.749258518e-01f, 0.0f, 6.969888927e-04f, 2.999881282e-03f, 1.000000000e+00f };
+    static const float b[6] = { 3.403265961e-03f, -3.403265961e-03f, 1.393977785e-03f, -1.393977785e-03f, 2.230364316e-06f, -2.230364316e-06f };
+    static const float c[3] = { 4.194243622e+01f, 1.255181427e+02f, 2.193607712e+01f };
     float xn[3];
-    float v = 1.342157871e-01f * r + -1.342157871e-01f * y;
+    float v = 1.342158020e-01f * r + -1.342158020e-01f * y;
     unsigned i, j;
     for (i = 0u; i < 3u; ++i) {
         float acc = b[2u * i] * r + b[2u * i + 1u] * y;
@@ -230,9 +230,9 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         saturated = 1;
     }
     /* back-calculation anti-windup */
-    nx.d[0] += -6.727342452e-07f * (vds - vd);
-    nx.d[1] += 3.849690529e-06f * (vds - vd);
-    nx.d[2] += 8.895987946e-09f * (vds - vd);
+    nx.d[0] += -1.377759967e-03f * (vds - vd);
+    nx.d[1] += 7.884165272e-03f * (vds - vd);
+    nx.d[2] += 1.821898150e-05f * (vds - vd);
     nx.q[0] += 1.432562065e+01f * (vqs - vq);
     nx.q[1] += -4.476202488e+00f * (vqs - vq);
     nx.q[2] += 1.622889377e-02f * (vqs - vq);
@@ -264,8 +264,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 86.6025 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000393 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000396 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000376 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000406 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
@@ -275,9 +275,9 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
 #define CCT_Q31_W_MAX 2.300000000e+02f /* rad/s, speed range (cct_to_q31 clamps beyond) */
 #define CCT_Q31_V_MAX 181618690L /* V_MAX / V_BASE in Q31: the largest limit */
 #define CCT_Q31_VDC_BASE 1.773619995e+03f /* V of bus at full scale (cct_set_vdc_q31) */
-#define CCT_Q31_D_X0_BASE 4.882812500e-04f /* state 0 full scale */
-#define CCT_Q31_D_X1_BASE 1.953125000e-03f /* state 1 full scale */
-#define CCT_Q31_D_X2_BASE 3.906250000e-03f /* state 2 full scale */
+#define CCT_Q31_D_X0_BASE 1.000000000e+00f /* state 0 full scale */
+#define CCT_Q31_D_X1_BASE 4.000000000e+00f /* state 1 full scale */
+#define CCT_Q31_D_X2_BASE 8.000000000e+00f /* state 2 full scale */
 #define CCT_Q31_Q_X0_BASE 8.192000000e+03f /* state 0 full scale */
 #define CCT_Q31_Q_X1_BASE 2.048000000e+03f /* state 1 full scale */
 #define CCT_Q31_Q_X2_BASE 4.096000000e+03f /* state 2 full scale */
@@ -377,10 +377,10 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[5] = { 21989916L, 263230606L, 92006569L, 2251767L, -2251767L };
+    static const int32_t co[5] = { 21989917L, 263230626L, 92006576L, 2251767L, -2251767L };
     static const int32_t ca[18] = {
-        8525598L, -163937182L, 0L, 14616917L, -14616917L, -189357857L,
-        7308458L, 58715280L, 0L, 748386L, -748386L, 135448947L,
+        8525594L, -163937188L, 0L, 14616916L, -14616916L, -189357895L,
+        7308458L, 58715280L, 0L, 748386L, -748386L, 135448934L,
         11694L, 201319L, 134217728L, 1197L, -1197L, 313000L,
     };
     static const unsigned fa[3] = { 27u, 26u, 27u };
@@ -401,7 +401,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[3] = { -189357857L, 135448947L, 313000L };
+    static const int32_t aw[3] = { -189357895L, 135448934L, 313000L };
     static const unsigned fa[3] = { 27u, 26u, 27u };
     unsigned i;
     for (i = 0u; i < 3u; ++i) {
@@ -414,8 +414,8 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
     static const int32_t co[6] = { 183257540L, 0L, 91628770L, 0L, 715850L, -715850L };
     static const int32_t ca[28] = {
-        164984225L, 33554432L, 0L, 0L, 1393452L, -1393452L, 240344029L,
-        -102537228L, 0L, 0L, 0L, 48854L, -48854L, -150196426L,
+        164984225L, 33554432L, 0L, 0L, 1393452L, -1393452L, 240344028L,
+        -102537228L, 0L, 0L, 0L, 48854L, -48854L, -150196425L,
         371758L, 0L, 134217728L, 32768L, 1452L, -1452L, 544551L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
@@ -437,7 +437,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 240344029L, -150196426L, 544551L, 0L };
+    static const int32_t aw[4] = { 240344028L, -150196425L, 544551L, 0L };
     static const unsigned fa[4] = { 27u, 26u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {

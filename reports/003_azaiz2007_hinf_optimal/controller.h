@@ -4,8 +4,8 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: fe6722ab3d8aaf89f7f3af7cde13d4df131e24c702653ac07366c33f1f6f30b5
- * law sha256:  4ddde6208ccdca3efff7e5f951ed6dff65197a474930730d321abb5a9dcb7762
- * created:     2026-11-24T14:07:39+00:00
+ * law sha256:  63dbb317db91823e29eb529e90aff04272f3569efb3b599f82b9caed570784a2
+ * created:     2026-11-25T10:46:12+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
@@ -66,7 +66,7 @@
 #define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
 
-#define CCT_D_GAIN 2.415857278e-03f /* d axis SOS output gain, V/A */
+#define CCT_D_GAIN 2.415857976e-03f /* d axis SOS output gain, V/A */
 #define CCT_D_NUM_STAGES 2
 #define CCT_Q_GAIN 7.069702726e-03f /* q axis SOS output gain, V/A */
 #define CCT_Q_NUM_STAGES 2
@@ -229,11 +229,11 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         saturated = 1;
     }
     /* back-calculation anti-windup */
-    nx.d[0] += 6.783045654e+02f * (vds - vd);
-    nx.d[1] += -2.842355652e+02f * (vds - vd);
-    nx.d[2] += 1.736776543e+01f * (vds - vd);
+    nx.d[0] += 6.783043213e+02f * (vds - vd);
+    nx.d[1] += -2.842354736e+02f * (vds - vd);
+    nx.d[2] += 1.736775970e+01f * (vds - vd);
     nx.q[0] += 2.207859955e+02f * (vqs - vq);
-    nx.q[1] += -8.723780060e+01f * (vqs - vq);
+    nx.q[1] += -8.723779297e+01f * (vqs - vq);
     nx.q[2] += 2.998911619e+00f * (vqs - vq);
     if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
@@ -263,8 +263,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 86.6025 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.00412 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00134 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.00384 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00136 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
@@ -377,11 +377,11 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 166016451L, 0L, 41504113L, 0L, 20266L, -20266L };
+    static const int32_t co[6] = { 166016496L, 0L, 41504124L, 0L, 20266L, -20266L };
     static const int32_t ca[28] = {
-        55211300L, 16777216L, 0L, 0L, 12591L, -12591L, 177813466L,
-        -46081818L, 0L, 0L, 0L, -2114L, 2114L, -149021301L,
-        22526052L, 0L, 134217728L, 2048L, 2750L, -2750L, 72845686L,
+        55211299L, 16777216L, 0L, 0L, 12591L, -12591L, 177813415L,
+        -46081816L, 0L, 0L, 0L, -2114L, 2114L, -149021255L,
+        22526052L, 0L, 134217728L, 2048L, 2750L, -2750L, 72845666L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[4] = { 25u, 25u, 27u, 31u };
@@ -402,7 +402,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 177813466L, -149021301L, 72845686L, 0L };
+    static const int32_t aw[4] = { 177813415L, -149021255L, 72845666L, 0L };
     static const unsigned fa[4] = { 25u, 25u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
@@ -413,7 +413,7 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 242913139L, 0L, 60728285L, 0L, 59305L, -59305L };
+    static const int32_t co[6] = { 242913140L, 0L, 60728285L, 0L, 59305L, -59305L };
     static const int32_t ca[28] = {
         105201820L, 33554432L, 0L, 0L, 49090L, -49090L, 231510890L,
         -82778153L, 0L, 0L, 0L, -6166L, 6166L, -182950920L,
