@@ -57,3 +57,16 @@ def tc_artifact(K=800.0, m=AZAIZ, Ts=1e-4, d=1):
         ax[n] = AxisController.from_law(law, sample_time=Ts, method="native", antiwindup=False)
     return art("tc", ax, m, Ts, d)
 
+
+def plain_bisection(ok, tol: float) -> float:
+    """Largest scale in [0, 1] with ``ok(scale)``, by plain bisection to ``tol``
+    (the reference the certificates' warm-started bisections are tested against)."""
+    if ok(1.0):
+        return 1.0
+    if not ok(0.0):
+        return 0.0
+    lo, hi = 0.0, 1.0
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo

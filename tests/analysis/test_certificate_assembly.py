@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 import pytest
 
-from analysis_helpers import AZAIZ, DRIVE
+from analysis_helpers import AZAIZ, DRIVE, plain_bisection
 from toolbox.analysis import certificate as C
 from toolbox.plant import max_electrical_speed
 
@@ -59,15 +59,7 @@ def _reference_scale(art, motor, drive, monkeypatch, *, tol: float, alpha: float
             box = C.ParameterBox.around(motor, k, omega_max=wmax)
             return C._certify(art, box, alpha, False, guess=None)[0].certified
 
-        if ok(1.0):
-            return 1.0
-        if not ok(0.0):
-            return 0.0
-        lo, hi = 0.0, 1.0
-        while hi - lo > tol:
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if ok(mid) else (lo, mid)
-        return lo
+        return plain_bisection(ok, tol)
 
 
 @pytest.mark.parametrize("design", ["pi", "hinf"])

@@ -19,6 +19,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from analysis_helpers import plain_bisection
 from toolbox.analysis import (SampledBox, certify_sampled, largest_certified_sampled_scale,
                               largest_certified_scale, robustness_sweep)
 from toolbox.analysis import _sampled_certificate as S
@@ -235,15 +236,7 @@ def _reference_scale(art, motor, drive, tol: float, monkeypatch) -> float:
                                 speed_gain=S.DEFAULT_RANGES["speed_gain"][:2], speed_offset=off)
         return certify_sampled(art, box, guesses={})[0]
 
-    if ok(1.0):
-        return 1.0
-    if not ok(0.0):
-        return 0.0
-    lo, hi = 0.0, 1.0
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
-    return lo
+    return plain_bisection(ok, tol)
 
 
 @pytest.mark.parametrize("name", sorted(DESIGNS))
