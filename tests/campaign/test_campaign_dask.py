@@ -91,10 +91,13 @@ def test_killed_worker_chunks_are_retried(designed, serial_run, cluster, tmp_pat
         def kill_busy(done, total):
             if done == 0 or killed:
                 return
+            processing = monitor.processing()
+            # read after processing(): a worker that registered late (a loaded
+            # machine) is then known; before, it raised KeyError on its address
             info = monitor.scheduler_info()["workers"]
-            for addr, keys in monitor.processing().items():
+            for addr, keys in processing.items():
                 chunks = [k for k in keys if "cct-chunk" in str(k)]
-                if chunks and not killed:
+                if chunks and not killed and addr in info:
                     k = int(info[addr]["name"][1:])
                     workers[k].send_signal(signal.SIGKILL)
                     workers[k].wait(timeout=30)
