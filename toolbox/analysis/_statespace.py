@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import expm, matrix_balance
 
-from .._lti import pade as lti_pade, tf2ss
+from .._lti import StateSpace, pade as lti_pade, tf2ss
 from ..plant import zoh_first_order
 
 if TYPE_CHECKING:
@@ -40,15 +40,12 @@ def freqresp(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 class FreqResponse:
     """``C (x I - A)^-1 B + D`` of one system at many points, vectorised.
 
-    A is diagonalised once, ``A = V diag(lam) V^-1``; a grid is then evaluated
-    as the modal sum ``sum_i (C V)_i (V^-1 B)_i / (x - lam_i) + D``: O(N n)
-    array work instead of N LU factorisations (20000 points of a 5-state
-    loop: ~1 ms instead of ~13 ms; python-control's per-frequency SLICOT
-    ``tb05ad`` takes ~40 ms, issue 13). The modal sum loses about
-    ``cond(V) * eps`` relative accuracy, so it is used only while
-    ``cond(V) <= 1e6`` (then within ~1e-10 of an LU solve); a nearly
-    defective A (integrator chains, repeated poles) keeps the per-point LU
-    solves of :func:`freqresp`, and so does a single point (one LAPACK call).
+    The modal sum of :attr:`toolbox._lti.StateSpace.modal` (A diagonalised
+    once) for a grid while A's eigenvectors are well conditioned (then within
+    ~1e-10 of an LU solve); a nearly defective A (integrator chains, repeated
+    poles) keeps per-point LU solves (:meth:`toolbox._lti.StateSpace.evaluate`).
+    A SISO system is also evaluated at single points in plain Python
+    (:meth:`at`), which the margin refinements call hundreds of times.
 
     Parameters
     ----------
@@ -56,55 +53,35 @@ class FreqResponse:
         Real state-space matrices, (n, n), (n, m), (p, n), (p, m).
     """
 
-    COND_MAX = 1e6
-
     def __init__(self, A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> None:
-        self.A, self.B, self.C, self.D = (np.asarray(M, float) for M in (A, B, C, D))
-        self.modal = None
+        self.system = StateSpace(A, B, C, D)
+        self.modal = self.system.modal
         self._siso = None
-        n = self.A.shape[0]
-        self._eye = np.eye(n)
-        if n:
-            lam, V = np.linalg.eig(self.A)
-            if np.linalg.cond(V) <= self.COND_MAX:
-                res = (self.C @ V)[:, :, None] * np.linalg.solve(V, self.B)[None, :, :]
-                self.modal = (lam, np.moveaxis(res, 1, 0).reshape(n, -1))   # residues (n, p m)
-                if self.D.size == 1:            # SISO: plain Python numbers for one point
-                    self._siso = (list(zip(res[0, :, 0].tolist(), lam.tolist())),
-                                  complex(self.D[0, 0]))
+        if self.modal is not None and self.system.D.size == 1:
+            lam, R = self.modal
+            self._siso = (list(zip(R[0, 0].tolist(), lam.tolist())),
+                          complex(self.system.D[0, 0]))
 
     def at(self, x: complex) -> complex:
         """Response of a SISO system at one point ``x`` (a Python complex).
 
         The modal form is summed in plain Python arithmetic (~2 us, where any
-        numpy call costs more: the margin refinements make hundreds of such
-        calls, issue 13); otherwise, or exactly on a pole, one LU solve.
+        numpy call costs more, issue 13); otherwise, or exactly on a pole, one
+        LU solve.
         """
         if self._siso is not None:
             try:
                 return sum(r / (x - lam) for r, lam in self._siso[0]) + self._siso[1]
             except ZeroDivisionError:           # exactly on a pole
                 pass
-        return complex(freqresp(self.A, self.B, self.C, self.D, np.array([x]))[0, 0, 0])
+        return complex(self.system.evaluate([x])[0, 0, 0])
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         """Response at the complex points ``x``: shape ``(len(x), p, m)``."""
         x = np.asarray(x, complex).reshape(-1)
         if x.size == 1 and self._siso is not None:
             return np.array([[[self.at(complex(x[0]))]]])
-        if x.size == 1 and self.A.size:         # one point: one LAPACK call, no stacking
-            try:
-                y = np.linalg.solve(x[0] * self._eye - self.A, self.B)
-            except np.linalg.LinAlgError:       # exactly on a pole
-                return freqresp(self.A, self.B, self.C, self.D, x)
-            return (self.C @ y + self.D)[None]
-        if self.modal is None:
-            return freqresp(self.A, self.B, self.C, self.D, x)
-        lam, res = self.modal
-        inv = np.subtract.outer(x, lam)                                # (N, n)
-        with np.errstate(divide="ignore", invalid="ignore"):         # a point on a pole
-            np.reciprocal(inv, out=inv)
-            return (inv @ res).reshape((x.size,) + self.D.shape) + self.D
+        return np.moveaxis(self.system.evaluate(x), -1, 0)
 
 
 def zoh_axis(R, L, Ts) -> tuple[np.ndarray, np.ndarray]:
