@@ -31,7 +31,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg
-from scipy.linalg.lapack import dgeev as _dgeev
+from scipy.linalg.lapack import dgebal as _dgebal, dgeev as _dgeev
 
 __all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d",
            "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
@@ -47,6 +47,34 @@ C2D_METHODS = ("zoh", "foh", *_GBT_ALPHA)
 #: response is evaluated as a modal sum (relative error ~cond(V) eps, so
 #: <= ~1e-10); a nearly defective A takes per-point LU solves instead.
 _MODAL_COND_MAX = 1e6
+
+
+def diagonal_scaling(M: np.ndarray) -> np.ndarray:
+    """Diagonal scaling of LAPACK dgebal without permutation (powers of two),
+    as ``scipy.linalg.matrix_balance(M, permute=False, separate=True)``."""
+    _, _, _, scale, info = _dgebal(M, scale=1, permute=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgebal failed (info {info})")
+    return scale
+
+
+def state_scaling(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """Powers of two ``t`` such that ``x = diag(t) x_b`` equilibrates
+    ``[A B; C 0]`` (dgebal), taken relative to the input/output's own scale so
+    that B and C are equilibrated as well: controllers come back in the
+    plant's coordinates with entries over ~12 decades, and a companion-form
+    realisation has B = e1 against C up to ~1e10."""
+    n = A.shape[0]
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n], M[:n, n:], M[n:, :n] = A, B, C
+    scale = diagonal_scaling(M)
+    return 2.0 ** np.round(np.log2(scale[:n] / scale[n]))
+
+
+def balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``(A, B, C)`` in the coordinates of :func:`state_scaling` (exact: powers of two)."""
+    t = state_scaling(A, B, C)
+    return A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
 
 
 def modal_form(A: np.ndarray, B: np.ndarray,

@@ -6,13 +6,12 @@ stability tests and zero-order-hold discretisations (single and stacked 2x2).
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.linalg import expm, matrix_balance
+from scipy.linalg import expm
 
-from .._lti import StateSpace, pade as lti_pade, tf2ss
+from .._lti import StateSpace, balanced, pade as lti_pade, tf2ss
 from ..plant import zoh_first_order
 
 if TYPE_CHECKING:
@@ -112,21 +111,14 @@ def pade(tau: float, order: int) -> tuple[np.ndarray, ...]:
     """State space of the ``order`` Pade approximation of ``exp(-s tau)``.
 
     The controllable canonical form of :func:`toolbox._lti.tf2ss` holds the
-    coefficients ``tau^-k`` (1e13 for a third-order 150 us delay), so it is
-    balanced by a diagonal similarity (``scipy.linalg.matrix_balance`` on A,
-    then a common factor for B and C; powers of two: exact), as
-    python-control's slycot realisation was.
+    coefficients ``tau^-k`` (1e13 for a third-order 150 us delay), so its
+    states are scaled by :func:`toolbox._lti.balanced` (powers of two: exact),
+    as python-control's slycot realisation was.
     """
     sys = tf2ss(*lti_pade(tau, order))
     A, B, C, D = (np.array(M) for M in (sys.A, sys.B, sys.C, sys.D))    # writable copies
     if A.size:
-        _, (scale, _) = matrix_balance(A, permute=False, separate=True)
-        # then B and C to equal norms by a common power of two (the similarity c I)
-        c = 2.0 ** round(0.5 * math.log2(np.linalg.norm(B / scale[:, None])
-                                         / np.linalg.norm(C * scale[None, :])))
-        A = A * scale[None, :] / scale[:, None]
-        B = B / (c * scale[:, None])
-        C = C * (c * scale[None, :])
+        A, B, C = balanced(A, B, C)
     return A, B, C, D
 
 

@@ -35,12 +35,13 @@ from typing import Any, Literal
 import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
-                                 dgebal as _dgebal, dgesdd as _dgesdd, dgesv as _dgesv,
+                                 dgesdd as _dgesdd, dgesv as _dgesv,
                                  dgetrf as _dgetrf, dlange as _dlange,
                                  dgetrs as _dgetrs, dggev as _dggev, dpotrf as _dpotrf,
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd)
 
-from .._lti import StateSpace, TransferFunction, as_statespace, linf_norm
+from .._lti import (StateSpace, TransferFunction, as_statespace, balanced, diagonal_scaling,
+                    linf_norm)
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -248,28 +249,6 @@ def _cholesky(M: np.ndarray) -> np.ndarray:
     return c
 
 
-def _balancing(M: np.ndarray) -> np.ndarray:
-    """Diagonal scaling of LAPACK dgebal without permutation (powers of two),
-    as ``scipy.linalg.matrix_balance(M, permute=False, separate=True)``."""
-    _, _, _, scale, info = _dgebal(M, scale=1, permute=0)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dgebal failed (info {info})")
-    return scale
-
-
-def _balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Diagonal state scaling (powers of two, exact) equilibrating [A B; C 0]:
-    controllers come back in the plant's coordinates with entries over ~12
-    decades, and a companion-form weight has B = e1 against C up to ~1e10."""
-    n = A.shape[0]
-    M = np.zeros((n + 1, n + 1))
-    M[:n, :n], M[:n, n:], M[n:, :n] = A, B, C
-    scale = _balancing(M)
-    # relative to the input/output's own scale: B and C equilibrated as well
-    t = 2.0 ** np.round(np.log2(scale[:n] / scale[n]))
-    return A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
-
-
 def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
     """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
     ones (|beta| <= 1e-13 |alpha|) are dropped."""
@@ -289,7 +268,7 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     n = A.shape[0]
     if n == 0:
         return np.zeros(0, complex)
-    A, B, C = _balanced(A, B, C)
+    A, B, C = balanced(A, B, C)
     M = np.zeros((n + C.shape[0], n + B.shape[1]))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
     N = np.zeros_like(M)
@@ -333,7 +312,7 @@ def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
     Common roots of num and den are cancelled first
     (:meth:`toolbox._lti.TransferFunction.minreal`, python-control's rule),
     then :func:`toolbox._lti.tf2ss` gives the controllable canonical form,
-    whose states are scaled by powers of two (:func:`_balanced`: exact) so that
+    whose states are scaled by powers of two (:func:`toolbox._lti.balanced`: exact) so that
     B and C have comparable entries (paper 003's w3 has C ~ -2.7e10 for
     B = 1 otherwise).
     """
@@ -345,7 +324,7 @@ def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
     if not tf.num.any():
         return _ss_blocks(0.0)
     g = tf.minreal().to_statespace()
-    return (*_balanced(g.A, g.B, g.C), np.array(g.D))
+    return (*balanced(g.A, g.B, g.C), np.array(g.D))
 
 
 def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
@@ -588,7 +567,7 @@ def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
     M[:n, n + m1:n + m] = P.B2
     M[n:n + p1, :n] = P.C1
     M[n + p1:n + p, :n] = P.C2
-    t = 2.0 ** np.round(np.log2(_balancing(M)[:n]))
+    t = 2.0 ** np.round(np.log2(diagonal_scaling(M)[:n]))
     ti = (1.0 / t)[:, None]                  # exact: t holds powers of two
     Ps = P._derived(A=P.A * (ti * t), B1=P.B1 * ti, B2=P.B2 * ti, C1=P.C1 * t, C2=P.C2 * t)
     return Ps, t

@@ -22,8 +22,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import StateSpace, as_statespace, linf_norm, parallel
-from ._hinf_riccati import _balanced, _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
+from .._lti import StateSpace, as_statespace, balanced, linf_norm, parallel, state_scaling
+from ._hinf_riccati import _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -55,7 +55,7 @@ def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
 def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray, ...]:
     """A, B, C, D of k prod(s - z)/prod(s - p): scipy.signal's ``zpk2ss``
     (controllable canonical form) without its argument handling (~0.3 ms a
-    call, issue 13), then the diagonal balancing of :func:`_balanced`."""
+    call, issue 13), then the diagonal balancing of :func:`toolbox._lti.balanced`."""
     z, p = _real_conj(z), _real_conj(p)
     if p.size == 0:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(k)]])
@@ -69,7 +69,7 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
     B = np.zeros((n, 1))
     B[0, 0] = 1.0
     C = (num[1:] - num[0] * den[1:])[None, :]
-    return (*_balanced(A, B, C), np.array([[num[0]]]))
+    return (*balanced(A, B, C), np.array([[num[0]]]))
 
 
 def _real_conj(r: np.ndarray) -> np.ndarray:
@@ -227,13 +227,9 @@ def balanced_truncation(K: Any, order: int) -> tuple[StateSpace, np.ndarray, flo
     """
     Kss = as_statespace(K)
     A, B, C, D = (np.asarray(x, float) for x in (Kss.A, Kss.B, Kss.C, Kss.D))
-    n = A.shape[0]
     if np.any(np.linalg.eigvals(A).real >= 0):
         raise ValueError("balanced_truncation: K must be stable; split it with stable_split")
-    Mx = np.zeros((n + 1, n + 1))
-    Mx[:n, :n], Mx[:n, n:], Mx[n:, :n] = A, B[:, :1], C[:1, :]
-    _, (sc, _) = sla.matrix_balance(Mx, permute=False, separate=True)
-    t = 2.0 ** np.round(np.log2(sc[:n]))
+    t = state_scaling(A, B[:, :1], C[:1, :])
     A, B, C = A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
     Lp = _gramian_factor(sla.solve_continuous_lyapunov(A, -B @ B.T))
     Lq = _gramian_factor(sla.solve_continuous_lyapunov(A.T, -C.T @ C))
@@ -526,7 +522,7 @@ def _margins(g: tuple, k: tuple) -> LoopMargins:
     if A.shape[0] == 0:
         gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
         return LoopMargins(gm_db, w_gm, pm, w_pm, abs(1.0 + d), abs(1.0 / (1.0 + d)))
-    A, B, C = _balanced(A, B, C)
+    A, B, C = balanced(A, B, C)
     gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
     peak = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]))
