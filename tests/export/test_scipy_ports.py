@@ -15,7 +15,7 @@ import scipy.signal
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from toolbox.export._fixed import _fast_length, _fftconvolve
+from toolbox.export._fixed import _fftconvolve
 from toolbox.export._sos import zpk2sos_nearest
 
 
@@ -45,12 +45,6 @@ def test_zpk2sos_nearest_on_repeated_and_unit_circle_roots():
     z = np.array([-1.0, -1.0, 1.0, 0.5 + 0.5j, 0.5 - 0.5j])
     p = np.array([1.0, 0.9, 0.9, 0.3 + 0.6j, 0.3 - 0.6j])
     assert np.array_equal(zpk2sos_nearest(z, p), scipy.signal.zpk2sos(z, p, 1.0, pairing="nearest"))
-
-
-def test_fast_length_equals_scipy():
-    assert all(_fast_length(n) == scipy.fft.next_fast_len(n, True) for n in range(1, 20000))
-    for n in (123457, 999983, 2**20 + 1):
-        assert _fast_length(n) == scipy.fft.next_fast_len(n, True)
 
 
 @settings(max_examples=40, deadline=None)

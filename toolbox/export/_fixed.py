@@ -270,34 +270,20 @@ def horizon_bound(plan: FixedPlan, n: int) -> dict:
     return out
 
 
-def _fast_length(n: int) -> int:
-    """Smallest 5-smooth integer >= n (``scipy.fft.next_fast_len(n, real=True)``)."""
-    best = 1 << max(n - 1, 0).bit_length()
-    p5 = 1
-    while p5 < best:
-        p35 = p5
-        while p35 < best:
-            m = p35
-            while m < n:
-                m *= 2
-            best = min(best, m)
-            p35 *= 3
-        p5 *= 5
-    return best
-
-
 def _fftconvolve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Full linear convolution of two real 1-D arrays by FFT.
 
     ``scipy.signal.fftconvolve`` without importing scipy.signal (~0.4 s of
-    every ``cct design``, issue 13): same transform length, same pocketfft
-    transforms, so the same numbers (tests/export/test_propagate_bound.py).
+    every ``cct design``, issue 13): the same scipy.fft transforms at the same
+    length, so the same numbers (tests/export/test_propagate_bound.py).
     """
+    from scipy.fft import irfft, next_fast_len, rfft
+
     if a.size == 1 or b.size == 1:          # scipy multiplies directly (no transform)
         return a * b
     size = a.size + b.size - 1
-    L = _fast_length(size)
-    return np.fft.irfft(np.fft.rfft(a, L) * np.fft.rfft(b, L), L)[:size]
+    L = next_fast_len(size, real=True)
+    return irfft(rfft(a, L) * rfft(b, L), L)[:size]
 
 
 def propagate_bound(A: np.ndarray, C: np.ndarray, delta_x: np.ndarray,
