@@ -103,9 +103,25 @@ def _simplify(expr: sp.Expr) -> sp.Expr:
     ``c, s`` and reduces numerator and denominator modulo ``c^2 + s^2 - 1``
     (a Groebner-basis normal form, so identities are decided exactly).
     """
-    num, den = sp.fraction(sp.cancel(sp.together(_to_cs(expr))))
+    return _simplify_cs(_to_cs(expr))
+
+
+def _simplify_cs(e: sp.Expr) -> sp.Expr:
+    """:func:`_simplify` of an expression already written in ``c, s``."""
+    num, den = sp.fraction(sp.cancel(sp.together(e)))
     out = sp.cancel(_reduce(num) / _reduce(den)).subs({_s: sp.sin(theta), _c: sp.cos(theta)})
     return sp.simplify(out) if out.has(theta) else sp.factor_terms(sp.expand(out))
+
+
+def _simplified_product(*factors: sp.Matrix) -> sp.Matrix:
+    """:func:`_simplify_matrix` of the product of ``factors``, multiplied as
+    polynomials in ``c, s``: the same expanded polynomials as expanding the
+    trigonometric product, without ``expand_trig`` on the long product
+    terms (issue 13: four times faster on ``T L_abc T^-1``)."""
+    prod = factors[0].applyfunc(_to_cs)
+    for f in factors[1:]:
+        prod = prod * f.applyfunc(_to_cs)
+    return prod.applyfunc(lambda e: _simplify_cs(sp.expand(e)))
 
 
 def _trig_inverse(m: sp.Matrix) -> sp.Matrix:
@@ -120,7 +136,7 @@ def _trig_inverse(m: sp.Matrix) -> sp.Matrix:
     """
     cs = m.applyfunc(_to_cs)
     det = _reduce(cs.det(method="berkowitz"))
-    return (cs.adjugate(method="berkowitz") / det).applyfunc(_simplify)
+    return (cs.adjugate(method="berkowitz") / det).applyfunc(_simplify_cs)
 
 
 @dataclass(frozen=True)
@@ -200,9 +216,9 @@ def _derive_dq_model(convention: str) -> DqModel:
     th = theta
     T = park_matrix(th, convention)
     Tinv = _trig_inverse(T)
-    L_dq = _simplify_matrix(T * _phase_inductance(th) * Tinv)
-    psi_dq_pm = _simplify_matrix(T * _pm_flux(th))
-    rot = _simplify_matrix(T * Tinv.diff(th))
+    L_dq = _simplified_product(T, _phase_inductance(th), Tinv)
+    psi_dq_pm = _simplified_product(T, _pm_flux(th))
+    rot = _simplified_product(T, Tinv.diff(th))
 
     i_vec = sp.Matrix([i_d, i_q, 0])
     psi = L_dq * i_vec + psi_dq_pm
