@@ -132,13 +132,32 @@ def test_solution_is_symmetric_and_satisfies_the_lmis(pi):
     assert np.max(np.linalg.eigvalsh(M)) <= -1e-6 * (1 - 1e-1)
 
 
+def _solved_once(solve):
+    """``solve`` answering a repeated problem (same data, bit for bit) from memory."""
+    memo = {}
+
+    def once(As: np.ndarray, alpha: float, eps: float = 1e-6):
+        key = (As.shape, As.tobytes(), alpha, eps)
+        if key not in memo:
+            memo[key] = solve(As, alpha, eps)
+        return memo[key]
+
+    return once
+
+
 @pytest.mark.parametrize("design", ["pi", "hinf"])
-def test_active_vertex_set_gives_the_full_solve_verdict(design, request):
+def test_active_vertex_set_gives_the_full_solve_verdict(design, request, monkeypatch):
     """Constraint generation (a few vertices, the violated ones added) reaches
     the verdict of the solve over all vertices on every box of a scale sweep,
     its certificate holds on all vertices, and it solves fewer vertex LMIs.
-    The sweep must contain certified and uncertified (solved) boxes."""
+    The sweep must contain certified and uncertified (solved) boxes.
+
+    Where constraint generation ends in the solve over all vertices (a subset
+    failing numerically: most boxes with an unstable vertex), that solve is
+    the reference's own, the same data bit for bit: it is read back rather
+    than solved twice (the solver is deterministic; ~3 s of the test)."""
     art = request.getfixturevalue(design)
+    monkeypatch.setattr(C, "_solve", _solved_once(C._solve))
     verdicts = set()
     for k in np.linspace(0.0, 1.0, 9):
         for alpha in (0.0, 200.0):
@@ -170,12 +189,15 @@ def test_warm_start_is_used_and_checked(pi):
 
 
 @pytest.mark.parametrize("design", ["pi", "hinf"])
-def test_prescreen_rejects_only_what_the_solver_rejects(design, request):
+def test_prescreen_rejects_only_what_the_solver_rejects(design, request, monkeypatch):
     """A box whose vertex set holds an unstable matrix is declared not certified
     without a solve; on every such box of a scale sweep the solver indeed finds
     no certificate, and a prescreened box is never one the solver certifies.
-    The sweep must contain rejected boxes for the test to mean anything."""
+    The sweep must contain rejected boxes for the test to mean anything.
+    (A box not prescreened is solved on the same data with and without the
+    prescreen: solved once.)"""
     art = request.getfixturevalue(design)
+    monkeypatch.setattr(C, "_solve", _solved_once(C._solve))
     rejected = 0
     for k in np.linspace(0.0, 1.0, 9):
         for alpha in (0.0, 200.0):
