@@ -27,6 +27,7 @@ Damaged or wrong equations of the paper, re-derived here:
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -35,13 +36,12 @@ from typing import Any, Literal
 import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
-                                 dgesdd as _dgesdd, dgesv as _dgesv,
-                                 dgetrf as _dgetrf, dlange as _dlange,
-                                 dgetrs as _dgetrs, dggev as _dggev, dpotrf as _dpotrf,
+                                 dgesdd as _dgesdd, dgesv as _dgesv, dlange as _dlange,
+                                 dggev as _dggev, dpotrf as _dpotrf,
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd)
 
-from .._lti import (StateSpace, TransferFunction, as_statespace, balanced, diagonal_scaling,
-                    linf_norm)
+from .._lti import (StateSpace, TransferFunction, _linf_norm, as_statespace, balanced,
+                    diagonal_scaling)
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -197,6 +197,15 @@ class PartitionedPlant:
 # scipy's wrappers (argument checks, dispatch) cost 3-10 times the LAPACK work
 # itself (issue 13). Inputs must be finite float arrays (they are built here).
 # --------------------------------------------------------------------------
+@functools.lru_cache(maxsize=64)
+def _eye(n: int) -> np.ndarray:
+    """Read-only identity of order n (``np.eye`` builds one in Python, ~1 us,
+    and the controller formulae need several per call)."""
+    eye = np.eye(n)
+    eye.flags.writeable = False
+    return eye
+
+
 def _eigvals(A: np.ndarray) -> np.ndarray:
     """Eigenvalues of a real square matrix (LAPACK dgeev)."""
     if A.shape[0] == 0:
@@ -217,7 +226,7 @@ def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 def _inv(A: np.ndarray) -> np.ndarray:
     """A^-1 (LAPACK dgesv on the identity, as numpy's ``inv``)."""
-    return _solve(A, np.eye(A.shape[0]))
+    return _solve(A, _eye(A.shape[0]))
 
 
 def _svdvals(M: np.ndarray) -> np.ndarray:
@@ -275,6 +284,10 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     N[range(n), range(n)] = 1.0
     return _pencil_eigvals(M, N)
 
+
+#: maximum of a non-empty array: the ufunc's reduce, without ``ndarray.max``'s
+#: Python-level dispatch (~1 us a call, several per gamma)
+_amax = np.maximum.reduce
 
 _BLOCKS = ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22")
 
@@ -432,7 +445,7 @@ def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
     wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
-    on_axis = np.abs(wr) <= tol * max(1.0, np.hypot(wr, wi).max())
+    on_axis = np.abs(wr) <= tol * max(1.0, _amax(np.hypot(wr, wi)))
     return (wr[on_axis] + 1j * wi[on_axis]) if on_axis.any() else np.zeros(0, complex)
 
 
@@ -567,7 +580,7 @@ def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
     M[:n, n + m1:n + m] = P.B2
     M[n:n + p1, :n] = P.C1
     M[n + p1:n + p, :n] = P.C2
-    t = 2.0 ** np.round(np.log2(diagonal_scaling(M)[:n]))
+    t = diagonal_scaling(M)[:n]                  # powers of two
     ti = (1.0 / t)[:, None]                  # exact: t holds powers of two
     Ps = P._derived(A=P.A * (ti * t), B1=P.B1 * ti, B2=P.B2 * ti, C1=P.C1 * t, C2=P.C2 * t)
     return Ps, t
@@ -687,7 +700,7 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
         ev = np.linalg.eigvals(a - b @ F)
         wr, wi = ev.real, ev.imag
     X = 0.5 * (X + X.T)
-    if wr.size and wr.max() >= -1e-12 * max(1.0, np.hypot(wr, wi).max()):
+    if wr.size and _amax(wr) >= -1e-12 * max(1.0, _amax(np.hypot(wr, wi))):
         return None, "the solution is not stabilising"
     return X, ""
 
@@ -723,13 +736,13 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     if info != 0 or sdim != n:
         return None, None, None
     Z11t = Z[:n, :n].T
-    lu, piv, info = _dgetrf(Z11t)
+    # X^T = Z11^-T Z21^T; dgesv keeps the LU factors for the condition estimate
+    lu, _, Xt, info = _dgesv(Z11t, Z[n:, :n].T)
     if info != 0:
         return None, None, None
     rcond, _ = _dgecon(lu, _dlange("1", Z11t))
     if not rcond >= 1e-14:
         return None, None, None
-    Xt, _ = _dgetrs(lu, piv, Z[n:, :n].T)                  # X^T = Z11^-T Z21^T
     return Xt.T, wr[:n], wi[:n]
 
 
@@ -783,19 +796,19 @@ class _GammaFree:
 
     B: np.ndarray       # eq (10)
     C: np.ndarray       # eq (11)
-    D1s: np.ndarray     # eq (12)
-    Ds1: np.ndarray     # eq (13)
-    DtD: np.ndarray     # D1s^T D1s, eq (14) without gamma
-    DDt: np.ndarray     # Ds1 Ds1^T, eq (15) without gamma
+    DtD: np.ndarray     # D1s^T D1s, eq (14) without gamma (D1s of eq 12)
+    DDt: np.ndarray     # Ds1 Ds1^T, eq (15) without gamma (Ds1 of eq 13)
     Ew: np.ndarray      # diag(I_m1, 0): eq (14) is DtD - gamma^2 Ew
     Ez: np.ndarray      # diag(I_p1, 0): eq (15) is DDt - gamma^2 Ez
     Hx: _Hamiltonian    # eq (16): a = A, b = B, q = C1^T C1, s = C1^T D1s
     Hy: _Hamiltonian    # eq (17): a = A^T, b = C^T, q = B1 B1^T, s = B1 Ds1^T
     bound: float        # condition (a): max(sigma(D1111 D1112), sigma(D1111; D1121))
+    d11: tuple          # D1111, D1112, D1121, D1122 (Theorem 1, eq 24-26)
 
 
 def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
-    D1111, D1112, D1121, _ = _d11_blocks(Pn)
+    d11 = _d11_blocks(Pn)
+    D1111, D1112, D1121, _ = d11
     B = np.concatenate([Pn.B1, Pn.B2], axis=1)
     C = np.concatenate([Pn.C1, Pn.C2])
     D1s = np.concatenate([Pn.D11, Pn.D12], axis=1)
@@ -805,10 +818,10 @@ def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     m1, p1 = Pn.nw, Pn.nz
     Ew, Ez = np.eye(m1 + Pn.nu), np.eye(p1 + Pn.ny)
     Ew[m1:, m1:] = Ez[p1:, p1:] = 0.0
-    return _GammaFree(B=B, C=C, D1s=D1s, Ds1=Ds1, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
+    return _GammaFree(B=B, C=C, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
                       Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),
                       Hy=_hamiltonian(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Pn.B1 @ Ds1.T),
-                      bound=bound)
+                      bound=bound, d11=d11)
 
 
 def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
@@ -847,9 +860,8 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "rho",
                                f"rho(XY) = {rho:.6g} >= gamma^2 = {g2:.6g}",
                                X=X, Y=Y, rho=rho)
-    work = dict(B=w.B, C=w.C, D1s=w.D1s, Ds1=w.Ds1, Rnh=Rnh, Rnj=Rnj)
     return HinfFeasibility(gamma, True, None, "conditions (a) and (b) of Theorem 1 hold",
-                           X=X, Y=Y, rho=rho, _work=work)
+                           X=X, Y=Y, rho=rho, _work=(w, Rnh, Rnj))
 
 
 def _spectral_radius(M: np.ndarray) -> float:
@@ -857,7 +869,7 @@ def _spectral_radius(M: np.ndarray) -> float:
     wr, wi, _, _, info = _dgeev(M, compute_vl=0, compute_vr=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
-    return float(np.hypot(wr, wi).max())
+    return float(_amax(np.hypot(wr, wi)))
 
 
 @dataclass
@@ -946,34 +958,36 @@ def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.
     gamma^2 I exactly and no system is solved for it.
     """
     g2 = res.gamma * res.gamma
-    w = res._work
+    w, Rnh, Rnj = res._work
     X, Y = res.X, res.Y
     m1, m2, p1, p2 = Pn.nw, Pn.nu, Pn.nz, Pn.ny
-    D1111, D1112, D1121, D1122 = _d11_blocks(Pn)
-    B, C, A = w["B"], w["C"], Pn.A
-    F = -_solve(w["Rnh"], w["D1s"].T @ Pn.C1 + B.T @ X)               # eq (20)
-    # eq (21): L = -(B1 Ds1^T + Y C^T) Rnj^-1, Rnj symmetric (eq 15)
-    L = -_solve(w["Rnj"], w["Ds1"] @ Pn.B1.T + C @ Y.T).T
+    D1111, D1112, D1121, D1122 = w.d11
+    B, C, A = w.B, w.C, Pn.A
+    F = -_solve(Rnh, w.Hx.s.T + B.T @ X)                 # eq (20); Hx.s^T = D1s^T C1
+    # eq (21): L = -(B1 Ds1^T + Y C^T) Rnj^-1, Rnj symmetric (eq 15); Hy.s = B1 Ds1^T
+    L = -_solve(Rnj, w.Hy.s.T + C @ Y.T).T
     F12, F2 = F[m1 - p2:m1], F[m1:]
     L12, L2 = L[:, p1 - m2:p1], L[:, p1:]
+    # eq (27): Z = (I - Y X / gamma^2)^-1, applied to both B2 + L12 and L2 at once
+    ZB = _solve(_eye(A.shape[0]) - (Y @ X) / g2, np.concatenate([Pn.B2 + L12, L2], axis=1))
     if D1111.size:
         r, c = D1111.shape
-        Ka = _solve(g2 * np.eye(r) - D1111 @ D1111.T, D1112)         # (g2 I - D D^T)^-1 D1112
-        Kb = _solve(g2 * np.eye(c) - D1111.T @ D1111, D1121.T)
+        Ka = _solve(g2 * _eye(r) - D1111 @ D1111.T, D1112)         # (g2 I - D D^T)^-1 D1112
+        Kb = _solve(g2 * _eye(c) - D1111.T @ D1111, D1121.T)
         D11h = -D1121 @ D1111.T @ Ka - D1122                          # eq (24)
-        T2 = np.eye(m2) - D1121 @ Kb                                  # eq (25)
-        T3 = np.eye(p2) - D1112.T @ Ka                                # eq (26)
+        D12h = _cholesky(_eye(m2) - D1121 @ Kb)            # D12h D12h^T = T2, eq (25)
+        T3 = _eye(p2) - D1112.T @ Ka                                # eq (26)
+        B2h = ZB[:, :m2] @ D12h                                       # eq (27)
+        B1h = B2h @ _solve(D12h, D11h) - ZB[:, m2:]                   # eq (29)
     else:
+        # eq (24)-(25) with an empty D1111: T2 = I, so D12h = I and eq (27), (29)
+        # lose their products by it (exact: products by an identity round nothing)
         D11h = -D1122                                                 # eq (24)
-        T2 = np.eye(m2)                                               # eq (25)
-        T3 = np.eye(p2) - (D1112.T @ D1112) / g2                      # eq (26)
-    D12h = _cholesky(T2)                                     # D12h D12h^T = T2
+        T3 = _eye(p2) - (D1112.T @ D1112) / g2                      # eq (26)
+        B2h = ZB[:, :m2]                                              # eq (27)
+        B1h = B2h @ D11h - ZB[:, m2:]                                 # eq (29)
     D21h = _cholesky(T3).T                                   # D21h^T D21h = T3
-    # eq (27): Z = (I - Y X / gamma^2)^-1, applied to both B2 + L12 and L2 at once
-    ZB = _solve(np.eye(A.shape[0]) - (Y @ X) / g2, np.concatenate([Pn.B2 + L12, L2], axis=1))
-    B2h = ZB[:, :m2] @ D12h                                           # eq (27)
     C2h = -D21h @ (Pn.C2 + F12)                                       # eq (28), D21h
-    B1h = B2h @ _solve(D12h, D11h) - ZB[:, m2:]                       # eq (29)
     S = _solve(D21h, C2h)                                    # D21h^-1 C2h of eq (30), (31)
     C1h = F2 + D11h @ S                                      # eq (30), no U12
     Ah = A + B @ F + B1h @ S                                 # eq (31)
@@ -1011,7 +1025,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> StateSpace:
     res = prep.feasibility(gamma)
     if not res.feasible:
         raise DesignInfeasible(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
-    return StateSpace(*_controller_from(prep, res))
+    return StateSpace._unchecked(*_controller_from(prep, res))
 
 
 def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray, ...]:
@@ -1302,7 +1316,7 @@ def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ..
     Dk D21 w), M = (I - Dk D22)^-1 (numpy; python-control's ``lft`` builds named
     systems, ~1.5 ms, issue 13)."""
     Ak, Bk, Ck, Dk = K
-    Mi = _inv(np.eye(P.nu) - Dk @ P.D22)
+    Mi = _inv(_eye(P.nu) - Dk @ P.D22)
     Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
     Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
     A = _blocks2x2(P.A + P.B2 @ Ux, P.B2 @ Uk, Bk @ Yx, Ak + Bk @ Yk)
@@ -1326,7 +1340,7 @@ def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> fl
     ev = _eigvals(A)
     if np.any(ev.real >= 0) or np.any(np.isclose(ev.real, 0.0)):
         return float("inf")
-    return linf_norm(StateSpace(A, B, C, D))
+    return _linf_norm(A, B, C, D)
 
 
 def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal",
@@ -1414,7 +1428,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
     for msg in notes:
         warnings.warn(msg, RuntimeWarning, stacklevel=2)
     prep_res = _unscale_xy(res, prep.t)
-    return HinfResult(K=StateSpace(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
+    return HinfResult(K=StateSpace._unchecked(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
                       X=prep_res.X, Y=prep_res.Y, closed_loop_norm=cl_norm,
                       fastest_pole=fast, pole_limit=limit, warnings=notes)
 

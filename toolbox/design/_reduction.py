@@ -22,7 +22,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import StateSpace, as_statespace, balanced, linf_norm, parallel, state_scaling
+from .._lti import StateSpace, _linf_norm, as_statespace, balanced, parallel, state_scaling
 from ._hinf_riccati import _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
 
 __all__ = [
@@ -480,13 +480,6 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
             raise np.linalg.LinAlgError(f"singular matrix (zgesv info {info})")
         out[i] = c @ x[:, 0] + d
     return out
-
-
-def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> float:
-    """``sup_w |F(jw)|`` (:func:`toolbox._lti.linf_norm`, the algorithm of SLICOT
-    ab13dd, relative tolerance 1e-10; the L-infinity norm, also of an
-    unstable F), inf with a pole on the axis."""
-    return linf_norm(StateSpace(A, B, C, D), tol=1e-10)
 
 
 def loop_margins(G: Any, K: Any) -> LoopMargins:
