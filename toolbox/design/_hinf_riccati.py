@@ -527,13 +527,13 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12,
                             f"(e.g. 1e-4 times the crossover frequency)")
     for lam in modes + [0j]:
         M = P.A - 1j * lam.imag * np.eye(n) if lam.imag else P.A   # real at s = 0
-        where = _where(lam)
         if _rank_defect(_blocks2x2(M, P.B2, P.C1, P.D12), tol):
-            problems.append(f"A3 fails: the weighted plant has an invariant zero at {where}: "
-                            f"move the pole or zero of w2/w3 (or of G) off the imaginary axis")
+            problems.append(f"A3 fails: the weighted plant has an invariant zero at "
+                            f"{_where(lam)}: move the pole or zero of w2/w3 (or of G) off "
+                            f"the imaginary axis")
         if _rank_defect(_blocks2x2(M, P.B1, P.C2, P.D21).T, tol):
             problems.append(f"A4 fails: {_blame_mode(P, lam) if modes else 'the plant'} "
-                            f"gives a rank loss at {where}: move its pole to a small "
+                            f"gives a rank loss at {_where(lam)}: move its pole to a small "
                             f"negative value")
     s12, s21 = (None, None) if d_sv is None else d_sv
     if _rank_defect(P.D12, tol, s12):
@@ -589,7 +589,7 @@ def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
 # --------------------------------------------------------------------------
 # normalisation eq (65)-(67)
 # --------------------------------------------------------------------------
-@dataclass
+@dataclass(slots=True)
 class _Normalised:
     P: PartitionedPlant          # normalised plant, D12 = [0; I], D21 = [0 I], D22 = 0
     R12inv: np.ndarray           # u = R12inv u~
@@ -746,7 +746,7 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     return Xt.T, wr[:n], wi[:n]
 
 
-@dataclass
+@dataclass(slots=True)
 class HinfFeasibility:
     """Outcome of the tests of Theorem 1 of paper 003 at one gamma.
 
@@ -872,7 +872,7 @@ def _spectral_radius(M: np.ndarray) -> float:
     return float(_amax(np.hypot(wr, wi)))
 
 
-@dataclass
+@dataclass(slots=True)
 class _Prepared:
     """Balanced and normalised copy of a plant, reused across gammas."""
 
