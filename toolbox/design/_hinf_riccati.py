@@ -437,16 +437,17 @@ class AssumptionReport:
                             "H-infinity problem hold", "; ".join(self.problems))
 
 
-def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
+def _imag_axis_modes(A: np.ndarray, tol: float) -> list[complex]:
     """Eigenvalues of A within ``tol`` (relative to max(1, the largest |eigenvalue|))
     of the imaginary axis."""
     if A.shape[0] == 0:
-        return np.zeros(0, complex)
+        return []
     wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
-    on_axis = np.abs(wr) <= tol * max(1.0, _amax(np.hypot(wr, wi)))
-    return (wr[on_axis] + 1j * wi[on_axis]) if on_axis.any() else np.zeros(0, complex)
+    wr, wi = wr.tolist(), wi.tolist()       # a few: scalar code beats array calls
+    lim = tol * max(1.0, *map(math.hypot, wr, wi))
+    return [complex(a, b) for a, b in zip(wr, wi) if abs(a) <= lim]
 
 
 def _rank_defect(M: np.ndarray, tol: float, sv: np.ndarray | None = None) -> bool:
@@ -514,7 +515,7 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12,
     D21 when already computed (by the SVDs the normalisation uses)."""
     problems: list[str] = []
     n = P.nx
-    modes = list(_imag_axis_modes(P.A, tol))
+    modes = _imag_axis_modes(P.A, tol)
     for lam in modes:
         M = P.A - 1j * lam.imag * np.eye(n)
         src, where = _blame_mode(P, lam), _where(lam)
@@ -808,16 +809,17 @@ class _GammaFree:
 
 def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     d11 = _d11_blocks(Pn)
-    D1111, D1112, D1121, _ = d11
+    r, c = d11[0].shape
     B = np.concatenate([Pn.B1, Pn.B2], axis=1)
     C = np.concatenate([Pn.C1, Pn.C2])
     D1s = np.concatenate([Pn.D11, Pn.D12], axis=1)
     Ds1 = np.concatenate([Pn.D11, Pn.D21])
-    bound = max(_sigma_max(np.concatenate([D1111, D1112], axis=1)),
-                _sigma_max(np.concatenate([D1111, D1121])))
+    # [D1111 D1112] and [D1111; D1121] are the first rows and columns of D11
+    bound = max(_sigma_max(Pn.D11[:r]), _sigma_max(Pn.D11[:, :c]))
     m1, p1 = Pn.nw, Pn.nz
-    Ew, Ez = np.eye(m1 + Pn.nu), np.eye(p1 + Pn.ny)
-    Ew[m1:, m1:] = Ez[p1:, p1:] = 0.0
+    Ew, Ez = np.zeros((m1 + Pn.nu,) * 2), np.zeros((p1 + Pn.ny,) * 2)
+    Ew.flat[:m1 * (Ew.shape[0] + 1):Ew.shape[0] + 1] = 1.0      # diag(I_m1, 0)
+    Ez.flat[:p1 * (Ez.shape[0] + 1):Ez.shape[0] + 1] = 1.0      # diag(I_p1, 0)
     return _GammaFree(B=B, C=C, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
                       Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),
                       Hy=_hamiltonian(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Pn.B1 @ Ds1.T),
@@ -1460,8 +1462,8 @@ _BOUND_GRID = np.logspace(-4, 9, 4000)
 _BOUND_GRID.flags.writeable = False
 
 
-def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
-    """SISO responses at the points ``s``, all frequencies at once (issue 13:
+def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
+    """SISO responses at the frequencies ``w`` (rad/s), all at once (issue 13:
     python-control converted each weight to state space and called SLICOT
     tb05ad per frequency). The transfer functions are evaluated together from
     their polynomials by Horner's rule on one (polynomials x points) array (rows
@@ -1470,6 +1472,7 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
     loaded machine); a state-space system goes through
     its modal form (:meth:`toolbox._lti.StateSpace.evaluate`); a number is
     constant."""
+    s = 1j * w
     polys, out = [], []
     for sys in systems:
         if np.isscalar(sys):
@@ -1487,8 +1490,12 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
         if deg == 0:
             vals = np.broadcast_to(coef, (len(polys), s.size)).astype(complex)
         else:
-            vals = coef[:, :1] * s                              # first Horner step fused
-            vals += coef[:, 1:2]
+            # first Horner step, c0 s + c1 = c1 + j c0 w on the imaginary axis: the
+            # same numbers as the complex product and sum (whose other terms are
+            # exact zeros), at the cost of one real product
+            vals = np.empty((len(polys), s.size), complex)
+            vals.real = coef[:, 1:2]
+            np.multiply(coef[:, :1], w, out=vals.imag)
         for k in range(2, deg + 1):
             vals *= s
             vals += coef[:, k:k + 1]
@@ -1516,11 +1523,11 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
         Keys ``"S"``, ``"KS"``, ``"T"`` for the weights given.
     """
     w = _BOUND_GRID if freqs is None else np.asarray(freqs, float)
-    s = 1j * w
     weights = [wt for wt in (w1, w2, w3) if wt is not None]
-    g, k, *wv = _freqresps([G, K] + weights, s)
-    S = 1.0 / (1.0 + g * k)
-    funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (g * k * S, w3)}
+    g, k, *wv = _freqresps([G, K] + weights, w)
+    gk = g * k
+    S = 1.0 / (1.0 + gk)
+    funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (gk * S, w3)}
     out = {}
     for name, (f, wt) in funcs.items():
         if wt is None:
