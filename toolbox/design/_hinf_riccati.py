@@ -38,7 +38,8 @@ import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
                                  dgesdd as _dgesdd, dgesv as _dgesv, dlange as _dlange,
                                  dggev as _dggev, dpotrf as _dpotrf,
-                                 dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd)
+                                 dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
+                                 zgesv as _zgesv)
 
 from .._lti import (StateSpace, TransferFunction, _linf_norm, as_statespace, balanced,
                     diagonal_scaling)
@@ -217,8 +218,9 @@ def _eigvals(A: np.ndarray) -> np.ndarray:
 
 
 def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """A^-1 B (LAPACK dgesv); LinAlgError when A is exactly singular."""
-    _, _, x, info = _dgesv(A, B)
+    """A^-1 B (LAPACK dgesv, zgesv for a complex A); LinAlgError when A is
+    exactly singular."""
+    _, _, x, info = (_zgesv if A.dtype.kind == "c" else _dgesv)(A, B)
     if info != 0:
         raise np.linalg.LinAlgError(f"singular matrix (dgesv info {info})")
     return x
@@ -281,7 +283,7 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     M = np.zeros((n + C.shape[0], n + B.shape[1]))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
     N = np.zeros_like(M)
-    N[range(n), range(n)] = 1.0
+    N.reshape(-1)[:n * (N.shape[1] + 1):N.shape[1] + 1] = 1.0      # diag(I, 0) (a view)
     return _pencil_eigvals(M, N)
 
 

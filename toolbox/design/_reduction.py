@@ -40,8 +40,8 @@ def _zpk(K: Any) -> tuple[np.ndarray, np.ndarray, float]:
     A, B, C, D = _ss_blocks(K)
     z, p = _zeros(A, B, C, D), _eigvals(A)
     # leading gain from the value at a test point away from poles and zeros
-    s0 = 1j * (1.0 + 3.0 * max([1.0] + [abs(x) for x in np.r_[z, p]]))
-    val = complex(D[0, 0]) + (complex((C @ np.linalg.solve(s0 * np.eye(A.shape[0]) - A, B))[0, 0])
+    s0 = 1j * (1.0 + 3.0 * max([1.0] + [abs(x) for x in z.tolist() + p.tolist()]))
+    val = complex(D[0, 0]) + (complex((C @ _solve(s0 * np.eye(A.shape[0]) - A, B))[0, 0])
                               if A.shape[0] else 0.0)
     k = val * np.prod(s0 - p) / np.prod(s0 - z)
     return z, p, float(k.real)
@@ -59,17 +59,30 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
     z, p = _real_conj(z), _real_conj(p)
     if p.size == 0:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(k)]])
-    den = np.real_if_close(np.poly(p))
-    num = float(k) * (np.real_if_close(np.poly(z)) if z.size else np.ones(1))
+    den = _poly(p)
+    num = float(k) * (_poly(z) if z.size else np.ones(1))
     num = np.concatenate([np.zeros(den.size - num.size), num])
     n = p.size
     A = np.zeros((n, n))
     A[0] = -den[1:]
-    A[range(1, n), range(n - 1)] = 1.0
+    A.reshape(-1)[n::n + 1] = 1.0                   # the subdiagonal (a view)
     B = np.zeros((n, 1))
     B[0, 0] = 1.0
     C = (num[1:] - num[0] * den[1:])[None, :]
     return (*balanced(A, B, C), np.array([[num[0]]]))
+
+
+def _poly(r: np.ndarray) -> np.ndarray:
+    """``np.real_if_close(np.poly(r))``, the coefficients of ``prod(s - r_i)``: for
+    real roots (the usual case of these controllers) the same products
+    (``np.convolve`` in complex, as ``np.poly`` does) without its argument
+    handling and conjugate-pair sort, ~10 us a call (issue 13)."""
+    if r.imag.any():
+        return np.real_if_close(np.poly(r))
+    a = np.ones(1, complex)
+    for x in r.tolist():
+        a = np.convolve(a, np.array([1.0, -x], complex))
+    return a.real.copy()
 
 
 def _real_conj(r: np.ndarray) -> np.ndarray:
@@ -471,10 +484,10 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
     if w.size == 0:
         return out
     n = A.shape[0]
-    Bc, c = B.astype(complex), C[0]
+    Bc, c, minus_A = B.astype(complex), C[0], -A.astype(complex)
     for i, wi in enumerate(w):
-        M = -A.astype(complex)
-        M.flat[::n + 1] += 1j * wi
+        M = minus_A.copy()
+        M.reshape(-1)[::n + 1] += 1j * wi               # the diagonal (a view: M is contiguous)
         _, _, x, info = _zgesv(M, Bc, overwrite_a=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"singular matrix (zgesv info {info})")
