@@ -729,6 +729,8 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     except np.linalg.LinAlgError:                           # singular r: the pencil route
         return None, None, None
     H = h.H0 - h.W @ rv
+    if not H[n:, :n].any():
+        return _ric_zero(H[:n, :n])
     # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
     # dgees's own sorting does, without a Python callback per eigenvalue
     T, _, wr, wi, Z, _, info = _dgees(_no_select, H, sort_t=0, overwrite_a=1)
@@ -747,6 +749,20 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     if not rcond >= 1e-14:
         return None, None, None
     return Xt.T, wr[:n], wi[:n]
+
+
+def _ric_zero(a_cl: np.ndarray) -> tuple[np.ndarray | None, ...]:
+    """:func:`_ric_schur_h` when the constant term ``q - s r^-1 s^T`` is exactly
+    zero (the Y equation (19) when w reaches y directly, D21 square: paper 003's
+    Y is 0): H is then block upper triangular with diagonal blocks
+    ``a_cl = a - b r^-1 s^T`` and ``-a_cl^T``, and X = 0 is the stabilising
+    solution iff ``a_cl`` is Hurwitz; its eigenvalues are the closed-loop
+    poles. One eigenvalue problem of order n instead of the Schur form of
+    order 2n; otherwise ``(None, None, None)`` (no stabilising solution)."""
+    wr, wi, _, _, info = _dgeev(a_cl, compute_vl=0, compute_vr=0)
+    if info != 0 or not (wr < 0.0).all():
+        return None, None, None
+    return np.zeros(a_cl.shape), wr, wi
 
 
 @dataclass(slots=True)
