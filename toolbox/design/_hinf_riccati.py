@@ -729,7 +729,7 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     except np.linalg.LinAlgError:                           # singular r: the pencil route
         return None, None, None
     H = h.H0 - h.W @ rv
-    if not H[n:, :n].any():
+    if not np.count_nonzero(H[n:, :n]):   # count_nonzero: no Python-level dispatch
         return _ric_zero(H[:n, :n])
     # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
     # dgees's own sorting does, without a Python callback per eigenvalue
@@ -1057,7 +1057,7 @@ def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray,
     t = prep.t[:, None]
     Ah, Bh, Ch = Ah * (t / prep.t), Bh * t, Ch / prep.t      # exact: powers of two
     D22 = prep.P.D22
-    if D22.any():
+    if np.count_nonzero(D22):
         # loop shift u = K0 (y - D22 u): M = (I + Dk D22)^-1, u = M (Ck xk + Dk y)
         M = np.linalg.inv(np.eye(Dh.shape[0]) + Dh @ D22)
         Ah, Bh = Ah - Bh @ D22 @ M @ Ch, Bh @ (np.eye(D22.shape[0]) - D22 @ M @ Dh)
