@@ -545,7 +545,7 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12,
     if _rank_defect(P.D21.T, tol, s21):
         problems.append("A2 fails: D21 has not full row rank: the measurement must contain "
                         "the exogenous input directly (y = r - G u gives D21 = 1)")
-    problems = list(dict.fromkeys(problems))
+    problems = list(dict.fromkeys(problems)) if problems else problems
     return AssumptionReport(ok=not problems, problems=problems)
 
 
@@ -618,7 +618,7 @@ def _normalise(P: PartitionedPlant, svds: tuple[tuple, tuple] | None = None) -> 
     R12inv, R21inv = V12t.T / s12, U21.T / s21[:, None]
     Pn = P._derived(B1=P.B1 @ VwT, B2=P.B2 @ R12inv, C1=Uz @ P.C1, C2=R21inv @ P.C2,
                     D11=Uz @ P.D11 @ VwT, D12=Uz @ P.D12 @ R12inv,
-                    D21=R21inv @ P.D21 @ VwT, D22=np.zeros_like(P.D22))
+                    D21=R21inv @ P.D21 @ VwT, D22=np.zeros(P.D22.shape))
     return _Normalised(P=Pn, R12inv=R12inv, R21inv=R21inv)
 
 
@@ -702,7 +702,8 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
         F = np.linalg.solve(r, b.T @ X + s.T)
         ev = np.linalg.eigvals(a - b @ F)
         wr, wi = ev.real, ev.imag
-    X = 0.5 * (X + X.T)
+    X = X + X.T
+    X *= 0.5                                  # 0.5 (X + X^T), one temporary fewer
     if wr.size and _amax(wr) >= -1e-12 * max(1.0, _amax(np.hypot(wr, wi))):
         return None, "the solution is not stabilising"
     return X, ""
