@@ -850,7 +850,6 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
     """Theorem 1 on an already normalised, balanced plant (``gf``: its
     gamma-free products, formed here when not given)."""
     w = _gamma_free(Pn) if gf is None else gf
-    n = Pn.nx
     if w.bound >= gamma:
         return HinfFeasibility(gamma, False, "D11",
                                f"condition (a) of Theorem 1 fails: max(sigma(D1111 D1112), "
@@ -872,11 +871,13 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "Y_not_stabilising",
                                f"the Y Riccati equation (19) has no stabilising solution "
                                f"at gamma = {gamma:.6g}: {why}", X=X)
-    if not _psd(Y):
+    # Y = 0 (see _ric_zero) is >= 0 with rho(XY) = 0: no eigenvalue problem for either
+    nonzero_y = np.count_nonzero(Y)
+    if nonzero_y and not _psd(Y):
         return HinfFeasibility(gamma, False, "Y_not_psd",
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, Y=Y)
-    rho = _spectral_radius(X @ Y) if n else 0.0
+    rho = _spectral_radius(X @ Y) if nonzero_y else 0.0
     if rho >= g2:
         return HinfFeasibility(gamma, False, "rho",
                                f"rho(XY) = {rho:.6g} >= gamma^2 = {g2:.6g}",
