@@ -409,8 +409,8 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
     labels = ["G"] * ng
     for (name, _), sz in zip(ws, sizes[1:]):
         labels += [name] * sz
-    return PartitionedPlant(A=A, B1=B1, B2=B2, C1=np.vstack(C1_rows),
-                            C2=C_e, D11=np.vstack(D11_rows), D12=np.vstack(D12_rows),
+    return PartitionedPlant(A=A, B1=B1, B2=B2, C1=np.concatenate(C1_rows),
+                            C2=C_e, D11=np.concatenate(D11_rows), D12=np.concatenate(D12_rows),
                             D21=De_w, D22=De_u, state_labels=tuple(labels))
 
 
@@ -1342,8 +1342,8 @@ def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ..
     Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
     Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
     A = _blocks2x2(P.A + P.B2 @ Ux, P.B2 @ Uk, Bk @ Yx, Ak + Bk @ Yk)
-    B = np.vstack([P.B1 + P.B2 @ Uw, Bk @ Yw])
-    C = np.hstack([P.C1 + P.D12 @ Ux, P.D12 @ Uk])
+    B = np.concatenate([P.B1 + P.B2 @ Uw, Bk @ Yw])
+    C = np.concatenate([P.C1 + P.D12 @ Ux, P.D12 @ Uk], axis=1)
     return A, B, C, P.D11 + P.D12 @ Uw
 
 
@@ -1359,8 +1359,8 @@ def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> fl
     n = A.shape[0]
     if n == 0:
         return float(np.linalg.norm(D, 2)) if D.size else 0.0
-    ev = _eigvals(A)
-    if np.any(ev.real >= 0) or np.any(np.isclose(ev.real, 0.0)):
+    # a pole with Re >= 0 or within np.isclose's 1e-8 of the axis: Re >= -1e-8
+    if _amax(_eigvals(A).real) >= -1e-8:
         return float("inf")
     return _linf_norm(A, B, C, D)
 

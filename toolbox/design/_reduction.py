@@ -441,7 +441,7 @@ def _series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:
     n1, n2 = A1.shape[0], A2.shape[0]
     A = np.zeros((n1 + n2, n1 + n2))
     A[:n1, :n1], A[n1:, n1:], A[n1:, :n1] = A1, A2, B2 @ C1
-    return (A, np.vstack([B1, B2 @ D1]), np.hstack([D2 @ C1, C2]), D2 @ D1)
+    return (A, np.concatenate([B1, B2 @ D1]), np.concatenate([D2 @ C1, C2], axis=1), D2 @ D1)
 
 
 def _imag_axis_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float) -> np.ndarray:
@@ -472,7 +472,7 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     Ap = np.zeros((2 * n, 2 * n))
     Ap[:n, :n], Ap[n:, n:] = A, Am
     gain = _imag_axis_zeros(Ag, Bg, Cg, float(Dg[0, 0]) - 1.0)
-    phase = _imag_axis_zeros(Ap, np.vstack([B, Bm]), np.hstack([C, -C]), 0.0)
+    phase = _imag_axis_zeros(Ap, np.concatenate([B, Bm]), np.concatenate([C, -C], axis=1), 0.0)
     return gain, phase
 
 
@@ -532,7 +532,7 @@ def _margins(g: tuple, k: tuple) -> LoopMargins:
     gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
     peak = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]))
-    if np.any(np.abs(_eigvals(A)) < 1e-12):         # an integrator: no static error
+    if np.count_nonzero(np.abs(_eigvals(A)) < 1e-12):   # an integrator: no static error
         ess = 0.0
     else:
         ess = float(abs(1.0 / (1.0 + d - float((C @ _solve(A, B))[0, 0]))))
@@ -609,6 +609,6 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
         if np.isfinite(x) and not y >= (1 - max_loss) * x:
             flags.append(f"{name} fell from {x:.4g} to {y:.4g} (> {100 * max_loss:g} % loss)")
     A, B, C, D = _series(kr, g)
-    if np.any(_eigvals(A - B @ C / (1.0 + D[0, 0])).real >= 0):
+    if np.count_nonzero(_eigvals(A - B @ C / (1.0 + D[0, 0])).real >= 0):
         flags.append("the reduced controller destabilises the loop")
     return MarginComparison(a, b, max_loss, flags)
