@@ -837,8 +837,8 @@ def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     bound = max(_sigma_max(Pn.D11[:r]), _sigma_max(Pn.D11[:, :c]))
     m1, p1 = Pn.nw, Pn.nz
     Ew, Ez = np.zeros((m1 + Pn.nu,) * 2), np.zeros((p1 + Pn.ny,) * 2)
-    Ew.flat[:m1 * (Ew.shape[0] + 1):Ew.shape[0] + 1] = 1.0      # diag(I_m1, 0)
-    Ez.flat[:p1 * (Ez.shape[0] + 1):Ez.shape[0] + 1] = 1.0      # diag(I_p1, 0)
+    Ew.reshape(-1)[:m1 * (Ew.shape[0] + 1):Ew.shape[0] + 1] = 1.0    # diag(I_m1, 0)
+    Ez.reshape(-1)[:p1 * (Ez.shape[0] + 1):Ez.shape[0] + 1] = 1.0    # diag(I_p1, 0)
     return _GammaFree(B=B, C=C, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
                       Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),
                       Hy=_hamiltonian(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Pn.B1 @ Ds1.T),
