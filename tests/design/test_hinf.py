@@ -61,6 +61,16 @@ def test_partitioned_plant_names_bad_block():
                            D12=np.zeros((3, 1)), D21=np.ones((1, 1)), D22=np.zeros((1, 1)))
 
 
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_partitioned_plant_names_non_finite_block(bad):
+    B2 = np.ones((2, 1))
+    B2[1, 0] = bad
+    with pytest.raises(ValueError, match="block B2 has NaN or inf"):
+        H.PartitionedPlant(A=np.zeros((2, 2)), B1=np.ones((2, 1)), B2=B2,
+                           C1=np.ones((3, 2)), C2=np.ones((1, 2)), D11=np.zeros((3, 1)),
+                           D12=np.zeros((3, 1)), D21=np.ones((1, 1)), D22=np.zeros((1, 1)))
+
+
 def test_partitioned_plant_is_frozen(Pq):
     with pytest.raises(Exception):
         Pq.A = np.eye(4)
