@@ -31,7 +31,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg
-from scipy.linalg.lapack import dgebal as _dgebal, dgeev as _dgeev
+from scipy.linalg.lapack import dgebal as _dgebal, dgeev as _dgeev, dgesv as _dgesv, zgesv as _zgesv
 
 __all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d",
            "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
@@ -50,8 +50,10 @@ _MODAL_COND_MAX = 1e6
 
 
 def diagonal_scaling(M: np.ndarray) -> np.ndarray:
-    """Diagonal scaling of LAPACK dgebal without permutation (powers of two),
-    as ``scipy.linalg.matrix_balance(M, permute=False, separate=True)``."""
+    """Diagonal scaling of LAPACK dgebal without permutation, as
+    ``scipy.linalg.matrix_balance(M, permute=False, separate=True)``: exact
+    powers of two (dgebal multiplies by its radix ``SCLFAC = 2``), so that
+    ratios of them are exact and need no rounding."""
     _, _, _, scale, info = _dgebal(M, scale=1, permute=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgebal failed (info {info})")
@@ -68,7 +70,7 @@ def state_scaling(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
     M = np.zeros((n + 1, n + 1))
     M[:n, :n], M[:n, n:], M[n:, :n] = A, B, C
     scale = diagonal_scaling(M)
-    return 2.0 ** np.round(np.log2(scale[:n] / scale[n]))
+    return scale[:n] / scale[n]                  # exact: powers of two
 
 
 def balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -93,9 +95,10 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     :data:`_MODAL_COND_MAX`; otherwise callers solve per point.
     """
     lam, V = np.linalg.eig(A)
-    try:
-        Vi = np.linalg.inv(V)
-    except np.linalg.LinAlgError:                    # defective A
+    # V^-1 by LAPACK gesv on the identity, as numpy's ``inv`` (without its
+    # ~3 us of dispatch); eig's V is real when every eigenvalue is
+    _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, np.eye(A.shape[0]))
+    if info != 0:                                    # defective A
         return None
     if A.shape[0] * np.abs(Vi).sum(0).max() > _MODAL_COND_MAX:
         return None
@@ -132,6 +135,20 @@ class StateSpace:
     C: np.ndarray
     D: np.ndarray
     dt: float | None = None
+
+    @classmethod
+    def _unchecked(cls, A: np.ndarray, B: np.ndarray, C: np.ndarray,
+                   D: np.ndarray) -> "StateSpace":
+        """A continuous system of float arrays of consistent shapes that the
+        caller has just computed and hands over (made read-only here, not
+        copied): the checks and copies of the constructor cost ~4 us, and the
+        H-infinity synthesis builds several small systems per design."""
+        new = object.__new__(cls)
+        for k, v in zip("ABCD", (A, B, C, D)):
+            v.flags.writeable = False
+            object.__setattr__(new, k, v)
+        object.__setattr__(new, "dt", None)
+        return new
 
     def __post_init__(self) -> None:
         A, B, C, D = (_matrix(getattr(self, k), k) for k in "ABCD")
@@ -828,11 +845,12 @@ def _gain_function(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     single row or column needs no SVD: its largest singular value is its
     2-norm.
     """
-    g = StateSpace(A, B, C, D)
-    if g.modal is None:
+    modal = modal_form(A, B, C)
+    if modal is None:
+        g = StateSpace(A, B, C, D)
         return (np.linalg.eigvals(A),
                 lambda w: _largest_sv(np.moveaxis(g.freqresp(w), -1, 0)))
-    lam, R = g.modal
+    lam, R = modal
     p, m = D.shape
     if p == m == 1:
         r, d = R[0, 0], D[0, 0]
@@ -959,10 +977,20 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
     imaginary axis gives ``inf``.
     """
     g = as_statespace(sys)
-    A, B, C, D = g.A, g.B, g.C, g.D
-    dnorm = (abs(float(D[0, 0])) if D.shape == (1, 1)
-             else float(np.linalg.norm(D, 2)) if D.size else 0.0)
-    if g.nstates == 0 or D.size == 0:
+    return _linf_norm(g.A, g.B, g.C, g.D, tol)
+
+
+def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+               tol: float = 1e-10) -> float:
+    """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` (no system
+    object built: the synthesis calls it on arrays it has just formed)."""
+    if D.shape == (1, 1):
+        dnorm = abs(float(D[0, 0]))
+    elif D.shape[0] == 1 or D.shape[1] == 1:         # a row or column: sigma_max = 2-norm
+        dnorm = float(np.sqrt((D * D).sum()))
+    else:
+        dnorm = float(np.linalg.norm(D, 2)) if D.size else 0.0
+    if A.shape[0] == 0 or D.size == 0:
         return dnorm
     lam, gains = _gain_function(A, B, C, D)
     lam = lam.tolist()                               # a few: scalar code is cheaper

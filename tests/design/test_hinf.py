@@ -61,6 +61,16 @@ def test_partitioned_plant_names_bad_block():
                            D12=np.zeros((3, 1)), D21=np.ones((1, 1)), D22=np.zeros((1, 1)))
 
 
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_partitioned_plant_names_non_finite_block(bad):
+    B2 = np.ones((2, 1))
+    B2[1, 0] = bad
+    with pytest.raises(ValueError, match="block B2 has NaN or inf"):
+        H.PartitionedPlant(A=np.zeros((2, 2)), B1=np.ones((2, 1)), B2=B2,
+                           C1=np.ones((3, 2)), C2=np.ones((1, 2)), D11=np.zeros((3, 1)),
+                           D12=np.zeros((3, 1)), D21=np.ones((1, 1)), D22=np.zeros((1, 1)))
+
+
 def test_partitioned_plant_is_frozen(Pq):
     with pytest.raises(Exception):
         Pq.A = np.eye(4)
@@ -198,6 +208,29 @@ def test_hamiltonian_schur_route_matches_scipy_care(seed):
     F = np.linalg.solve(r, b.T @ X + s.T)                       # reported poles = a - b F
     assert np.allclose(np.sort_complex(ev), np.sort_complex(np.linalg.eigvals(a - b @ F)),
                        rtol=1e-8, atol=1e-10)
+
+
+@pytest.mark.parametrize("shift", [-3.0, 3.0])
+def test_riccati_with_zero_constant_term(shift):
+    """q = s r^-1 s^T exactly (the Y equation of a plant whose w reaches y
+    directly): X = 0 when a - b r^-1 s^T is Hurwitz, the order-n shortcut
+    agreeing with scipy's solve_continuous_are; otherwise no stabilising
+    solution from the shortcut (the pencil route of _ric has the last word,
+    as for a failed Schur route)."""
+    rng = np.random.default_rng(7)
+    n = 4
+    a_cl = rng.standard_normal((n, n)) + shift * np.eye(n)
+    s = np.vstack([np.eye(1), np.zeros((n - 1, 1))])             # q = s s^T exactly (r = 1)
+    a, b, q, r = a_cl + s @ s.T, s.copy(), s @ s.T, np.eye(1)
+    poles = np.linalg.eigvals(a - b @ s.T)
+    X, ev = H._ric_schur(a, b, q, r, s)
+    if poles.real.max() < 0:
+        assert X is not None and not X.any()
+        ref = sla.solve_continuous_are(a, b, q, r, s=s)
+        assert np.max(np.abs(ref)) <= 1e-10
+        assert np.allclose(np.sort_complex(ev), np.sort_complex(poles))
+    else:
+        assert X is None
 
 
 def test_riccati_without_stabilising_solution_is_refused():

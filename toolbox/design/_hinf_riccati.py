@@ -27,6 +27,7 @@ Damaged or wrong equations of the paper, re-derived here:
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -35,13 +36,13 @@ from typing import Any, Literal
 import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
-                                 dgesdd as _dgesdd, dgesv as _dgesv,
-                                 dgetrf as _dgetrf, dlange as _dlange,
-                                 dgetrs as _dgetrs, dggev as _dggev, dpotrf as _dpotrf,
-                                 dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd)
+                                 dgesdd as _dgesdd, dgesv as _dgesv, dlange as _dlange,
+                                 dggev as _dggev, dpotrf as _dpotrf,
+                                 dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
+                                 zgesv as _zgesv)
 
-from .._lti import (StateSpace, TransferFunction, as_statespace, balanced, diagonal_scaling,
-                    linf_norm)
+from .._lti import (StateSpace, TransferFunction, _linf_norm, as_statespace, balanced,
+                    diagonal_scaling)
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -120,13 +121,16 @@ class PartitionedPlant:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "state_labels", tuple(self.state_labels))
-        for name in ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22"):
+        for name in _BLOCKS:
             arr = np.asarray(getattr(self, name), dtype=float)
             if arr.ndim < 2:
                 arr = arr.reshape(1, -1) if arr.size else arr.reshape(0, 0)
-            if not np.all(np.isfinite(arr)):
-                raise ValueError(f"PartitionedPlant: block {name} has NaN or inf entries")
             object.__setattr__(self, name, arr)
+        # one finiteness test of all the entries (nine tests cost ~15 us); the
+        # culprit is sought only when it fails
+        if not np.isfinite(np.concatenate([getattr(self, k).ravel() for k in _BLOCKS])).all():
+            name = next(k for k in _BLOCKS if not np.isfinite(getattr(self, k)).all())
+            raise ValueError(f"PartitionedPlant: block {name} has NaN or inf entries")
         n = self.A.shape[0]
         nw, nu = self.B1.shape[1], self.B2.shape[1]
         nz, ny = self.C1.shape[0], self.C2.shape[0]
@@ -197,6 +201,15 @@ class PartitionedPlant:
 # scipy's wrappers (argument checks, dispatch) cost 3-10 times the LAPACK work
 # itself (issue 13). Inputs must be finite float arrays (they are built here).
 # --------------------------------------------------------------------------
+@functools.lru_cache(maxsize=64)
+def _eye(n: int) -> np.ndarray:
+    """Read-only identity of order n (``np.eye`` builds one in Python, ~1 us,
+    and the controller formulae need several per call)."""
+    eye = np.eye(n)
+    eye.flags.writeable = False
+    return eye
+
+
 def _eigvals(A: np.ndarray) -> np.ndarray:
     """Eigenvalues of a real square matrix (LAPACK dgeev)."""
     if A.shape[0] == 0:
@@ -208,8 +221,9 @@ def _eigvals(A: np.ndarray) -> np.ndarray:
 
 
 def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """A^-1 B (LAPACK dgesv); LinAlgError when A is exactly singular."""
-    _, _, x, info = _dgesv(A, B)
+    """A^-1 B (LAPACK dgesv, zgesv for a complex A); LinAlgError when A is
+    exactly singular."""
+    _, _, x, info = (_zgesv if A.dtype.kind == "c" else _dgesv)(A, B)
     if info != 0:
         raise np.linalg.LinAlgError(f"singular matrix (dgesv info {info})")
     return x
@@ -217,7 +231,7 @@ def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 def _inv(A: np.ndarray) -> np.ndarray:
     """A^-1 (LAPACK dgesv on the identity, as numpy's ``inv``)."""
-    return _solve(A, np.eye(A.shape[0]))
+    return _solve(A, _eye(A.shape[0]))
 
 
 def _svdvals(M: np.ndarray) -> np.ndarray:
@@ -272,9 +286,13 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     M = np.zeros((n + C.shape[0], n + B.shape[1]))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
     N = np.zeros_like(M)
-    N[range(n), range(n)] = 1.0
+    N.reshape(-1)[:n * (N.shape[1] + 1):N.shape[1] + 1] = 1.0      # diag(I, 0) (a view)
     return _pencil_eigvals(M, N)
 
+
+#: maximum of a non-empty array: the ufunc's reduce, without ``ndarray.max``'s
+#: Python-level dispatch (~1 us a call, several per gamma)
+_amax = np.maximum.reduce
 
 _BLOCKS = ("A", "B1", "B2", "C1", "C2", "D11", "D12", "D21", "D22")
 
@@ -394,8 +412,8 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
     labels = ["G"] * ng
     for (name, _), sz in zip(ws, sizes[1:]):
         labels += [name] * sz
-    return PartitionedPlant(A=A, B1=B1, B2=B2, C1=np.vstack(C1_rows),
-                            C2=C_e, D11=np.vstack(D11_rows), D12=np.vstack(D12_rows),
+    return PartitionedPlant(A=A, B1=B1, B2=B2, C1=np.concatenate(C1_rows),
+                            C2=C_e, D11=np.concatenate(D11_rows), D12=np.concatenate(D12_rows),
                             D21=De_w, D22=De_u, state_labels=tuple(labels))
 
 
@@ -424,16 +442,17 @@ class AssumptionReport:
                             "H-infinity problem hold", "; ".join(self.problems))
 
 
-def _imag_axis_modes(A: np.ndarray, tol: float) -> np.ndarray:
+def _imag_axis_modes(A: np.ndarray, tol: float) -> list[complex]:
     """Eigenvalues of A within ``tol`` (relative to max(1, the largest |eigenvalue|))
     of the imaginary axis."""
     if A.shape[0] == 0:
-        return np.zeros(0, complex)
+        return []
     wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
-    on_axis = np.abs(wr) <= tol * max(1.0, np.hypot(wr, wi).max())
-    return (wr[on_axis] + 1j * wi[on_axis]) if on_axis.any() else np.zeros(0, complex)
+    wr, wi = wr.tolist(), wi.tolist()       # a few: scalar code beats array calls
+    lim = tol * max(1.0, *map(math.hypot, wr, wi))
+    return [complex(a, b) for a, b in zip(wr, wi) if abs(a) <= lim]
 
 
 def _rank_defect(M: np.ndarray, tol: float, sv: np.ndarray | None = None) -> bool:
@@ -501,7 +520,7 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12,
     D21 when already computed (by the SVDs the normalisation uses)."""
     problems: list[str] = []
     n = P.nx
-    modes = list(_imag_axis_modes(P.A, tol))
+    modes = _imag_axis_modes(P.A, tol)
     for lam in modes:
         M = P.A - 1j * lam.imag * np.eye(n)
         src, where = _blame_mode(P, lam), _where(lam)
@@ -514,13 +533,13 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12,
                             f"(e.g. 1e-4 times the crossover frequency)")
     for lam in modes + [0j]:
         M = P.A - 1j * lam.imag * np.eye(n) if lam.imag else P.A   # real at s = 0
-        where = _where(lam)
         if _rank_defect(_blocks2x2(M, P.B2, P.C1, P.D12), tol):
-            problems.append(f"A3 fails: the weighted plant has an invariant zero at {where}: "
-                            f"move the pole or zero of w2/w3 (or of G) off the imaginary axis")
+            problems.append(f"A3 fails: the weighted plant has an invariant zero at "
+                            f"{_where(lam)}: move the pole or zero of w2/w3 (or of G) off "
+                            f"the imaginary axis")
         if _rank_defect(_blocks2x2(M, P.B1, P.C2, P.D21).T, tol):
             problems.append(f"A4 fails: {_blame_mode(P, lam) if modes else 'the plant'} "
-                            f"gives a rank loss at {where}: move its pole to a small "
+                            f"gives a rank loss at {_where(lam)}: move its pole to a small "
                             f"negative value")
     s12, s21 = (None, None) if d_sv is None else d_sv
     if _rank_defect(P.D12, tol, s12):
@@ -529,7 +548,7 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12,
     if _rank_defect(P.D21.T, tol, s21):
         problems.append("A2 fails: D21 has not full row rank: the measurement must contain "
                         "the exogenous input directly (y = r - G u gives D21 = 1)")
-    problems = list(dict.fromkeys(problems))
+    problems = list(dict.fromkeys(problems)) if problems else problems
     return AssumptionReport(ok=not problems, problems=problems)
 
 
@@ -567,7 +586,7 @@ def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
     M[:n, n + m1:n + m] = P.B2
     M[n:n + p1, :n] = P.C1
     M[n + p1:n + p, :n] = P.C2
-    t = 2.0 ** np.round(np.log2(diagonal_scaling(M)[:n]))
+    t = diagonal_scaling(M)[:n]                  # powers of two
     ti = (1.0 / t)[:, None]                  # exact: t holds powers of two
     Ps = P._derived(A=P.A * (ti * t), B1=P.B1 * ti, B2=P.B2 * ti, C1=P.C1 * t, C2=P.C2 * t)
     return Ps, t
@@ -576,7 +595,7 @@ def balance_plant(P: PartitionedPlant) -> tuple[PartitionedPlant, np.ndarray]:
 # --------------------------------------------------------------------------
 # normalisation eq (65)-(67)
 # --------------------------------------------------------------------------
-@dataclass
+@dataclass(slots=True)
 class _Normalised:
     P: PartitionedPlant          # normalised plant, D12 = [0; I], D21 = [0 I], D22 = 0
     R12inv: np.ndarray           # u = R12inv u~
@@ -602,7 +621,7 @@ def _normalise(P: PartitionedPlant, svds: tuple[tuple, tuple] | None = None) -> 
     R12inv, R21inv = V12t.T / s12, U21.T / s21[:, None]
     Pn = P._derived(B1=P.B1 @ VwT, B2=P.B2 @ R12inv, C1=Uz @ P.C1, C2=R21inv @ P.C2,
                     D11=Uz @ P.D11 @ VwT, D12=Uz @ P.D12 @ R12inv,
-                    D21=R21inv @ P.D21 @ VwT, D22=np.zeros_like(P.D22))
+                    D21=R21inv @ P.D21 @ VwT, D22=np.zeros(P.D22.shape))
     return _Normalised(P=Pn, R12inv=R12inv, R21inv=R21inv)
 
 
@@ -686,8 +705,9 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
         F = np.linalg.solve(r, b.T @ X + s.T)
         ev = np.linalg.eigvals(a - b @ F)
         wr, wi = ev.real, ev.imag
-    X = 0.5 * (X + X.T)
-    if wr.size and wr.max() >= -1e-12 * max(1.0, np.hypot(wr, wi).max()):
+    X = X + X.T
+    X *= 0.5                                  # 0.5 (X + X^T), one temporary fewer
+    if wr.size and _amax(wr) >= -1e-12 * max(1.0, _amax(np.hypot(wr, wi))):
         return None, "the solution is not stabilising"
     return X, ""
 
@@ -713,6 +733,8 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     except np.linalg.LinAlgError:                           # singular r: the pencil route
         return None, None, None
     H = h.H0 - h.W @ rv
+    if not np.count_nonzero(H[n:, :n]):   # count_nonzero: no Python-level dispatch
+        return _ric_zero(H[:n, :n])
     # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
     # dgees's own sorting does, without a Python callback per eigenvalue
     T, _, wr, wi, Z, _, info = _dgees(_no_select, H, sort_t=0, overwrite_a=1)
@@ -723,17 +745,31 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     if info != 0 or sdim != n:
         return None, None, None
     Z11t = Z[:n, :n].T
-    lu, piv, info = _dgetrf(Z11t)
+    # X^T = Z11^-T Z21^T; dgesv keeps the LU factors for the condition estimate
+    lu, _, Xt, info = _dgesv(Z11t, Z[n:, :n].T)
     if info != 0:
         return None, None, None
     rcond, _ = _dgecon(lu, _dlange("1", Z11t))
     if not rcond >= 1e-14:
         return None, None, None
-    Xt, _ = _dgetrs(lu, piv, Z[n:, :n].T)                  # X^T = Z11^-T Z21^T
     return Xt.T, wr[:n], wi[:n]
 
 
-@dataclass
+def _ric_zero(a_cl: np.ndarray) -> tuple[np.ndarray | None, ...]:
+    """:func:`_ric_schur_h` when the constant term ``q - s r^-1 s^T`` is exactly
+    zero (the Y equation (19) when w reaches y directly, D21 square: paper 003's
+    Y is 0): H is then block upper triangular with diagonal blocks
+    ``a_cl = a - b r^-1 s^T`` and ``-a_cl^T``, and X = 0 is the stabilising
+    solution iff ``a_cl`` is Hurwitz; its eigenvalues are the closed-loop
+    poles. One eigenvalue problem of order n instead of the Schur form of
+    order 2n; otherwise ``(None, None, None)`` (no stabilising solution)."""
+    wr, wi, _, _, info = _dgeev(a_cl, compute_vl=0, compute_vr=0)
+    if info != 0 or not (wr < 0.0).all():
+        return None, None, None
+    return np.zeros(a_cl.shape), wr, wi
+
+
+@dataclass(slots=True)
 class HinfFeasibility:
     """Outcome of the tests of Theorem 1 of paper 003 at one gamma.
 
@@ -783,32 +819,33 @@ class _GammaFree:
 
     B: np.ndarray       # eq (10)
     C: np.ndarray       # eq (11)
-    D1s: np.ndarray     # eq (12)
-    Ds1: np.ndarray     # eq (13)
-    DtD: np.ndarray     # D1s^T D1s, eq (14) without gamma
-    DDt: np.ndarray     # Ds1 Ds1^T, eq (15) without gamma
+    DtD: np.ndarray     # D1s^T D1s, eq (14) without gamma (D1s of eq 12)
+    DDt: np.ndarray     # Ds1 Ds1^T, eq (15) without gamma (Ds1 of eq 13)
     Ew: np.ndarray      # diag(I_m1, 0): eq (14) is DtD - gamma^2 Ew
     Ez: np.ndarray      # diag(I_p1, 0): eq (15) is DDt - gamma^2 Ez
     Hx: _Hamiltonian    # eq (16): a = A, b = B, q = C1^T C1, s = C1^T D1s
     Hy: _Hamiltonian    # eq (17): a = A^T, b = C^T, q = B1 B1^T, s = B1 Ds1^T
     bound: float        # condition (a): max(sigma(D1111 D1112), sigma(D1111; D1121))
+    d11: tuple          # D1111, D1112, D1121, D1122 (Theorem 1, eq 24-26)
 
 
 def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
-    D1111, D1112, D1121, _ = _d11_blocks(Pn)
+    d11 = _d11_blocks(Pn)
+    r, c = d11[0].shape
     B = np.concatenate([Pn.B1, Pn.B2], axis=1)
     C = np.concatenate([Pn.C1, Pn.C2])
     D1s = np.concatenate([Pn.D11, Pn.D12], axis=1)
     Ds1 = np.concatenate([Pn.D11, Pn.D21])
-    bound = max(_sigma_max(np.concatenate([D1111, D1112], axis=1)),
-                _sigma_max(np.concatenate([D1111, D1121])))
+    # [D1111 D1112] and [D1111; D1121] are the first rows and columns of D11
+    bound = max(_sigma_max(Pn.D11[:r]), _sigma_max(Pn.D11[:, :c]))
     m1, p1 = Pn.nw, Pn.nz
-    Ew, Ez = np.eye(m1 + Pn.nu), np.eye(p1 + Pn.ny)
-    Ew[m1:, m1:] = Ez[p1:, p1:] = 0.0
-    return _GammaFree(B=B, C=C, D1s=D1s, Ds1=Ds1, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
+    Ew, Ez = np.zeros((m1 + Pn.nu,) * 2), np.zeros((p1 + Pn.ny,) * 2)
+    Ew.reshape(-1)[:m1 * (Ew.shape[0] + 1):Ew.shape[0] + 1] = 1.0    # diag(I_m1, 0)
+    Ez.reshape(-1)[:p1 * (Ez.shape[0] + 1):Ez.shape[0] + 1] = 1.0    # diag(I_p1, 0)
+    return _GammaFree(B=B, C=C, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
                       Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),
                       Hy=_hamiltonian(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Pn.B1 @ Ds1.T),
-                      bound=bound)
+                      bound=bound, d11=d11)
 
 
 def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
@@ -816,7 +853,6 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
     """Theorem 1 on an already normalised, balanced plant (``gf``: its
     gamma-free products, formed here when not given)."""
     w = _gamma_free(Pn) if gf is None else gf
-    n = Pn.nx
     if w.bound >= gamma:
         return HinfFeasibility(gamma, False, "D11",
                                f"condition (a) of Theorem 1 fails: max(sigma(D1111 D1112), "
@@ -838,18 +874,19 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "Y_not_stabilising",
                                f"the Y Riccati equation (19) has no stabilising solution "
                                f"at gamma = {gamma:.6g}: {why}", X=X)
-    if not _psd(Y):
+    # Y = 0 (see _ric_zero) is >= 0 with rho(XY) = 0: no eigenvalue problem for either
+    nonzero_y = np.count_nonzero(Y)
+    if nonzero_y and not _psd(Y):
         return HinfFeasibility(gamma, False, "Y_not_psd",
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, Y=Y)
-    rho = _spectral_radius(X @ Y) if n else 0.0
+    rho = _spectral_radius(X @ Y) if nonzero_y else 0.0
     if rho >= g2:
         return HinfFeasibility(gamma, False, "rho",
                                f"rho(XY) = {rho:.6g} >= gamma^2 = {g2:.6g}",
                                X=X, Y=Y, rho=rho)
-    work = dict(B=w.B, C=w.C, D1s=w.D1s, Ds1=w.Ds1, Rnh=Rnh, Rnj=Rnj)
     return HinfFeasibility(gamma, True, None, "conditions (a) and (b) of Theorem 1 hold",
-                           X=X, Y=Y, rho=rho, _work=work)
+                           X=X, Y=Y, rho=rho, _work=(w, Rnh, Rnj))
 
 
 def _spectral_radius(M: np.ndarray) -> float:
@@ -857,10 +894,10 @@ def _spectral_radius(M: np.ndarray) -> float:
     wr, wi, _, _, info = _dgeev(M, compute_vl=0, compute_vr=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
-    return float(np.hypot(wr, wi).max())
+    return float(_amax(np.hypot(wr, wi)))
 
 
-@dataclass
+@dataclass(slots=True)
 class _Prepared:
     """Balanced and normalised copy of a plant, reused across gammas."""
 
@@ -946,34 +983,36 @@ def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.
     gamma^2 I exactly and no system is solved for it.
     """
     g2 = res.gamma * res.gamma
-    w = res._work
+    w, Rnh, Rnj = res._work
     X, Y = res.X, res.Y
     m1, m2, p1, p2 = Pn.nw, Pn.nu, Pn.nz, Pn.ny
-    D1111, D1112, D1121, D1122 = _d11_blocks(Pn)
-    B, C, A = w["B"], w["C"], Pn.A
-    F = -_solve(w["Rnh"], w["D1s"].T @ Pn.C1 + B.T @ X)               # eq (20)
-    # eq (21): L = -(B1 Ds1^T + Y C^T) Rnj^-1, Rnj symmetric (eq 15)
-    L = -_solve(w["Rnj"], w["Ds1"] @ Pn.B1.T + C @ Y.T).T
+    D1111, D1112, D1121, D1122 = w.d11
+    B, C, A = w.B, w.C, Pn.A
+    F = -_solve(Rnh, w.Hx.s.T + B.T @ X)                 # eq (20); Hx.s^T = D1s^T C1
+    # eq (21): L = -(B1 Ds1^T + Y C^T) Rnj^-1, Rnj symmetric (eq 15); Hy.s = B1 Ds1^T
+    L = -_solve(Rnj, w.Hy.s.T + C @ Y.T).T
     F12, F2 = F[m1 - p2:m1], F[m1:]
     L12, L2 = L[:, p1 - m2:p1], L[:, p1:]
+    # eq (27): Z = (I - Y X / gamma^2)^-1, applied to both B2 + L12 and L2 at once
+    ZB = _solve(_eye(A.shape[0]) - (Y @ X) / g2, np.concatenate([Pn.B2 + L12, L2], axis=1))
     if D1111.size:
         r, c = D1111.shape
-        Ka = _solve(g2 * np.eye(r) - D1111 @ D1111.T, D1112)         # (g2 I - D D^T)^-1 D1112
-        Kb = _solve(g2 * np.eye(c) - D1111.T @ D1111, D1121.T)
+        Ka = _solve(g2 * _eye(r) - D1111 @ D1111.T, D1112)         # (g2 I - D D^T)^-1 D1112
+        Kb = _solve(g2 * _eye(c) - D1111.T @ D1111, D1121.T)
         D11h = -D1121 @ D1111.T @ Ka - D1122                          # eq (24)
-        T2 = np.eye(m2) - D1121 @ Kb                                  # eq (25)
-        T3 = np.eye(p2) - D1112.T @ Ka                                # eq (26)
+        D12h = _cholesky(_eye(m2) - D1121 @ Kb)            # D12h D12h^T = T2, eq (25)
+        T3 = _eye(p2) - D1112.T @ Ka                                # eq (26)
+        B2h = ZB[:, :m2] @ D12h                                       # eq (27)
+        B1h = B2h @ _solve(D12h, D11h) - ZB[:, m2:]                   # eq (29)
     else:
+        # eq (24)-(25) with an empty D1111: T2 = I, so D12h = I and eq (27), (29)
+        # lose their products by it (exact: products by an identity round nothing)
         D11h = -D1122                                                 # eq (24)
-        T2 = np.eye(m2)                                               # eq (25)
-        T3 = np.eye(p2) - (D1112.T @ D1112) / g2                      # eq (26)
-    D12h = _cholesky(T2)                                     # D12h D12h^T = T2
+        T3 = _eye(p2) - (D1112.T @ D1112) / g2                      # eq (26)
+        B2h = ZB[:, :m2]                                              # eq (27)
+        B1h = B2h @ D11h - ZB[:, m2:]                                 # eq (29)
     D21h = _cholesky(T3).T                                   # D21h^T D21h = T3
-    # eq (27): Z = (I - Y X / gamma^2)^-1, applied to both B2 + L12 and L2 at once
-    ZB = _solve(np.eye(A.shape[0]) - (Y @ X) / g2, np.concatenate([Pn.B2 + L12, L2], axis=1))
-    B2h = ZB[:, :m2] @ D12h                                           # eq (27)
     C2h = -D21h @ (Pn.C2 + F12)                                       # eq (28), D21h
-    B1h = B2h @ _solve(D12h, D11h) - ZB[:, m2:]                       # eq (29)
     S = _solve(D21h, C2h)                                    # D21h^-1 C2h of eq (30), (31)
     C1h = F2 + D11h @ S                                      # eq (30), no U12
     Ah = A + B @ F + B1h @ S                                 # eq (31)
@@ -1011,7 +1050,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> StateSpace:
     res = prep.feasibility(gamma)
     if not res.feasible:
         raise DesignInfeasible(_GAMMA_KEY, "a feasible gamma", gamma, hint=res.message)
-    return StateSpace(*_controller_from(prep, res))
+    return StateSpace._unchecked(*_controller_from(prep, res))
 
 
 def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray, ...]:
@@ -1023,7 +1062,7 @@ def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray,
     t = prep.t[:, None]
     Ah, Bh, Ch = Ah * (t / prep.t), Bh * t, Ch / prep.t      # exact: powers of two
     D22 = prep.P.D22
-    if D22.any():
+    if np.count_nonzero(D22):
         # loop shift u = K0 (y - D22 u): M = (I + Dk D22)^-1, u = M (Ck xk + Dk y)
         M = np.linalg.inv(np.eye(Dh.shape[0]) + Dh @ D22)
         Ah, Bh = Ah - Bh @ D22 @ M @ Ch, Bh @ (np.eye(D22.shape[0]) - D22 @ M @ Dh)
@@ -1302,12 +1341,12 @@ def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ..
     Dk D21 w), M = (I - Dk D22)^-1 (numpy; python-control's ``lft`` builds named
     systems, ~1.5 ms, issue 13)."""
     Ak, Bk, Ck, Dk = K
-    Mi = _inv(np.eye(P.nu) - Dk @ P.D22)
+    Mi = _inv(_eye(P.nu) - Dk @ P.D22)
     Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
     Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
     A = _blocks2x2(P.A + P.B2 @ Ux, P.B2 @ Uk, Bk @ Yx, Ak + Bk @ Yk)
-    B = np.vstack([P.B1 + P.B2 @ Uw, Bk @ Yw])
-    C = np.hstack([P.C1 + P.D12 @ Ux, P.D12 @ Uk])
+    B = np.concatenate([P.B1 + P.B2 @ Uw, Bk @ Yw])
+    C = np.concatenate([P.C1 + P.D12 @ Ux, P.D12 @ Uk], axis=1)
     return A, B, C, P.D11 + P.D12 @ Uw
 
 
@@ -1323,10 +1362,10 @@ def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> fl
     n = A.shape[0]
     if n == 0:
         return float(np.linalg.norm(D, 2)) if D.size else 0.0
-    ev = _eigvals(A)
-    if np.any(ev.real >= 0) or np.any(np.isclose(ev.real, 0.0)):
+    # a pole with Re >= 0 or within np.isclose's 1e-8 of the axis: Re >= -1e-8
+    if _amax(_eigvals(A).real) >= -1e-8:
         return float("inf")
-    return linf_norm(StateSpace(A, B, C, D))
+    return _linf_norm(A, B, C, D)
 
 
 def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal",
@@ -1414,7 +1453,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
     for msg in notes:
         warnings.warn(msg, RuntimeWarning, stacklevel=2)
     prep_res = _unscale_xy(res, prep.t)
-    return HinfResult(K=StateSpace(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
+    return HinfResult(K=StateSpace._unchecked(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
                       X=prep_res.X, Y=prep_res.Y, closed_loop_norm=cl_norm,
                       fastest_pole=fast, pole_limit=limit, warnings=notes)
 
@@ -1446,8 +1485,8 @@ _BOUND_GRID = np.logspace(-4, 9, 4000)
 _BOUND_GRID.flags.writeable = False
 
 
-def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
-    """SISO responses at the points ``s``, all frequencies at once (issue 13:
+def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
+    """SISO responses at the frequencies ``w`` (rad/s), all at once (issue 13:
     python-control converted each weight to state space and called SLICOT
     tb05ad per frequency). The transfer functions are evaluated together from
     their polynomials by Horner's rule on one (polynomials x points) array (rows
@@ -1456,6 +1495,7 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
     loaded machine); a state-space system goes through
     its modal form (:meth:`toolbox._lti.StateSpace.evaluate`); a number is
     constant."""
+    s = 1j * w
     polys, out = [], []
     for sys in systems:
         if np.isscalar(sys):
@@ -1473,8 +1513,12 @@ def _freqresps(systems: list, s: np.ndarray) -> list[np.ndarray]:
         if deg == 0:
             vals = np.broadcast_to(coef, (len(polys), s.size)).astype(complex)
         else:
-            vals = coef[:, :1] * s                              # first Horner step fused
-            vals += coef[:, 1:2]
+            # first Horner step, c0 s + c1 = c1 + j c0 w on the imaginary axis: the
+            # same numbers as the complex product and sum (whose other terms are
+            # exact zeros), at the cost of one real product
+            vals = np.empty((len(polys), s.size), complex)
+            vals.real = coef[:, 1:2]
+            np.multiply(coef[:, :1], w, out=vals.imag)
         for k in range(2, deg + 1):
             vals *= s
             vals += coef[:, k:k + 1]
@@ -1502,11 +1546,11 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
         Keys ``"S"``, ``"KS"``, ``"T"`` for the weights given.
     """
     w = _BOUND_GRID if freqs is None else np.asarray(freqs, float)
-    s = 1j * w
     weights = [wt for wt in (w1, w2, w3) if wt is not None]
-    g, k, *wv = _freqresps([G, K] + weights, s)
-    S = 1.0 / (1.0 + g * k)
-    funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (g * k * S, w3)}
+    g, k, *wv = _freqresps([G, K] + weights, w)
+    gk = g * k
+    S = 1.0 / (1.0 + gk)
+    funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (gk * S, w3)}
     out = {}
     for name, (f, wt) in funcs.items():
         if wt is None:
