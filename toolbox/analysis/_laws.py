@@ -6,9 +6,12 @@ An :class:`AxisController` stores the executed discrete law ``[i_ref, i_meas] ->
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..artifact import AxisController
 
 __all__ = ["AXES", "Law", "axis_law", "law_to_continuous"]
 
@@ -49,10 +52,30 @@ def axis_law(axis, discrete: bool) -> Law:
     twin of the executed law obtained by :func:`law_to_continuous` (the
     artifact stores no continuous law). Without a continuous error controller
     the discrete law is converted too.
+
+    The continuous law of an :class:`AxisController` (frozen, hashed by
+    identity) is converted once and kept while the controller lives: the
+    certificate's bisection asks for it hundreds of times and a conversion
+    can take a matrix logarithm (issue 13).
     """
     s = axis.law
     if discrete:
         return Law(s.A, s.B, s.C, s.D, s.dt)
+    if not isinstance(axis, AxisController):
+        return _continuous_law(axis)
+    law = _CONTINUOUS.get(axis)
+    if law is None:
+        law = _CONTINUOUS[axis] = _continuous_law(axis)
+    return law
+
+
+#: Continuous laws of live controllers (:func:`axis_law`).
+_CONTINUOUS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _continuous_law(axis) -> Law:
+    """The continuous law of :func:`axis_law` (computed)."""
+    s = axis.law
     one_dof = (np.allclose(s.B[:, 0], -s.B[:, 1], rtol=1e-12, atol=0)
                and np.isclose(s.D[0, 0], -s.D[0, 1], rtol=1e-12, atol=0))
     if one_dof and axis.continuous is not None:

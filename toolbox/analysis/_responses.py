@@ -75,7 +75,8 @@ def round_sig(values: Any, digits: int = 6) -> Any:
         into the strings ``"inf"``/``"nan"`` later).
     """
     arr = np.asarray(values, float)
-    flat = [float(f"{v:.{digits}g}") if math.isfinite(v) else float(v) for v in arr.ravel()]
+    # Python floats: formatting a numpy scalar costs several times more (issue 13)
+    flat = [float(f"{v:.{digits}g}") if math.isfinite(v) else v for v in arr.ravel().tolist()]
     if arr.ndim == 0:
         return flat[0]
     return np.asarray(flat).reshape(arr.shape).tolist()

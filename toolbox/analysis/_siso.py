@@ -341,22 +341,25 @@ def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
     # pass counts, so the complex divisions are replaced by real arithmetic and
     # everything else is evaluated only at the crossing cells
     re, im = Lw.real, Lw.imag
-    one2 = (1.0 + re) ** 2 + im * im                       # |1 + L|^2
+    im2 = im * im
+    one2 = np.square(1.0 + re)                             # |1 + L|^2, in place
+    one2 += im2
     sm = np.sqrt(np.min(one2, axis=1))
     # |S - 1/2| = |1 - L|/(2 |1 + L|), S = 1/(1 + L)
-    dm = 2.0 / np.sqrt(np.max(((1.0 - re) ** 2 + im * im) / one2, axis=1))
+    ratio = np.square(1.0 - re)
+    ratio += im2
+    ratio /= one2
+    dm = 2.0 / np.sqrt(np.max(ratio, axis=1))
     n = Lw.shape[0]
-    # phase margins at |L| = 1 crossings: sign(|L| - 1) is sign(log |L|)
+    # phase margins at |L| = 1 crossings (sign changes of log |L|)
     mag = np.abs(Lw)
-    sg = np.sign(mag - 1.0)
-    r, c = np.nonzero(sg[:, :-1] * sg[:, 1:] < 0)
+    r, c = _sign_changes(mag, 1.0)
     lg0, lg1 = np.log(mag[r, c]), np.log(mag[r, c + 1])
     t = lg0 / (lg0 - lg1)
     Lc = Lw[r, c] + t * (Lw[r, c + 1] - Lw[r, c])
     pm = _closest(n, r, c, np.degrees(np.angle(-Lc)))
     # gain margins at Im L = 0, Re L < 0
-    sg = np.sign(im)
-    r, c = np.nonzero(sg[:, :-1] * sg[:, 1:] < 0)
+    r, c = _sign_changes(im, 0.0)
     t2 = im[r, c] / (im[r, c] - im[r, c + 1])
     rc = re[r, c] + t2 * (re[r, c + 1] - re[r, c])
     neg = rc < 0
@@ -368,6 +371,14 @@ def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
         gm = np.concatenate([gm, -20 * np.log10(np.abs(re[k, -1]))])
     return {"gain_margin_db": _closest(n, r, c, gm), "phase_margin_deg": pm,
             "stability_margin": sm, "disk_margin": dm}
+
+
+def _sign_changes(x: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(rows, cols)`` of the cells where ``x - level`` changes sign strictly
+    between columns ``col`` and ``col + 1`` (a sample at ``level`` or NaN starts
+    or ends none). Boolean masks: a product of signs cost four float passes."""
+    above, below = x > level, x < level
+    return np.nonzero((above[:, :-1] & below[:, 1:]) | (below[:, :-1] & above[:, 1:]))
 
 
 def _closest(n: int, rows: np.ndarray, cols: np.ndarray, values: np.ndarray) -> np.ndarray:

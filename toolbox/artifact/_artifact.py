@@ -656,7 +656,16 @@ def json_ready(value: Any) -> Any:
     Any
         The same structure in plain JSON types.
     """
-    if isinstance(value, Mapping):
+    # exact plain types first: analysis.json holds tens of thousands of floats, and
+    # the ABC check isinstance(x, Mapping) on each cost most of its encoding (issue 13)
+    kind = type(value)
+    if kind is float:
+        return value if math.isfinite(value) else _non_finite(value)
+    if kind in _PLAIN:
+        return value
+    if kind is list or kind is tuple:
+        return [v if type(v) is float and math.isfinite(v) else json_ready(v) for v in value]
+    if kind is dict or isinstance(value, Mapping):
         return {str(k): json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [json_ready(v) for v in value]
@@ -670,8 +679,17 @@ def json_ready(value: Any) -> Any:
         return int(value)
     if isinstance(value, (float, np.floating)):
         v = float(value)
-        return v if math.isfinite(v) else ("inf" if v > 0 else "-inf" if v < 0 else "nan")
+        return v if math.isfinite(v) else _non_finite(v)
     return value
+
+
+#: Exact types :func:`json_ready` returns unchanged.
+_PLAIN = frozenset({int, str, bool, type(None)})
+
+
+def _non_finite(v: float) -> str:
+    """The JSON string of a non-finite float."""
+    return "inf" if v > 0 else "-inf" if v < 0 else "nan"
 
 
 def spec_sha256(spec: Mapping) -> str:

@@ -293,6 +293,10 @@ class ExportCheck:
         distance from the centre to an edge, r_hex sqrt(3)/2: the same number).
     limit : str
         ``"circle"`` or ``"hexagon"`` (``drive.voltage_limit``).
+    minimal : dict
+        ``{"d": MinimalLaw, "q": MinimalLaw}`` (:func:`minimal_laws`), which
+        the realisations and the vendor plan are made from (computed once:
+        about half of a header's time, issue 13).
     """
 
     realisations: dict
@@ -304,6 +308,7 @@ class ExportCheck:
     limit: str = "circle"
     saturated_radius: dict = field(default_factory=dict)
     fixed_error_bound: dict = field(default_factory=dict)
+    minimal: dict = field(default_factory=dict)
 
     @property
     def marginal_antiwindup(self) -> list[str]:
@@ -431,7 +436,7 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
                                 hint="ill-conditioned realisation; reduce or rescale the controller")
         exact = np.linalg.eigvals(real.A) if real.order else np.zeros(0)
         shifts[ax] = _check_shift(exact, _rounded_poles_f32(real), ts, key, f"{ax}-axis float32")
-    res = ExportCheck(reals, shifts, v_max=float(v_max), limit=limit)
+    res = ExportCheck(reals, shifts, v_max=float(v_max), limit=limit, minimal=mins)
     for ax in AXES:
         r = reals[ax]
         if r.order and np.any(r.aw != 0):
@@ -935,7 +940,7 @@ def vendor_plan(artifact, motor, drive, check: ExportCheck):
     if check.limit == "hexagon":
         return None, ('voltage_limit = "hexagon" is implemented in the float path only; '
                       'the MCSDK/IQmath variants need voltage_limit = "circle"')
-    return _vendor.plan_vendor(minimal_laws(artifact), i_max, w_max, check.v_max, dec_coeffs)
+    return _vendor.plan_vendor(check.minimal, i_max, w_max, check.v_max, dec_coeffs)
 
 
 def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str,
