@@ -376,9 +376,11 @@ def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
 def _sign_changes(x: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
     """``(rows, cols)`` of the cells where ``x - level`` changes sign strictly
     between columns ``col`` and ``col + 1`` (a sample at ``level`` or NaN starts
-    or ends none). Boolean masks: a product of signs cost four float passes."""
+    or ends none). Boolean masks, and flat indices: a product of signs cost four
+    float passes, and a 2-D ``np.nonzero`` ten times ``flatnonzero``."""
     above, below = x > level, x < level
-    return np.nonzero((above[:, :-1] & below[:, 1:]) | (below[:, :-1] & above[:, 1:]))
+    cells = (above[:, :-1] & below[:, 1:]) | (below[:, :-1] & above[:, 1:])
+    return np.divmod(np.flatnonzero(cells), cells.shape[1])
 
 
 def _closest(n: int, rows: np.ndarray, cols: np.ndarray, values: np.ndarray) -> np.ndarray:
