@@ -233,8 +233,9 @@ def _frequency_margins(loop, L1, w: np.ndarray, nyquist: bool) -> FrequencyMargi
     t_peak, _ = _peak(lambda x: abs(1 - S(x)), w, np.abs(Lw * Sw))
     skewed = []
     for sigma in SKEWS:
-        peak, _ = _peak(lambda x: abs(S(x) + 0.5 * (sigma - 1)), w,
-                        np.abs(Sw + 0.5 * (sigma - 1)))
+        # skew 1 is |S| itself: the same search as s_peak, not run twice
+        peak = s_peak if sigma == 1.0 else _peak(lambda x: abs(S(x) + 0.5 * (sigma - 1)), w,
+                                                 np.abs(Sw + 0.5 * (sigma - 1)))[0]
         alpha = 1.0 / peak
         lo, hi, ph = disk_variations(alpha, sigma)
         skewed.append({"skew": sigma, "alpha": alpha, "gain_low": lo, "gain_high": hi,

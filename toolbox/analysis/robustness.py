@@ -26,7 +26,7 @@ corners of the box, so extreme combinations are always included.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -192,7 +192,7 @@ class SweepResult:
 
     def to_json(self) -> dict:
         """JSON-ready dict of all attributes (non-finite floats as strings)."""
-        return json_ready(asdict(self))
+        return json_ready({f.name: getattr(self, f.name) for f in fields(self)})
 
 
 def _params_of(P: dict, i: int) -> dict:
