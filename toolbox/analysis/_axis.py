@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import cmath
 import math
+import weakref
 from dataclasses import dataclass, field, fields
 from functools import cached_property
 
@@ -31,7 +32,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..plant import axis_coefficients
-from ..artifact import json_ready
+from ..artifact import AxisController, json_ready
 from ._laws import Law, axis_law
 from ._siso import MARGIN_KEYS, frequency_margins, log_grid
 from ._statespace import (FreqResponse, closed_loop, is_stable, pade, plant_chain, series,
@@ -413,11 +414,26 @@ def compute_margins(artifact, motor, *, discrete: bool = True, delay: str | None
     --------
     >>> m = compute_margins(artifact, motor)               # doctest: +SKIP
     >>> m["q"].phase_margin_deg, m["q"].to_json()          # doctest: +SKIP
+
+    Each axis's result is kept while its :class:`AxisController` lives (frozen,
+    hashed by identity) and returned again for the same loop: ``cct design``'s
+    verification recomputes the sampled margins the analysis just computed
+    (issue 13).
     """
     out = {}
     for name, L in (("d", motor.Ld), ("q", motor.Lq)):
-        loop = make_axis_loop(artifact.axes[name], motor.R, L, artifact.sample_time,
-                              artifact.delay_samples, discrete=discrete,
-                              delay=None if discrete else delay)
-        out[name] = axis_margins(loop, n_grid=n_grid, step=step)
+        axis = artifact.axes[name]
+        key = (float(motor.R), float(L), float(artifact.sample_time),
+               int(artifact.delay_samples), discrete, None if discrete else delay, step, n_grid)
+        known = _MARGINS.setdefault(axis, {}) if isinstance(axis, AxisController) else {}
+        if key not in known:
+            loop = make_axis_loop(axis, motor.R, L, artifact.sample_time,
+                                  artifact.delay_samples, discrete=discrete,
+                                  delay=None if discrete else delay)
+            known[key] = axis_margins(loop, n_grid=n_grid, step=step)
+        out[name] = known[key]
     return out
+
+
+#: Margins of live controllers by loop (:func:`compute_margins`).
+_MARGINS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
