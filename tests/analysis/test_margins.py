@@ -333,3 +333,28 @@ def test_law_to_continuous_inverts_discretisation(method):
     ours = M.freqresp(back.A, back.B, back.C, back.D, 1j * w)
     ref = np.moveaxis(np.asarray(ct.frequency_response(law_c, w).complex), -1, 0)
     np.testing.assert_allclose(ours, ref, rtol=1e-8)
+
+
+def test_continuous_law_and_margins_computed_once_per_controller(hinf):
+    """The continuous law of an AxisController and its margins per loop are kept
+    while the controller lives (issue 13): a second call returns the same
+    objects, equal to a fresh computation (a copy of the controller, hashed
+    apart, recomputes them)."""
+    import copy
+
+    from toolbox.analysis._laws import _continuous_law, axis_law
+
+    axis = hinf.axes["q"]
+    law = axis_law(axis, False)
+    assert axis_law(axis, False) is law
+    fresh = _continuous_law(axis)
+    for name in ("A", "B", "C", "D"):
+        assert np.array_equal(getattr(law, name), getattr(fresh, name))
+    first = M.compute_margins(hinf, AZAIZ, discrete=False, delay="exact")
+    assert M.compute_margins(hinf, AZAIZ, discrete=False, delay="exact")["q"] is first["q"]
+    twin = copy.copy(hinf)
+    object.__setattr__(twin, "axes", {k: copy.copy(v) for k, v in hinf.axes.items()})
+    again = M.compute_margins(twin, AZAIZ, discrete=False, delay="exact")
+    assert again["q"] is not first["q"]
+    assert again["q"].to_json() == first["q"].to_json()
+    assert M.compute_margins(hinf, AZAIZ)["q"] is not first["q"]    # another loop

@@ -174,3 +174,31 @@ def test_latin_hypercube_equals_scipy_qmc(n, d, seed):
 
     want = qmc.LatinHypercube(d=d, seed=seed).random(n)
     assert np.array_equal(latin_hypercube(n, d, seed), want)
+
+
+def test_batch_axis_margins_rows_equal_their_own_loops(pi):
+    """batch_axis_margins evaluates each distinct (R, L, delay) once, grouped by
+    delay (issue 13): every row, duplicated or not, in any order, gets bit for
+    bit the grid margins of its own loop ``K z^-d b/(z - a)`` evaluated alone."""
+    import math
+
+    from toolbox.analysis._statespace import FreqResponse
+    from toolbox.analysis.robustness import batch_axis_margins
+
+    w = np.logspace(0, math.log10(math.pi / TS), 400)
+    w[-1] = math.pi / TS
+    z = np.exp(1j * w * TS)
+    K = FreqResponse(*M.axis_law(pi.axes["q"], True).error_controller())(z)[:, 0, 0]
+    rng = np.random.default_rng(1)
+    R = AZAIZ.R * rng.choice([0.5, 1.0, 2.0], 150) * rng.uniform(0.9, 1.1, 150).round(1)
+    L = AZAIZ.Lq * rng.choice([0.5, 2.0], 150)
+    d = rng.choice([1, 2], 150)
+    got = batch_axis_margins(K, z, w, R, L, TS, d)
+    assert len(np.unique(np.column_stack([R, L, d]), axis=0)) < R.size   # duplicates
+    for i in (0, 1, 7, 42, 149):
+        a, b = M.zoh_axis(R[i], L[i], TS)
+        qr = z.real - a
+        alone = M.grid_margins(w, K * z ** (-float(d[i])) * (qr - 1j * z.imag)
+                               * (b / (qr * qr + z.imag * z.imag)), nyquist=True)
+        for key, v in alone.items():
+            assert got[key][i] == v or (np.isnan(v) and np.isnan(got[key][i])), (i, key)
