@@ -132,3 +132,32 @@ def test_grid_margins_equal_the_full_array_formulation(nyquist):
         assert np.array_equal(got[key], want[key], equal_nan=True), key
     for key in ("stability_margin", "disk_margin"):
         np.testing.assert_allclose(got[key], want[key], rtol=1e-14, err_msg=key)
+
+
+def test_grid_kernel_equals_numpy_bit_for_bit():
+    """The compiled pass of grid_margins (issue 13) gives numpy's numbers bit for
+    bit: ``min (1 + re)^2 + im^2``, ``max ((1 - re)^2 + im^2)/that`` per row
+    (NaN rows NaN), and the strict sign changes of ``|L| - 1`` and ``Im L``
+    (a sample exactly at the level or NaN starts or ends none)."""
+    from toolbox.analysis._grid_kernel import grid_pass
+
+    rng = np.random.default_rng(3)
+    L = (rng.normal(size=(40, 300)) + 1j * rng.normal(size=(40, 300))) * rng.uniform(0.1, 5, (40, 1))
+    L[3, 17] = np.nan
+    L[4, 10] = 1.0            # |L| = 1 exactly, Im L = 0 exactly
+    L[5, :] = 0.5
+    re, im, mag = L.real, L.imag, np.abs(L)
+    one2_min, ratio_max, gain_cells, phase_cells = grid_pass(re, im, mag)
+    with np.errstate(invalid="ignore"):
+        one2 = (1.0 + re) ** 2 + im * im
+        want_min = np.min(one2, axis=1)
+        want_max = np.max(((1.0 - re) ** 2 + im * im) / one2, axis=1)
+        sg = np.sign(mag - 1.0)
+        want_gain = sg[:, :-1] * sg[:, 1:] < 0
+        sg = np.sign(im)
+        want_phase = sg[:, :-1] * sg[:, 1:] < 0
+    assert np.array_equal(one2_min, want_min, equal_nan=True)
+    assert np.array_equal(ratio_max, want_max, equal_nan=True)
+    assert np.isnan(one2_min[3]) and np.isnan(ratio_max[3])
+    assert np.array_equal(gain_cells, want_gain)
+    assert np.array_equal(phase_cells, want_phase)

@@ -339,28 +339,26 @@ def grid_margins(w: np.ndarray, response: np.ndarray, *, nyquist: bool = False) 
 
 def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
     # issue 13: thousands of loops of a thousand points each; every full-size
-    # pass counts, so the complex divisions are replaced by real arithmetic and
-    # everything else is evaluated only at the crossing cells
+    # quantity is made in one compiled pass (_grid_kernel, numpy's numbers bit for
+    # bit), the complex divisions replaced by real arithmetic, and everything
+    # else is evaluated only at the crossing cells
+    from ._grid_kernel import grid_pass
+
     re, im = Lw.real, Lw.imag
-    im2 = im * im
-    one2 = np.square(1.0 + re)                             # |1 + L|^2, in place
-    one2 += im2
-    sm = np.sqrt(np.min(one2, axis=1))
+    mag = np.abs(Lw)
+    one2_min, ratio_max, gain_cells, phase_cells = grid_pass(re, im, mag)
+    sm = np.sqrt(one2_min)                                 # min |1 + L|
     # |S - 1/2| = |1 - L|/(2 |1 + L|), S = 1/(1 + L)
-    ratio = np.square(1.0 - re)
-    ratio += im2
-    ratio /= one2
-    dm = 2.0 / np.sqrt(np.max(ratio, axis=1))
+    dm = 2.0 / np.sqrt(ratio_max)
     n = Lw.shape[0]
     # phase margins at |L| = 1 crossings (sign changes of log |L|)
-    mag = np.abs(Lw)
-    r, c = _sign_changes(mag, 1.0)
+    r, c = _cells(gain_cells)
     lg0, lg1 = np.log(mag[r, c]), np.log(mag[r, c + 1])
     t = lg0 / (lg0 - lg1)
     Lc = Lw[r, c] + t * (Lw[r, c + 1] - Lw[r, c])
     pm = _closest(n, r, c, np.degrees(np.angle(-Lc)))
     # gain margins at Im L = 0, Re L < 0
-    r, c = _sign_changes(im, 0.0)
+    r, c = _cells(phase_cells)
     t2 = im[r, c] / (im[r, c] - im[r, c + 1])
     rc = re[r, c] + t2 * (re[r, c + 1] - re[r, c])
     neg = rc < 0
@@ -374,14 +372,10 @@ def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
             "stability_margin": sm, "disk_margin": dm}
 
 
-def _sign_changes(x: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(rows, cols)`` of the cells where ``x - level`` changes sign strictly
-    between columns ``col`` and ``col + 1`` (a sample at ``level`` or NaN starts
-    or ends none). Boolean masks, and flat indices: a product of signs cost four
-    float passes, and a 2-D ``np.nonzero`` ten times ``flatnonzero``."""
-    above, below = x > level, x < level
-    cells = (above[:, :-1] & below[:, 1:]) | (below[:, :-1] & above[:, 1:])
-    return np.divmod(np.flatnonzero(cells), cells.shape[1])
+def _cells(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(rows, cols)`` of the True cells of a 2-D mask, row by row: ``flatnonzero``
+    (a 2-D ``np.nonzero`` cost ten times more)."""
+    return np.divmod(np.flatnonzero(mask), mask.shape[1])
 
 
 def _closest(n: int, rows: np.ndarray, cols: np.ndarray, values: np.ndarray) -> np.ndarray:
