@@ -137,22 +137,40 @@ def mimo_loop_response(artifact, motor, omega: float, w: np.ndarray, *,
     laws' measurement channels in discrete time) and ``W`` the decoupling
     with the controller's model parameters and measured speed.
     """
-    Ts, d = artifact.sample_time, artifact.delay_samples
     w = np.atleast_1d(np.asarray(w, float))
-    Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
-    if discrete:
-        Phi, Gam = zoh_coupled(Ac, Bc, Ts)
-        x = np.exp(1j * w * Ts)
-        P = inv_2x2(x[:, None, None] * np.eye(2) - Phi[0]) @ Gam[0]
-        P = P * (x ** (-d))[:, None, None]
-    else:
-        x = 1j * w
-        P = inv_2x2(x[:, None, None] * np.eye(2) - Ac[0]) @ Bc[0]
-        P = P * np.exp(-1j * w * (d + 0.5) * Ts)[:, None, None]
+    C = _controllers(artifact, w, discrete)
+    return _loop_response(artifact, motor, omega, w, C, discrete, omega_meas)
+
+
+def _grid_point(artifact, w: np.ndarray, discrete: bool) -> np.ndarray:
+    """``z = e^{j w Ts}`` (discrete) or ``s = j w`` at the frequencies ``w``."""
+    return np.exp(1j * w * artifact.sample_time) if discrete else 1j * w
+
+
+def _controllers(artifact, w: np.ndarray, discrete: bool) -> np.ndarray:
+    """``K = diag(K_d, K_q)`` (Nw, 2, 2), the error controllers on the grid: the same at
+    every speed, so :func:`mimo_disk_margins` evaluates them once (issue 13)."""
+    x = _grid_point(artifact, w, discrete)
     C = np.zeros((w.size, 2, 2), complex)
     for k, name in enumerate(AXES):
         law = axis_law(artifact.axes[name], discrete)
         C[:, k, k] = FreqResponse(*law.error_controller())(x)[:, 0, 0]
+    return C
+
+
+def _loop_response(artifact, motor, omega: float, w: np.ndarray, C: np.ndarray,
+                   discrete: bool, omega_meas: float | None) -> np.ndarray:
+    """:func:`mimo_loop_response` with the controllers ``C`` (:func:`_controllers`) given."""
+    Ts, d = artifact.sample_time, artifact.delay_samples
+    x = _grid_point(artifact, w, discrete)
+    Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
+    if discrete:
+        Phi, Gam = zoh_coupled(Ac, Bc, Ts)
+        P = inv_2x2(x[:, None, None] * np.eye(2) - Phi[0]) @ Gam[0]
+        P = P * (x ** (-d))[:, None, None]
+    else:
+        P = inv_2x2(x[:, None, None] * np.eye(2) - Ac[0]) @ Bc[0]
+        P = P * np.exp(-1j * w * (d + 0.5) * Ts)[:, None, None]
     W = decoupling_matrix(artifact.decoupling, omega if omega_meas is None else omega_meas)[0]
     return (C - W) @ P
 
@@ -195,6 +213,7 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
     if discrete:
         w = w[:-1]  # z = -1 exactly can hit a Tustin controller's pole/zero
     laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
+    C = _controllers(artifact, w, discrete)
     dm, du, st = [], [], []
     for om in speeds:
         if discrete:
@@ -203,7 +222,7 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
             stable = bool(loop.spectral_radius()[0] < 1 - 1e-9)
         else:
             stable = _continuous_coupled_stable(artifact, motor, om)
-        Li = mimo_loop_response(artifact, motor, om, w, discrete=discrete)
+        Li = _loop_response(artifact, motor, om, w, C, discrete, None)
         S = inv_2x2(np.eye(2) + Li)
         M = S - 0.5 * np.eye(2)
         a_mu = 1.0 / float(np.max(mu_upper_2x2(M))) if stable else 0.0
