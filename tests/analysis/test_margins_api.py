@@ -161,3 +161,20 @@ def test_grid_kernel_equals_numpy_bit_for_bit():
     assert np.isnan(one2_min[3]) and np.isnan(ratio_max[3])
     assert np.array_equal(gain_cells, want_gain)
     assert np.array_equal(phase_cells, want_phase)
+
+
+def test_plant_factors_equal_numpy_bit_for_bit():
+    """The compiled ``qr - j qi`` and ``b/(qr^2 + qi^2)`` of the sweep's loops
+    (issue 13) are numpy's ``zr - a``, ``qr - 1j qi``, ``b/(qr * qr + qi * qi)``
+    bit for bit, signed zeros included."""
+    from toolbox.analysis._grid_kernel import plant_factors
+
+    z = np.exp(1j * np.linspace(0.0, np.pi, 500))
+    rng = np.random.default_rng(4)
+    a, b = rng.uniform(0.0, 1.0, 30), rng.uniform(1e-3, 1.0, 30)
+    conj, scale = plant_factors(z.real, z.imag, a, b)
+    qr = z.real[None, :] - a[:, None]
+    want = qr - 1j * z.imag[None, :]
+    assert np.array_equal(conj.view(float), want.view(float))
+    assert np.array_equal(np.signbit(conj.imag), np.signbit(want.imag))
+    assert np.array_equal(scale, b[:, None] / (qr * qr + z.imag * z.imag))

@@ -65,3 +65,24 @@ def grid_pass(re: np.ndarray, im: np.ndarray, mag: np.ndarray):
         one2_min[i] = lo
         ratio_max[i] = hi
     return one2_min, ratio_max, gain_cells, phase_cells
+
+
+@njit(cache=True, error_model="numpy")
+def plant_factors(zr: np.ndarray, qi: np.ndarray, a: np.ndarray, b: np.ndarray):
+    """``z - a`` conjugated and ``b/|z - a|^2`` of first-order plants ``b/(z - a)``.
+
+    ``zr``, ``qi`` (Nw,) are ``Re z``, ``Im z``; ``a``, ``b`` (n,). Returns the
+    complex ``qr - j qi`` with ``qr = zr - a`` (n, Nw) and the real
+    ``b/(qr^2 + qi^2)`` (n, Nw): numpy's ``zr - a``, ``qr - 1j qi`` and
+    ``b/(qr * qr + qi * qi)`` bit for bit, in one pass (signed zeros included:
+    the imaginary part is ``0.0 - qi``, as numpy's complex subtraction gives).
+    """
+    n, nw = a.size, zr.size
+    conj = np.empty((n, nw), np.complex128)
+    scale = np.empty((n, nw))
+    for i in range(n):
+        for k in range(nw):
+            qr = zr[k] - a[i]
+            conj[i, k] = complex(qr, 0.0 - qi[k])
+            scale[i, k] = b[i] / (qr * qr + qi[k] * qi[k])
+    return conj, scale

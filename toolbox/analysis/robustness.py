@@ -73,37 +73,33 @@ def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.nda
     # grouped by delay (issue 13); the rows are independent, the numbers the same
     keys, inverse = np.unique(np.column_stack([d, R, L]), axis=0, return_inverse=True)
     d_u, R_u, L_u = keys.T
-    a, b = zoh_axis(R_u[:, None], L_u[:, None], Ts)
+    a, b = zoh_axis(R_u, L_u, Ts)
     delays, starts = np.unique(d_u, return_index=True)
     Kz = K_fr[None, :] * z[None, :] ** (-delays[:, None])
-    qi = z.imag[None, :]
     parts = []
     for k, rows in enumerate(np.split(np.arange(d_u.size), starts[1:])):
         # blocks of sets: each temporary then stays in the cache (1.5x faster than
         # whole (N, Nw) arrays, the same numbers: the rows are independent)
         for block in np.array_split(rows, max(1, -(-rows.size // BLOCK_ROWS))):
-            parts.append(grid_margins(w, _loop_block(Kz[k], z.real, qi, a[block], b[block]),
+            parts.append(grid_margins(w, _loop_block(Kz[k], z.real, z.imag, a[block], b[block]),
                                       nyquist=True))
     return {k: np.concatenate([p[k] for p in parts])[inverse.reshape(-1)] for k in parts[0]}
 
 
 def _loop_block(Kz: np.ndarray, zr: np.ndarray, qi: np.ndarray, a: np.ndarray,
                 b: np.ndarray) -> np.ndarray:
-    """``L = K z^-d b/(z - a)`` (n, Nw) for one delay (``Kz``, (Nw,)) and plants ``a, b`` (n, 1).
+    """``L = K z^-d b/(z - a)`` (n, Nw) for one delay (``Kz``, (Nw,)) and plants ``a, b`` (n,).
 
     ``b/(z - a) = b conj(z - a)/|z - a|^2`` in real arithmetic: numpy's complex
-    division of (n, Nw) arrays cost 4x (issue 13). In place, without numpy's
-    mixed real-complex casts: the numbers of ``Kz * (qr - 1j qi) * (b/|q|^2)``
-    bit for bit (the complex product keeps its operand order, which numpy's
-    fused multiply-add kernels make matter).
+    division of (n, Nw) arrays cost 4x (issue 13). The real factors come from one
+    compiled pass (:func:`toolbox.analysis._grid_kernel.plant_factors`); the
+    complex product stays numpy's, operand order kept (its fused multiply-add
+    kernels make the order matter): the numbers of
+    ``Kz * (qr - 1j qi) * (b/|q|^2)`` bit for bit.
     """
-    qr = zr[None, :] - a
-    L = np.empty(qr.shape, complex)
-    L.real = qr
-    L.imag = 0.0 - qi      # the imaginary part of qr - 1j qi, signed zeros included
-    scale = qr * qr
-    scale += qi * qi
-    np.divide(b, scale, out=scale)
+    from ._grid_kernel import plant_factors
+
+    L, scale = plant_factors(zr, qi, a, b)
     np.multiply(Kz, L, out=L)
     L *= scale
     return L
