@@ -202,3 +202,20 @@ def test_batch_axis_margins_rows_equal_their_own_loops(pi):
                                * (b / (qr * qr + z.imag * z.imag)), nyquist=True)
         for key, v in alone.items():
             assert got[key][i] == v or (np.isnan(v) and np.isnan(got[key][i])), (i, key)
+
+
+def test_spectral_radii_of_repeated_sets_equal_the_full_stack(pi):
+    """The sweep analyses each distinct coupled-loop matrix once (issue 13): the
+    radii equal those of the whole stack, sets repeated (flux and, at zero
+    speed, the speed-sensor gain do not enter the state matrix) or not."""
+    from toolbox.analysis.robustness import _spectral_radii
+
+    laws = {k: M.axis_law(pi.axes[k], True) for k in "dq"}
+    rng = np.random.default_rng(2)
+    R = AZAIZ.R * rng.choice([0.5, 2.0], 80)
+    Ld, Lq = AZAIZ.Ld * rng.choice([0.5, 2.0], 80), AZAIZ.Lq * rng.uniform(0.5, 2.0, 80)
+    wm = 300.0 + rng.choice([-10.0, 10.0], 80)
+    got = _spectral_radii(laws, pi.decoupling, TS, 1, R, Ld, Lq, 300.0, wm)
+    full = M.coupled_closed_loop(laws, pi.decoupling, TS, 1, R=R, Ld=Ld, Lq=Lq, omega=300.0,
+                                 omega_meas=wm).spectral_radius()
+    assert np.array_equal(got, full)

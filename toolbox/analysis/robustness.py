@@ -191,6 +191,22 @@ class SweepResult:
         return json_ready({f.name: getattr(self, f.name) for f in fields(self)})
 
 
+def _spectral_radii(laws: dict, decoupling, Ts: float, d: int, R: np.ndarray, Ld: np.ndarray,
+                    Lq: np.ndarray, omega: float, omega_meas: np.ndarray) -> np.ndarray:
+    """Largest pole modulus of each set's coupled closed loop at one speed (N,).
+
+    The state matrix depends on neither the flux (the back-EMF enters the
+    constant term only) nor, at zero speed, the speed-sensor gain: the box
+    corners repeat matrices, and each distinct one is analysed once (issue 13;
+    the eigenvalues of a matrix do not depend on the others in the stack).
+    """
+    _, first, inverse = np.unique(np.column_stack([R, Ld, Lq, omega_meas]), axis=0,
+                                  return_index=True, return_inverse=True)
+    loop = coupled_closed_loop(laws, decoupling, Ts, d, R=R[first], Ld=Ld[first],
+                               Lq=Lq[first], omega=omega, omega_meas=omega_meas[first])
+    return loop.spectral_radius()[inverse.reshape(-1)]
+
+
 def _params_of(P: dict, i: int) -> dict:
     return {k: (int(v[i]) if v.dtype.kind == "i" else float(v[i])) for k, v in P.items()}
 
@@ -263,10 +279,8 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
     for dv in np.unique(d):
         sel = np.nonzero(d == dv)[0]
         for om in speeds:
-            loop = coupled_closed_loop(laws, artifact.decoupling, Ts, int(dv), R=R[sel],
-                                       Ld=Ld[sel], Lq=Lq[sel], omega=om,
-                                       omega_meas=g[sel] * om + off[sel], flux=flux[sel])
-            r = loop.spectral_radius()
+            r = _spectral_radii(laws, artifact.decoupling, Ts, int(dv), R[sel], Ld[sel],
+                                Lq[sel], om, g[sel] * om + off[sel])
             rho[sel] = np.maximum(rho[sel], r)
             if om == speeds[-1]:
                 ok = r < 1 - 1e-9
