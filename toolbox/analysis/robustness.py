@@ -69,7 +69,7 @@ def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.nda
         recomputed exactly afterwards).
     """
     # the loop depends on (R, L, d) only: the box corners of a sweep repeat those
-    # triples (a fifth of the sets of the default sweep), so each is evaluated once,
+    # triples (a tenth of the sets of the default sweep), so each is evaluated once,
     # grouped by delay (issue 13); the rows are independent, the numbers the same
     keys, inverse = np.unique(np.column_stack([d, R, L]), axis=0, return_inverse=True)
     d_u, R_u, L_u = keys.T
@@ -81,6 +81,7 @@ def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.nda
         # blocks of sets: each temporary then stays in the cache (1.5x faster than
         # whole (N, Nw) arrays, the same numbers: the rows are independent)
         for block in np.array_split(rows, max(1, -(-rows.size // BLOCK_ROWS))):
+            # the last grid point is the Nyquist frequency (robustness_sweep builds it so)
             parts.append(grid_margins(w, _loop_block(Kz[k], z.real, z.imag, a[block], b[block]),
                                       nyquist=True))
     return {k: np.concatenate([p[k] for p in parts])[inverse.reshape(-1)] for k in parts[0]}
