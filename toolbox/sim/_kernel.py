@@ -344,10 +344,24 @@ def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, 
     equal RK4 steps; returns (new time, new state)."""
     if dur <= 0.0:
         return t, x
+    n, dt = _split(dur, h)
+    return _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
+                      refs, mset)
+
+
+@_jit_inline
+def _split(dur, h):
+    """(n, dt): the ``n = ceil(dur / h)`` equal plant steps of length dt over ``dur``."""
     n = int(math.ceil(dur / h - 1e-9))
     if n < 1:
         n = 1
-    dt = dur / n
+    return n, dur / n
+
+
+@_jit_no_rc
+def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m, refs,
+               mset):
+    """:func:`_advance` over ``n`` steps of length ``dt`` (:func:`_split`)."""
     m = _load_acc(acc_m)
     if mech == 1:
         t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, 0.0, 1, acc, m, refs, mset)
@@ -368,12 +382,16 @@ def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, 
 def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, m, refs, mset):
     """``n`` RK4 steps of length dt with the metrics accumulated at the start of
     each; returns (time, state, accumulators)."""
-    i_d, i_q, om, th = x
     for _ in range(n):
-        m = _accumulate(m, i_d, i_q, om, t, dt, pl, refs, mset)
-        i_d, i_q, om, th = _rk4(i_d, i_q, om, th, vx, vy, frame, dt, pl, t_load, mech, acc)
+        x1 = _rk4(x[0], x[1], x[2], x[3], vx, vy, frame, dt, pl, t_load, mech, acc)
+        # the metrics of the step's start state after its RK4 stages in program
+        # order: the out-of-order core runs the oldest ready instruction first,
+        # so the step's own stages (the dependency chain) win the execution
+        # ports over the metrics that become ready with them (issue 13)
+        m = _accumulate(m, x[0], x[1], x[2], t, dt, pl, refs, mset)
+        x = x1
         t += dt
-    return t, (i_d, i_q, om, th), m
+    return t, x, m
 
 
 # ------------------------------------------------------------------- controller
@@ -802,6 +820,7 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m,
     flux_c = LP[LP_FLUX_C]
     mset = _metric_setup(SC)
     x = (0.0, 0.0, omega0, 0.0)  # plant state id, iq, Omega, theta
+    n_ts, dt_ts = _split(Ts, h)  # the plant steps of a period held constant
     nbuf = vd_buf.shape[0]
     trdec = max(int(SC[SC_TRACE_DECIM]), 1)
     # speed loop state
@@ -876,13 +895,13 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m,
             tr[row, 9] = om_m
         # ---- plant over one period
         if inverter == 0 and hold == 0:
-            t, x = _advance(x, t, vd_app, vq_app, 0, Ts, h, pl, t_load, mech, acc, omega0,
-                            acc_m, refs, mset)
+            t, x = _advance_n(x, t, vd_app, vq_app, 0, n_ts, dt_ts, pl, t_load, mech, acc,
+                              omega0, acc_m, refs, mset)
         elif inverter == 0:  # held in the stationary frame at the mid-period angle
             tha = th_m + w_m * Ts * 0.5
             vx, vy = _to_ab(vd_app, vq_app, math.cos(tha), math.sin(tha))
-            t, x = _advance(x, t, vx, vy, 1, Ts, h, pl, t_load, mech, acc, omega0,
-                            acc_m, refs, mset)
+            t, x = _advance_n(x, t, vx, vy, 1, n_ts, dt_ts, pl, t_load, mech, acc, omega0,
+                              acc_m, refs, mset)
         elif inverter == 1 and carrier:
             t, x, conf_applied = _carrier_period(x, t, k, vd_app, vq_app, th_m, w_m,
                                                  conf_applied, h, pl, t_load, mech, acc,
@@ -895,8 +914,8 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m,
             acc_m[_A_CELLS] += bit_changes(conf_applied, conf_now)
             conf_applied = conf_now
             vx, vy = state_vector(conf_now, r_hex)
-            t, x = _advance(x, t, vx, vy, 1, Ts, h, pl, t_load, mech, acc, omega0,
-                            acc_m, refs, mset)
+            t, x = _advance_n(x, t, vx, vy, 1, n_ts, dt_ts, pl, t_load, mech, acc, omega0,
+                              acc_m, refs, mset)
     return x[2]
 
 
