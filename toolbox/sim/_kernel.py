@@ -35,11 +35,30 @@ Everything is plain float arrays so that the same core runs one simulation
 arrays' slots are declared once, by name, in :data:`LAYOUTS`; the index
 constants (``P_R``, ``DP_TS``, ``SC_DURATION``, ...) are generated from that
 declaration and :func:`pack_indices` gives the same map to the Python side
-that fills the arrays (``_simulate._pack``). :func:`run` is a short loop over
-small ``@njit`` helpers (sensors, references, speed loop, law step with
+that fills the arrays (``_simulate._pack``). :func:`run` allocates the work
+arrays and :func:`_periods` runs the periods, a short loop over small
+``@njit`` helpers (sensors, references, speed loop, law step with
 anti-windup and voltage limit, predictive choice, inverter and plant RK4);
 the plant state lives in local scalars, not in an array, so that LLVM keeps
 it in registers across the RK4 stages (issue 13).
+
+Loop structure (issue 13; gcc -O3 -march=native's plain C loop of the same
+arithmetic, ``tests/benchmarks/bench_sim.py``, is the yardstick: both are
+bound by the latency of the RK4 chain, ~100 cycles per plant step, so what
+ours adds must stay off that chain and out of its way):
+
+* the period loop and the plant steps are compiled without numba's
+  reference counting (:data:`_jit_no_rc`): its increfs and decrefs are
+  atomic read-modify-writes, full memory barriers that kept a period's
+  plant steps from overlapping the previous period's;
+* the online metrics are kept in local values over a run of steps
+  (:func:`_load_acc`), with no division per step (:func:`_overshoot`), and
+  are accumulated after the step's RK4 stages in program order;
+* the unloaded free-speed case has its loop of its own, without the load
+  torque's ``- 0.0`` on the speed's chain (:func:`_advance_n`); the step
+  split of a period (:func:`_split`) is computed once per run.
+
+All of it leaves every result bit for bit as it was.
 
 Arithmetic (issue 13). The 1 us loop is bound by the latency of one
 dependency chain (the four RK4 stages in sequence, each ending in a
@@ -142,9 +161,12 @@ _jit = njit(cache=True, error_model="numpy")
 #: The helpers of the 1 us substep loop, inlined into it in numba's IR: called
 #: as separate functions, each RK4 step passed ~20 arguments through the stack
 #: and returned its state through memory (issue 13: 43.3 -> 41.5 ns per step).
-#: The law step too, once per period (its fixed cost per period ~170 -> ~110 ns).
+#: The law step too, once per period (its fixed cost per period ~170 -> ~110 ns),
+#: and every helper of the period loop that reads an array: called from the
+#: loop compiled without reference counting (:data:`_jit_no_rc`), a function
+#: would incref and decref its array arguments itself.
 _jit_inline = njit(cache=True, error_model="numpy", inline="always")
-#: The period loop (:func:`_periods`) and the plant steps (:func:`_advance`):
+#: The period loop (:func:`_periods`) and the plant steps (:func:`_advance_n`):
 #: compiled without numba's reference counting (they allocate nothing; every
 #: array is :func:`run`'s). With it, each array passed to a helper or used by
 #: an inlined one was increfed and decrefed around the use, ~20 atomic
@@ -361,7 +383,11 @@ def _split(dur, h):
 @_jit_no_rc
 def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m, refs,
                mset):
-    """:func:`_advance` over ``n`` steps of length ``dt`` (:func:`_split`)."""
+    """:func:`_advance` over ``n`` steps of length ``dt`` (:func:`_split`).
+
+    One loop per speed mode, the mode a constant in each: imposed speed,
+    free and unloaded, free and loaded (LLVM does not unswitch a loop this
+    large itself)."""
     m = _load_acc(acc_m)
     if mech == 1:
         t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, 0.0, 1, acc, m, refs, mset)
