@@ -385,21 +385,19 @@ def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
                mset):
     """:func:`_advance` over ``n`` steps of length ``dt`` (:func:`_split`).
 
-    One loop per speed mode, the mode a constant in each: imposed speed,
-    free and unloaded, free and loaded (LLVM does not unswitch a loop this
-    large itself)."""
+    Two loops: with and without a load torque, the latter with the
+    constant 0 (LLVM does not unswitch a loop this large itself)."""
     m = _load_acc(acc_m)
-    if mech == 1:
-        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, 0.0, 1, acc, m, refs, mset)
-        x = (x[0], x[1], omega0 + acc * t, x[3])  # imposed speed: no round-off drift
-    elif t_load == 0.0:
+    if t_load == 0.0 or mech == 1:
         # the unloaded loop of its own, with the constant 0: ``x - 0.0`` is x
         # exactly, so LLVM drops the subtraction, the last one before the
         # multiplication by 1/J on the speed's dependency chain (~4 % of the
         # plant step's latency, issue 13)
-        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, 0.0, 0, acc, m, refs, mset)
+        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, 0.0, mech, acc, m, refs, mset)
     else:
-        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, t_load, 0, acc, m, refs, mset)
+        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, m, refs, mset)
+    if mech == 1:  # imposed speed: remove the round-off drift of the integral
+        x = (x[0], x[1], omega0 + acc * t, x[3])
     _store_acc(acc_m, m)
     return t, x
 
