@@ -54,8 +54,8 @@ ours adds must stay off that chain and out of its way):
 * the online metrics are kept in local values over a run of steps
   (:func:`_load_acc`), with no division per step (:func:`_overshoot`), and
   are accumulated after the step's RK4 stages in program order;
-* the unloaded free-speed case has its loop of its own, without the load
-  torque's ``- 0.0`` on the speed's chain (:func:`_advance_n`); the step
+* the periods without load torque have a loop of their own, without the
+  load's ``- 0.0`` on the speed's chain (:func:`_advance_n`); the step
   split of a period (:func:`_split`) is computed once per run.
 
 All of it leaves every result bit for bit as it was.
