@@ -31,6 +31,7 @@
 
 from __future__ import annotations
 
+import gc
 import os
 import statistics
 import time
@@ -50,23 +51,38 @@ def pin_blas_threads(n: int = 1) -> None:
 
 
 def interleaved(routes: Mapping[str, Callable[[], object]], rounds: int,
-                repeat: int = 1) -> dict[str, list[float]]:
+                repeat: int = 1, quiet_gc: bool = False) -> dict[str, list[float]]:
     """Run every route ``repeat`` times per round, in turn; return each route's
     CPU seconds per call, one value per round.
 
     A route may return its own elapsed seconds as a ``float`` (e.g. a C
     program timing its inner loop with its own CPU clock); anything else it
     returns is ignored and the process CPU time is measured here.
+
+    ``quiet_gc``: collect Python's garbage before each route's turn and keep
+    the cyclic collector off while it runs (as ``timeit`` does), so that a
+    collection of what the other routes (or the harness: ``subprocess``)
+    left behind is not charged to the route that happens to trigger it.
+    Measured (issue 13): in ``bench_sim`` a route calling ``simulate()``
+    after the C subprocesses took a median 0.3-0.4 ms more per call (1.5 %
+    of a 1 s simulation) than the same kernel call without the collector.
     """
     times: dict[str, list[float]] = {name: [] for name in routes}
     for _ in range(rounds):
         for name, func in routes.items():
-            t0 = time.process_time()
-            own = 0.0
-            for _ in range(repeat):
-                r = func()
-                own += r if isinstance(r, float) else 0.0
-            cpu = time.process_time() - t0
+            if quiet_gc:
+                gc.collect()
+                gc.disable()
+            try:
+                t0 = time.process_time()
+                own = 0.0
+                for _ in range(repeat):
+                    r = func()
+                    own += r if isinstance(r, float) else 0.0
+                cpu = time.process_time() - t0
+            finally:
+                if quiet_gc:
+                    gc.enable()
             times[name].append((own if own else cpu) / repeat)
     return times
 

@@ -49,11 +49,12 @@ def test_kernel_matches_python_reference(case):
 
 
 @pytest.mark.parametrize("inverter", ["svm", "fcs_mpc"])
-def test_compiled_kernel_equals_interpreted_kernel(inverter):
+def test_compiled_kernel_equals_interpreted_kernel(inverter, monkeypatch):
     """The switching-level paths (SVM segments, predictive choice, seeded
     sensor noise, hexagon limit) compiled by numba equal the same source run
-    by the Python interpreter (``run.py_func``) to 1e-9 relative: no
-    numba-specific semantics (integer division, wrap-around, casts) leak in."""
+    by the Python interpreter (``run.py_func`` and its period loop
+    ``_periods.py_func``) to 1e-9 relative: no numba-specific semantics
+    (integer division, wrap-around, casts) leak in."""
     from toolbox.sim import _kernel
     from toolbox.sim._simulate import FcsWeights, _pack, _pack_law, _plant_array
     from dataclasses import replace
@@ -68,9 +69,35 @@ def test_compiled_kernel_equals_interpreted_kernel(inverter):
     DP, SP, SC = _pack(law, M, sc, drive)
     args = (_plant_array(M), A, B, C, D, W, LP, SP, DP, SC, True)
     m1, t1 = _kernel.run(*args)
+    monkeypatch.setattr(_kernel, "_periods", _kernel._periods.py_func)
     m2, t2 = _kernel.run.py_func(*args)
     assert _close(t1, t2)
     both = np.isfinite(m1)
     assert np.array_equal(both, np.isfinite(m2))
     assert np.allclose(m1[both], m2[both], rtol=1e-9, atol=0)
     assert m1[7] > 0   # commutations counted
+
+
+@pytest.mark.parametrize("delta", [3.7, -0.41, 1e-3])
+def test_overshoot_from_the_extreme_equals_the_largest_quotient(delta):
+    """The kernel keeps the extreme y of the step's direction and divides once
+    (``_kernel._overshoot``): bit for bit the largest per-step quotient
+    ``max(0, (y - yf)/delta)`` it computed before (correctly rounded
+    subtraction and division are monotone)."""
+    from toolbox.sim import _kernel
+
+    rng = np.random.default_rng(11)
+    yf = 2.3
+    for _ in range(200):
+        y = yf + delta * rng.normal(0.0, 0.05, rng.integers(1, 50))
+        largest = 0.0
+        for v in y:  # the per-step rule of the former accumulator
+            q = (v - yf) / delta
+            if q > largest:
+                largest = q
+        ext = yf
+        for v in y:
+            if (v > ext) if delta > 0 else (v < ext):
+                ext = v
+        got = _kernel._overshoot(ext, yf, delta)
+        assert got == largest and np.signbit(got) == np.signbit(largest)

@@ -35,11 +35,30 @@ Everything is plain float arrays so that the same core runs one simulation
 arrays' slots are declared once, by name, in :data:`LAYOUTS`; the index
 constants (``P_R``, ``DP_TS``, ``SC_DURATION``, ...) are generated from that
 declaration and :func:`pack_indices` gives the same map to the Python side
-that fills the arrays (``_simulate._pack``). :func:`run` is a short loop over
-small ``@njit`` helpers (sensors, references, speed loop, law step with
+that fills the arrays (``_simulate._pack``). :func:`run` allocates the work
+arrays and :func:`_periods` runs the periods, a short loop over small
+``@njit`` helpers (sensors, references, speed loop, law step with
 anti-windup and voltage limit, predictive choice, inverter and plant RK4);
 the plant state lives in local scalars, not in an array, so that LLVM keeps
 it in registers across the RK4 stages (issue 13).
+
+Loop structure (issue 13; gcc -O3 -march=native's plain C loop of the same
+arithmetic, ``tests/benchmarks/bench_sim.py``, is the yardstick: both are
+bound by the latency of the RK4 chain, ~100 cycles per plant step, so what
+ours adds must stay off that chain and out of its way):
+
+* the period loop and the plant steps are compiled without numba's
+  reference counting (:data:`_jit_no_rc`): its increfs and decrefs are
+  atomic read-modify-writes, full memory barriers that kept a period's
+  plant steps from overlapping the previous period's;
+* the online metrics are kept in local values over a run of steps
+  (:func:`_load_acc`), with no division per step (:func:`_overshoot`), and
+  are accumulated after the step's RK4 stages in program order;
+* the periods without load torque have a loop of their own, without the
+  load's ``- 0.0`` on the speed's chain (:func:`_advance_n`); the step
+  split of a period (:func:`_split`) is computed once per run.
+
+All of it leaves every result bit for bit as it was.
 
 Arithmetic (issue 13). The 1 us loop is bound by the latency of one
 dependency chain (the four RK4 stages in sequence, each ending in a
@@ -119,7 +138,7 @@ globals().update({f"M_{_n.upper()}": _i for _i, _n in enumerate(METRIC_NAMES)})
 N_TRACE = 10
 
 # accumulator slots of the online metrics
-_A_OUT5, _A_OUT2, _A_T10, _A_T90, _A_OVER, _A_SQT, _A_SQID, _A_STAT, _A_STATT, \
+_A_OUT5, _A_OUT2, _A_T10, _A_T90, _A_YEXT, _A_SQT, _A_SQID, _A_STAT, _A_STATT, \
     _A_FINAL, _A_SQIQ, _A_CELLS, _A_SAT = range(13)
 
 
@@ -142,12 +161,24 @@ _jit = njit(cache=True, error_model="numpy")
 #: The helpers of the 1 us substep loop, inlined into it in numba's IR: called
 #: as separate functions, each RK4 step passed ~20 arguments through the stack
 #: and returned its state through memory (issue 13: 43.3 -> 41.5 ns per step).
-#: The law step too, once per period (its fixed cost per period ~170 -> ~110 ns).
+#: The law step too, once per period (its fixed cost per period ~170 -> ~110 ns),
+#: and every helper of the period loop that reads an array: called from the
+#: loop compiled without reference counting (:data:`_jit_no_rc`), a function
+#: would incref and decref its array arguments itself.
 _jit_inline = njit(cache=True, error_model="numpy", inline="always")
+#: The period loop (:func:`_periods`) and the plant steps (:func:`_advance_n`):
+#: compiled without numba's reference counting (they allocate nothing; every
+#: array is :func:`run`'s). With it, each array passed to a helper or used by
+#: an inlined one was increfed and decrefed around the use, ~20 atomic
+#: read-modify-writes per period, each a full memory barrier that kept the
+#: next period's plant steps from starting before the previous ones had
+#: retired: ~60-80 ns per period, 0.6-0.8 ns per plant step at 100 steps per
+#: period (issue 13).
+_jit_no_rc = njit(cache=True, error_model="numpy", _nrt=False)
 
 
 # --------------------------------------------------------------------------- RNG
-@_jit
+@_jit_inline
 def _splitmix(st):
     """splitmix64 step on the 1-element uint64 state array; returns a float in [0, 1)."""
     z = st[0] + np.uint64(0x9E3779B97F4A7C15)
@@ -158,7 +189,7 @@ def _splitmix(st):
     return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@_jit
+@_jit_inline
 def _noise(st, amp, kind):
     """Uniform noise in [-amp, amp] (kind 0) or Gaussian of std amp (kind 1, Box-Muller)."""
     if amp == 0.0:
@@ -263,16 +294,37 @@ def _metric_setup(SC):
 
 
 @_jit_inline
-def _accumulate(acc_m, i_d, i_q, om, t, dt, pl, refs, mset):
-    """Online metrics at the start of a plant step of length dt (time-weighted)."""
+def _load_acc(acc_m):
+    """The accumulators :func:`_accumulate` updates (slots ``_A_OUT5`` ..
+    ``_A_SQIQ``) as a tuple: local values that LLVM keeps in registers over a
+    run of plant steps, where the array's elements were loaded and stored at
+    every step and could only be updated by branches (issue 13)."""
+    return (acc_m[_A_OUT5], acc_m[_A_OUT2], acc_m[_A_T10], acc_m[_A_T90], acc_m[_A_YEXT],
+            acc_m[_A_SQT], acc_m[_A_SQID], acc_m[_A_STAT], acc_m[_A_STATT],
+            acc_m[_A_FINAL], acc_m[_A_SQIQ])
+
+
+@_jit_inline
+def _store_acc(acc_m, m):
+    """Write back the tuple of :func:`_load_acc`."""
+    (acc_m[_A_OUT5], acc_m[_A_OUT2], acc_m[_A_T10], acc_m[_A_T90], acc_m[_A_YEXT],
+     acc_m[_A_SQT], acc_m[_A_SQID], acc_m[_A_STAT], acc_m[_A_STATT],
+     acc_m[_A_FINAL], acc_m[_A_SQIQ]) = m
+
+
+@_jit_inline
+def _accumulate(m, i_d, i_q, om, t, dt, pl, refs, mset):
+    """Online metrics at the start of a plant step of length dt (time-weighted):
+    the accumulators ``m`` (:func:`_load_acc`) updated."""
+    out5, out2, t10, t90, yext, sqt, sqid, stat, statt, final, sqiq = m
     idr, iqr, sr, tref = refs
     sig, y0, yf, t_stat, t_step = mset
     e_t = _torque(pl, i_d, i_q) - tref
-    acc_m[_A_SQT] += e_t * e_t * dt
+    sqt += e_t * e_t * dt
     e_id = i_d - idr
-    acc_m[_A_SQID] += e_id * e_id * dt
+    sqid += e_id * e_id * dt
     e_iq = i_q - iqr
-    acc_m[_A_SQIQ] += e_iq * e_iq * dt
+    sqiq += e_iq * e_iq * dt
     if sig == 0:
         y = i_q
         r = iqr
@@ -283,49 +335,91 @@ def _accumulate(acc_m, i_d, i_q, om, t, dt, pl, refs, mset):
         y = om
         r = sr
     if t >= t_stat:
-        acc_m[_A_STAT] += (r - y) * dt
-        acc_m[_A_FINAL] += y * dt
-        acc_m[_A_STATT] += dt
+        stat += (r - y) * dt
+        final += y * dt
+        statt += dt
     delta = yf - y0
     if t >= t_step and delta != 0.0:
         dev = abs(y - yf)
         if dev > 0.05 * abs(delta):
-            acc_m[_A_OUT5] = t + dt
+            out5 = t + dt
         if dev > 0.02 * abs(delta):
-            acc_m[_A_OUT2] = t + dt
-        frac = (y - y0) / delta
-        if frac >= 0.1 and acc_m[_A_T10] < 0.0:
-            acc_m[_A_T10] = t
-        if frac >= 0.9 and acc_m[_A_T90] < 0.0:
-            acc_m[_A_T90] = t
-        over = (y - yf) / delta
-        if over > acc_m[_A_OVER]:
-            acc_m[_A_OVER] = over
+            out2 = t + dt
+        # 90 % reached implies 10 % reached: no division once both are known
+        if t90 < 0.0:
+            frac = (y - y0) / delta
+            if frac >= 0.1 and t10 < 0.0:
+                t10 = t
+            if frac >= 0.9:
+                t90 = t
+        # the overshoot (y - yf)/delta is monotone in y: keep the extreme y
+        # in the direction of the step and divide once (:func:`_overshoot`)
+        if (y > yext) if delta > 0.0 else (y < yext):
+            yext = y
+    return out5, out2, t10, t90, yext, sqt, sqid, stat, statt, final, sqiq
 
 
-@_jit
+@_jit_no_rc
 def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, refs,
              mset):
     """Integrate the state x = (id, iq, Omega, theta) over ``dur`` with ceil(dur/h)
     equal RK4 steps; returns (new time, new state)."""
     if dur <= 0.0:
         return t, x
+    n, dt = _split(dur, h)
+    return _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
+                      refs, mset)
+
+
+@_jit_inline
+def _split(dur, h):
+    """(n, dt): the ``n = ceil(dur / h)`` equal plant steps of length dt over ``dur``."""
     n = int(math.ceil(dur / h - 1e-9))
     if n < 1:
         n = 1
-    dt = dur / n
-    i_d, i_q, om, th = x
-    for _ in range(n):
-        _accumulate(acc_m, i_d, i_q, om, t, dt, pl, refs, mset)
-        i_d, i_q, om, th = _rk4(i_d, i_q, om, th, vx, vy, frame, dt, pl, t_load, mech, acc)
-        t += dt
+    return n, dur / n
+
+
+@_jit_no_rc
+def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m, refs,
+               mset):
+    """:func:`_advance` over ``n`` steps of length ``dt`` (:func:`_split`).
+
+    Two loops: with and without a load torque, the latter with the
+    constant 0 (LLVM does not unswitch a loop this large itself)."""
+    m = _load_acc(acc_m)
+    if t_load == 0.0 or mech == 1:
+        # the unloaded loop of its own, with the constant 0: ``x - 0.0`` is x
+        # exactly, so LLVM drops the subtraction, the last one before the
+        # multiplication by 1/J on the speed's dependency chain (~4 % of the
+        # plant step's latency, issue 13)
+        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, 0.0, mech, acc, m, refs, mset)
+    else:
+        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, m, refs, mset)
     if mech == 1:  # imposed speed: remove the round-off drift of the integral
-        om = omega0 + acc * t
-    return t, (i_d, i_q, om, th)
+        x = (x[0], x[1], omega0 + acc * t, x[3])
+    _store_acc(acc_m, m)
+    return t, x
+
+
+@_jit_inline
+def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, m, refs, mset):
+    """``n`` RK4 steps of length dt with the metrics accumulated at the start of
+    each; returns (time, state, accumulators)."""
+    for _ in range(n):
+        x1 = _rk4(x[0], x[1], x[2], x[3], vx, vy, frame, dt, pl, t_load, mech, acc)
+        # the metrics of the step's start state after its RK4 stages in program
+        # order: the out-of-order core runs the oldest ready instruction first,
+        # so the step's own stages (the dependency chain) win the execution
+        # ports over the metrics that become ready with them (issue 13)
+        m = _accumulate(m, x[0], x[1], x[2], t, dt, pl, refs, mset)
+        x = x1
+        t += dt
+    return t, x, m
 
 
 # ------------------------------------------------------------------- controller
-@_jit
+@_jit_inline
 def _sense(x, rng, SC):
     """Sampled sensors (paper 000: gain/offset/noise on the speed; noise and
     quantisation on the currents); returns (id_m, iq_m, Omega_m)."""
@@ -341,7 +435,7 @@ def _sense(x, rng, SC):
     return i_d_m, i_q_m, om_m
 
 
-@_jit
+@_jit_inline
 def _delayed(v, k, nd, buf):
     """``v`` measured ``nd`` periods ago (ring buffer ``buf`` of ``nd + 1``
     samples); 0 before the first one exists (the currents start at 0)."""
@@ -354,7 +448,7 @@ def _delayed(v, k, nd, buf):
     return buf[(k - nd) % nb]
 
 
-@_jit
+@_jit_inline
 def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
     """Gain and measurement delay (whole periods) on each measured current
     (paper 002 sect. 5: a gain and a time delay on the state variables
@@ -363,7 +457,7 @@ def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
             _delayed(i_q_m * SC[SC_CURRENT_GAIN_Q], k, int(SC[SC_CURRENT_DELAY_Q]), buf_q))
 
 
-@_jit
+@_jit_inline
 def _references(t, SC):
     """Current and speed references at sample time t: (id_ref, iq_ref, speed_ref)."""
     before = t < SC[SC_T_STEP]
@@ -380,7 +474,7 @@ def _references(t, SC):
     return idr, iqr, sr
 
 
-@_jit
+@_jit_inline
 def _speed_pid(e, e_prev, integ, Tsp, SP):
     """One step of the speed PID with conditional integration (anti-windup).
 
@@ -618,6 +712,21 @@ def _carrier_period(x, t, k, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, 
 
 # ---------------------------------------------------------------------- metrics
 @_jit
+def _overshoot(y_ext, yf, delta):
+    """``max((y - yf)/delta, 0)`` over the run from the extreme ``y_ext`` of y
+    in the direction of the step (``yf`` if y never passed it).
+
+    Equal, bit for bit, to the maximum of the per-step quotients: correctly
+    rounded subtraction and division are monotone, so the quotient of the
+    extreme is the extreme of the quotients; ``y_ext == yf`` gives +0 (the
+    quotient would be -0 for a negative step).
+    """
+    if y_ext == yf or math.isnan(delta):  # nan: no quotient ever exceeded 0
+        return 0.0
+    return (y_ext - yf) / delta
+
+
+@_jit
 def _finalise(acc_m, n_per, Ts, om_final, t_step, mset):
     """Metrics (order of ``_metrics.METRIC_NAMES``) from the accumulators."""
     M = np.full(N_METRICS, np.nan)
@@ -632,7 +741,7 @@ def _finalise(acc_m, n_per, Ts, om_final, t_step, mset):
         M[M_SETTLING_TIME_2PCT] = 0.0
     elif acc_m[_A_OUT2] < total - 1e-12:
         M[M_SETTLING_TIME_2PCT] = acc_m[_A_OUT2] - t_step
-    M[M_OVERSHOOT_PCT] = 100.0 * acc_m[_A_OVER]
+    M[M_OVERSHOOT_PCT] = 100.0 * _overshoot(acc_m[_A_YEXT], mset[2], mset[2] - mset[1])
     if acc_m[_A_STATT] > 0.0:
         M[M_STATIC_ERROR] = acc_m[_A_STAT] / acc_m[_A_STATT]
         M[M_FINAL_VALUE] = acc_m[_A_FINAL] / acc_m[_A_STATT]
@@ -687,6 +796,35 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     traces : (n_rows, N_TRACE)
         t, id, iq, vd, vq, speed, torque, id_ref, iq_ref, speed_measured.
     """
+    Ts = DP[DP_TS]
+    n_per = int(round(SC[SC_DURATION] / Ts))
+    mset = _metric_setup(SC)
+    n = A.shape[1]
+    acc_m = np.zeros(13)
+    acc_m[_A_OUT5] = -1.0
+    acc_m[_A_OUT2] = -1.0
+    acc_m[_A_T10] = -1.0
+    acc_m[_A_T90] = -1.0
+    acc_m[_A_YEXT] = mset[2]  # overshoot 0 until y passes yf
+    rng = np.zeros(1, dtype=np.uint64)
+    rng[0] = np.uint64(int(SC[SC_SEED]))
+    nbuf = int(DP[DP_DELAY]) + 1  # ring buffer of the computation delay
+    trdec = max(int(SC[SC_TRACE_DECIM]), 1)
+    tr = np.empty(((n_per + trdec - 1) // trdec if keep_traces else 0, N_TRACE))
+    om_final = _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, np.zeros(n),
+                        np.zeros(n), np.zeros(n), acc_m, rng, np.zeros(nbuf), np.zeros(nbuf),
+                        np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1),
+                        np.zeros(int(SC[SC_CURRENT_DELAY_Q]) + 1), tr)
+    return _finalise(acc_m, n_per, Ts, om_final, SC[SC_T_STEP], mset), tr
+
+
+@_jit_no_rc
+def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m, rng,
+             vd_buf, vq_buf, cs_d, cs_q, tr):
+    """The ``n_per`` controller periods of :func:`run` over its work arrays
+    (law states ``xd``, ``xq``, scratch ``xn``; metric accumulators; RNG
+    state; delay ring buffers; current-sensor delay lines; traces); returns
+    the final mechanical speed."""
     pl = _plant(P)
     p = pl[4]
     Ts = DP[DP_TS]
@@ -705,25 +843,10 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     Lq_c = LP[LP_LQ_C]
     flux_c = LP[LP_FLUX_C]
     mset = _metric_setup(SC)
-    n = A.shape[1]
-    xd = np.zeros(n)
-    xq = np.zeros(n)
-    xn = np.zeros(n)
     x = (0.0, 0.0, omega0, 0.0)  # plant state id, iq, Omega, theta
-    acc_m = np.zeros(13)
-    acc_m[_A_OUT5] = -1.0
-    acc_m[_A_OUT2] = -1.0
-    acc_m[_A_T10] = -1.0
-    acc_m[_A_T90] = -1.0
-    rng = np.zeros(1, dtype=np.uint64)
-    rng[0] = np.uint64(int(SC[SC_SEED]))
-    nbuf = delay + 1  # ring buffer of the computation delay
-    vd_buf = np.zeros(nbuf)
-    vq_buf = np.zeros(nbuf)
-    cs_d = np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1)  # current-sensor delay lines
-    cs_q = np.zeros(int(SC[SC_CURRENT_DELAY_Q]) + 1)
+    n_ts, dt_ts = _split(Ts, h)  # the plant steps of a period held constant
+    nbuf = vd_buf.shape[0]
     trdec = max(int(SC[SC_TRACE_DECIM]), 1)
-    tr = np.empty(((n_per + trdec - 1) // trdec if keep_traces else 0, N_TRACE))
     # speed loop state
     sp_on = SP[SP_ENABLED] > 0.5
     sp_dec = max(int(SP[SP_DECIM]), 1)
@@ -796,13 +919,13 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
             tr[row, 9] = om_m
         # ---- plant over one period
         if inverter == 0 and hold == 0:
-            t, x = _advance(x, t, vd_app, vq_app, 0, Ts, h, pl, t_load, mech, acc, omega0,
-                            acc_m, refs, mset)
+            t, x = _advance_n(x, t, vd_app, vq_app, 0, n_ts, dt_ts, pl, t_load, mech, acc,
+                              omega0, acc_m, refs, mset)
         elif inverter == 0:  # held in the stationary frame at the mid-period angle
             tha = th_m + w_m * Ts * 0.5
             vx, vy = _to_ab(vd_app, vq_app, math.cos(tha), math.sin(tha))
-            t, x = _advance(x, t, vx, vy, 1, Ts, h, pl, t_load, mech, acc, omega0,
-                            acc_m, refs, mset)
+            t, x = _advance_n(x, t, vx, vy, 1, n_ts, dt_ts, pl, t_load, mech, acc, omega0,
+                              acc_m, refs, mset)
         elif inverter == 1 and carrier:
             t, x, conf_applied = _carrier_period(x, t, k, vd_app, vq_app, th_m, w_m,
                                                  conf_applied, h, pl, t_load, mech, acc,
@@ -815,9 +938,9 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
             acc_m[_A_CELLS] += bit_changes(conf_applied, conf_now)
             conf_applied = conf_now
             vx, vy = state_vector(conf_now, r_hex)
-            t, x = _advance(x, t, vx, vy, 1, Ts, h, pl, t_load, mech, acc, omega0,
-                            acc_m, refs, mset)
-    return _finalise(acc_m, n_per, Ts, x[2], SC[SC_T_STEP], mset), tr
+            t, x = _advance_n(x, t, vx, vy, 1, n_ts, dt_ts, pl, t_load, mech, acc, omega0,
+                              acc_m, refs, mset)
+    return x[2]
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
