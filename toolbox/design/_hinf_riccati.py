@@ -37,12 +37,12 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
                                  dgesdd as _dgesdd, dgesv as _dgesv, dlange as _dlange,
-                                 dggev as _dggev, dpotrf as _dpotrf,
+                                 dpotrf as _dpotrf,
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
                                  zgesv as _zgesv)
 
-from .._lti import (StateSpace, TransferFunction, _linf_norm, as_statespace, balanced,
-                    diagonal_scaling)
+from .._lti import (StateSpace, TransferFunction, _eigvals, _linf_norm, _pencil_eigvals, _zeros,
+                    as_statespace, balanced, diagonal_scaling)
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -210,16 +210,6 @@ def _eye(n: int) -> np.ndarray:
     return eye
 
 
-def _eigvals(A: np.ndarray) -> np.ndarray:
-    """Eigenvalues of a real square matrix (LAPACK dgeev)."""
-    if A.shape[0] == 0:
-        return np.zeros(0, complex)
-    wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
-    return wr + 1j * wi
-
-
 def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A^-1 B (LAPACK dgesv, zgesv for a complex A); LinAlgError when A is
     exactly singular."""
@@ -261,33 +251,6 @@ def _cholesky(M: np.ndarray) -> np.ndarray:
     if info != 0:
         raise np.linalg.LinAlgError(f"matrix not positive definite (dpotrf info {info})")
     return c
-
-
-def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
-    """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
-    ones (|beta| <= 1e-13 |alpha|) are dropped."""
-    ar, ai, beta, _, _, _, info = _dggev(M, N, compute_vl=0, compute_vr=0)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dggev failed (info {info})")
-    alpha = ar + 1j * ai
-    fin = np.abs(beta) > 1e-13 * np.abs(alpha)
-    return alpha[fin] / beta[fin]
-
-
-def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """Invariant zeros: the finite eigenvalues of the system pencil
-    ``([A B; C D], diag(I, 0))`` (QZ), after a power-of-two diagonal scaling of
-    its states (exact) that evens the entries of controllers spanning many
-    decades; the infinite eigenvalues (relative degree) are dropped."""
-    n = A.shape[0]
-    if n == 0:
-        return np.zeros(0, complex)
-    A, B, C = balanced(A, B, C)
-    M = np.zeros((n + C.shape[0], n + B.shape[1]))
-    M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
-    N = np.zeros_like(M)
-    N.reshape(-1)[:n * (N.shape[1] + 1):N.shape[1] + 1] = 1.0      # diag(I, 0) (a view)
-    return _pencil_eigvals(M, N)
 
 
 #: maximum of a non-empty array: the ufunc's reduce, without ``ndarray.max``'s
@@ -341,8 +304,8 @@ def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
                          f"{tf.order}")
     if not tf.num.any():
         return _ss_blocks(0.0)
-    g = tf.minreal().to_statespace()
-    return (*balanced(g.A, g.B, g.C), np.array(g.D))
+    A, B, C, D = tf.minreal()._realisation()
+    return (*balanced(A, B, C), D)
 
 
 def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
@@ -1279,13 +1242,13 @@ def fastest_pole_modulus(K: Any) -> float:
     Compared with :func:`pole_limit` (``pi/Ts``) to decide whether ``K`` can
     be discretised at the sample time (paper 003 sect. 4 trap at the optimum).
     """
-    return _fastest(_ss_blocks(K))
+    return _fastest(StateSpace(*_ss_blocks(K)))
 
 
-def _fastest(K: tuple[np.ndarray, ...]) -> float:
-    """:func:`fastest_pole_modulus` of the realisation ``K = (A, B, C, D)``."""
-    A, B, C, D = K
-    ep = _effective_poles(_eigvals(A), _zeros(A, B, C, D), 1e-2)
+def _fastest(K: StateSpace) -> float:
+    """:func:`fastest_pole_modulus` of our system ``K`` (its poles and zeros
+    are kept on it for the order reduction)."""
+    ep = _effective_poles(*K._poles_zeros, 1e-2)
     return float(np.max(np.abs(ep))) if ep.size else 0.0
 
 
@@ -1420,7 +1383,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
         b = float(backoff)
         while True:
             res = prep.feasibility((1.0 + b) * gamma_opt)
-            K = _controller_from(prep, res) if res.feasible else None
+            K = StateSpace._unchecked(*_controller_from(prep, res)) if res.feasible else None
             fast = _fastest(K) if K is not None else math.inf
             ok = limit is None or fast <= limit
             if (K is not None and ok) or b >= max_backoff:
@@ -1439,21 +1402,21 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
                                          "\"optimal\"")
             err.condition, err.best = res.message, best
             raise err
-        K, gamma_opt, b = _controller_from(prep, res), None, 0.0
+        K, gamma_opt, b = StateSpace._unchecked(*_controller_from(prep, res)), None, 0.0
         fast = _fastest(K)
     if limit is not None and fast > limit:
         notes.append(f"controller pole at |s| = {fast:.4g} rad/s exceeds the realisability "
                      f"limit pi/Ts = {limit:.4g} rad/s"
                      + (f" even with back-off {b:g}" if gamma_opt is not None else "")
                      + ": raise gamma (back-off) or lower the high-frequency weights")
-    cl_norm = _hinf_norm(*_lft(P, K))
+    cl_norm = _hinf_norm(*_lft(P, (K.A, K.B, K.C, K.D)))
     if not cl_norm <= res.gamma * (1 + 1e-6) + 1e-12:
         notes.append(f"recomputed closed-loop norm {cl_norm:.6g} exceeds the design "
                      f"gamma {res.gamma:.6g}: the Riccati solution is inaccurate")
     for msg in notes:
         warnings.warn(msg, RuntimeWarning, stacklevel=2)
     prep_res = _unscale_xy(res, prep.t)
-    return HinfResult(K=StateSpace._unchecked(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
+    return HinfResult(K=K, gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
                       X=prep_res.X, Y=prep_res.Y, closed_loop_norm=cl_norm,
                       fastest_pole=fast, pole_limit=limit, warnings=notes)
 
