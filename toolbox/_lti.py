@@ -32,6 +32,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import scipy.linalg
 from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev, dgeev_lwork as _dgeev_lwork_query,
+                                 dgesdd as _dgesdd, dgesdd_lwork as _dgesdd_lwork_query,
                                  dgesv as _dgesv, dggev as _dggev, zgesv as _zgesv)
 
 __all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d",
@@ -100,12 +101,41 @@ def modal_form(A: np.ndarray, B: np.ndarray,
         return None
     # V^-1 by LAPACK gesv on the identity, as numpy's ``inv`` (without its
     # ~3 us of dispatch); V is real when every eigenvalue is
-    _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, np.eye(A.shape[0]))
+    _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, _identity(A.shape[0]))
     if info != 0:                                    # defective A
         return None
     if A.shape[0] * np.abs(Vi).sum(0).max() > _MODAL_COND_MAX:
         return None
     return lam, (C @ V)[:, None, :] * (Vi @ B).T[None, :, :]
+
+
+@lru_cache(maxsize=64)
+def _identity(n: int) -> np.ndarray:
+    """Read-only identity of order n (``np.eye`` builds one in Python, ~1 us,
+    and the small systems here need several per call)."""
+    eye = np.eye(n)
+    eye.flags.writeable = False
+    return eye
+
+
+def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``np.linalg.svd(M)`` of a real matrix (full U and V^T): the same LAPACK
+    dgesdd with numpy's workspace, hence the same bits, without its ~4 us of
+    dispatch."""
+    U, s, Vt, info = _dgesdd(M, compute_uv=1, full_matrices=1, lwork=_dgesdd_lwork(*M.shape))
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
+    # C-ordered as numpy's (products round differently on another layout)
+    return np.ascontiguousarray(U), s, np.ascontiguousarray(Vt)
+
+
+@lru_cache(maxsize=32)
+def _dgesdd_lwork(m: int, n: int) -> int:
+    """Optimal dgesdd workspace (full U and V^T) for an m x n matrix."""
+    work, info = _dgesdd_lwork_query(m, n, compute_uv=1, full_matrices=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgesdd workspace query failed (info {info})")
+    return max(int(work), 1)
 
 
 @lru_cache(maxsize=32)
@@ -523,7 +553,7 @@ def _tf2ss_arrays(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
     n = den.size - 1
     D = np.array([[num[0]]])
     A = np.zeros((n, n))
-    A[0, :] = -den[1:]
+    A[:1] = -den[1:]                                # the first row (none when n = 0)
     A.reshape(-1)[n::n + 1] = 1.0                   # the subdiagonal (a view)
     B = np.zeros((n, 1))
     B[:1] = 1.0
@@ -1022,7 +1052,7 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
         d = float(D[0, 0])
         U, s, Vt = np.array([[-1.0 if d < 0 else 1.0]]), np.array([abs(d)]), np.ones((1, 1))
     else:
-        U, s, Vt = np.linalg.svd(D)
+        U, s, Vt = _svd(D)
     Bv, Cu, k = (B @ Vt.T).T, U.T @ C, s.size
     X, Y = np.zeros((2 * k + m + p, 2 * n)), np.zeros((2 * k + m + p, 2 * n))
     X[:k, :n], Y[:k, :n] = -Bv[:k], Cu[:k]

@@ -27,7 +27,6 @@ Damaged or wrong equations of the paper, re-derived here:
 
 from __future__ import annotations
 
-import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -41,8 +40,9 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
                                  zgesv as _zgesv)
 
-from .._lti import (StateSpace, TransferFunction, _eigvals, _linf_norm, _pencil_eigvals, _zeros,
+from .._lti import (StateSpace, TransferFunction, _eigvals, _linf_norm, _zeros,
                     as_statespace, balanced, diagonal_scaling)
+from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -201,15 +201,6 @@ class PartitionedPlant:
 # scipy's wrappers (argument checks, dispatch) cost 3-10 times the LAPACK work
 # itself (issue 13). Inputs must be finite float arrays (they are built here).
 # --------------------------------------------------------------------------
-@functools.lru_cache(maxsize=64)
-def _eye(n: int) -> np.ndarray:
-    """Read-only identity of order n (``np.eye`` builds one in Python, ~1 us,
-    and the controller formulae need several per call)."""
-    eye = np.eye(n)
-    eye.flags.writeable = False
-    return eye
-
-
 def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A^-1 B (LAPACK dgesv, zgesv for a complex A); LinAlgError when A is
     exactly singular."""

@@ -13,6 +13,7 @@ perturbation (residualisation of fast modes, keeps the DC gain).
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -51,7 +52,7 @@ def _zpk(K: Any) -> tuple[np.ndarray, np.ndarray, float]:
 
 def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
     """Well-scaled state-space realisation of k prod(s - z)/prod(s - p)."""
-    return StateSpace(*_zpk_realisation(z, p, k))
+    return StateSpace._unchecked(*_zpk_realisation(z, p, k))     # fresh float arrays
 
 
 def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray, ...]:
@@ -456,11 +457,18 @@ def _imag_axis_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float) -> n
     n = A.shape[0]
     M = np.zeros((n + 1, n + 1))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n, n] = A, B, C, d
-    N = np.eye(n + 1)
-    N[n, n] = 0.0
-    lam = _pencil_eigvals(M, N)
+    lam = _pencil_eigvals(M, _diag_i0(n))
     w = lam.imag[(np.abs(lam.real) <= _IMAG_TOL * np.abs(lam)) & (lam.imag > 0)]
     return np.sort(w[(w >= MARGIN_BAND[0]) & (w <= MARGIN_BAND[1])])
+
+
+@functools.lru_cache(maxsize=32)
+def _diag_i0(n: int) -> np.ndarray:
+    """Read-only ``diag(I_n, 0)``, the right-hand matrix of a SISO system pencil."""
+    N = np.eye(n + 1)
+    N[n, n] = 0.0
+    N.flags.writeable = False
+    return N
 
 
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
