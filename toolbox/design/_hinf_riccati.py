@@ -1078,7 +1078,7 @@ def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> fl
     if lo < hi:
         mid = 0.5 * (lo + hi)
         if (res := prep.feasibility(mid)).feasible:
-            return _bisect(prep, lo, hi, *_narrow(prep, lo, mid, [], 0.25 * tol), tol)
+            return _bisect(prep, lo, hi, *_narrow(prep, lo, hi, lo, mid, [], tol), tol)
         tested.append(res)
     while not (res := prep.feasibility(hi)).feasible:
         if hi >= top:
@@ -1088,7 +1088,7 @@ def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> fl
         tested.append(res)
         lo, hi = hi, min(2.0 * hi, top)
     a = max([lo] + [r.gamma for r in tested])          # the highest level known infeasible
-    return _bisect(prep, lo, hi, *_narrow(prep, a, hi, tested, 0.25 * tol), tol)
+    return _bisect(prep, lo, hi, *_narrow(prep, lo, hi, a, hi, tested, tol), tol)
 
 
 def _bisect(prep: _Prepared, lo: float, hi: float, a: float, b: float, tol: float) -> float:
@@ -1108,7 +1108,7 @@ def _bisect(prep: _Prepared, lo: float, hi: float, a: float, b: float, tol: floa
     return hi
 
 
-#: tests :func:`_narrow` may spend (paper 003's axes need 5-7)
+#: tests :func:`_narrow` may spend (paper 003's axes need 6-7)
 _NARROW_STEPS = 10
 
 
@@ -1127,39 +1127,65 @@ def _boundary_distance(res: HinfFeasibility) -> tuple[str, float] | None:
     return None
 
 
-def _narrow(prep: _Prepared, a: float, b: float, tested: list,
-            rel: float) -> tuple[float, float]:
+def _narrow(prep: _Prepared, lo: float, hi: float, a: float, b: float, tested: list,
+            tol: float) -> tuple[float, float]:
     """A bracket [a, b] of the optimal gamma (a infeasible, b feasible, both
-    known from tests), narrowed towards ``b - a <= rel * b``.
+    known from tests) that decides every midpoint of the bisection of
+    :func:`gamma_iteration` from [lo, hi] (none falls inside it).
 
-    Secant extrapolation of :func:`_boundary_distance` over the last two
-    infeasible levels that failed the same condition predicts the optimum; a
-    level just above the prediction is tested and, if feasible, one just
-    below. Bisection when there is no prediction or a prediction missed.
+    The tests are levels of that bisection: secant extrapolation of
+    :func:`_boundary_distance` over the last two infeasible levels that
+    failed the same condition predicts the optimum, and the two ends of the
+    bisection's last bracket around the prediction (:func:`_cell`) are
+    tested, the upper first; two hits decide the whole bisection. Its next
+    undecided midpoint is tested when there is no prediction or a prediction
+    missed.
     """
     seen = [(r.gamma, d) for r in tested if (d := _boundary_distance(r)) is not None]
-    step = "predict"
+    step, below = "predict", None
     for _ in range(_NARROW_STEPS):
-        if b - a <= rel * b:
+        c = _open_midpoint(lo, hi, a, b, tol)
+        if c is None:
             break
         guess = _extrapolate(seen) if step == "predict" else None
-        if step == "below":
-            c = b * (1.0 - 0.9 * rel)
+        if step == "below" and a < below < b:
+            c = below
         elif guess is not None and a < guess < b:
-            c = min(max(guess + 0.45 * rel * b, a + 0.45 * rel * b), b - 0.45 * rel * b)
+            below, top = _cell(lo, hi, a, b, guess, tol)
+            c, step = (top, "below") if top < b else (below, "predict")
         else:
-            c, guess = 0.5 * (a + b), None
+            step = "predict"
         res = prep.feasibility(c)
         if res.feasible:
-            b = c
-            # a hit just above a prediction calls for the test just below; a
-            # feasible test just below means the prediction was high: bisect once
-            step = "below" if guess is not None else ("bisect" if step == "below" else "predict")
+            # a feasible lower end means the prediction was high: bisect once
+            b, step = c, ("bisect" if c == below else step)
         else:
             a, step = c, "predict"
             if (d := _boundary_distance(res)) is not None:
                 seen.append((c, d))
     return a, b
+
+
+def _open_midpoint(lo: float, hi: float, a: float, b: float, tol: float) -> float | None:
+    """The first midpoint of the bisection from [lo, hi] (tolerance ``tol``)
+    that the known levels a (infeasible) and b (feasible) leave undecided, or
+    None when they decide them all."""
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        if a < mid < b:
+            return mid
+        lo, hi = (lo, mid) if mid >= b else (mid, hi)
+    return None
+
+
+def _cell(lo: float, hi: float, a: float, b: float, guess: float,
+          tol: float) -> tuple[float, float]:
+    """The last bracket of the bisection from [lo, hi] if the optimum were
+    ``guess`` (a < guess < b): its levels from ``guess`` up feasible."""
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if mid >= b or (mid > a and mid >= guess) else (mid, hi)
+    return lo, hi
 
 
 def _extrapolate(seen: list) -> float | None:
