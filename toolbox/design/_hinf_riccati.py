@@ -744,6 +744,9 @@ class HinfFeasibility:
         given (after undoing the internal balancing).
     rho : float
         Spectral radius of X Y (nan when not computed).
+    min_eig : float
+        Smallest eigenvalue of X (``"X_not_psd"``) or Y (``"Y_not_psd"``), in
+        the balanced coordinates of the test (nan otherwise).
     """
 
     gamma: float
@@ -753,17 +756,20 @@ class HinfFeasibility:
     X: np.ndarray | None = None
     Y: np.ndarray | None = None
     rho: float = float("nan")
+    min_eig: float = float("nan")
     _work: Any = field(default=None, repr=False)
 
 
-def _psd(X: np.ndarray, tol: float = 1e-9) -> bool:
-    """X >= 0 up to ``tol`` relative to its largest eigenvalue (LAPACK dsyevd)."""
+def _not_psd(X: np.ndarray, tol: float = 1e-9) -> float | None:
+    """None when X >= 0 up to ``tol`` relative to its largest eigenvalue, else
+    its smallest eigenvalue (LAPACK dsyevd; kept for the gamma iteration's
+    extrapolation, :func:`_boundary_distance`)."""
     if X.size == 0:
-        return True
+        return None
     ev, _, info = _dsyevd(X, compute_v=0)                  # ascending
     if info != 0:
         raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
-    return bool(ev[0] >= -tol * max(1.0, -ev[0], ev[-1]))
+    return None if ev[0] >= -tol * max(1.0, -ev[0], ev[-1]) else float(ev[0])
 
 
 @dataclass(slots=True)
@@ -819,10 +825,10 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "X_not_stabilising",
                                f"the X Riccati equation (18) has no stabilising solution "
                                f"at gamma = {gamma:.6g}: {why}")
-    if not _psd(X):
+    if (low := _not_psd(X)) is not None:
         return HinfFeasibility(gamma, False, "X_not_psd",
                                f"X of eq (18) is stabilising but not >= 0 at gamma = {gamma:.6g}",
-                               X=X)
+                               X=X, min_eig=low)
     Y, why = _ric_h(w.Hy, Rnj)                                       # eq (17), (19)
     if Y is None:
         return HinfFeasibility(gamma, False, "Y_not_stabilising",
@@ -830,10 +836,10 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
                                f"at gamma = {gamma:.6g}: {why}", X=X)
     # Y = 0 (see _ric_zero) is >= 0 with rho(XY) = 0: no eigenvalue problem for either
     nonzero_y = np.count_nonzero(Y)
-    if nonzero_y and not _psd(Y):
+    if nonzero_y and (low := _not_psd(Y)) is not None:
         return HinfFeasibility(gamma, False, "Y_not_psd",
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
-                               X=X, Y=Y)
+                               X=X, Y=Y, min_eig=low)
     rho = _spectral_radius(X @ Y) if nonzero_y else 0.0
     if rho >= g2:
         return HinfFeasibility(gamma, False, "rho",
@@ -1119,9 +1125,7 @@ def _boundary_distance(res: HinfFeasibility) -> tuple[str, float] | None:
     eigenvalue runs off to -inf there), ``1 - rho(XY)/gamma^2`` for the
     coupling condition; None when a Riccati equation had no solution."""
     if res.failed in ("X_not_psd", "Y_not_psd"):
-        M = res.X if res.failed == "X_not_psd" else res.Y
-        ev, _, _ = _dsyevd(M, compute_v=0)
-        return res.failed, 1.0 / ev[0]
+        return res.failed, 1.0 / res.min_eig
     if res.failed == "rho":
         return "rho", 1.0 - res.rho / res.gamma ** 2
     return None
