@@ -97,8 +97,6 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     :data:`_MODAL_COND_MAX`; otherwise callers solve per point.
     """
     lam, V = _eig(A)
-    if lam is None:
-        return None
     # V^-1 by LAPACK gesv on the identity, as numpy's ``inv`` (without its
     # ~3 us of dispatch); V is real when every eigenvalue is
     _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, _identity(A.shape[0]))
@@ -147,18 +145,21 @@ def _dgeev_lwork(n: int) -> int:
     return max(int(work), 1)
 
 
-def _eig(A: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+def _eig(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eigenvalues and right eigenvectors of a real square matrix, as
     ``np.linalg.eig`` returns them (the same LAPACK dgeev, the same complex
     vectors ``vr[:, j] +- 1j vr[:, j + 1]`` of a conjugate pair, real arrays
-    when every eigenvalue is real, C-ordered) without its ~7 us of dispatch per call
-    (four calls per H-infinity axis, issue 13); ``(None, None)`` when dgeev
-    fails (non-finite entries). The optimal workspace, as numpy queries it:
-    dtrevc3's back-transformation is blocked according to it, and the
-    eigenvectors of a complex pair differ in their last bits otherwise."""
+    when every eigenvalue is real, C-ordered, the same LinAlgError on
+    non-finite entries or no convergence) without its ~5 us of dispatch per
+    call (four calls per H-infinity axis, issue 13). The optimal workspace, as
+    numpy queries it: dtrevc3's back-transformation is blocked according to
+    it, and the eigenvectors of a complex pair differ in their last bits
+    otherwise."""
+    if not np.isfinite(A).all():
+        raise np.linalg.LinAlgError("Array must not contain infs or NaNs")
     wr, wi, _, vr, info = _dgeev(A, compute_vl=0, lwork=_dgeev_lwork(A.shape[0]))
     if info != 0:
-        return None, None
+        raise np.linalg.LinAlgError("Eigenvalues did not converge")
     # C-ordered as numpy's (a product with a Fortran-ordered operand takes
     # another BLAS path and rounds differently)
     if not wi.any():
