@@ -162,11 +162,14 @@ def _eig(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         raise np.linalg.LinAlgError("Eigenvalues did not converge")
     # C-ordered as numpy's (a product with a Fortran-ordered operand takes
     # another BLAS path and rounds differently)
-    if not wi.any():
+    # the first of each conjugate pair (dgeev puts the one with wi > 0 first);
+    # the eigenvalues are few: scalar code beats array calls
+    pairs = [j for j, v in enumerate(wi.tolist()) if v > 0.0]
+    if not pairs:
         return wr, np.ascontiguousarray(vr)
     V = vr.astype(complex, order="C")
     re, im = V.real, V.imag                      # views
-    for j in np.flatnonzero(wi > 0.0).tolist():  # the first of each pair (few: slices)
+    for j in pairs:
         im[:, j], re[:, j + 1], im[:, j + 1] = vr[:, j + 1], vr[:, j], -vr[:, j + 1]
     lam = np.empty(wr.size, complex)
     lam.real, lam.imag = wr, wi
