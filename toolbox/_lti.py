@@ -24,14 +24,16 @@ Conventions follow python-control so that ported code reads the same:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from math import hypot, log
 from sys import modules as sys_modules
 from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg
-from scipy.linalg.lapack import dgebal as _dgebal, dgeev as _dgeev, dgesv as _dgesv, zgesv as _zgesv
+from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev, dgeev_lwork as _dgeev_lwork_query,
+                                 dgesdd as _dgesdd, dgesdd_lwork as _dgesdd_lwork_query,
+                                 dgesv as _dgesv, dggev as _dggev, zgesv as _zgesv)
 
 __all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d",
            "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
@@ -94,15 +96,121 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     ``cond_2(V)`` from above, without an SVD) is at most
     :data:`_MODAL_COND_MAX`; otherwise callers solve per point.
     """
-    lam, V = np.linalg.eig(A)
+    lam, V = _eig(A)
     # V^-1 by LAPACK gesv on the identity, as numpy's ``inv`` (without its
-    # ~3 us of dispatch); eig's V is real when every eigenvalue is
-    _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, np.eye(A.shape[0]))
+    # ~3 us of dispatch); V is real when every eigenvalue is
+    _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, _identity(A.shape[0]))
     if info != 0:                                    # defective A
         return None
     if A.shape[0] * np.abs(Vi).sum(0).max() > _MODAL_COND_MAX:
         return None
     return lam, (C @ V)[:, None, :] * (Vi @ B).T[None, :, :]
+
+
+@lru_cache(maxsize=64)
+def _identity(n: int) -> np.ndarray:
+    """Read-only identity of order n (``np.eye`` builds one in Python, ~1 us,
+    and the small systems here need several per call)."""
+    eye = np.eye(n)
+    eye.flags.writeable = False
+    return eye
+
+
+def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``np.linalg.svd(M)`` of a real matrix (full U and V^T): the same LAPACK
+    dgesdd with numpy's workspace, hence the same bits, without its ~4 us of
+    dispatch."""
+    U, s, Vt, info = _dgesdd(M, compute_uv=1, full_matrices=1, lwork=_dgesdd_lwork(*M.shape))
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
+    # C-ordered as numpy's (products round differently on another layout)
+    return np.ascontiguousarray(U), s, np.ascontiguousarray(Vt)
+
+
+@lru_cache(maxsize=32)
+def _dgesdd_lwork(m: int, n: int) -> int:
+    """Optimal dgesdd workspace (full U and V^T) for an m x n matrix."""
+    work, info = _dgesdd_lwork_query(m, n, compute_uv=1, full_matrices=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgesdd workspace query failed (info {info})")
+    return max(int(work), 1)
+
+
+@lru_cache(maxsize=32)
+def _dgeev_lwork(n: int) -> int:
+    """Optimal dgeev workspace (eigenvectors on the right) for order n."""
+    work, info = _dgeev_lwork_query(n, compute_vl=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeev workspace query failed (info {info})")
+    return max(int(work), 1)
+
+
+def _eig(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues and right eigenvectors of a real square matrix, as
+    ``np.linalg.eig`` returns them (the same LAPACK dgeev, the same complex
+    vectors ``vr[:, j] +- 1j vr[:, j + 1]`` of a conjugate pair, real arrays
+    when every eigenvalue is real, C-ordered, the same LinAlgError on
+    non-finite entries or no convergence) without its ~5 us of dispatch per
+    call (four calls per H-infinity axis, issue 13). The optimal workspace, as
+    numpy queries it: dtrevc3's back-transformation is blocked according to
+    it, and the eigenvectors of a complex pair differ in their last bits
+    otherwise."""
+    if not np.isfinite(A).all():
+        raise np.linalg.LinAlgError("Array must not contain infs or NaNs")
+    wr, wi, _, vr, info = _dgeev(A, compute_vl=0, lwork=_dgeev_lwork(A.shape[0]))
+    if info != 0:
+        raise np.linalg.LinAlgError("Eigenvalues did not converge")
+    # C-ordered as numpy's (a product with a Fortran-ordered operand takes
+    # another BLAS path and rounds differently)
+    # the first of each conjugate pair (dgeev puts the one with wi > 0 first);
+    # the eigenvalues are few: scalar code beats array calls
+    pairs = [j for j, v in enumerate(wi.tolist()) if v > 0.0]
+    if not pairs:
+        return wr, np.ascontiguousarray(vr)
+    V = vr.astype(complex, order="C")
+    re, im = V.real, V.imag                      # views
+    for j in pairs:
+        im[:, j], re[:, j + 1], im[:, j + 1] = vr[:, j + 1], vr[:, j], -vr[:, j + 1]
+    lam = np.empty(wr.size, complex)
+    lam.real, lam.imag = wr, wi
+    return lam, V
+
+
+def _eigvals(A: np.ndarray) -> np.ndarray:
+    """Eigenvalues of a real square matrix (LAPACK dgeev)."""
+    if A.shape[0] == 0:
+        return np.zeros(0, complex)
+    wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
+    return wr + 1j * wi
+
+
+def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
+    ones (|beta| <= 1e-13 |alpha|) are dropped."""
+    ar, ai, beta, _, _, _, info = _dggev(M, N, compute_vl=0, compute_vr=0)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dggev failed (info {info})")
+    alpha = ar + 1j * ai
+    fin = np.abs(beta) > 1e-13 * np.abs(alpha)
+    return alpha[fin] / beta[fin]
+
+
+def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """Invariant zeros: the finite eigenvalues of the system pencil
+    ``([A B; C D], diag(I, 0))`` (QZ), after a power-of-two diagonal scaling of
+    its states (exact) that evens the entries of controllers spanning many
+    decades; the infinite eigenvalues (relative degree) are dropped."""
+    n = A.shape[0]
+    if n == 0:
+        return np.zeros(0, complex)
+    A, B, C = balanced(A, B, C)
+    M = np.zeros((n + C.shape[0], n + B.shape[1]))
+    M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
+    N = np.zeros_like(M)
+    N.reshape(-1)[:n * (N.shape[1] + 1):N.shape[1] + 1] = 1.0      # diag(I, 0) (a view)
+    return _pencil_eigvals(M, N)
 
 
 def _matrix(value: Any, name: str) -> np.ndarray:
@@ -202,6 +310,13 @@ class StateSpace:
     def modal(self) -> tuple[np.ndarray, np.ndarray] | None:
         """:func:`modal_form` of the system (computed once), None without states."""
         return modal_form(self.A, self.B, self.C) if self.nstates else None
+
+    @cached_property
+    def _poles_zeros(self) -> tuple[np.ndarray, np.ndarray]:
+        """Poles (dgeev) and invariant zeros (:func:`_zeros`), computed once:
+        the H-infinity synthesis tests its controller's fastest pole with them
+        and the order reduction starts from the same zeros and poles (issue 13)."""
+        return _eigvals(self.A), _zeros(self.A, self.B, self.C, self.D)
 
     def evaluate(self, x: Any) -> np.ndarray:
         """``C (x I - A)^-1 B + D`` at complex points ``x``: shape ``(p, m, len(x))``.
@@ -424,7 +539,14 @@ def tf2ss(num: Any, den: Any, dt: float | None = None) -> StateSpace:
     first row, ``B = e1``, ``C = num' - num'_0 den'`` and ``D = num'_0``
     (primes: normalised so that ``den[0] = 1``, ``num`` padded to its degree).
     """
-    num, den = _poly(num), _poly(den)
+    A, B, C, D = _tf2ss_arrays(_poly(num), _poly(den))
+    return static_gain(D, dt) if A.size == 0 else StateSpace(A, B, C, D, dt)
+
+
+def _tf2ss_arrays(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
+    """A, B, C, D of :func:`tf2ss` for trimmed 1-D float polynomials (no
+    system object: the H-infinity augmentation realises four transfer
+    functions per axis and keeps only the arrays, issue 13)."""
     if not den.any():
         raise ValueError("tf2ss: zero denominator")
     if num.size > den.size:
@@ -434,15 +556,13 @@ def tf2ss(num: Any, den: Any, dt: float | None = None) -> StateSpace:
     den = den / den[0]
     n = den.size - 1
     D = np.array([[num[0]]])
-    if n == 0:
-        return static_gain(D, dt)
     A = np.zeros((n, n))
-    A[0, :] = -den[1:]
-    A[1:, :-1] = np.eye(n - 1)
+    A[:1] = -den[1:]                                # the first row (none when n = 0)
+    A.reshape(-1)[n::n + 1] = 1.0                   # the subdiagonal (a view)
     B = np.zeros((n, 1))
-    B[0, 0] = 1.0
+    B[:1] = 1.0
     C = (num[1:] - num[0] * den[1:]).reshape(1, n)
-    return StateSpace(A, B, C, D, dt)
+    return A, B, C, D
 
 
 def ss2tf(sys: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -664,6 +784,10 @@ class TransferFunction:
     def to_statespace(self) -> StateSpace:
         """Controllable canonical realisation (:func:`tf2ss`)."""
         return tf2ss(self.num, self.den)
+
+    def _realisation(self) -> tuple[np.ndarray, ...]:
+        """A, B, C, D of :meth:`to_statespace` as plain arrays."""
+        return _tf2ss_arrays(self.num, self.den)
 
     def to_control(self) -> Any:
         """The same transfer function as a ``control.TransferFunction``
@@ -932,7 +1056,7 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
         d = float(D[0, 0])
         U, s, Vt = np.array([[-1.0 if d < 0 else 1.0]]), np.array([abs(d)]), np.ones((1, 1))
     else:
-        U, s, Vt = np.linalg.svd(D)
+        U, s, Vt = _svd(D)
     Bv, Cu, k = (B @ Vt.T).T, U.T @ C, s.size
     X, Y = np.zeros((2 * k + m + p, 2 * n)), np.zeros((2 * k + m + p, 2 * n))
     X[:k, :n], Y[:k, :n] = -Bv[:k], Cu[:k]

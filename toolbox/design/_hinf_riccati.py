@@ -27,7 +27,6 @@ Damaged or wrong equations of the paper, re-derived here:
 
 from __future__ import annotations
 
-import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -37,12 +36,13 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
                                  dgesdd as _dgesdd, dgesv as _dgesv, dlange as _dlange,
-                                 dggev as _dggev, dpotrf as _dpotrf,
+                                 dpotrf as _dpotrf,
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
                                  zgesv as _zgesv)
 
-from .._lti import (StateSpace, TransferFunction, _linf_norm, as_statespace, balanced,
-                    diagonal_scaling)
+from .._lti import (StateSpace, TransferFunction, _eigvals, _linf_norm, _zeros,
+                    as_statespace, balanced, diagonal_scaling)
+from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -201,25 +201,6 @@ class PartitionedPlant:
 # scipy's wrappers (argument checks, dispatch) cost 3-10 times the LAPACK work
 # itself (issue 13). Inputs must be finite float arrays (they are built here).
 # --------------------------------------------------------------------------
-@functools.lru_cache(maxsize=64)
-def _eye(n: int) -> np.ndarray:
-    """Read-only identity of order n (``np.eye`` builds one in Python, ~1 us,
-    and the controller formulae need several per call)."""
-    eye = np.eye(n)
-    eye.flags.writeable = False
-    return eye
-
-
-def _eigvals(A: np.ndarray) -> np.ndarray:
-    """Eigenvalues of a real square matrix (LAPACK dgeev)."""
-    if A.shape[0] == 0:
-        return np.zeros(0, complex)
-    wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
-    return wr + 1j * wi
-
-
 def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A^-1 B (LAPACK dgesv, zgesv for a complex A); LinAlgError when A is
     exactly singular."""
@@ -261,33 +242,6 @@ def _cholesky(M: np.ndarray) -> np.ndarray:
     if info != 0:
         raise np.linalg.LinAlgError(f"matrix not positive definite (dpotrf info {info})")
     return c
-
-
-def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
-    """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
-    ones (|beta| <= 1e-13 |alpha|) are dropped."""
-    ar, ai, beta, _, _, _, info = _dggev(M, N, compute_vl=0, compute_vr=0)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dggev failed (info {info})")
-    alpha = ar + 1j * ai
-    fin = np.abs(beta) > 1e-13 * np.abs(alpha)
-    return alpha[fin] / beta[fin]
-
-
-def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """Invariant zeros: the finite eigenvalues of the system pencil
-    ``([A B; C D], diag(I, 0))`` (QZ), after a power-of-two diagonal scaling of
-    its states (exact) that evens the entries of controllers spanning many
-    decades; the infinite eigenvalues (relative degree) are dropped."""
-    n = A.shape[0]
-    if n == 0:
-        return np.zeros(0, complex)
-    A, B, C = balanced(A, B, C)
-    M = np.zeros((n + C.shape[0], n + B.shape[1]))
-    M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
-    N = np.zeros_like(M)
-    N.reshape(-1)[:n * (N.shape[1] + 1):N.shape[1] + 1] = 1.0      # diag(I, 0) (a view)
-    return _pencil_eigvals(M, N)
 
 
 #: maximum of a non-empty array: the ufunc's reduce, without ``ndarray.max``'s
@@ -341,8 +295,8 @@ def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
                          f"{tf.order}")
     if not tf.num.any():
         return _ss_blocks(0.0)
-    g = tf.minreal().to_statespace()
-    return (*balanced(g.A, g.B, g.C), np.array(g.D))
+    A, B, C, D = tf.minreal()._realisation()
+    return (*balanced(A, B, C), D)
 
 
 def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
@@ -790,6 +744,9 @@ class HinfFeasibility:
         given (after undoing the internal balancing).
     rho : float
         Spectral radius of X Y (nan when not computed).
+    min_eig : float
+        Smallest eigenvalue of X (``"X_not_psd"``) or Y (``"Y_not_psd"``), in
+        the balanced coordinates of the test (nan otherwise).
     """
 
     gamma: float
@@ -799,17 +756,20 @@ class HinfFeasibility:
     X: np.ndarray | None = None
     Y: np.ndarray | None = None
     rho: float = float("nan")
+    min_eig: float = float("nan")
     _work: Any = field(default=None, repr=False)
 
 
-def _psd(X: np.ndarray, tol: float = 1e-9) -> bool:
-    """X >= 0 up to ``tol`` relative to its largest eigenvalue (LAPACK dsyevd)."""
+def _not_psd(X: np.ndarray, tol: float = 1e-9) -> float | None:
+    """None when X >= 0 up to ``tol`` relative to its largest eigenvalue, else
+    its smallest eigenvalue (LAPACK dsyevd; kept for the gamma iteration's
+    extrapolation, :func:`_boundary_distance`)."""
     if X.size == 0:
-        return True
+        return None
     ev, _, info = _dsyevd(X, compute_v=0)                  # ascending
     if info != 0:
         raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
-    return bool(ev[0] >= -tol * max(1.0, -ev[0], ev[-1]))
+    return None if ev[0] >= -tol * max(1.0, -ev[0], ev[-1]) else float(ev[0])
 
 
 @dataclass(slots=True)
@@ -865,10 +825,10 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "X_not_stabilising",
                                f"the X Riccati equation (18) has no stabilising solution "
                                f"at gamma = {gamma:.6g}: {why}")
-    if not _psd(X):
+    if (low := _not_psd(X)) is not None:
         return HinfFeasibility(gamma, False, "X_not_psd",
                                f"X of eq (18) is stabilising but not >= 0 at gamma = {gamma:.6g}",
-                               X=X)
+                               X=X, min_eig=low)
     Y, why = _ric_h(w.Hy, Rnj)                                       # eq (17), (19)
     if Y is None:
         return HinfFeasibility(gamma, False, "Y_not_stabilising",
@@ -876,10 +836,10 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
                                f"at gamma = {gamma:.6g}: {why}", X=X)
     # Y = 0 (see _ric_zero) is >= 0 with rho(XY) = 0: no eigenvalue problem for either
     nonzero_y = np.count_nonzero(Y)
-    if nonzero_y and not _psd(Y):
+    if nonzero_y and (low := _not_psd(Y)) is not None:
         return HinfFeasibility(gamma, False, "Y_not_psd",
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
-                               X=X, Y=Y)
+                               X=X, Y=Y, min_eig=low)
     rho = _spectral_radius(X @ Y) if nonzero_y else 0.0
     if rho >= g2:
         return HinfFeasibility(gamma, False, "rho",
@@ -1113,12 +1073,19 @@ def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> fl
     feasible and one below a level found infeasible is not. :func:`_narrow`
     first brackets the optimum by extrapolation; the bisection then replays
     its midpoints and solves the Riccati equations only for those the
-    bracket [a, b] leaves undecided.
+    bracket [a, b] leaves undecided. The first midpoint is tested before the
+    upper end: when it is feasible, so is the upper end (one test fewer, the
+    usual case: gamma_opt is rarely above 3/4 of the first upper end).
     """
     lo = prep.gf.bound
     top = 1e8 if gamma_max is None else float(gamma_max)
     hi = min(max(1.0, 2.0 * lo), top)
     tested = []
+    if lo < hi:
+        mid = 0.5 * (lo + hi)
+        if (res := prep.feasibility(mid)).feasible:
+            return _bisect(prep, lo, hi, *_narrow(prep, lo, hi, lo, mid, [], tol), tol)
+        tested.append(res)
     while not (res := prep.feasibility(hi)).feasible:
         if hi >= top:
             raise DesignInfeasible(_GAMMA_KEY, f"a problem feasible for some gamma <= {top:g}",
@@ -1126,7 +1093,13 @@ def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> fl
                                  "the weights w1/w3")
         tested.append(res)
         lo, hi = hi, min(2.0 * hi, top)
-    a, b = _narrow(prep, lo, hi, tested, 0.25 * tol)
+    a = max([lo] + [r.gamma for r in tested])          # the highest level known infeasible
+    return _bisect(prep, lo, hi, *_narrow(prep, lo, hi, a, hi, tested, tol), tol)
+
+
+def _bisect(prep: _Prepared, lo: float, hi: float, a: float, b: float, tol: float) -> float:
+    """The bisection of :func:`gamma_iteration` from [lo, hi], testing only the
+    midpoints the known bracket [a, b] (a infeasible, b feasible) leaves open."""
     while hi - lo > tol * hi:
         mid = 0.5 * (lo + hi)
         if a < mid < b:
@@ -1141,7 +1114,7 @@ def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> fl
     return hi
 
 
-#: tests :func:`_narrow` may spend (paper 003's axes need 5-7)
+#: tests :func:`_narrow` may spend (paper 003's axes need 6-7)
 _NARROW_STEPS = 10
 
 
@@ -1152,47 +1125,71 @@ def _boundary_distance(res: HinfFeasibility) -> tuple[str, float] | None:
     eigenvalue runs off to -inf there), ``1 - rho(XY)/gamma^2`` for the
     coupling condition; None when a Riccati equation had no solution."""
     if res.failed in ("X_not_psd", "Y_not_psd"):
-        M = res.X if res.failed == "X_not_psd" else res.Y
-        ev, _, _ = _dsyevd(M, compute_v=0)
-        return res.failed, 1.0 / ev[0]
+        return res.failed, 1.0 / res.min_eig
     if res.failed == "rho":
         return "rho", 1.0 - res.rho / res.gamma ** 2
     return None
 
 
-def _narrow(prep: _Prepared, a: float, b: float, tested: list,
-            rel: float) -> tuple[float, float]:
+def _narrow(prep: _Prepared, lo: float, hi: float, a: float, b: float, tested: list,
+            tol: float) -> tuple[float, float]:
     """A bracket [a, b] of the optimal gamma (a infeasible, b feasible, both
-    known from tests), narrowed towards ``b - a <= rel * b``.
+    known from tests) that decides every midpoint of the bisection of
+    :func:`gamma_iteration` from [lo, hi] (none falls inside it).
 
-    Secant extrapolation of :func:`_boundary_distance` over the last two
-    infeasible levels that failed the same condition predicts the optimum; a
-    level just above the prediction is tested and, if feasible, one just
-    below. Bisection when there is no prediction or a prediction missed.
+    The tests are levels of that bisection: secant extrapolation of
+    :func:`_boundary_distance` over the last two infeasible levels that
+    failed the same condition predicts the optimum, and the two ends of the
+    bisection's last bracket around the prediction (:func:`_cell`) are
+    tested, the upper first; two hits decide the whole bisection. Its next
+    undecided midpoint is tested when there is no prediction or a prediction
+    missed.
     """
     seen = [(r.gamma, d) for r in tested if (d := _boundary_distance(r)) is not None]
-    step = "predict"
+    step, below = "predict", None
     for _ in range(_NARROW_STEPS):
-        if b - a <= rel * b:
+        c = _open_midpoint(lo, hi, a, b, tol)
+        if c is None:
             break
         guess = _extrapolate(seen) if step == "predict" else None
-        if step == "below":
-            c = b * (1.0 - 0.9 * rel)
+        if step == "below" and a < below < b:
+            c = below
         elif guess is not None and a < guess < b:
-            c = min(max(guess + 0.45 * rel * b, a + 0.45 * rel * b), b - 0.45 * rel * b)
+            below, top = _cell(lo, hi, a, b, guess, tol)
+            c, step = (top, "below") if top < b else (below, "predict")
         else:
-            c, guess = 0.5 * (a + b), None
+            step = "predict"
         res = prep.feasibility(c)
         if res.feasible:
-            b = c
-            # a hit just above a prediction calls for the test just below; a
-            # feasible test just below means the prediction was high: bisect once
-            step = "below" if guess is not None else ("bisect" if step == "below" else "predict")
+            # a feasible lower end means the prediction was high: bisect once
+            b, step = c, ("bisect" if c == below else step)
         else:
             a, step = c, "predict"
             if (d := _boundary_distance(res)) is not None:
                 seen.append((c, d))
     return a, b
+
+
+def _open_midpoint(lo: float, hi: float, a: float, b: float, tol: float) -> float | None:
+    """The first midpoint of the bisection from [lo, hi] (tolerance ``tol``)
+    that the known levels a (infeasible) and b (feasible) leave undecided, or
+    None when they decide them all."""
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        if a < mid < b:
+            return mid
+        lo, hi = (lo, mid) if mid >= b else (mid, hi)
+    return None
+
+
+def _cell(lo: float, hi: float, a: float, b: float, guess: float,
+          tol: float) -> tuple[float, float]:
+    """The last bracket of the bisection from [lo, hi] if the optimum were
+    ``guess`` (a < guess < b): its levels from ``guess`` up feasible."""
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if mid >= b or (mid > a and mid >= guess) else (mid, hi)
+    return lo, hi
 
 
 def _extrapolate(seen: list) -> float | None:
@@ -1279,13 +1276,13 @@ def fastest_pole_modulus(K: Any) -> float:
     Compared with :func:`pole_limit` (``pi/Ts``) to decide whether ``K`` can
     be discretised at the sample time (paper 003 sect. 4 trap at the optimum).
     """
-    return _fastest(_ss_blocks(K))
+    return _fastest(StateSpace(*_ss_blocks(K)))
 
 
-def _fastest(K: tuple[np.ndarray, ...]) -> float:
-    """:func:`fastest_pole_modulus` of the realisation ``K = (A, B, C, D)``."""
-    A, B, C, D = K
-    ep = _effective_poles(_eigvals(A), _zeros(A, B, C, D), 1e-2)
+def _fastest(K: StateSpace) -> float:
+    """:func:`fastest_pole_modulus` of our system ``K`` (its poles and zeros
+    are kept on it for the order reduction)."""
+    ep = _effective_poles(*K._poles_zeros, 1e-2)
     return float(np.max(np.abs(ep))) if ep.size else 0.0
 
 
@@ -1420,7 +1417,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
         b = float(backoff)
         while True:
             res = prep.feasibility((1.0 + b) * gamma_opt)
-            K = _controller_from(prep, res) if res.feasible else None
+            K = StateSpace._unchecked(*_controller_from(prep, res)) if res.feasible else None
             fast = _fastest(K) if K is not None else math.inf
             ok = limit is None or fast <= limit
             if (K is not None and ok) or b >= max_backoff:
@@ -1439,21 +1436,21 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
                                          "\"optimal\"")
             err.condition, err.best = res.message, best
             raise err
-        K, gamma_opt, b = _controller_from(prep, res), None, 0.0
+        K, gamma_opt, b = StateSpace._unchecked(*_controller_from(prep, res)), None, 0.0
         fast = _fastest(K)
     if limit is not None and fast > limit:
         notes.append(f"controller pole at |s| = {fast:.4g} rad/s exceeds the realisability "
                      f"limit pi/Ts = {limit:.4g} rad/s"
                      + (f" even with back-off {b:g}" if gamma_opt is not None else "")
                      + ": raise gamma (back-off) or lower the high-frequency weights")
-    cl_norm = _hinf_norm(*_lft(P, K))
+    cl_norm = _hinf_norm(*_lft(P, (K.A, K.B, K.C, K.D)))
     if not cl_norm <= res.gamma * (1 + 1e-6) + 1e-12:
         notes.append(f"recomputed closed-loop norm {cl_norm:.6g} exceeds the design "
                      f"gamma {res.gamma:.6g}: the Riccati solution is inaccurate")
     for msg in notes:
         warnings.warn(msg, RuntimeWarning, stacklevel=2)
     prep_res = _unscale_xy(res, prep.t)
-    return HinfResult(K=StateSpace._unchecked(*K), gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
+    return HinfResult(K=K, gamma=res.gamma, gamma_opt=gamma_opt, backoff=b,
                       X=prep_res.X, Y=prep_res.Y, closed_loop_norm=cl_norm,
                       fastest_pole=fast, pole_limit=limit, warnings=notes)
 

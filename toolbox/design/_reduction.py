@@ -13,6 +13,7 @@ perturbation (residualisation of fast modes, keeps the DC gain).
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -22,8 +23,9 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import StateSpace, _linf_norm, as_statespace, balanced, parallel, state_scaling
-from ._hinf_riccati import _eigvals, _pencil_eigvals, _solve, _ss_blocks, _zeros
+from .._lti import (StateSpace, _eigvals, _linf_norm, _pencil_eigvals, _zeros, as_statespace,
+                    balanced, parallel, state_scaling)
+from ._hinf_riccati import _solve, _ss_blocks
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -36,9 +38,10 @@ __all__ = [
 # zpk helpers
 # --------------------------------------------------------------------------
 def _zpk(K: Any) -> tuple[np.ndarray, np.ndarray, float]:
-    """Zeros, poles and leading gain of a SISO system."""
+    """Zeros, poles and leading gain of a SISO system (those our systems keep
+    once computed: the synthesis computed the controller's)."""
     A, B, C, D = _ss_blocks(K)
-    z, p = _zeros(A, B, C, D), _eigvals(A)
+    p, z = K._poles_zeros if isinstance(K, StateSpace) else (_eigvals(A), _zeros(A, B, C, D))
     # leading gain from the value at a test point away from poles and zeros
     s0 = 1j * (1.0 + 3.0 * max([1.0] + [abs(x) for x in z.tolist() + p.tolist()]))
     val = complex(D[0, 0]) + (complex((C @ _solve(s0 * np.eye(A.shape[0]) - A, B))[0, 0])
@@ -49,7 +52,7 @@ def _zpk(K: Any) -> tuple[np.ndarray, np.ndarray, float]:
 
 def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
     """Well-scaled state-space realisation of k prod(s - z)/prod(s - p)."""
-    return StateSpace(*_zpk_realisation(z, p, k))
+    return StateSpace._unchecked(*_zpk_realisation(z, p, k))     # fresh float arrays
 
 
 def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray, ...]:
@@ -73,16 +76,17 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
 
 
 def _poly(r: np.ndarray) -> np.ndarray:
-    """``np.real_if_close(np.poly(r))``, the coefficients of ``prod(s - r_i)``: for
-    real roots (the usual case of these controllers) the same products
-    (``np.convolve`` in complex, as ``np.poly`` does) without its argument
-    handling and conjugate-pair sort, ~10 us a call (issue 13)."""
-    if r.imag.any():
-        return np.real_if_close(np.poly(r))
+    """``np.real_if_close(np.poly(r))``, the coefficients of ``prod(s - r_i)``:
+    the same products (``np.convolve`` in complex, as ``np.poly`` does) and
+    the same test of a conjugate-closed set (its sorted roots against their
+    sorted conjugates) without its argument handling, ~10-40 us a call
+    (issue 13)."""
     a = np.ones(1, complex)
     for x in r.tolist():
         a = np.convolve(a, np.array([1.0, -x], complex))
-    return a.real.copy()
+    if not r.imag.any() or np.array_equal(np.sort(r), np.sort(r.conj())):
+        return a.real.copy()
+    return np.real_if_close(a)
 
 
 def _real_conj(r: np.ndarray) -> np.ndarray:
@@ -453,11 +457,18 @@ def _imag_axis_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float) -> n
     n = A.shape[0]
     M = np.zeros((n + 1, n + 1))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n, n] = A, B, C, d
-    N = np.eye(n + 1)
-    N[n, n] = 0.0
-    lam = _pencil_eigvals(M, N)
+    lam = _pencil_eigvals(M, _diag_i0(n))
     w = lam.imag[(np.abs(lam.real) <= _IMAG_TOL * np.abs(lam)) & (lam.imag > 0)]
     return np.sort(w[(w >= MARGIN_BAND[0]) & (w <= MARGIN_BAND[1])])
+
+
+@functools.lru_cache(maxsize=32)
+def _diag_i0(n: int) -> np.ndarray:
+    """Read-only ``diag(I_n, 0)``, the right-hand matrix of a SISO system pencil."""
+    N = np.eye(n + 1)
+    N[n, n] = 0.0
+    N.flags.writeable = False
+    return N
 
 
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
