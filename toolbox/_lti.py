@@ -31,7 +31,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg
-from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev, dgeev_lwork as _dgeev_lwork_query,
+from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev,
                                  dgesdd as _dgesdd, dgesdd_lwork as _dgesdd_lwork_query,
                                  dgesv as _dgesv, dggev as _dggev, zgesv as _zgesv)
 
@@ -96,7 +96,7 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     ``cond_2(V)`` from above, without an SVD) is at most
     :data:`_MODAL_COND_MAX`; otherwise callers solve per point.
     """
-    lam, V = _eig(A)
+    lam, V = np.linalg.eig(A)
     # V^-1 by LAPACK gesv on the identity, as numpy's ``inv`` (without its
     # ~3 us of dispatch); V is real when every eigenvalue is
     _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, _identity(A.shape[0]))
@@ -117,9 +117,12 @@ def _identity(n: int) -> np.ndarray:
 
 
 def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``np.linalg.svd(M)`` of a real matrix (full U and V^T): the same LAPACK
-    dgesdd with numpy's workspace, hence the same bits, without its ~4 us of
-    dispatch."""
+    """``np.linalg.svd(M)`` of a real matrix (full U and V^T): LAPACK dgesdd
+    with numpy's workspace and layout, without its ~4 us of dispatch. It is
+    scipy's LAPACK build, not numpy's: the bits agree on the gallery's plants
+    (outputs unchanged) but need not on every matrix (an eigen-decomposition
+    taken the same way moved one design's margins by an ulp, and was
+    reverted to numpy's)."""
     U, s, Vt, info = _dgesdd(M, compute_uv=1, full_matrices=1, lwork=_dgesdd_lwork(*M.shape))
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
@@ -134,46 +137,6 @@ def _dgesdd_lwork(m: int, n: int) -> int:
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd workspace query failed (info {info})")
     return max(int(work), 1)
-
-
-@lru_cache(maxsize=32)
-def _dgeev_lwork(n: int) -> int:
-    """Optimal dgeev workspace (eigenvectors on the right) for order n."""
-    work, info = _dgeev_lwork_query(n, compute_vl=0)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dgeev workspace query failed (info {info})")
-    return max(int(work), 1)
-
-
-def _eig(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Eigenvalues and right eigenvectors of a real square matrix, as
-    ``np.linalg.eig`` returns them (the same LAPACK dgeev, the same complex
-    vectors ``vr[:, j] +- 1j vr[:, j + 1]`` of a conjugate pair, real arrays
-    when every eigenvalue is real, C-ordered, the same LinAlgError on
-    non-finite entries or no convergence) without its ~5 us of dispatch per
-    call (four calls per H-infinity axis, issue 13). The optimal workspace, as
-    numpy queries it: dtrevc3's back-transformation is blocked according to
-    it, and the eigenvectors of a complex pair differ in their last bits
-    otherwise."""
-    if not np.isfinite(A).all():
-        raise np.linalg.LinAlgError("Array must not contain infs or NaNs")
-    wr, wi, _, vr, info = _dgeev(A, compute_vl=0, lwork=_dgeev_lwork(A.shape[0]))
-    if info != 0:
-        raise np.linalg.LinAlgError("Eigenvalues did not converge")
-    # C-ordered as numpy's (a product with a Fortran-ordered operand takes
-    # another BLAS path and rounds differently)
-    # the first of each conjugate pair (dgeev puts the one with wi > 0 first);
-    # the eigenvalues are few: scalar code beats array calls
-    pairs = [j for j, v in enumerate(wi.tolist()) if v > 0.0]
-    if not pairs:
-        return wr, np.ascontiguousarray(vr)
-    V = vr.astype(complex, order="C")
-    re, im = V.real, V.imag                      # views
-    for j in pairs:
-        im[:, j], re[:, j + 1], im[:, j + 1] = vr[:, j + 1], vr[:, j], -vr[:, j + 1]
-    lam = np.empty(wr.size, complex)
-    lam.real, lam.imag = wr, wi
-    return lam, V
 
 
 def _eigvals(A: np.ndarray) -> np.ndarray:
