@@ -1,7 +1,7 @@
 """Margins and step figures of the d and q current loops, one axis at a time.
 
 Per axis, the loop is broken at the plant input: ``L = K G`` with the
-error controller ``K`` and ``G = 1/(R + s L)`` (:func:`toolbox.plant.axis_plants`,
+error controller ``K`` and ``G = 1/(R + s L)`` (:func:`toolbox.plant.axis_plant_models`,
 paper 003 eq (33)-(34)).
 
 * **discrete** (default, what users run): ``K`` is the executed discrete law's
@@ -392,7 +392,7 @@ def compute_margins(artifact, motor, *, discrete: bool = True, delay: str | None
     artifact : ControllerArtifact
         The controller (its executed laws, sample time and delay).
     motor : Motor
-        The plant (R in ohm, Ld/Lq in H); :func:`toolbox.plant.axis_plants`
+        The plant (R in ohm, Ld/Lq in H); :func:`toolbox.plant.axis_plant_models`
         gives the same ``1/(R + s L)``.
     discrete : bool
         True (default): sampled loop as executed (law measurement channel,

@@ -9,7 +9,7 @@ iteration with back-off), :mod:`._weights` (eq (44)-(49) and ``makeweight``)
 and :mod:`._reduction` (eq (71)-(72)); this module turns a spec into them and
 the result into a :class:`~toolbox.artifact.ControllerArtifact`.
 
-Per axis: ``G = axis_plants(motor)[axis]`` (eq (33)-(34)), weights from
+Per axis: ``G = axis_plant_models(motor)[axis]`` (eq (33)-(34)), weights from
 ``[controller.hinf.weights.<axis>]``, synthesis at ``gamma`` (or the optimum
 with back-off, realisable at ``drive.sample_time``), weight-bound checks (41)-(43),
 then optionally order reduction with a margin comparison.

@@ -349,7 +349,7 @@ def ilq_axis_from_plant(G: Any, s_star: float, sigma: float, **options: Any) -> 
     Parameters
     ----------
     G : toolbox._lti.StateSpace or python-control LTI
-        First-order plant (A/V), e.g. ``axis_plants(motor)["q"]``.
+        First-order plant (A/V), e.g. ``axis_plant_models(motor)["q"]``.
     s_star : float
         Assigned pole (rad/s), < 0.
     sigma : float

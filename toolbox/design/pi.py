@@ -282,7 +282,7 @@ def plant_RL(plant: Any) -> tuple[float, float]:
     """``(R, L)`` of a first-order axis plant ``1/(R + L s)``.
 
     ``plant`` is anything :func:`toolbox._lti.as_statespace` reads (e.g.
-    :func:`toolbox.plant.axis_plants`, a python-control system): one state,
+    :func:`toolbox.plant.axis_plant_models`, or a python-control system): one state,
     no feedthrough, ``G = c b/(s - a)`` so ``L = 1/(c b)`` and ``R = -a L``.
     """
     g = as_statespace(plant)
