@@ -107,13 +107,21 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     return lam, (C @ V)[:, None, :] * (Vi @ B).T[None, :, :]
 
 
-@lru_cache(maxsize=64)
 def _identity(n: int) -> np.ndarray:
-    """Read-only identity of order n (``np.eye`` builds one in Python, ~1 us,
-    and the small systems here need several per call)."""
-    eye = np.eye(n)
-    eye.flags.writeable = False
-    return eye
+    """Read-only identity of order n, made once (``np.eye`` builds one in
+    Python, ~1 us, and the small systems here need several per call)."""
+    return _leading_identity(n, n, n)
+
+
+@lru_cache(maxsize=64)
+def _leading_identity(rows: int, cols: int, k: int) -> np.ndarray:
+    """Read-only ``rows x cols`` matrix with ones on the first ``k`` diagonal
+    entries, zeros elsewhere: ``diag(I_k, 0)``, the right-hand matrix of a
+    system pencil and the gamma-weighted blocks of the H-infinity Riccati data."""
+    E = np.zeros((rows, cols))
+    E[np.arange(k), np.arange(k)] = 1.0
+    E.flags.writeable = False
+    return E
 
 
 def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -171,9 +179,7 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     A, B, C = balanced(A, B, C)
     M = np.zeros((n + C.shape[0], n + B.shape[1]))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
-    N = np.zeros_like(M)
-    N.reshape(-1)[:n * (N.shape[1] + 1):N.shape[1] + 1] = 1.0      # diag(I, 0) (a view)
-    return _pencil_eigvals(M, N)
+    return _pencil_eigvals(M, _leading_identity(*M.shape, n))
 
 
 def _matrix(value: Any, name: str) -> np.ndarray:

@@ -40,7 +40,7 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
                                  zgesv as _zgesv)
 
-from .._lti import (StateSpace, TransferFunction, _eigvals, _linf_norm, _zeros,
+from .._lti import (StateSpace, TransferFunction, _eigvals, _leading_identity, _linf_norm, _zeros,
                     as_statespace, balanced, diagonal_scaling)
 from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
@@ -798,10 +798,8 @@ def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     Ds1 = np.concatenate([Pn.D11, Pn.D21])
     # [D1111 D1112] and [D1111; D1121] are the first rows and columns of D11
     bound = max(_sigma_max(Pn.D11[:r]), _sigma_max(Pn.D11[:, :c]))
-    m1, p1 = Pn.nw, Pn.nz
-    Ew, Ez = np.zeros((m1 + Pn.nu,) * 2), np.zeros((p1 + Pn.ny,) * 2)
-    Ew.reshape(-1)[:m1 * (Ew.shape[0] + 1):Ew.shape[0] + 1] = 1.0    # diag(I_m1, 0)
-    Ez.reshape(-1)[:p1 * (Ez.shape[0] + 1):Ez.shape[0] + 1] = 1.0    # diag(I_p1, 0)
+    m, p = Pn.nw + Pn.nu, Pn.nz + Pn.ny
+    Ew, Ez = _leading_identity(m, m, Pn.nw), _leading_identity(p, p, Pn.nz)
     return _GammaFree(B=B, C=C, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
                       Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),
                       Hy=_hamiltonian(Pn.A.T, C.T, Pn.B1 @ Pn.B1.T, Pn.B1 @ Ds1.T),

@@ -13,7 +13,6 @@ perturbation (residualisation of fast modes, keeps the DC gain).
 
 from __future__ import annotations
 
-import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -23,8 +22,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _linf_norm, _pencil_eigvals, _zeros, as_statespace,
-                    balanced, parallel, state_scaling)
+from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals, _zeros,
+                    as_statespace, balanced, parallel, state_scaling)
 from ._hinf_riccati import _solve, _ss_blocks
 
 __all__ = [
@@ -457,18 +456,9 @@ def _imag_axis_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float) -> n
     n = A.shape[0]
     M = np.zeros((n + 1, n + 1))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n, n] = A, B, C, d
-    lam = _pencil_eigvals(M, _diag_i0(n))
+    lam = _pencil_eigvals(M, _leading_identity(n + 1, n + 1, n))
     w = lam.imag[(np.abs(lam.real) <= _IMAG_TOL * np.abs(lam)) & (lam.imag > 0)]
     return np.sort(w[(w >= MARGIN_BAND[0]) & (w <= MARGIN_BAND[1])])
-
-
-@functools.lru_cache(maxsize=32)
-def _diag_i0(n: int) -> np.ndarray:
-    """Read-only ``diag(I_n, 0)``, the right-hand matrix of a SISO system pencil."""
-    N = np.eye(n + 1)
-    N[n, n] = 0.0
-    N.flags.writeable = False
-    return N
 
 
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
