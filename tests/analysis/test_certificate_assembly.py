@@ -132,17 +132,29 @@ def test_solution_is_symmetric_and_satisfies_the_lmis(pi):
     assert np.max(np.linalg.eigvalsh(M)) <= -1e-6 * (1 - 1e-1)
 
 
-def _solved_once(solve):
-    """``solve`` answering a repeated problem (same data, bit for bit) from memory."""
-    memo = {}
+#: Solves of the vertex LMIs made by this module's scale sweeps, keyed by their
+#: data bit for bit: the sweeps of the two tests below solve the same problems
+#: (the solver is deterministic), so whichever runs second reads them back.
+_SOLVES: dict = {}
 
+
+def _solved_once(solve):
+    """``solve`` answering a problem solved before (same data, bit for bit) from
+    :data:`_SOLVES`."""
     def once(As: np.ndarray, alpha: float, eps: float = 1e-6):
         key = (As.shape, As.tobytes(), alpha, eps)
-        if key not in memo:
-            memo[key] = solve(As, alpha, eps)
-        return memo[key]
+        if key not in _SOLVES:
+            _SOLVES[key] = solve(As, alpha, eps)
+        return _SOLVES[key]
 
     return once
+
+
+def _sweep():
+    """The boxes of both sweeps: ``(box, alpha)`` at scales 0, 1/8, .., 1 and
+    decay rates 0 and 200 1/s."""
+    return [(C.ParameterBox.around(AZAIZ, k, omega_max=920.0), alpha)
+            for k in np.linspace(0.0, 1.0, 9) for alpha in (0.0, 200.0)]
 
 
 @pytest.mark.parametrize("design", ["pi", "hinf"])
@@ -150,7 +162,8 @@ def test_active_vertex_set_gives_the_full_solve_verdict(design, request, monkeyp
     """Constraint generation (a few vertices, the violated ones added) reaches
     the verdict of the solve over all vertices on every box of a scale sweep,
     its certificate holds on all vertices, and it solves fewer vertex LMIs.
-    The sweep must contain certified and uncertified (solved) boxes.
+    The sweep must contain certified and uncertified (solved) boxes. The
+    vertices are those the certificate solves: balanced (:func:`C._balanced`).
 
     Where constraint generation ends in the solve over all vertices (a subset
     failing numerically: most boxes with an unstable vertex), that solve is
@@ -159,15 +172,14 @@ def test_active_vertex_set_gives_the_full_solve_verdict(design, request, monkeyp
     art = request.getfixturevalue(design)
     monkeypatch.setattr(C, "_solve", _solved_once(C._solve))
     verdicts = set()
-    for k in np.linspace(0.0, 1.0, 9):
-        for alpha in (0.0, 200.0):
-            As = C._vertices(art, C.ParameterBox.around(AZAIZ, k, omega_max=920.0))
-            norm = max(1.0, float(np.max(np.abs(As))))
-            P_full, _ = C._solve(As / norm, alpha / norm)
-            full = P_full is not None and C._verified(As, P_full, alpha)
-            P, _ = C._solve_active(As, alpha)
-            assert (P is not None and C._verified(As, P, alpha)) == full, (k, alpha)
-            verdicts.add(full)
+    for box, alpha in _sweep():
+        Ab = C._balanced(art, box, C._vertices(art, box), False)[0]
+        norm = max(1.0, float(np.max(np.abs(Ab))))
+        P_full, _ = C._solve(Ab / norm, alpha / norm)
+        full = P_full is not None and C._verified(Ab, P_full, alpha)
+        P, _ = C._solve_active(Ab, alpha)
+        assert (P is not None and C._verified(Ab, P, alpha)) == full, (box, alpha)
+        verdicts.add(full)
     assert verdicts == {True, False}
 
 
@@ -194,19 +206,17 @@ def test_prescreen_rejects_only_what_the_solver_rejects(design, request, monkeyp
     without a solve; on every such box of a scale sweep the solver indeed finds
     no certificate, and a prescreened box is never one the solver certifies.
     The sweep must contain rejected boxes for the test to mean anything.
-    (A box not prescreened is solved on the same data with and without the
-    prescreen: solved once.)"""
+    (The solves are those of the sweep above, same boxes and same data: run
+    after it in one process, they are read back from :data:`_SOLVES`.)"""
     art = request.getfixturevalue(design)
     monkeypatch.setattr(C, "_solve", _solved_once(C._solve))
     rejected = 0
-    for k in np.linspace(0.0, 1.0, 9):
-        for alpha in (0.0, 200.0):
-            box = C.ParameterBox.around(AZAIZ, k, omega_max=920.0)
-            fast, _ = C._certify(art, box, alpha, False, prescreen=True)
-            slow, _ = C._certify(art, box, alpha, False)
-            if fast.status == "infeasible (unstable vertex)":
-                rejected += 1
-                assert not slow.certified
-            else:
-                assert fast.certified == slow.certified
+    for box, alpha in _sweep():
+        fast, _ = C._certify(art, box, alpha, False, prescreen=True)
+        slow, _ = C._certify(art, box, alpha, False)
+        if fast.status == "infeasible (unstable vertex)":
+            rejected += 1
+            assert not slow.certified
+        else:
+            assert fast.certified == slow.certified
     assert rejected >= 2

@@ -407,6 +407,17 @@ def _unstable_vertex(As: np.ndarray, alpha: float) -> bool:
     return bool(lam > -alpha + 1e-9 * float(np.max(np.abs(As))))
 
 
+def _balanced(artifact, box: ParameterBox, As: np.ndarray, delay: bool):
+    """``(T^-1 A_i T, T, T^-1)``: the vertices ``As`` in the coordinates of the
+    diagonal similarity ``T`` that balances the box-centre matrix (conditioning
+    of the LMIs; the certificate is ``T^-1 P T^-1`` back in the original ones)."""
+    centre = point_matrices(artifact, np.mean(box.corners(), axis=0), delay)[0]
+    _, (scale_vec, _) = matrix_balance(centre, permute=False, separate=True)
+    T = np.diag(scale_vec)
+    Ti = np.diag(1 / scale_vec)
+    return Ti @ As @ T, T, Ti
+
+
 def _certify(artifact, box: ParameterBox, alpha: float, delay: bool,
              guess: np.ndarray | None = None,
              prescreen: bool = False) -> tuple[CertificateResult, np.ndarray | None]:
@@ -425,12 +436,7 @@ def _certify(artifact, box: ParameterBox, alpha: float, delay: bool,
         return (CertificateResult(False, float(alpha), json_ready(asdict(box)),
                                   int(As.shape[0]), "infeasible (unstable vertex)",
                                   math.nan), None)
-    # diagonal similarity from the box-centre matrix for conditioning
-    centre = point_matrices(artifact, np.mean(box.corners(), axis=0), delay)[0]
-    _, (scale_vec, _) = matrix_balance(centre, permute=False, separate=True)
-    T = np.diag(scale_vec)
-    Ti = np.diag(1 / scale_vec)
-    Ab = Ti @ As @ T
+    Ab, T, Ti = _balanced(artifact, box, As, delay)
     Pg = None
     if guess is not None:
         # x_b = T^-1 x: V = x' P0 x = x_b' (T P0 T) x_b
