@@ -200,6 +200,10 @@ class PartitionedPlant:
 # LAPACK called directly: the matrices here have order <= ~12, where numpy's and
 # scipy's wrappers (argument checks, dispatch) cost 3-10 times the LAPACK work
 # itself (issue 13). Inputs must be finite float arrays (they are built here).
+# Their options go by position (f2py matches a keyword by string comparison
+# against each name, ~0.1 us apiece): the order is the wrapper's signature,
+# e.g. ``dgeev(a, compute_vl, compute_vr)``, ``dgesdd(a, compute_uv,
+# full_matrices)``, ``dsyevd(a, compute_v)``, ``dpotrf(a, lower, clean)``.
 # --------------------------------------------------------------------------
 def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A^-1 B (LAPACK dgesv, zgesv for a complex A); LinAlgError when A is
@@ -220,7 +224,7 @@ def _svdvals(M: np.ndarray) -> np.ndarray:
     if M.size == 0:
         return np.zeros(0)
     # complex at an imaginary-axis mode (A - j w I) in the A1-A4 rank tests
-    _, s, _, info = (_zgesdd if M.dtype.kind == "c" else _dgesdd)(M, compute_uv=0)
+    _, s, _, info = (_zgesdd if M.dtype.kind == "c" else _dgesdd)(M, 0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
     return s
@@ -228,7 +232,7 @@ def _svdvals(M: np.ndarray) -> np.ndarray:
 
 def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Full SVD ``M = U diag(s) Vt`` (LAPACK dgesdd, as numpy's ``svd``)."""
-    U, s, Vt, info = _dgesdd(M, compute_uv=1, full_matrices=1)
+    U, s, Vt, info = _dgesdd(M, 1, 1)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
     return U, s, Vt
@@ -238,7 +242,7 @@ def _cholesky(M: np.ndarray) -> np.ndarray:
     """Lower Cholesky factor (LAPACK dpotrf, as numpy's ``cholesky``)."""
     if M.size == 0:
         return M.copy()
-    c, info = _dpotrf(M, lower=1, clean=1)
+    c, info = _dpotrf(M, 1, 1)
     if info != 0:
         raise np.linalg.LinAlgError(f"matrix not positive definite (dpotrf info {info})")
     return c
@@ -401,7 +405,7 @@ def _imag_axis_modes(A: np.ndarray, tol: float) -> list[complex]:
     of the imaginary axis."""
     if A.shape[0] == 0:
         return []
-    wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
+    wr, wi, _, _, info = _dgeev(A, 0, 0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
     wr, wi = wr.tolist(), wi.tolist()       # a few: scalar code beats array calls
@@ -691,10 +695,10 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
         return _ric_zero(H[:n, :n])
     # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
     # dgees's own sorting does, without a Python callback per eigenvalue
-    T, _, wr, wi, Z, _, info = _dgees(_no_select, H, sort_t=0, overwrite_a=1)
+    T, _, wr, wi, Z, _, info = _dgees(_no_select, H, 1, 0)       # compute_v, sort_t
     if info != 0:
         return None, None, None
-    _, Z, wr, wi, sdim, _, _, info = _dtrsen((wr < 0.0).astype(np.int32), T, Z, job="N",
+    _, Z, wr, wi, sdim, _, _, info = _dtrsen((wr < 0.0).astype(np.int32), T, Z, "N",
                                              overwrite_t=1, overwrite_q=1)
     if info != 0 or sdim != n:
         return None, None, None
@@ -717,7 +721,7 @@ def _ric_zero(a_cl: np.ndarray) -> tuple[np.ndarray | None, ...]:
     solution iff ``a_cl`` is Hurwitz; its eigenvalues are the closed-loop
     poles. One eigenvalue problem of order n instead of the Schur form of
     order 2n; otherwise ``(None, None, None)`` (no stabilising solution)."""
-    wr, wi, _, _, info = _dgeev(a_cl, compute_vl=0, compute_vr=0)
+    wr, wi, _, _, info = _dgeev(a_cl, 0, 0)
     if info != 0 or not (wr < 0.0).all():
         return None, None, None
     return np.zeros(a_cl.shape), wr, wi
@@ -766,7 +770,7 @@ def _not_psd(X: np.ndarray, tol: float = 1e-9) -> float | None:
     extrapolation, :func:`_boundary_distance`)."""
     if X.size == 0:
         return None
-    ev, _, info = _dsyevd(X, compute_v=0)                  # ascending
+    ev, _, info = _dsyevd(X, 0)                  # ascending
     if info != 0:
         raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
     return None if ev[0] >= -tol * max(1.0, -ev[0], ev[-1]) else float(ev[0])
@@ -849,7 +853,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
 
 def _spectral_radius(M: np.ndarray) -> float:
     """max |eigenvalue| of a non-empty real square matrix (LAPACK dgeev)."""
-    wr, wi, _, _, info = _dgeev(M, compute_vl=0, compute_vr=0)
+    wr, wi, _, _, info = _dgeev(M, 0, 0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
     return float(_amax(np.hypot(wr, wi)))
