@@ -663,8 +663,7 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
         F = np.linalg.solve(r, b.T @ X + s.T)
         ev = np.linalg.eigvals(a - b @ F)
         wr, wi = ev.real, ev.imag
-    X = X + X.T
-    X *= 0.5                                  # 0.5 (X + X^T), one temporary fewer
+        X = _symmetric_part(X)
     if wr.size and _amax(wr) >= -1e-12 * max(1.0, _amax(np.hypot(wr, wi))):
         return None, "the solution is not stabilising"
     return X, ""
@@ -684,7 +683,8 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     parts of the closed-loop poles (the n selected eigenvalues of H, those of
     ``a - b r^-1 (b^T X + s^T)``); ``(None, None, None)`` if it does not exist
     or its basis Z11 is too ill-conditioned to give X = Z21 Z11^-1 accurately
-    (1-norm condition estimate above 1e14)."""
+    (1-norm condition estimate above 1e14). X is symmetrised (rounding
+    leaves it slightly asymmetric)."""
     n = h.a.shape[0]
     try:
         rv = _solve(r, h.V)                                 # r^-1 [s^T, b^T]
@@ -710,7 +710,14 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     rcond, _ = _dgecon(lu, _dlange("1", Z11t))
     if not rcond >= 1e-14:
         return None, None, None
-    return Xt.T, wr[:n], wi[:n]
+    return _symmetric_part(Xt), wr[:n], wi[:n]
+
+
+def _symmetric_part(X: np.ndarray) -> np.ndarray:
+    """0.5 (X + X^T) (of a solution X or of its transpose: the same numbers)."""
+    X = X + X.T
+    X *= 0.5                                  # one temporary fewer
+    return X
 
 
 def _ric_zero(a_cl: np.ndarray) -> tuple[np.ndarray | None, ...]:
