@@ -664,7 +664,9 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
         ev = np.linalg.eigvals(a - b @ F)
         wr, wi = ev.real, ev.imag
         X = _symmetric_part(X)
-    if wr.size and _amax(wr) >= -1e-12 * max(1.0, _amax(np.hypot(wr, wi))):
+    # a few poles: scalar code beats array calls (as in _imag_axis_modes)
+    wr, wi = wr.tolist(), wi.tolist()
+    if wr and max(wr) >= -1e-12 * max(1.0, *map(math.hypot, wr, wi)):
         return None, "the solution is not stabilising"
     return X, ""
 
@@ -729,7 +731,7 @@ def _ric_zero(a_cl: np.ndarray) -> tuple[np.ndarray | None, ...]:
     poles. One eigenvalue problem of order n instead of the Schur form of
     order 2n; otherwise ``(None, None, None)`` (no stabilising solution)."""
     wr, wi, _, _, info = _dgeev(a_cl, 0, 0)
-    if info != 0 or not (wr < 0.0).all():
+    if info != 0 or not max(wr.tolist(), default=-1.0) < 0.0:      # all Re < 0
         return None, None, None
     return np.zeros(a_cl.shape), wr, wi
 
