@@ -423,7 +423,8 @@ def _rank_defect(M: np.ndarray, tol: float, sv: np.ndarray | None = None) -> boo
     if M.shape[0] < M.shape[1]:
         return True
     sv = _svdvals(M) if sv is None else sv
-    return bool(sv[-1] <= tol * max(sv[0], 1e-300))
+    hi, lo = sv[0].item(), sv[-1].item()        # Python floats: no numpy scalar arithmetic
+    return lo <= tol * max(hi, 1e-300)
 
 
 def _blame_mode(P: PartitionedPlant, lam: complex) -> str:
@@ -782,7 +783,8 @@ def _not_psd(X: np.ndarray, tol: float = 1e-9) -> float | None:
     ev, _, info = _dsyevd(X, 0)                  # ascending
     if info != 0:
         raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
-    return None if ev[0] >= -tol * max(1.0, -ev[0], ev[-1]) else float(ev[0])
+    lo, hi = ev[0].item(), ev[-1].item()        # Python floats: no numpy scalar arithmetic
+    return None if lo >= -tol * max(1.0, -lo, hi) else lo
 
 
 @dataclass(slots=True)
