@@ -628,8 +628,8 @@ def _hamiltonian(a: np.ndarray, b: np.ndarray, q: np.ndarray, s: np.ndarray) -> 
     n = a.shape[0]
     H0 = np.zeros((2 * n, 2 * n))
     H0[:n, :n] = a
-    np.negative(q, out=H0[n:, :n])
-    np.negative(a.T, out=H0[n:, n:])
+    H0[n:, :n] = -q                  # faster than np.negative(..., out=) on such sizes
+    H0[n:, n:] = -a.T
     return _Hamiltonian(a=a, b=b, q=q, s=s, H0=H0, W=np.concatenate([b, -s]),
                         V=np.concatenate([s.T, b.T], axis=1))
 
