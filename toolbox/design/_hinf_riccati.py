@@ -200,6 +200,10 @@ class PartitionedPlant:
 # LAPACK called directly: the matrices here have order <= ~12, where numpy's and
 # scipy's wrappers (argument checks, dispatch) cost 3-10 times the LAPACK work
 # itself (issue 13). Inputs must be finite float arrays (they are built here).
+# Their options go by position (f2py matches a keyword by string comparison
+# against each name, ~0.1 us apiece): the order is the wrapper's signature,
+# e.g. ``dgeev(a, compute_vl, compute_vr)``, ``dgesdd(a, compute_uv,
+# full_matrices)``, ``dsyevd(a, compute_v)``, ``dpotrf(a, lower, clean)``.
 # --------------------------------------------------------------------------
 def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A^-1 B (LAPACK dgesv, zgesv for a complex A); LinAlgError when A is
@@ -220,7 +224,7 @@ def _svdvals(M: np.ndarray) -> np.ndarray:
     if M.size == 0:
         return np.zeros(0)
     # complex at an imaginary-axis mode (A - j w I) in the A1-A4 rank tests
-    _, s, _, info = (_zgesdd if M.dtype.kind == "c" else _dgesdd)(M, compute_uv=0)
+    _, s, _, info = (_zgesdd if M.dtype.kind == "c" else _dgesdd)(M, 0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
     return s
@@ -228,7 +232,7 @@ def _svdvals(M: np.ndarray) -> np.ndarray:
 
 def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Full SVD ``M = U diag(s) Vt`` (LAPACK dgesdd, as numpy's ``svd``)."""
-    U, s, Vt, info = _dgesdd(M, compute_uv=1, full_matrices=1)
+    U, s, Vt, info = _dgesdd(M, 1, 1)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
     return U, s, Vt
@@ -238,7 +242,7 @@ def _cholesky(M: np.ndarray) -> np.ndarray:
     """Lower Cholesky factor (LAPACK dpotrf, as numpy's ``cholesky``)."""
     if M.size == 0:
         return M.copy()
-    c, info = _dpotrf(M, lower=1, clean=1)
+    c, info = _dpotrf(M, 1, 1)
     if info != 0:
         raise np.linalg.LinAlgError(f"matrix not positive definite (dpotrf info {info})")
     return c
@@ -401,7 +405,7 @@ def _imag_axis_modes(A: np.ndarray, tol: float) -> list[complex]:
     of the imaginary axis."""
     if A.shape[0] == 0:
         return []
-    wr, wi, _, _, info = _dgeev(A, compute_vl=0, compute_vr=0)
+    wr, wi, _, _, info = _dgeev(A, 0, 0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
     wr, wi = wr.tolist(), wi.tolist()       # a few: scalar code beats array calls
@@ -419,7 +423,8 @@ def _rank_defect(M: np.ndarray, tol: float, sv: np.ndarray | None = None) -> boo
     if M.shape[0] < M.shape[1]:
         return True
     sv = _svdvals(M) if sv is None else sv
-    return bool(sv[-1] <= tol * max(sv[0], 1e-300))
+    hi, lo = sv[0].item(), sv[-1].item()        # Python floats: no numpy scalar arithmetic
+    return lo <= tol * max(hi, 1e-300)
 
 
 def _blame_mode(P: PartitionedPlant, lam: complex) -> str:
@@ -623,8 +628,8 @@ def _hamiltonian(a: np.ndarray, b: np.ndarray, q: np.ndarray, s: np.ndarray) -> 
     n = a.shape[0]
     H0 = np.zeros((2 * n, 2 * n))
     H0[:n, :n] = a
-    np.negative(q, out=H0[n:, :n])
-    np.negative(a.T, out=H0[n:, n:])
+    H0[n:, :n] = -q                  # faster than np.negative(..., out=) on such sizes
+    H0[n:, n:] = -a.T
     return _Hamiltonian(a=a, b=b, q=q, s=s, H0=H0, W=np.concatenate([b, -s]),
                         V=np.concatenate([s.T, b.T], axis=1))
 
@@ -659,9 +664,10 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
         F = np.linalg.solve(r, b.T @ X + s.T)
         ev = np.linalg.eigvals(a - b @ F)
         wr, wi = ev.real, ev.imag
-    X = X + X.T
-    X *= 0.5                                  # 0.5 (X + X^T), one temporary fewer
-    if wr.size and _amax(wr) >= -1e-12 * max(1.0, _amax(np.hypot(wr, wi))):
+        X = _symmetric_part(X)
+    # a few poles: scalar code beats array calls (as in _imag_axis_modes)
+    wr, wi = wr.tolist(), wi.tolist()
+    if wr and max(wr) >= -1e-12 * max(1.0, *map(math.hypot, wr, wi)):
         return None, "the solution is not stabilising"
     return X, ""
 
@@ -680,7 +686,8 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     parts of the closed-loop poles (the n selected eigenvalues of H, those of
     ``a - b r^-1 (b^T X + s^T)``); ``(None, None, None)`` if it does not exist
     or its basis Z11 is too ill-conditioned to give X = Z21 Z11^-1 accurately
-    (1-norm condition estimate above 1e14)."""
+    (1-norm condition estimate above 1e14). X is symmetrised (rounding
+    leaves it slightly asymmetric)."""
     n = h.a.shape[0]
     try:
         rv = _solve(r, h.V)                                 # r^-1 [s^T, b^T]
@@ -691,10 +698,10 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
         return _ric_zero(H[:n, :n])
     # unsorted Schur form, then dtrsen moves the stable eigenvalues first: what
     # dgees's own sorting does, without a Python callback per eigenvalue
-    T, _, wr, wi, Z, _, info = _dgees(_no_select, H, sort_t=0, overwrite_a=1)
+    T, _, wr, wi, Z, _, info = _dgees(_no_select, H, 1, 0)       # compute_v, sort_t
     if info != 0:
         return None, None, None
-    _, Z, wr, wi, sdim, _, _, info = _dtrsen((wr < 0.0).astype(np.int32), T, Z, job="N",
+    _, Z, wr, wi, sdim, _, _, info = _dtrsen((wr < 0.0).astype(np.int32), T, Z, "N",
                                              overwrite_t=1, overwrite_q=1)
     if info != 0 or sdim != n:
         return None, None, None
@@ -706,7 +713,14 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     rcond, _ = _dgecon(lu, _dlange("1", Z11t))
     if not rcond >= 1e-14:
         return None, None, None
-    return Xt.T, wr[:n], wi[:n]
+    return _symmetric_part(Xt), wr[:n], wi[:n]
+
+
+def _symmetric_part(X: np.ndarray) -> np.ndarray:
+    """0.5 (X + X^T) (of a solution X or of its transpose: the same numbers)."""
+    X = X + X.T
+    X *= 0.5                                  # one temporary fewer
+    return X
 
 
 def _ric_zero(a_cl: np.ndarray) -> tuple[np.ndarray | None, ...]:
@@ -717,8 +731,8 @@ def _ric_zero(a_cl: np.ndarray) -> tuple[np.ndarray | None, ...]:
     solution iff ``a_cl`` is Hurwitz; its eigenvalues are the closed-loop
     poles. One eigenvalue problem of order n instead of the Schur form of
     order 2n; otherwise ``(None, None, None)`` (no stabilising solution)."""
-    wr, wi, _, _, info = _dgeev(a_cl, compute_vl=0, compute_vr=0)
-    if info != 0 or not (wr < 0.0).all():
+    wr, wi, _, _, info = _dgeev(a_cl, 0, 0)
+    if info != 0 or not max(wr.tolist(), default=-1.0) < 0.0:      # all Re < 0
         return None, None, None
     return np.zeros(a_cl.shape), wr, wi
 
@@ -766,10 +780,11 @@ def _not_psd(X: np.ndarray, tol: float = 1e-9) -> float | None:
     extrapolation, :func:`_boundary_distance`)."""
     if X.size == 0:
         return None
-    ev, _, info = _dsyevd(X, compute_v=0)                  # ascending
+    ev, _, info = _dsyevd(X, 0)                  # ascending
     if info != 0:
         raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
-    return None if ev[0] >= -tol * max(1.0, -ev[0], ev[-1]) else float(ev[0])
+    lo, hi = ev[0].item(), ev[-1].item()        # Python floats: no numpy scalar arithmetic
+    return None if lo >= -tol * max(1.0, -lo, hi) else lo
 
 
 @dataclass(slots=True)
@@ -849,7 +864,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
 
 def _spectral_radius(M: np.ndarray) -> float:
     """max |eigenvalue| of a non-empty real square matrix (LAPACK dgeev)."""
-    wr, wi, _, _, info = _dgeev(M, compute_vl=0, compute_vr=0)
+    wr, wi, _, _, info = _dgeev(M, 0, 0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
     return float(_amax(np.hypot(wr, wi)))
