@@ -456,9 +456,12 @@ def _imag_axis_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float) -> n
     n = A.shape[0]
     M = np.zeros((n + 1, n + 1))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n, n] = A, B, C, d
-    lam = _pencil_eigvals(M, _leading_identity(n + 1, n + 1, n))
-    w = lam.imag[(np.abs(lam.real) <= _IMAG_TOL * np.abs(lam)) & (lam.imag > 0)]
-    return np.sort(w[(w >= MARGIN_BAND[0]) & (w <= MARGIN_BAND[1])])
+    lam = _pencil_eigvals(M, _leading_identity(n + 1, n + 1, n)).tolist()
+    lo, hi = MARGIN_BAND
+    # a few eigenvalues: scalar code beats five masked array operations here
+    # (abs of a Python complex is the same hypot as numpy's)
+    return np.array(sorted(z.imag for z in lam
+                           if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * abs(z)))
 
 
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
