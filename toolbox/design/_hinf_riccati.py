@@ -1268,15 +1268,17 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
 
 def _effective_poles(poles: np.ndarray, zeros: np.ndarray, cancel_tol: float) -> np.ndarray:
     """:func:`effective_poles` of the given poles and zeros."""
-    z = list(zeros)
+    # Python complex numbers: the same differences and moduli (hypot) as
+    # numpy's scalars, at a third of their cost
+    z = zeros.tolist()
     keep = []
-    for pi in sorted(poles, key=abs):
+    for pi in sorted(poles.tolist(), key=abs):
         d = [abs(zi - pi) for zi in z]
         if d and min(d) <= cancel_tol * max(abs(pi), 1e-300):
-            z.pop(int(np.argmin(d)))
+            z.pop(d.index(min(d)))
         else:
             keep.append(pi)
-    return np.asarray(keep, dtype=complex)
+    return np.array(keep, dtype=complex)
 
 
 def fastest_pole_modulus(K: Any) -> float:

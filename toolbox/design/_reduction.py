@@ -134,7 +134,7 @@ def _cancel(Kz: tuple, tol: float, keep: str) -> tuple[tuple, list[str]]:
     for pi in sorted(p, key=abs):
         d = [abs(zi - pi) for zi in zl]
         if d and min(d) <= tol * max(abs(pi), 1e-300) and abs(pi) > 0:
-            zi = zl.pop(int(np.argmin(d)))
+            zi = zl.pop(d.index(min(d)))
             if keep == "dc":
                 k *= (zi / pi).real
             actions.append(f"removed pole {pi:.6g} with zero {zi:.6g} "
