@@ -1050,12 +1050,15 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     through a solve with a nearly singular R, which lost the crossings.
     """
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
-    if D.shape == (1, 1):                            # SISO: the SVD by hand, 5x cheaper
+    if D.shape == (1, 1):
+        # SISO: the SVD by hand, D = sign(d) |d| 1, so B V = B and U' C = sign(d) C
+        # exactly (products by +-1)
         d = float(D[0, 0])
-        U, s, Vt = np.array([[-1.0 if d < 0 else 1.0]]), np.array([abs(d)]), np.ones((1, 1))
+        s, Bv, Cu = np.array([abs(d)]), B.T, -C if d < 0 else C
     else:
         U, s, Vt = _svd(D)
-    Bv, Cu, k = (B @ Vt.T).T, U.T @ C, s.size
+        Bv, Cu = (B @ Vt.T).T, U.T @ C
+    k = s.size
     X, Y = np.zeros((2 * k + m + p, 2 * n)), np.zeros((2 * k + m + p, 2 * n))
     X[:k, :n], Y[:k, :n] = -Bv[:k], Cu[:k]
     X[k:2 * k, n:], Y[k:2 * k, n:] = Cu[:k], Bv[:k]
