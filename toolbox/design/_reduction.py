@@ -455,12 +455,13 @@ def _imag_axis_zeros(M: np.ndarray) -> np.ndarray:
     are symmetric about the imaginary axis and a simple zero on it stays
     there up to rounding."""
     n = M.shape[0] - 1
-    lam = _pencil_eigvals(M, _leading_identity(n + 1, n + 1, n)).tolist()
+    lam = _pencil_eigvals(M, _leading_identity(n + 1, n + 1, n))
     lo, hi = MARGIN_BAND
-    # a few eigenvalues: scalar code beats five masked array operations here
-    # (abs of a Python complex is the same hypot as numpy's)
-    return np.array(sorted(z.imag for z in lam
-                           if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * abs(z)))
+    # a few eigenvalues: scalar code beats four more masked array operations;
+    # the moduli stay numpy's (its vectorised hypot differs from libm's in
+    # the last bit, which could move an eigenvalue across the threshold)
+    return np.array(sorted(z.imag for z, r in zip(lam.tolist(), np.abs(lam).tolist())
+                           if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * r))
 
 
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
