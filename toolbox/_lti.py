@@ -523,6 +523,7 @@ def _roots(p: np.ndarray) -> np.ndarray:
 #: :class:`TransferFunction` cancel (python-control's ``minreal`` default).
 _CANCEL_TOL = float(np.sqrt(np.finfo(float).eps))
 
+
 def _minreal_coeffs(num: np.ndarray, den: np.ndarray,
                     tol: float = _CANCEL_TOL) -> tuple[np.ndarray, np.ndarray]:
     """:meth:`TransferFunction.minreal` on trimmed coefficients: the same
