@@ -31,6 +31,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg
+from numpy.linalg import _umath_linalg
 from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev,
                                  dgesdd as _dgesdd, dgesdd_lwork as _dgesdd_lwork_query,
                                  dgesv as _dgesv, dggev as _dggev, zgesv as _zgesv)
@@ -96,7 +97,7 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     ``cond_2(V)`` from above, without an SVD) is at most
     :data:`_MODAL_COND_MAX`; otherwise callers solve per point.
     """
-    lam, V = np.linalg.eig(A)
+    lam, V = _eig(A)
     # V^-1 by LAPACK gesv on the identity, as numpy's ``inv`` (without its
     # ~3 us of dispatch); V is real when every eigenvalue is
     _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, _identity(A.shape[0]))
@@ -105,6 +106,23 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     if A.shape[0] * np.abs(Vi).sum(0).max() > _MODAL_COND_MAX:
         return None
     return lam, (C @ V)[:, None, :] * (Vi @ B).T[None, :, :]
+
+
+def _eig(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.linalg.eig(A)`` of a real square float array: the same LAPACK
+    routine of numpy's own build (``_umath_linalg.eig``: scipy's ``dgeev`` is
+    another OpenBLAS build, whose bits moved a gallery margin, see
+    :func:`_svd`) and the same outputs, real views when every eigenvalue is
+    real, without the wrapper's ~8 us of argument handling (four calls per
+    H-infinity axis, issue 13)."""
+    if not np.isfinite(A).all():
+        raise np.linalg.LinAlgError("Array must not contain infs or NaNs")
+    w, V = _umath_linalg.eig(A, signature="d->DD")
+    if np.isnan(w).any():                       # numpy's wrapper raises on non-convergence
+        raise np.linalg.LinAlgError("Eigenvalues did not converge")
+    if not w.imag.any():
+        return w.real, V.real
+    return w, V
 
 
 def _identity(n: int) -> np.ndarray:
@@ -501,6 +519,34 @@ def _roots(p: np.ndarray) -> np.ndarray:
     return np.roots(p)
 
 
+#: Relative distance below which a pole and a zero of a
+#: :class:`TransferFunction` cancel (python-control's ``minreal`` default).
+_CANCEL_TOL = float(np.sqrt(np.finfo(float).eps))
+
+
+def _minreal_coeffs(num: np.ndarray, den: np.ndarray,
+                    tol: float = _CANCEL_TOL) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`TransferFunction.minreal` on trimmed coefficients: the same
+    ``num`` and ``den`` objects when nothing cancels, else new trimmed ones
+    (the H-infinity augmentation realises four transfer functions per axis
+    and needs no object of them, issue 13)."""
+    if num.size == 1 or den.size == 1:
+        return num, den                        # no zero or no pole: nothing to cancel
+    zeros = list(_roots(num)) if num.any() else []
+    poles = list(_roots(den))
+    kept = []
+    for z in zeros:
+        near = [i for i, p in enumerate(poles) if abs(p - z) <= tol * max(1.0, abs(z))]
+        if near:
+            poles.pop(min(near, key=lambda i: abs(poles[i] - z)))
+        else:
+            kept.append(z)
+    if len(kept) == len(zeros):
+        return num, den
+    return (_poly(num[0] * np.real(np.poly(kept)) if kept else num[:1]),
+            _poly(den[0] * np.real(np.poly(poles))))
+
+
 def tf2ss(num: Any, den: Any, dt: float | None = None) -> StateSpace:
     """Controllable canonical realisation of a proper SISO ``num/den``.
 
@@ -609,10 +655,6 @@ def as_statespace(sys: Any) -> StateSpace:
         return _tf_to_ss(sys, dt)
     raise TypeError(f"cannot read {type(sys).__name__} as a linear system")
 
-
-#: Relative distance below which a pole and a zero of a
-#: :class:`TransferFunction` cancel (python-control's ``minreal`` default).
-_CANCEL_TOL = float(np.sqrt(np.finfo(float).eps))
 
 
 @dataclass(frozen=True, eq=False)
@@ -735,20 +777,8 @@ class TransferFunction:
         """Cancel the poles and zeros closer than ``tol max(1, |z|)`` (the
         rule of python-control's transfer-function ``minreal``); unchanged
         coefficients when nothing cancels (roots are not re-expanded)."""
-        if self.num.size == 1 or self.den.size == 1:
-            return self                        # no zero or no pole: nothing to cancel
-        zeros, poles = list(self.zeros()), list(self.poles())
-        kept = []
-        for z in zeros:
-            near = [i for i, p in enumerate(poles) if abs(p - z) <= tol * max(1.0, abs(z))]
-            if near:
-                poles.pop(min(near, key=lambda i: abs(poles[i] - z)))
-            else:
-                kept.append(z)
-        if len(kept) == len(zeros):
-            return self
-        num = self.num[0] * np.real(np.poly(kept)) if kept else self.num[:1]
-        return TransferFunction(num, self.den[0] * np.real(np.poly(poles)))
+        num, den = _minreal_coeffs(self.num, self.den, tol)
+        return self if num is self.num else TransferFunction(num, den)
 
     def to_statespace(self) -> StateSpace:
         """Controllable canonical realisation (:func:`tf2ss`)."""
@@ -1021,12 +1051,15 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     through a solve with a nearly singular R, which lost the crossings.
     """
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
-    if D.shape == (1, 1):                            # SISO: the SVD by hand, 5x cheaper
+    if D.shape == (1, 1):
+        # SISO: the SVD by hand, D = sign(d) |d| 1, so B V = B and U' C = sign(d) C
+        # exactly (products by +-1)
         d = float(D[0, 0])
-        U, s, Vt = np.array([[-1.0 if d < 0 else 1.0]]), np.array([abs(d)]), np.ones((1, 1))
+        s, Bv, Cu = np.array([abs(d)]), B.T, -C if d < 0 else C
     else:
         U, s, Vt = _svd(D)
-    Bv, Cu, k = (B @ Vt.T).T, U.T @ C, s.size
+        Bv, Cu = (B @ Vt.T).T, U.T @ C
+    k = s.size
     X, Y = np.zeros((2 * k + m + p, 2 * n)), np.zeros((2 * k + m + p, 2 * n))
     X[:k, :n], Y[:k, :n] = -Bv[:k], Cu[:k]
     X[k:2 * k, n:], Y[k:2 * k, n:] = Cu[:k], Bv[:k]

@@ -134,7 +134,7 @@ def _cancel(Kz: tuple, tol: float, keep: str) -> tuple[tuple, list[str]]:
     for pi in sorted(p, key=abs):
         d = [abs(zi - pi) for zi in zl]
         if d and min(d) <= tol * max(abs(pi), 1e-300) and abs(pi) > 0:
-            zi = zl.pop(int(np.argmin(d)))
+            zi = zl.pop(d.index(min(d)))
             if keep == "dc":
                 k *= (zi / pi).real
             actions.append(f"removed pole {pi:.6g} with zero {zi:.6g} "
@@ -447,34 +447,44 @@ def _series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:
     return (A, np.concatenate([B1, B2 @ D1]), np.concatenate([D2 @ C1, C2], axis=1), D2 @ D1)
 
 
-def _imag_axis_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float) -> np.ndarray:
+def _imag_axis_zeros(M: np.ndarray) -> np.ndarray:
     """Frequencies w in :data:`MARGIN_BAND` with ``F(jw) = 0`` for the SISO
-    ``F = (A, B, C, d)``, from the finite eigenvalues of the system pencil
-    ``([A B; C d], diag(I, 0))`` (its invariant zeros). The crossing functions
-    below are para-Hermitian (even in s), so their zeros are symmetric about
-    the imaginary axis and a simple zero on it stays there up to rounding."""
-    n = A.shape[0]
-    M = np.zeros((n + 1, n + 1))
-    M[:n, :n], M[:n, n:], M[n:, :n], M[n, n] = A, B, C, d
+    ``F`` whose system matrix is ``M = [A B; C d]``, from the finite
+    eigenvalues of the pencil ``(M, diag(I, 0))`` (its invariant zeros). The
+    crossing functions below are para-Hermitian (even in s), so their zeros
+    are symmetric about the imaginary axis and a simple zero on it stays
+    there up to rounding."""
+    n = M.shape[0] - 1
     lam = _pencil_eigvals(M, _leading_identity(n + 1, n + 1, n))
-    w = lam.imag[(np.abs(lam.real) <= _IMAG_TOL * np.abs(lam)) & (lam.imag > 0)]
-    return np.sort(w[(w >= MARGIN_BAND[0]) & (w <= MARGIN_BAND[1])])
+    lo, hi = MARGIN_BAND
+    # a few eigenvalues: scalar code beats four more masked array operations;
+    # the moduli stay numpy's (its vectorised hypot differs from libm's in
+    # the last bit, which could move an eigenvalue across the threshold)
+    return np.array(sorted(z.imag for z, r in zip(lam.tolist(), np.abs(lam).tolist())
+                           if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * r))
 
 
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
                d: float) -> tuple[np.ndarray, np.ndarray]:
     """Gain crossovers (``|L(jw)| = 1``: zeros of ``L(s) L(-s) - 1``) and phase
     crossover candidates (``Im L(jw) = 0``: zeros of ``L(s) - L(-s)``) of the
-    SISO loop ``L = (A, B, C, d)``; ``L(-s)`` is realised by ``(-A, -B, C, d)``."""
+    SISO loop ``L = (A, B, C, d)``; ``L(-s)`` is realised by ``(-A, -B, C, d)``.
+
+    The system matrices are written directly: ``L(s) L(-s) - 1`` is the series
+    connection ``[-A 0 -B; B C A B d; d C C d^2 - 1]`` (its products of single
+    numbers are those of :func:`_series`' matrix products), ``L(s) - L(-s)`` the
+    parallel one ``[A 0 B; 0 -A -B; C -C 0]``."""
     n = A.shape[0]
-    Am, Bm = -A, -B
-    D = np.array([[d]])
-    Ag, Bg, Cg, Dg = _series((Am, Bm, C, D), (A, B, C, D))     # L(s) L(-s)
-    Ap = np.zeros((2 * n, 2 * n))
-    Ap[:n, :n], Ap[n:, n:] = A, Am
-    gain = _imag_axis_zeros(Ag, Bg, Cg, float(Dg[0, 0]) - 1.0)
-    phase = _imag_axis_zeros(Ap, np.concatenate([B, Bm]), np.concatenate([C, -C], axis=1), 0.0)
-    return gain, phase
+    b, c = B[:, 0], C[0]
+    Mg = np.zeros((2 * n + 1, 2 * n + 1))
+    Mg[:n, :n], Mg[:n, -1] = -A, -b
+    Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = B * C, A, b * d
+    Mg[-1, :n], Mg[-1, n:-1], Mg[-1, -1] = d * c, c, d * d - 1.0
+    Mp = np.zeros((2 * n + 1, 2 * n + 1))
+    Mp[:n, :n], Mp[:n, -1] = A, b
+    Mp[n:-1, n:-1], Mp[n:-1, -1] = -A, -b
+    Mp[-1, :n], Mp[-1, n:-1] = c, -c
+    return _imag_axis_zeros(Mg), _imag_axis_zeros(Mp)
 
 
 def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
