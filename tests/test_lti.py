@@ -384,23 +384,3 @@ def test_linf_norm_of_a_row_with_feedthrough():
     assert ours >= _grid_peak(g) * (1 - 1e-12)
     assert ours == pytest.approx(_ab13dd(g), rel=1e-9)
 
-
-@pytest.mark.parametrize("seed", range(6))
-def test_eig_is_numpys_eig_bit_for_bit(seed):
-    """_lti._eig calls numpy's eig ufunc without its wrapper: the same
-    eigenvalues and eigenvectors, dtypes and layout (real views when every
-    eigenvalue is real), since gallery numbers depend on their last bits."""
-    rng = np.random.default_rng(seed)
-    n = 2 + seed
-    A = rng.standard_normal((n, n)) * 10.0 ** rng.uniform(-3, 6, (n, n))
-    if seed % 2:                                     # triangular: real eigenvalues
-        A = np.triu(A)
-    w, V = L._eig(A)
-    w0, V0 = np.linalg.eig(A)
-    assert w.dtype == w0.dtype and V.dtype == V0.dtype and V.strides == V0.strides
-    assert np.array_equal(w, w0) and np.array_equal(V, V0)
-
-
-def test_eig_refuses_non_finite():
-    with pytest.raises(np.linalg.LinAlgError):
-        L._eig(np.array([[1.0, np.inf], [0.0, 1.0]]))

@@ -31,7 +31,6 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg
-from numpy.linalg import _umath_linalg
 from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev,
                                  dgesdd as _dgesdd, dgesdd_lwork as _dgesdd_lwork_query,
                                  dgesv as _dgesv, dggev as _dggev, zgesv as _zgesv)
@@ -97,7 +96,7 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     ``cond_2(V)`` from above, without an SVD) is at most
     :data:`_MODAL_COND_MAX`; otherwise callers solve per point.
     """
-    lam, V = _eig(A)
+    lam, V = np.linalg.eig(A)
     # V^-1 by LAPACK gesv on the identity, as numpy's ``inv`` (without its
     # ~3 us of dispatch); V is real when every eigenvalue is
     _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, _identity(A.shape[0]))
@@ -106,23 +105,6 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     if A.shape[0] * np.abs(Vi).sum(0).max() > _MODAL_COND_MAX:
         return None
     return lam, (C @ V)[:, None, :] * (Vi @ B).T[None, :, :]
-
-
-def _eig(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.linalg.eig(A)`` of a real square float array: the same LAPACK
-    routine of numpy's own build (``_umath_linalg.eig``: scipy's ``dgeev`` is
-    another OpenBLAS build, whose bits moved a gallery margin, see
-    :func:`_svd`) and the same outputs, real views when every eigenvalue is
-    real, without the wrapper's ~8 us of argument handling (four calls per
-    H-infinity axis, issue 13)."""
-    if not np.isfinite(A).all():
-        raise np.linalg.LinAlgError("Array must not contain infs or NaNs")
-    w, V = _umath_linalg.eig(A, signature="d->DD")
-    if np.isnan(w).any():                       # numpy's wrapper raises on non-convergence
-        raise np.linalg.LinAlgError("Eigenvalues did not converge")
-    if not w.imag.any():
-        return w.real, V.real
-    return w, V
 
 
 def _identity(n: int) -> np.ndarray:
@@ -654,7 +636,6 @@ def as_statespace(sys: Any) -> StateSpace:
             return StateSpace(ss.A, ss.B, ss.C, ss.D, dt)
         return _tf_to_ss(sys, dt)
     raise TypeError(f"cannot read {type(sys).__name__} as a linear system")
-
 
 
 @dataclass(frozen=True, eq=False)
