@@ -305,7 +305,8 @@ def bench_batch(n=10_000, duration=0.02):
     # warm-up (compile the parallel kernel) outside the timing
     simulate_batch(LAW, {k: (v[:4] if np.ndim(v) else v) for k, v in plants.items()},
                    sc, DRIVE)
-    bar = tqdm(total=n, unit="sim", desc="batch")
+    # a bar on a terminal only: in a log, tqdm's carriage returns garble the report
+    bar = tqdm(total=n, unit="sim", desc="batch", disable=not sys.stderr.isatty())
     last = [0]
 
     def progress(done, total):
