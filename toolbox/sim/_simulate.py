@@ -327,7 +327,7 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams)
                         f"({law.sample_time} s)", Ts)
     if not (isinstance(drive.delay_samples, (int, np.integer)) and drive.delay_samples >= 0):
         raise SpecError("drive.delay_samples", "an integer >= 0", drive.delay_samples)
-    scenario.validate("scenario", Ts)
+    scenario.check_plant_step(Ts)  # the rest was validated when the frozen scenario was built
     inverter = scenario.inverter or drive.inverter
     inv_code = {"average": 0, "svm": 1, "fcs_mpc": 2}.get(inverter)
     if inv_code is None:
