@@ -13,7 +13,7 @@ from toolbox.errors import SpecError
 from toolbox.sim import DriveParams, Scenario, control_law, simulate, simulate_batch
 from toolbox.spec import spec_from_dict
 
-from sim_helpers import PAPER000 as M, tc_law
+from sim_helpers import PAPER000 as M, tc_law, tci_law
 
 Ts = 1e-4
 DRIVE = DriveParams(vdc=150, sample_time=Ts, delay_samples=1)
@@ -67,3 +67,17 @@ def test_batch_columns_refuse_an_unknown_torque_factor():
             "J": M.J, "torque_factor": np.array([1.0, 1.2])}
     with pytest.raises(SpecError, match=r"plants\.torque_factor\[1\]"):
         simulate_batch(tc_law(M, 800, 800, Ts), cols, STEP, DRIVE)
+
+
+@pytest.mark.parametrize("axis, field, value", [("d", "A", np.nan), ("q", "antiwindup", np.inf),
+                                                ("q", "D", -np.inf)])
+def test_non_finite_law_matrices_are_refused(axis, field, value):
+    """A NaN or inf anywhere in a law's matrices (including the anti-windup
+    gain) raises SpecError before the kernel runs."""
+    law = tci_law(M, 800, 200, 800, 200, Ts)
+    ax = getattr(law, axis)
+    bad = np.array(getattr(ax, field), float, copy=True)
+    bad.flat[-1] = value
+    law = dataclasses.replace(law, **{axis: dataclasses.replace(ax, **{field: bad})})
+    with pytest.raises(SpecError, match="finite controller matrices"):
+        simulate(law, M, STEP, DRIVE)

@@ -295,9 +295,9 @@ def _pack_law(law: ControlLaw):
         except ValueError as exc:
             raise SpecError(f"law.{name}", f"A {m}x{m}, B {m}x2, C 1x{m}, D 1x2, "
                             f"antiwindup {m}", str(exc)) from None
-    for arr in (A, B, C, D, W):
-        if not np.all(np.isfinite(arr)):
-            raise SpecError("law", "finite controller matrices", "NaN or inf")
+    # one isfinite over all five (each np.all(np.isfinite(.)) cost ~1.6 us per call)
+    if not np.isfinite(np.concatenate([a.ravel() for a in (A, B, C, D, W)])).all():
+        raise SpecError("law", "finite controller matrices", "NaN or inf")
     f = law.fcs or FcsWeights()
     dec = law.decoupling
     LP = _packed("LP", R_c=dec.R_c, Ld_c=dec.Ld_c, Lq_c=dec.Lq_c, flux_c=dec.flux_c,
