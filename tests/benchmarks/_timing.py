@@ -59,31 +59,38 @@ def interleaved(routes: Mapping[str, Callable[[], object]], rounds: int,
     program timing its inner loop with its own CPU clock); anything else it
     returns is ignored and the process CPU time is measured here.
 
-    ``quiet_gc``: collect Python's garbage before each route's turn and keep
-    the cyclic collector off while it runs (as ``timeit`` does), so that a
-    collection of what the other routes (or the harness: ``subprocess``)
-    left behind is not charged to the route that happens to trigger it.
-    Measured (issue 13): in ``bench_sim`` a route calling ``simulate()``
-    after the C subprocesses took a median 0.3-0.4 ms more per call (1.5 %
-    of a 1 s simulation) than the same kernel call without the collector.
+    ``quiet_gc``: collect Python's garbage once before the rounds and keep
+    the cyclic collector off through all of them (as ``timeit`` does for its
+    run), so that a collection of what the other routes (or the harness:
+    ``subprocess``) left behind is not charged to the route that happens to
+    trigger it. Measured (issue 13): in ``bench_sim`` a route calling
+    ``simulate()`` after the C subprocesses took a median 0.3-0.4 ms more
+    per call (1.5 % of a 1 s simulation) than the same kernel call without
+    the collector. Once, not before every turn: a full collection (~17 ms
+    through ~115k objects with numba loaded, memory-bound) leaves the core
+    slower for the next ~8 ms (a 50 ms simulation repeated right after one:
+    1.52, 1.45, 1.44, ... 1.31 ms from the 7th call on, as without it), so
+    the in-process route timed next paid 0.8-1.1 ms per 1 s simulation
+    (3-4 %), while a C route's process start-up ran before its own clock.
     """
     times: dict[str, list[float]] = {name: [] for name in routes}
-    for _ in range(rounds):
-        for name, func in routes.items():
-            if quiet_gc:
-                gc.collect()
-                gc.disable()
-            try:
+    gc_was_on = gc.isenabled()
+    if quiet_gc:
+        gc.collect()
+        gc.disable()
+    try:
+        for _ in range(rounds):
+            for name, func in routes.items():
                 t0 = time.process_time()
                 own = 0.0
                 for _ in range(repeat):
                     r = func()
                     own += r if isinstance(r, float) else 0.0
                 cpu = time.process_time() - t0
-            finally:
-                if quiet_gc:
-                    gc.enable()
-            times[name].append((own if own else cpu) / repeat)
+                times[name].append((own if own else cpu) / repeat)
+    finally:
+        if quiet_gc and gc_was_on:
+            gc.enable()
     return times
 
 

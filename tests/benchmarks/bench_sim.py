@@ -28,10 +28,11 @@ Routes:
    (ours, C..., ours, ...), each timed by its own process CPU time (the C
    loop reads CLOCK_PROCESS_CPUTIME_ID around its loop; see ``_timing`` for
    why not the wall clock; ours' wall time per call is printed too), with
-   Python's cyclic garbage collector run before and off during each timed
-   call (``interleaved(quiet_gc=True)``, as ``timeit``: the collections of
-   what the C routes' ``subprocess`` calls left behind otherwise landed in
-   ours' calls, 0.3-0.4 ms of a 26 ms call); each
+   Python's cyclic garbage collector run once before the rounds and off
+   through them (``interleaved(quiet_gc=True)``, as ``timeit``: the
+   collections of what the C routes' ``subprocess`` calls left behind
+   otherwise landed in ours' calls, 0.3-0.4 ms of a 26 ms call; a
+   collection before every turn cost ours 3-4 % instead, see ``_timing``); each
    ratio is the median of the per-round ratios with its interquartile range;
 3. scipy.integrate.solve_ivp (RK45, rtol 1e-8, atol 1e-10) once per control
    period, run on a shorter horizon and reported per simulated second;
