@@ -163,7 +163,7 @@ def test_active_vertex_set_gives_the_full_solve_verdict(design, request, monkeyp
     the verdict of the solve over all vertices on every box of a scale sweep,
     its certificate holds on all vertices, and it solves fewer vertex LMIs.
     The sweep must contain certified and uncertified (solved) boxes. The
-    vertices are those the certificate solves: balanced (:func:`C._balanced`).
+    vertices are those the certificate solves: balanced (:func:`C._balanced_vertices`).
 
     Where constraint generation ends in the solve over all vertices (a subset
     failing numerically: most boxes with an unstable vertex), that solve is
@@ -173,7 +173,7 @@ def test_active_vertex_set_gives_the_full_solve_verdict(design, request, monkeyp
     monkeypatch.setattr(C, "_solve", _solved_once(C._solve))
     verdicts = set()
     for box, alpha in _sweep():
-        Ab = C._balanced(art, box, C._vertices(art, box), False)[0]
+        Ab = C._balanced_vertices(art, box, C._vertices(art, box), False)[0]
         norm = max(1.0, float(np.max(np.abs(Ab))))
         P_full, _ = C._solve(Ab / norm, alpha / norm)
         full = P_full is not None and C._verified(Ab, P_full, alpha)

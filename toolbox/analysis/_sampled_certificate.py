@@ -74,8 +74,9 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.linalg import expm, matrix_balance
+from scipy.linalg import expm
 
+from .._lti import diagonal_scaling
 from ..artifact import json_ready
 from ..plant import dq_matrices, max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_state_matrix
@@ -472,7 +473,7 @@ def _cell_lmi(artifact, laws, cell: SampledBox) -> _CellLMI:
     U = np.zeros((n, 2))
     U[0, 0] = U[1, 1] = 1.0
     # diagonal similarity x = T x_b from the mean corner matrix, for conditioning
-    _, (t, _) = matrix_balance(np.mean(A, axis=0), permute=False, separate=True)
+    t = diagonal_scaling(np.mean(A, axis=0))
     keep = _distinct_corners(A, G)
     A, G = A[keep], G[keep]
     return _CellLMI(A * t[None, None, :] / t[None, :, None],

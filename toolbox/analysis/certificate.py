@@ -40,7 +40,7 @@ approximation of the sampled loop, which the robustness sweep evaluates
 exactly.
 
 The LMIs are solved with Clarabel (called directly) after a diagonal similarity
-(``scipy.linalg.matrix_balance`` of the nominal matrix), with ``P >= I`` and
+(LAPACK dgebal's scaling of the nominal matrix), with ``P >= I`` and
 a margin ``eps`` on each vertex LMI, then checked a posteriori with numpy
 eigenvalues of the returned ``P`` (a certificate is only reported when that
 check passes).
@@ -53,8 +53,8 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.linalg import matrix_balance
 
+from .._lti import diagonal_scaling
 from ..plant import dq_matrices, max_electrical_speed
 from ._lmi import (above_identity, lmi_rows, problem_data, solve_by_constraint_generation,
                    solve_feasibility, symmetric_basis, symmetric_matrix)
@@ -407,12 +407,13 @@ def _unstable_vertex(As: np.ndarray, alpha: float) -> bool:
     return bool(lam > -alpha + 1e-9 * float(np.max(np.abs(As))))
 
 
-def _balanced(artifact, box: ParameterBox, As: np.ndarray, delay: bool):
+def _balanced_vertices(artifact, box: ParameterBox, As: np.ndarray, delay: bool):
     """``(T^-1 A_i T, T, T^-1)``: the vertices ``As`` in the coordinates of the
-    diagonal similarity ``T`` that balances the box-centre matrix (conditioning
-    of the LMIs; the certificate is ``T^-1 P T^-1`` back in the original ones)."""
+    diagonal similarity ``T`` that balances the box-centre matrix
+    (:func:`toolbox._lti.diagonal_scaling`, LAPACK dgebal: conditioning of the
+    LMIs; the certificate is ``T^-1 P T^-1`` back in the original ones)."""
     centre = point_matrices(artifact, np.mean(box.corners(), axis=0), delay)[0]
-    _, (scale_vec, _) = matrix_balance(centre, permute=False, separate=True)
+    scale_vec = diagonal_scaling(centre)
     T = np.diag(scale_vec)
     Ti = np.diag(1 / scale_vec)
     return Ti @ As @ T, T, Ti
@@ -436,7 +437,7 @@ def _certify(artifact, box: ParameterBox, alpha: float, delay: bool,
         return (CertificateResult(False, float(alpha), json_ready(asdict(box)),
                                   int(As.shape[0]), "infeasible (unstable vertex)",
                                   math.nan), None)
-    Ab, T, Ti = _balanced(artifact, box, As, delay)
+    Ab, T, Ti = _balanced_vertices(artifact, box, As, delay)
     Pg = None
     if guess is not None:
         # x_b = T^-1 x: V = x' P0 x = x_b' (T P0 T) x_b

@@ -10,7 +10,7 @@ look like 1e14 and refuse a sound controller.
 :func:`minimal_law` therefore
 
 1. balances the law with an exact power-of-two diagonal similarity
-   (``scipy.linalg.matrix_balance``, as LAPACK ``gebal``) so that one
+   (:func:`toolbox._lti.diagonal_scaling`, LAPACK ``gebal``) so that one
    threshold fits every row;
 2. sets to zero every entry of ``A``, ``[B aw]``, ``C`` below
    ``ROUNDOFF_REL`` times the norm of its block (1e-10: four orders above the
@@ -33,9 +33,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
-from .._lti import StateSpace, minreal
+from .._lti import StateSpace, diagonal_scaling, minreal
 
 __all__ = ["MinimalLaw", "minimal_law", "ROUNDOFF_REL", "EQUIV_RTOL"]
 
@@ -122,7 +121,7 @@ def _balance(A, Bx, C):
     """Exact power-of-two diagonal similarity (no permutation)."""
     if A.shape[0] == 0:
         return A, Bx, C
-    _, (scale, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
+    scale = diagonal_scaling(A)
     return A * (1.0 / scale)[:, None] * scale[None, :], Bx / scale[:, None], C * scale[None, :]
 
 

@@ -9,7 +9,7 @@ discrete two-input system ``[i_ref, i_meas] -> v``):
   (``{b0, b1, b2, a1, a2}`` per stage, a1 and a2 NEGATED with respect to
   scipy's denominator ``[1, a1, a2]``) followed by an output gain;
 * ``"ss"`` for two-input laws: the state-space law itself after an exact
-  power-of-two diagonal balancing (``scipy.linalg.matrix_balance``).
+  power-of-two diagonal balancing (:func:`toolbox._lti.diagonal_scaling`).
 
 Both come with their equivalent state-space matrices *in the coordinates
 the C code uses* (for the SOS form: the transposed-direct-form-II states
@@ -23,9 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
-from .._lti import StateSpace, ss2zpk
+from .._lti import StateSpace, diagonal_scaling, ss2zpk
 
 __all__ = ["Realisation", "realise_axis", "is_one_dof"]
 
@@ -281,8 +280,7 @@ def realise_axis(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
         if real is not None:
             return real
     if n:
-        _, (scale, perm) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
-        S = scale                                  # powers of two: exact
+        S = diagonal_scaling(A)                    # powers of two: exact
         A = A * (1.0 / S)[:, None] * S[None, :]
         B = B / S[:, None]
         C = C * S[None, :]
