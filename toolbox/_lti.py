@@ -765,10 +765,6 @@ class TransferFunction:
         """Controllable canonical realisation (:func:`tf2ss`)."""
         return tf2ss(self.num, self.den)
 
-    def _realisation(self) -> tuple[np.ndarray, ...]:
-        """A, B, C, D of :meth:`to_statespace` as plain arrays."""
-        return _tf2ss_arrays(self.num, self.den)
-
     def to_control(self) -> Any:
         """The same transfer function as a ``control.TransferFunction``
         (imports python-control)."""

@@ -22,8 +22,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals, _zeros,
-                    as_statespace, balanced, parallel, state_scaling)
+from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals,
+                    _tf2ss_arrays, _zeros, as_statespace, balanced, parallel, state_scaling)
 from ._hinf_riccati import _solve, _ss_blocks
 
 __all__ = [
@@ -56,25 +56,19 @@ def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
 
 def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray, ...]:
     """A, B, C, D of k prod(s - z)/prod(s - p): scipy.signal's ``zpk2ss``
-    (controllable canonical form) without its argument handling (~0.3 ms a
-    call, issue 13), then the diagonal balancing of :func:`toolbox._lti.balanced`."""
+    (the controllable canonical form of :func:`toolbox._lti.tf2ss`) without its
+    argument handling (~0.3 ms a call, issue 13), then the diagonal balancing
+    of :func:`toolbox._lti.balanced`."""
     z, p = _real_conj(z), _real_conj(p)
     if p.size == 0:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(k)]])
-    den = _poly(p)
-    num = float(k) * (_poly(z) if z.size else np.ones(1))
-    num = np.concatenate([np.zeros(den.size - num.size), num])
-    n = p.size
-    A = np.zeros((n, n))
-    A[0] = -den[1:]
-    A.reshape(-1)[n::n + 1] = 1.0                   # the subdiagonal (a view)
-    B = np.zeros((n, 1))
-    B[0, 0] = 1.0
-    C = (num[1:] - num[0] * den[1:])[None, :]
-    return (*balanced(A, B, C), np.array([[num[0]]]))
+    num = float(k) * (_poly_from_roots(z) if z.size else np.ones(1))
+    # tf2ss's controllable canonical form (den is monic: its division by den[0] is exact)
+    A, B, C, D = _tf2ss_arrays(num, _poly_from_roots(p))
+    return (*balanced(A, B, C), D)
 
 
-def _poly(r: np.ndarray) -> np.ndarray:
+def _poly_from_roots(r: np.ndarray) -> np.ndarray:
     """``np.real_if_close(np.poly(r))``, the coefficients of ``prod(s - r_i)``:
     the same products (``np.convolve`` in complex, as ``np.poly`` does) and
     the same test of a conjugate-closed set (its sorted roots against their
