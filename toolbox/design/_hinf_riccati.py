@@ -211,7 +211,7 @@ def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     exactly singular."""
     _, _, x, info = (_zgesv if A.dtype.kind == "c" else _dgesv)(A, B)
     if info != 0:
-        raise np.linalg.LinAlgError(f"singular matrix (dgesv info {info})")
+        raise np.linalg.LinAlgError(f"singular matrix (gesv info {info})")
     return x
 
 
@@ -1116,18 +1116,9 @@ def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> fl
 def _bisect(prep: _Prepared, lo: float, hi: float, a: float, b: float, tol: float) -> float:
     """The bisection of :func:`gamma_iteration` from [lo, hi], testing only the
     midpoints the known bracket [a, b] (a infeasible, b feasible) leaves open."""
-    while hi - lo > tol * hi:
-        mid = 0.5 * (lo + hi)
-        if a < mid < b:
-            feasible = prep.feasibility(mid).feasible
-            a, b = (a, mid) if feasible else (mid, b)
-        else:
-            feasible = mid >= b
-        if feasible:
-            hi = mid
-        else:
-            lo = mid
-    return hi
+    while (mid := _open_midpoint(lo, hi, a, b, tol)) is not None:
+        a, b = (a, mid) if prep.feasibility(mid).feasible else (mid, b)
+    return _cell(lo, hi, a, b, b, tol)[1]        # all decided: the last bracket's top
 
 
 #: tests :func:`_narrow` may spend (paper 003's axes need 5-7)
