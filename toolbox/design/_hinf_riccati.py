@@ -41,7 +41,7 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  zgesv as _zgesv)
 
 from .._lti import (StateSpace, TransferFunction, _eigvals, _leading_identity, _linf_norm,
-                    _minreal_coeffs, _poly, _tf2ss_arrays, _zeros,
+                    _minreal_coeffs, _poly, _svd, _tf2ss_arrays, _zeros,
                     as_statespace, balanced, diagonal_scaling)
 from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
@@ -229,14 +229,6 @@ def _svdvals(M: np.ndarray) -> np.ndarray:
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
     return s
-
-
-def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Full SVD ``M = U diag(s) Vt`` (LAPACK dgesdd, as numpy's ``svd``)."""
-    U, s, Vt, info = _dgesdd(M, 1, 1)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
-    return U, s, Vt
 
 
 def _cholesky(M: np.ndarray) -> np.ndarray:
