@@ -383,4 +383,3 @@ def test_linf_norm_of_a_row_with_feedthrough():
     ours = L.linf_norm(g)
     assert ours >= _grid_peak(g) * (1 - 1e-12)
     assert ours == pytest.approx(_ab13dd(g), rel=1e-9)
-
