@@ -267,10 +267,12 @@ def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     """A, B, C, D of a SISO system or a scalar gain."""
     if isinstance(sys, (int, float, np.floating)):
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(sys)]])
-    coeffs = _tf_coeffs(sys)
-    if coeffs is not None:
+    if isinstance(sys, StateSpace):
+        s = sys                  # ours (float arrays): no transfer-function test, ~2 us
+    elif (coeffs := _tf_coeffs(sys)) is not None:
         return _tf_realisation(*coeffs)
-    s = sys if all(hasattr(sys, m) for m in "ABCD") else as_statespace(sys)
+    else:
+        s = sys if all(hasattr(sys, m) for m in "ABCD") else as_statespace(sys)
     if np.shape(s.D) != (1, 1):
         raise ValueError(f"augment_mixed_sensitivity: expected a SISO system, "
                          f"got {np.shape(s.D)[0]}x{np.shape(s.D)[1]}")
