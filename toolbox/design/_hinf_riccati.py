@@ -40,8 +40,8 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
                                  zgesv as _zgesv)
 
-from .._lti import (StateSpace, TransferFunction, _eigvals, _leading_identity, _linf_norm,
-                    _minreal_coeffs, _poly, _svd, _tf2ss_arrays, _zeros,
+from .._lti import (_CANCEL_TOL, StateSpace, TransferFunction, _eigvals, _leading_identity,
+                    _linf_norm, _minreal_coeffs, _poly, _svd, _tf2ss_arrays, _zeros,
                     as_statespace, balanced, diagonal_scaling)
 from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
@@ -127,11 +127,7 @@ class PartitionedPlant:
             if arr.ndim < 2:
                 arr = arr.reshape(1, -1) if arr.size else arr.reshape(0, 0)
             object.__setattr__(self, name, arr)
-        # one finiteness test of all the entries (nine tests cost ~15 us); the
-        # culprit is sought only when it fails
-        if not np.isfinite(np.concatenate([getattr(self, k).ravel() for k in _BLOCKS])).all():
-            name = next(k for k in _BLOCKS if not np.isfinite(getattr(self, k)).all())
-            raise ValueError(f"PartitionedPlant: block {name} has NaN or inf entries")
+        self._check_finite()
         n = self.A.shape[0]
         nw, nu = self.B1.shape[1], self.B2.shape[1]
         nz, ny = self.C1.shape[0], self.C2.shape[0]
@@ -186,6 +182,25 @@ class PartitionedPlant:
         data["state_labels"] = self.state_labels
         data.update(blocks)
         return PartitionedPlant(**data)
+
+    def _check_finite(self) -> None:
+        """ValueError naming the first block with a NaN or inf entry: one
+        finiteness test of all the entries (nine tests cost ~15 us), the
+        culprit sought only when it fails."""
+        if not np.isfinite(np.concatenate([getattr(self, k).ravel() for k in _BLOCKS])).all():
+            name = next(k for k in _BLOCKS if not np.isfinite(getattr(self, k)).all())
+            raise ValueError(f"PartitionedPlant: block {name} has NaN or inf entries")
+
+    @classmethod
+    def _built(cls, **blocks: Any) -> "PartitionedPlant":
+        """A plant of 2-D float blocks of consistent sizes assembled here (the
+        augmentation): only the finiteness of its entries, which come from the
+        caller's weights, is tested; the conversions and size checks of
+        ``__post_init__`` (~15 us) are skipped (issue 13)."""
+        new = object.__new__(cls)
+        new.__dict__.update(blocks)          # frozen: no __setattr__ per block
+        new._check_finite()
+        return new
 
     def _derived(self, **blocks: np.ndarray) -> "PartitionedPlant":
         """Copy with some blocks replaced by float arrays computed from valid ones
@@ -252,10 +267,12 @@ def _ss_blocks(sys: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     """A, B, C, D of a SISO system or a scalar gain."""
     if isinstance(sys, (int, float, np.floating)):
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(sys)]])
-    coeffs = _tf_coeffs(sys)
-    if coeffs is not None:
+    if isinstance(sys, StateSpace):
+        s = sys                  # ours (float arrays): no transfer-function test, ~2 us
+    elif (coeffs := _tf_coeffs(sys)) is not None:
         return _tf_realisation(*coeffs)
-    s = sys if all(hasattr(sys, m) for m in "ABCD") else as_statespace(sys)
+    else:
+        s = sys if all(hasattr(sys, m) for m in "ABCD") else as_statespace(sys)
     if np.shape(s.D) != (1, 1):
         raise ValueError(f"augment_mixed_sensitivity: expected a SISO system, "
                          f"got {np.shape(s.D)[0]}x{np.shape(s.D)[1]}")
@@ -294,8 +311,30 @@ def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
                          f"{den.size - 1}")
     if not num.any():
         return _ss_blocks(0.0)
+    if den.size == 2 and (first := _first_order(num, den)) is not None:
+        return first
     A, B, C, D = _tf2ss_arrays(*_minreal_coeffs(num, den))
     return (*balanced(A, B, C), D)
+
+
+def _first_order(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...] | None:
+    """:func:`_tf_realisation` of ``(n0 s + n1)/(d0 s + d1)`` or ``n1/(d0 s + d1)``
+    (the plant of eq (34) and the weights of eq (44)-(49) are first-order) in
+    scalar arithmetic: the operations of :func:`toolbox._lti._minreal_coeffs`
+    and :func:`toolbox._lti._tf2ss_arrays` on Python floats, which round as
+    numpy's on one-element arrays (IEEE), without their array calls (issue 13);
+    None when the zero cancels the pole (the general route removes it)."""
+    d0, d1 = den.tolist()
+    if num.size == 2:
+        n0, n1 = num.tolist()
+        z = -n1 / n0
+        if abs(-d1 / d0 - z) <= _CANCEL_TOL * max(1.0, abs(z)):
+            return None
+    else:
+        n0, n1 = 0.0, num.item()         # num padded to den's degree
+    n0, n1, a1 = n0 / d0, n1 / d0, d1 / d0           # den made monic
+    A, B, C = balanced(np.array([[-a1]]), np.ones((1, 1)), np.array([[n1 - n0 * a1]]))
+    return A, B, C, np.array([[n0]])
 
 
 def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
@@ -329,11 +368,9 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
     """
     Ag, Bg, Cg, Dg = _ss_blocks(G)
     ng = Ag.shape[0]
-    ws = [("w1", w1), ("w2", w2), ("w3", w3)]
-    mats = [_ss_blocks(w) if w is not None else None for _, w in ws]
-    sizes = [ng] + [m[0].shape[0] if m is not None else 0 for m in mats]
-    n = sum(sizes)
-    off = np.cumsum([0] + sizes)
+    ws = [(name, _ss_blocks(w)) for name, w in (("w1", w1), ("w2", w2), ("w3", w3))
+          if w is not None]
+    n = ng + sum(m[0].shape[0] for _, m in ws)
     A = np.zeros((n, n))
     B1 = np.zeros((n, 1))
     B2 = np.zeros((n, 1))
@@ -341,17 +378,17 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
     B2[:ng] = Bg
     # error e = r - (Cg xg + Dg u)
     C_e = np.zeros((1, n)); C_e[:, :ng] = -Cg
-    De_w, De_u = np.array([[1.0]]), -Dg
+    De_w, De_u = np.ones((1, 1)), -Dg
     # plant output yg = Cg xg + Dg u
     C_g = np.zeros((1, n)); C_g[:, :ng] = Cg
-    inputs = {"w1": (C_e, De_w, De_u), "w2": (np.zeros((1, n)), np.zeros((1, 1)), np.eye(1)),
-              "w3": (C_g, np.zeros((1, 1)), Dg)}
+    zero = np.zeros((1, 1))
+    inputs = {"w1": (C_e, De_w, De_u), "w2": (np.zeros((1, n)), zero, _eye(1)),
+              "w3": (C_g, zero, Dg)}
     C1_rows, D11_rows, D12_rows = [], [], []
-    for k, ((name, _), m) in enumerate(zip(ws, mats)):
-        if m is None:
-            continue
-        Aw, Bw, Cw, Dw = m
-        i0, i1 = off[k + 1], off[k + 2]
+    labels = ["G"] * ng
+    i0 = ng
+    for name, (Aw, Bw, Cw, Dw) in ws:
+        i1 = i0 + Aw.shape[0]
         Cin, Dinw, Dinu = inputs[name]
         A[i0:i1, i0:i1] = Aw
         A[i0:i1, :] += Bw @ Cin
@@ -362,12 +399,12 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
         C1_rows.append(crow)
         D11_rows.append(Dw @ Dinw)
         D12_rows.append(Dw @ Dinu)
-    labels = ["G"] * ng
-    for (name, _), sz in zip(ws, sizes[1:]):
-        labels += [name] * sz
-    return PartitionedPlant(A=A, B1=B1, B2=B2, C1=np.concatenate(C1_rows),
-                            C2=C_e, D11=np.concatenate(D11_rows), D12=np.concatenate(D12_rows),
-                            D21=De_w, D22=De_u, state_labels=tuple(labels))
+        labels += [name] * (i1 - i0)
+        i0 = i1
+    return PartitionedPlant._built(A=A, B1=B1, B2=B2, C1=np.concatenate(C1_rows), C2=C_e,
+                                   D11=np.concatenate(D11_rows),
+                                   D12=np.concatenate(D12_rows), D21=De_w, D22=De_u,
+                                   state_labels=tuple(labels))
 
 
 # --------------------------------------------------------------------------
@@ -827,7 +864,6 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
                                f"sigma(D1111; D1121)) = {w.bound:.6g} >= gamma = {gamma:.6g}")
     g2 = gamma * gamma
     Rnh = w.DtD - g2 * w.Ew                                          # eq (14)
-    Rnj = w.DDt - g2 * w.Ez                                          # eq (15)
     X, why = _ric_h(w.Hx, Rnh)                                       # eq (16), (18)
     if X is None:
         return HinfFeasibility(gamma, False, "X_not_stabilising",
@@ -837,6 +873,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "X_not_psd",
                                f"X of eq (18) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, min_eig=low)
+    Rnj = w.DDt - g2 * w.Ez                                          # eq (15)
     Y, why = _ric_h(w.Hy, Rnj)                                       # eq (17), (19)
     if Y is None:
         return HinfFeasibility(gamma, False, "Y_not_stabilising",
