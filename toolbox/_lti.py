@@ -31,6 +31,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg
+from numpy.linalg import _umath_linalg
 from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev,
                                  dgesdd as _dgesdd, dgesdd_lwork as _dgesdd_lwork_query,
                                  dgesv as _dgesv, dggev as _dggev, zgesv as _zgesv)
@@ -96,7 +97,7 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     ``cond_2(V)`` from above, without an SVD) is at most
     :data:`_MODAL_COND_MAX`; otherwise callers solve per point.
     """
-    lam, V = np.linalg.eig(A)
+    lam, V = _eig(A)
     # V^-1 by LAPACK gesv on the identity, as numpy's ``inv`` (without its
     # ~3 us of dispatch); V is real when every eigenvalue is
     _, _, Vi, info = (_zgesv if V.dtype.kind == "c" else _dgesv)(V, _identity(A.shape[0]))
@@ -105,6 +106,17 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     if A.shape[0] * np.abs(Vi).sum(0).max() > _MODAL_COND_MAX:
         return None
     return lam, (C @ V)[:, None, :] * (Vi @ B).T[None, :, :]
+
+
+def _eig(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.linalg.eig(A)`` of a real square matrix: the gufunc numpy's ``eig``
+    calls (numpy's LAPACK, so the same bits: scipy's dgeev gave other last bits
+    on one design, see :func:`_svd`) without its ~8 us of argument checks, and
+    real results when every eigenvalue is real, as ``eig`` returns them."""
+    lam, V = _umath_linalg.eig(A, signature="d->DD")
+    if np.isnan(lam).any():                          # the gufunc's failure (or a nan in A)
+        raise np.linalg.LinAlgError("Eigenvalues did not converge")
+    return (lam, V) if lam.imag.any() else (lam.real, V.real)
 
 
 def _identity(n: int) -> np.ndarray:
@@ -1087,6 +1099,13 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
                tol: float = 1e-10) -> float:
     """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` (no system
     object built: the synthesis calls it on arrays it has just formed)."""
+    return _linf_norm_poles(A, B, C, D, tol)[0]
+
+
+def _linf_norm_poles(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                     tol: float = 1e-10) -> tuple[float, np.ndarray]:
+    """:func:`_linf_norm` and the eigenvalues of ``A`` it computed on the way
+    (a caller testing the stability of A needs no second eigenvalue problem)."""
     if D.shape == (1, 1):
         dnorm = abs(float(D[0, 0]))
     elif D.shape[0] == 1 or D.shape[1] == 1:         # a row or column: sigma_max = 2-norm
@@ -1094,21 +1113,21 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     else:
         dnorm = float(np.linalg.norm(D, 2)) if D.size else 0.0
     if A.shape[0] == 0 or D.size == 0:
-        return dnorm
-    lam, gains = _gain_function(A, B, C, D)
-    lam = lam.tolist()                               # a few: scalar code is cheaper
+        return dnorm, _eigvals(A)
+    poles, gains = _gain_function(A, B, C, D)
+    lam = poles.tolist()                             # a few: scalar code is cheaper
     if any(abs(z.real) <= 1e-12 * max(1.0, abs(z)) for z in lam):
-        return float("inf")
+        return float("inf"), poles
     best = max(float(gains(np.array([0.0] + [abs(z) for z in lam])).max()), dnorm)
     if best == 0.0:
-        return 0.0
+        return 0.0, poles
     crossings = _hamiltonian(A, B, C, D)
     for _ in range(100):
         w = crossings((1.0 + 2.0 * tol) * best)
         if len(w) < 2:
-            return best
+            break
         peak = _refined_peak(gains, w, tol)
         if peak <= best:
-            return best
+            break
         best = peak
-    return best
+    return best, poles
