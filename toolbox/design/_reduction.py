@@ -471,13 +471,13 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     n = A.shape[0]
     b, c = B[:, 0], C[0]
     Mg = np.zeros((2 * n + 1, 2 * n + 1))
-    Mg[:n, :n], Mg[:n, -1] = -A, -b
+    Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = -A, -b, c
     Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = B * C, A, b * d
-    Mg[-1, :n], Mg[-1, n:-1], Mg[-1, -1] = d * c, c, d * d - 1.0
+    Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
     Mp = np.zeros((2 * n + 1, 2 * n + 1))
-    Mp[:n, :n], Mp[:n, -1] = A, b
-    Mp[n:-1, n:-1], Mp[n:-1, -1] = -A, -b
-    Mp[-1, :n], Mp[-1, n:-1] = c, -c
+    Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
+    # -A, -b (exact negations) are already in Mg
+    Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = Mg[:n, :n], Mg[:n, -1], -c
     return _imag_axis_zeros(Mg), _imag_axis_zeros(Mp)
 
 
@@ -554,9 +554,11 @@ def _gain_phase_margins(A: np.ndarray, B: np.ndarray, C: np.ndarray,
         w_gc = w_pc = np.zeros(0)
     else:
         w_gc, w_pc = _crossings(A, B, C, d)
-    Lgc, Lpc = _response(A, B, C, d, w_gc), _response(A, B, C, d, w_pc)
-    pms = [(math.degrees(np.angle(-x)), w) for x, w in zip(Lgc, w_gc)]
-    gms = [(-20 * math.log10(abs(x)), w) for x, w in zip(Lpc, w_pc)
+    # one call for both sets of crossings (one setup of the complex data)
+    L = _response(A, B, C, d, np.concatenate([w_gc, w_pc])).tolist()
+    Lgc, Lpc = L[:w_gc.size], L[w_gc.size:]
+    pms = [(math.degrees(np.angle(-x)), w) for x, w in zip(Lgc, w_gc.tolist())]
+    gms = [(-20 * math.log10(abs(x)), w) for x, w in zip(Lpc, w_pc.tolist())
            if x.real < 0 and abs(x.imag) <= 1e-6 * abs(x)]
     gm_db, w_gm = min(gms, key=lambda g: abs(g[0])) if gms else (math.inf, math.nan)
     pm, w_pm = min(pms, key=lambda p: abs(p[0])) if pms else (math.inf, math.nan)
