@@ -1529,7 +1529,9 @@ def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
         for k in range(2, deg + 1):
             vals *= s
             vals += coef[:, k:k + 1]
-        out = [vals[o] / vals[o + 1] if isinstance(o, int) else o for o in out]
+        # each quotient over its numerator's row: no new (N,) arrays
+        out = [np.divide(vals[o], vals[o + 1], out=vals[o]) if isinstance(o, int) else o
+               for o in out]
     return out
 
 
@@ -1556,13 +1558,21 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
     weights = [wt for wt in (w1, w2, w3) if wt is not None]
     g, k, *wv = _freqresps([G, K] + weights, w)
     gk = g * k
-    S = 1.0 / (1.0 + gk)
-    funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (gk * S, w3)}
+    S = 1.0 + gk
+    np.divide(1.0, S, out=S)
+    # 4000 points: the products and moduli go to two buffers (fewer
+    # temporaries to allocate and bring into cache)
+    fw, r = np.empty_like(S), np.empty(w.size)
     out = {}
-    for name, (f, wt) in funcs.items():
+    for name, f, wt in (("S", None, w1), ("KS", k, w2), ("T", gk, w3)):
         if wt is None:
             continue
-        r = np.abs(f * wv.pop(0))
+        if f is None:
+            np.multiply(S, wv.pop(0), out=fw)
+        else:
+            np.multiply(f, S, out=fw)
+            fw *= wv.pop(0)
+        np.abs(fw, out=r)
         i = int(np.argmax(r))
         out[name] = WeightBound(name, float(r[i]), float(w[i]))
     return out
