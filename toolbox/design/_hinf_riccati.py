@@ -1505,11 +1505,11 @@ def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
     s = 1j * w
     polys, out = [], []
     for sys in systems:
-        if np.isscalar(sys):
-            out.append(np.full(s.size, complex(sys)))
-        elif (coeffs := _tf_coeffs(sys)) is not None:
+        if (coeffs := _tf_coeffs(sys)) is not None:       # the usual case first
             out.append(len(polys))
             polys += list(coeffs)
+        elif np.isscalar(sys):
+            out.append(np.full(s.size, complex(sys)))
         else:
             out.append(as_statespace(sys).evaluate(s)[0, 0])
     if polys:

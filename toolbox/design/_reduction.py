@@ -595,7 +595,8 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
 
     Gain margin is compared in absolute ratio (not dB), phase margin in
     degrees, M_m as is.  A reduced controller that destabilises the loop is
-    always flagged.
+    always flagged (a closed-loop pole with Re >= 0: the poles of ``S``,
+    which the norm giving M_m computed).
 
     Parameters
     ----------
