@@ -316,7 +316,9 @@ class StateSpace:
                 inv = x[None, :] - lam[:, None]                      # (n, N)
                 np.divide(1.0, inv, out=inv)     # in place: a grid's (n, N) is large
                 if p == m == 1:                  # a product, 2-3x faster than einsum
-                    return (R[0, 0] @ inv + self.D[0, 0])[None, None, :]
+                    y = R[0, 0] @ inv
+                    y += self.D[0, 0]
+                    return y[None, None, :]
                 return np.einsum("pmk,kN->pmN", R, inv) + self.D[:, :, None]
             M = x[:, None, None] * np.eye(n) - self.A
             try:
