@@ -369,6 +369,34 @@ def test_linf_norm_matches_slicot_and_a_dense_grid(seed):
     assert L.linf_norm(ct.ss([[0.0]], [[1.0]], [[1.0]], [[0.0]])) == np.inf
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_eig_is_numpys_bit_for_bit(seed):
+    """``_eig`` (numpy's eig gufunc without its checks) returns the very
+    arrays of ``np.linalg.eig``, real when every eigenvalue is (a symmetric
+    matrix) and complex otherwise."""
+    rng = np.random.default_rng(seed)
+    M = rng.standard_normal((5, 5))
+    for A in (M, M + M.T):
+        lam, V = L._eig(A)
+        ref_lam, ref_V = np.linalg.eig(A)
+        assert lam.dtype == ref_lam.dtype and V.dtype == ref_V.dtype
+        assert np.array_equal(lam, ref_lam) and np.array_equal(V, ref_V)
+
+
+def test_linf_norm_poles_are_the_eigenvalues_of_a():
+    """The poles ``_linf_norm_poles`` hands back (its modal form's) are A's
+    eigenvalues (python-control's poles, rtol 1e-12) beside the norm itself;
+    an unstable system keeps its norm on the axis (1/(s - 1): 1 at w = 0)."""
+    g = _rss(2, 4, 1, 1)
+    norm, poles = L._linf_norm_poles(*(np.asarray(m, float) for m in (g.A, g.B, g.C, g.D)))
+    assert norm == L.linf_norm(g)
+    assert np.allclose(np.sort_complex(poles), np.sort_complex(ct.poles(g)), rtol=1e-12)
+    unstable = ct.ss([[1.0]], [[1.0]], [[1.0]], [[0.0]])
+    assert L.linf_norm(unstable) == pytest.approx(1.0)
+    assert L._linf_norm_poles(*(np.asarray(m, float) for m in (unstable.A, unstable.B,
+                                                               unstable.C, unstable.D)))[1] == 1.0
+
+
 def test_linf_norm_of_a_row_with_feedthrough():
     """A 1x2 system (a random draw) whose first level, just above
     ``sigma_max(D)`` = 1.8627, makes ``R = D'D - g^2 I`` nearly singular: the

@@ -1034,7 +1034,8 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     diagonal in the rotated ``b_i`` (columns of ``B V``) and ``c_i`` (rows of
     ``U' C``), so ``H = blkdiag(A, -A') + X' diag(coef(g)) Y``, a sum of
     fixed rank-one terms ``x_i y_i'`` with scalar coefficients
-    ``(fixed_i + g scaled_i) / (sig2_i - g^2)``:
+    ``s_i/(s_i^2 - g^2)`` or ``g/(s_i^2 - g^2)`` (``s_i = 0`` past the
+    singular values of D):
     ``[-b_i; 0][c_i; 0]'`` and ``[0; c_i][0; b_i]'`` with ``s_i/(s_i^2 - g^2)``,
     ``[b_i; 0][0; -b_i]'`` with ``g/(s_i^2 - g^2)`` and ``[0; c_j][c_j; 0]'``
     with ``g/(s_j^2 - g^2)``. Each level costs one product and one real
