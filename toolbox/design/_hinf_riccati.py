@@ -1488,9 +1488,12 @@ class WeightBound:
     worst_freq: float
 
 
-#: default grid of :func:`weight_bound_check` (rad/s), read-only and built once
+#: default grid of :func:`weight_bound_check` (rad/s) and its points j w,
+#: read-only and built once
 _BOUND_GRID = np.logspace(-4, 9, 4000)
 _BOUND_GRID.flags.writeable = False
+_BOUND_POINTS = 1j * _BOUND_GRID
+_BOUND_POINTS.flags.writeable = False
 
 
 def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
@@ -1503,7 +1506,7 @@ def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
     loaded machine); a state-space system goes through
     its modal form (:meth:`toolbox._lti.StateSpace.evaluate`); a number is
     constant."""
-    s = 1j * w
+    s = _BOUND_POINTS if w is _BOUND_GRID else 1j * w
     polys, out = [], []
     for sys in systems:
         if (coeffs := _tf_coeffs(sys)) is not None:       # the usual case first
