@@ -1517,10 +1517,10 @@ def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
         else:
             out.append(as_statespace(sys).evaluate(s)[0, 0])
     if polys:
+        polys = [np.asarray(c, float).tolist() for c in polys]
         deg = max(len(c) for c in polys) - 1
-        coef = np.zeros((len(polys), deg + 1))
-        for j, c in enumerate(polys):
-            coef[j, deg + 1 - len(c):] = np.asarray(c, float)    # highest power first
+        # highest power first, zero-padded to the common degree (one array call)
+        coef = np.array([[0.0] * (deg + 1 - len(c)) + c for c in polys])
         if deg == 0:
             vals = np.broadcast_to(coef, (len(polys), s.size)).astype(complex)
         else:
@@ -1577,6 +1577,6 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
             np.multiply(f, S, out=fw)
             fw *= wv.pop(0)
         np.abs(fw, out=r)
-        i = int(np.argmax(r))
+        i = int(r.argmax())
         out[name] = WeightBound(name, float(r[i]), float(w[i]))
     return out
