@@ -301,9 +301,12 @@ class StateSpace:
         with np.errstate(divide="ignore", invalid="ignore"):
             if x.size > 1 and self.modal is not None:
                 lam, R = self.modal
-                inv = 1.0 / (x[None, :] - lam[:, None])              # (n, N)
+                inv = x[None, :] - lam[:, None]                      # (n, N)
+                np.divide(1.0, inv, out=inv)     # in place: a grid's (n, N) is large
                 if p == m == 1:                  # a product, 2-3x faster than einsum
-                    return (R[0, 0] @ inv + self.D[0, 0])[None, None, :]
+                    y = R[0, 0] @ inv
+                    y += self.D[0, 0]
+                    return y[None, None, :]
                 return np.einsum("pmk,kN->pmN", R, inv) + self.D[:, :, None]
             M = x[:, None, None] * np.eye(n) - self.A
             try:
@@ -1019,7 +1022,8 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     diagonal in the rotated ``b_i`` (columns of ``B V``) and ``c_i`` (rows of
     ``U' C``), so ``H = blkdiag(A, -A') + X' diag(coef(g)) Y``, a sum of
     fixed rank-one terms ``x_i y_i'`` with scalar coefficients
-    ``(fixed_i + g scaled_i) / (sig2_i - g^2)``:
+    ``s_i/(s_i^2 - g^2)`` or ``g/(s_i^2 - g^2)`` (``s_i = 0`` past the
+    singular values of D):
     ``[-b_i; 0][c_i; 0]'`` and ``[0; c_i][0; b_i]'`` with ``s_i/(s_i^2 - g^2)``,
     ``[b_i; 0][0; -b_i]'`` with ``g/(s_i^2 - g^2)`` and ``[0; c_j][c_j; 0]'``
     with ``g/(s_j^2 - g^2)``. Each level costs one product and one real
@@ -1042,16 +1046,19 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     X[k:2 * k, n:], Y[k:2 * k, n:] = Cu[:k], Bv[:k]
     X[2 * k:2 * k + m, :n], Y[2 * k:2 * k + m, n:] = Bv, -Bv
     X[2 * k + m:, n:], Y[2 * k + m:, :n] = Cu, Cu
-    sig2, fixed, scaled = np.zeros((3, 2 * k + m + p))
-    sig2[:k] = sig2[k:2 * k] = sig2[2 * k:3 * k] = sig2[2 * k + m:2 * k + m + k] = s * s
-    fixed[:k] = fixed[k:2 * k] = s
-    scaled[2 * k:] = 1.0
+    # the coefficients' parts as scalars (a few: scalar code beats four array
+    # operations per level): s_i^2 of each term (0 past the k singular values)
+    # and the fixed numerators s_i of the first 2 k (the others are g)
+    sq = (s * s).tolist()
+    s2, fixed = sq * 3 + [0.0] * (m - k) + sq + [0.0] * (p - k), s.tolist() * 2
     H0 = np.zeros((2 * n, 2 * n))
     H0[:n, :n], H0[n:, n:] = A, -A.T
     XT = X.T
 
     def crossings(level: float) -> list[float]:
-        H = H0 + (XT * ((fixed + level * scaled) / (sig2 - level * level))) @ Y
+        g2 = level * level
+        coef = [f / (q - g2) for f, q in zip(fixed, s2)] + [level / (q - g2) for q in s2[2 * k:]]
+        H = H0 + (XT * np.array(coef)) @ Y
         # H' is Fortran-ordered (no copy) and has the eigenvalues of H
         wr, wi, _, _, info = _dgeev(H.T, compute_vl=0, compute_vr=0, overwrite_a=1)
         if info != 0:
@@ -1087,6 +1094,13 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
                tol: float = 1e-10) -> float:
     """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` (no system
     object built: the synthesis calls it on arrays it has just formed)."""
+    return _linf_norm_poles(A, B, C, D, tol)[0]
+
+
+def _linf_norm_poles(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                     tol: float = 1e-10) -> tuple[float, np.ndarray]:
+    """:func:`_linf_norm` and the eigenvalues of ``A`` it computed on the way
+    (a caller testing the stability of A needs no second eigenvalue problem)."""
     if D.shape == (1, 1):
         dnorm = abs(float(D[0, 0]))
     elif D.shape[0] == 1 or D.shape[1] == 1:         # a row or column: sigma_max = 2-norm
@@ -1094,21 +1108,21 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     else:
         dnorm = float(np.linalg.norm(D, 2)) if D.size else 0.0
     if A.shape[0] == 0 or D.size == 0:
-        return dnorm
-    lam, gains = _gain_function(A, B, C, D)
-    lam = lam.tolist()                               # a few: scalar code is cheaper
+        return dnorm, _eigvals(A)
+    poles, gains = _gain_function(A, B, C, D)
+    lam = poles.tolist()                             # a few: scalar code is cheaper
     if any(abs(z.real) <= 1e-12 * max(1.0, abs(z)) for z in lam):
-        return float("inf")
+        return float("inf"), poles
     best = max(float(gains(np.array([0.0] + [abs(z) for z in lam])).max()), dnorm)
     if best == 0.0:
-        return 0.0
+        return 0.0, poles
     crossings = _hamiltonian(A, B, C, D)
     for _ in range(100):
         w = crossings((1.0 + 2.0 * tol) * best)
         if len(w) < 2:
-            return best
+            break
         peak = _refined_peak(gains, w, tol)
         if peak <= best:
-            return best
+            break
         best = peak
-    return best
+    return best, poles

@@ -302,6 +302,16 @@ def test_random_mimo_problem_matches_sb10fd():
     assert H.hinf_norm(H.closed_loop(P, K)) < g
 
 
+def test_hinf_norm_is_inf_for_an_unstable_or_axis_pole_system():
+    """The stability test reads the poles the L-infinity norm computed: an
+    unstable pole (+1) or one within 1e-8 of the axis gives inf, a stable
+    system its L-infinity norm (python-control's ``norm``, rtol 1e-9)."""
+    assert H.hinf_norm(ct.ss([[1.0]], [[1.0]], [[1.0]], [[0.0]])) == np.inf
+    assert H.hinf_norm(ct.ss([[-1e-9]], [[1.0]], [[1.0]], [[0.0]])) == np.inf
+    g = ct.ss(ct.tf([1.0, 3.0], [1.0, 0.2, 4.0]))
+    assert H.hinf_norm(g) == pytest.approx(ct.norm(g, "inf"), rel=1e-9)
+
+
 # ---------------------------------------------------------------- (7)
 def test_gamma_iteration_brackets_and_meets_tolerance(Pq):
     g = H.gamma_iteration(Pq, tol=1e-4)

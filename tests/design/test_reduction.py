@@ -88,6 +88,18 @@ def test_compare_margins_flags_a_bad_reduction():
     assert not bad.ok and any("phase margin" in f for f in bad.flags)
 
 
+def test_compare_margins_flags_a_destabilising_reduction():
+    """The stability test reads the poles of S that the norm giving M_m
+    computed: python-control's closed loop of G Kr has a pole at +1 rad/s
+    (L = -2/(s + 1)), the full loop (K = 1) none in the right half-plane."""
+    G, K, Kr = 1 / (s + 1), 1 / (1 + s / 1e3), -2 / (1 + s / 1e3)
+    assert np.all(ct.poles(ct.feedback(G * K)).real < 0)
+    assert np.max(ct.poles(ct.feedback(G * Kr)).real) == pytest.approx(1.0, rel=1e-2)
+    res = R.compare_margins(G, K, Kr)
+    assert "the reduced controller destabilises the loop" in res.flags
+    assert "the reduced controller destabilises the loop" not in R.compare_margins(G, K, K).flags
+
+
 def test_loop_margins_static_error():
     G = 1 / (s + 1)
     m = R.loop_margins(G, 9.0)

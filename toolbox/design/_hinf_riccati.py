@@ -41,7 +41,7 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  zgesv as _zgesv)
 
 from .._lti import (_CANCEL_TOL, StateSpace, TransferFunction, _eigvals, _leading_identity,
-                    _linf_norm, _minreal_coeffs, _poly, _svd, _tf2ss_arrays, _zeros,
+                    _linf_norm_poles, _minreal_coeffs, _poly, _svd, _tf2ss_arrays, _zeros,
                     as_statespace, balanced, diagonal_scaling)
 from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
@@ -1406,10 +1406,11 @@ def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> fl
     n = A.shape[0]
     if n == 0:
         return float(np.linalg.norm(D, 2)) if D.size else 0.0
+    # the poles the norm computed on the way (no second eigenvalue problem; an
+    # unstable system, the rare case, still gets its finite L-infinity norm first)
+    norm, poles = _linf_norm_poles(A, B, C, D)
     # a pole with Re >= 0 or within np.isclose's 1e-8 of the axis: Re >= -1e-8
-    if _amax(_eigvals(A).real) >= -1e-8:
-        return float("inf")
-    return _linf_norm(A, B, C, D)
+    return float("inf") if _amax(poles.real) >= -1e-8 else norm
 
 
 def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal",
@@ -1524,9 +1525,12 @@ class WeightBound:
     worst_freq: float
 
 
-#: default grid of :func:`weight_bound_check` (rad/s), read-only and built once
+#: default grid of :func:`weight_bound_check` (rad/s) and its points j w,
+#: read-only and built once
 _BOUND_GRID = np.logspace(-4, 9, 4000)
 _BOUND_GRID.flags.writeable = False
+_BOUND_POINTS = 1j * _BOUND_GRID
+_BOUND_POINTS.flags.writeable = False
 
 
 def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
@@ -1539,21 +1543,21 @@ def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
     loaded machine); a state-space system goes through
     its modal form (:meth:`toolbox._lti.StateSpace.evaluate`); a number is
     constant."""
-    s = 1j * w
+    s = _BOUND_POINTS if w is _BOUND_GRID else 1j * w
     polys, out = [], []
     for sys in systems:
-        if np.isscalar(sys):
-            out.append(np.full(s.size, complex(sys)))
-        elif (coeffs := _tf_coeffs(sys)) is not None:
+        if (coeffs := _tf_coeffs(sys)) is not None:       # the usual case first
             out.append(len(polys))
             polys += list(coeffs)
+        elif np.isscalar(sys):
+            out.append(np.full(s.size, complex(sys)))
         else:
             out.append(as_statespace(sys).evaluate(s)[0, 0])
     if polys:
+        polys = [np.asarray(c, float).tolist() for c in polys]
         deg = max(len(c) for c in polys) - 1
-        coef = np.zeros((len(polys), deg + 1))
-        for j, c in enumerate(polys):
-            coef[j, deg + 1 - len(c):] = np.asarray(c, float)    # highest power first
+        # highest power first, zero-padded to the common degree (one array call)
+        coef = np.array([[0.0] * (deg + 1 - len(c)) + c for c in polys])
         if deg == 0:
             vals = np.broadcast_to(coef, (len(polys), s.size)).astype(complex)
         else:
@@ -1566,7 +1570,9 @@ def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
         for k in range(2, deg + 1):
             vals *= s
             vals += coef[:, k:k + 1]
-        out = [vals[o] / vals[o + 1] if isinstance(o, int) else o for o in out]
+        # each quotient over its numerator's row: no new (N,) arrays
+        out = [np.divide(vals[o], vals[o + 1], out=vals[o]) if isinstance(o, int) else o
+               for o in out]
     return out
 
 
@@ -1593,13 +1599,21 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
     weights = [wt for wt in (w1, w2, w3) if wt is not None]
     g, k, *wv = _freqresps([G, K] + weights, w)
     gk = g * k
-    S = 1.0 / (1.0 + gk)
-    funcs = {"S": (S, w1), "KS": (k * S, w2), "T": (gk * S, w3)}
+    S = 1.0 + gk
+    np.divide(1.0, S, out=S)
+    # 4000 points: the products and moduli go to two buffers (fewer
+    # temporaries to allocate and bring into cache)
+    fw, r = np.empty_like(S), np.empty(w.size)
     out = {}
-    for name, (f, wt) in funcs.items():
+    for name, f, wt in (("S", None, w1), ("KS", k, w2), ("T", gk, w3)):
         if wt is None:
             continue
-        r = np.abs(f * wv.pop(0))
-        i = int(np.argmax(r))
+        if f is None:
+            np.multiply(S, wv.pop(0), out=fw)
+        else:
+            np.multiply(f, S, out=fw)
+            fw *= wv.pop(0)
+        np.abs(fw, out=r)
+        i = int(r.argmax())
         out[name] = WeightBound(name, float(r[i]), float(w[i]))
     return out

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals,
+from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm_poles, _pencil_eigvals,
                     _tf2ss_arrays, _zeros, as_statespace, balanced, parallel, state_scaling)
 from ._hinf_riccati import _solve, _ss_blocks
 
@@ -471,13 +471,13 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     n = A.shape[0]
     b, c = B[:, 0], C[0]
     Mg = np.zeros((2 * n + 1, 2 * n + 1))
-    Mg[:n, :n], Mg[:n, -1] = -A, -b
+    Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = -A, -b, c
     Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = B * C, A, b * d
-    Mg[-1, :n], Mg[-1, n:-1], Mg[-1, -1] = d * c, c, d * d - 1.0
+    Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
     Mp = np.zeros((2 * n + 1, 2 * n + 1))
-    Mp[:n, :n], Mp[:n, -1] = A, b
-    Mp[n:-1, n:-1], Mp[n:-1, -1] = -A, -b
-    Mp[-1, :n], Mp[-1, n:-1] = c, -c
+    Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
+    # -A, -b (exact negations) are already in Mg
+    Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = Mg[:n, :n], Mg[:n, -1], -c
     return _imag_axis_zeros(Mg), _imag_axis_zeros(Mp)
 
 
@@ -523,25 +523,27 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     -------
     LoopMargins
     """
-    return _margins(_ss_blocks(G), _ss_blocks(K))
+    return _margins(_ss_blocks(G), _ss_blocks(K))[0]
 
 
-def _margins(g: tuple, k: tuple) -> LoopMargins:
-    """:func:`loop_margins` of the loop of the realisations ``g`` and ``k``."""
+def _margins(g: tuple, k: tuple) -> tuple[LoopMargins, np.ndarray]:
+    """:func:`loop_margins` of the loop of the realisations ``g`` and ``k``,
+    and the closed-loop poles (those of ``S``, whose norm gave ``M_m``)."""
     A, B, C, D = _series(k, g)
     d = float(D[0, 0])
     if A.shape[0] == 0:
         gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
-        return LoopMargins(gm_db, w_gm, pm, w_pm, abs(1.0 + d), abs(1.0 / (1.0 + d)))
+        return (LoopMargins(gm_db, w_gm, pm, w_pm, abs(1.0 + d), abs(1.0 / (1.0 + d))),
+                np.zeros(0, complex))
     A, B, C = balanced(A, B, C)
     gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
-    peak = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]))
+    peak, poles = _linf_norm_poles(A - f * B @ C, f * B, -f * C, np.array([[f]]))
     if np.count_nonzero(np.abs(_eigvals(A)) < 1e-12):   # an integrator: no static error
         ess = 0.0
     else:
         ess = float(abs(1.0 / (1.0 + d - float((C @ _solve(A, B))[0, 0]))))
-    return LoopMargins(gm_db, w_gm, pm, w_pm, 1.0 / peak, ess)
+    return LoopMargins(gm_db, w_gm, pm, w_pm, 1.0 / peak, ess), poles
 
 
 def _gain_phase_margins(A: np.ndarray, B: np.ndarray, C: np.ndarray,
@@ -552,9 +554,11 @@ def _gain_phase_margins(A: np.ndarray, B: np.ndarray, C: np.ndarray,
         w_gc = w_pc = np.zeros(0)
     else:
         w_gc, w_pc = _crossings(A, B, C, d)
-    Lgc, Lpc = _response(A, B, C, d, w_gc), _response(A, B, C, d, w_pc)
-    pms = [(math.degrees(np.angle(-x)), w) for x, w in zip(Lgc, w_gc)]
-    gms = [(-20 * math.log10(abs(x)), w) for x, w in zip(Lpc, w_pc)
+    # one call for both sets of crossings (one setup of the complex data)
+    L = _response(A, B, C, d, np.concatenate([w_gc, w_pc])).tolist()
+    Lgc, Lpc = L[:w_gc.size], L[w_gc.size:]
+    pms = [(math.degrees(np.angle(-x)), w) for x, w in zip(Lgc, w_gc.tolist())]
+    gms = [(-20 * math.log10(abs(x)), w) for x, w in zip(Lpc, w_pc.tolist())
            if x.real < 0 and abs(x.imag) <= 1e-6 * abs(x)]
     gm_db, w_gm = min(gms, key=lambda g: abs(g[0])) if gms else (math.inf, math.nan)
     pm, w_pm = min(pms, key=lambda p: abs(p[0])) if pms else (math.inf, math.nan)
@@ -591,7 +595,8 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
 
     Gain margin is compared in absolute ratio (not dB), phase margin in
     degrees, M_m as is.  A reduced controller that destabilises the loop is
-    always flagged.
+    always flagged (a closed-loop pole with Re >= 0: the poles of ``S``,
+    which the norm giving M_m computed).
 
     Parameters
     ----------
@@ -604,8 +609,9 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
     -------
     MarginComparison
     """
-    g, kr = _ss_blocks(G), _ss_blocks(Kr)
-    a, b = _margins(g, _ss_blocks(K)), _margins(g, kr)
+    g = _ss_blocks(G)
+    a, _ = _margins(g, _ss_blocks(K))
+    b, poles = _margins(g, _ss_blocks(Kr))
     flags = []
     pairs = {"gain margin": (10 ** (a.gain_margin_db / 20), 10 ** (b.gain_margin_db / 20)),
              "phase margin": (a.phase_margin_deg, b.phase_margin_deg),
@@ -613,7 +619,6 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
     for name, (x, y) in pairs.items():
         if np.isfinite(x) and not y >= (1 - max_loss) * x:
             flags.append(f"{name} fell from {x:.4g} to {y:.4g} (> {100 * max_loss:g} % loss)")
-    A, B, C, D = _series(kr, g)
-    if np.count_nonzero(_eigvals(A - B @ C / (1.0 + D[0, 0])).real >= 0):
+    if np.count_nonzero(poles.real >= 0):
         flags.append("the reduced controller destabilises the loop")
     return MarginComparison(a, b, max_loss, flags)
