@@ -370,17 +370,17 @@ def test_linf_norm_matches_slicot_and_a_dense_grid(seed):
 
 
 def test_linf_norm_poles_are_the_eigenvalues_of_a():
-    """The poles ``_linf_norm_poles`` hands back (its modal form's) are A's
+    """The poles ``_linf_norm`` hands back (its modal form's) are A's
     eigenvalues (python-control's poles, rtol 1e-12) beside the norm itself;
     an unstable system keeps its norm on the axis (1/(s - 1): 1 at w = 0)."""
     g = _rss(2, 4, 1, 1)
-    norm, poles = L._linf_norm_poles(*(np.asarray(m, float) for m in (g.A, g.B, g.C, g.D)))
+    norm, poles = L._linf_norm(*(np.asarray(m, float) for m in (g.A, g.B, g.C, g.D)))
     assert norm == L.linf_norm(g)
     assert np.allclose(np.sort_complex(poles), np.sort_complex(ct.poles(g)), rtol=1e-12)
     unstable = ct.ss([[1.0]], [[1.0]], [[1.0]], [[0.0]])
     assert L.linf_norm(unstable) == pytest.approx(1.0)
-    assert L._linf_norm_poles(*(np.asarray(m, float) for m in (unstable.A, unstable.B,
-                                                               unstable.C, unstable.D)))[1] == 1.0
+    assert L._linf_norm(*(np.asarray(m, float) for m in (unstable.A, unstable.B,
+                                                   unstable.C, unstable.D)))[1] == 1.0
 
 
 def test_linf_norm_of_a_row_with_feedthrough():

@@ -1087,20 +1087,15 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
     imaginary axis gives ``inf``.
     """
     g = as_statespace(sys)
-    return _linf_norm(g.A, g.B, g.C, g.D, tol)
+    return _linf_norm(g.A, g.B, g.C, g.D, tol)[0]
 
 
 def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
-               tol: float = 1e-10) -> float:
+               tol: float = 1e-10) -> tuple[float, np.ndarray]:
     """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` (no system
-    object built: the synthesis calls it on arrays it has just formed)."""
-    return _linf_norm_poles(A, B, C, D, tol)[0]
-
-
-def _linf_norm_poles(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
-                     tol: float = 1e-10) -> tuple[float, np.ndarray]:
-    """:func:`_linf_norm` and the eigenvalues of ``A`` it computed on the way
-    (a caller testing the stability of A needs no second eigenvalue problem)."""
+    object built: the synthesis calls it on arrays it has just formed), and the
+    eigenvalues of ``A`` it computed on the way (a caller testing the stability
+    of A needs no second eigenvalue problem)."""
     if D.shape == (1, 1):
         dnorm = abs(float(D[0, 0]))
     elif D.shape[0] == 1 or D.shape[1] == 1:         # a row or column: sigma_max = 2-norm

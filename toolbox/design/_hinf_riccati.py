@@ -41,7 +41,7 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  zgesv as _zgesv)
 
 from .._lti import (_CANCEL_TOL, StateSpace, TransferFunction, _eigvals, _leading_identity,
-                    _linf_norm_poles, _minreal_coeffs, _poly, _svd, _tf2ss_arrays, _zeros,
+                    _linf_norm, _minreal_coeffs, _poly, _svd, _tf2ss_arrays, _zeros,
                     as_statespace, balanced, diagonal_scaling)
 from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
@@ -1408,7 +1408,7 @@ def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> fl
         return float(np.linalg.norm(D, 2)) if D.size else 0.0
     # the poles the norm computed on the way (no second eigenvalue problem; an
     # unstable system, the rare case, still gets its finite L-infinity norm first)
-    norm, poles = _linf_norm_poles(A, B, C, D)
+    norm, poles = _linf_norm(A, B, C, D)
     # a pole with Re >= 0 or within np.isclose's 1e-8 of the axis: Re >= -1e-8
     return float("inf") if _amax(poles.real) >= -1e-8 else norm
 

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm_poles, _pencil_eigvals,
+from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals,
                     _tf2ss_arrays, _zeros, as_statespace, balanced, parallel, state_scaling)
 from ._hinf_riccati import _solve, _ss_blocks
 
@@ -538,7 +538,7 @@ def _margins(g: tuple, k: tuple) -> tuple[LoopMargins, np.ndarray]:
     A, B, C = balanced(A, B, C)
     gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
-    peak, poles = _linf_norm_poles(A - f * B @ C, f * B, -f * C, np.array([[f]]))
+    peak, poles = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]))
     if np.count_nonzero(np.abs(_eigvals(A)) < 1e-12):   # an integrator: no static error
         ess = 0.0
     else:
