@@ -12,9 +12,11 @@ E_Gamma, E_Id, Nb_c. Takami (paper 001): plant at 1 us, controller at 0.1 ms.
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Callable, Mapping, Sequence
 
+import numba
 import numpy as np
 
 from toolbox.artifact import Decoupling, FcsWeights  # typed in the artifact; FcsWeights re-exported
@@ -501,7 +503,12 @@ def simulate_batch(law: ControlLaw,
                    scenario: Scenario, drive: DriveParams,
                    progress: Callable[[int, int], None] | None = None,
                    chunk: int | None = None) -> BatchResult:
-    """Run N closed-loop simulations in parallel (numba ``prange``, all cores).
+    """Run N closed-loop simulations in parallel (one thread per core).
+
+    Each simulation is one call of the compiled kernel (:func:`simulate`'s),
+    which releases the GIL: the threads share its one compiled version, so a
+    batch compiles nothing of its own (issue 13: a second, ``prange``
+    entry point cost ~5 s of cold compile in every process).
 
     Parameters
     ----------
@@ -515,7 +522,8 @@ def simulate_batch(law: ControlLaw,
     progress : callable, optional
         Called as ``progress(done, N)`` after each chunk.
     chunk : int, optional
-        Simulations per parallel call (default: about 1 % of N, at least 64).
+        Simulations between two progress calls, run by all the threads
+        (default: about 1 % of N, at least 64).
 
     Returns
     -------
@@ -542,12 +550,22 @@ def simulate_batch(law: ControlLaw,
     if chunk is None:
         chunk = max(64, N // 100)
     out = np.empty((N, len(METRIC_NAMES)))
-    done = 0
-    while done < N:
-        stop = min(N, done + chunk)
-        out[done:stop] = _kernel.run_batch(np.ascontiguousarray(P[done:stop]), A, B, C,
-                                           D, W, LP, SP, DP, SC)
-        done = stop
-        if progress is not None:
-            progress(done, N)
+    law_drive = (A, B, C, D, W, LP, SP, DP, SC)
+
+    def run_rows(rows: range) -> None:
+        for i in rows:
+            out[i], _ = _kernel.run(P[i], *law_drive, False)
+
+    n_threads = max(1, min(numba.config.NUMBA_NUM_THREADS, chunk))
+    with ThreadPoolExecutor(n_threads) as pool:
+        done = 0
+        while done < N:
+            stop = min(N, done + chunk)
+            # strided rows: a sweep ordered by a parameter spreads its slow
+            # (long or diverging) simulations over the threads
+            list(pool.map(run_rows, [range(done + j, stop, n_threads)
+                                     for j in range(n_threads)]))
+            done = stop
+            if progress is not None:
+                progress(done, N)
     return BatchResult({name: out[:, j].copy() for j, name in enumerate(METRIC_NAMES)})
