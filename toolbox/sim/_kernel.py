@@ -388,7 +388,7 @@ def _accumulate(m, i_d, i_q, om, t, dt, pl, refs, mset):
     return out5, out2, t10, t90, yext, sqt, sqid, stat, statt, final, sqiq
 
 
-@_jit_no_rc
+@_jit_inline
 def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, refs,
              mset):
     """Integrate the state x = (id, iq, Omega, theta) over ``dur`` with ceil(dur/h)

@@ -503,7 +503,8 @@ def simulate_batch(law: ControlLaw,
                    scenario: Scenario, drive: DriveParams,
                    progress: Callable[[int, int], None] | None = None,
                    chunk: int | None = None) -> BatchResult:
-    """Run N closed-loop simulations in parallel (one thread per core).
+    """Run N closed-loop simulations in parallel (``numba.get_num_threads()``
+    threads, one per core by default).
 
     Each simulation is one call of the compiled kernel (:func:`simulate`'s),
     which releases the GIL: the threads share its one compiled version, so a
@@ -556,7 +557,9 @@ def simulate_batch(law: ControlLaw,
         for i in rows:
             out[i], _ = _kernel.run(P[i], *law_drive, False)
 
-    n_threads = max(1, min(numba.config.NUMBA_NUM_THREADS, chunk))
+    # numba's thread count: NUMBA_NUM_THREADS, or numba.set_num_threads in this
+    # thread (a campaign's dask task runs on one)
+    n_threads = max(1, min(numba.get_num_threads(), chunk))
     with ThreadPoolExecutor(n_threads) as pool:
         done = 0
         while done < N:
