@@ -34,7 +34,7 @@ ACTIVE_ORDER = np.array([4, 6, 2, 3, 1, 5], dtype=np.int64)
 _SQ3_2 = math.sqrt(3.0) / 2.0
 
 
-@njit
+@njit(cache=True)
 def state_vector(state, r_hex):
     """(v_alpha, v_beta) of inverter ``state`` for hexagon vertex radius ``r_hex`` (V)."""
     m1 = (state >> 2) & 1
@@ -47,7 +47,7 @@ def state_vector(state, r_hex):
     return va, vb
 
 
-@njit
+@njit(cache=True)
 def sector(va, vb):
     """Hexagon sector ``0..5`` of the stationary-frame vector (va, vb) and its
     angle ``phi`` (rad, ``0 <= phi < pi/3``) from the sector's first edge."""
@@ -60,7 +60,7 @@ def sector(va, vb):
     return sect, ang - sect * (math.pi / 3.0)
 
 
-@njit
+@njit(cache=True)
 def hexagon_scale(va, vb, r_hex):
     """Factor s <= 1 that brings (va, vb) onto or inside the hexagon of vertex radius r_hex."""
     mag = math.hypot(va, vb)
@@ -74,7 +74,7 @@ def hexagon_scale(va, vb, r_hex):
     return 1.0
 
 
-@njit
+@njit(cache=True)
 def svm_times(va, vb, r_hex, ts):
     """Sector and dwell times of paper 002 eq (21)-(22).
 
@@ -106,7 +106,7 @@ def svm_times(va, vb, r_hex, ts):
     return l_state, k_state, tl, tk, t0
 
 
-@njit
+@njit(cache=True)
 def bit_changes(a, b):
     """Number of commutation cells that change between inverter states a and b."""
     x = a ^ b

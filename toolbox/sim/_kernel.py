@@ -33,9 +33,10 @@ discrete state-space systems with inputs ``[i_ref, i_measured]``.
 Everything is plain float arrays; :func:`run` is the one compiled entry
 point, for one simulation or, from one thread per core, a batch
 (``_simulate.simulate_batch``). The arrays' slots are declared once, by
-name, in :data:`LAYOUTS`; the index constants (``P_R``, ``DP_TS``, ``SC_DURATION``, ...) are generated from that
-declaration and :func:`pack_indices` gives the same map to the Python side
-that fills the arrays (``_simulate._pack``). :func:`run` allocates the work
+name, in :data:`LAYOUTS`; the index constants (``P_R``, ``DP_TS``,
+``SC_DURATION``, ...) are generated from that declaration and
+:func:`pack_indices` gives the same map to the Python side that fills the
+arrays (``_simulate._pack``). :func:`run` allocates the work
 arrays and :func:`_periods` runs the periods, a short loop over small
 ``@njit`` helpers (sensors, references, speed loop, law step with
 anti-windup and voltage limit, predictive choice, inverter and plant RK4);
@@ -80,9 +81,10 @@ the RK4 truncation error; results moved by that much once, when this was
 introduced, and are plain IEEE operations in a fixed order, the same on every
 x86-64 CPU. No ``fastmath``: ``{"contract"}`` on the substep loop (FMA) saved
 another 9 % (29.1 -> 26.5 ns per step), and is deterministic run to run,
-but whether LLVM may fuse depends on the host CPU (the numba cache is compiled for it), so verify.json's digits of
-the dq-frame scenarios would differ between machines with and without FMA,
-which today they do not ("same spec, same bytes", toolbox/ARCHITECTURE.md).
+but whether LLVM may fuse depends on the host CPU (the numba cache is
+compiled for it), so verify.json's digits of the dq-frame scenarios would
+differ between machines with and without FMA, which today they do not
+("same spec, same bytes", toolbox/ARCHITECTURE.md).
 (The angle-dependent scenarios already differ there in the last bits: glibc
 picks FMA variants of sin, cos, log by CPU, which numba calls: with FMA
 disabled through GLIBC_TUNABLES, 1 in 1,300 sines differed by 1 ulp.)
@@ -103,8 +105,7 @@ compiles is kept to what the speed needs:
   its own, and the helpers below it again;
 * :func:`_steps` is a compiled function, not inlined in numba's IR: numba
   copies an inlined callee's IR block by block, each block with all the
-  callee's variables, ~1 s per copy of the loop;
-* only :func:`run` is cached on disk (see :data:`_jit`).
+  callee's variables, ~1 s per copy of the loop.
 Metrics are accumulated online (see :mod:`toolbox.sim._metrics` for their
 definitions); traces are optional and decimated, so memory is flat in the
 simulated duration when only metrics are requested.
@@ -182,11 +183,11 @@ def pack_indices(array: str = "SC") -> dict[str, int]:
 #: Decorator of the kernel's functions. ``error_model="numpy"``: a division by
 #: zero gives inf/nan (IEEE) instead of a Python ZeroDivisionError, which drops
 #: a compare-and-branch before every division of the 1 us loop; every divisor
-#: there is a validated positive parameter or guarded (issue 13). Only the
-#: entry point :func:`run` is cached on disk: its cache holds every helper's
-#: code, so the helpers' own cache files were written on each cold compile
-#: (~0.7 s of ~11) and never read.
-_jit = njit(error_model="numpy")
+#: there is a validated positive parameter or guarded (issue 13). Cached on
+#: disk although :func:`run`'s cache holds every helper's code: the tests
+#: call helpers and ``run.py_func`` from Python, which compiled each helper
+#: again in every process without it (~10 s of the kernel's test files).
+_jit = njit(cache=True, error_model="numpy")
 #: The helpers of the 1 us substep loop, inlined into it in numba's IR: called
 #: as separate functions, each RK4 step passed ~20 arguments through the stack
 #: and returned its state through memory (issue 13: 43.3 -> 41.5 ns per step).
@@ -194,7 +195,7 @@ _jit = njit(error_model="numpy")
 #: and every helper of the period loop that reads an array: called from the
 #: loop compiled without reference counting (:data:`_jit_no_rc`), a function
 #: would incref and decref its array arguments itself.
-_jit_inline = njit(error_model="numpy", inline="always")
+_jit_inline = njit(cache=True, error_model="numpy", inline="always")
 #: The period loop (:func:`_periods`) and the plant steps (:func:`_steps`):
 #: compiled without numba's reference counting (they allocate nothing; every
 #: array is :func:`run`'s). With it, each array passed to a helper or used by
@@ -203,7 +204,7 @@ _jit_inline = njit(error_model="numpy", inline="always")
 #: next period's plant steps from starting before the previous ones had
 #: retired: ~60-80 ns per period, 0.6-0.8 ns per plant step at 100 steps per
 #: period (issue 13).
-_jit_no_rc = njit(error_model="numpy", _nrt=False)
+_jit_no_rc = njit(cache=True, error_model="numpy", _nrt=False)
 
 
 # --------------------------------------------------------------------------- RNG
