@@ -111,7 +111,9 @@ compiles is kept to what the speed needs:
 Measured (CPU s, fresh cache, median of 3 alternated with the code before):
 :func:`run` 13.8 -> 11.1, a batch's own 5.8 -> 0.5 (``simulate_batch``'s
 first call, :func:`run` already compiled); the plant loop as fast as before
-(``bench_sim``). Metrics are accumulated online (see :mod:`toolbox.sim._metrics` for their
+(``bench_sim``).
+
+Metrics are accumulated online (see :mod:`toolbox.sim._metrics` for their
 definitions); traces are optional and decimated, so memory is flat in the
 simulated duration when only metrics are requested.
 """
