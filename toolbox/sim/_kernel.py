@@ -109,7 +109,7 @@ compiles is kept to what the speed needs:
   callee's variables, ~1 s per copy of the loop.
 
 Measured (CPU s, fresh cache, median of 3 alternated with the code before):
-:func:`run` 13.8 -> 11.1, a batch's own 5.8 -> 0.5 (``simulate_batch``'s
+:func:`run` 13.0 -> 10.5, a batch's own 5.2 -> 0.5 (``simulate_batch``'s
 first call, :func:`run` already compiled); the plant loop as fast as before
 (``bench_sim``).
 
