@@ -7,8 +7,8 @@ sample also gets its per-axis loop margins). Routes, each on a fresh output
 directory, the design made once beforehand:
 
 1. serial batch: ``toolbox.sim.simulate_batch`` alone on the same plants
-   (numba ``prange`` on all cores, no draws, margins, Parquet or Dask): the
-   simulator's ceiling;
+   (the numba kernel on one thread per core, no draws, margins, Parquet or
+   Dask): the simulator's ceiling;
 2. the campaign in this process (``scheduler="serial"``: draws, simulation
    on all cores, margins, judging, Parquet);
 3. the campaign on a LocalCluster with 1 and 2 single-thread workers (the

@@ -30,12 +30,13 @@ reduced to ``Ts / ceil(Ts / h)``), zero-order hold, computation delay of
 ``delay`` periods (Le Pioufle 1992, paper 000). The two current controllers are
 discrete state-space systems with inputs ``[i_ref, i_measured]``.
 
-Everything is plain float arrays so that the same core runs one simulation
-(:func:`run`) or a parallel batch (:func:`run_batch`, ``numba.prange``). The
-arrays' slots are declared once, by name, in :data:`LAYOUTS`; the index
-constants (``P_R``, ``DP_TS``, ``SC_DURATION``, ...) are generated from that
-declaration and :func:`pack_indices` gives the same map to the Python side
-that fills the arrays (``_simulate._pack``). :func:`run` allocates the work
+Everything is plain float arrays; :func:`run` simulates one closed loop, and
+:func:`run_rows` a thread's share of a batch (``_simulate.simulate_batch``
+runs one per core). The arrays' slots are declared once, by
+name, in :data:`LAYOUTS`; the index constants (``P_R``, ``DP_TS``,
+``SC_DURATION``, ...) are generated from that declaration and
+:func:`pack_indices` gives the same map to the Python side that fills the
+arrays (``_simulate._pack``). :func:`run` allocates the work
 arrays and :func:`_periods` runs the periods, a short loop over small
 ``@njit`` helpers (sensors, references, speed loop, law step with
 anti-windup and voltage limit, predictive choice, inverter and plant RK4);
@@ -55,7 +56,7 @@ ours adds must stay off that chain and out of its way):
   (:func:`_load_acc`), with no division per step (:func:`_overshoot`), and
   are accumulated after the step's RK4 stages in program order;
 * the periods without load torque have a loop of their own, without the
-  load's ``- 0.0`` on the speed's chain (:func:`_advance_n`); the step
+  load's ``- 0.0`` on the speed's chain (:func:`_steps`); the step
   split of a period (:func:`_split`) is computed once per run.
 
 All of it leaves every result bit for bit as it was. What is left is the
@@ -79,16 +80,39 @@ carries one more rounding (<= 1 ulp instead of 0.5), 1e-16 relative, far below
 the RK4 truncation error; results moved by that much once, when this was
 introduced, and are plain IEEE operations in a fixed order, the same on every
 x86-64 CPU. No ``fastmath``: ``{"contract"}`` on the substep loop (FMA) saved
-another 9 % (29.1 -> 26.5 ns per step), and is deterministic run to run and
-between :func:`run` and :func:`run_batch`, but whether LLVM may fuse depends on
-the host CPU (the numba cache is compiled for it), so verify.json's digits of
-the dq-frame scenarios would differ between machines with and without FMA,
-which today they do not ("same spec, same bytes", toolbox/ARCHITECTURE.md).
+another 9 % (29.1 -> 26.5 ns per step), and is deterministic run to run,
+but whether LLVM may fuse depends on the host CPU (the numba cache is
+compiled for it), so verify.json's digits of the dq-frame scenarios would
+differ between machines with and without FMA, which today they do not
+("same spec, same bytes", toolbox/ARCHITECTURE.md).
 (The angle-dependent scenarios already differ there in the last bits: glibc
 picks FMA variants of sin, cos, log by CPU, which numba calls: with FMA
-disabled through GLIBC_TUNABLES, 1 in 1,300 sines differed by 1 ulp.) ``reassoc``/``arcp`` would let LLVM choose the
-evaluation order; the flags that assume finite values ("nnan", "ninf") would
-break the divergence detection of the metrics.
+disabled through GLIBC_TUNABLES, 1 in 1,300 sines differed by 1 ulp.)
+``reassoc``/``arcp`` would let LLVM choose the evaluation order; the flags
+that assume finite values ("nnan", "ninf") would break the divergence
+detection of the metrics.
+
+Cold compile (issue 13). A process without a numba cache (a fresh clone,
+each pytest-xdist worker) compiles :func:`run` on its first call; what it
+compiles is kept to what the speed needs:
+
+* a batch reuses :func:`run`'s compiled code from one thread per core
+  (:func:`run_rows`, ~0.5 s), where a ``prange`` entry point compiled ~5 s
+  more per process;
+* one version of each helper, except the plant loop :func:`_steps` (four:
+  ``frame`` and ``loaded``). Numba types a call from compiled code with the
+  arguments' literal types, so a literal argument (``False``, ``0``, or a
+  variable whose first value is ``0``) compiled a version of the callee of
+  its own, and the helpers below it again;
+* :func:`_steps` is a compiled function, not inlined in numba's IR: numba
+  copies an inlined callee's IR block by block, each block with all the
+  callee's variables, ~1 s per copy of the loop.
+
+Measured (CPU s, fresh cache, median of 3 alternated with the code before):
+:func:`run` 13.0 -> 10.5, a batch's own 5.2 -> 0.5 (``simulate_batch``'s
+first call, :func:`run` already compiled); the plant loop as fast as before
+(``bench_sim``).
+
 Metrics are accumulated online (see :mod:`toolbox.sim._metrics` for their
 definitions); traces are optional and decimated, so memory is flat in the
 simulated duration when only metrics are requested.
@@ -99,12 +123,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ._inverter import bit_changes, hexagon_scale, state_vector, svm_times
 from ._metrics import METRIC_NAMES
 
-__all__ = ["run", "run_batch", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices"]
+__all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices"]
 
 # ---- packed-array layouts: the one declaration of every slot ----------------
 #: Slot names of each packed parameter array, in order, keyed by the array's
@@ -166,7 +190,10 @@ def pack_indices(array: str = "SC") -> dict[str, int]:
 #: Decorator of the kernel's functions. ``error_model="numpy"``: a division by
 #: zero gives inf/nan (IEEE) instead of a Python ZeroDivisionError, which drops
 #: a compare-and-branch before every division of the 1 us loop; every divisor
-#: there is a validated positive parameter or guarded (issue 13).
+#: there is a validated positive parameter or guarded (issue 13). Cached on
+#: disk although :func:`run`'s cache holds every helper's code: the tests
+#: call helpers and ``run.py_func`` from Python, which compiled each helper
+#: again in every process without it (~10 s of the kernel's test files).
 _jit = njit(cache=True, error_model="numpy")
 #: The helpers of the 1 us substep loop, inlined into it in numba's IR: called
 #: as separate functions, each RK4 step passed ~20 arguments through the stack
@@ -176,7 +203,7 @@ _jit = njit(cache=True, error_model="numpy")
 #: loop compiled without reference counting (:data:`_jit_no_rc`), a function
 #: would incref and decref its array arguments itself.
 _jit_inline = njit(cache=True, error_model="numpy", inline="always")
-#: The period loop (:func:`_periods`) and the plant steps (:func:`_advance_n`):
+#: The period loop (:func:`_periods`) and the plant steps (:func:`_steps`):
 #: compiled without numba's reference counting (they allocate nothing; every
 #: array is :func:`run`'s). With it, each array passed to a helper or used by
 #: an inlined one was increfed and decrefed around the use, ~20 atomic
@@ -369,7 +396,7 @@ def _accumulate(m, i_d, i_q, om, t, dt, pl, refs, mset):
     return out5, out2, t10, t90, yext, sqt, sqid, stat, statt, final, sqiq
 
 
-@_jit_no_rc
+@_jit_inline
 def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, refs,
              mset):
     """Integrate the state x = (id, iq, Omega, theta) over ``dur`` with ceil(dur/h)
@@ -390,32 +417,37 @@ def _split(dur, h):
     return n, dur / n
 
 
-@_jit_no_rc
+@_jit_inline
 def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m, refs,
                mset):
     """:func:`_advance` over ``n`` steps of length ``dt`` (:func:`_split`).
 
-    Two loops: with and without a load torque, the latter with the
-    constant 0 (LLVM does not unswitch a loop this large itself)."""
-    m = _load_acc(acc_m)
+    Two compiled loops (:func:`_steps`): with and without a load torque, the
+    latter with the constant 0 (LLVM does not unswitch a loop this large
+    itself). Inlined into its callers, so that the loop is one call away from
+    the period loop, as it was when both loops were inlined here: numba
+    copied the loop's inlined IR into each of them, ~1 s of cold compile
+    each (issue 13)."""
     if t_load == 0.0 or mech == 1:
-        # the unloaded loop of its own, with the constant 0: ``x - 0.0`` is x
-        # exactly, so LLVM drops the subtraction, the last one before the
-        # multiplication by 1/J on the speed's dependency chain (~4 % of the
-        # plant step's latency, issue 13)
-        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, 0.0, mech, acc, m, refs, mset)
-    else:
-        t, x, m = _steps(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, m, refs, mset)
-    if mech == 1:  # imposed speed: remove the round-off drift of the integral
-        x = (x[0], x[1], omega0 + acc * t, x[3])
-    _store_acc(acc_m, m)
-    return t, x
+        return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, False, mech, acc, omega0,
+                      acc_m, refs, mset)
+    return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, True, mech, acc, omega0, acc_m,
+                  refs, mset)
 
 
-@_jit_inline
-def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, m, refs, mset):
+@_jit_no_rc
+def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, loaded, mech, acc, omega0, acc_m, refs,
+           mset):
     """``n`` RK4 steps of length dt with the metrics accumulated at the start of
-    each; returns (time, state, accumulators)."""
+    each; returns (time, state).
+
+    ``loaded`` is a literal (one compiled version each, as ``frame``): False
+    integrates without the load torque, with the constant 0 in its place:
+    ``x - 0.0`` is x exactly, so LLVM drops the subtraction, the last one
+    before the multiplication by 1/J on the speed's dependency chain (~4 % of
+    the plant step's latency, issue 13)."""
+    t_load = t_load if loaded else 0.0
+    m = _load_acc(acc_m)
     for _ in range(n):
         x1 = _rk4(x[0], x[1], x[2], x[3], vx, vy, frame, dt, pl, t_load, mech, acc)
         # the metrics of the step's start state after its RK4 stages in program
@@ -425,7 +457,10 @@ def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, m, refs, mset):
         m = _accumulate(m, x[0], x[1], x[2], t, dt, pl, refs, mset)
         x = x1
         t += dt
-    return t, x, m
+    if mech == 1:  # imposed speed: remove the round-off drift of the integral
+        x = (x[0], x[1], omega0 + acc * t, x[3])
+    _store_acc(acc_m, m)
+    return t, x
 
 
 # ------------------------------------------------------------------- controller
@@ -654,7 +689,7 @@ def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, ome
     The plant is integrated segment by segment between the switching
     instants; returns (time, state, inverter state at the end).
     """
-    start = 0
+    start = np.int64(0)  # not the literal 0: it compiled a version of each callee
     for leg in range(3):
         d = dts[leg]
         if (rising and d > 0.0) or (not rising and d >= 1.0):
@@ -772,9 +807,9 @@ def _finalise(acc_m, n_per, Ts, om_final, t_step, mset):
 
 
 # ------------------------------------------------------------------ simulation
-@_jit
+@njit(cache=True, nogil=True, error_model="numpy")
 def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
-    """One closed-loop simulation.
+    """One closed-loop simulation (releases the GIL, as :func:`run_rows`).
 
     Parameters (all float64 arrays, filled by ``_simulate._pack*``; slots in
     :data:`LAYOUTS`)
@@ -865,10 +900,11 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m,
     e_prev = 0.0
     first_sp = True
     iqr_sp = 0.0
-    # inverter bookkeeping
-    conf_applied = 0  # inverter state in force at the end of the last segment
-    conf_next = 0  # fcs with delay: state chosen last period, applied now
-    conf_now = 0
+    # inverter bookkeeping, typed int64 from the start: with the literal 0, numba
+    # compiled every callee once more for the literal's type (cold compile)
+    conf_applied = np.int64(0)  # inverter state in force at the end of the last segment
+    conf_next = np.int64(0)  # fcs with delay: state chosen last period, applied now
+    conf_now = np.int64(0)
     vd_app = 0.0
     vq_app = 0.0
     for k in range(n_per):
@@ -891,13 +927,17 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m,
         refs = (idr, iqr, sr, tf_p * (flux_c * iqr + (Ld_c - Lq_c) * idr * iqr))
         t_load = SC[SC_LOAD] if t >= SC[SC_LOAD_TIME] else 0.0
         if inverter == 2:
-            if delay >= 1:
+            # one call with a run-time flag, not two with the literals True and
+            # False: each literal compiled a version of its own (cold compile)
+            predict = delay >= 1
+            choice = _fcs_choice(i_d_m, i_q_m, w_m, th_m, idr, iqr,
+                                 conf_next if predict else conf_applied, predict, Ts,
+                                 r_hex, LP)
+            if predict:
                 conf_now = conf_next
-                conf_next = _fcs_choice(i_d_m, i_q_m, w_m, th_m, idr, iqr, conf_next,
-                                        True, Ts, r_hex, LP)
+                conf_next = choice
             else:
-                conf_now = _fcs_choice(i_d_m, i_q_m, w_m, th_m, idr, iqr, conf_applied,
-                                       False, Ts, r_hex, LP)
+                conf_now = choice
             va, vb = state_vector(conf_now, r_hex)
             vd_app, vq_app = _to_dq(va, vb, math.cos(th_m), math.sin(th_m))
         else:
@@ -953,20 +993,21 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m,
     return x[2]
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def run_batch(P, A, B, C, D, Baw, LP, SP, DP, SC):
-    """Metrics of N simulations, one per row of the plant-parameter array P (N, 8).
+@njit(cache=True, nogil=True, error_model="numpy")
+def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
+    """Metrics of the simulations of the plants ``P[start:stop:step]`` into the
+    same rows of ``out`` (N, N_METRICS): one thread's share of a batch
+    (``_simulate.simulate_batch`` runs one per core).
 
-    Parameters
-    ----------
-    P : (N, 8)
-        One plant per row (layout ``LAYOUTS["P"]``).
-    A, B, C, D, Baw, LP, SP, DP, SC
-        As for :func:`run` (traces are never kept).
+    One call per share, not one per simulation: each return to Python hands
+    the GIL between the threads, ~5 % of a batch of 20 ms simulations.
+    Parameters as for :func:`run`, ``P`` (N, 8) one plant per row.
     """
-    N = P.shape[0]
-    out = np.empty((N, N_METRICS))
-    for i in prange(N):
-        M, _ = run(P[i], A, B, C, D, Baw, LP, SP, DP, SC, False)
-        out[i, :] = M
-    return out
+    for i in range(start, stop, step):
+        # np.bool_, not the literal False: a literal compiled run and its
+        # helpers a second time (~3 s of cold compile)
+        M, _ = run(P[i], A, B, C, D, Baw, LP, SP, DP, SC, np.bool_(False))
+        # element by element: ``out[i] = M`` compiled numba's shape check and
+        # its error message formatting (~1.2 s of cold compile)
+        for j in range(N_METRICS):
+            out[i, j] = M[j]
