@@ -120,15 +120,19 @@ simulated duration when only metrics are requested.
 
 from __future__ import annotations
 
+import hashlib
 import math
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
+from .._io import write_atomic
 from ._inverter import bit_changes, hexagon_scale, state_vector, svm_times
 from ._metrics import METRIC_NAMES
 
-__all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices"]
+__all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices",
+           "KERNEL_SOURCES"]
 
 # ---- packed-array layouts: the one declaration of every slot ----------------
 #: Slot names of each packed parameter array, in order, keyed by the array's
@@ -1011,3 +1015,38 @@ def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
         # its error message formatting (~1.2 s of cold compile)
         for j in range(N_METRICS):
             out[i, j] = M[j]
+
+
+# ------------------------------------------------------------- disk cache
+#: The sources compiled into this module's cached machine code. numba keys a
+#: function's disk cache on the stamp of its own file and its own bytecode
+#: only (a documented limitation, numba issue #1833): an edit of
+#: ``_inverter.py`` (whose helpers are compiled into :func:`_periods` and
+#: :func:`run`) or of ``_metrics.py`` (``METRIC_NAMES`` fixes the ``N_METRICS``
+#: and ``M_*`` slots compiled in) left a checkout running the old kernel, and
+#: its tests passing on it.
+KERNEL_SOURCES = ("_kernel.py", "_inverter.py", "_metrics.py")
+
+
+def _drop_stale_cache(cache_dir: Path) -> None:
+    """Remove this module's numba cache indexes from ``cache_dir`` when the
+    digest of :data:`KERNEL_SOURCES` is not the one recorded there (numba's
+    own workaround, deleting the cache, limited to what depends on them);
+    the next call compiles and caches afresh. ``_inverter``'s own indexes
+    stay: they are keyed on their own file. A cache directory that cannot be
+    read or written is left alone (numba then caches nowhere else either)."""
+    here = Path(__file__).parent
+    digest = hashlib.sha256(b"".join((here / name).read_bytes()
+                                     for name in KERNEL_SOURCES)).hexdigest()
+    stamp = cache_dir / "_kernel.sources.sha256"
+    try:
+        if stamp.is_file() and stamp.read_text() == digest:
+            return
+        for index in cache_dir.glob("_kernel.*.nbi"):
+            index.unlink(missing_ok=True)
+        write_atomic(stamp, digest)
+    except OSError:
+        pass
+
+
+_drop_stale_cache(Path(run.stats.cache_path))

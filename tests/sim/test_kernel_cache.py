@@ -1,0 +1,67 @@
+"""The kernel's disk cache follows every source compiled into it (numba issue
+#1833: numba keys a cached function on its own file only, so an edit of a
+helper module left the old machine code in use)."""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import inspect
+from pathlib import Path
+
+from numba.core.registry import CPUDispatcher
+
+from toolbox.sim import _kernel
+
+SIM = Path(_kernel.__file__).parent
+
+
+def test_kernel_sources_cover_what_it_compiles_in():
+    """Every module _kernel imports from the sim package (helpers compiled
+    in, constants frozen in) and every file defining one of its compiled
+    functions is in KERNEL_SOURCES: a new dependency must join the digest."""
+    tree = ast.parse((SIM / "_kernel.py").read_text())
+    imported = {f"{node.module}.py" for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom) and node.level == 1}
+    compiled = {Path(inspect.getsourcefile(f.py_func)).name
+                for f in vars(_kernel).values() if isinstance(f, CPUDispatcher)}
+    assert imported == {"_inverter.py", "_metrics.py"}
+    assert compiled == {"_kernel.py", "_inverter.py"}
+    assert set(_kernel.KERNEL_SOURCES) == imported | compiled
+
+
+def _digest() -> str:
+    return hashlib.sha256(b"".join((SIM / n).read_bytes()
+                                   for n in _kernel.KERNEL_SOURCES)).hexdigest()
+
+
+def test_stale_indexes_are_dropped_once(tmp_path):
+    """Without a stamp, or with another digest, the kernel's indexes go (its
+    data files and _inverter's own indexes stay) and the digest is recorded;
+    with the recorded digest nothing is touched."""
+    names = ["_kernel.run-810.py311.nbi", "_kernel.run-810.py311.1.nbc",
+             "_inverter.svm_times-77.py311.nbi"]
+    for name in names:
+        (tmp_path / name).write_bytes(b"x")
+    _kernel._drop_stale_cache(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        names[1:] + ["_kernel.sources.sha256"])
+    assert (tmp_path / "_kernel.sources.sha256").read_text() == _digest()
+
+    (tmp_path / names[0]).write_bytes(b"x")          # compiled again, same sources
+    _kernel._drop_stale_cache(tmp_path)
+    assert (tmp_path / names[0]).exists()
+
+    (tmp_path / "_kernel.sources.sha256").write_text("0" * 64)   # a source changed
+    _kernel._drop_stale_cache(tmp_path)
+    assert not (tmp_path / names[0]).exists()
+    assert (tmp_path / "_kernel.sources.sha256").read_text() == _digest()
+
+
+def test_unusable_cache_directory_raises_nothing(tmp_path):
+    """A cache path that cannot be a directory (here under a regular file;
+    likewise one that cannot be written) raises nothing at import: numba
+    caches nowhere there either."""
+    (tmp_path / "file").write_bytes(b"")
+    _kernel._drop_stale_cache(tmp_path / "file" / "cache")
+    assert (tmp_path / "file").is_file()
