@@ -4,12 +4,14 @@
   problems here are tiny (matrices of order <= 10), where a multi-threaded
   BLAS only adds variance (one ``mixsyn`` call once took 9 s under OpenBLAS
   thread contention). It also makes idle OpenMP workers sleep
-  (``OMP_WAIT_POLICY=PASSIVE``): numba's parallel batch runs on libgomp,
-  whose workers otherwise spin for milliseconds after each parallel region,
-  and their spinning is CPU time of this process. Measured (issue 13): the
-  first 0.1 s simulation after a 64-plant batch took 52-65 ns per plant step
-  of CPU time against ~31 before the batch (and 150-220 ns of wall time: the
-  spinning threads held both cores); 31 with the passive policy.
+  (``OMP_WAIT_POLICY=PASSIVE``): libgomp's workers otherwise spin for
+  milliseconds after each parallel region, and their spinning is CPU time of
+  this process. Measured (issue 13) when the batch was a numba ``prange``
+  (libgomp; it now runs on Python threads): the first 0.1 s simulation after
+  a 64-plant batch took 52-65 ns per plant step of CPU time against ~31
+  before the batch (and 150-220 ns of wall time: the spinning threads held
+  both cores); 31 with the passive policy. It stays for any OpenMP runtime
+  a route loads (an OpenMP build of BLAS).
 * :func:`interleaved` times the routes alternately in one run (A B A B ...),
   so that a slow spell of the shared machine hits every route alike;
   :func:`ratio` reports the per-round ratio A_i/B_i as its median and
