@@ -3,15 +3,7 @@
 * :func:`pin_blas_threads` must run before numpy is first imported: the
   problems here are tiny (matrices of order <= 10), where a multi-threaded
   BLAS only adds variance (one ``mixsyn`` call once took 9 s under OpenBLAS
-  thread contention). It also makes idle OpenMP workers sleep
-  (``OMP_WAIT_POLICY=PASSIVE``): libgomp's workers otherwise spin for
-  milliseconds after each parallel region, and their spinning is CPU time of
-  this process. Measured (issue 13) when the batch was a numba ``prange``
-  (libgomp; it now runs on Python threads): the first 0.1 s simulation after
-  a 64-plant batch took 52-65 ns per plant step of CPU time against ~31
-  before the batch (and 150-220 ns of wall time: the spinning threads held
-  both cores); 31 with the passive policy. It stays for any OpenMP runtime
-  a route loads (an OpenMP build of BLAS).
+  thread contention).
 * :func:`interleaved` times the routes alternately in one run (A B A B ...),
   so that a slow spell of the shared machine hits every route alike;
   :func:`ratio` reports the per-round ratio A_i/B_i as its median and
@@ -44,12 +36,9 @@ BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
 
 
 def pin_blas_threads(n: int = 1) -> None:
-    """Set the BLAS/OpenMP thread counts (only effective before ``import numpy``)
-    and let idle OpenMP workers sleep instead of spinning (module docstring;
-    effective until numba first starts its threads)."""
+    """Set the BLAS/OpenMP thread counts (only effective before ``import numpy``)."""
     for key in BLAS_ENV:
         os.environ[key] = str(n)
-    os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
 
 
 def interleaved(routes: Mapping[str, Callable[[], object]], rounds: int,

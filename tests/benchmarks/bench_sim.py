@@ -303,7 +303,7 @@ def bench_batch(n=10_000, duration=0.02):
               "pole_pairs": M.pole_pairs, "J": M.J, "friction": M.friction,
               "torque_factor": M.torque_factor}
     sc = Scenario(kind="unloaded_start", duration=duration, iq_ref=IQ_REF, step_time=0.001)
-    # warm-up (compile the parallel kernel) outside the timing
+    # warm-up (load the compiled kernel) outside the timing
     simulate_batch(LAW, {k: (v[:4] if np.ndim(v) else v) for k, v in plants.items()},
                    sc, DRIVE)
     # a bar on a terminal only: in a log, tqdm's carriage returns garble the report
@@ -332,7 +332,7 @@ def bench_batch(n=10_000, duration=0.02):
 def main():
     import numba
     print(f"machine: {os.cpu_count()} cores, numba {numba.__version__}, "
-          f"numba threads {numba.get_num_threads()}, load average {os.getloadavg()[0]:.2f} "
+          f"batch threads {numba.config.NUMBA_NUM_THREADS}, load average {os.getloadavg()[0]:.2f} "
           "(other processes on the machine lower every rate, the parallel batch most)")
     print(f"scenario: {DURATION} s unloaded start, iq_ref {IQ_REF} A, PI wc {WC} rad/s, "
           f"Ts {TS} s, delay 1, plant RK4 at {H} s\n")

@@ -25,7 +25,12 @@ def _pi(wc=2000.0, speed_loop=None):
                       decoupling=Decoupling.from_motor(M), speed_loop=speed_loop)
 
 
-def test_batch_equals_single_runs_and_reports_progress():
+@pytest.mark.parametrize("threads", [1, 3])
+def test_batch_equals_single_runs_and_reports_progress(threads):
+    """Every row of a batch is :func:`simulate`'s run of its plant, bit for bit
+    (the same compiled kernel; the rows are independent), whatever the thread
+    count: 3 threads on chunks of 3 give shares of one row each and, in the
+    last chunk, empty shares; progress comes after each chunk."""
     sc = Scenario(kind="unloaded_start", duration=0.01, iq_ref=5.0)
     scales = np.linspace(0.5, 2.0, 7)
     plants = {"R": M.R, "Ld": M.Ld * scales, "Lq": M.Lq * scales, "flux": M.flux,
@@ -33,13 +38,21 @@ def test_batch_equals_single_runs_and_reports_progress():
               "torque_factor": 1.0}
     calls = []
     out = simulate_batch(_pi(), plants, sc, DRIVE, progress=lambda d, n: calls.append((d, n)),
-                         chunk=3)
+                         chunk=3, threads=threads)
     assert calls == [(3, 7), (6, 7), (7, 7)]
     for i, s in enumerate(scales):
         single = simulate(_pi(), M.with_overrides(scale={"Ld": s, "Lq": s}), sc, DRIVE)
         for k, v in single.metrics.items():
             b = out.metrics[k][i]
-            assert (math.isnan(v) and math.isnan(b)) or b == pytest.approx(v, rel=1e-12), k
+            assert (math.isnan(v) and math.isnan(b)) or b == v, k
+
+
+def test_batch_refuses_empty_chunks_and_no_threads():
+    """A chunk or thread count below one would never finish: refused."""
+    sc = Scenario(kind="unloaded_start", duration=0.001, iq_ref=5.0)
+    for kw in ({"chunk": 0}, {"threads": 0}):
+        with pytest.raises(ValueError, match="chunk and threads must be >= 1"):
+            simulate_batch(_pi(), [M], sc, DRIVE, **kw)
 
 
 def test_metrics_only_memory_is_flat():

@@ -60,7 +60,8 @@ class Plan:
     artifact : ControllerArtifact
         For the loop margins of each sample.
     numba_threads : int or None
-        Threads of the compiled batch per task (None: numba's default).
+        Threads of each simulation batch (:func:`toolbox.sim.simulate_batch`'s
+        ``threads``; None: its default, one per core).
     """
 
     cfg: Any
@@ -182,10 +183,6 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
     """
     from ..sim import METRIC_NAMES, simulate_batch
 
-    if plan.numba_threads:
-        import numba
-
-        numba.set_num_threads(min(plan.numba_threads, numba.config.NUMBA_NUM_THREADS))
     cfg, motor = plan.cfg, plan.motor
     start, stop = chunk_range(cfg, chunk)
     n = stop - start
@@ -216,7 +213,8 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
                 k: (int(v) if k == "delay_samples" else float(v))
                 for k, v in point.items() if k in ("delay_samples", "vdc")})
             pick = np.searchsorted(good, rows)
-            res = simulate_batch(law, [motors[j] for j in pick], sc, dr, chunk=rows.size)
+            res = simulate_batch(law, [motors[j] for j in pick], sc, dr,
+                                 threads=plan.numba_threads)
             for m in METRIC_NAMES:
                 table[m][rows] = res.metrics[m]
         speed_signal = scenario.kind in ("speed_step", "load_step")

@@ -9,12 +9,6 @@ import os
 # 3.9 s of CPU, outputs identical). Set before numpy is imported; a value the
 # user exported wins.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-# numba's parallel batches (campaigns, sweeps) run on OpenMP, whose idle workers
-# spin for milliseconds after each batch by default: that spinning took the
-# cores from the serial simulations that followed (issue 13: a 0.1 s simulation
-# after a batch cost 52-65 instead of 31 ns of CPU per step). Read by the
-# OpenMP runtime when numba first starts it.
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from ._main import main  # noqa: E402
 
