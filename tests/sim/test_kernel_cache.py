@@ -5,7 +5,6 @@ helper module left the old machine code in use)."""
 from __future__ import annotations
 
 import ast
-import hashlib
 import inspect
 from pathlib import Path
 
@@ -30,9 +29,19 @@ def test_kernel_sources_cover_what_it_compiles_in():
     assert set(_kernel.KERNEL_SOURCES) == imported | compiled
 
 
-def _digest() -> str:
-    return hashlib.sha256(b"".join((SIM / n).read_bytes()
-                                   for n in _kernel.KERNEL_SOURCES)).hexdigest()
+def test_digest_follows_each_source(tmp_path, monkeypatch):
+    """The recorded key changes with the contents of each of KERNEL_SOURCES
+    (copies edited one at a time) and with nothing else."""
+    for name in _kernel.KERNEL_SOURCES:
+        (tmp_path / name).write_bytes((SIM / name).read_bytes())
+    monkeypatch.setattr(_kernel, "__file__", str(tmp_path / "_kernel.py"))
+    keys = {_kernel.sources_digest()}
+    assert _kernel.sources_digest() in keys                  # deterministic
+    for name in _kernel.KERNEL_SOURCES:
+        with open(tmp_path / name, "a") as f:
+            f.write("# edited\n")
+        keys.add(_kernel.sources_digest())
+    assert len(keys) == 1 + len(_kernel.KERNEL_SOURCES)
 
 
 def test_stale_indexes_are_dropped_once(tmp_path):
@@ -45,17 +54,17 @@ def test_stale_indexes_are_dropped_once(tmp_path):
         (tmp_path / name).write_bytes(b"x")
     _kernel._drop_stale_cache(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
-        names[1:] + ["_kernel.sources.sha256"])
-    assert (tmp_path / "_kernel.sources.sha256").read_text() == _digest()
+        names[1:] + ["_kernel.sources.key"])
+    assert (tmp_path / "_kernel.sources.key").read_text() == _kernel.sources_digest()
 
     (tmp_path / names[0]).write_bytes(b"x")          # compiled again, same sources
     _kernel._drop_stale_cache(tmp_path)
     assert (tmp_path / names[0]).exists()
 
-    (tmp_path / "_kernel.sources.sha256").write_text("0" * 64)   # a source changed
+    (tmp_path / "_kernel.sources.key").write_text("0" * 64)   # a source changed
     _kernel._drop_stale_cache(tmp_path)
     assert not (tmp_path / names[0]).exists()
-    assert (tmp_path / "_kernel.sources.sha256").read_text() == _digest()
+    assert (tmp_path / "_kernel.sources.key").read_text() == _kernel.sources_digest()
 
 
 def test_unusable_cache_directory_raises_nothing(tmp_path):

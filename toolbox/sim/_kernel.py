@@ -120,19 +120,19 @@ simulated duration when only metrics are requested.
 
 from __future__ import annotations
 
-import hashlib
 import math
 from pathlib import Path
 
 import numpy as np
 from numba import njit
 
+from .._cache import cache_key
 from .._io import write_atomic
 from ._inverter import bit_changes, hexagon_scale, state_vector, svm_times
 from ._metrics import METRIC_NAMES
 
 __all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices",
-           "KERNEL_SOURCES"]
+           "KERNEL_SOURCES", "sources_digest"]
 
 # ---- packed-array layouts: the one declaration of every slot ----------------
 #: Slot names of each packed parameter array, in order, keyed by the array's
@@ -1028,17 +1028,26 @@ def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
 KERNEL_SOURCES = ("_kernel.py", "_inverter.py", "_metrics.py")
 
 
+def sources_digest() -> str:
+    """Key of :data:`KERNEL_SOURCES` (``toolbox._cache.cache_key``: their
+    contents and numba's version)."""
+    here = Path(__file__).parent
+    return cache_key([here / name for name in KERNEL_SOURCES], packages=("numba",))
+
+
 def _drop_stale_cache(cache_dir: Path) -> None:
     """Remove this module's numba cache indexes from ``cache_dir`` when the
-    digest of :data:`KERNEL_SOURCES` is not the one recorded there (numba's
-    own workaround, deleting the cache, limited to what depends on them);
-    the next call compiles and caches afresh. ``_inverter``'s own indexes
-    stay: they are keyed on their own file. A cache directory that cannot be
-    read or written is left alone (numba then caches nowhere else either)."""
-    here = Path(__file__).parent
-    digest = hashlib.sha256(b"".join((here / name).read_bytes()
-                                     for name in KERNEL_SOURCES)).hexdigest()
-    stamp = cache_dir / "_kernel.sources.sha256"
+    :func:`sources_digest` recorded there is another (numba's own workaround,
+    deleting the cache, limited to what depends on the sources); the next
+    call compiles and caches afresh. ``_inverter``'s own indexes stay: they
+    are keyed on their own file. A cache directory that cannot be read or
+    written is left alone (numba then caches nowhere else either).
+
+    Not covered: a process started before an edit of ``_inverter.py`` or
+    ``_metrics.py`` alone that compiles a new signature afterwards saves its
+    old code under numba's unchanged stamp of ``_kernel.py``."""
+    digest = sources_digest()
+    stamp = cache_dir / "_kernel.sources.key"
     try:
         if stamp.is_file() and stamp.read_text() == digest:
             return
