@@ -80,7 +80,7 @@ carries one more rounding (<= 1 ulp instead of 0.5), 1e-16 relative, far below
 the RK4 truncation error; results moved by that much once, when this was
 introduced, and are plain IEEE operations in a fixed order, the same on every
 x86-64 CPU. No ``fastmath``: ``{"contract"}`` on the substep loop (FMA) saved
-another 9 % (29.1 -> 26.5 ns per step), and is deterministic run to run,
+another 9 % when it was tried (29.1 -> 26.5 ns per step), and is deterministic run to run,
 but whether LLVM may fuse depends on the host CPU (the numba cache is
 compiled for it), so verify.json's digits of the dq-frame scenarios would
 differ between machines with and without FMA, which today they do not
