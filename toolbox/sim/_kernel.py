@@ -860,18 +860,18 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     nbuf = int(DP[DP_DELAY]) + 1  # ring buffer of the computation delay
     trdec = max(int(SC[SC_TRACE_DECIM]), 1)
     tr = np.empty(((n_per + trdec - 1) // trdec if keep_traces else 0, N_TRACE))
-    om_final = _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, np.zeros(n),
-                        np.zeros(n), np.zeros(n), acc_m, rng, np.zeros(nbuf), np.zeros(nbuf),
-                        np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1),
+    om_final = _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec,
+                        np.zeros(n), np.zeros(n), np.zeros(n), acc_m, rng, np.zeros(nbuf),
+                        np.zeros(nbuf), np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1),
                         np.zeros(int(SC[SC_CURRENT_DELAY_Q]) + 1), tr)
     return _finalise(acc_m, n_per, Ts, om_final, SC[SC_T_STEP], mset), tr
 
 
 @_jit_no_rc
-def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m, rng,
-             vd_buf, vq_buf, cs_d, cs_q, tr):
-    """The ``n_per`` controller periods of :func:`run` over its work arrays
-    (law states ``xd``, ``xq``, scratch ``xn``; metric accumulators; RNG
+def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec, xd, xq,
+             xn, acc_m, rng, vd_buf, vq_buf, cs_d, cs_q, tr):
+    """The ``n_per`` controller periods of :func:`run` (metric set-up ``mset``,
+    a trace row every ``trdec`` periods) over its work arrays (law states ``xd``, ``xq``, scratch ``xn``; metric accumulators; RNG
     state; delay ring buffers; current-sensor delay lines; traces); returns
     the final mechanical speed."""
     pl = _plant(P)
@@ -883,7 +883,6 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m,
     carrier = DP[DP_HALF_PERIODS] > 0.5
     hold = int(DP[DP_HOLD])
     h = SC[SC_H]
-    n_per = int(round(SC[SC_DURATION] / Ts))
     mech = int(SC[SC_MECH])
     acc = SC[SC_ACC]
     omega0 = SC[SC_OMEGA0]
@@ -891,11 +890,9 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, xd, xq, xn, acc_m,
     Ld_c = LP[LP_LD_C]
     Lq_c = LP[LP_LQ_C]
     flux_c = LP[LP_FLUX_C]
-    mset = _metric_setup(SC)
     x = (0.0, 0.0, omega0, 0.0)  # plant state id, iq, Omega, theta
     n_ts, dt_ts = _split(Ts, h)  # the plant steps of a period held constant
     nbuf = vd_buf.shape[0]
-    trdec = max(int(SC[SC_TRACE_DECIM]), 1)
     # speed loop state
     sp_on = SP[SP_ENABLED] > 0.5
     sp_dec = max(int(SP[SP_DECIM]), 1)
