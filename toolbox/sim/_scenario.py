@@ -274,7 +274,8 @@ class Scenario:
                                 e.got if e.has_got else SpecError._MISSING,
                                 hint=e.hint) from None
             raise
-        sc.validate(key, sample_time)
+        if sample_time is not None:   # the rest was validated on construction
+            sc.check_plant_step(sample_time, key)
         return sc
 
 
