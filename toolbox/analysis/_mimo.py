@@ -138,8 +138,9 @@ def mimo_loop_response(artifact, motor, omega: float, w: np.ndarray, *,
     with the controller's model parameters and measured speed.
     """
     w = np.atleast_1d(np.asarray(w, float))
-    C = _controllers(artifact, w, discrete)
-    return _loop_response(artifact, motor, omega, w, C, discrete, omega_meas)
+    x = _grid_point(artifact, w, discrete)
+    return _loop_response(artifact, motor, omega, w, x, _controllers(artifact, x, discrete),
+                          discrete, omega_meas)
 
 
 def _grid_point(artifact, w: np.ndarray, discrete: bool) -> np.ndarray:
@@ -147,22 +148,22 @@ def _grid_point(artifact, w: np.ndarray, discrete: bool) -> np.ndarray:
     return np.exp(1j * w * artifact.sample_time) if discrete else 1j * w
 
 
-def _controllers(artifact, w: np.ndarray, discrete: bool) -> np.ndarray:
-    """``K = diag(K_d, K_q)`` (Nw, 2, 2), the error controllers on the grid: the same at
-    every speed, so :func:`mimo_disk_margins` evaluates them once (issue 13)."""
-    x = _grid_point(artifact, w, discrete)
-    C = np.zeros((w.size, 2, 2), complex)
+def _controllers(artifact, x: np.ndarray, discrete: bool) -> np.ndarray:
+    """``K = diag(K_d, K_q)`` (Nw, 2, 2), the error controllers at the grid points
+    ``x`` (:func:`_grid_point`): the same at every speed, so
+    :func:`mimo_disk_margins` evaluates them once (issue 13)."""
+    C = np.zeros((x.size, 2, 2), complex)
     for k, name in enumerate(AXES):
         law = axis_law(artifact.axes[name], discrete)
         C[:, k, k] = FreqResponse(*law.error_controller())(x)[:, 0, 0]
     return C
 
 
-def _loop_response(artifact, motor, omega: float, w: np.ndarray, C: np.ndarray,
-                   discrete: bool, omega_meas: float | None) -> np.ndarray:
-    """:func:`mimo_loop_response` with the controllers ``C`` (:func:`_controllers`) given."""
+def _loop_response(artifact, motor, omega: float, w: np.ndarray, x: np.ndarray,
+                   C: np.ndarray, discrete: bool, omega_meas: float | None) -> np.ndarray:
+    """:func:`mimo_loop_response` with the grid points ``x`` (:func:`_grid_point`)
+    and the controllers ``C`` (:func:`_controllers`) given."""
     Ts, d = artifact.sample_time, artifact.delay_samples
-    x = _grid_point(artifact, w, discrete)
     Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
     if discrete:
         Phi, Gam = zoh_coupled(Ac, Bc, Ts)
@@ -213,7 +214,8 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
     if discrete:
         w = w[:-1]  # z = -1 exactly can hit a Tustin controller's pole/zero
     laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
-    C = _controllers(artifact, w, discrete)
+    x = _grid_point(artifact, w, discrete)
+    C = _controllers(artifact, x, discrete)
     dm, du, st = [], [], []
     for om in speeds:
         if discrete:
@@ -222,7 +224,7 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
             stable = bool(loop.spectral_radius()[0] < 1 - 1e-9)
         else:
             stable = _continuous_coupled_stable(artifact, motor, om)
-        Li = _loop_response(artifact, motor, om, w, C, discrete, None)
+        Li = _loop_response(artifact, motor, om, w, x, C, discrete, None)
         S = inv_2x2(np.eye(2) + Li)
         M = S - 0.5 * np.eye(2)
         a_mu = 1.0 / float(np.max(mu_upper_2x2(M))) if stable else 0.0
