@@ -397,3 +397,11 @@ def test_linf_norm_of_a_row_with_feedthrough():
     ours = L.linf_norm(g)
     assert ours >= _grid_peak(g) * (1 - 1e-12)
     assert ours == pytest.approx(_ab13dd(g), rel=1e-9)
+
+
+def test_zeros_refuse_a_system_with_two_inputs():
+    """The invariant zeros are those of a SISO system (the balancing scales one
+    input and one output): two inputs get a clear error, not a broadcast one."""
+    A, B, C, D = -np.eye(2), np.ones((2, 2)), np.ones((1, 2)), np.zeros((1, 2))
+    with pytest.raises(ValueError, match="a SISO system expected, got 1 outputs and 2 inputs"):
+        L._zeros(A, B, C, D)

@@ -169,10 +169,14 @@ def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
 
 
 def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """Invariant zeros: the finite eigenvalues of the system pencil
-    ``([A B; C D], diag(I, 0))`` (QZ), after a power-of-two diagonal scaling of
-    its states (exact) that evens the entries of controllers spanning many
-    decades; the infinite eigenvalues (relative degree) are dropped."""
+    """Invariant zeros of a SISO system: the finite eigenvalues of the system
+    pencil ``([A B; C D], diag(I, 0))`` (QZ), after a power-of-two diagonal
+    scaling of its states (exact, :func:`balanced`: one input and one output)
+    that evens the entries of controllers spanning many decades; the infinite
+    eigenvalues (relative degree) are dropped."""
+    if B.shape[1] != 1 or C.shape[0] != 1:
+        raise ValueError(f"_zeros: a SISO system expected, got {C.shape[0]} outputs and "
+                         f"{B.shape[1]} inputs")
     n = A.shape[0]
     if n == 0:
         return np.zeros(0, complex)
@@ -282,7 +286,8 @@ class StateSpace:
 
     @cached_property
     def _poles_zeros(self) -> tuple[np.ndarray, np.ndarray]:
-        """Poles (dgeev) and invariant zeros (:func:`_zeros`), computed once:
+        """Poles (dgeev) and invariant zeros (:func:`_zeros`) of a SISO system,
+        computed once:
         the H-infinity synthesis tests its controller's fastest pole with them
         and the order reduction starts from the same zeros and poles (issue 13)."""
         return _eigvals(self.A), _zeros(self.A, self.B, self.C, self.D)

@@ -40,8 +40,8 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
                                  zgesv as _zgesv)
 
-from .._lti import (_CANCEL_TOL, StateSpace, TransferFunction, _eigvals, _leading_identity,
-                    _linf_norm, _minreal_coeffs, _poly, _svd, _tf2ss_arrays, _zeros,
+from .._lti import (_CANCEL_TOL, StateSpace, TransferFunction, _leading_identity,
+                    _linf_norm, _minreal_coeffs, _poly, _svd, _tf2ss_arrays,
                     as_statespace, balanced, diagonal_scaling)
 from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
@@ -1297,8 +1297,15 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
     ndarray of complex
         The remaining poles (rad/s).
     """
-    A, B, C, D = _ss_blocks(K)
-    return _effective_poles(_eigvals(A), _zeros(A, B, C, D), cancel_tol)
+    return _effective_poles(*_poles_zeros(K), cancel_tol)
+
+
+def _poles_zeros(K: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Poles and invariant zeros of a SISO system: those our ``StateSpace``
+    keeps once computed (``StateSpace._poles_zeros``), else of its realisation."""
+    if not isinstance(K, StateSpace):
+        K = StateSpace._unchecked(*_ss_blocks(K))
+    return K._poles_zeros
 
 
 def _effective_poles(poles: np.ndarray, zeros: np.ndarray, cancel_tol: float) -> np.ndarray:
@@ -1323,13 +1330,7 @@ def fastest_pole_modulus(K: Any) -> float:
     Compared with :func:`pole_limit` (``pi/Ts``) to decide whether ``K`` can
     be discretised at the sample time (paper 003 sect. 4 trap at the optimum).
     """
-    return _fastest(StateSpace(*_ss_blocks(K)))
-
-
-def _fastest(K: StateSpace) -> float:
-    """:func:`fastest_pole_modulus` of our system ``K`` (its poles and zeros
-    are kept on it for the order reduction)."""
-    ep = _effective_poles(*K._poles_zeros, 1e-2)
+    ep = _effective_poles(*_poles_zeros(K), 1e-2)
     return float(np.max(np.abs(ep))) if ep.size else 0.0
 
 
@@ -1466,7 +1467,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
         while True:
             res = prep.feasibility((1.0 + b) * gamma_opt)
             K = StateSpace._unchecked(*_controller_from(prep, res)) if res.feasible else None
-            fast = _fastest(K) if K is not None else math.inf
+            fast = fastest_pole_modulus(K) if K is not None else math.inf
             ok = limit is None or fast <= limit
             if (K is not None and ok) or b >= max_backoff:
                 break
@@ -1485,7 +1486,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
             err.condition, err.best = res.message, best
             raise err
         K, gamma_opt, b = StateSpace._unchecked(*_controller_from(prep, res)), None, 0.0
-        fast = _fastest(K)
+        fast = fastest_pole_modulus(K)
     if limit is not None and fast > limit:
         notes.append(f"controller pole at |s| = {fast:.4g} rad/s exceeds the realisability "
                      f"limit pi/Ts = {limit:.4g} rad/s"
