@@ -338,3 +338,18 @@ def test_gains_retunable_at_run_time(variant, tmp_path):
                                     text=True, timeout=60, check=True).stdout
     assert runs["retuned"] == runs["1000"]
     assert runs["retuned"] != runs["500"]
+
+
+def test_vendor_plan_of_a_check_without_its_minimal_laws():
+    """An ExportCheck built without the minimal laws (its field's default) gets
+    the plan made from the artifact's, the same as check_exportable's."""
+    from dataclasses import replace
+
+    from toolbox.export.c_header import vendor_plan
+
+    art = A.pi_artifact()
+    chk = check_exportable(art, A.MOTOR, A.DRIVE)
+    plan, why = vendor_plan(art, A.MOTOR, A.DRIVE, chk)
+    assert plan is not None, why
+    again, _ = vendor_plan(art, A.MOTOR, A.DRIVE, replace(chk, minimal={}))
+    assert again == plan

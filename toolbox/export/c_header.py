@@ -296,7 +296,8 @@ class ExportCheck:
     minimal : dict
         ``{"d": MinimalLaw, "q": MinimalLaw}`` (:func:`minimal_laws`), which
         the realisations and the vendor plan are made from (computed once:
-        about half of a header's time, issue 13).
+        about half of a header's time, issue 13; an empty dict: the vendor
+        plan computes them).
     """
 
     realisations: dict
@@ -940,7 +941,9 @@ def vendor_plan(artifact, motor, drive, check: ExportCheck):
     if check.limit == "hexagon":
         return None, ('voltage_limit = "hexagon" is implemented in the float path only; '
                       'the MCSDK/IQmath variants need voltage_limit = "circle"')
-    return _vendor.plan_vendor(check.minimal, i_max, w_max, check.v_max, dec_coeffs)
+    # an ExportCheck built by hand may lack the minimal laws check_exportable keeps
+    minimal = check.minimal or minimal_laws(artifact)
+    return _vendor.plan_vendor(minimal, i_max, w_max, check.v_max, dec_coeffs)
 
 
 def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str,
