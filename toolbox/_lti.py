@@ -128,9 +128,7 @@ def _svd(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``np.linalg.svd(M)`` of a real matrix (full U and V^T): LAPACK dgesdd
     with numpy's workspace and layout, without its ~4 us of dispatch. It is
     scipy's LAPACK build, not numpy's: the bits agree on the gallery's plants
-    (outputs unchanged) but need not on every matrix (an eigen-decomposition
-    taken the same way moved one design's margins by an ulp, and was
-    reverted to numpy's)."""
+    (outputs unchanged) but need not on every matrix."""
     U, s, Vt, info = _dgesdd(M, compute_uv=1, full_matrices=1, lwork=_dgesdd_lwork(*M.shape))
     if info != 0:
         raise np.linalg.LinAlgError(f"dgesdd failed (info {info})")
@@ -1026,9 +1024,8 @@ def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     With the SVD ``D = U Sigma V'`` (once), ``R^-1`` and ``S^-1`` are
     diagonal in the rotated ``b_i`` (columns of ``B V``) and ``c_i`` (rows of
     ``U' C``), so ``H = blkdiag(A, -A') + X' diag(coef(g)) Y``, a sum of
-    fixed rank-one terms ``x_i y_i'`` with scalar coefficients
-    ``s_i/(s_i^2 - g^2)`` or ``g/(s_i^2 - g^2)`` (``s_i = 0`` past the
-    singular values of D):
+    fixed rank-one terms ``x_i y_i'`` with scalar coefficients (``s_i = 0``
+    past the singular values of D):
     ``[-b_i; 0][c_i; 0]'`` and ``[0; c_i][0; b_i]'`` with ``s_i/(s_i^2 - g^2)``,
     ``[b_i; 0][0; -b_i]'`` with ``g/(s_i^2 - g^2)`` and ``[0; c_j][c_j; 0]'``
     with ``g/(s_j^2 - g^2)``. Each level costs one product and one real

@@ -118,25 +118,6 @@ def test_weight_realisation_is_minimal_and_exact():
         H._tf_realisation([1.0, 0.0, 0.0], [1.0, 1.0])
 
 
-def test_first_order_realisation_is_the_general_one_bit_for_bit():
-    """The scalar route for first-order transfer functions (the plant and
-    paper 003's weights) rounds exactly as the general one (cancellation
-    test, tf2ss, power-of-two balancing), including a negative leading
-    coefficient and a constant numerator; a cancelling zero goes the general
-    way (None)."""
-    from toolbox._lti import _minreal_coeffs, _poly, _tf2ss_arrays, balanced
-    cases = [([1 / 1.51, 177.3493 / 1.51], [1.0, 0.0117]), ([0.5e-3, 0.5], [2e-5, 1.0]),
-             ([1e4, 1e4 * 135.68], [1.0, 2.7135e6]), ([1.0], [2.8e-3, 0.6]),
-             ([-3.0, 7e5], [-2e-3, 0.0]), ([2.5], [-1.0, 3e-7])]
-    for num, den in cases:
-        n, d = _poly(num), _poly(den)
-        A, B, C, D = _tf2ss_arrays(*_minreal_coeffs(n, d))
-        ref = (*balanced(A, B, C), D)
-        got = H._first_order(n, d)
-        assert all(g.shape == r.shape and g.tobytes() == r.tobytes() for g, r in zip(got, ref))
-    assert H._first_order(_poly([2.0, 2.0]), _poly([1.0, 1.0])) is None
-
-
 # ---------------------------------------------------------------- (3)
 def test_assumptions_hold_for_paper_q_axis(Pq):
     rep = H.check_assumptions(Pq)

@@ -40,10 +40,9 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
                                  zgesv as _zgesv)
 
-from .._lti import (_CANCEL_TOL, StateSpace, TransferFunction, _leading_identity,
+from .._lti import (StateSpace, TransferFunction, _identity, _leading_identity,
                     _linf_norm, _minreal_coeffs, _poly, _svd, _tf2ss_arrays,
                     as_statespace, balanced, diagonal_scaling)
-from .._lti import _identity as _eye
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -232,7 +231,7 @@ def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 def _inv(A: np.ndarray) -> np.ndarray:
     """A^-1 (LAPACK dgesv on the identity, as numpy's ``inv``)."""
-    return _solve(A, _eye(A.shape[0]))
+    return _solve(A, _identity(A.shape[0]))
 
 
 def _svdvals(M: np.ndarray) -> np.ndarray:
@@ -296,45 +295,23 @@ def _tf_realisation(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
     """Minimal realisation (A, B, C, D) of the proper SISO ``num/den``.
 
     Common roots of num and den are cancelled first
-    (:meth:`toolbox._lti.TransferFunction.minreal`, python-control's rule),
-    then :func:`toolbox._lti.tf2ss` gives the controllable canonical form,
+    (:func:`toolbox._lti._minreal_coeffs`, python-control's rule), then
+    :func:`toolbox._lti._tf2ss_arrays` gives the controllable canonical form,
     whose states are scaled by powers of two (:func:`toolbox._lti.balanced`: exact) so that
     B and C have comparable entries (paper 003's w3 has C ~ -2.7e10 for
     B = 1 otherwise).
     """
     num, den = _poly(num), _poly(den)      # trimmed copies, as TransferFunction keeps them
     if not den.any():
-        raise ValueError("TransferFunction: zero denominator")
+        raise ValueError("augment_mixed_sensitivity: zero denominator")
     if num.size > den.size:
         raise ValueError(f"augment_mixed_sensitivity: expected a proper transfer function, "
                          f"got numerator degree {num.size - 1} over denominator degree "
                          f"{den.size - 1}")
     if not num.any():
         return _ss_blocks(0.0)
-    if den.size == 2 and (first := _first_order(num, den)) is not None:
-        return first
     A, B, C, D = _tf2ss_arrays(*_minreal_coeffs(num, den))
     return (*balanced(A, B, C), D)
-
-
-def _first_order(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...] | None:
-    """:func:`_tf_realisation` of ``(n0 s + n1)/(d0 s + d1)`` or ``n1/(d0 s + d1)``
-    (the plant of eq (34) and the weights of eq (44)-(49) are first-order) in
-    scalar arithmetic: the operations of :func:`toolbox._lti._minreal_coeffs`
-    and :func:`toolbox._lti._tf2ss_arrays` on Python floats, which round as
-    numpy's on one-element arrays (IEEE), without their array calls (issue 13);
-    None when the zero cancels the pole (the general route removes it)."""
-    d0, d1 = den.tolist()
-    if num.size == 2:
-        n0, n1 = num.tolist()
-        z = -n1 / n0
-        if abs(-d1 / d0 - z) <= _CANCEL_TOL * max(1.0, abs(z)):
-            return None
-    else:
-        n0, n1 = 0.0, num.item()         # num padded to den's degree
-    n0, n1, a1 = n0 / d0, n1 / d0, d1 / d0           # den made monic
-    A, B, C = balanced(np.array([[-a1]]), np.ones((1, 1)), np.array([[n1 - n0 * a1]]))
-    return A, B, C, np.array([[n0]])
 
 
 def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
@@ -382,7 +359,7 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
     # plant output yg = Cg xg + Dg u
     C_g = np.zeros((1, n)); C_g[:, :ng] = Cg
     zero = np.zeros((1, 1))
-    inputs = {"w1": (C_e, De_w, De_u), "w2": (np.zeros((1, n)), zero, _eye(1)),
+    inputs = {"w1": (C_e, De_w, De_u), "w2": (np.zeros((1, n)), zero, _identity(1)),
               "w3": (C_g, zero, Dg)}
     C1_rows, D11_rows, D12_rows = [], [], []
     labels = ["G"] * ng
@@ -539,7 +516,7 @@ def _check_balanced(P: PartitionedPlant, tol: float = 1e-12,
     if _rank_defect(P.D21.T, tol, s21):
         problems.append("A2 fails: D21 has not full row rank: the measurement must contain "
                         "the exogenous input directly (y = r - G u gives D21 = 1)")
-    problems = list(dict.fromkeys(problems)) if problems else problems
+    problems = list(dict.fromkeys(problems))       # a message once, in order
     return AssumptionReport(ok=not problems, problems=problems)
 
 
@@ -999,21 +976,21 @@ def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.
     F12, F2 = F[m1 - p2:m1], F[m1:]
     L12, L2 = L[:, p1 - m2:p1], L[:, p1:]
     # eq (27): Z = (I - Y X / gamma^2)^-1, applied to both B2 + L12 and L2 at once
-    ZB = _solve(_eye(A.shape[0]) - (Y @ X) / g2, np.concatenate([Pn.B2 + L12, L2], axis=1))
+    ZB = _solve(_identity(A.shape[0]) - (Y @ X) / g2, np.concatenate([Pn.B2 + L12, L2], axis=1))
     if D1111.size:
         r, c = D1111.shape
-        Ka = _solve(g2 * _eye(r) - D1111 @ D1111.T, D1112)         # (g2 I - D D^T)^-1 D1112
-        Kb = _solve(g2 * _eye(c) - D1111.T @ D1111, D1121.T)
+        Ka = _solve(g2 * _identity(r) - D1111 @ D1111.T, D1112)         # (g2 I - D D^T)^-1 D1112
+        Kb = _solve(g2 * _identity(c) - D1111.T @ D1111, D1121.T)
         D11h = -D1121 @ D1111.T @ Ka - D1122                          # eq (24)
-        D12h = _cholesky(_eye(m2) - D1121 @ Kb)            # D12h D12h^T = T2, eq (25)
-        T3 = _eye(p2) - D1112.T @ Ka                                # eq (26)
+        D12h = _cholesky(_identity(m2) - D1121 @ Kb)            # D12h D12h^T = T2, eq (25)
+        T3 = _identity(p2) - D1112.T @ Ka                                # eq (26)
         B2h = ZB[:, :m2] @ D12h                                       # eq (27)
         B1h = B2h @ _solve(D12h, D11h) - ZB[:, m2:]                   # eq (29)
     else:
         # eq (24)-(25) with an empty D1111: T2 = I, so D12h = I and eq (27), (29)
         # lose their products by it (exact: products by an identity round nothing)
         D11h = -D1122                                                 # eq (24)
-        T3 = _eye(p2) - (D1112.T @ D1112) / g2                      # eq (26)
+        T3 = _identity(p2) - (D1112.T @ D1112) / g2                      # eq (26)
         B2h = ZB[:, :m2]                                              # eq (27)
         B1h = B2h @ D11h - ZB[:, m2:]                                 # eq (29)
     D21h = _cholesky(T3).T                                   # D21h^T D21h = T3
@@ -1150,7 +1127,8 @@ def _bisect(prep: _Prepared, lo: float, hi: float, a: float, b: float, tol: floa
     return _cell(lo, hi, a, b, b, tol)[1]        # all decided: the last bracket's top
 
 
-#: tests :func:`_narrow` may spend (paper 003's axes need 5-7)
+#: tests :func:`_narrow` may spend (the gallery's paper 003 designs need 5 to 7,
+#: once 10; the bisection then goes on from the bracket reached)
 _NARROW_STEPS = 10
 
 
@@ -1234,8 +1212,7 @@ def _extrapolate(seen: list) -> float | None:
     as ``gamma^-2`` (the Hamiltonians' ``B1 B1'/gamma^2``), and the distances
     are nearer to straight lines in it than in gamma (issue 13: the secant in
     gamma undershot paper 003's q-axis optimum by 0.9 %, costing one more
-    Riccati test; over the gallery's ten iterations 92 tests instead of 99,
-    the same optima)."""
+    Riccati test)."""
     if len(seen) < 2 or seen[-1][1][0] != seen[-2][1][0]:
         return None
     (g1, (_, v1)), (g2, (_, v2)) = seen[-2], seen[-1]
@@ -1386,7 +1363,7 @@ def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ..
     Dk D21 w), M = (I - Dk D22)^-1 (numpy; python-control's ``lft`` builds named
     systems, ~1.5 ms, issue 13)."""
     Ak, Bk, Ck, Dk = K
-    Mi = _inv(_eye(P.nu) - Dk @ P.D22)
+    Mi = _inv(_identity(P.nu) - Dk @ P.D22)
     Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
     Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
     A = _blocks2x2(P.A + P.B2 @ Ux, P.B2 @ Uk, Bk @ Yx, Ak + Bk @ Yk)
