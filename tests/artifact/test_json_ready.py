@@ -38,3 +38,21 @@ def test_plain_and_numpy_values_convert_by_the_same_rules():
 
     assert types(out)
     assert type(out["n"][3]) is bool and math.copysign(1.0, out["f"][4]) == -1.0
+
+
+def test_controller_matrices_are_read_only_copies():
+    """An artifact's matrices cannot be edited in place (the analysis keeps
+    results keyed on a live controller, which such an edit would leave stale)
+    and do not alias the caller's arrays."""
+    import pytest
+
+    from toolbox.artifact import StateSpaceData
+
+    A = np.array([[1.0]])
+    s = StateSpaceData(A, np.ones((1, 2)), np.ones((1, 1)), np.zeros((1, 2)), 1e-4, "zoh")
+    A[0, 0] = 5.0
+    assert s.A[0, 0] == 1.0
+    for m in (s.A, s.B, s.C, s.D):
+        assert m.dtype == float
+        with pytest.raises(ValueError, match="read-only"):
+            m[...] = 0.0

@@ -84,7 +84,8 @@ class StateSpaceData:
     Attributes
     ----------
     A, B, C, D : ndarray
-        System matrices (SI units: inputs A, outputs V).
+        System matrices (SI units: inputs A, outputs V), kept as read-only
+        float copies.
     dt : float or None
         Sample time (s); ``None`` for a continuous system.
     method : str or None
@@ -100,6 +101,14 @@ class StateSpaceData:
     method: str | None = None
 
     def __post_init__(self) -> None:
+        # read-only float copies: the artifact is the hinge between the stages, and
+        # the analysis keeps results keyed on a live controller (``_axis._MARGINS``,
+        # ``_laws._CONTINUOUS``), which an edit of its matrices in place would
+        # leave stale
+        for name in ("A", "B", "C", "D"):
+            arr = np.array(getattr(self, name), dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
         n = self.A.shape[0]
         if self.A.shape != (n, n):
             raise ArtifactError("A", "a square matrix", list(self.A.shape))
@@ -120,8 +129,7 @@ class StateSpaceData:
         :func:`toolbox._lti.as_statespace` reads (python-control systems:
         ``dt`` 0 or None means continuous)."""
         g = as_statespace(sys)
-        return cls(np.array(g.A), np.array(g.B), np.array(g.C), np.array(g.D),
-                   g.dt, method if g.dt else None)
+        return cls(g.A, g.B, g.C, g.D, g.dt, method if g.dt else None)
 
     def to_statespace(self) -> StateSpace:
         """The system as a :class:`toolbox._lti.StateSpace` (continuous when
