@@ -114,7 +114,7 @@ def _simplify_cs(e: sp.Expr) -> sp.Expr:
 
 
 def _simplified_product(*factors: sp.Matrix) -> sp.Matrix:
-    """:func:`_simplify_matrix` of the product of ``factors``, multiplied as
+    """:func:`_simplify` of each entry of the product of ``factors``, multiplied as
     polynomials in ``c, s``: the same expanded polynomials as expanding the
     trigonometric product, without ``expand_trig`` on the long product
     terms (issue 13: four times faster on ``T L_abc T^-1``)."""
@@ -248,7 +248,3 @@ def _derive_dq_model(convention: str) -> DqModel:
     return DqModel(convention=convention, di_dt=di_dt, voltage=v_dq, torque=torque,
                    dOmega_dt=(torque - F * Omega - T_L) / J,
                    inductance_map={L_d: Ld_expr, L_q: Lq_expr, psi_f: pm_expr})
-
-
-def _simplify_matrix(m: sp.Matrix) -> sp.Matrix:
-    return m.applyfunc(_simplify)
