@@ -24,7 +24,7 @@ from scipy.linalg.lapack import zgesv as _zgesv
 
 from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals,
                     _tf2ss_arrays, as_statespace, balanced, parallel, state_scaling)
-from ._hinf_riccati import _poles_zeros, _solve, _ss_blocks
+from ._hinf_riccati import _ss_blocks, _solve, _zpk
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -36,19 +36,6 @@ __all__ = [
 # --------------------------------------------------------------------------
 # zpk helpers
 # --------------------------------------------------------------------------
-def _zpk(K: Any) -> tuple[np.ndarray, np.ndarray, float]:
-    """Zeros, poles and leading gain of a SISO system (those our systems keep
-    once computed: the synthesis computed the controller's)."""
-    A, B, C, D = _ss_blocks(K)
-    p, z = _poles_zeros(K)
-    # leading gain from the value at a test point away from poles and zeros
-    s0 = 1j * (1.0 + 3.0 * max([1.0] + [abs(x) for x in z.tolist() + p.tolist()]))
-    val = complex(D[0, 0]) + (complex((C @ _solve(s0 * np.eye(A.shape[0]) - A, B))[0, 0])
-                              if A.shape[0] else 0.0)
-    k = val * np.prod(s0 - p) / np.prod(s0 - z)
-    return z, p, float(k.real)
-
-
 def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
     """Well-scaled state-space realisation of k prod(s - z)/prod(s - p)."""
     return StateSpace._unchecked(*_zpk_realisation(z, p, k))     # fresh float arrays
