@@ -781,19 +781,30 @@ class HinfFeasibility:
     rho: float = float("nan")
     min_eig: float = float("nan")
     _work: Any = field(default=None, repr=False)
+    _x_eig: Any = field(default=None, repr=False)   # X's eigenvalues and vectors (_Boundary)
 
 
-def _not_psd(X: np.ndarray, tol: float = 1e-9) -> float | None:
-    """None when X >= 0 up to ``tol`` relative to its largest eigenvalue, else
-    its smallest eigenvalue (LAPACK dsyevd; kept for the gamma iteration's
-    extrapolation, :func:`_boundary_distance`)."""
-    if X.size == 0:
-        return None
-    ev, _, info = _dsyevd(X, 0)                  # ascending
-    if info != 0:
-        raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
+def _not_psd(X: np.ndarray) -> float | None:
+    """:func:`_psd_defect` of the eigenvalues of a symmetric X."""
+    return _psd_defect(_eigh(X)[0]) if X.size else None
+
+
+def _psd_defect(ev: np.ndarray, tol: float = 1e-9) -> float | None:
+    """None when the (ascending, non-empty) eigenvalues ``ev`` are >= 0 up to
+    ``tol`` relative to the largest, else the smallest (kept for the gamma
+    iteration's prediction, :class:`_Boundary`)."""
     lo, hi = ev[0].item(), ev[-1].item()        # Python floats: no numpy scalar arithmetic
     return None if lo >= -tol * max(1.0, -lo, hi) else lo
+
+
+def _eigh(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues (ascending) and eigenvectors of a symmetric X (LAPACK
+    dsyevd; the vectors cost ~1 us more on these orders and serve
+    :class:`_Boundary`)."""
+    lam, U, info = _dsyevd(X, 1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
+    return lam, U
 
 
 @dataclass(slots=True)
@@ -846,10 +857,11 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
         return HinfFeasibility(gamma, False, "X_not_stabilising",
                                f"the X Riccati equation (18) has no stabilising solution "
                                f"at gamma = {gamma:.6g}: {why}")
-    if (low := _not_psd(X)) is not None:
+    x_eig = _eigh(X) if X.size else None
+    if x_eig is not None and (low := _psd_defect(x_eig[0])) is not None:
         return HinfFeasibility(gamma, False, "X_not_psd",
                                f"X of eq (18) is stabilising but not >= 0 at gamma = {gamma:.6g}",
-                               X=X, min_eig=low)
+                               X=X, min_eig=low, _x_eig=x_eig)
     Rnj = w.DDt - g2 * w.Ez                                          # eq (15)
     Y, why = _ric_h(w.Hy, Rnj)                                       # eq (17), (19)
     if Y is None:
@@ -868,7 +880,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
                                f"rho(XY) = {rho:.6g} >= gamma^2 = {g2:.6g}",
                                X=X, Y=Y, rho=rho)
     return HinfFeasibility(gamma, True, None, "conditions (a) and (b) of Theorem 1 hold",
-                           X=X, Y=Y, rho=rho, _work=(w, Rnh, Rnj))
+                           X=X, Y=Y, rho=rho, _work=(w, Rnh, Rnj), _x_eig=x_eig)
 
 
 def _spectral_radius(M: np.ndarray) -> float:
@@ -1093,7 +1105,7 @@ def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> fl
     (issue 13): feasibility is monotone in gamma (a level above an achievable
     one is achievable), so a midpoint above a level already found feasible is
     feasible and one below a level found infeasible is not. :func:`_narrow`
-    first brackets the optimum by extrapolation; the bisection then replays
+    first brackets the optimum by interpolation; the bisection then replays
     its midpoints and solves the Riccati equations only for those the
     bracket [a, b] leaves undecided. The first midpoint is tested before the
     upper end: when it is feasible, so is the upper end (one test fewer, the
@@ -1102,98 +1114,165 @@ def _gamma_iteration(prep: _Prepared, tol: float, gamma_max: float | None) -> fl
     lo = prep.gf.bound
     top = 1e8 if gamma_max is None else float(gamma_max)
     hi = min(max(1.0, 2.0 * lo), top)
-    tested = []
+    seen = _Boundary()
+    a = lo                                   # the highest level known infeasible
     if lo < hi:
         mid = 0.5 * (lo + hi)
-        if (res := prep.feasibility(mid)).feasible:
-            return _bisect(prep, lo, hi, *_narrow(prep, lo, hi, lo, mid, [], tol), tol)
-        tested.append(res)
+        seen.add(res := prep.feasibility(mid))
+        if res.feasible:
+            return _bisect(prep, *_narrow(prep, lo, hi, lo, mid, seen, tol), tol)
+        a = mid
     while not (res := prep.feasibility(hi)).feasible:
         if hi >= top:
             raise DesignInfeasible(_GAMMA_KEY, f"a problem feasible for some gamma <= {top:g}",
                             hint="no controller reaches it: raise gamma_max or relax "
                                  "the weights w1/w3")
-        tested.append(res)
+        seen.add(res)
+        a = hi
         lo, hi = hi, min(2.0 * hi, top)
-    a = max([lo] + [r.gamma for r in tested])          # the highest level known infeasible
-    return _bisect(prep, lo, hi, *_narrow(prep, lo, hi, a, hi, tested, tol), tol)
+    seen.add(res)
+    return _bisect(prep, *_narrow(prep, lo, hi, a, hi, seen, tol), tol)
 
 
 def _bisect(prep: _Prepared, lo: float, hi: float, a: float, b: float, tol: float) -> float:
     """The bisection of :func:`gamma_iteration` from [lo, hi], testing only the
     midpoints the known bracket [a, b] (a infeasible, b feasible) leaves open."""
-    while (mid := _open_midpoint(lo, hi, a, b, tol)) is not None:
+    while True:
+        lo, hi = _walk(lo, hi, a, b, tol)
+        if hi - lo <= tol * hi:
+            return hi                            # all decided: the last bracket's top
+        mid = 0.5 * (lo + hi)
         a, b = (a, mid) if prep.feasibility(mid).feasible else (mid, b)
-    return _cell(lo, hi, a, b, b, tol)[1]        # all decided: the last bracket's top
 
 
-#: tests :func:`_narrow` may spend (the gallery's paper 003 designs need 5 to 7,
-#: once 10; the bisection then goes on from the bracket reached)
+#: tests :func:`_narrow` may spend (the gallery's H-infinity designs need 5 to 8
+#: tests in all, 98 -> 75 over its 10 iterations with the feasible levels'
+#: data; the bisection then goes on from the bracket reached)
 _NARROW_STEPS = 10
 
 
-def _boundary_distance(res: HinfFeasibility) -> tuple[str, float] | None:
-    """Which condition of Theorem 1 failed at an infeasible gamma, and a number
-    that goes to zero about linearly as gamma rises to that condition's
-    boundary: ``1/lambda_min`` of X or Y when it is not >= 0 (its negative
-    eigenvalue runs off to -inf there), ``1 - rho(XY)/gamma^2`` for the
-    coupling condition; None when a Riccati equation had no solution."""
-    if res.failed in ("X_not_psd", "Y_not_psd"):
-        return res.failed, 1.0 / res.min_eig
-    if res.failed == "rho":
-        return "rho", 1.0 - res.rho / res.gamma ** 2
-    return None
+class _Boundary:
+    """What the tested levels say about where the optimal gamma lies.
 
-
-def _narrow(prep: _Prepared, lo: float, hi: float, a: float, b: float, tested: list,
-            tol: float) -> tuple[float, float]:
-    """A bracket [a, b] of the optimal gamma (a infeasible, b feasible, both
-    known from tests) that decides every midpoint of the bisection of
-    :func:`gamma_iteration` from [lo, hi] (none falls inside it).
-
-    The tests are levels of that bisection: secant extrapolation (in 1/gamma^2) of
-    :func:`_boundary_distance` over the last two infeasible levels that
-    failed the same condition predicts the optimum, and the two ends of the
-    bisection's last bracket around the prediction (:func:`_cell`) are
-    tested, the upper first; two hits decide the whole bisection. Its next
-    undecided midpoint is tested when there is no prediction or a prediction
-    missed.
+    Each condition of Theorem 1 that fails below the optimum has a number
+    that goes through zero about linearly in ``1/gamma^2`` at its boundary
+    (gamma enters the Riccati data of eq (14)-(17) as ``gamma^-2``):
+    ``1/lambda`` for the eigenvalue of X (or Y) that runs off to infinity
+    there (X^-1 is smooth through the boundary; the eigenvalue is the
+    negative one below it, the same eigenvector's above it), ``1 -
+    rho(XY)/gamma^2`` for the coupling condition. The X eigenvalue is the
+    usual boundary (paper 003's Y is 0); it is the one whose feasible
+    levels are used too, so that the optimum is interpolated between levels
+    on both sides of it rather than extrapolated from one side.
     """
-    seen = [(r.gamma, d) for r in tested if (d := _boundary_distance(r)) is not None]
-    step, below = "predict", None
-    for _ in range(_NARROW_STEPS):
-        c = _open_midpoint(lo, hi, a, b, tol)
-        if c is None:
-            break
-        guess = _extrapolate(seen) if step == "predict" else None
-        if step == "below" and a < below < b:
-            c = below
-        elif guess is not None and a < guess < b:
-            below, top = _cell(lo, hi, a, b, guess, tol)
-            c, step = (top, "below") if top < b else (below, "predict")
-        else:
-            step = "predict"
-        res = prep.feasibility(c)
+
+    def __init__(self) -> None:
+        self.low: list[tuple] = []       # infeasible: (gamma, condition, value, eigenvector)
+        self.high: list[list] = []       # feasible: [gamma, X's eigenvalues, eigenvectors,
+                                         #   the entry of ``low`` matched last, the value]
+        self.top: tuple | None = None    # the highest of ``low``
+
+    def add(self, res: HinfFeasibility) -> None:
+        """Record a tested level."""
         if res.feasible:
-            # a feasible lower end means the prediction was high: bisect once
-            b, step = c, ("bisect" if c == below else step)
+            if res._x_eig is not None:
+                self.high.append([res.gamma, *res._x_eig, None, 0.0])
+            return
+        if res.failed == "X_not_psd":
+            lam, U = res._x_eig
+            entry = (res.gamma, "X", 1.0 / lam[0].item(), U[:, 0])
+        elif res.failed == "Y_not_psd":
+            entry = (res.gamma, "Y", 1.0 / res.min_eig, None)
+        elif res.failed == "rho":
+            entry = (res.gamma, "rho", 1.0 - res.rho / res.gamma ** 2, None)
         else:
-            a, step = c, "predict"
-            if (d := _boundary_distance(res)) is not None:
-                seen.append((c, d))
-    return a, b
+            return
+        self.low.append(entry)
+        if self.top is None or entry[0] > self.top[0]:
+            self.top = entry
+
+    def predict(self, a: float, b: float) -> float | None:
+        """The optimum (between the levels a, infeasible, and b, feasible)
+        interpolated from the three levels nearest to [a, b] of the family of
+        the highest infeasible level with data (inverse quadratic
+        interpolation in ``1/gamma^2``; the line through the two nearest when
+        that leaves the bracket). The X family counts the feasible levels too,
+        with the value of the eigenvalue whose eigenvector is nearest that of
+        the highest infeasible level. None without two points."""
+        if self.top is None:
+            return None
+        cond = self.top[1]
+        near = sorted([(a - g, g, v) for g, c, v, _ in self.low if c == cond]
+                      + ([(h[0] - b, h[0], h) for h in self.high] if cond == "X" else []),
+                      key=_first)[:3]
+        if len(near) < 2:
+            return None
+        pts = [(g ** -2, v if isinstance(v, float) else self._matched(v)) for _, g, v in near]
+        (x1, f1), (x2, f2) = pts[:2]
+        if len(pts) == 3 and f1 != f2 and (f3 := pts[2][1]) != f1 and f3 != f2:
+            x = (x1 * f2 * f3 / ((f1 - f2) * (f1 - f3)) + x2 * f1 * f3 / ((f2 - f1) * (f2 - f3))
+                 + pts[2][0] * f1 * f2 / ((f3 - f1) * (f3 - f2)))
+            if b ** -2 < x < a ** -2:
+                return x ** -0.5
+        if f1 == f2:
+            return None
+        x = x1 - f1 * (x2 - x1) / (f2 - f1)
+        return x ** -0.5 if x > 0.0 else None
+
+    def _matched(self, high: list) -> float:
+        """``1/lambda`` of the eigenvalue of a feasible level's X whose
+        eigenvector is nearest the highest infeasible level's (kept until
+        that level changes)."""
+        if high[3] is not self.top:
+            _, lam, U, _, _ = high
+            x = lam[int(np.abs(self.top[3] @ U).argmax())].item()
+            high[3:] = self.top, (1.0 / x if x else math.inf)     # inf: no prediction
+        return high[4]
 
 
-def _open_midpoint(lo: float, hi: float, a: float, b: float, tol: float) -> float | None:
-    """The first midpoint of the bisection from [lo, hi] (tolerance ``tol``)
-    that the known levels a (infeasible) and b (feasible) leave undecided, or
-    None when they decide them all."""
+def _first(entry: tuple) -> float:
+    return entry[0]
+
+
+def _narrow(prep: _Prepared, lo: float, hi: float, a: float, b: float, seen: _Boundary,
+            tol: float) -> tuple[float, float, float, float]:
+    """A bracket [a, b] of the optimal gamma (a infeasible, b feasible, both
+    known from tests) that decides the midpoints of the bisection of
+    :func:`gamma_iteration` from [lo, hi] (none falls inside it), returned
+    with the bracket of that bisection reached (:func:`_walk`).
+
+    The tests are levels of that bisection: :meth:`_Boundary.predict` predicts
+    the optimum, and the two ends of the bisection's last bracket around the
+    prediction (:func:`_cell`) are tested, the upper first; two hits decide
+    the whole bisection. Its next undecided midpoint is tested when there is
+    no prediction or a prediction missed.
+    """
+    for _ in range(_NARROW_STEPS):
+        lo, hi = _walk(lo, hi, a, b, tol)
+        if hi - lo <= tol * hi:
+            break
+        c = 0.5 * (lo + hi)
+        guess = seen.predict(a, b)
+        if guess is not None and a < guess < b:
+            below, top = _cell(lo, hi, a, b, guess, tol)
+            c = top if top < b else below if below > a else c
+        seen.add(res := prep.feasibility(c))
+        a, b = (a, c) if res.feasible else (c, b)
+    return lo, hi, a, b
+
+
+def _walk(lo: float, hi: float, a: float, b: float, tol: float) -> tuple[float, float]:
+    """The bracket the bisection from [lo, hi] (tolerance ``tol``) reaches
+    through the midpoints the known levels a (infeasible) and b (feasible)
+    decide: its midpoint is undecided, or it is the last (``hi - lo <= tol
+    hi``). As a and b only tighten, the walk resumes from the bracket it
+    reached (~14 levels in Python, ~3 us, per test otherwise)."""
     while hi - lo > tol * hi:
         mid = 0.5 * (lo + hi)
         if a < mid < b:
-            return mid
+            break
         lo, hi = (lo, mid) if mid >= b else (mid, hi)
-    return None
+    return lo, hi
 
 
 def _cell(lo: float, hi: float, a: float, b: float, guess: float,
@@ -1204,23 +1283,6 @@ def _cell(lo: float, hi: float, a: float, b: float, guess: float,
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if mid >= b or (mid > a and mid >= guess) else (mid, hi)
     return lo, hi
-
-
-def _extrapolate(seen: list) -> float | None:
-    """Zero of the line through the last two distances of the same condition,
-    drawn against ``1/gamma^2``: gamma enters the Riccati data of eq (14)-(17)
-    as ``gamma^-2`` (the Hamiltonians' ``B1 B1'/gamma^2``), and the distances
-    are nearer to straight lines in it than in gamma (issue 13: the secant in
-    gamma undershot paper 003's q-axis optimum by 0.9 %, costing one more
-    Riccati test)."""
-    if len(seen) < 2 or seen[-1][1][0] != seen[-2][1][0]:
-        return None
-    (g1, (_, v1)), (g2, (_, v2)) = seen[-2], seen[-1]
-    if v1 == v2:
-        return None
-    x1, x2 = g1 ** -2, g2 ** -2
-    x = x2 - v2 * (x2 - x1) / (v2 - v1)
-    return x ** -0.5 if x > 0.0 else None
 
 
 # --------------------------------------------------------------------------
