@@ -441,15 +441,11 @@ def _series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:
     return (A, np.concatenate([B1, B2 @ D1]), np.concatenate([D2 @ C1, C2], axis=1), D2 @ D1)
 
 
-def _imag_axis_zeros(M: np.ndarray) -> np.ndarray:
-    """Frequencies w in :data:`MARGIN_BAND` with ``F(jw) = 0`` for the SISO
-    ``F`` whose system matrix is ``M = [A B; C d]``, from the finite
-    eigenvalues of the pencil ``(M, diag(I, 0))`` (its invariant zeros). The
-    crossing functions below are para-Hermitian (even in s), so their zeros
-    are symmetric about the imaginary axis and a simple zero on it stays
-    there up to rounding."""
-    n = M.shape[0] - 1
-    lam = _pencil_eigvals(M, _leading_identity(n + 1, n + 1, n))
+def _imag_axis_zeros(lam: np.ndarray) -> np.ndarray:
+    """Frequencies w in :data:`MARGIN_BAND` of the zeros ``lam`` of a
+    crossing function on the imaginary axis. The crossing functions below
+    are para-Hermitian (even in s), so their zeros are symmetric about the
+    imaginary axis and a simple zero on it stays there up to rounding."""
     lo, hi = MARGIN_BAND
     # a few eigenvalues: scalar code beats four more masked array operations;
     # the moduli stay numpy's (its vectorised hypot differs from libm's in
@@ -458,27 +454,49 @@ def _imag_axis_zeros(M: np.ndarray) -> np.ndarray:
                            if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * r))
 
 
+#: smallest ``|d^2 - 1|`` (the feedthrough of ``L(s) L(-s) - 1``) whose
+#: inverse forms the gain crossovers' standard eigenproblem; below, near
+#: ``|d| = 1``, the QZ pencil of the system matrix is kept
+_BIPROPER_MIN = 0.5
+
+
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
                d: float) -> tuple[np.ndarray, np.ndarray]:
     """Gain crossovers (``|L(jw)| = 1``: zeros of ``L(s) L(-s) - 1``) and phase
     crossover candidates (``Im L(jw) = 0``: zeros of ``L(s) - L(-s)``) of the
     SISO loop ``L = (A, B, C, d)``; ``L(-s)`` is realised by ``(-A, -B, C, d)``.
 
-    The system matrices are written directly: ``L(s) L(-s) - 1`` is the series
-    connection ``[-A 0 -B; B C A B d; d C C d^2 - 1]`` (its products of single
-    numbers are those of :func:`_series`' matrix products), ``L(s) - L(-s)`` the
-    parallel one ``[A 0 B; 0 -A -B; C -C 0]``."""
+    ``L(s) L(-s) - 1`` is the series connection ``(Ag, Bg, Cg, e)`` with
+    ``Ag = [-A 0; b c A]``, ``Bg = [-b; b d]``, ``Cg = [d c, c]`` and
+    ``e = d^2 - 1``, nonzero away from ``|d| = 1`` (a strictly proper loop:
+    -1); its zeros are then the eigenvalues of
+    ``Ag - Bg Cg / e = [-A + (d/e) b c, b c/e; -b c/e, A - (d/e) b c]`` (one
+    dgeev of order 2n, about half a QZ of the (2n+1) pencil). ``L(s) -
+    L(-s)`` has no feedthrough (an odd function vanishes at infinity), so its
+    zeros stay the finite eigenvalues of the pencil of its system matrix
+    ``[A 0 b; 0 -A -b; c -c 0]``."""
     n = A.shape[0]
     b, c = B[:, 0], C[0]
-    Mg = np.zeros((2 * n + 1, 2 * n + 1))
-    Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = -A, -b, c
-    Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = B * C, A, b * d
-    Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
+    bc = B * C                                       # the outer product b c
+    e = d * d - 1.0
+    if abs(e) >= _BIPROPER_MIN:
+        Z = np.empty((2 * n, 2 * n))
+        Z[:n, :n], Z[:n, n:], Z[n:, :n], Z[n:, n:] = -A, bc / e, bc / -e, A
+        if d != 0.0:
+            Z[:n, :n] += (d / e) * bc
+            Z[n:, n:] -= (d / e) * bc
+        gain = _eigvals(Z)
+    else:
+        Mg = np.zeros((2 * n + 1, 2 * n + 1))
+        Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = -A, -b, c
+        Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = bc, A, b * d
+        Mg[-1, :n], Mg[-1, -1] = d * c, e
+        gain = _pencil_eigvals(Mg, _leading_identity(2 * n + 1, 2 * n + 1, 2 * n))
     Mp = np.zeros((2 * n + 1, 2 * n + 1))
     Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
-    # -A, -b (exact negations) are already in Mg
-    Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = Mg[:n, :n], Mg[:n, -1], -c
-    return _imag_axis_zeros(Mg), _imag_axis_zeros(Mp)
+    Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = -A, -b, -c
+    phase = _pencil_eigvals(Mp, _leading_identity(2 * n + 1, 2 * n + 1, 2 * n))
+    return _imag_axis_zeros(gain), _imag_axis_zeros(phase)
 
 
 def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
