@@ -22,7 +22,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals,
+from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_peak, _pencil_eigvals,
                     _tf2ss_arrays, as_statespace, balanced, parallel, state_scaling)
 from ._hinf_riccati import _poles_zeros, _solve, _ss_blocks
 
@@ -544,24 +544,28 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     return _margins(_ss_blocks(G), _ss_blocks(K))[0]
 
 
-def _margins(g: tuple, k: tuple) -> tuple[LoopMargins, np.ndarray]:
+def _margins(g: tuple, k: tuple,
+             hint: float | None = None) -> tuple[LoopMargins, np.ndarray, float]:
     """:func:`loop_margins` of the loop of the realisations ``g`` and ``k``,
-    and the closed-loop poles (those of ``S``, whose norm gave ``M_m``)."""
+    the closed-loop poles (those of ``S``, whose norm gave ``M_m``) and the
+    frequency of the peak of ``|S|``; ``hint``, a frequency near that peak
+    (:func:`toolbox._lti._linf_peak`: the full loop's when ``k`` is its
+    reduced controller)."""
     A, B, C, D = _series(k, g)
     d = float(D[0, 0])
     if A.shape[0] == 0:
         gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
         return (LoopMargins(gm_db, w_gm, pm, w_pm, abs(1.0 + d), abs(1.0 / (1.0 + d))),
-                np.zeros(0, complex))
+                np.zeros(0, complex), math.inf)
     A, B, C = balanced(A, B, C)
     gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
-    peak, poles = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]))
+    peak, w_peak, poles = _linf_peak(A - f * B @ C, f * B, -f * C, np.array([[f]]), hint=hint)
     if np.count_nonzero(np.abs(_eigvals(A)) < 1e-12):   # an integrator: no static error
         ess = 0.0
     else:
         ess = float(abs(1.0 / (1.0 + d - float((C @ _solve(A, B))[0, 0]))))
-    return LoopMargins(gm_db, w_gm, pm, w_pm, 1.0 / peak, ess), poles
+    return LoopMargins(gm_db, w_gm, pm, w_pm, 1.0 / peak, ess), poles, w_peak
 
 
 def _gain_phase_margins(A: np.ndarray, B: np.ndarray, C: np.ndarray,
@@ -628,8 +632,10 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
     MarginComparison
     """
     g = _ss_blocks(G)
-    a, _ = _margins(g, _ss_blocks(K))
-    b, poles = _margins(g, _ss_blocks(Kr))
+    a, _, w_peak = _margins(g, _ss_blocks(K))
+    # the reduction moves the peak of |S| little: the full loop's frequency
+    # lets the reduced loop's first Hamiltonian certify its norm
+    b, poles, _ = _margins(g, _ss_blocks(Kr), hint=w_peak)
     flags = []
     pairs = {"gain margin": (10 ** (a.gain_margin_db / 20), 10 ** (b.gain_margin_db / 20)),
              "phase margin": (a.phase_margin_deg, b.phase_margin_deg),
