@@ -50,11 +50,6 @@ C2D_METHODS = ("zoh", "foh", *_GBT_ALPHA)
 #: <= ~1e-10); a nearly defective A takes per-point LU solves instead.
 _MODAL_COND_MAX = 1e6
 
-#: Half-width (a factor in w) of the band that :func:`_linf_peak` searches
-#: around a hint frequency: a reduced controller moves the sensitivity peak
-#: of paper 003's loops by ~1e-5 (relative)
-_HINT_BAND = 1.01
-
 
 def diagonal_scaling(M: np.ndarray) -> np.ndarray:
     """Diagonal scaling of LAPACK dgebal without permutation, as
@@ -1136,18 +1131,18 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 
 def _linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
                tol: float = 1e-10,
-               hint: float | None = None) -> tuple[float, float, np.ndarray]:
+               band: tuple[float, float] | None = None) -> tuple[float, float, np.ndarray]:
     """:func:`_linf_norm`'s norm, a frequency where the response attains it
     (inf for ``sigma_max(D)``, nan for a zero or infinite norm) and A's
     eigenvalues.
 
-    ``hint``: a frequency near the expected peak (that of a nearby system,
-    e.g. the loop before a controller reduction). The peak in a narrow band
-    around it (:func:`_refined_peak`, +-:data:`_HINT_BAND` in log w) joins
-    the first lower bound, so that the first Hamiltonian usually certifies
-    it at once (one eigenvalue problem and one band search saved); a wrong
-    hint costs that search and changes nothing else: the Hamiltonian test
-    at ``(1 + 2 tol)`` times the bound stays the stopping rule.
+    ``band``: frequencies ``(lo, hi)`` expected to bracket the peak (e.g.
+    around the peak of a nearby system: the loop before a controller
+    reduction). The peak found in it (:func:`_refined_peak`) joins the first
+    lower bound, so that the first Hamiltonian usually certifies it at once
+    (one eigenvalue problem and one band search saved); a wrong band costs
+    that search and changes nothing else: the Hamiltonian test at
+    ``(1 + 2 tol)`` times the bound stays the stopping rule.
     """
     if D.shape == (1, 1):
         dnorm = abs(float(D[0, 0]))
@@ -1163,8 +1158,8 @@ def _linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
         return inf, nan, poles
     w = [0.0] + [abs(z) for z in lam]
     best = max((dnorm, inf), *zip(gains(np.array(w)).tolist(), w))
-    if hint is not None and 0.0 < hint < inf:
-        best = max(best, _refined_peak(gains, [hint / _HINT_BAND, hint * _HINT_BAND], tol))
+    if band is not None and 0.0 < band[0] < band[1] < inf:
+        best = max(best, _refined_peak(gains, list(band), tol))
     if best[0] == 0.0:
         return 0.0, nan, poles
     crossings = _hamiltonian(A, B, C, D)

@@ -429,6 +429,10 @@ class LoopMargins:
 MARGIN_BAND = (1e-3, 1e8)
 #: a zero of the crossing function counts as imaginary when |Re| <= this * |zero|
 _IMAG_TOL = 1e-6
+#: half-width (a factor in w) of the band searched for the reduced loop's
+#: peak of |S| around the full loop's: a reduction keeping the margins moves
+#: it little (paper 003's q axis: by 4e-5, relative)
+_PEAK_BAND = 1.01
 
 
 def _series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:
@@ -545,12 +549,18 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
 
 
 def _margins(g: tuple, k: tuple,
-             hint: float | None = None) -> tuple[LoopMargins, np.ndarray, float]:
+             peak_near: float | None = None) -> tuple[LoopMargins, np.ndarray, float]:
     """:func:`loop_margins` of the loop of the realisations ``g`` and ``k``,
     the closed-loop poles (those of ``S``, whose norm gave ``M_m``) and the
-    frequency of the peak of ``|S|``; ``hint``, a frequency near that peak
-    (:func:`toolbox._lti._linf_peak`: the full loop's when ``k`` is its
-    reduced controller)."""
+    frequency of the peak of ``|S|``.
+
+    The norm's first lower bound searches a band expected to hold that peak
+    (:func:`toolbox._lti._linf_peak`: one Hamiltonian instead of two when it
+    does): :data:`_PEAK_BAND` around ``peak_near`` (the full loop's peak when
+    ``k`` is its reduced controller), else between the headline gain and
+    phase crossovers, where ``|1 + L|`` is smallest on most loops (the
+    Nyquist curve passes closest to -1 between |L| = 1 and the real axis).
+    """
     A, B, C, D = _series(k, g)
     d = float(D[0, 0])
     if A.shape[0] == 0:
@@ -559,8 +569,10 @@ def _margins(g: tuple, k: tuple,
                 np.zeros(0, complex), math.inf)
     A, B, C = balanced(A, B, C)
     gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
+    band = ((peak_near / _PEAK_BAND, peak_near * _PEAK_BAND) if peak_near is not None
+            else (min(w_gm, w_pm), max(w_gm, w_pm)))   # with a nan: no band (lo < hi fails)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
-    peak, w_peak, poles = _linf_peak(A - f * B @ C, f * B, -f * C, np.array([[f]]), hint=hint)
+    peak, w_peak, poles = _linf_peak(A - f * B @ C, f * B, -f * C, np.array([[f]]), band=band)
     if np.count_nonzero(np.abs(_eigvals(A)) < 1e-12):   # an integrator: no static error
         ess = 0.0
     else:
@@ -635,7 +647,7 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
     a, _, w_peak = _margins(g, _ss_blocks(K))
     # the reduction moves the peak of |S| little: the full loop's frequency
     # lets the reduced loop's first Hamiltonian certify its norm
-    b, poles, _ = _margins(g, _ss_blocks(Kr), hint=w_peak)
+    b, poles, _ = _margins(g, _ss_blocks(Kr), peak_near=w_peak)
     flags = []
     pairs = {"gain margin": (10 ** (a.gain_margin_db / 20), 10 ** (b.gain_margin_db / 20)),
              "phase margin": (a.phase_margin_deg, b.phase_margin_deg),
