@@ -82,6 +82,22 @@ def test_freqresp_defective_a_takes_the_lu_route():
     assert _close(g.freqresp(W), _fresp(sys), 1e-12)
 
 
+
+@pytest.mark.parametrize("n", [1, 2, 5, 8])
+def test_eig_follows_numpys_conventions(n):
+    """``_eig`` (scipy's dgeev) gives numpy's ``eig``: real arrays when every
+    eigenvalue is real, else complex ones with each conjugate pair's vectors
+    assembled from dgeev's packed columns; the two LAPACK builds agree to
+    rounding (1e-12), and ``A V = V diag(lam)``."""
+    rng = np.random.default_rng(n)
+    for A in (rng.standard_normal((n, n)), np.triu(rng.standard_normal((n, n)))):
+        lam, V = L._eig(A)
+        ref_lam, ref_V = np.linalg.eig(A)
+        assert lam.dtype == ref_lam.dtype and V.dtype == ref_V.dtype and V.flags.c_contiguous
+        assert np.allclose(lam, ref_lam, rtol=1e-12, atol=1e-12 * np.abs(ref_lam).max())
+        assert np.allclose(V, ref_V, rtol=1e-12, atol=1e-12)
+        assert np.allclose(A @ V, V * lam, atol=1e-12 * np.abs(A).sum())
+
 @pytest.mark.parametrize("method", ["zoh", "foh", "tustin", "euler", "backward_diff"])
 @settings(max_examples=10, deadline=None)
 @given(sys=systems())
