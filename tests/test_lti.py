@@ -82,7 +82,6 @@ def test_freqresp_defective_a_takes_the_lu_route():
     assert _close(g.freqresp(W), _fresp(sys), 1e-12)
 
 
-
 @pytest.mark.parametrize("n", [1, 2, 5, 8])
 def test_eig_follows_numpys_conventions(n):
     """``_eig`` (scipy's dgeev) gives numpy's ``eig``: real arrays when every
@@ -97,6 +96,7 @@ def test_eig_follows_numpys_conventions(n):
         assert np.allclose(lam, ref_lam, rtol=1e-12, atol=1e-12 * np.abs(ref_lam).max())
         assert np.allclose(V, ref_V, rtol=1e-12, atol=1e-12)
         assert np.allclose(A @ V, V * lam, atol=1e-12 * np.abs(A).sum())
+
 
 @pytest.mark.parametrize("method", ["zoh", "foh", "tustin", "euler", "backward_diff"])
 @settings(max_examples=10, deadline=None)
