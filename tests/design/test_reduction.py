@@ -137,10 +137,10 @@ def test_loop_margins_match_the_grid_route_and_python_control(K):
 
 @pytest.mark.parametrize("dG", [0.3, 0.9])
 def test_loop_margins_with_feedthrough_match_the_grid_route(dG):
-    """A biproper loop (L(inf) = d = dG): the gain crossovers come from the
-    standard eigenproblem of ``L(s) L(-s) - 1`` while ``|d^2 - 1| >= 0.5``
-    (d = 0.3) and from its QZ pencil near ``|d| = 1`` (d = 0.9); both give
-    the grid route's numbers to 1e-7, as the strictly proper loops above."""
+    """A biproper loop (L(inf) = d = dG, with |d| far from and near 1, where
+    ``L(s) L(-s) - 1`` loses its feedthrough d^2 - 1): the crossings of the
+    QZ pencils give the grid route's numbers to 1e-7, as for the strictly
+    proper loops above."""
     from toolbox.analysis import lti_loop_margins
 
     G = dG * (s + 100) / (s + 1)            # K(inf) = 1 (lag and an all-pass): d = dG

@@ -459,48 +459,31 @@ def _imag_axis_zeros(lam: np.ndarray) -> list[float]:
                   if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * r)
 
 
-#: smallest ``|d^2 - 1|`` (the feedthrough of ``L(s) L(-s) - 1``) whose
-#: inverse forms the gain crossovers' standard eigenproblem; below, near
-#: ``|d| = 1``, the QZ pencil of the system matrix is kept
-_BIPROPER_MIN = 0.5
-
-
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
                d: float) -> tuple[list[float], list[float]]:
     """Gain crossovers (``|L(jw)| = 1``: zeros of ``L(s) L(-s) - 1``) and phase
     crossover candidates (``Im L(jw) = 0``: zeros of ``L(s) - L(-s)``) of the
     SISO loop ``L = (A, B, C, d)``; ``L(-s)`` is realised by ``(-A, -B, C, d)``.
 
-    ``L(s) L(-s) - 1`` is the series connection ``(Ag, Bg, Cg, e)`` with
-    ``Ag = [-A 0; b c A]``, ``Bg = [-b; b d]``, ``Cg = [d c, c]`` and
-    ``e = d^2 - 1``, nonzero away from ``|d| = 1`` (a strictly proper loop:
-    -1); its zeros are then the eigenvalues of
-    ``Ag - Bg Cg / e = [-A + (d/e) b c, b c/e; -b c/e, A - (d/e) b c]`` (one
-    dgeev of order 2n, about half a QZ of the (2n+1) pencil). ``L(s) -
-    L(-s)`` has no feedthrough (an odd function vanishes at infinity), so its
-    zeros stay the finite eigenvalues of the pencil of its system matrix
-    ``[A 0 b; 0 -A -b; c -c 0]``."""
+    The zeros are the finite eigenvalues of the QZ pencils ``(M, diag(I, 0))``
+    of the system matrices, written directly: ``L(s) L(-s) - 1`` is the series
+    connection ``[-A 0 -b; b c A b d; d c c d^2 - 1]``, ``L(s) - L(-s)`` the
+    parallel one ``[A 0 b; 0 -A -b; c -c 0]``. (For ``d^2 != 1`` the first
+    could be deflated to a standard eigenproblem of order 2n, ~5 us less per
+    loop; measured on paper 003's d axis it put a crossover 1.8e-11 from a
+    40-digit root where QZ is 1.5e-12 off, so QZ stays.)"""
     n = A.shape[0]
     b, c = B[:, 0], C[0]
-    bc = B * C                                       # the outer product b c
-    e = d * d - 1.0
-    if abs(e) >= _BIPROPER_MIN:
-        Z = np.empty((2 * n, 2 * n))
-        Z[:n, :n], Z[:n, n:], Z[n:, :n], Z[n:, n:] = -A, bc / e, bc / -e, A
-        if d != 0.0:
-            Z[:n, :n] += (d / e) * bc
-            Z[n:, n:] -= (d / e) * bc
-        gain = _eigvals(Z)
-    else:
-        Mg = np.zeros((2 * n + 1, 2 * n + 1))
-        Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = -A, -b, c
-        Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = bc, A, b * d
-        Mg[-1, :n], Mg[-1, -1] = d * c, e
-        gain = _pencil_eigvals(Mg, _leading_identity(2 * n + 1, 2 * n + 1, 2 * n))
+    Mg = np.zeros((2 * n + 1, 2 * n + 1))
+    Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = -A, -b, c
+    Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = B * C, A, b * d
+    Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
+    E = _leading_identity(2 * n + 1, 2 * n + 1, 2 * n)
+    gain = _pencil_eigvals(Mg, E)
     Mp = np.zeros((2 * n + 1, 2 * n + 1))
     Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
     Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = -A, -b, -c
-    phase = _pencil_eigvals(Mp, _leading_identity(2 * n + 1, 2 * n + 1, 2 * n))
+    phase = _pencil_eigvals(Mp, E)
     return _imag_axis_zeros(gain), _imag_axis_zeros(phase)
 
 
