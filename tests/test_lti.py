@@ -82,6 +82,22 @@ def test_freqresp_defective_a_takes_the_lu_route():
     assert _close(g.freqresp(W), _fresp(sys), 1e-12)
 
 
+@pytest.mark.parametrize("n", [1, 2, 5, 8])
+def test_eig_follows_numpys_conventions(n):
+    """``_eig`` (scipy's dgeev) gives numpy's ``eig``: real arrays when every
+    eigenvalue is real, else complex ones with each conjugate pair's vectors
+    assembled from dgeev's packed columns; the two LAPACK builds agree to
+    rounding (1e-12), and ``A V = V diag(lam)``."""
+    rng = np.random.default_rng(n)
+    for A in (rng.standard_normal((n, n)), np.triu(rng.standard_normal((n, n)))):
+        lam, V = L._eig(A)
+        ref_lam, ref_V = np.linalg.eig(A)
+        assert lam.dtype == ref_lam.dtype and V.dtype == ref_V.dtype and V.flags.c_contiguous
+        assert np.allclose(lam, ref_lam, rtol=1e-12, atol=1e-12 * np.abs(ref_lam).max())
+        assert np.allclose(V, ref_V, rtol=1e-12, atol=1e-12)
+        assert np.allclose(A @ V, V * lam, atol=1e-12 * np.abs(A).sum())
+
+
 @pytest.mark.parametrize("method", ["zoh", "foh", "tustin", "euler", "backward_diff"])
 @settings(max_examples=10, deadline=None)
 @given(sys=systems())
@@ -381,6 +397,41 @@ def test_linf_norm_poles_are_the_eigenvalues_of_a():
     assert L.linf_norm(unstable) == pytest.approx(1.0)
     assert L._linf_norm(*(np.asarray(m, float) for m in (unstable.A, unstable.B,
                                                    unstable.C, unstable.D)))[1] == 1.0
+
+
+@pytest.mark.parametrize("band", [None, (0.99, 1.01), (0.5, 2.0), (3.0, 30.0), (1e3, 1e4)])
+def test_linf_peak_frequency_and_band(band):
+    """``_linf_peak`` returns the norm of ``_linf_norm`` (a band holding the
+    peak at 1 rad/s, or missing it, changes it by less than the 2 tol of the
+    stopping rule: the Hamiltonian test still decides) and a frequency where
+    the response attains it (rtol 1e-12)."""
+    g = ct.ss(ct.tf([1.0], [1.0, 0.02, 1.0]) * ct.tf([1.0, 3.0], [1.0, 30.0]))
+    A, B, C, D = (np.asarray(m, float) for m in (g.A, g.B, g.C, g.D))
+    norm, w, poles = L._linf_peak(A, B, C, D, band=band)
+    assert norm == pytest.approx(L._linf_norm(A, B, C, D)[0], rel=2e-10)
+    assert abs(L.as_statespace(g)(1j * w)) == pytest.approx(norm, rel=1e-12)
+    assert np.array_equal(poles, L._linf_norm(A, B, C, D)[1])
+
+
+def test_linf_peak_band_saves_a_hamiltonian(monkeypatch):
+    """A band holding the peak (0.99094 rad/s, damping 0.1) lets the first
+    Hamiltonian certify the norm; without one, the first lower bound (the
+    response at the poles' moduli) needs a second."""
+    g = ct.ss(ct.tf([1.0], [1.0, 0.2, 1.0]) * ct.tf([1.0, 3.0], [1.0, 30.0]))
+    A, B, C, D = (np.asarray(m, float) for m in (g.A, g.B, g.C, g.D))
+    levels = []
+    hamiltonian = L._hamiltonian
+
+    def counted(*blocks):
+        crossings = hamiltonian(*blocks)
+        return lambda level: levels.append(level) or crossings(level)
+
+    monkeypatch.setattr(L, "_hamiltonian", counted)
+    L._linf_peak(A, B, C, D)
+    assert len(levels) == 2
+    levels.clear()
+    L._linf_peak(A, B, C, D, band=(0.995 / 1.01, 0.995 * 1.01))
+    assert len(levels) == 1
 
 
 def test_linf_norm_of_a_row_with_feedthrough():

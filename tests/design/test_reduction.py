@@ -133,3 +133,23 @@ def test_loop_margins_match_the_grid_route_and_python_control(K):
             continue
         assert ours == pytest.approx(grid, rel=1e-7)
         assert ours == pytest.approx(theirs, rel=1e-5)
+
+
+@pytest.mark.parametrize("dG", [0.3, 0.9])
+def test_loop_margins_with_feedthrough_match_the_grid_route(dG):
+    """A biproper loop (L(inf) = d = dG, with |d| far from and near 1, where
+    ``L(s) L(-s) - 1`` loses its feedthrough d^2 - 1): the crossings of the
+    QZ pencils give the grid route's numbers to 1e-7, as for the strictly
+    proper loops above."""
+    from toolbox.analysis import lti_loop_margins
+
+    G = dG * (s + 100) / (s + 1)            # K(inf) = 1 (lag and an all-pass): d = dG
+    K = (s + 200) / (s + 2) * (s * s / 4e6 - s / 1e3 + 1) / (s * s / 4e6 + s / 1e3 + 1)
+    m = R.loop_margins(G, K)
+    g = lti_loop_margins(ct.ss(G) * ct.ss(K))
+    for ours, grid in ((m.gain_margin_db, g.gain_margin_db),
+                       (m.phase_crossover_rad_s, g.phase_crossover_rad_s),
+                       (m.phase_margin_deg, g.phase_margin_deg),
+                       (m.gain_crossover_rad_s, g.gain_crossover_rad_s),
+                       (m.stability_margin, g.stability_margin)):
+        assert np.isfinite(ours) and ours == pytest.approx(grid, rel=1e-7)

@@ -35,11 +35,11 @@ import math
 from typing import Any
 
 import numpy as np
-from scipy.linalg import eigvals
 
+from .._lti import _zeros
+from ..artifact import AxisWeights
 # step_response is the step helper whose figures the discrete margins report:
 # one step computation.
-from ..artifact import AxisWeights
 from .margins import AxisLoop, freqresp, json_ready, make_axis_loop, step_response
 
 __all__ = ["RESPONSES_SCHEMA", "N_POINTS", "W_END_FRACTION", "round_sig", "axis_responses",
@@ -92,22 +92,6 @@ def _pairs(roots: np.ndarray) -> list[list[float]]:
     roots = np.asarray(roots, complex)
     roots = roots[np.lexsort((roots.imag, roots.real))]
     return [[round_sig(r.real), round_sig(r.imag)] for r in roots]
-
-
-def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """Finite transmission zeros of a SISO state space (Rosenbrock pencil).
-
-    The zeros are the finite generalised eigenvalues of
-    ``([[A, B], [C, D]], [[I, 0], [0, 0]])``; infinite ones (relative degree)
-    are dropped.
-    """
-    n = A.shape[0]
-    M = np.block([[A, B], [C, D]])
-    N = np.zeros_like(M)
-    N[:n, :n] = np.eye(n)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ev = eigvals(M, N)
-    return ev[np.isfinite(ev) & (np.abs(ev) < 1e12)]
 
 
 def _decimate(t: np.ndarray, y: np.ndarray, n_max: int) -> tuple[np.ndarray, np.ndarray]:

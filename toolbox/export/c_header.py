@@ -86,7 +86,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import StateSpace, ss2zpk
+from .._lti import _zeros
 from ..errors import CctError, ExportRefused, SpecError
 from . import _fixed, _vendor
 from ._minimal import MinimalLaw, minimal_law
@@ -503,12 +503,10 @@ def check_fixed(plan, sample_time: float, key: str = "controller") -> dict:
 
 
 def _law_zeros(law) -> np.ndarray:
-    """Transmission zeros of the reference channel (the error channel for 1-DOF laws)."""
-    if law.A.shape[0] == 0:
-        return np.zeros(0)
-    z, _, _ = ss2zpk(StateSpace(law.A, law.B[:, :1], law.C, law.D[:, :1]))
-    z2, _, _ = ss2zpk(StateSpace(law.A, law.B[:, 1:], law.C, law.D[:, 1:]))
-    return np.concatenate([z[np.isfinite(z)], z2[np.isfinite(z2)]])
+    """Invariant zeros of both channels of the law (``i_ref -> v`` and
+    ``i_meas -> v``), each from its system pencil (:func:`toolbox._lti._zeros`)."""
+    return np.concatenate([_zeros(law.A, law.B[:, j:j + 1], law.C, law.D[:, j:j + 1])
+                           for j in range(law.B.shape[1])])
 
 
 # ---------------------------------------------------------------------------
