@@ -25,7 +25,7 @@ from scipy.linalg.lapack import zgesv as _zgesv
 
 from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_peak, _pencil_eigvals,
                     _tf2ss_arrays, as_statespace, balanced, parallel, state_scaling)
-from ._hinf_riccati import _ss_blocks, _solve, _zpk
+from ._hinf_riccati import _solve, _ss_blocks, _zpk
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
