@@ -1200,7 +1200,9 @@ class _Boundary:
         interpolation in ``1/gamma^2``; the line through the two nearest when
         that leaves the bracket). The X family counts the feasible levels too,
         with the value of the eigenvalue whose eigenvector is nearest that of
-        the highest infeasible level. None without two points."""
+        the highest infeasible level. Before any level with data failed:
+        :func:`_newton_level` from the lowest feasible level. None (or nan)
+        without a prediction."""
         if self.top is None:
             if not self.high:
                 return None
@@ -1275,11 +1277,12 @@ def _narrow(prep: _Prepared, lo: float, hi: float, a: float, b: float, seen: _Bo
     :func:`gamma_iteration` from [lo, hi] (none falls inside it), returned
     with the bracket of that bisection reached (:func:`_walk`).
 
-    The tests are levels of that bisection: :meth:`_Boundary.predict` predicts
-    the optimum, and the two ends of the bisection's last bracket around the
-    prediction (:func:`_cell`) are tested, the upper first; two hits decide
+    The tests are levels of that bisection: after every test
+    :meth:`_Boundary.predict` predicts the optimum from all the levels tested,
+    and the undecided end of the bisection's last bracket around the
+    prediction (:func:`_cell`) is tested, the upper first; two hits decide
     the whole bisection. Its next undecided midpoint is tested when there is
-    no prediction or a prediction missed.
+    no prediction inside the bracket [a, b].
     """
     for _ in range(_NARROW_STEPS):
         lo, hi = _walk(lo, hi, a, b, tol)
