@@ -1681,9 +1681,13 @@ def _zpk_response(z: np.ndarray, p: np.ndarray, k: float, s: np.ndarray) -> np.n
     at worst, where the modal sum of :meth:`toolbox._lti.StateSpace.evaluate`
     (eigenvectors of condition ~1e6 there) lost 2e-10 median, 7e-10 at worst,
     in a third of the time of the modal form and its sum (issue 13)."""
-    num = np.full(s.size, complex(k))
-    for r in z.tolist():
-        num *= s - r
+    if z.size:
+        num = s - z[0]
+        num *= k
+        for r in z[1:].tolist():
+            num *= s - r
+    else:
+        num = np.full(s.size, complex(k))
     if p.size:
         den = s - p[0]
         for r in p[1:].tolist():
