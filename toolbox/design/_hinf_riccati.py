@@ -1630,15 +1630,17 @@ _BOUND_POINTS = 1j * _BOUND_GRID
 _BOUND_POINTS.flags.writeable = False
 
 
-def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
-    """SISO responses at the frequencies ``w`` (rad/s), all at once (issue 13:
-    python-control converted each weight to state space and called SLICOT
-    tb05ad per frequency). The transfer functions are evaluated together from
-    their polynomials by Horner's rule on one (polynomials x points) array (rows
-    contiguous: the quotients read whole rows), with elementwise operations
-    only (a multi-threaded BLAS product of this shape costs milliseconds on a
-    loaded machine); a state-space system (the controller) through its zeros,
-    poles and gain (:func:`_zpk_response`); a number is constant."""
+def _fractions(systems: list, w: np.ndarray) -> list[tuple[np.ndarray, np.ndarray | None]]:
+    """SISO responses at the frequencies ``w`` (rad/s) as (numerator,
+    denominator) values, all at once (issue 13: python-control converted each
+    weight to state space and called SLICOT tb05ad per frequency); None for a
+    denominator 1. The transfer functions are evaluated together from their
+    polynomials by Horner's rule on one (polynomials x points) array, with
+    elementwise operations only (a multi-threaded BLAS product of this shape
+    costs milliseconds on a loaded machine); a state-space system (the
+    controller) through its zeros, poles and gain (:func:`_zpk_fraction`); a
+    number is constant. The quotients are left to the caller, which needs
+    fewer of them (a complex division of 4000 points costs ~9 us)."""
     s = _BOUND_POINTS if w is _BOUND_GRID else 1j * w
     polys, out = [], []
     for sys in systems:
@@ -1646,9 +1648,9 @@ def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
             out.append(len(polys))
             polys += list(coeffs)
         elif np.isscalar(sys):
-            out.append(np.full(s.size, complex(sys)))
+            out.append((np.full(s.size, complex(sys)), None))
         else:
-            out.append(_zpk_response(*_zpk(sys), s))
+            out.append(_zpk_fraction(*_zpk(sys), s))
     if polys:
         polys = [np.asarray(c, float).tolist() for c in polys]
         deg = max(len(c) for c in polys) - 1
@@ -1666,21 +1668,22 @@ def _freqresps(systems: list, w: np.ndarray) -> list[np.ndarray]:
         for k in range(2, deg + 1):
             vals *= s
             vals += coef[:, k:k + 1]
-        # each quotient over its numerator's row: no new (N,) arrays
-        out = [np.divide(vals[o], vals[o + 1], out=vals[o]) if isinstance(o, int) else o
-               for o in out]
+        out = [(vals[o], vals[o + 1]) if isinstance(o, int) else o for o in out]
     return out
 
 
-def _zpk_response(z: np.ndarray, p: np.ndarray, k: float, s: np.ndarray) -> np.ndarray:
-    """``k prod(s - z) / prod(s - p)`` at the points ``s``: one rounding per
-    factor, so the value is as accurate as the zeros and poles (the synthesis
-    computed the controller's already, :func:`fastest_pole_modulus`). Measured
-    on paper 003's q-axis controller at 109 of the 4000 grid points against a
-    40-digit evaluation of its realisation: relative error 5e-15 median, 3e-12
-    at worst, where the modal sum of :meth:`toolbox._lti.StateSpace.evaluate`
-    (eigenvectors of condition ~1e6 there) lost 2e-10 median, 7e-10 at worst,
-    in a third of the time of the modal form and its sum (issue 13)."""
+def _zpk_fraction(z: np.ndarray, p: np.ndarray, k: float,
+                  s: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """``k prod(s - z)`` and ``prod(s - p)`` (None without poles) at the points
+    ``s``: one rounding per factor, so the value is as accurate as the zeros
+    and poles (the synthesis computed the controller's already,
+    :func:`fastest_pole_modulus`). Measured on paper 003's q-axis controller
+    at 109 of the 4000 grid points against a 40-digit evaluation of its
+    realisation: relative error of the quotient 5e-15 median, 3e-12 at worst,
+    where the modal sum of :meth:`toolbox._lti.StateSpace.evaluate`
+    (eigenvectors of condition ~1e6 there) lost 2e-10 median, 7e-10 at worst
+    (5e-9 on the d axis of ``003_azaiz2007_hinf``), in a third of the time of
+    the modal form and its sum (issue 13)."""
     if z.size:
         num = s - z[0]
         num *= k
@@ -1688,12 +1691,17 @@ def _zpk_response(z: np.ndarray, p: np.ndarray, k: float, s: np.ndarray) -> np.n
             num *= s - r
     else:
         num = np.full(s.size, complex(k))
-    if p.size:
-        den = s - p[0]
-        for r in p[1:].tolist():
-            den *= s - r
-        num /= den
-    return num
+    if not p.size:
+        return num, None
+    den = s - p[0]
+    for r in p[1:].tolist():
+        den *= s - r
+    return num, den
+
+
+def _times(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
+    """The product of two values of :func:`_fractions` (None: 1)."""
+    return b if a is None else a if b is None else a * b
 
 
 def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
@@ -1717,23 +1725,21 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
     """
     w = _BOUND_GRID if freqs is None else np.asarray(freqs, float)
     weights = [wt for wt in (w1, w2, w3) if wt is not None]
-    g, k, *wv = _freqresps([G, K] + weights, w)
-    gk = g * k
-    S = 1.0 + gk
-    np.divide(1.0, S, out=S)
-    # 4000 points: the products and moduli go to two buffers (fewer
-    # temporaries to allocate and bring into cache)
-    fw, r = np.empty_like(S), np.empty(w.size)
+    (gn, gd), (kn, kd), *wv = _fractions([G, K] + weights, w)
+    # 1 + G K = c / (gd kd) with c = gd kd + gn kn: S, K S and T = G K S are
+    # gd kd / c, gd kn / c and gn kn / c, each weighted value one quotient
+    # (three divisions instead of six)
+    gdkd, gnkn = _times(gd, kd), gn * kn
+    c = gnkn + (1.0 if gdkd is None else gdkd)
+    r = np.empty(w.size)
     out = {}
-    for name, f, wt in (("S", None, w1), ("KS", k, w2), ("T", gk, w3)):
+    for name, f, wt in (("S", gdkd, w1), ("KS", _times(gd, kn), w2), ("T", gnkn, w3)):
         if wt is None:
             continue
-        if f is None:
-            np.multiply(S, wv.pop(0), out=fw)
-        else:
-            np.multiply(f, S, out=fw)
-            fw *= wv.pop(0)
-        np.abs(fw, out=r)
+        n, d = wv.pop(0)
+        num = n if f is None else f * n
+        np.abs(np.divide(num, c if d is None else c * d, out=num if f is not None else None),
+               out=r)
         i = int(r.argmax())
         out[name] = WeightBound(name, float(r[i]), float(w[i]))
     return out
