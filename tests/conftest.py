@@ -27,6 +27,7 @@ import gc
 import importlib
 import os
 import pkgutil
+import sys
 
 # The same BLAS regime as the cct command (toolbox/cli/__init__.py): the
 # toolbox's matrices are small, and OpenBLAS threads in each of the suite's
@@ -35,6 +36,17 @@ import pkgutil
 # 2-core machine, 0.26 s with one). Read when numpy first loads OpenBLAS,
 # which no pytest plugin does before this file.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+# Bytecode is cached even where PYTHONDONTWRITEBYTECODE is set (the shared
+# machine's environment sets it, issue 13): without the cache each
+# pytest-xdist worker compiles and assertion-rewrites every test module and
+# compiles the toolbox again (collection 5.1 s of CPU instead of 2.9 s per
+# process), and so does every interpreter a test starts (cct, the import
+# probes, dask workers; ~0.15 s each for `cct design`). The files go to
+# __pycache__ (ignored by git; written atomically, so concurrent workers are
+# safe). Set before pytest-xdist starts its workers, which inherit both.
+sys.dont_write_bytecode = False
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 
 import pytest
 
