@@ -11,11 +11,11 @@ module before the first test makes that pool the same in every order and
 every worker, so each derandomised test is one fixed set of examples again.
 
 Then the objects alive at that point (every module imported by the
-collection and by that import: python-control, matplotlib, scipy, the
-toolbox) are frozen out of the cyclic garbage collector (``gc.freeze``):
+collection and by that import: python-control, matplotlib, scipy, sympy,
+numba, the toolbox) are frozen out of the cyclic garbage collector (``gc.freeze``):
 they live as long as the process anyway, and each full collection walked
 all of them again (issue 13: 2.3 s of a 32 s serial run of tests/analysis,
-22 full collections of ~0.1 s; halved by the freeze). Garbage made by the
+22 full collections of ~0.1 s; 1.0 s with the freeze). Garbage made by the
 tests is collected as before: only the objects alive at the freeze are
 exempt, and reference counting still frees any of them that is dropped
 outside a cycle.
