@@ -28,11 +28,11 @@ def browser():
     """One headless Chromium for the module's pages (each test opens its own page)."""
     from playwright import sync_api  # a test dependency: missing means broken set-up
     with sync_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
+        chromium = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
         try:
-            yield browser
+            yield chromium
         finally:
-            browser.close()
+            chromium.close()
 
 
 def _open(browser, page_path, shot):
