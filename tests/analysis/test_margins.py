@@ -227,6 +227,23 @@ def test_mu_bound_matches_slicot_ab13md():
     np.testing.assert_allclose(M.sigma_max_2x2(Ms), np.linalg.norm(Ms, 2, axis=(1, 2)), rtol=1e-12)
 
 
+@pytest.mark.parametrize("eps", [1e-6, 1e-9, 1e-12])
+def test_mu_and_sigma_at_a_nearly_repeated_singular_value(eps):
+    """At a nearly repeated singular value (equal inductances at zero speed: a
+    diagonal M with |m00| ~ |m11|) both closed forms keep every digit: against
+    the exact diag(1, 1 + eps) and numpy's SVD of a near-unitary matrix, 4 eps
+    of double precision (the textbook sqrt(f^2 - 4 |det|^2) was off by
+    ~eps / 2 here: 5e-10 at eps = 1e-9, five orders above this tolerance)."""
+    tol = 4 * np.finfo(float).eps
+    diag = np.array([[[1.0, 0.0], [0.0, 1.0 + eps]]], complex)
+    assert M.mu_upper_2x2(diag)[0] == pytest.approx(1.0 + eps, rel=tol, abs=0)
+    assert M.sigma_max_2x2(diag)[0] == pytest.approx(1.0 + eps, rel=tol, abs=0)
+    near_unitary = np.array([[[1.0, 1e-3j], [1e-3j, 1.0 + eps]]])
+    ref = np.linalg.svd(near_unitary[0], compute_uv=False)[0]
+    assert M.sigma_max_2x2(near_unitary)[0] == pytest.approx(ref, rel=tol, abs=0)
+    assert M.mu_upper_2x2(near_unitary)[0] == pytest.approx(ref, rel=tol, abs=0)   # |m01| = |m10|: D = I
+
+
 @pytest.mark.parametrize("grid", [(49, 40), (25, 12)])
 def test_mu_bound_equals_the_explicitly_scaled_matrices(grid):
     """mu_upper_2x2 is the closed-form minimum over d of sigma_max(D M D^-1)

@@ -23,39 +23,49 @@ pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM) and not REQUIRED,
                                 reason=f"{CHROMIUM} absent (run .ci/browser-deps.sh as root)")
 
 
-def _open(page_path, shot):
-    """Load ``page_path`` in Chromium; return what went wrong and what it saw."""
+@pytest.fixture(scope="module")
+def browser():
+    """One headless Chromium for the module's pages (each test opens its own page)."""
     from playwright import sync_api  # a test dependency: missing means broken set-up
+    with sync_api.sync_playwright() as pw:
+        chromium = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
+        try:
+            yield chromium
+        finally:
+            chromium.close()
+
+
+def _open(browser, page_path, shot):
+    """Load ``page_path`` in a new page of ``browser``; return what went wrong
+    and what it saw."""
     problems: list[str] = []
     requests: list[str] = []
-    with sync_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, headless=True)
-        try:
-            page = browser.new_page(viewport={"width": 1100, "height": 1400})
-            page.on("console", lambda m: problems.append(f"console {m.type}: {m.text}")
-                    if m.type in ("error", "warning") else None)
-            page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
-            page.on("requestfailed", lambda r: problems.append(f"request failed: {r.url}"))
-            page.on("request", lambda r: requests.append(r.url))
-            page.on("dialog", lambda d: (problems.append(f"dialog: {d.message}"), d.dismiss()))
-            page.goto(page_path.as_uri(), wait_until="load")
-            sizes = page.evaluate(
-                "() => Array.from(document.querySelectorAll('svg, img')).map(e => {"
-                " const r = e.getBoundingClientRect(); return [r.width, r.height]; })")
-            title = page.evaluate("() => document.querySelector('h1').textContent")
-            n_scripts = page.evaluate("() => document.scripts.length")
-            page.screenshot(path=str(shot), full_page=True)
-        finally:
-            browser.close()
+    page = browser.new_page(viewport={"width": 1100, "height": 1400})
+    try:
+        page.on("console", lambda m: problems.append(f"console {m.type}: {m.text}")
+                if m.type in ("error", "warning") else None)
+        page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+        page.on("requestfailed", lambda r: problems.append(f"request failed: {r.url}"))
+        page.on("request", lambda r: requests.append(r.url))
+        page.on("dialog", lambda d: (problems.append(f"dialog: {d.message}"), d.dismiss()))
+        page.goto(page_path.as_uri(), wait_until="load")
+        sizes = page.evaluate(
+            "() => Array.from(document.querySelectorAll('svg, img')).map(e => {"
+            " const r = e.getBoundingClientRect(); return [r.width, r.height]; })")
+        title = page.evaluate("() => document.querySelector('h1').textContent")
+        n_scripts = page.evaluate("() => document.scripts.length")
+        page.screenshot(path=str(shot), full_page=True)
+    finally:
+        page.context.close()
     external = [u for u in requests if not u.startswith("file://")]
     return problems, requests, external, sizes, title, n_scripts
 
 
-def test_report_renders_in_chromium(full_data, full_html, tmp_path):
+def test_report_renders_in_chromium(browser, full_data, full_html, tmp_path):
     page_path = tmp_path / "report.html"
     page_path.write_text(full_html, encoding="utf-8")
     shot = tmp_path / "report.png"
-    problems, requests, external, sizes, title, n_scripts = _open(page_path, shot)
+    problems, requests, external, sizes, title, n_scripts = _open(browser, page_path, shot)
 
     assert not problems, problems
     assert requests and not external, requests
@@ -72,7 +82,7 @@ def test_report_renders_in_chromium(full_data, full_html, tmp_path):
         assert ImageStat.Stat(gray).stddev[0] > 10  # not blank
 
 
-def test_checker_catches_bad_pages(tmp_path):
+def test_checker_catches_bad_pages(browser, tmp_path):
     """Negative control: the checks above do fire on a script error, an external
     request and an empty image (the network request is refused by routing to an
     unroutable address and flags as external whatever its outcome)."""
@@ -81,7 +91,7 @@ def test_checker_catches_bad_pages(tmp_path):
         "<!DOCTYPE html><html><body><h1>x</h1><script>undefined_fn()</script>"
         '<img src="http://127.0.0.1:9/x.png"><svg width="0" height="0"></svg></body></html>',
         encoding="utf-8")
-    problems, _, external, sizes, _, n_scripts = _open(page_path, tmp_path / "bad.png")
+    problems, _, external, sizes, _, n_scripts = _open(browser, page_path, tmp_path / "bad.png")
     assert any("page error" in p for p in problems)
     assert external == ["http://127.0.0.1:9/x.png"]
     assert any(w == 0 or h == 0 for w, h in sizes)

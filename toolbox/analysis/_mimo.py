@@ -76,11 +76,24 @@ class MimoMarginsResult:
 
 
 def sigma_max_2x2(M: np.ndarray) -> np.ndarray:
-    """Largest singular value of stacked 2x2 complex matrices (closed form)."""
-    fro2 = np.sum(np.abs(M) ** 2, axis=(-2, -1))
-    det = M[..., 0, 0] * M[..., 1, 1] - M[..., 0, 1] * M[..., 1, 0]
-    disc = np.sqrt(np.maximum(fro2 ** 2 - 4 * np.abs(det) ** 2, 0.0))
-    return np.sqrt(0.5 * (fro2 + disc))
+    """Largest singular value of stacked 2x2 complex matrices (closed form).
+
+    The largest eigenvalue of the Gram matrix ``M M^H = [[r0, c], [c*, r1]]``,
+    ``(r0 + r1 + sqrt((r0 - r1)^2 + 4 |c|^2)) / 2``: the discriminant is a sum
+    of squares, accurate to rounding even at a (nearly) repeated singular
+    value, where the textbook ``sqrt(||M||_F^4 - 4 |det M|^2)`` subtracts two
+    nearly equal numbers and keeps half the digits.
+    """
+    m00, m01, m10, m11 = M[..., 0, 0], M[..., 0, 1], M[..., 1, 0], M[..., 1, 1]
+    r0 = _abs2(m00) + _abs2(m01)
+    r1 = _abs2(m10) + _abs2(m11)
+    c = m00 * np.conj(m10) + m01 * np.conj(m11)
+    return np.sqrt(0.5 * (r0 + r1 + np.sqrt((r0 - r1) ** 2 + 4.0 * _abs2(c))))
+
+
+def _abs2(z: np.ndarray) -> np.ndarray:
+    """``|z|^2`` of complex entries."""
+    return z.real * z.real + z.imag * z.imag
 
 
 def inv_2x2(M: np.ndarray) -> np.ndarray:
@@ -120,11 +133,21 @@ def mu_upper_2x2(M: np.ndarray) -> np.ndarray:
 def mu_upper_entries(m00: np.ndarray, m01: np.ndarray, m10: np.ndarray,
                      m11: np.ndarray) -> np.ndarray:
     """:func:`mu_upper_2x2` of the matrices ``[[m00, m01], [m10, m11]]`` given
-    entry by entry (arrays of one shape)."""
+    entry by entry (arrays of one shape).
+
+    :func:`sigma_max_2x2` of the scaled ``N = D M D^-1`` without forming it:
+    with ``p = |m01| |m10|`` its Gram discriminant is
+    ``(|m00|^2 - |m11|^2)^2 + 4 |p m00 + conj(m11) m01 m10|^2 / p`` (0 for
+    ``p = 0``, its limit), a sum of squares: exact where ``f^2 - 4 |det M|^2``
+    lost half the digits (a diagonal M with ``|m00| ~ |m11|``: equal
+    inductances at zero speed).
+    """
     a0, a1 = np.abs(m00), np.abs(m11)
-    f = a0 * a0 + a1 * a1 + 2.0 * np.abs(m01) * np.abs(m10)
-    det = np.abs(m00 * m11 - m01 * m10)
-    return np.sqrt(0.5 * (f + np.sqrt(np.maximum(f * f - 4.0 * det * det, 0.0))))
+    p = np.abs(m01) * np.abs(m10)
+    h = p * m00 + np.conj(m11) * m01 * m10
+    cross = np.divide(_abs2(h), p, out=np.zeros(np.shape(p)), where=p > 0)
+    disc = np.sqrt(((a0 - a1) * (a0 + a1)) ** 2 + 4.0 * cross)
+    return np.sqrt(0.5 * (a0 * a0 + a1 * a1 + 2.0 * p + disc))
 
 
 def mimo_loop_response(artifact, motor, omega: float, w: np.ndarray, *,
