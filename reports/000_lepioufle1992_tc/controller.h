@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: bfbd2612ef9951308507a3387cd59aa74050331f6eaa224654826036fce3a2dc
  * law sha256:  dab511f4adfe54cbe9ad2f71164538c8a88b06f065552f0626310cb505472d91
- * created:     2026-11-25T11:10:06+00:00
+ * created:     2026-11-25T17:26:09+00:00
  * equations:   000 eq (8): de/dt = -K e; 000 eq (9)-(11): total compensation law; 000 eq (12): controller-side parameters R_c, L_dc, L_qc, psi_fc
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: e12416654bb8d2779cec238e95e7e4817bccf286f8f37cacfe975ad0526baf41
  * law sha256:  e9eac83a6b74082be8427784fcfe77b6f4d5b23b7995a1047a84b2654599ce88
- * created:     2026-11-25T11:10:07+00:00
+ * created:     2026-11-25T17:26:09+00:00
  * equations:   001 eq (1); 001 eq (2); 001 eq (3); 001 eq (4); 001 Fig. 2(a)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

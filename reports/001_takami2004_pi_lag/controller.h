@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: c924a9280bf2ddac6bd85976cacff2c93467e25d061a5c2b9b96aa59ed079d9c
  * law sha256:  6441717ae94a17e4b99fa3050065a39868e11920cc8c2847ce862184f860bf76
- * created:     2026-11-25T11:10:08+00:00
+ * created:     2026-11-25T17:26:10+00:00
  * equations:   001 Fig. 2b: PI with first-order lag 1/(1 + T_d s) on the measured currents; Kp = L wc, Ki = R wc (closed loop wc/(s + wc), wc = ln(20)/t5)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 51a9b8cfa0cb19ae0420bd3f81857c7710ffb44752894f029c357b36fa56a787
  * law sha256:  71caf05f24df6dd0957d558de86005e464767e0ab7d1bfef3cd3d90d829364ad
- * created:     2026-11-25T11:10:14+00:00
+ * created:     2026-11-25T17:26:15+00:00
  * equations:   Kp = L wc, Ki = Kp w_z (robust PI: max wc s.t. multiloop disk margin >= alpha on every model of the set, sampled coupled loop with delay)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
