@@ -1120,21 +1120,14 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
 
 
 def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
-               tol: float = 1e-10) -> tuple[float, np.ndarray]:
-    """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` (no system
-    object built: the synthesis calls it on arrays it has just formed), and the
-    eigenvalues of ``A`` it computed on the way (a caller testing the stability
-    of A needs no second eigenvalue problem)."""
-    norm, _, poles = _linf_peak(A, B, C, D, tol)
-    return norm, poles
-
-
-def _linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
                tol: float = 1e-10,
                band: tuple[float, float] | None = None) -> tuple[float, float, np.ndarray]:
-    """:func:`_linf_norm`'s norm, a frequency where the response attains it
-    (inf for ``sigma_max(D)``, nan for a zero or infinite norm) and A's
-    eigenvalues.
+    """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` (no system
+    object built: the synthesis calls it on arrays it has just formed), a
+    frequency where the response attains it (inf for ``sigma_max(D)``, nan for
+    a zero or infinite norm) and the eigenvalues of ``A`` it computed on the
+    way (a caller testing the stability of A needs no second eigenvalue
+    problem).
 
     ``band``: frequencies ``(lo, hi)`` expected to bracket the peak (e.g.
     around the peak of a nearby system: the loop before a controller

@@ -1506,7 +1506,7 @@ def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> fl
         return float(np.linalg.norm(D, 2)) if D.size else 0.0
     # the poles the norm computed on the way (no second eigenvalue problem; an
     # unstable system, the rare case, still gets its finite L-infinity norm first)
-    norm, poles = _linf_norm(A, B, C, D)
+    norm, _, poles = _linf_norm(A, B, C, D)
     # a pole with Re >= 0 or within np.isclose's 1e-8 of the axis: Re >= -1e-8
     return float("inf") if _amax(poles.real) >= -1e-8 else norm
 

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_peak, _pencil_eigvals,
+from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals,
                     _tf2ss_arrays, as_statespace, balanced, parallel, state_scaling)
 from ._hinf_riccati import _solve, _ss_blocks, _zpk
 
@@ -526,7 +526,7 @@ def _margins(g: tuple, k: tuple,
     frequency of the peak of ``|S|``.
 
     The norm's first lower bound searches a band expected to hold that peak
-    (:func:`toolbox._lti._linf_peak`: one Hamiltonian instead of two when it
+    (:func:`toolbox._lti._linf_norm`: one Hamiltonian instead of two when it
     does): :data:`_PEAK_BAND` around ``peak_near`` (the full loop's peak when
     ``k`` is its reduced controller), else between the headline gain and
     phase crossovers, where ``|1 + L|`` is smallest on most loops (the
@@ -543,7 +543,7 @@ def _margins(g: tuple, k: tuple,
     band = ((peak_near / _PEAK_BAND, peak_near * _PEAK_BAND) if peak_near is not None
             else (min(w_gm, w_pm), max(w_gm, w_pm)))   # with a nan: no band (lo < hi fails)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
-    peak, w_peak, poles = _linf_peak(A - f * B @ C, f * B, -f * C, np.array([[f]]), band=band)
+    peak, w_peak, poles = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]), band=band)
     if np.count_nonzero(np.abs(_eigvals(A)) < 1e-12):   # an integrator: no static error
         ess = 0.0
     else:
