@@ -87,8 +87,14 @@ def sigma_max_2x2(M: np.ndarray) -> np.ndarray:
     m00, m01, m10, m11 = M[..., 0, 0], M[..., 0, 1], M[..., 1, 0], M[..., 1, 1]
     r0 = _abs2(m00) + _abs2(m01)
     r1 = _abs2(m10) + _abs2(m11)
-    c = m00 * np.conj(m10) + m01 * np.conj(m11)
-    return np.sqrt(0.5 * (r0 + r1 + np.sqrt((r0 - r1) ** 2 + 4.0 * _abs2(c))))
+    return _gram_sigma_max(r0 + r1, r0 - r1, _abs2(m00 * np.conj(m10) + m01 * np.conj(m11)))
+
+
+def _gram_sigma_max(trace: np.ndarray, diff: np.ndarray, c2: np.ndarray) -> np.ndarray:
+    """Largest singular value from the Gram matrix ``[[r0, c], [c*, r1]]`` given
+    as ``r0 + r1``, ``r0 - r1`` and ``|c|^2``: ``sqrt((trace + sqrt(diff^2 +
+    4 |c|^2)) / 2)``, a sum of squares under the inner root."""
+    return np.sqrt(0.5 * (trace + np.sqrt(diff * diff + 4.0 * c2)))
 
 
 def _abs2(z: np.ndarray) -> np.ndarray:
@@ -146,8 +152,7 @@ def mu_upper_entries(m00: np.ndarray, m01: np.ndarray, m10: np.ndarray,
     p = np.abs(m01) * np.abs(m10)
     h = p * m00 + np.conj(m11) * m01 * m10
     cross = np.divide(_abs2(h), p, out=np.zeros(np.shape(p)), where=p > 0)
-    disc = np.sqrt(((a0 - a1) * (a0 + a1)) ** 2 + 4.0 * cross)
-    return np.sqrt(0.5 * (a0 * a0 + a1 * a1 + 2.0 * p + disc))
+    return _gram_sigma_max(a0 * a0 + a1 * a1 + 2.0 * p, (a0 - a1) * (a0 + a1), cross)
 
 
 def mimo_loop_response(artifact, motor, omega: float, w: np.ndarray, *,
