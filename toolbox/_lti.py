@@ -968,8 +968,10 @@ def minreal(sys: Any, tol: float | None = None) -> StateSpace:
 
 # -- norms ---------------------------------------------------------------------
 def _gain_function(A: np.ndarray, B: np.ndarray, C: np.ndarray,
-                   D: np.ndarray) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
-    """Eigenvalues of A and ``w -> sigma_max(G(j w))``.
+                   D: np.ndarray) -> tuple[np.ndarray, Callable[[list[float]], list[float]]]:
+    """Eigenvalues of A and ``w -> sigma_max(G(j w))`` (a few frequencies in,
+    their gains out, as Python lists: the norm's searches fit parabolas to
+    them in scalar code).
 
     The modal sum of :attr:`StateSpace.modal` while A's eigenvectors are well
     conditioned, else a stacked LU solve (:meth:`StateSpace.freqresp`). A
@@ -980,18 +982,46 @@ def _gain_function(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     if modal is None:
         g = StateSpace(A, B, C, D)
         return (_eigvals(A),
-                lambda w: _largest_sv(np.moveaxis(g.freqresp(w), -1, 0)))
+                lambda w: _largest_sv(np.moveaxis(g.freqresp(w), -1, 0)).tolist())
     lam, R = modal
     p, m = D.shape
+    col = lam[:, None]
     if p == m == 1:
         r, d = R[0, 0], D[0, 0]
-        return lam, lambda w: np.abs(r @ (1.0 / (1j * w - lam[:, None])) + d)
+        return lam, lambda w: np.abs(r @ (1.0 / (1j * np.array(w) - col)) + d).tolist()
     if p == 1 or m == 1:                             # residues of the entries (p m, n)
         Rv, d = R.reshape(p * m, -1), D.reshape(-1, 1)
         return lam, lambda w: np.sqrt(
-            (np.abs(Rv @ (1.0 / (1j * w - lam[:, None])) + d) ** 2).sum(0))
+            (np.abs(Rv @ (1.0 / (1j * np.array(w) - col)) + d) ** 2).sum(0)).tolist()
     return lam, lambda w: _largest_sv(
-        np.einsum("pmk,kN->Npm", R, 1.0 / (1j * w - lam[:, None])) + D)
+        np.einsum("pmk,kN->Npm", R, 1.0 / (1j * np.array(w) - col)) + D).tolist()
+
+
+def _zpk_gains(zeros: list[complex], poles: list[complex],
+               k: float) -> Callable[[list[float]], list[float]]:
+    """``w -> |k prod(j w - z_i) / prod(j w - p_i)|`` for as many zeros as
+    poles, at a few frequencies, in Python numbers (a handful of points per
+    call: scalar code beats a dozen array calls). With the poles and zeros
+    computed as eigenvalues (backward stable), the products are the
+    characteristic polynomials ``det(j w I - A)`` of nearby matrices: the value
+    loses no accuracy to ill-conditioned eigenvectors, as a modal sum does
+    (paper 003's loops: within 3e-12 of a 50-digit evaluation where the
+    modal sum is 4e-12 off; 5e-16 against 2e-13 for the reduced loops).
+    Zeros and poles go in pairs, so that the running product stays near the
+    gain (no overflow for many states)."""
+    pairs = list(zip(zeros, poles))
+    k = abs(k)
+
+    def gains(w: list[float]) -> list[float]:
+        out = []
+        for x in w:
+            s, g = complex(0.0, x), k
+            for z, p in pairs:
+                g *= abs(s - z) / abs(s - p)
+            out.append(g)
+        return out
+
+    return gains
 
 
 def _largest_sv(G: np.ndarray) -> np.ndarray:
@@ -999,7 +1029,7 @@ def _largest_sv(G: np.ndarray) -> np.ndarray:
     return np.linalg.svd(G, compute_uv=False)[:, 0]
 
 
-def _refined_peak(gains: Callable[[np.ndarray], np.ndarray], crossings: list[float],
+def _refined_peak(gains: Callable[[list[float]], list[float]], crossings: list[float],
                   tol: float) -> tuple[float, float]:
     """Largest gain found in the bands between consecutive ``crossings`` (sorted
     frequencies) by successive parabolas in log w, and its frequency.
@@ -1022,9 +1052,9 @@ def _refined_peak(gains: Callable[[np.ndarray], np.ndarray], crossings: list[flo
     h = [0.125 * (b - a) for a, b in bands]
     best = (0.0, nan)
     for _ in range(4):                               # spacing 1e-6 of the first: converged
-        w = np.exp([v for c, d in zip(x, h) for v in (c - d, c, c + d)])
-        y = gains(w).tolist()
-        best = max(best, *zip(y, w.tolist()))
+        w = np.exp([v for c, d in zip(x, h) for v in (c - d, c, c + d)]).tolist()
+        y = gains(w)
+        best = max(best, *zip(y, w))
         promise = best[0]
         for i, (a, b) in enumerate(bands):
             y0, y1, y2 = y[3 * i:3 * i + 3]
@@ -1033,8 +1063,8 @@ def _refined_peak(gains: Callable[[np.ndarray], np.ndarray], crossings: list[flo
                 promise = max(promise, y1 - 0.125 * slope * slope / curv)
                 x[i] = min(max(x[i] + 0.5 * h[i] * slope / curv, a), b)
         if promise <= best[0] * (1.0 + tol):
-            w = np.exp(x)
-            return max(best, *zip(gains(w).tolist(), w.tolist()))
+            w = np.exp(x).tolist()
+            return max(best, *zip(gains(w), w))
         h = [0.01 * d for d in h]
     return best
 
@@ -1120,8 +1150,8 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
 
 
 def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
-               tol: float = 1e-10,
-               band: tuple[float, float] | None = None) -> tuple[float, float, np.ndarray]:
+               tol: float = 1e-10, band: tuple[float, float] | None = None,
+               zeros: np.ndarray | None = None) -> tuple[float, float, np.ndarray]:
     """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` (no system
     object built: the synthesis calls it on arrays it has just formed), a
     frequency where the response attains it (inf for ``sigma_max(D)``, nan for
@@ -1136,6 +1166,12 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     (one eigenvalue problem and one band search saved); a wrong band costs
     that search and changes nothing else: the Hamiltonian test at
     ``(1 + 2 tol)`` times the bound stays the stopping rule.
+
+    ``zeros``: the ``n`` invariant zeros of a SISO system with ``D != 0``
+    (``eig(A - B C / D)``), when the caller has them (the sensitivity
+    ``S = 1/(1 + L)`` of a loop has the loop's poles): the gains then come
+    from zeros, poles and ``D`` (:func:`_zpk_gains`), which needs A's
+    eigenvalues only instead of its modal form.
     """
     if D.shape == (1, 1):
         dnorm = abs(float(D[0, 0]))
@@ -1145,12 +1181,16 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
         dnorm = float(np.linalg.norm(D, 2)) if D.size else 0.0
     if A.shape[0] == 0 or D.size == 0:
         return dnorm, inf, _eigvals(A)
-    poles, gains = _gain_function(A, B, C, D)
+    if zeros is None:
+        poles, gains = _gain_function(A, B, C, D)
+    else:
+        poles = _eigvals(A)
+        gains = _zpk_gains(zeros.tolist(), poles.tolist(), float(D[0, 0]))
     lam = poles.tolist()                             # a few: scalar code is cheaper
     if any(abs(z.real) <= 1e-12 * max(1.0, abs(z)) for z in lam):
         return inf, nan, poles
     w = [0.0] + [abs(z) for z in lam]
-    best = max((dnorm, inf), *zip(gains(np.array(w)).tolist(), w))
+    best = max((dnorm, inf), *zip(gains(w), w))
     if band is not None and 0.0 < band[0] < band[1] < inf:
         best = max(best, _refined_peak(gains, list(band), tol))
     if best[0] == 0.0:
