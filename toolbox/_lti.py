@@ -183,12 +183,26 @@ def _eigvals(A: np.ndarray) -> np.ndarray:
 def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
     """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
     ones (|beta| <= 1e-13 |alpha|) are dropped."""
+    return np.array(_pencil_eigval_list(M, N), complex)
+
+
+def _pencil_eigval_list(M: np.ndarray, N: np.ndarray) -> list[complex]:
+    """:func:`_pencil_eigvals` as Python numbers (a pencil of a small system
+    has a dozen eigenvalues: scalar code beats the nine array operations of
+    the filter and the quotients). The quotients are numpy's ``alpha / beta``
+    bit for bit (its complex division by a real ``beta`` multiplies by
+    ``1 / beta``); the moduli of the finiteness test are libm's ``hypot``,
+    which may differ from numpy's vectorised one in the last bit, far from
+    the test's margin (an infinite eigenvalue has |beta| ~ eps |alpha| or 0)."""
     ar, ai, beta, _, _, _, info = _dggev(M, N, compute_vl=0, compute_vr=0)
     if info != 0:
         raise np.linalg.LinAlgError(f"dggev failed (info {info})")
-    alpha = ar + 1j * ai
-    fin = np.abs(beta) > 1e-13 * np.abs(alpha)
-    return alpha[fin] / beta[fin]
+    out = []
+    for re, im, b in zip(ar.tolist(), ai.tolist(), beta.tolist()):
+        if abs(b) > 1e-13 * hypot(re, im):
+            r = 1.0 / b
+            out.append(complex(re * r, im * r))
+    return out
 
 
 def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigvals,
+from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigval_list,
                     _tf2ss_arrays, as_statespace, balanced, parallel, state_scaling)
 from ._hinf_riccati import _solve, _ss_blocks, _zpk
 
@@ -433,17 +433,14 @@ def _series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:
     return (A, np.concatenate([B1, B2 @ D1]), np.concatenate([D2 @ C1, C2], axis=1), D2 @ D1)
 
 
-def _imag_axis_zeros(lam: np.ndarray) -> list[float]:
+def _imag_axis_zeros(lam: list[complex]) -> list[float]:
     """Frequencies w in :data:`MARGIN_BAND` of the zeros ``lam`` of a
     crossing function on the imaginary axis. The crossing functions below
     are para-Hermitian (even in s), so their zeros are symmetric about the
     imaginary axis and a simple zero on it stays there up to rounding."""
     lo, hi = MARGIN_BAND
-    # a few eigenvalues: scalar code beats four more masked array operations;
-    # the moduli stay numpy's (its vectorised hypot differs from libm's in
-    # the last bit, which could move an eigenvalue across the threshold)
-    return sorted(z.imag for z, r in zip(lam.tolist(), np.abs(lam).tolist())
-                  if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * r)
+    # a few eigenvalues: scalar code beats masked array operations
+    return sorted(z.imag for z in lam if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * abs(z))
 
 
 def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
@@ -466,11 +463,11 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = B * C, A, b * d
     Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
     E = _leading_identity(2 * n + 1, 2 * n + 1, 2 * n)
-    gain = _pencil_eigvals(Mg, E)
+    gain = _pencil_eigval_list(Mg, E)
     Mp = np.zeros((2 * n + 1, 2 * n + 1))
     Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
     Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = -A, -b, -c
-    phase = _pencil_eigvals(Mp, E)
+    phase = _pencil_eigval_list(Mp, E)
     return _imag_axis_zeros(gain), _imag_axis_zeros(phase)
 
 
