@@ -16,7 +16,6 @@ from __future__ import annotations
 import cmath
 import math
 import warnings
-from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -68,18 +67,26 @@ def _poly_from_roots(r: list[complex]) -> np.ndarray:
     1e-3..1e7 rad/s, the coefficients' relative error against a 60-digit
     product is 1.1e-16 median and 5e-16 at worst, ``np.poly``'s 1.2e-16 and
     3.9e-13. Any other set keeps ``np.real_if_close(np.poly(r))``."""
-    if Counter(x for x in r if x.imag > 0.0) != Counter(x.conjugate() for x in r if x.imag < 0.0):
+    upper = [x for x in r if x.imag > 0.0]
+    lower = [x.conjugate() for x in r if x.imag < 0.0]
+    # LAPACK lists a pair's members together: the sorts are seldom needed
+    if upper != lower and sorted(upper, key=_re_im) != sorted(lower, key=_re_im):
         return np.real_if_close(np.poly(r))
     a = [1.0]
     for x in r:
         if x.imag == 0.0:                            # times (s - x)
             m = -x.real
-            a = [a[0], *(u + m * v for u, v in zip(a[1:], a)), m * a[-1]]
+            a = [a[0]] + [u + m * v for u, v in zip(a[1:], a)] + [m * a[-1]]
         elif x.imag > 0.0:                           # times (s - x)(s - conj(x)); conj(x) skipped
             p1, p2 = -2.0 * x.real, x.real * x.real + x.imag * x.imag
-            a = [*a, 0.0, 0.0]
-            a = [a[0], a[1] + p1 * a[0], *(u + p1 * v + p2 * w for u, v, w in zip(a[2:], a[1:], a))]
+            a += [0.0, 0.0]
+            a = [a[0], a[1] + p1 * a[0]] + [u + p1 * v + p2 * w for u, v, w in zip(a[2:], a[1:], a)]
     return np.array(a)
+
+
+def _re_im(x: complex) -> tuple[float, float]:
+    """Sort key of complex numbers, numpy's order (real part, then imaginary)."""
+    return x.real, x.imag
 
 
 def _real_conj(r: np.ndarray) -> list[complex]:
