@@ -23,9 +23,9 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigval_list,
-                    _tf2ss_arrays, as_statespace, balanced, diagonal_scaling, parallel,
-                    state_scaling)
+from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm,
+                    _pencil_eigval_list, _tf2ss_arrays, as_statespace, balanced,
+                    diagonal_scaling, parallel, state_scaling)
 from ._hinf_riccati import _solve, _ss_blocks, _zpk
 
 __all__ = [
@@ -440,7 +440,8 @@ _IMAG_TOL = 1e-6
 _PEAK_BAND = 1.01
 
 
-def _balanced_series(first: tuple, second: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+def _balanced_series(first: tuple,
+                     second: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """A, B, C, d of ``second * first`` (SISO; the signal passes ``first``
     first), with A, B, C in the coordinates of :func:`toolbox._lti.balanced`
     (the same powers of two, so the same numbers): the system matrix
@@ -484,18 +485,16 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     loop; measured on paper 003's d axis it put a crossover 1.8e-11 from a
     40-digit root where QZ is 1.5e-12 off, so QZ stays.)"""
     n = A.shape[0]
-    b, c = B[:, 0], C[0]
-    Mg = np.zeros((2 * n + 1, 2 * n + 1))
-    Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = -A, -b, c
+    b, c, minus_A, minus_b = B[:, 0], C[0], -A, -B[:, 0]
+    Mg, Mp = np.zeros((2, 2 * n + 1, 2 * n + 1))
+    Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = minus_A, minus_b, c
     Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = B * C, A, b * d
     Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
-    E = _leading_identity(2 * n + 1, 2 * n + 1, 2 * n)
-    gain = _pencil_eigval_list(Mg, E)
-    Mp = np.zeros((2 * n + 1, 2 * n + 1))
     Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
-    Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = -A, -b, -c
-    phase = _pencil_eigval_list(Mp, E)
-    return _imag_axis_zeros(gain), _imag_axis_zeros(phase)
+    Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = minus_A, minus_b, -c
+    E = _leading_identity(2 * n + 1, 2 * n + 1, 2 * n)
+    return (_imag_axis_zeros(_pencil_eigval_list(Mg, E)),
+            _imag_axis_zeros(_pencil_eigval_list(Mp, E)))
 
 
 def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
@@ -505,7 +504,8 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
     if not w:
         return []
     n = A.shape[0]
-    Bc, c, minus_A = B.astype(complex), C[0], -A.astype(complex)
+    # C made complex once: numpy would cast it at every product
+    Bc, c, minus_A = B.astype(complex), C[0].astype(complex), -A.astype(complex)
     out = []
     for wi in w:
         M = minus_A.copy()
@@ -569,7 +569,7 @@ def _margins(g: tuple, k: tuple,
     # the zeros of S are the loop's poles (eig(A_S - B_S C_S / D_S) = eig(A))
     peak, w_peak, poles = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]), band=band,
                                      zeros=loop_poles)
-    if np.count_nonzero(np.abs(loop_poles) < 1e-12):    # an integrator: no static error
+    if any(abs(z) < 1e-12 for z in loop_poles.tolist()):    # an integrator: no static error
         ess = 0.0
     else:
         ess = float(abs(1.0 / (1.0 + d - float((C @ _solve(A, B))[0, 0]))))
