@@ -565,11 +565,8 @@ def _margins(g: tuple, k: tuple,
     band = ((peak_near / _PEAK_BAND, peak_near * _PEAK_BAND) if peak_near is not None
             else (min(w_gm, w_pm), max(w_gm, w_pm)))   # with a nan: no band (lo < hi fails)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
-    loop_poles = _eigvals(A)
-    # the zeros of S are the loop's poles (eig(A_S - B_S C_S / D_S) = eig(A))
-    peak, w_peak, poles = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]), band=band,
-                                     zeros=loop_poles)
-    if any(abs(z) < 1e-12 for z in loop_poles.tolist()):    # an integrator: no static error
+    peak, w_peak, poles = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]), band=band)
+    if any(abs(z) < 1e-12 for z in _eigvals(A).tolist()):   # an integrator: no static error
         ess = 0.0
     else:
         ess = float(abs(1.0 / (1.0 + d - float((C @ _solve(A, B))[0, 0]))))
