@@ -588,7 +588,8 @@ def _margins(g: tuple, k: tuple,
     band = ((peak_near / _PEAK_BAND, peak_near * _PEAK_BAND) if peak_near is not None
             else (min(w_gm, w_pm), max(w_gm, w_pm)))   # with a nan: no band (lo < hi fails)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
-    peak, w_peak, poles = _linf_norm(A - f * B @ C, f * B, -f * C, np.array([[f]]), band=band)
+    fB = f * B
+    peak, w_peak, poles = _linf_norm(A - fB @ C, fB, -f * C, np.array([[f]]), band=band)
     if any(abs(z) < 1e-12 for z in _eigvals(A).tolist()):   # an integrator: no static error
         ess = 0.0
     else:
@@ -669,7 +670,7 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
              "phase margin": (a.phase_margin_deg, b.phase_margin_deg),
              "stability margin M_m": (a.stability_margin, b.stability_margin)}
     for name, (x, y) in pairs.items():
-        if np.isfinite(x) and not y >= (1 - max_loss) * x:
+        if math.isfinite(x) and not y >= (1 - max_loss) * x:
             flags.append(f"{name} fell from {x:.4g} to {y:.4g} (> {100 * max_loss:g} % loss)")
     if np.count_nonzero(poles.real >= 0):
         flags.append("the reduced controller destabilises the loop")
