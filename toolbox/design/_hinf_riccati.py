@@ -1211,6 +1211,7 @@ class _Boundary:
         self.high: list[list] = []       # feasible: [gamma, result, the entry of ``low``
                                          #   matched last, the value, the Taylor level]
         self.top: tuple | None = None    # the highest of ``low``
+        self.guess: float | None = None  # the last Taylor level predicted
 
     def add(self, res: HinfFeasibility) -> None:
         """Record a tested level."""
@@ -1239,14 +1240,19 @@ class _Boundary:
         that leaves the bracket). The X family counts the feasible levels too,
         with the value of the eigenvalue whose eigenvector is nearest that of
         the highest infeasible level. Before any level with data failed:
-        :func:`_taylor_level` from the lowest feasible level. None (or nan)
-        without a prediction."""
+        :func:`_taylor_level` from the lowest feasible level (the previous
+        one's while it lies in [a, b]). None (or nan) without a prediction."""
         if self.top is None:
             if not self.high:
                 return None
             low = min(self.high, key=_first)
             if low[4] is None:
-                low[4] = _taylor_level(low[1])
+                # the last prediction while the bracket still holds it (the level
+                # just found feasible is the top of its cell: the next test is the
+                # cell below either way), else the Taylor level from this one
+                last = self.guess
+                low[4] = last if last is not None and a < last < b else _taylor_level(low[1])
+                self.guess = low[4]
             return low[4]
         cond = self.top[1]
         near = sorted([(a - g, g, v) for g, c, v, _ in self.low if c == cond]
