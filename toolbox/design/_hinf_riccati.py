@@ -191,14 +191,22 @@ class PartitionedPlant:
             raise ValueError(f"PartitionedPlant: block {name} has NaN or inf entries")
 
     @classmethod
-    def _built(cls, **blocks: Any) -> "PartitionedPlant":
-        """A plant of 2-D float blocks of consistent sizes assembled here (the
-        augmentation): only the finiteness of its entries, which come from the
-        caller's weights, is tested; the conversions and size checks of
-        ``__post_init__`` (~15 us) are skipped (issue 13)."""
+    def _from_system_matrix(cls, S: np.ndarray, nx: int, nw: int, nz: int,
+                            state_labels: tuple[str, ...]) -> "PartitionedPlant":
+        """The plant whose blocks are views of its system matrix
+        ``S = [[A, B1, B2], [C1, D11, D12], [C2, D21, D22]]`` (float, assembled
+        here: the augmentation). Only the finiteness of the entries, which come
+        from the caller's weights, is tested, once on S; the conversions and
+        size checks of ``__post_init__`` (~15 us) are skipped (issue 13)."""
+        n, m1, p1 = nx, nw, nz
         new = object.__new__(cls)
-        new.__dict__.update(blocks)          # frozen: no __setattr__ per block
-        new._check_finite()
+        new.__dict__.update(                 # frozen: no __setattr__ per block
+            A=S[:n, :n], B1=S[:n, n:n + m1], B2=S[:n, n + m1:],
+            C1=S[n:n + p1, :n], D11=S[n:n + p1, n:n + m1], D12=S[n:n + p1, n + m1:],
+            C2=S[n + p1:, :n], D21=S[n + p1:, n:n + m1], D22=S[n + p1:, n + m1:],
+            state_labels=state_labels)
+        if not np.isfinite(S).all():
+            new._check_finite()              # names the block
         return new
 
     def _derived(self, **blocks: np.ndarray) -> "PartitionedPlant":
@@ -384,41 +392,34 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
     ng = Ag.shape[0]
     ws = [(name, _ss_blocks(w)) for name, w in (("w1", w1), ("w2", w2), ("w3", w3))
           if w is not None]
-    n = ng + sum(m[0].shape[0] for _, m in ws)
-    A = np.zeros((n, n))
-    B1 = np.zeros((n, 1))
-    B2 = np.zeros((n, 1))
-    A[:ng, :ng] = Ag
-    B2[:ng] = Bg
-    # error e = r - (Cg xg + Dg u)
-    C_e = np.zeros((1, n)); C_e[:, :ng] = -Cg
-    De_w, De_u = np.ones((1, 1)), -Dg
-    # plant output yg = Cg xg + Dg u
-    C_g = np.zeros((1, n)); C_g[:, :ng] = Cg
-    zero = np.zeros((1, 1))
-    inputs = {"w1": (C_e, De_w, De_u), "w2": (np.zeros((1, n)), zero, _identity(1)),
-              "w3": (C_g, zero, Dg)}
-    C1_rows, D11_rows, D12_rows = [], [], []
+    n, nz = ng + sum(m[0].shape[0] for _, m in ws), len(ws)
+    # the system matrix [[A, B1, B2], [C1, D11, D12], [C2, D21, D22]] filled in place
+    # (columns x, w, u): one array instead of nine blocks and their concatenations
+    S = np.zeros((n + nz + 1, n + 2))
+    S[:ng, :ng] = Ag
+    S[:ng, n + 1:] = Bg
+    # the weights' inputs as rows over [x, w, u]: the error e = r - (Cg xg + Dg u),
+    # which is also y (the last row), u, and the plant output Cg xg + Dg u
+    e = S[n + nz:]
+    e[:, :ng], e[:, n], e[:, n + 1:] = -Cg, 1.0, -Dg
+    u = np.zeros((1, n + 2))
+    u[:, n + 1] = 1.0
+    yg = np.zeros((1, n + 2))
+    yg[:, :ng], yg[:, n + 1:] = Cg, Dg
+    inputs = {"w1": e, "w2": u, "w3": yg}
     labels = ["G"] * ng
     i0 = ng
-    for name, (Aw, Bw, Cw, Dw) in ws:
+    for k, (name, (Aw, Bw, Cw, Dw)) in enumerate(ws):
         i1 = i0 + Aw.shape[0]
-        Cin, Dinw, Dinu = inputs[name]
-        A[i0:i1, i0:i1] = Aw
-        A[i0:i1, :] += Bw @ Cin
-        B1[i0:i1] += Bw @ Dinw
-        B2[i0:i1] += Bw @ Dinu
-        crow = Dw @ Cin
-        crow[:, i0:i1] += Cw
-        C1_rows.append(crow)
-        D11_rows.append(Dw @ Dinw)
-        D12_rows.append(Dw @ Dinu)
+        v = inputs[name]
+        S[i0:i1, i0:i1] = Aw
+        S[i0:i1] += Bw * v                   # x_w' = Aw x_w + Bw (its input)
+        z = S[n + k:n + k + 1]
+        z += Dw * v                          # z_k = Cw x_w + Dw (its input); added to
+        z[:, i0:i1] += Cw                    # zeros, as a product's sum: 0 + (-0) = 0
         labels += [name] * (i1 - i0)
         i0 = i1
-    return PartitionedPlant._built(A=A, B1=B1, B2=B2, C1=np.concatenate(C1_rows), C2=C_e,
-                                   D11=np.concatenate(D11_rows),
-                                   D12=np.concatenate(D12_rows), D21=De_w, D22=De_u,
-                                   state_labels=tuple(labels))
+    return PartitionedPlant._from_system_matrix(S, n, 1, nz, tuple(labels))
 
 
 # --------------------------------------------------------------------------
@@ -1491,7 +1492,7 @@ def fastest_pole_modulus(K: Any) -> float:
     be discretised at the sample time (paper 003 sect. 4 trap at the optimum).
     """
     ep = _effective_poles(*_poles_zeros(K), 1e-2)
-    return float(np.max(np.abs(ep))) if ep.size else 0.0
+    return float(_amax(np.abs(ep))) if ep.size else 0.0
 
 
 # --------------------------------------------------------------------------
@@ -1623,7 +1624,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
         message names the failed condition and gives the best achievable
         gamma), a bad ``backoff`` or violated assumptions A1-A4.
     """
-    if not (isinstance(backoff, (int, float)) and np.isfinite(backoff) and backoff >= 0):
+    if not (isinstance(backoff, (int, float)) and math.isfinite(backoff) and backoff >= 0):
         raise SpecError("controller.hinf.backoff", "a number >= 0", backoff)
     prep = _prepare(P)
     notes: list[str] = []
