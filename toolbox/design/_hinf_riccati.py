@@ -41,7 +41,7 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  zgesv as _zgesv)
 
 from .._lti import (_CANCEL_TOL, StateSpace, TransferFunction, _identity, _leading_identity,
-                    _linf_norm, _minreal_coeffs, _poly, _svd, _tf2ss_arrays,
+                    _linf_norm, _minreal_coeffs, _svd, _tf2ss_arrays,
                     as_statespace, balanced, diagonal_scaling)
 from ..errors import DesignInfeasible, SpecError
 
