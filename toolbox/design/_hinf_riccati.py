@@ -469,8 +469,8 @@ def _rank_defect(M: np.ndarray, tol: float, sv: np.ndarray | None = None) -> boo
         return False
     if M.shape[0] < M.shape[1]:
         return True
-    sv = _svdvals(M) if sv is None else sv
-    hi, lo = sv[0].item(), sv[-1].item()        # Python floats: no numpy scalar arithmetic
+    sv = (_svdvals(M) if sv is None else sv).tolist()   # Python floats: no numpy scalars
+    hi, lo = sv[0], sv[-1]
     return lo <= tol * max(hi, 1e-300)
 
 
@@ -831,7 +831,8 @@ def _psd_defect(ev: np.ndarray, tol: float = 1e-9) -> float | None:
     """None when the (ascending, non-empty) eigenvalues ``ev`` are >= 0 up to
     ``tol`` relative to the largest, else the smallest (kept for the gamma
     iteration's prediction, :class:`_Boundary`)."""
-    lo, hi = ev[0].item(), ev[-1].item()        # Python floats: no numpy scalar arithmetic
+    ev = ev.tolist()                            # Python floats: no numpy scalar arithmetic
+    lo, hi = ev[0], ev[-1]
     return None if lo >= -tol * max(1.0, -lo, hi) else lo
 
 
