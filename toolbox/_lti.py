@@ -1143,7 +1143,7 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     by the first Hamiltonian before anything else: when it certifies it, no
     modal form (eigenvectors, ~25 us of the ~90 us) is computed and the
     poles come from dgeev without vectors. The solve is also the accurate
-    value there (paper 003's q-axis loop: 1.5e-11 relative from a 50-digit
+    value there (paper 003's d-axis loop: 1.5e-11 relative from a 50-digit
     evaluation, where the modal sum lost 4e-7). Otherwise the usual lower
     bound and the peaks between that Hamiltonian's crossings join it, and
     the search goes on as without it.
