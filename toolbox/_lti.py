@@ -1148,7 +1148,7 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     bound and the peaks between that Hamiltonian's crossings join it, and
     the search goes on as without it.
     """
-    dnorm = _sigma_max(D)
+    dnorm = _spectral_norm(D)
     if A.shape[0] == 0 or D.size == 0:
         return dnorm, inf, _eigvals(A)
     best, first, crossings = (dnorm, inf), [], None
@@ -1191,7 +1191,7 @@ def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     return best[0], best[1], poles
 
 
-def _sigma_max(M: np.ndarray) -> float:
+def _spectral_norm(M: np.ndarray) -> float:
     """Largest singular value of a matrix (0 when empty); a row or column is
     its 2-norm, a scalar its modulus."""
     if M.shape == (1, 1):
@@ -1210,7 +1210,7 @@ def _gain_at(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, w: floa
     else:
         _, _, X, info = _zgesv(1j * w * _identity(A.shape[0]) - A, B)
         G = C @ X + D
-    return _sigma_max(G) if info == 0 else inf
+    return _spectral_norm(G) if info == 0 else inf
 
 
 def _on_axis(poles: list[complex]) -> bool:
