@@ -415,8 +415,8 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
         S[i0:i1, i0:i1] = Aw
         S[i0:i1] += Bw * v                   # x_w' = Aw x_w + Bw (its input)
         z = S[n + k:n + k + 1]
-        z += Dw * v                          # z_k = Cw x_w + Dw (its input); added to
-        z[:, i0:i1] += Cw                    # zeros, as a product's sum: 0 + (-0) = 0
+        z += Dw * v                          # z_k = Cw x_w + Dw (its input), added to
+        z[:, i0:i1] += Cw                    # zeros: a zero entry is +0 as a matmul's sum
         labels += [name] * (i1 - i0)
         i0 = i1
     return PartitionedPlant._from_system_matrix(S, n, 1, nz, tuple(labels))
