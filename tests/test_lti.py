@@ -434,6 +434,26 @@ def test_linf_norm_band_saves_a_hamiltonian(monkeypatch):
     assert len(levels) == 1
 
 
+def test_linf_norm_peak_at_zero(monkeypatch):
+    """``peak_at_zero``: a column peaking at w = 0 gets its steady-state gain
+    (sqrt(1 + 0.2^2), rtol 1e-15) from the first Hamiltonian, without a modal
+    form; one peaking at 1 rad/s gets the norm of the usual route (rtol 2e-10)
+    at a frequency where the response attains it."""
+    g = ct.ss(ct.tf([[[2.0]], [[1.0]]], [[[1.0, 3.0, 2.0]], [[1.0, 5.0]]]))
+    A, B, C, D = (np.asarray(m, float) for m in (g.A, g.B, g.C, g.D))
+    gain_function = L._gain_function
+    monkeypatch.setattr(L, "_gain_function", None)         # any call fails
+    norm, w, poles = L._linf_norm(A, B, C, D, peak_at_zero=True)
+    assert norm == pytest.approx(np.sqrt(1.04), rel=1e-15) and w == 0.0
+    assert np.allclose(np.sort_complex(poles), [-5.0, -2.0, -1.0], rtol=1e-12)
+    monkeypatch.setattr(L, "_gain_function", gain_function)
+    g = ct.ss(ct.tf([1.0], [1.0, 0.02, 1.0]) * ct.tf([1.0, 3.0], [1.0, 30.0]))
+    A, B, C, D = (np.asarray(m, float) for m in (g.A, g.B, g.C, g.D))
+    norm, w, _ = L._linf_norm(A, B, C, D, peak_at_zero=True)
+    assert norm == pytest.approx(L._linf_norm(A, B, C, D)[0], rel=2e-10)
+    assert abs(L.as_statespace(g)(1j * w)) == pytest.approx(norm, rel=1e-12)
+
+
 def test_linf_norm_of_a_row_with_feedthrough():
     """A 1x2 system (a random draw) whose first level, just above
     ``sigma_max(D)`` = 1.8627, makes ``R = D'D - g^2 I`` nearly singular: the
