@@ -143,13 +143,14 @@ def remove_cancellations(K: Any, tol: float = 1e-2,
 def _cancel(Kz: tuple, tol: float, keep: str) -> tuple[tuple, list[str]]:
     """:func:`remove_cancellations` on ``(zeros, poles, gain)``."""
     z, p, k = Kz
-    zl, pl, actions = list(z), [], []
-    for pi in sorted(p, key=abs):
+    # a few roots: Python numbers (numpy scalars cost ~5x more per operation)
+    zl, pl, actions = np.asarray(z, complex).tolist(), [], []
+    for pi in sorted(np.asarray(p, complex).tolist(), key=abs):
         d = [abs(zi - pi) for zi in zl]
         if d and min(d) <= tol * max(abs(pi), 1e-300) and abs(pi) > 0:
             zi = zl.pop(d.index(min(d)))
             if keep == "dc":
-                k *= (zi / pi).real
+                k *= (np.complex128(zi) / pi).real    # numpy's division, as before
             actions.append(f"removed pole {pi:.6g} with zero {zi:.6g} "
                            f"(|z-p|/|p| = {abs(zi - pi) / abs(pi):.2g})")
         else:
@@ -183,11 +184,9 @@ def replace_integrators(K: Any, tol: float) -> tuple[StateSpace, list[str]]:
 def _integrators(Kz: tuple, tol: float) -> tuple[tuple, list[str]]:
     """:func:`replace_integrators` on ``(zeros, poles, gain)``."""
     z, p, k = Kz
-    small = np.abs(p) < tol
-    actions = [f"replaced pole {pi:.6g} by an integrator" for pi in p[small] if pi != 0]
-    p = p.copy()
-    p[small] = 0.0
-    return (z, p, k), actions
+    pl = np.asarray(p, complex).tolist()             # a few poles: Python numbers
+    actions = [f"replaced pole {pi:.6g} by an integrator" for pi in pl if 0 < abs(pi) < tol]
+    return (z, np.array([0j if abs(pi) < tol else pi for pi in pl], complex), k), actions
 
 
 def stable_split(K: Any, tol: float = 1e-12) -> tuple[StateSpace, StateSpace]:
