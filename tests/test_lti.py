@@ -14,6 +14,7 @@ import warnings
 import control as ct
 import numpy as np
 import pytest
+import scipy.linalg.lapack
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -476,3 +477,30 @@ def test_zeros_refuse_a_system_with_two_inputs():
     A, B, C, D = -np.eye(2), np.ones((2, 2)), np.ones((1, 2)), np.zeros((1, 2))
     with pytest.raises(ValueError, match="a SISO system expected, got 1 outputs and 2 inputs"):
         L._zeros(A, B, C, D)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_modal_gains_equal_the_vectorised_modal_sum(seed):
+    """The SISO gain function is the modal sum in Python numbers: within a few
+    units of the last place of numpy's vectorised sum (another rounding order)."""
+    g = _rss(seed, 5, 1, 1)
+    A, B, C, D = (np.asarray(m, float) for m in (g.A, g.B, g.C, g.D))
+    lam, R = L.modal_form(A, B, C)
+    w = np.logspace(-1, 4, 7)
+    ref = np.abs(R[0, 0] @ (1.0 / (1j * w - lam[:, None])) + D[0, 0])
+    ours = L._gain_function(A, B, C, D)[1](w.tolist())
+    assert np.allclose(ours, ref, rtol=1e-14, atol=0.0)
+
+
+def test_pencil_eigval_list_is_numpys_quotient():
+    """The finite generalised eigenvalues in Python numbers are numpy's
+    ``alpha / beta`` bit for bit; the infinite ones are dropped."""
+    rng = np.random.default_rng(3)
+    M = rng.standard_normal((7, 7))
+    E = L._leading_identity(7, 7, 5)
+    ar, ai, beta, *_ = scipy.linalg.lapack.dggev(M, E, compute_vl=0, compute_vr=0)
+    alpha = ar + 1j * ai
+    fin = np.abs(beta) > 1e-13 * np.abs(alpha)
+    assert np.count_nonzero(fin) == 5
+    assert np.array_equal(np.array(L._pencil_eigval_list(M, E)), alpha[fin] / beta[fin])
+    assert np.array_equal(L._pencil_eigvals(M, E), alpha[fin] / beta[fin])
