@@ -999,9 +999,9 @@ def _gain_function(A: np.ndarray, B: np.ndarray, C: np.ndarray,
                 lambda w: _largest_sv(np.moveaxis(g.freqresp(w), -1, 0)).tolist())
     lam, R = modal
     p, m = D.shape
-    col = lam[:, None]
     if p == m == 1:
         return lam, _modal_gains(R[0, 0].tolist(), lam.tolist(), float(D[0, 0]))
+    col = lam[:, None]
     if p == 1 or m == 1:                             # residues of the entries (p m, n)
         Rv, d = R.reshape(p * m, -1), D.reshape(-1, 1)
         return lam, lambda w: np.sqrt(
@@ -1051,8 +1051,8 @@ def _refined_peak(gains: Callable[[list[float]], list[float]], crossings: list[f
     search (far closer to the peaks than ``tol``): the next Hamiltonian then
     usually certifies the peak at once instead of narrowing the band down
     (one eigenvalue problem saved). The bands are few (one per local
-    peak above the level): the fits are scalar arithmetic, and one
-    vectorised response per step serves all bands.
+    peak above the level): the fits are scalar arithmetic, and one call of
+    ``gains`` (Python lists in and out) per step serves all bands.
     """
     bands = [(log(max(a, 1e-6 * b)), log(b))        # 1e-6: a crossing at w = 0
              for a, b in zip(crossings[:-1], crossings[1:])]

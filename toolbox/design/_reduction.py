@@ -143,7 +143,7 @@ def remove_cancellations(K: Any, tol: float = 1e-2,
 def _cancel(Kz: tuple, tol: float, keep: str) -> tuple[tuple, list[str]]:
     """:func:`remove_cancellations` on ``(zeros, poles, gain)``."""
     z, p, k = Kz
-    # a few roots: Python numbers (numpy scalars cost ~5x more per operation)
+    # a few roots: Python numbers (numpy scalars' arithmetic costs several times more)
     zl, pl, actions = np.asarray(z, complex).tolist(), [], []
     for pi in sorted(np.asarray(p, complex).tolist(), key=abs):
         d = [abs(zi - pi) for zi in zl]
@@ -489,7 +489,9 @@ def _imag_axis_zeros(lam: list[complex]) -> list[float]:
     are para-Hermitian (even in s), so their zeros are symmetric about the
     imaginary axis and a simple zero on it stays there up to rounding."""
     lo, hi = MARGIN_BAND
-    # a few eigenvalues: scalar code beats masked array operations
+    # a few eigenvalues: scalar code beats masked array operations (libm's
+    # hypot for the moduli, which may differ from numpy's in the last bit:
+    # a zero on the axis is ~1e-12 off it, far from the 1e-6 threshold)
     return sorted(z.imag for z in lam if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * abs(z))
 
 
