@@ -24,12 +24,16 @@ median of the per-round ratios with its interquartile range:
 
 Routes 1-4 are timed one call per route and round, so each call follows
 another route's work: that is how a design runs in ``cct`` (once, after
-reading the spec), and a call of ~2 ms then finds the caches holding the
-previous route's code and data (measured: ~0.3-0.5 ms more than the same call
-repeated; a 20 ms sleep before it costs as much as ``mixsyn`` does). Routes 1
-and 4 are timed once more with ten calls in a row per round ("warm": what a
-sweep over many designs sees, and what ``timeit`` would report), both routes
-alike.
+reading the spec). A call of ~2 ms then finds the core's caches holding the
+previous route's code and data. Measured (issue 13, after the same ``mixsyn``
+call): route 1 takes ~0.5-0.8 ms (30-50 %) more than when repeated, where a
+2-3 ms loop of small numpy operations or of pure Python pays 1-2 %; a 20 ms
+sleep costs route 1 as much as ``mixsyn`` does; re-running the twelve LAPACK
+drivers it calls (dgees, dggev, dsyevd, ...) between ``mixsyn`` and route 1
+recovers ~0.08 ms of it. The rest is the footprint of its Python and numpy
+code paths. Routes 1 and 4 are therefore also timed with ten calls in a row
+per round ("warm": what a sweep over many designs sees, and what ``timeit``
+reports), both routes alike.
 
 Run: ``python tests/benchmarks/bench_hinf.py`` from the repository root.
 """
