@@ -189,6 +189,22 @@ def test_poly_from_roots_is_as_accurate_as_np_poly():
 def test_poly_from_roots_refuses_an_unpaired_complex_root():
     with pytest.raises(ValueError, match="not closed under conjugation"):
         R._poly_from_roots([-1.0 + 2.0j, -3.0 + 0.0j])
+    with pytest.raises(ValueError, match="not closed under conjugation"):
+        R._poly_from_roots([-1.0 + 2.0j, -1.0 - 2.1j])
+
+
+def test_poly_from_roots_pairs_conjugates_that_differ_in_the_last_bits():
+    """Zeros from a QZ pencil (the reduced H-infinity controller's, which the
+    saturation tests execute) form pairs whose members differ in the last
+    bits: each pair is its real quadratic (x + y, x y), within 1e-15 of
+    np.poly's real part (complex products whose imaginary parts cancel)."""
+    r = [-608.4767775829737 + 306.3858412957058j, -608.4767775829738 - 306.38584129570575j,
+         -62.499999999989974 + 0j]
+    ours = R._poly_from_roots(r)
+    assert np.allclose(ours, np.poly(r).real, rtol=1e-15, atol=0.0)
+    # exact conjugates: -2 Re(x) and |x|^2, the same bits as before pairing
+    x = r[0]
+    assert R._poly_from_roots([x, x.conjugate()]) == [1.0, -2.0 * x.real, x.real ** 2 + x.imag ** 2]
 
 
 def test_zpk_realisation_is_tf2ss_then_balanced():

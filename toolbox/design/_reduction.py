@@ -73,34 +73,48 @@ def _poly_from_roots(r: list[complex]) -> list[float]:
     """Coefficients of ``prod(s - r_i)``, highest power first, real for a
     conjugate-closed set (those of a real system, as :func:`_real_conj`
     leaves them): a linear factor per real root and the real quadratic
-    ``s^2 - 2 Re(x) s + |x|^2`` per pair, in Python floats (a few roots:
-    ~1 us where ``np.poly``'s ``np.convolve`` per root took ~4-8). As
-    accurate as ``np.poly``'s complex products, whose imaginary parts cancel
-    only up to rounding, or more: over 3000 random sets of 2-6 roots within
-    1e-3..1e7 rad/s, the coefficients' relative error against a 60-digit
-    product is 1.1e-16 median and 5e-16 at worst, ``np.poly``'s 1.2e-16 and
-    3.9e-13. Another set is not that of a real system: ValueError."""
-    upper = [x for x in r if x.imag > 0.0]
-    lower = [x.conjugate() for x in r if x.imag < 0.0]
-    # LAPACK lists a pair's members together: the sorts are seldom needed
-    if upper != lower and sorted(upper, key=_re_im) != sorted(lower, key=_re_im):
-        raise ValueError(f"roots {r} are not closed under conjugation: not those of a real "
-                         f"transfer function")
+    ``s^2 - Re(x + y) s + Re(x y)`` per pair ``x, y`` (``y = conj(x)`` up to
+    rounding: the zeros from a QZ pencil, :func:`toolbox._lti._zeros`, differ
+    in the last bits; exact conjugates give ``-2 Re(x)`` and ``|x|^2``), in
+    Python floats (a few roots: ~1 us where ``np.poly``'s ``np.convolve`` per
+    root took ~4-8). As accurate as ``np.poly``'s complex products, whose
+    imaginary parts cancel only up to rounding, or more: over 3000 random
+    sets of 2-6 roots within 1e-3..1e7 rad/s, the coefficients' relative
+    error against a 60-digit product is 1.1e-16 median and 5e-16 at worst,
+    ``np.poly``'s 1.2e-16 and 3.9e-13. A complex root without a partner
+    within 1e-6 (relative) is not that of a real system: ValueError."""
+    partners = iter(_conjugate_partners(r))
     a = [1.0]
     for x in r:
         if x.imag == 0.0:                            # times (s - x)
             m = -x.real
             a = [a[0]] + [u + m * v for u, v in zip(a[1:], a)] + [m * a[-1]]
-        elif x.imag > 0.0:                           # times (s - x)(s - conj(x)); conj(x) skipped
-            p1, p2 = -2.0 * x.real, x.real * x.real + x.imag * x.imag
+        elif x.imag > 0.0:                           # times (s - x)(s - y); y skipped
+            y = next(partners)
+            p1, p2 = -(x.real + y.real), x.real * y.real - x.imag * y.imag
             a += [0.0, 0.0]
             a = [a[0], a[1] + p1 * a[0]] + [u + p1 * v + p2 * w for u, v, w in zip(a[2:], a[1:], a)]
     return a
 
 
-def _re_im(x: complex) -> tuple[float, float]:
-    """Sort key of complex numbers, numpy's order (real part, then imaginary)."""
-    return x.real, x.imag
+def _conjugate_partners(r: list[complex]) -> list[complex]:
+    """For each root above the real axis, in order, the root below it nearest
+    its conjugate; ValueError when the set is not conjugate-closed up to 1e-6
+    (relative)."""
+    upper = [x for x in r if x.imag > 0.0]
+    lower = [x for x in r if x.imag < 0.0]
+    if len(upper) != len(lower):
+        raise ValueError(f"roots {r} are not closed under conjugation: not those of a real "
+                         f"transfer function")
+    out = []
+    for x in upper:
+        d = [abs(x - y.conjugate()) for y in lower]
+        j = d.index(min(d))
+        if d[j] > 1e-6 * max(1.0, abs(x)):
+            raise ValueError(f"roots {r} are not closed under conjugation: not those of a real "
+                             f"transfer function")
+        out.append(lower.pop(j))
+    return out
 
 
 def _real_conj(r: np.ndarray) -> list[complex]:
