@@ -419,6 +419,71 @@ def test_weight_bound_check_keys_and_values(Pq):
     assert set(only) == {"S"}
 
 
+def _bound_ratios_by_python_control(G, K, ws, w):
+    """|w1 S|, |w2 K S|, |w3 T| on the grid ``w`` from python-control's
+    frequency responses (an independent route: state-space evaluation by
+    SLICOT, no zeros, poles or compiled pass)."""
+    g, k = freq(G, w).ravel(), freq(K, w).ravel()
+    S = 1.0 / (1.0 + g * k)
+    return {name: np.abs(freq(wt, w).ravel() * f)
+            for name, wt, f in (("S", ws[0], S), ("KS", ws[1], k * S), ("T", ws[2], g * k * S))}
+
+
+def test_weight_bounds_equal_python_controls_responses(Pq):
+    """On the 4000-point grid, each worst ratio is the largest of python-control's
+    |w_i F_i(j w)| at the same grid point (the compiled search,
+    toolbox/design/_bound_kernel.py, found it). Relative 1e-8: at the worst
+    point of S (1e-4 rad/s, next to the controller's pole at -0.0117)
+    python-control's response of K is 4.8e-9 off a 50-digit evaluation of its
+    realisation, the zeros-and-poles value 1.1e-11."""
+    K = H.synthesize(Pq, "optimal", backoff=0.05, sample_time=1e-4).K
+    loop = [*H._factors(G), *H._factors(K)]
+    bounds = {n: H._factors(wt) for n, wt in zip(("S", "KS", "T"), (W1, W2, W3))}
+    assert H._worst_points_compiled(H._BOUND_GRID, loop, bounds) is not None
+    got = H.weight_bound_check(G, K, W1, W2, W3)
+    ref = _bound_ratios_by_python_control(G, K, (W1, W2, W3), np.asarray(H._BOUND_GRID))
+    for name, r in ref.items():
+        i = int(np.argmax(r))
+        assert got[name].worst_ratio == pytest.approx(r[i], rel=1e-8)
+        assert got[name].worst_freq == H._BOUND_GRID[i]
+
+
+def test_weight_bound_search_compiled_equals_numpy():
+    """The compiled pass compares squared ratios; numpy's fallback compares
+    moduli of complex quotients: on random first- and second-order loops and
+    weights the two pick the same grid point, or (a plateau flat to rounding)
+    points whose ratios agree to 1e-13."""
+    rng = np.random.default_rng(5)
+    w = np.logspace(-3, 7, 1500)
+    for _ in range(40):
+        def tf(order):
+            return ct.tf(rng.uniform(0.1, 10, order + 1), np.poly(-rng.uniform(0.5, 1e4, order)))
+        Gr, Kr, ws = tf(1), tf(int(rng.integers(1, 3))) * ct.tf([1, 1e-2], [1, 1e-3]), [tf(1) for _ in range(3)]
+        loop = [*H._factors(Gr), *H._factors(Kr)]
+        bounds = {n: H._factors(x) for n, x in zip(("S", "KS", "T"), ws)}
+        a = H._worst_points_compiled(w, loop, bounds)
+        b = H._worst_points_numpy(w, loop, bounds)
+        ref = _bound_ratios_by_python_control(Gr, Kr, ws, w)
+        for (name, r), i, j in zip(ref.items(), a, b):
+            assert i == j or r[i] == pytest.approx(r[j], rel=1e-13)
+
+
+def test_weight_bounds_of_a_high_order_controller_take_the_numpy_route(Pq):
+    """A controller whose gain at 1e9 rad/s exceeds what the compiled pass may
+    square (poles far below: |kd| ~ 1e63 there) is searched by numpy; the
+    results still equal python-control's (relative 1e-8, as above)."""
+    K = H.synthesize(Pq, "optimal", backoff=0.05, sample_time=1e-4).K
+    slow = ct.tf([1.0], [1.0, 1.0]) ** 3 * ct.tf([1.0], [1.0, 2.0]) ** 4
+    Kh = ct.ss(ctl(K)) * ct.ss(slow) * 5e55
+    loop = [*H._factors(G), *H._factors(Kh)]
+    bounds = {n: H._factors(wt) for n, wt in zip(("S", "KS", "T"), (W1, W2, W3))}
+    assert H._worst_points_compiled(H._BOUND_GRID, loop, bounds) is None
+    got = H.weight_bound_check(G, Kh, W1, W2, W3)
+    ref = _bound_ratios_by_python_control(G, Kh, (W1, W2, W3), np.asarray(H._BOUND_GRID))
+    for name, r in ref.items():
+        assert got[name].worst_ratio == pytest.approx(r.max(), rel=1e-8)
+
+
 def _random_plant(seed, n=3):
     rng = np.random.default_rng(seed)
     return H.PartitionedPlant(A=rng.normal(size=(n, n)) - 1.5 * np.eye(n),

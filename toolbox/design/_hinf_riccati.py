@@ -27,6 +27,7 @@ Damaged or wrong equations of the paper, re-derived here:
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -1698,91 +1699,100 @@ class WeightBound:
     worst_freq: float
 
 
-#: default grid of :func:`weight_bound_check` (rad/s) and its points j w,
-#: read-only and built once
+#: default grid of :func:`weight_bound_check` (rad/s), read-only and built once
 _BOUND_GRID = np.logspace(-4, 9, 4000)
 _BOUND_GRID.flags.writeable = False
-_BOUND_POINTS = 1j * _BOUND_GRID
-_BOUND_POINTS.flags.writeable = False
+#: the compiled search runs when every factor's modulus on the grid lies within
+#: exp(+-_FACTOR_LOG_BOUND) (~1e+-43) a priori, and |1 + G K|^2 (gd kd)^2 above
+#: _C2_MIN: its squares and their products are then normal numbers
+#: (toolbox/design/_bound_kernel.py)
+_FACTOR_LOG_BOUND = 99.0
+_C2_MIN = 1e-200
 
 
-def _fractions(systems: list, w: np.ndarray) -> list[tuple[np.ndarray, np.ndarray | None]]:
-    """SISO responses at the frequencies ``w`` (rad/s) as (numerator,
-    denominator) values, all at once (issue 13: python-control converted each
-    weight to state space and called SLICOT tb05ad per frequency); None for a
-    denominator 1. The transfer functions are evaluated together from their
-    polynomials by Horner's rule on one (polynomials x points) array, with
-    elementwise operations only (a multi-threaded BLAS product of this shape
-    costs milliseconds on a loaded machine); a state-space system (the
-    controller) through its zeros, poles and gain (:func:`_zpk_fraction`); a
-    number is constant. The quotients are left to the caller, which needs
-    fewer of them (a complex division of 4000 points costs ~9 us)."""
-    s = _BOUND_POINTS if w is _BOUND_GRID else 1j * w
-    polys, out = [], []
-    for sys in systems:
-        if (coeffs := _tf_coeffs(sys)) is not None:       # the usual case first
-            out.append(len(polys))
-            polys += list(coeffs)
-        elif np.isscalar(sys):
-            out.append((np.full(s.size, complex(sys)), None))
-        else:
-            out.append(_zpk_fraction(*_zpk(sys), s))
-    if polys:
-        polys = [np.asarray(c, float).tolist() for c in polys]
-        deg = max(len(c) for c in polys) - 1
-        # highest power first, zero-padded to the common degree (one array call)
-        coef = np.array([[0.0] * (deg + 1 - len(c)) + c for c in polys])
-        if deg == 0:
-            vals = np.broadcast_to(coef, (len(polys), s.size)).astype(complex)
-        else:
-            # first Horner step, c0 s + c1 = c1 + j c0 w on the imaginary axis: the
-            # same numbers as the complex product and sum (whose other terms are
-            # exact zeros), at the cost of one real product
-            vals = np.empty((len(polys), s.size), complex)
-            vals.real = coef[:, 1:2]
-            np.multiply(coef[:, :1], w, out=vals.imag)
-        for k in range(2, deg + 1):
-            vals *= s
-            vals += coef[:, k:k + 1]
-        out = [(vals[o], vals[o + 1]) if isinstance(o, int) else o for o in out]
-    return out
+@dataclass(frozen=True, slots=True)
+class _Factor:
+    """``gain * prod(s - roots)``, the numerator or denominator of a SISO
+    response, evaluated with one rounding per factor: as accurate as the
+    roots (the synthesis computed the controller's already,
+    :func:`fastest_pole_modulus`; a first-order weight's root is one
+    division). Measured on paper 003's q-axis controller at 109 of the 4000
+    grid points against a 40-digit evaluation of its realisation: relative
+    error 5e-15 median, 3e-12 at worst, where the modal sum of
+    :meth:`toolbox._lti.StateSpace.evaluate` lost 2e-10 median (issue 13)."""
+
+    gain: float
+    roots: list[complex]
+
+    def at(self, s: complex) -> complex:
+        """The value at one point (Python complex numbers, the kernel's order)."""
+        v = complex(self.gain)
+        for r in self.roots:
+            v *= s - r
+        return v
+
+    def on_grid(self, s: np.ndarray) -> np.ndarray:
+        """The values at the points ``s`` (the operations of :meth:`at`)."""
+        v = np.full(s.size, complex(self.gain))
+        for r in self.roots:
+            v *= s - r
+        return v
+
+    def log_range(self, w_lo: float, w_hi: float) -> tuple[float, float]:
+        """Natural logarithms of a lower and an upper bound of ``|f(j w)|`` for
+        ``w_lo <= w <= w_hi`` (``-inf`` where it may vanish): ``|j w - r|``
+        lies between the distance from ``r`` to that segment of the imaginary
+        axis and ``max|w| + |r|``."""
+        if self.gain == 0.0:
+            return -math.inf, -math.inf
+        w_max = max(abs(w_lo), abs(w_hi))
+        lo = hi = math.log(abs(self.gain))
+        for r in self.roots:
+            d = math.hypot(r.real, max(0.0, w_lo - r.imag, r.imag - w_hi))
+            lo += math.log(d) if d > 0.0 else -math.inf
+            hi += math.log(w_max + abs(r))
+        return lo, hi
 
 
-def _zpk_fraction(z: np.ndarray, p: np.ndarray, k: float,
-                  s: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """``k prod(s - z)`` and ``prod(s - p)`` (None without poles) at the points
-    ``s``: one rounding per factor, so the value is as accurate as the zeros
-    and poles (the synthesis computed the controller's already,
-    :func:`fastest_pole_modulus`). Measured on paper 003's q-axis controller
-    at 109 of the 4000 grid points against a 40-digit evaluation of its
-    realisation: relative error of the quotient 5e-15 median, 3e-12 at worst,
-    where the modal sum of :meth:`toolbox._lti.StateSpace.evaluate`
-    (eigenvectors of condition ~1e6 there) lost 2e-10 median, 7e-10 at worst
-    (5e-9 on the d axis of ``003_azaiz2007_hinf``), in a third of the time of
-    the modal form and its sum (issue 13)."""
-    if z.size:
-        num = s - z[0]
-        num *= k
-        for r in z[1:].tolist():
-            num *= s - r
-    else:
-        num = np.full(s.size, complex(k))
-    if not p.size:
-        return num, None
-    den = s - p[0]
-    for r in p[1:].tolist():
-        den *= s - r
-    return num, den
+def _factors(sys: Any) -> tuple[_Factor, _Factor]:
+    """Numerator and denominator of a SISO transfer function (ours or
+    python-control's: its polynomials' roots, a first-order one's by one
+    division), a number, or a state-space system (its zeros, poles and gain,
+    :func:`_zpk`)."""
+    if (coeffs := _tf_coeffs(sys)) is not None:
+        return tuple(_Factor(c[0], _poly_roots(c)) for c in map(_trimmed, coeffs))
+    if np.isscalar(sys):
+        return _Factor(float(sys), []), _Factor(1.0, [])
+    z, p, k = _zpk(sys)
+    return _Factor(k, z.tolist()), _Factor(1.0, p.tolist())
 
 
-def _times(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
-    """The product of two values of :func:`_fractions` (None: 1)."""
-    return b if a is None else a if b is None else a * b
+def _poly_roots(c: list[float]) -> list[complex]:
+    """Roots of a trimmed polynomial (highest power first)."""
+    if len(c) <= 1:
+        return []
+    if len(c) == 2:
+        return [complex(-c[1] / c[0])]
+    return np.roots(c).tolist()
+
+
+#: the closed-loop function of each bound in terms of G = gn/gd and K = kn/kd
+#: (1 + G K = c/(gd kd), c = gd kd + gn kn): S = gd kd/c, K S = gd kn/c, T = gn kn/c
+_BOUND_FUNCTIONS = {"S": (1, 3), "KS": (1, 2), "T": (0, 2)}
 
 
 def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
                        freqs: np.ndarray | None = None) -> dict[str, WeightBound]:
     """Check |S| < 1/|w1|, |KS| < 1/|w2|, |T| < 1/|w3| (eq 41-43 of paper 003).
+
+    Every system is a numerator and a denominator ``gain * prod(s - roots)``
+    (:class:`_Factor`). The worst grid point of each bound is found by a
+    compiled pass over the grid (:mod:`toolbox.design._bound_kernel`, issue
+    13: ~50 us where numpy's ~35 passes over 4000 complex numbers took
+    ~200 us), or by numpy when the factors' moduli are not known to keep that
+    pass's squares in range (a controller of order ~5 or more at 1e9 rad/s:
+    :data:`_FACTOR_LOG_BOUND`); the ratio there is evaluated by
+    :meth:`_Factor.at`.
 
     Parameters
     ----------
@@ -1799,23 +1809,53 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
     dict of str to WeightBound
         Keys ``"S"``, ``"KS"``, ``"T"`` for the weights given.
     """
-    w = _BOUND_GRID if freqs is None else np.asarray(freqs, float)
-    weights = [wt for wt in (w1, w2, w3) if wt is not None]
-    (gn, gd), (kn, kd), *wv = _fractions([G, K] + weights, w)
-    # 1 + G K = c / (gd kd) with c = gd kd + gn kn: S, K S and T = G K S are
-    # gd kd / c, gd kn / c and gn kn / c, each weighted value one quotient
-    # (three divisions instead of six)
-    gdkd, gnkn = _times(gd, kd), gn * kn
-    c = gnkn + (1.0 if gdkd is None else gdkd)
-    r = np.empty(w.size)
+    w = _BOUND_GRID if freqs is None else np.asarray(freqs, float).ravel()
+    loop = [*_factors(G), *_factors(K)]                         # gn, gd, kn, kd
+    bounds = {name: _factors(wt) for name, wt in (("S", w1), ("KS", w2), ("T", w3))
+              if wt is not None}
+    at = _worst_points_compiled(w, loop, bounds)
+    if at is None:
+        at = _worst_points_numpy(w, loop, bounds)
     out = {}
-    for name, f, wt in (("S", gdkd, w1), ("KS", _times(gd, kn), w2), ("T", gnkn, w3)):
-        if wt is None:
-            continue
-        n, d = wv.pop(0)
-        num = n if f is None else f * n
-        np.abs(np.divide(num, c if d is None else c * d, out=num if f is not None else None),
-               out=r)
-        i = int(r.argmax())
-        out[name] = WeightBound(name, float(r[i]), float(w[i]))
+    for name, i in zip(bounds, at):
+        s = 1j * float(w[i])
+        v = [f.at(s) for f in loop]
+        (a, b), (n, d) = _BOUND_FUNCTIONS[name], bounds[name]
+        ratio = abs((v[a] * v[b] * n.at(s)) / ((v[1] * v[3] + v[0] * v[2]) * d.at(s)))
+        out[name] = WeightBound(name, ratio, float(w[i]))
+    return out
+
+
+def _worst_points_compiled(w: np.ndarray, loop: list[_Factor],
+                           bounds: dict[str, tuple[_Factor, _Factor]]) -> list[int] | None:
+    """The grid index of each bound's worst ratio by the compiled pass, None
+    when its squares are not known to stay in range."""
+    factors = loop + [f for pair in bounds.values() for f in pair]
+    if not bounds or w.size == 0:
+        return None
+    w_lo, w_hi = (w[0], w[-1]) if w is _BOUND_GRID else (float(w.min()), float(w.max()))
+    if not all(-_FACTOR_LOG_BOUND <= lo and hi <= _FACTOR_LOG_BOUND
+               for lo, hi in (f.log_range(w_lo, w_hi) for f in factors)):
+        return None
+    from ._bound_kernel import worst_points
+
+    at, c2_min = worst_points(
+        w, np.array([r for f in factors for r in f.roots], complex),
+        np.array(list(itertools.accumulate([len(f.roots) for f in factors], initial=0))),
+        np.array([f.gain for f in factors]),
+        np.array([list(_BOUND_FUNCTIONS).index(name) for name in bounds]))
+    return at.tolist() if c2_min >= _C2_MIN else None
+
+
+def _worst_points_numpy(w: np.ndarray, loop: list[_Factor],
+                        bounds: dict[str, tuple[_Factor, _Factor]]) -> list[int]:
+    """:func:`_worst_points_compiled` by numpy over the whole grid (complex
+    quotients and moduli: no squares to leave the range)."""
+    s = 1j * w
+    v = [f.on_grid(s) for f in loop]                            # gn, gd, kn, kd
+    c = v[1] * v[3] + v[0] * v[2]
+    out = []
+    for name, (n, d) in bounds.items():
+        a, b = _BOUND_FUNCTIONS[name]
+        out.append(int(np.abs((v[a] * v[b] * n.on_grid(s)) / (c * d.on_grid(s))).argmax()))
     return out
