@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 725ca7e47e8fb783e32a98f3530d9f7f87e8372a8e40b66b26c2473ca062b79f
  * law sha256:  90ba78e33eff6fa13763b45b362bfe70b6a195854dbd4c79ee92e9c291e339e7
- * created:     2026-11-25T18:47:52+00:00
+ * created:     2026-11-25T18:52:45+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).

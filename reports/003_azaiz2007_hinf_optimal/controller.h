@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: fe6722ab3d8aaf89f7f3af7cde13d4df131e24c702653ac07366c33f1f6f30b5
  * law sha256:  63dbb317db91823e29eb529e90aff04272f3569efb3b599f82b9caed570784a2
- * created:     2026-11-25T18:47:53+00:00
+ * created:     2026-11-25T18:52:47+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
