@@ -329,6 +329,23 @@ class StateSpace:
         and the order reduction starts from the same zeros and poles (issue 13)."""
         return _eigvals(self.A), _zeros(self.A, self.B, self.C, self.D)
 
+    @cached_property
+    def _zpk(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """Zeros, poles and leading gain of a SISO system, computed once: the
+        H-infinity weight-bound check and the order reduction both start from
+        them (issue 13). The gain is the value at a test point away from the
+        poles and zeros, divided by their factors there."""
+        p, z = self._poles_zeros
+        s0 = 1j * (1.0 + 3.0 * max([1.0] + [abs(x) for x in z.tolist() + p.tolist()]))
+        val = complex(self.D[0, 0])
+        if self.nstates:
+            _, _, x, info = _zgesv(s0 * _identity(self.nstates) - self.A, self.B)
+            if info != 0:
+                raise np.linalg.LinAlgError(f"singular matrix (zgesv info {info})")
+            val += complex((self.C @ x)[0, 0])
+        k = val * np.prod(s0 - p) / np.prod(s0 - z)
+        return z, p, float(k.real)
+
     def evaluate(self, x: Any) -> np.ndarray:
         """``C (x I - A)^-1 B + D`` at complex points ``x``: shape ``(p, m, len(x))``.
 

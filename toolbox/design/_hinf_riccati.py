@@ -1476,16 +1476,11 @@ def _effective_poles(poles: np.ndarray, zeros: np.ndarray, cancel_tol: float) ->
 
 
 def _zpk(K: Any) -> tuple[np.ndarray, np.ndarray, float]:
-    """Zeros, poles and leading gain of a SISO system (those our systems keep
-    once computed: the synthesis computed the controller's)."""
-    A, B, C, D = _ss_blocks(K)
-    p, z = _poles_zeros(K)
-    # leading gain from the value at a test point away from poles and zeros
-    s0 = 1j * (1.0 + 3.0 * max([1.0] + [abs(x) for x in z.tolist() + p.tolist()]))
-    val = complex(D[0, 0]) + (complex((C @ _solve(s0 * _identity(A.shape[0]) - A, B))[0, 0])
-                              if A.shape[0] else 0.0)
-    k = val * np.prod(s0 - p) / np.prod(s0 - z)
-    return z, p, float(k.real)
+    """Zeros, poles and leading gain of a SISO system: those our ``StateSpace``
+    keeps once computed (``StateSpace._zpk``), else of its realisation."""
+    if not isinstance(K, StateSpace):
+        K = StateSpace._unchecked(*_ss_blocks(K))
+    return K._zpk
 
 
 def fastest_pole_modulus(K: Any) -> float:
