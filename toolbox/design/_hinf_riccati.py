@@ -1697,9 +1697,10 @@ class WeightBound:
 #: default grid of :func:`weight_bound_check` (rad/s), read-only and built once
 _BOUND_GRID = np.logspace(-4, 9, 4000)
 _BOUND_GRID.flags.writeable = False
-#: the compiled search runs when every factor's modulus on the grid lies within
-#: exp(+-_FACTOR_LOG_BOUND) (~1e+-43) a priori, and |1 + G K|^2 (gd kd)^2 above
-#: _C2_MIN: its squares and their products are then normal numbers
+#: the compiled search's result stands when every factor's modulus on the grid
+#: lies within exp(+-_FACTOR_LOG_BOUND) (~1e+-43, known a priori) and
+#: |c|^2 = |gd kd + gn kn|^2 = |1 + G K|^2 |gd kd|^2 is at least _C2_MIN there:
+#: its squares and their products are then normal numbers
 #: (toolbox/design/_bound_kernel.py)
 _FACTOR_LOG_BOUND = 99.0
 _C2_MIN = 1e-200
@@ -1825,9 +1826,9 @@ def _worst_points_compiled(w: np.ndarray, loop: list[_Factor],
                            bounds: dict[str, tuple[_Factor, _Factor]]) -> list[int] | None:
     """The grid index of each bound's worst ratio by the compiled pass, None
     when its squares are not known to stay in range."""
-    factors = loop + [f for pair in bounds.values() for f in pair]
     if not bounds or w.size == 0:
         return None
+    factors = loop + [f for pair in bounds.values() for f in pair]
     w_lo, w_hi = (w[0], w[-1]) if w is _BOUND_GRID else (float(w.min()), float(w.max()))
     if not all(-_FACTOR_LOG_BOUND <= lo and hi <= _FACTOR_LOG_BOUND
                for lo, hi in (f.log_range(w_lo, w_hi) for f in factors)):
