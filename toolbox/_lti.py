@@ -81,6 +81,41 @@ def balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, .
     return A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
 
 
+def _balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A, B, C of the SISO system matrix ``M = [[A, B], [C, 0]]`` in the
+    coordinates of :func:`balanced` (the same powers of two, so the same
+    numbers), as views of one scaled copy of ``M``: for a caller that wrote
+    the system matrix itself, one array operation for the three blocks
+    instead of a system matrix rebuilt by :func:`state_scaling` and three
+    scalings (issue 13)."""
+    n = M.shape[0] - 1
+    if n:
+        t = diagonal_scaling(M)
+        t = t / t[n]                                 # exact: powers of two; t[n] = 1
+        M = M * t[None, :] / t[:, None]
+    return M[:n, :n], M[:n, n:], M[n:, :n]
+
+
+def _balanced_companion(num: list[float], den: list[float]) -> tuple[np.ndarray, ...]:
+    """A, B, C, D of :func:`tf2ss`'s controllable canonical form of the proper
+    ``num/den`` (trimmed Python floats, ``den[0] != 0``) in the coordinates of
+    :func:`balanced`: the same numbers as ``balanced(*tf2ss(num, den)[:3])``,
+    with the system matrix ``[[A, B], [C, 0]]`` written once from the
+    coefficients (``-den[1:]`` on A's first row, ones below its diagonal,
+    ``B = e1``, ``C = num[1:] - num[0] den[1:]``, normalised by ``den[0]``) and
+    scaled by :func:`_balanced_blocks`. A, B, C are views of that matrix."""
+    n, d0 = len(den) - 1, den[0]
+    num = [v / d0 for v in [0.0] * (n + 1 - len(num)) + num]
+    den = [v / d0 for v in den]
+    M = np.zeros((n + 1, n + 1))
+    if n:
+        M[0, :n] = [-v for v in den[1:]]
+        M.reshape(-1)[n + 1:n * (n + 1):n + 2] = 1.0     # A's subdiagonal
+        M[0, n] = 1.0
+        M[n, :n] = [u - num[0] * v for u, v in zip(num[1:], den[1:])]
+    return (*_balanced_blocks(M), np.array([[num[0]]]))
+
+
 def modal_form(A: np.ndarray, B: np.ndarray,
                C: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """Poles ``lam`` (n,) and residues ``R`` (p, m, n) with
@@ -543,14 +578,17 @@ def feedback(plant: Any, other: Any = 1.0, sign: int = -1) -> StateSpace:
 
 
 # -- transfer functions -------------------------------------------------------
-def _poly(coeffs: Any) -> np.ndarray:
-    """A 1-D float polynomial with leading zeros trimmed (zero -> ``[0.]``).
+def _trimmed(coeffs: Any) -> list[float]:
+    """The coefficients of a polynomial as Python floats without leading zeros
+    (zero -> ``[0.0]``): the small transfer functions of a design need no array."""
+    p = np.asarray(coeffs, dtype=float).reshape(-1).tolist()
+    i = next((k for k, c in enumerate(p) if c), None)
+    return [0.0] if i is None else p[i:]
 
-    A fresh array (``np.trim_zeros`` would cost ~5 us a call in its generic form).
-    """
-    p = np.array(coeffs, float).ravel()
-    nz = np.flatnonzero(p)
-    return p[nz[0]:] if nz.size else np.zeros(1)
+
+def _poly(coeffs: Any) -> np.ndarray:
+    """:func:`_trimmed` as a fresh 1-D float array."""
+    return np.array(_trimmed(coeffs))
 
 
 def _roots(p: np.ndarray) -> np.ndarray:
@@ -576,6 +614,10 @@ def _minreal_coeffs(num: np.ndarray, den: np.ndarray,
     and needs no object of them, issue 13)."""
     if num.size == 1 or den.size == 1:
         return num, den                        # no zero or no pole: nothing to cancel
+    if num.size == 2 and den.size == 2:        # one zero, one pole (most weights): scalars
+        (n0, n1), (d0, d1) = num.tolist(), den.tolist()
+        z, p = -n1 / n0, -d1 / d0               # the roots _roots gives, as floats
+        return (num[:1], den[:1]) if abs(p - z) <= tol * max(1.0, abs(z)) else (num, den)
     zeros = list(_roots(num)) if num.any() else []
     poles = list(_roots(den))
     kept = []

@@ -121,11 +121,13 @@ def test_weight_realisation_is_minimal_and_exact():
 @pytest.mark.parametrize("num, den", [([0.66225, 117.4499], [1.0, 0.0117]),
                                       ([-1e4, -1.3568e6], [1.0, 2.7135e6]),
                                       ([2.0], [-3.0, 1e-3]), ([0.0, 5.0], [2.0, 0.0]),
-                                      ([1.0, 2.0], [3.0, 6.0 * (1 + 1e-9)]), ([7.0], [2.0])])
-def test_first_order_realisation_is_the_general_route(num, den):
-    """The scalar route of a denominator of degree <= 1 gives the same bits as
-    cancellation, tf2ss and the power-of-two balancing on arrays (the fifth
-    pair cancels to the gain 1/3)."""
+                                      ([1.0, 2.0], [3.0, 6.0 * (1 + 1e-9)]), ([7.0], [2.0]),
+                                      ([3.0, 1.0, 1.0], [-2.0, 3.0, 2.5e4])])
+def test_tf_realisation_is_tf2ss_then_balanced(num, den):
+    """The system matrix written from the coefficients and balanced once
+    (``_lti._balanced_companion``) gives the same bits as cancellation, tf2ss
+    and the power-of-two balancing on arrays (the fifth pair cancels to the
+    gain 1/3)."""
     from toolbox import _lti as L
     A, B, C, D = L._tf2ss_arrays(*L._minreal_coeffs(L._poly(num), L._poly(den)))
     ref = (*L.balanced(A, B, C), D)

@@ -41,9 +41,9 @@ from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _d
                                  dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
                                  zgesv as _zgesv)
 
-from .._lti import (_CANCEL_TOL, StateSpace, TransferFunction, _identity, _leading_identity,
-                    _linf_norm, _minreal_coeffs, _svd, _tf2ss_arrays,
-                    as_statespace, balanced, diagonal_scaling)
+from .._lti import (StateSpace, TransferFunction, _balanced_companion, _identity,
+                    _leading_identity, _linf_norm, _minreal_coeffs, _roots, _svd, _trimmed,
+                    as_statespace, diagonal_scaling)
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -305,11 +305,10 @@ def _tf_realisation(num: Any, den: Any) -> tuple[np.ndarray, ...]:
 
     Common roots of num and den are cancelled first
     (:func:`toolbox._lti._minreal_coeffs`, python-control's rule), then
-    :func:`toolbox._lti._tf2ss_arrays` gives the controllable canonical form,
-    whose states are scaled by powers of two (:func:`toolbox._lti.balanced`: exact) so that
-    B and C have comparable entries (paper 003's w3 has C ~ -2.7e10 for
-    B = 1 otherwise). A denominator of degree <= 1 (the plant and weights of
-    paper 003) takes :func:`_first_order_realisation`, the same numbers.
+    :func:`toolbox._lti._balanced_companion` gives the controllable canonical
+    form, whose states are scaled by powers of two (exact) so that B and C
+    have comparable entries (paper 003's w3 has C ~ -2.7e10 for B = 1
+    otherwise).
     """
     num, den = _trimmed(num), _trimmed(den)
     if not any(den):
@@ -320,44 +319,8 @@ def _tf_realisation(num: Any, den: Any) -> tuple[np.ndarray, ...]:
                          f"{len(den) - 1}")
     if not any(num):
         return _ss_blocks(0.0)
-    if len(den) <= 2:
-        return _first_order_realisation(num, den)
-    A, B, C, D = _tf2ss_arrays(*_minreal_coeffs(np.array(num), np.array(den)))
-    return (*balanced(A, B, C), D)
-
-
-def _trimmed(coeffs: Any) -> list[float]:
-    """The coefficients as Python floats without leading zeros (``[0.0]`` for
-    zero): :func:`toolbox._lti._poly` as a list."""
-    p = np.asarray(coeffs, dtype=float).reshape(-1).tolist()
-    i = next((k for k, c in enumerate(p) if c), None)
-    return [0.0] if i is None else p[i:]
-
-
-def _first_order_realisation(num: list[float], den: list[float]) -> tuple[np.ndarray, ...]:
-    """:func:`_tf_realisation` of a non-zero ``num/den`` with ``den`` of degree
-    <= 1, by the same floating-point operations in scalar code (one array
-    call each of ``_minreal_coeffs``, ``_tf2ss_arrays`` and ``balanced``
-    makes ~25 us per weight, issue 13): the root ``-n1/n0`` cancels the pole
-    ``-d1/d0`` within ``_CANCEL_TOL`` (a static gain remains), the companion
-    form of the monic ``s + d1/d0`` is ``a = -d1/d0``, ``b = 1``,
-    ``c = n1' - n0' d1/d0``, ``d = n0'`` (``n'``: the numerator padded to
-    degree 1 over ``d0``), and the power-of-two state scaling ``t`` of
-    :func:`toolbox._lti.state_scaling` gives ``(a t / t, b / t, c t)``."""
-    d0 = den[0]
-    if len(den) == 2 and len(num) == 2:
-        z, p = -num[1] / num[0], -den[1] / d0
-        if abs(p - z) <= _CANCEL_TOL * max(1.0, abs(z)):
-            num, den = [num[0]], [d0]
-    if len(den) == 1:
-        return _ss_blocks(num[0] / d0)
-    n0, n1 = ([0.0] + num if len(num) == 1 else num)
-    n0, n1, d1 = n0 / d0, n1 / d0, den[1] / d0
-    a, c = -d1, n1 - n0 * d1
-    scale = diagonal_scaling(np.array([[a, 1.0], [c, 0.0]])).tolist()
-    t = scale[0] / scale[1]
-    return (np.array([[a * t / t]]), np.array([[1.0 / t]]), np.array([[c * t]]),
-            np.array([[n0]]))
+    num, den = _minreal_coeffs(np.array(num), np.array(den))
+    return _balanced_companion(num.tolist(), den.tolist())
 
 
 def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
@@ -1756,20 +1719,11 @@ def _factors(sys: Any) -> tuple[_Factor, _Factor]:
     division), a number, or a state-space system (its zeros, poles and gain,
     :func:`_zpk`)."""
     if (coeffs := _tf_coeffs(sys)) is not None:
-        return tuple(_Factor(c[0], _poly_roots(c)) for c in map(_trimmed, coeffs))
+        return tuple(_Factor(c[0], _roots(np.array(c)).tolist()) for c in map(_trimmed, coeffs))
     if np.isscalar(sys):
         return _Factor(float(sys), []), _Factor(1.0, [])
     z, p, k = _zpk(sys)
     return _Factor(k, z.tolist()), _Factor(1.0, p.tolist())
-
-
-def _poly_roots(c: list[float]) -> list[complex]:
-    """Roots of a trimmed polynomial (highest power first)."""
-    if len(c) <= 1:
-        return []
-    if len(c) == 2:
-        return [complex(-c[1] / c[0])]
-    return np.roots(c).tolist()
 
 
 #: the closed-loop function of each bound in terms of G = gn/gd and K = kn/kd

@@ -23,8 +23,9 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import zgesv as _zgesv
 
-from .._lti import (StateSpace, _eigvals, _leading_identity, _linf_norm, _pencil_eigval_list,
-                    as_statespace, diagonal_scaling, parallel, state_scaling)
+from .._lti import (StateSpace, _balanced_blocks, _balanced_companion, _eigvals,
+                    _leading_identity, _linf_norm, _pencil_eigval_list, as_statespace, parallel,
+                    state_scaling)
 from ._hinf_riccati import _solve, _ss_blocks, _zpk
 
 __all__ = [
@@ -47,8 +48,8 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
     (the controllable canonical form of :func:`toolbox._lti.tf2ss`) without its
     argument handling (~0.3 ms a call, issue 13), then the diagonal balancing
     of :func:`toolbox._lti.balanced`: the same numbers, from the polynomials'
-    coefficients as Python floats written straight into the system matrix
-    that the balancing equilibrates (~10 array calls instead of ~30)."""
+    coefficients as Python floats (:func:`toolbox._lti._balanced_companion`,
+    ~10 array calls instead of ~30)."""
     if p.size == 0:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(k)]])
     den = _poly_from_roots(_real_conj(p))
@@ -56,17 +57,8 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
     num = _poly_from_roots(_real_conj(z))
     if len(num) > n + 1:
         raise ValueError(f"improper transfer function ({len(num) - 1} zeros, {n} poles)")
-    num = [0.0] * (n + 1 - len(num)) + [float(k) * v for v in num]
-    # the system matrix [[A, B], [C, 0]] of tf2ss's controllable canonical form
-    # (den is monic: tf2ss's divisions by den[0] are exact): -den[1:] on the
-    # first row of A, ones below its diagonal, B = e1, C = num[1:] - num[0] den[1:]
-    M = np.zeros((n + 1, n + 1))
-    M[0, :n] = [-v for v in den[1:]]
-    M.reshape(-1)[n + 1:n * (n + 1):n + 2] = 1.0
-    M[0, n] = 1.0
-    M[n, :n] = [u - num[0] * v for u, v in zip(num[1:], den[1:])]
-    A, B, C = _balanced_blocks(M)
-    return A.copy(), B.copy(), C.copy(), np.array([[num[0]]])
+    A, B, C, D = _balanced_companion([float(k) * v for v in num], den)
+    return A.copy(), B.copy(), C.copy(), D
 
 
 def _poly_from_roots(r: list[complex]) -> list[float]:
@@ -472,7 +464,7 @@ def _balanced_series(first: tuple,
     """A, B, C, d of ``second * first`` (SISO; the signal passes ``first``
     first), with A, B, C in the coordinates of :func:`toolbox._lti.balanced`
     (the same powers of two, so the same numbers): the system matrix
-    ``[[A, B], [C, 0]]`` is written once (:func:`_balanced_blocks`)."""
+    ``[[A, B], [C, 0]]`` is written once (:func:`toolbox._lti._balanced_blocks`)."""
     A1, B1, C1, D1 = first
     A2, B2, C2, D2 = second
     n1, n = A1.shape[0], A1.shape[0] + A2.shape[0]
@@ -481,20 +473,6 @@ def _balanced_series(first: tuple,
     M[:n1, :n1], M[n1:n, n1:n], M[n1:n, :n1] = A1, A2, B2 * C1
     M[:n1, n:], M[n1:n, n:], M[n:, :n1], M[n:, n1:n] = B1, B2 * d1, d2 * C1, C2
     return (*_balanced_blocks(M), d2 * d1)
-
-
-def _balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A, B, C of the SISO system matrix ``M = [[A, B], [C, 0]]`` in the
-    coordinates of :func:`toolbox._lti.balanced` (the same powers of two,
-    so the same numbers), as views of one scaled copy of ``M``: one array
-    operation for the three blocks instead of a system matrix rebuilt by
-    :func:`toolbox._lti.state_scaling` and three scalings."""
-    n = M.shape[0] - 1
-    if n:
-        t = diagonal_scaling(M)
-        t = t / t[n]                                 # exact: powers of two; t[n] = 1
-        M = M * t[None, :] / t[:, None]
-    return M[:n, :n], M[:n, n:], M[n:, :n]
 
 
 def _imag_axis_zeros(lam: list[complex]) -> list[float]:
