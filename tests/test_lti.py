@@ -503,4 +503,3 @@ def test_pencil_eigval_list_is_numpys_quotient():
     fin = np.abs(beta) > 1e-13 * np.abs(alpha)
     assert np.count_nonzero(fin) == 5
     assert np.array_equal(np.array(L._pencil_eigval_list(M, E)), alpha[fin] / beta[fin])
-    assert np.array_equal(L._pencil_eigvals(M, E), alpha[fin] / beta[fin])

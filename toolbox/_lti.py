@@ -167,6 +167,15 @@ def _eig(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return wr + 1j * wi, V
 
 
+def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A^-1 B (LAPACK dgesv, zgesv for a complex A, without numpy's ~4 us of
+    dispatch); LinAlgError when A is exactly singular."""
+    _, _, x, info = (_zgesv if A.dtype.kind == "c" else _dgesv)(A, B)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"singular matrix (gesv info {info})")
+    return x
+
+
 def _identity(n: int) -> np.ndarray:
     """Read-only identity of order n, made once (``np.eye`` builds one in
     Python, ~1 us, and the small systems here need several per call)."""
@@ -215,14 +224,9 @@ def _eigvals(A: np.ndarray) -> np.ndarray:
     return wr + 1j * wi
 
 
-def _pencil_eigvals(M: np.ndarray, N: np.ndarray) -> np.ndarray:
-    """Finite generalised eigenvalues of (M, N) (LAPACK dggev); the infinite
-    ones (|beta| <= 1e-13 |alpha|) are dropped."""
-    return np.array(_pencil_eigval_list(M, N), complex)
-
-
 def _pencil_eigval_list(M: np.ndarray, N: np.ndarray) -> list[complex]:
-    """:func:`_pencil_eigvals` as Python numbers (a pencil of a small system
+    """Finite generalised eigenvalues of (M, N) (LAPACK dggev; the infinite
+    ones, |beta| <= 1e-13 |alpha|, are dropped) as Python numbers (a pencil of a small system
     has a dozen eigenvalues: scalar code beats the nine array operations of
     the filter and the quotients). The quotients are numpy's ``alpha / beta``
     bit for bit (its complex division by a real ``beta`` multiplies by
@@ -255,7 +259,7 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     A, B, C = balanced(A, B, C)
     M = np.zeros((n + C.shape[0], n + B.shape[1]))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
-    return _pencil_eigvals(M, _leading_identity(*M.shape, n))
+    return np.array(_pencil_eigval_list(M, _leading_identity(*M.shape, n)), complex)
 
 
 def _matrix(value: Any, name: str) -> np.ndarray:
@@ -374,10 +378,7 @@ class StateSpace:
         s0 = 1j * (1.0 + 3.0 * max([1.0] + [abs(x) for x in z.tolist() + p.tolist()]))
         val = complex(self.D[0, 0])
         if self.nstates:
-            _, _, x, info = _zgesv(s0 * _identity(self.nstates) - self.A, self.B)
-            if info != 0:
-                raise np.linalg.LinAlgError(f"singular matrix (zgesv info {info})")
-            val += complex((self.C @ x)[0, 0])
+            val += complex((self.C @ _solve(s0 * _identity(self.nstates) - self.A, self.B))[0, 0])
         k = val * np.prod(s0 - p) / np.prod(s0 - z)
         return z, p, float(k.real)
 
@@ -1301,13 +1302,11 @@ def _spectral_norm(M: np.ndarray) -> float:
 
 def _gain_at(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, w: float) -> float:
     """``sigma_max(G(j w))`` by one LU solve (real at w = 0); inf on a pole."""
-    if w == 0.0:
-        _, _, X, info = _dgesv(A, B)
-        G = D - C @ X
-    else:
-        _, _, X, info = _zgesv(1j * w * _identity(A.shape[0]) - A, B)
-        G = C @ X + D
-    return _spectral_norm(G) if info == 0 else inf
+    try:
+        G = D - C @ _solve(A, B) if w == 0.0 else C @ _solve(1j * w * _identity(A.shape[0]) - A, B) + D
+    except np.linalg.LinAlgError:
+        return inf
+    return _spectral_norm(G)
 
 
 def _on_axis(poles: list[complex]) -> bool:

@@ -38,12 +38,11 @@ import scipy.linalg as sla
 from scipy.linalg.lapack import (dgecon as _dgecon, dgees as _dgees, dgeev as _dgeev,
                                  dgesdd as _dgesdd, dgesv as _dgesv, dlange as _dlange,
                                  dpotrf as _dpotrf,
-                                 dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd,
-                                 zgesv as _zgesv)
+                                 dsyevd as _dsyevd, dtrsen as _dtrsen, zgesdd as _zgesdd)
 
 from .._lti import (StateSpace, TransferFunction, _balanced_companion, _identity,
-                    _leading_identity, _linf_norm, _minreal_coeffs, _roots, _svd, _trimmed,
-                    as_statespace, diagonal_scaling)
+                    _leading_identity, _linf_norm, _minreal_coeffs, _roots, _solve,
+                    _spectral_norm, _svd, _trimmed, as_statespace, diagonal_scaling)
 from ..errors import DesignInfeasible, SpecError
 
 __all__ = [
@@ -229,15 +228,6 @@ class PartitionedPlant:
 # e.g. ``dgeev(a, compute_vl, compute_vr)``, ``dgesdd(a, compute_uv,
 # full_matrices)``, ``dsyevd(a, compute_v)``, ``dpotrf(a, lower, clean)``.
 # --------------------------------------------------------------------------
-def _solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """A^-1 B (LAPACK dgesv, zgesv for a complex A); LinAlgError when A is
-    exactly singular."""
-    _, _, x, info = (_zgesv if A.dtype.kind == "c" else _dgesv)(A, B)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"singular matrix (gesv info {info})")
-    return x
-
-
 def _inv(A: np.ndarray) -> np.ndarray:
     """A^-1 (LAPACK dgesv on the identity, as numpy's ``inv``)."""
     return _solve(A, _identity(A.shape[0]))
@@ -602,10 +592,6 @@ def _d11_blocks(Pn: PartitionedPlant) -> tuple[np.ndarray, ...]:
     return D[:r, :c], D[:r, c:], D[r:, :c], D[r:, c:]
 
 
-def _sigma_max(M: np.ndarray) -> float:
-    return float(_svdvals(M)[0]) if M.size else 0.0
-
-
 # --------------------------------------------------------------------------
 # Riccati equations, eq (14)-(19)
 # --------------------------------------------------------------------------
@@ -835,7 +821,7 @@ def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     D1s = np.concatenate([Pn.D11, Pn.D12], axis=1)
     Ds1 = np.concatenate([Pn.D11, Pn.D21])
     # [D1111 D1112] and [D1111; D1121] are the first rows and columns of D11
-    bound = max(_sigma_max(Pn.D11[:r]), _sigma_max(Pn.D11[:, :c]))
+    bound = max(_spectral_norm(Pn.D11[:r]), _spectral_norm(Pn.D11[:, :c]))
     m, p = Pn.nw + Pn.nu, Pn.nz + Pn.ny
     Ew, Ez = _leading_identity(m, m, Pn.nw), _leading_identity(p, p, Pn.nz)
     return _GammaFree(B=B, C=C, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
@@ -1414,12 +1400,15 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
     return _effective_poles(*_poles_zeros(K), cancel_tol)
 
 
+def _ours(K: Any) -> StateSpace:
+    """Our ``StateSpace`` of a SISO system (itself when it is one: it keeps the
+    poles, zeros and gain computed once, ``StateSpace._poles_zeros``, ``_zpk``)."""
+    return K if isinstance(K, StateSpace) else StateSpace._unchecked(*_ss_blocks(K))
+
+
 def _poles_zeros(K: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Poles and invariant zeros of a SISO system: those our ``StateSpace``
-    keeps once computed (``StateSpace._poles_zeros``), else of its realisation."""
-    if not isinstance(K, StateSpace):
-        K = StateSpace._unchecked(*_ss_blocks(K))
-    return K._poles_zeros
+    """Poles and invariant zeros of a SISO system (:func:`_ours`)."""
+    return _ours(K)._poles_zeros
 
 
 def _effective_poles(poles: np.ndarray, zeros: np.ndarray, cancel_tol: float) -> np.ndarray:
@@ -1439,11 +1428,8 @@ def _effective_poles(poles: np.ndarray, zeros: np.ndarray, cancel_tol: float) ->
 
 
 def _zpk(K: Any) -> tuple[np.ndarray, np.ndarray, float]:
-    """Zeros, poles and leading gain of a SISO system: those our ``StateSpace``
-    keeps once computed (``StateSpace._zpk``), else of its realisation."""
-    if not isinstance(K, StateSpace):
-        K = StateSpace._unchecked(*_ss_blocks(K))
-    return K._zpk
+    """Zeros, poles and leading gain of a SISO system (:func:`_ours`)."""
+    return _ours(K)._zpk
 
 
 def fastest_pole_modulus(K: Any) -> float:
@@ -1535,7 +1521,7 @@ def hinf_norm(sys: Any) -> float:
 def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> float:
     n = A.shape[0]
     if n == 0:
-        return float(np.linalg.norm(D, 2)) if D.size else 0.0
+        return _spectral_norm(D)
     # the poles the norm computed on the way (no second eigenvalue problem; an
     # unstable system, the rare case, still gets its finite L-infinity norm first);
     # a mixed-sensitivity loop usually peaks at w = 0 (w1 nearly integrates: both

@@ -21,12 +21,11 @@ from typing import Any, Literal
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.linalg.lapack import zgesv as _zgesv
 
 from .._lti import (StateSpace, _balanced_blocks, _balanced_companion, _eigvals,
-                    _leading_identity, _linf_norm, _pencil_eigval_list, as_statespace, parallel,
-                    state_scaling)
-from ._hinf_riccati import _solve, _ss_blocks, _zpk
+                    _leading_identity, _linf_norm, _pencil_eigval_list, _solve, as_statespace,
+                    parallel, state_scaling)
+from ._hinf_riccati import _ss_blocks, _zpk
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -515,8 +514,9 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
 
 def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
               w: list[float]) -> list[complex]:
-    """``L(jw)`` at a few frequencies (one LAPACK zgesv each: numpy's batched
-    ``solve`` costs ~10 us of dispatch for the one or two crossings here)."""
+    """``L(jw)`` at a few frequencies (one LU solve each, :func:`toolbox._lti._solve`:
+    numpy's batched ``solve`` costs ~10 us of dispatch for the one or two
+    crossings here)."""
     if not w:
         return []
     n = A.shape[0]
@@ -526,10 +526,7 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
     for wi in w:
         M = minus_A.copy()
         M.reshape(-1)[::n + 1] += 1j * wi               # the diagonal (a view: M is contiguous)
-        _, _, x, info = _zgesv(M, Bc, overwrite_a=1)
-        if info != 0:
-            raise np.linalg.LinAlgError(f"singular matrix (zgesv info {info})")
-        out.append(complex(c @ x[:, 0]) + d)
+        out.append(complex(c @ _solve(M, Bc)[:, 0]) + d)
     return out
 
 
