@@ -74,3 +74,16 @@ def test_unusable_cache_directory_raises_nothing(tmp_path):
     (tmp_path / "file").write_bytes(b"")
     _kernel._drop_stale_cache(tmp_path / "file" / "cache")
     assert (tmp_path / "file").is_file()
+
+
+def test_sim_imports_with_the_jit_disabled():
+    """With NUMBA_DISABLE_JIT=1 (numba's own debugging switch) the kernel is
+    plain Python: importing toolbox.sim must not reach for a dispatcher's cache."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    out = subprocess.run([sys.executable, "-c", "import toolbox.sim"], env=env,
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr

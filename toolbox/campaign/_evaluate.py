@@ -59,7 +59,7 @@ class Plan:
         The ``[requirements]`` bounds.
     artifact : ControllerArtifact
         For the loop margins of each sample.
-    numba_threads : int or None
+    threads : int or None
         Threads of each simulation batch (:func:`toolbox.sim.simulate_batch`'s
         ``threads``; None: its default, one per core).
     """
@@ -69,7 +69,7 @@ class Plan:
     runs: tuple
     bounds: dict
     artifact: Any
-    numba_threads: int | None = None
+    threads: int | None = None
 
 
 def scenario_slug(name: str) -> str:
@@ -77,7 +77,7 @@ def scenario_slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_") or "scenario"
 
 
-def make_plan(spec, artifact, numba_threads: int | None = None) -> Plan:
+def make_plan(spec, artifact, threads: int | None = None) -> Plan:
     """The :class:`Plan` of ``spec``'s campaign for the designed ``artifact``.
 
     Scenarios: those named in ``campaign.scenarios``, else every
@@ -99,7 +99,7 @@ def make_plan(spec, artifact, numba_threads: int | None = None) -> Plan:
         runs.append((slug, dataclasses.replace(sc, keep_traces=False), law, drive))
     return Plan(cfg=cfg, motor=spec.motor, runs=tuple(runs),
                 bounds=dict(spec.requirements.bounds), artifact=artifact,
-                numba_threads=numba_threads)
+                threads=threads)
 
 
 def chunk_range(cfg, chunk: int) -> tuple[int, int]:
@@ -214,7 +214,7 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
                 for k, v in point.items() if k in ("delay_samples", "vdc")})
             pick = np.searchsorted(good, rows)
             res = simulate_batch(law, [motors[j] for j in pick], sc, dr,
-                                 threads=plan.numba_threads)
+                                 threads=plan.threads)
             for m in METRIC_NAMES:
                 table[m][rows] = res.metrics[m]
         speed_signal = scenario.kind in ("speed_step", "load_step")

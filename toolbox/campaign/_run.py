@@ -314,7 +314,7 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
             startup = evaluate_serial(make_plan(spec, artifact), todo, on_chunk)
         else:
             threads = 1 if scheduler in (None, "local") else None
-            startup = _evaluate_dask(make_plan(spec, artifact, numba_threads=threads), todo,
+            startup = _evaluate_dask(make_plan(spec, artifact, threads=threads), todo,
                                      on_chunk, scheduler, workers, digest)
     seconds = time.perf_counter() - t0
     n_run = sum(chunk_range(cfg, c)[1] - chunk_range(cfg, c)[0] for c in todo)

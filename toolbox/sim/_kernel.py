@@ -1055,4 +1055,5 @@ def _drop_stale_cache(cache_dir: Path) -> None:
         pass
 
 
-_drop_stale_cache(Path(run.stats.cache_path))
+if hasattr(run, "stats"):        # a numba dispatcher (not a plain function: NUMBA_DISABLE_JIT=1)
+    _drop_stale_cache(Path(run.stats.cache_path))

@@ -161,11 +161,10 @@ class Scenario:
         self.validate()
 
     # ------------------------------------------------------------------ checks
-    def validate(self, key: str = "scenario", sample_time: float | None = None) -> None:
-        """Raise :class:`SpecError` (key path under ``key``) for an invalid scenario.
-
-        ``sample_time`` (s), when given, also checks ``plant_step <= sample_time``.
-        """
+    def validate(self, key: str = "scenario") -> None:
+        """Raise :class:`SpecError` (key path under ``key``) for an invalid scenario
+        (``plant_step <= sample_time``, which depends on the drive, is
+        :meth:`check_plant_step`)."""
         def err(name, expected, got, hint=None):
             return SpecError(f"{key}.{name}", expected, got, hint=hint)
 
@@ -187,8 +186,6 @@ class Scenario:
             raise err("load_time", "a number >= 0 (s)", self.load_time)
         if not self.plant_step > 0:
             raise err("plant_step", "a number > 0 (s)", self.plant_step)
-        if sample_time is not None:
-            self.check_plant_step(sample_time, key)
         if self.trace_step is not None and not self.trace_step > 0:
             raise err("trace_step", "a number > 0 (s)", self.trace_step)
         for name in ("speed_noise", "current_noise", "current_quantum",
@@ -233,8 +230,9 @@ class Scenario:
         """Raise :class:`SpecError` unless ``plant_step <= sample_time`` (s).
 
         The one check of :meth:`validate` that depends on the drive:
-        ``simulate()`` runs it alone, the frozen scenario having been validated
-        when it was built (the full validation, ~16 us, ran on every call).
+        ``simulate()`` and :meth:`from_dict` run it alone, the frozen scenario
+        having been validated when it was built (the full validation, ~16 us,
+        ran on every call).
         """
         if self.plant_step > sample_time * (1 + 1e-9):
             raise SpecError(f"{key}.plant_step", f"a number <= the sample time "
