@@ -311,10 +311,12 @@ def test_mimo_disk_margin_at_zero_speed_and_worst_speed(pi):
 def test_coupled_loop_at_speed_matches_python_control_interconnection(hinf):
     """Coupled sampled loop with parameter mismatch and speed-sensor error, against an
     independent python-control build: ``sample_system`` (ZOH) of the 2x2 plant at
-    speed, a one-period delay per channel, the laws' measurement channels and the
-    decoupling gain W (measured speed), closed by ``feedback``. Poles agree to 1e-8;
-    the H-infinity case R, L x0.5 at 920 rad/s (a set the sweep reports unstable, with
-    a pole of modulus 1.0057) is unstable on both routes, while the continuous model
+    speed, a one-period delay per channel, the voltage placement's rotation
+    (toolbox/ARCHITECTURE.md "The digital loop": placed with the measured speed),
+    the laws' measurement channels and the decoupling gain W (measured speed),
+    closed by ``feedback``. Poles agree to 1e-8; the H-infinity case R, L x0.5 at
+    920 rad/s (a set the sweep reports unstable, with a pole of modulus 1.024) is
+    unstable on both routes, while the continuous model
     of the same set is stable: the computation delay of the decoupling is the cause."""
     from toolbox.analysis.certificate import point_matrices
     R, Ld, Lq, om, g = 0.3, 0.7e-3, 1.4e-3, 920.0, 1.1
@@ -324,7 +326,10 @@ def test_coupled_loop_at_speed_matches_python_control_interconnection(hinf):
     A, B = M.coupled_plant(R, Ld, Lq, om)
     Pd = ct.sample_system(ct.ss(A[0], B[0], np.eye(2), np.zeros((2, 2))), TS, method="zoh")
     z1 = ct.ss([[0]], [[1]], [[1]], [[0]], TS)
-    Pd = Pd * ct.append(z1, z1)
+    # the firmware places v at theta_k + t_c g w; it acts around theta_k + 1.5 Ts w
+    eps = hinf.decoupling.delay_compensation_time * g * om - 1.5 * TS * om
+    rot = np.array([[np.cos(eps), -np.sin(eps)], [np.sin(eps), np.cos(eps)]])
+    Pd = Pd * ct.append(z1, z1) * ct.ss([], [], [], rot, TS)
     Km = ct.append(*[hinf.axes[k].law.to_statespace().to_control()[0, 1] for k in "dq"])   # v = Km i
     W = M.decoupling_matrix(hinf.decoupling, g * om)[0]
     Cm = Km + ct.ss([], [], [], W, TS)

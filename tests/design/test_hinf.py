@@ -433,7 +433,7 @@ def _bound_ratios_by_python_control(G, K, ws, w):
 
 def test_weight_bounds_equal_python_controls_responses(Pq):
     """On the 4000-point grid, each worst ratio is the largest of python-control's
-    |w_i F_i(j w)| at the same grid point (the compiled search,
+    |w_i F_i(j w)| at a grid point where python-control's is largest too (the compiled search,
     toolbox/design/_bound_kernel.py, found it). Relative 1e-8: at the worst
     point of S (1e-4 rad/s, next to the controller's pole at -0.0117)
     python-control's response of K is 4.8e-9 off a 50-digit evaluation of its
@@ -447,7 +447,10 @@ def test_weight_bounds_equal_python_controls_responses(Pq):
     for name, r in ref.items():
         i = int(np.argmax(r))
         assert got[name].worst_ratio == pytest.approx(r[i], rel=1e-8)
-        assert got[name].worst_freq == H._BOUND_GRID[i]
+        # the worst point may sit on a plateau flat to rounding (S at low
+        # frequency): python-control's ratio at our point is its largest too
+        j = list(H._BOUND_GRID).index(got[name].worst_freq)
+        assert r[j] == pytest.approx(r[i], rel=1e-8)
 
 
 def test_weight_bound_search_compiled_equals_numpy():

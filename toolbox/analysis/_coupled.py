@@ -4,7 +4,13 @@ The plant ``A(omega) = [[-R/Ld, omega Lq/Ld], [-omega Ld/Lq, -R/Lq]]``,
 ``B = diag(1/Ld, 1/Lq)`` (paper 003 eq (3)-(4)) is discretised exactly (ZOH)
 at each speed and closed with both executed laws, the decoupling (with the
 controller's model parameters and the measured speed) and the delay line.
-Shared by the MIMO margins and the robustness sweep.
+The voltage enters the plant rotated by the placement error of the digital
+loop (toolbox/ARCHITECTURE.md "The digital loop"): the firmware places the
+voltage computed at ``t_k`` at ``theta_k + t_c w_meas`` and it acts around
+the middle of its application period, ``theta_k + (d + 1/2) Ts w``, so the
+rotor-frame hold sees ``R(eps) v`` with ``eps = t_c w_meas - (d + 1/2) Ts w``
+(the simulator's rotor hold, exactly). Shared by the MIMO margins and the
+robustness sweep.
 """
 
 from __future__ import annotations
@@ -17,7 +23,7 @@ from ..plant import dq_matrices
 from ._statespace import zoh_2x2
 
 __all__ = ["coupled_plant", "decoupling_matrix", "CoupledLoop", "coupled_closed_loop",
-           "coupled_state_matrix"]
+           "coupled_state_matrix", "placement_error", "rotation"]
 
 
 def coupled_plant(R, Ld, Lq, omega) -> tuple[np.ndarray, np.ndarray]:
@@ -34,6 +40,23 @@ def decoupling_matrix(decoupling, omega_meas) -> np.ndarray:
         W[:, 0, 1] = -wm * decoupling.Lq_c
         W[:, 1, 0] = wm * decoupling.Ld_c
     return W
+
+
+def placement_error(decoupling, sample_time: float, delay_samples: int, omega,
+                    omega_meas) -> np.ndarray:
+    """Angle ``eps`` (rad) by which the applied voltage leads the commanded
+    one in the rotor frame: ``t_c w_meas - (d + 1/2) Ts w`` (``t_c`` the
+    decoupling's ``delay_compensation_time``; speeds electrical, rad/s)."""
+    t_c = decoupling.delay_compensation_time
+    return (t_c * np.asarray(omega_meas, float)
+            - (int(delay_samples) + 0.5) * sample_time * np.asarray(omega, float))
+
+
+def rotation(eps) -> np.ndarray:
+    """Stacked rotation matrices ``R(eps)`` (N, 2, 2)."""
+    eps = np.atleast_1d(np.asarray(eps, float)).reshape(-1)
+    c, s = np.cos(eps), np.sin(eps)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
 
 
 @dataclass(frozen=True)
@@ -81,15 +104,18 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
     omega : array_like
         True electrical speed (rad/s).
     omega_meas : array_like, optional
-        Measured electrical speed used by the compensation (rad/s); default
-        ``omega`` (paper 000 eq (14)-(17) study its errors).
+        Measured electrical speed used by the compensation and the voltage
+        placement (rad/s); default ``omega`` (paper 000 eq (14)-(17) study its
+        errors).
     flux : array_like
         True magnet flux (Wb), for the back-EMF term ``c``.
 
     Returns
     -------
     CoupledLoop
-        The plant is ZOH-discretised at each speed (exact for constant speed).
+        The plant is ZOH-discretised at each speed (exact for constant speed);
+        the commanded voltage enters through ``Gamma R(eps)``
+        (:func:`placement_error`), the back-EMF through ``Gamma``.
     """
     Ts, d = sample_time, int(delay_samples)
     omega_meas = omega if omega_meas is None else omega_meas
@@ -99,7 +125,8 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
     N = R.size
     Ac, Bc = coupled_plant(R, Ld, Lq, omega)
     Phi, Gam = zoh_2x2(Ac, Bc, Ts)
-    A, Kx, Kr = _state_matrix(laws, decoupling, d, Phi, Gam, omega_meas)
+    Gam_v = Gam @ rotation(placement_error(decoupling, Ts, d, omega, omega_meas))
+    A, Kx, Kr = _state_matrix(laws, decoupling, d, Phi, Gam_v, omega_meas)
     n = A.shape[-1]
     nx = n - 2 * d
     k0 = np.zeros((N, 2))
@@ -114,8 +141,8 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
     B[:, 2:2 + ld.n, 0] = ld.B[:, 0]
     B[:, 2 + ld.n:nx, 1] = lq.B[:, 0]
     if d == 0:
-        B[:, :2, :] += Gam @ Kr
-        c[:, :2] += (Gam @ k0[..., None])[..., 0]
+        B[:, :2, :] += Gam_v @ Kr
+        c[:, :2] += (Gam_v @ k0[..., None])[..., 0]
     else:
         last = slice(nx + 2 * (d - 1), nx + 2 * d)      # q_d+ = v
         B[:, last, :] = Kr
@@ -128,7 +155,8 @@ def coupled_state_matrix(laws: dict, decoupling, delay_samples: int, Phi: np.nda
     """State matrix (N, n, n) of the executed coupled loop for given ZOH matrices.
 
     The loop of :func:`coupled_closed_loop` (same states) with the plant's
-    ``Phi`` (N, 2, 2) and ``Gamma`` (N, 2, 2) given rather than computed from
+    ``Phi`` (N, 2, 2) and the commanded voltage's input matrix ``Gamma`` (N,
+    2, 2; the placement rotation included) given rather than computed from
     parameters: the sampled-loop certificate evaluates it on matrices that
     bound the exact discretisation. Affine in ``(Phi, Gamma)`` for a fixed
     measured speed, and in the measured speed ``omega_meas`` (rad/s) for a

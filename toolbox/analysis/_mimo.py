@@ -21,7 +21,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..plant import max_electrical_speed
-from ._coupled import coupled_closed_loop, coupled_plant, decoupling_matrix
+from ._coupled import (coupled_closed_loop, coupled_plant, decoupling_matrix,
+                       placement_error, rotation)
 from ..artifact import json_ready
 from ._laws import AXES, axis_law
 from ._sampling import DEFAULT_BOX, sample_parameters
@@ -163,7 +164,9 @@ def mimo_loop_response(artifact, motor, omega: float, w: np.ndarray, *,
     ``z^-d`` in discrete time; ``exp(-s tau)``, ``tau = (d + 1/2) Ts``, in
     continuous time), ``K = diag(K_d, K_q)`` the error controllers (executed
     laws' measurement channels in discrete time) and ``W`` the decoupling
-    with the controller's model parameters and measured speed.
+    with the controller's model parameters and measured speed; the voltage
+    enters ``P`` rotated by the placement error of the digital loop
+    (:func:`toolbox.analysis._coupled.placement_error`).
     """
     w = np.atleast_1d(np.asarray(w, float))
     x = _grid_point(artifact, w, discrete)
@@ -192,7 +195,9 @@ def _loop_response(artifact, motor, omega: float, w: np.ndarray, x: np.ndarray,
     """:func:`mimo_loop_response` with the grid points ``x`` (:func:`_grid_point`)
     and the controllers ``C`` (:func:`_controllers`) given."""
     Ts, d = artifact.sample_time, artifact.delay_samples
+    om_meas = omega if omega_meas is None else omega_meas
     Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
+    Rot = rotation(placement_error(artifact.decoupling, Ts, d, omega, om_meas))[0]
     if discrete:
         Phi, Gam = zoh_coupled(Ac, Bc, Ts)
         P = inv_2x2(x[:, None, None] * np.eye(2) - Phi[0]) @ Gam[0]
@@ -200,8 +205,8 @@ def _loop_response(artifact, motor, omega: float, w: np.ndarray, x: np.ndarray,
     else:
         P = inv_2x2(x[:, None, None] * np.eye(2) - Ac[0]) @ Bc[0]
         P = P * np.exp(-1j * w * (d + 0.5) * Ts)[:, None, None]
-    W = decoupling_matrix(artifact.decoupling, omega if omega_meas is None else omega_meas)[0]
-    return (C - W) @ P
+    W = decoupling_matrix(artifact.decoupling, om_meas)[0]
+    return (C - W) @ P @ Rot
 
 
 def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
@@ -346,10 +351,16 @@ class MultiModelLoops:
                                        R=self.R, Ld=self.Ld, Lq=self.Lq, omega=om)
             stable[:, j] = loop.spectral_radius() < 1 - 1e-9
         kd, kq = (FreqResponse(*laws[name].error_controller())(self.z)[:, 0, 0] for name in AXES)
-        # L_i = (K - W) P with K = diag(K_d, K_q) and the off-diagonal W, entry by entry
-        W = decoupling_matrix(artifact.decoupling, np.tile(self.speeds, self.shape[0]))
+        # L_i = (K - W) P R(eps) with K = diag(K_d, K_q), the off-diagonal W and
+        # the placement rotation, entry by entry
+        speeds = np.tile(self.speeds, self.shape[0])
+        W = decoupling_matrix(artifact.decoupling, speeds)
         w01, w10 = W[:, 0, 1, None], W[:, 1, 0, None]
-        p00, p01, p10, p11 = self.P
+        eps = placement_error(artifact.decoupling, self.Ts, self.d, speeds, speeds)[:, None]
+        c, s = np.cos(eps), np.sin(eps)
+        q00, q01, q10, q11 = self.P
+        p00, p01 = q00 * c + q01 * s, q01 * c - q00 * s
+        p10, p11 = q10 * c + q11 * s, q11 * c - q10 * s
         l00, l01 = kd * p00 - w01 * p10, kd * p01 - w01 * p11
         l10, l11 = kq * p10 - w10 * p00, kq * p11 - w10 * p01
         # S_i - I/2 with S_i = (I + L_i)^-1 = adj(I + L_i)/det

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from datetime import datetime, timezone
 from typing import Any
 
@@ -12,15 +13,10 @@ from ..artifact import (AxisController, AxisWeights, ControllerArtifact, Decoupl
 __all__ = ["make_artifact", "decoupling_from_motor"]
 
 
-def decoupling_from_motor(motor, *, cross: bool = True, emf: bool = True,
-                          delay_compensation_time: float = 0.0) -> Decoupling:
-    """Compensation terms using the motor's own (nominal) parameters.
-
-    ``delay_compensation_time`` (s, 0 = none) is the rotation of ``v_dq`` by
-    ``delay_compensation_time * w_e`` the law assumes (see :class:`Decoupling`).
-    """
-    return Decoupling.from_motor(motor, cross=cross, emf=emf,
-                                 delay_compensation_time=delay_compensation_time)
+def decoupling_from_motor(motor, *, cross: bool = True, emf: bool = True) -> Decoupling:
+    """Compensation terms using the motor's own (nominal) parameters (the
+    voltage placement is the drive's, set by :func:`make_artifact`)."""
+    return Decoupling.from_motor(motor, cross=cross, emf=emf)
 
 
 def make_artifact(spec, axes: dict[str, AxisController], decoupling: Decoupling,
@@ -33,7 +29,14 @@ def make_artifact(spec, axes: dict[str, AxisController], decoupling: Decoupling,
     branched on); what a later stage executes or draws goes in the typed
     fields (``decoupling``, ``fcs``, ``weights``). ``equations`` lists the
     source equations used (e.g. ``"000 eq (11)"``), recorded in the provenance.
+
+    The decoupling's ``delay_compensation_time`` is the drive's voltage
+    placement (``drive.angle_compensation``, toolbox/ARCHITECTURE.md "The
+    digital loop"), the same for every method; the predictive law (``fcs``)
+    switches inverter states in the stationary frame and places no voltage.
     """
+    t_comp = 0.0 if fcs is not None else spec.drive.angle_compensation_time
+    decoupling = replace(decoupling, delay_compensation_time=t_comp)
     return ControllerArtifact(
         method=spec.controller.method,
         spec=spec.raw,

@@ -38,10 +38,11 @@ Gain rules (``[controller.<method>] rule``), all in effective units
 ``complex_vector``
     After motulator's synchronous-frame complex-vector PI (Briz 1999/2000),
     NOT motulator's controller itself. A continuous design in rotor
-    coordinates, bandwidth ``alpha_c``, with the delay compensation angle
-    ``1.5 Ts omega`` (Bae & Sul 2003, motulator's PWM ``k_comp = 1.5``)
-    recorded in ``decoupling.delay_compensation_time`` for the firmware (the
-    simulator does not rotate ``v_dq``). By default ``Kp = alpha_c L``,
+    coordinates, bandwidth ``alpha_c``. Its delay compensation angle ``1.5 Ts
+    omega`` (Bae & Sul 2003, motulator's PWM ``k_comp = 1.5``) is the drive's
+    voltage placement for one period of delay, which every method shares
+    (``drive.angle_compensation``, toolbox/ARCHITECTURE.md "The digital
+    loop"). By default ``Kp = alpha_c L``,
     ``Ki = alpha_c R``: a 1DOF cancellation PI (motulator has no such
     default), with the cross-coupling and EMF in the decoupling feedforward.
     With ``integral_bandwidth`` (``alpha_i``, method ``pi`` only) the
@@ -625,10 +626,6 @@ def design(spec) -> ControllerArtifact:
     axes = design_pi(cfg.Kp, cfg.Ki, Ts, structure=cfg.structure,
                      lag_time_constant=cfg.lag_time_constant, method=cfg.discretisation,
                      Kt=cfg.Kt)
-    # motulator's complex-vector PI rotates v_dq by 1.5 Ts w_e (one period of
-    # computation delay plus half a period of PWM/ZOH delay): executed, so typed
-    t_comp = 1.5 * Ts if cfg.rule == "complex_vector" else 0.0
-    dec = decoupling_from_motor(spec.motor, cross=cfg.decoupling, emf=cfg.decoupling,
-                                delay_compensation_time=t_comp)
+    dec = decoupling_from_motor(spec.motor, cross=cfg.decoupling, emf=cfg.decoupling)
     equations = _EQUATIONS[cfg.structure] + [_RULE_EQUATIONS[cfg.rule]]
     return make_artifact(spec, axes, dec, _gains(cfg, Ts, spec.motor), equations)

@@ -16,10 +16,15 @@ is split at every switching instant, so RK4 never integrates across a
 discontinuity (local error O(h^5) on smooth pieces; the global error on a 1 s
 run is far below the 1e-6 relative level of the tests).
 
-Inverters: the average model holds the commanded voltage over the period
-in the rotor frame (constant ``v_dq``) or, with ``hold = 1``, in the
-stationary frame (constant ``v_alpha_beta`` at the mid-period angle, the
-fundamental of a PWM inverter); the ``svm`` model switches the legs, either
+Voltage placement (toolbox/ARCHITECTURE.md "The digital loop"): the
+voltage computed at sample k is placed, as the firmware header does, at the
+angle ``phi_k = theta_k + t_c w_m`` (sampled angle, measured electrical
+speed, the drive's compensation time ``t_c``, ``DP_T_COMP``) and applied over
+period ``k + delay``. Inverters: the average model holds it over the period
+in the stationary frame (``hold = 1``: constant ``v_alpha_beta`` at
+``phi_k``, the fundamental of a PWM inverter) or in the rotor frame
+(``hold = 0``: constant ``v_dq`` rotated by ``phi_k`` minus the true
+mid-period angle, the idealisation the linear analysis discretises); the ``svm`` model switches the legs, either
 one centred 0-k-l-7-l-k-0 pattern per sample (paper 002 eq (21)-(22)) or a
 regular-sampled triangle carrier with min-max injection at the drive's
 switching frequency (``half_periods`` carrier half periods per sample,
@@ -141,13 +146,15 @@ __all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_i
 #: (``vlim``: 0 none, 1 circle, 2 hexagon; ``inverter``: 0 average, 1 svm,
 #: 2 fcs_mpc; ``half_periods``: carrier half periods per sample of the svm
 #: inverter, 0 = one centred pattern per sample; ``hold``: frame in which the
-#: average inverter holds the voltage, 0 rotor dq, 1 stationary) and scenario ``SC``. ``_simulate._pack*`` fill them by name
+#: average inverter holds the voltage, 0 rotor dq, 1 stationary; ``t_comp``: the
+#: voltage placement's compensation time, s) and scenario ``SC``. ``_simulate._pack*`` fill them by name
 #: through :func:`pack_indices`.
 LAYOUTS: dict[str, tuple[str, ...]] = {
     "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor"),
     "LP": ("R_c", "Ld_c", "Lq_c", "flux_c", "cross", "emf", "alpha", "beta", "gamma"),
     "SP": ("enabled", "kp", "ki", "kd", "decim", "iq_limit"),
-    "DP": ("Ts", "delay", "vlim", "v_max", "r_hex", "inverter", "half_periods", "hold"),
+    "DP": ("Ts", "delay", "vlim", "v_max", "r_hex", "inverter", "half_periods", "hold",
+           "t_comp"),
     "SC": ("duration", "mech", "omega0", "acc", "id0", "iq0", "id1", "iq1",
            "t_step", "speed0", "speed1", "load", "load_time", "iq_amp", "f_sin",
            "ref_mode", "signal", "gain", "offset", "speed_noise", "noise_kind",
@@ -567,7 +574,7 @@ def _update(A, B, Baw, ax, x, xn, r, y, dv):
 @_jit_inline
 def _voltage_limit(vd_u, vq_u, th_m, w_m, DP):
     """Saturated dq voltage: circle of radius v_max, or the SVM hexagon at the
-    angle where the voltage will be applied (theta + w (delay + 1/2) Ts)."""
+    angle where the voltage is placed (theta + t_comp w)."""
     vlim = int(DP[DP_VLIM])
     if vlim == 1:
         v_max = DP[DP_V_MAX]
@@ -575,7 +582,7 @@ def _voltage_limit(vd_u, vq_u, th_m, w_m, DP):
         if mag > v_max:
             return vd_u * v_max / mag, vq_u * v_max / mag
     elif vlim == 2:
-        thc = th_m + w_m * DP[DP_TS] * (int(DP[DP_DELAY]) + 0.5)
+        thc = th_m + w_m * DP[DP_T_COMP]
         va, vb = _to_ab(vd_u, vq_u, math.cos(thc), math.sin(thc))
         sc = hexagon_scale(va, vb, DP[DP_R_HEX])
         return vd_u * sc, vq_u * sc
@@ -646,15 +653,15 @@ def _fcs_choice(i_d_m, i_q_m, w_m, th_m, idr, iqr, conf_prev, predict, Ts, r_hex
 
 
 @_jit
-def _svm_period(x, t, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, omega0, acc_m,
+def _svm_period(x, t, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0, acc_m,
                 refs, mset, DP):
     """One period of space-vector modulation, paper 002 eq (21)-(22): the symmetric
-    centred pattern 0-k-l-7-l-k-0 (six cell commutations), the plant integrated
-    segment by segment. Returns (time, state, inverter state at the end)."""
+    centred pattern 0-k-l-7-l-k-0 (six cell commutations) of ``v_dq`` placed at
+    the angle ``phi``, the plant integrated segment by segment. Returns (time,
+    state, inverter state at the end)."""
     Ts = DP[DP_TS]
     r_hex = DP[DP_R_HEX]
-    tha = th_m + w_m * Ts * 0.5
-    va, vb = _to_ab(vd, vq, math.cos(tha), math.sin(tha))
+    va, vb = _to_ab(vd, vq, math.cos(phi), math.sin(phi))
     st1, st2, t1, t2, t0 = svm_times(va, vb, r_hex, Ts)
     seq_s = (0, st1, st2, 7, st2, st1, 0)
     seq_t = (0.25 * t0, 0.5 * t1, 0.5 * t2, 0.5 * t0, 0.5 * t2, 0.5 * t1, 0.25 * t0)
@@ -735,21 +742,20 @@ def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, ome
 
 
 @_jit
-def _carrier_period(x, t, k, vd, vq, th_m, w_m, conf, h, pl, t_load, mech, acc, omega0,
+def _carrier_period(x, t, k, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0,
                     acc_m, refs, mset, DP):
     """One controller period of carrier-based PWM at ``drive.switching_frequency``:
     ``half_periods`` half periods of a symmetric triangle carrier whose peak
     falls on the first sampling instant (regular sampling, duties loaded at
     the sample and held over the period, as the shadow registers of a PWM
-    timer). The voltage is placed in the stationary frame at the mid-period
-    angle, as :func:`_svm_period` does; with two half periods per sample the
+    timer). The voltage is placed in the stationary frame at the angle
+    ``phi``, as :func:`_svm_period` does; with two half periods per sample the
     pattern is the centred 0-k-l-7-l-k-0 of that model. Returns (time, state,
     inverter state at the end)."""
     Ts = DP[DP_TS]
     r_hex = DP[DP_R_HEX]
     n = int(DP[DP_HALF_PERIODS])
-    tha = th_m + w_m * Ts * 0.5
-    va, vb = _to_ab(vd, vq, math.cos(tha), math.sin(tha))
+    va, vb = _to_ab(vd, vq, math.cos(phi), math.sin(phi))
     dts = _duties(va, vb, r_hex)
     th_dur = Ts / n
     for i in range(n):
@@ -862,18 +868,20 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     tr = np.empty(((n_per + trdec - 1) // trdec if keep_traces else 0, N_TRACE))
     om_final = _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec,
                         np.zeros(n), np.zeros(n), np.zeros(n), acc_m, rng, np.zeros(nbuf),
-                        np.zeros(nbuf), np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1),
+                        np.zeros(nbuf), np.zeros(nbuf),
+                        np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1),
                         np.zeros(int(SC[SC_CURRENT_DELAY_Q]) + 1), tr)
     return _finalise(acc_m, n_per, Ts, om_final, SC[SC_T_STEP], mset), tr
 
 
 @_jit_no_rc
 def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec, xd, xq,
-             xn, acc_m, rng, vd_buf, vq_buf, cs_d, cs_q, tr):
+             xn, acc_m, rng, vd_buf, vq_buf, ph_buf, cs_d, cs_q, tr):
     """The ``n_per`` controller periods of :func:`run` (metric set-up ``mset``,
-    a trace row every ``trdec`` periods) over its work arrays (law states ``xd``, ``xq``, scratch ``xn``; metric accumulators; RNG
-    state; delay ring buffers; current-sensor delay lines; traces); returns
-    the final mechanical speed."""
+    a trace row every ``trdec`` periods) over its work arrays (law states
+    ``xd``, ``xq``, scratch ``xn``; metric accumulators; RNG state; delay ring
+    buffers of the voltage and its placement angle; current-sensor delay
+    lines; traces); returns the final mechanical speed."""
     pl = _plant(P)
     p = pl[4]
     Ts = DP[DP_TS]
@@ -906,8 +914,10 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     conf_applied = np.int64(0)  # inverter state in force at the end of the last segment
     conf_next = np.int64(0)  # fcs with delay: state chosen last period, applied now
     conf_now = np.int64(0)
+    t_comp = DP[DP_T_COMP]
     vd_app = 0.0
     vq_app = 0.0
+    ph_app = 0.0
     for k in range(n_per):
         t = k * Ts
         i_d_m, i_q_m, om_m = _sense(x, rng, SC)
@@ -949,13 +959,16 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
             slot = k % nbuf
             vd_buf[slot] = vd_s
             vq_buf[slot] = vq_s
+            ph_buf[slot] = th_m + t_comp * w_m  # the firmware's placement angle
             if k >= delay:
                 old = (k - delay) % nbuf
                 vd_app = vd_buf[old]
                 vq_app = vq_buf[old]
+                ph_app = ph_buf[old]
             else:
                 vd_app = 0.0
                 vq_app = 0.0
+                ph_app = 0.0
         if keep_traces and k % trdec == 0:
             row = k // trdec
             tr[row, 0] = t
@@ -970,19 +983,21 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
             tr[row, 9] = om_m
         # ---- plant over one period
         if inverter == 0 and hold == 0:
-            t, x = _advance_n(x, t, vd_app, vq_app, 0, n_ts, dt_ts, pl, t_load, mech, acc,
+            # rotor-frame hold: the placement's error from the true mid-period angle
+            err = ph_app - (x[3] + p * x[2] * Ts * 0.5)
+            vx, vy = _to_ab(vd_app, vq_app, math.cos(err), math.sin(err))
+            t, x = _advance_n(x, t, vx, vy, 0, n_ts, dt_ts, pl, t_load, mech, acc,
                               omega0, acc_m, refs, mset)
-        elif inverter == 0:  # held in the stationary frame at the mid-period angle
-            tha = th_m + w_m * Ts * 0.5
-            vx, vy = _to_ab(vd_app, vq_app, math.cos(tha), math.sin(tha))
+        elif inverter == 0:  # held in the stationary frame at the placement angle
+            vx, vy = _to_ab(vd_app, vq_app, math.cos(ph_app), math.sin(ph_app))
             t, x = _advance_n(x, t, vx, vy, 1, n_ts, dt_ts, pl, t_load, mech, acc, omega0,
                               acc_m, refs, mset)
         elif inverter == 1 and carrier:
-            t, x, conf_applied = _carrier_period(x, t, k, vd_app, vq_app, th_m, w_m,
+            t, x, conf_applied = _carrier_period(x, t, k, vd_app, vq_app, ph_app,
                                                  conf_applied, h, pl, t_load, mech, acc,
                                                  omega0, acc_m, refs, mset, DP)
         elif inverter == 1:
-            t, x, conf_applied = _svm_period(x, t, vd_app, vq_app, th_m, w_m, conf_applied,
+            t, x, conf_applied = _svm_period(x, t, vd_app, vq_app, ph_app, conf_applied,
                                              h, pl, t_load, mech, acc, omega0, acc_m,
                                              refs, mset, DP)
         else:

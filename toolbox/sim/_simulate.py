@@ -47,8 +47,8 @@ class DriveParams:
         period k + delay_samples (0 = at once, 1 = paper 000).
     v_limit : str
         ``"circle"`` (|v| <= v_max), ``"hexagon"`` (exact SVM hexagon in the
-        stationary frame, at the angle where the voltage will be applied:
-        theta + w (delay + 1/2) Ts) or ``"none"`` (average model only; with ``"svm"``
+        stationary frame, at the angle where the voltage is placed:
+        theta + t_c w) or ``"none"`` (average model only; with ``"svm"``
         "none" means the hexagon, the most the modulator can produce).
     v_max : float, optional
         Circle radius (V). Default: inscribed circle of the hexagon,
@@ -69,9 +69,10 @@ class DriveParams:
     hold_frame : str
         Frame in which the ``"average"`` inverter holds the commanded voltage
         over a period: ``"rotor"`` (constant ``v_dq``, the ideal average) or
-        ``"stationary"`` (constant ``v_alpha_beta``, placed at the mid-period
-        angle, so that ``v_dq(t) = R(-w (t - t_k - Ts/2)) v_dq``: what a PWM
-        inverter averages to).
+        ``"stationary"`` (constant ``v_alpha_beta`` at the placement angle,
+        rotating in dq: what a PWM inverter averages to); the rotor hold
+        applies ``v_dq`` rotated by the placement's error from the true
+        mid-period angle.
     """
 
     vdc: float
@@ -178,8 +179,9 @@ class ControlLaw:
         Omega_m``; the predictive law of ``fcs_mpc`` predicts with the same
         model. It is what the controller believes, a distinct concept from
         the true plant (a :class:`toolbox.spec.Motor`) it controls.
-        ``delay_compensation_time`` is not simulated (the kernel has no
-        rotation of ``v_dq``); the firmware header exports it.
+        Its ``delay_compensation_time`` ``t_c`` places the voltage as the
+        firmware header does: at the sampled angle plus ``t_c`` times the
+        measured electrical speed (toolbox/ARCHITECTURE.md "The digital loop").
     speed_loop : SpeedLoop, optional
         Outer loop for ``speed_step`` and ``load_step`` scenarios.
     fcs : FcsWeights, optional
@@ -350,7 +352,7 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams)
         raise SpecError("drive.hold_frame", '"rotor" or "stationary"', drive.hold_frame)
     DP = _packed("DP", Ts=Ts, delay=drive.delay_samples, vlim=vl, v_max=v_max, r_hex=r_hex,
                  inverter=inv_code, half_periods=_half_periods(drive) if inv_code == 1 else 0,
-                 hold=hold)
+                 hold=hold, t_comp=law.decoupling.delay_compensation_time)
 
     kind = scenario.kind
     sl = law.speed_loop

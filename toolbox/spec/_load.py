@@ -41,7 +41,8 @@ MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms",
               "rated_current_rms", "max_current_rms")
 DRIVE_KEYS = ("vdc", "sample_time", "delay_samples", "switching_frequency",
-              "voltage_limit", "max_speed", "sample_frequency", "hold_frame")
+              "voltage_limit", "max_speed", "sample_frequency", "hold_frame",
+              "angle_compensation")
 
 
 def load_spec(path: str | Path) -> Spec:
@@ -265,6 +266,7 @@ def _drive_logged(value: Any) -> tuple[Drive, list]:
         max_speed=_collect(errors, t.number, "max_speed", None, positive=True, unit="rad/s"),
         hold_frame=_collect(errors, t.string, "hold_frame", "rotor",
                             choices=("rotor", "stationary")),
+        angle_compensation=_collect(errors, _angle_compensation, t),
     )
     if errors.failed:
         errors.raise_if_any()
@@ -276,10 +278,23 @@ def _drive_logged(value: Any) -> tuple[Drive, list]:
     return drive, log
 
 
+def _angle_compensation(t: Table) -> str | float:
+    """``drive.angle_compensation``: ``"mid_period"`` (default), ``"none"`` or a
+    rotation time in seconds (0 .. 20 sample periods, checked with the timing)."""
+    value = t.raw("angle_compensation", "mid_period")
+    if isinstance(value, str):
+        return t.string("angle_compensation", "mid_period", choices=("mid_period", "none"))
+    return t.number("angle_compensation", nonnegative=True, unit="s")
+
+
 def _check_drive_timing(drive: Drive) -> None:
     if drive.delay_samples > 10:
         raise SpecError("drive.delay_samples", "at most 10 periods of computation delay",
                         drive.delay_samples)
+    if drive.angle_compensation_time > 20 * drive.sample_time:
+        raise SpecError("drive.angle_compensation", "a rotation time of at most 20 sample "
+                        f"periods ({20 * drive.sample_time:g} s), \"mid_period\" or \"none\"",
+                        drive.angle_compensation)
     if drive.switching_frequency is not None:
         half_periods = drive.sample_time * 2 * drive.switching_frequency
         if half_periods < 1 - 1e-9 or abs(half_periods - round(half_periods)) > 1e-6:

@@ -177,6 +177,13 @@ class Drive:
         Frame in which the simulated average inverter holds the voltage over
         a period: ``rotor`` (constant dq voltage) or ``stationary``
         (constant alpha-beta voltage, rotating in dq, as a PWM inverter).
+    angle_compensation : str or float
+        Where the firmware places the computed voltage (toolbox/ARCHITECTURE.md
+        "The digital loop"): the header rotates ``v_dq`` by
+        ``angle_compensation_time * w_e`` before the inverse Park transform at
+        the sampled angle. ``"mid_period"`` (default): ``(delay_samples + 1/2)
+        Ts``, the angle of the middle of the application period; ``"none"``: 0
+        (the voltage lags by ``(delay_samples + 1/2) Ts w_e``); or a time (s).
     """
 
     vdc: float
@@ -186,6 +193,17 @@ class Drive:
     voltage_limit: str = "circle"
     max_speed: float | None = None
     hold_frame: str = "rotor"
+    angle_compensation: str | float = "mid_period"
+
+    @property
+    def angle_compensation_time(self) -> float:
+        """The rotation time ``t_c`` (s) of the voltage placement: ``v_dq`` is
+        placed at ``theta_k + t_c w_e`` (``angle_compensation``)."""
+        if self.angle_compensation == "mid_period":
+            return (self.delay_samples + 0.5) * self.sample_time
+        if self.angle_compensation == "none":
+            return 0.0
+        return float(self.angle_compensation)
 
     def max_voltage(self, convention: str) -> float:
         """Largest dq voltage amplitude in linear modulation (V): the circle
