@@ -755,12 +755,24 @@ def _informational_pi_gains(artifact) -> list[tuple[str, float, float]]:
 
 
 def _delay_comp_time(artifact) -> float | None:
-    """Delay-compensation time (s) the law assumes, or None.
+    """The voltage placement's rotation time (s), or None when it is 0.
 
-    The typed ``decoupling.delay_compensation_time`` (0 means none).
+    The typed ``decoupling.delay_compensation_time`` (``drive.angle_compensation``,
+    toolbox/ARCHITECTURE.md "The digital loop").
     """
     t_comp = artifact.decoupling.delay_compensation_time
     return float(t_comp) if t_comp > 0 else None
+
+
+def _placement_convention(artifact) -> str:
+    """``drive.angle_compensation`` as written in the header's comment."""
+    t_comp = artifact.decoupling.delay_compensation_time
+    if t_comp == 0:
+        return '"none"'
+    if math.isclose(t_comp, (artifact.delay_samples + 0.5) * artifact.sample_time,
+                    rel_tol=1e-12):
+        return '"mid_period"'
+    return f"{t_comp:.9g} s"
 
 
 def _provenance(artifact, title: str) -> dict:
@@ -821,11 +833,10 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
             "Lq": _f(dec.Lq_c, 'motor.Lq', 'decoupling DEC_LQ'),
             "flux": _f(dec.flux_c, 'motor.flux', 'decoupling DEC_FLUX'),
             "pole_pairs": _int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)}
-    t_comp = _delay_comp_time(artifact)
-    comp = None
-    if t_comp is not None:
-        comp = {"time": _f(t_comp, 'drive.sample_time', 'DELAY_COMP_TIME'),
-                "periods": f"{t_comp / artifact.sample_time:g}"}
+    t_comp = artifact.decoupling.delay_compensation_time
+    comp = {"time": _f(t_comp, 'drive.angle_compensation', 'DELAY_COMP_TIME'),
+            "periods": f"{t_comp / artifact.sample_time:g}",
+            "convention": _placement_convention(artifact)}
     pi = [{"axis": ax, "kp": f"{kp:.9g}", "ki": f"{ki:.9g}",
            "ki_ts": f"{ki * artifact.sample_time:.9g}",
            "ti": f"{kp / ki:.9g}" if kp and ki else None}
@@ -958,7 +969,8 @@ def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str
     if plan is not None:
         body = _Text()
         try:
-            _vendor_body(body, plan, mc, iq, N, P, key)
+            _vendor_body(body, plan, mc, iq, N, P, key,
+                         _integer_placement(artifact, plan.W_FS))
         except ExportRefused as err:          # a constant out of range: no variant
             why = str(err)
         else:
@@ -969,7 +981,8 @@ def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str
     t("#endif")
 
 
-def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str) -> None:
+def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str,
+                 comp: dict | None) -> None:
     """The MCSDK/IQmath section (``templates/vendor.c.j2``); numbers formatted
     and range-checked here, in line order."""
     gains = [(ax, f"{plan.kp[ax]:.9g}", f"{plan.ki[ax]:.9g}", f"{plan.kaw[ax]:.9g}")
@@ -986,7 +999,7 @@ def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str) -
               for k, (g, sh) in mc.items()}
     iq_ctx = {k: _int(v, key, f"IQ24 {k}", -C_INT32_MAX, C_INT32_MAX) for k, v in iq.items()}
     t.lines.extend(_render("vendor.c.j2", N=N, P=P, U=N.upper(), gains=gains, d=d, mc=mc_ctx,
-                           iq=iq_ctx))
+                           iq=iq_ctx, comp=comp))
 
 
 def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
@@ -1038,7 +1051,32 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -
                             for m, _ in fa.rows) if has_aw else ""})
     t.lines.extend(_render("fixed.c.j2", N=N, P=P, p=P.lower(), head=head, d=d,
                            state_bases=state_bases, dec=dec, pi=pi, axes=axes,
+                           comp=_integer_placement(artifact, plan.W_BASE),
                            nd=max(plan.axes["d"].S.size, 1), nq=max(plan.axes["q"].S.size, 1)))
+
+
+#: Largest placement angle (rad, at the speed base) of the integer variants'
+#: Taylor rotation: its truncation error (x^8/8!) stays below 1e-4 up to here.
+Q31_MAX_PLACEMENT_ANGLE = 1.5
+
+
+def _integer_placement(artifact, w_base: float) -> dict | None:
+    """An integer variant's voltage placement constant, or None when the
+    placement time is 0: ``K`` is the rotation angle at the variant's
+    full-scale mechanical speed ``w_base`` (``DELAY_COMP_TIME p w_base``) in
+    Q30 radians (``templates/placement.c.j2``)."""
+    t_comp = _delay_comp_time(artifact)
+    if t_comp is None:
+        return None
+    angle = t_comp * artifact.decoupling.pole_pairs * w_base
+    if angle > Q31_MAX_PLACEMENT_ANGLE:
+        raise ExportRefused("drive.angle_compensation",
+                            f"a placement angle of at most {Q31_MAX_PLACEMENT_ANGLE} rad at "
+                            "the integer variants' speed base (DELAY_COMP_TIME x POLE_PAIRS "
+                            "x speed base)", f"{angle:.3g} rad")
+    return {"K": _int(round(angle * 2.0 ** 30), 'drive.angle_compensation',
+                      'placement angle constant', 0, 2 ** 31 - 1),
+            "angle": f"{angle:.6g}"}
 
 
 def fcs_r_hex_per_vdc(convention: str) -> float:
@@ -1229,6 +1267,8 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     t("")
     _float_section(t, check.realisations, N, P, _law_key(artifact), check.limit == "hexagon",
                    _delay_comp_time(artifact) is not None)
+    if _delay_comp_time(artifact) is not None:
+        t.lines.extend(_render("placement.c.j2", N=N, P=P))
     _fixed_section(t, check, N, P, artifact, drive)
     t("")
     _vendor_section(t, artifact, motor, drive, check, N, P)
