@@ -1115,7 +1115,9 @@ def _refined_peak(gains: Callable[[list[float]], list[float]], crossings: list[f
     ``gains`` (Python lists in and out) per step serves all bands.
     """
     bands = [(log(max(a, 1e-6 * b)), log(b))        # 1e-6: a crossing at w = 0
-             for a, b in zip(crossings[:-1], crossings[1:])]
+             for a, b in zip(crossings[:-1], crossings[1:]) if b > 0.0]
+    if not bands:                                    # the crossings are all at w = 0
+        return 0.0, nan
     x = [0.5 * (a + b) for a, b in bands]
     h = [0.125 * (b - a) for a, b in bands]
     best = (0.0, nan)

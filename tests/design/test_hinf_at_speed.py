@@ -50,12 +50,14 @@ def test_stable_where_the_per_axis_design_fails(designs):
 
 def test_default_sweep_loses_only_extra_delay_sets(designs):
     """Over the default sweep (delay up to one period more than designed) the
-    count falls from 178 to 4; what is left needs the extra period (the
+    count falls from 249 to 4 (249 with the header's voltage placement, whose
+    speed-sensor errors mis-rotate the voltage: toolbox/ARCHITECTURE.md "The
+    digital loop"; 178 before it was modelled); what is left needs the extra period (the
     continuous synthesis does not model it), and those sets are unstable for
     the per-axis design too (its worst radius there is also above 1)."""
     spec, nominal, at_speed = designs
     before, after = _sweep(nominal, spec), _sweep(at_speed, spec)
-    assert before.n_unstable == 178 and after.n_unstable < 10, (before.n_unstable,
+    assert before.n_unstable == 249 and after.n_unstable < 10, (before.n_unstable,
                                                                after.n_unstable)
     for ex in after.unstable_examples:
         assert ex["delay_samples"] == at_speed.delay_samples + 1
