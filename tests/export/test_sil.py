@@ -3,8 +3,10 @@ usage example says, behaves like the toolbox's simulator in closed loop.
 
 DESIGN.md "The digital loop" and toolbox/ARCHITECTURE.md "controller.h",
 "Inverter models". For every design of the gallery (``designs/*.toml``,
-designed here) plus the complex-vector PI (003's PI with ``rule =
-"complex_vector"``: no gallery spec uses it), the header is compiled
+designed here) and three variations of one key (:data:`VARIATIONS`: 003's PI
+with ``rule = "complex_vector"``, which no gallery spec uses; 003's PI and
+000's total compensation with its hexagon limit, both with
+``drive.angle_compensation = "none"``), the header is compiled
 (gcc -std=c99 -Wall -Wextra -Werror -pedantic -Wconversion -O2) with
 
 * ``sil_plant.c``: a PMSM written for this test (salient dq model at an
@@ -76,8 +78,23 @@ import export_c_helpers as C
 ROOT = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
 DESIGNS = sorted(p.stem for p in (ROOT / "designs").glob("*.toml"))
-CV_PI = "003_azaiz2007_pi+complex_vector"
-NAMES = DESIGNS + [CV_PI]
+
+def _complex_vector(data):
+    data["controller"]["pi"]["rule"] = "complex_vector"
+
+
+def _no_angle_compensation(data):
+    data["drive"]["angle_compensation"] = "none"
+
+
+#: gallery specs changed in one key: the complex-vector PI rule (no gallery
+#: spec uses it), and no angle compensation (DELAY_COMP_TIME 0, the voltage
+#: placed at the sampled angle; with a hexagon limit for 000_tc)
+VARIATIONS = {"003_azaiz2007_pi+complex_vector": ("003_azaiz2007_pi", _complex_vector),
+              "003_azaiz2007_pi+angle_none": ("003_azaiz2007_pi", _no_angle_compensation),
+              "000_lepioufle1992_tc+angle_none": ("000_lepioufle1992_tc",
+                                                  _no_angle_compensation)}
+NAMES = DESIGNS + list(VARIATIONS)
 VARIANTS = {"float": None, "q31": "CCT_FIXED_POINT", "mcsdk": "CCT_MCSDK",
             "iqmath": "CCT_IQMATH"}
 #: the section of the header each variant lives in, and the macro it is switched on by
@@ -103,10 +120,10 @@ def _designed(name: str):
     """(spec, artifact, header text) of a gallery spec, designed here."""
     import toolbox
     from toolbox.export import write_header
-    if name == CV_PI:
-        data = tomllib.loads((ROOT / "designs" / "003_azaiz2007_pi.toml").read_text())
-        data["title"] = "003 PI, complex-vector rule (delay compensation 1.5 Ts)"
-        data["controller"]["pi"]["rule"] = "complex_vector"
+    if name in VARIATIONS:
+        base, change = VARIATIONS[name]
+        data = tomllib.loads((ROOT / "designs" / f"{base}.toml").read_text())
+        change(data)
         spec = toolbox.spec_from_dict(data)
     else:
         spec = toolbox.load_spec(ROOT / "designs" / f"{name}.toml")
@@ -296,13 +313,13 @@ def quantisation_bound(header: str, variant: str, spec, i_step: float) -> tuple[
         q_v = _macro(header, "CCT_MCSDK_V_FS") / 32768.0
         gains = [abs(_macro(header, f"CCT_MCSDK_{n}_GAIN"))
                  for n in ("D_KP", "D_KI", "Q_KP", "Q_KI", "DD", "DQ", "DE")]
-        e_g = max(0.5 / g for g in gains)
+        e_g = max((0.5 / g for g in gains if g), default=0.0)   # 0: an exact zero (no term)
     else:
         q_i = _macro(header, "CCT_IQ_I_BASE") * 2.0 ** -24
         q_v = _macro(header, "CCT_IQ_V_BASE") * 2.0 ** -24
         gains = [abs(_macro(header, f"CCT_IQ_{n}"))
                  for n in ("D_KP", "D_KI", "Q_KP", "Q_KI", "DD", "DQ", "DE")]
-        e_g = max(0.5 / g for g in gains)
+        e_g = max((0.5 / g for g in gains if g), default=0.0)   # 0: an exact zero (no term)
     b = 4.0 * (q_i + q_v / R) + 2.0 * e_g * i_step
     return b, f"4 (q_i {q_i:.2g} A + q_v {q_v:.2g} V / R) + 2 e_g {e_g:.2g} I"
 
