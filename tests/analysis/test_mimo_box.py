@@ -57,7 +57,8 @@ def test_box_equals_the_one_plant_reference():
 
 def test_compare_rows_carry_the_box_worst_case(pi_145):
     spec, art = pi_145
-    # the tuner's model set made equal to the box's: nominal + corners, the same 5 speeds
+    # the tuner's R, Ld, Lq models made equal to the box's (nominal + corners, the same 5
+    # speeds), with the speed-sensor errors on top: the box sees an exact sensor
     rob = make("robust_pi", {"samples": 0, "n_speeds": 5, "zero_ratios": [10.0]})[1]
     rows = compare_designs([art, rob], spec.motor, spec.drive, sweep_sets=20, certificate=False)
     assert rows[0]["mimo_box"]["worst_disk_margin"] == 0.0 and rows[0]["mimo_box"]["n_unstable"] > 0

@@ -16,7 +16,7 @@ Constraint, on every model: the balanced multiloop (input, diagonal) disk
 margin of the coupled dq loop **as executed** - ZOH plant, the drive's
 computation delay, the decoupling with the controller's parameters, the
 Tustin-discretised PI, the voltage placed at ``theta_k + t_c w_meas``
-(``drive.angle_compensation``, toolbox/ARCHITECTURE.md "The digital loop") -
+(``drive.angle_compensation``: ``eps = t_c w_meas - (d + 1/2) Ts w`` below) -
 is at least ``disk_margin``, and the coupled closed loop is stable
 (:class:`toolbox.analysis.margins.MultiModelLoops`, the same loop as
 ``mimo_at_speed`` and the robustness sweep).
