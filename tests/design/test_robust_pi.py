@@ -296,3 +296,18 @@ def test_infeasible_margin_says_what_limits_it():
                   .split(";")[0])
     assert keeps > 0.52            # the sensor errors are what costs the margin
     assert "at standstill" in msg and "on the nominal motor" in msg
+
+
+def test_infeasible_everywhere_unstable_says_where():
+    """A small-inductance IPMSM up to 3300 rad/s electrical at 100 us: every
+    bandwidth leaves some corner unstable at top speed; the refusal reports
+    the least unstable bandwidth, how many pairs are unstable and where."""
+    spec = spec_from_dict({"motor": {"R": 0.02, "Ld": 0.2e-3, "Lq": 0.5e-3, "flux": 0.07,
+                                     "pole_pairs": 4, "J": 0.05},
+                           "drive": {"vdc": 400.0, "sample_time": 1e-4},
+                           "controller": {"method": "robust_pi"}})
+    with pytest.raises(DesignInfeasible) as e:
+        design(spec)
+    msg = str(e.value)
+    assert "best found 0 at wc" in msg and "of 164 (model, speed) pairs unstable" in msg
+    assert "at standstill" in msg

@@ -334,30 +334,35 @@ def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
         return loops.disk_margins(art)
 
     grid = np.geomspace(wc_max / 100.0, wc_max * 0.999, N_WC)
-    best_seen = (-1.0, None, None)                # margin, wc, ratio
+    # candidates are ranked by (worst margin, - unstable pairs): with every
+    # bandwidth unstable somewhere the refusal reports the least unstable one
+    best_seen = ((-1.0, 0), None, None)           # score, wc, ratio
     results = {}
     for ratio in (None,) + tuple(cfg.zero_ratios):
-        worst = lambda x, r=ratio: float(np.min(margins(x, r)))  # noqa: E731
-        lo, best_i = None, (-1.0, 0)
+        def score(x, r=ratio):
+            M = margins(x, r)
+            return float(np.min(M)), -int(np.count_nonzero(M == 0.0))
+
+        lo, best_i = None, ((-1.0, 0), 0)
         for i in range(len(grid) - 1, -1, -1):    # from the top: the largest feasible point
-            m = worst(grid[i])
-            best_i = max(best_i, (m, i))
-            if m >= alpha:
+            sc = score(grid[i])
+            best_i = max(best_i, (sc, i))
+            if sc[0] >= alpha:
                 lo = float(grid[i])
                 break
-        m, i = best_i
-        if lo is None:
+        sc, i = best_i
+        x = float(grid[i])
+        if lo is None and sc[0] > 0:
             # the feasible window may fall between two grid points (with the
-            # sensor errors it spans ~1.5x on paper 003's motor, the grid steps
+            # sensor errors it spans ~1.2x on paper 003's motor, the grid steps
             # 1.36x): maximise between the best point's neighbours
-            m, x = _golden_max(worst, float(grid[max(i - 1, 0)]),
-                               float(grid[min(i + 1, len(grid) - 1)]), (m, float(grid[i])))
+            m, x = _golden_max(lambda v: score(v)[0], float(grid[max(i - 1, 0)]),
+                               float(grid[min(i + 1, len(grid) - 1)]), (sc[0], x))
+            sc = (m, 0)
             if m >= alpha:
                 lo = x
-        else:
-            x = lo
-        if m > best_seen[0]:
-            best_seen = (m, x if lo is None else lo, ratio)
+        if sc > best_seen[0]:
+            best_seen = (sc, x if lo is None else lo, ratio)
         if lo is None:
             results[ratio] = None
             continue
@@ -366,14 +371,14 @@ def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
         if hi is not None:
             for _ in range(N_BISECT):
                 mid = math.sqrt(lo * hi)
-                if worst(mid) >= alpha:
+                if score(mid)[0] >= alpha:
                     lo = mid
                 else:
                     hi = mid
         results[ratio] = lo
     feasible = {r: wc for r, wc in results.items() if wc is not None}
     if not feasible:
-        m, wc, ratio = best_seen
+        (m, _), wc, ratio = best_seen
         raise DesignInfeasible(
             "controller.robust_pi.disk_margin",
             f"a disk margin the model set allows (best found {m:.3g} at wc = {wc:.4g} rad/s, "
@@ -440,18 +445,30 @@ def _limitation(spec, cfg: RobustPiCfg, models: ModelSet, wc: float, ratio, marg
     the limiting model, the same design without the speed-sensor errors, at
     standstill and on the nominal motor, and the trend either side of ``wc``."""
     M = margins(wc, ratio)
-    i, j = np.unravel_index(int(np.argmin(M)), M.shape)
+    unstable = M == 0.0
+    if np.any(unstable):          # the unstable pair at the lowest speed
+        cols = np.nonzero(unstable.any(axis=0))[0]
+        j = int(cols[np.argmin(np.abs(models.speeds[cols]))])
+        i = int(np.nonzero(unstable[:, j])[0][0])
+    else:
+        i, j = np.unravel_index(int(np.argmin(M)), M.shape)
     rec = _model_record(models, i, j)
     where = ", ".join(f"{k} x{rec[k]:.3g}" for k in _BOX_KEYS)
     parts = [f"limited by {where} at {rec['speed_rad_s']:.4g} rad/s electrical, the speed "
              f"measured {rec['measured_speed_rad_s']:.4g} (gain {rec['speed_gain']:.3g}, offset "
              f"{rec['speed_offset']:+.3g} rad/s mechanical)"]
+    if np.any(unstable):
+        speeds = np.abs(models.speeds[unstable.any(axis=0)])
+        parts.append(f"{int(np.count_nonzero(unstable))} of {M.size} (model, speed) pairs "
+                     f"unstable, at {speeds.min():.4g}..{speeds.max():.4g} rad/s electrical")
     art = _candidate(spec, cfg, *_gains(spec.motor, wc, ratio))
     if np.any(models.speed_gain != 1.0) or np.any(models.speed_offset != 0.0):
         from ..analysis.margins import multimodel_disk_margins
         exact = multimodel_disk_margins(art, models.motors, models.speeds, n_grid=N_GRID)
         parts.append(f"without the speed-sensor errors the same design keeps "
-                     f"{float(np.min(exact)):.3g}")
+                     f"{float(np.min(exact)):.3g}"
+                     + (f" ({int(np.count_nonzero(exact == 0.0))} pairs unstable)"
+                        if np.any(exact == 0.0) else ""))
     still = models.speeds == 0.0
     if np.any(still) and not np.all(still):
         parts.append(f"at standstill {float(np.min(M[:, still])):.3g}")
