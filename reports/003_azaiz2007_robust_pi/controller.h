@@ -1,14 +1,14 @@
 /*
  * controller.h -- current controller exported by current-control-toolbox
- * title:       Paper 003 motor: robust PI, largest bandwidth with a multiloop disk margin of 0.5 over R, Ld, Lq x0.5..x2 and 0..230 rad/s
+ * title:       Paper 003 motor: robust PI, largest bandwidth with a multiloop disk margin of 0.5 over R, Ld, Lq x0.5..x2, speed-sensor errors and 0..230 rad/s
  * method:      robust_pi
  * version:     0.1.0
- * spec sha256: 51a9b8cfa0cb19ae0420bd3f81857c7710ffb44752894f029c357b36fa56a787
- * law sha256:  71caf05f24df6dd0957d558de86005e464767e0ab7d1bfef3cd3d90d829364ad
- * created:     2026-11-25T17:26:15+00:00
- * equations:   Kp = L wc, Ki = Kp w_z (robust PI: max wc s.t. multiloop disk margin >= alpha on every model of the set, sampled coupled loop with delay)
+ * spec sha256: 0aaa94e6a8433162f7974bec2c27db518a788af11bb94ad075bffba910b39bd0
+ * law sha256:  f5051738b1f9ab8c44f2b74e25a4e2d8c0f4c79d8900d328247d76792858fb68
+ * created:     2026-11-27T17:38:30+00:00
+ * equations:   Kp = L wc, Ki = Kp w_z (robust PI: max wc s.t. multiloop disk margin >= alpha on every model of the set, sampled coupled loop with delay, decoupling and voltage placement from the measured speed g w + o)
  *
- * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
+ * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
  * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
  * cct_step() once per controller period (example at the end of this file). The
  * voltage returned is applied by the inverter in the NEXT period: the
@@ -22,6 +22,9 @@
  * back-calculation anti-windup x += aw (v_sat - v_unsat).
  * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc
  * (V_MAX, the nominal bus, after init).
+ * Delay compensation: v_d_comp, v_q_comp are v_dq rotated by DELAY_COMP_TIME w_e
+ * (the design's assumption); apply them with the inverse Park transform at the
+ * sampled angle theta_e. v_d, v_q are the law's own (unrotated) output.
  * Faults: out->status is
  *   CCT_STATUS_OK (0)        the law ran;
  *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
@@ -38,7 +41,7 @@
 #ifndef CCT_CONTROLLER_H
 #define CCT_CONTROLLER_H
 
-#include <math.h> /* sqrtf */
+#include <math.h> /* sqrtf, sinf, cosf */
 #include <stdint.h> /* uint32_t */
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
@@ -65,26 +68,27 @@
 #define CCT_DEC_LQ 2.799999900e-03f /* H */
 #define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
+#define CCT_DELAY_COMP_TIME 1.500000071e-04f /* s (1.5 Ts): the design assumes v_dq rotated by angle = CCT_DELAY_COMP_TIME * w_e (rad) before the inverse Park transform: applied inside cct_step, outputs v_d_comp, v_q_comp */
 /* d axis PI gains (method robust_pi), FOR INFORMATION ONLY: the code
  *   runs the coefficients of the law below, derived from these gains at export;
  *   to retune, change the spec and re-export (editing these numbers does nothing).
- *   Kp = 2.59824865 V/A (parallel proportional gain)
- *   Ki = 482.206862 V/(A s) (parallel integral gain)
- *   Ki Ts = 0.0482206862 V/A (integral gain per sample)
- *   Ti = 0.00538824488 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
+ *   Kp = 1.98950609 V/A (parallel proportional gain)
+ *   Ki = 282.723892 V/(A s) (parallel integral gain)
+ *   Ki Ts = 0.0282723892 V/A (integral gain per sample)
+ *   Ti = 0.00703692241 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
  */
 /* q axis PI gains (method robust_pi), FOR INFORMATION ONLY: the code
  *   runs the coefficients of the law below, derived from these gains at export;
  *   to retune, change the spec and re-export (editing these numbers does nothing).
- *   Kp = 5.19649731 V/A (parallel proportional gain)
- *   Ki = 964.413724 V/(A s) (parallel integral gain)
- *   Ki Ts = 0.0964413724 V/A (integral gain per sample)
- *   Ti = 0.00538824488 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
+ *   Kp = 3.97901218 V/A (parallel proportional gain)
+ *   Ki = 565.447784 V/(A s) (parallel integral gain)
+ *   Ki Ts = 0.0565447784 V/A (integral gain per sample)
+ *   Ti = 0.00703692241 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
  */
 
-#define CCT_D_GAIN 2.622359037e+00f /* d axis SOS output gain, V/A */
+#define CCT_D_GAIN 2.003642321e+00f /* d axis SOS output gain, V/A */
 #define CCT_D_NUM_STAGES 1
-#define CCT_Q_GAIN 5.244718075e+00f /* q axis SOS output gain, V/A */
+#define CCT_Q_GAIN 4.007284641e+00f /* q axis SOS output gain, V/A */
 #define CCT_Q_NUM_STAGES 1
 
 /* inputs: currents in A, measured MECHANICAL speed in rad/s */
@@ -103,7 +107,7 @@ typedef struct {
 typedef struct {
     float v_d;     /* V, the law's output (limited), to apply next period */
     float v_q;     /* V */
-    float v_d_comp; /* V, = v_d (this design has no delay compensation): */
+    float v_d_comp; /* V, v_dq rotated by CCT_DELAY_COMP_TIME w_e (delay compensation): */
     float v_q_comp; /* V, feed these to the inverse Park transform at theta_e */
     int saturated; /* 1 when the voltage limit acted */
     int status;    /* CCT_STATUS_* */
@@ -180,7 +184,7 @@ static inline float cct_d_linear(float *x, float r, float y)
 {
     /* 1 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_D_GAIN */
     static const float c[5] = {
-        1.000000000e+00f, -9.816117287e-01f, 0.0f, 1.000000000e+00f, 0.0f,
+        1.000000000e+00f, -9.858894944e-01f, 0.0f, 1.000000000e+00f, 0.0f,
     };
     float in = r - y;
     unsigned k;
@@ -199,7 +203,7 @@ static inline float cct_q_linear(float *x, float r, float y)
 {
     /* 1 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_Q_GAIN */
     static const float c[5] = {
-        1.000000000e+00f, -9.816117287e-01f, 0.0f, 1.000000000e+00f, 0.0f,
+        1.000000000e+00f, -9.858894944e-01f, 0.0f, 1.000000000e+00f, 0.0f,
     };
     float in = r - y;
     unsigned k;
@@ -243,14 +247,19 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         saturated = 1;
     }
     /* back-calculation anti-windup */
-    nx.d[0] += 7.012116257e-03f * (vds - vd);
-    nx.q[0] += 3.506058129e-03f * (vqs - vq);
+    nx.d[0] += 7.042423356e-03f * (vds - vd);
+    nx.q[0] += 3.521211678e-03f * (vqs - vq);
     if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
     }
-    const float vdr = vds; /* no delay compensation in this design */
-    const float vqr = vqs;
+    /* delay compensation (as the design assumes): v_dq rotated by DELAY_COMP_TIME w_e,
+     * i.e. the inverse Park transform at theta_e + DELAY_COMP_TIME w_e */
+    const float thc = CCT_DELAY_COMP_TIME * w;
+    const float cc = cosf(thc);
+    const float sc = sinf(thc);
+    const float vdr = vds * cc - vqs * sc;
+    const float vqr = vds * sc + vqs * cc;
     nx.v_d_hold = vds;
     nx.v_q_hold = vqs;
     nx.v_d_comp_hold = vdr;
@@ -273,8 +282,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 86.6025 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 2.33e-05 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 4.54e-05 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000146 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000228 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
@@ -284,7 +293,7 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
 #define CCT_Q31_W_MAX 2.300000000e+02f /* rad/s, speed range (cct_to_q31 clamps beyond) */
 #define CCT_Q31_V_MAX 181618690L /* V_MAX / V_BASE in Q31: the largest limit */
 #define CCT_Q31_VDC_BASE 1.773619995e+03f /* V of bus at full scale (cct_set_vdc_q31) */
-#define CCT_Q31_D_X0_BASE 6.400000000e+01f /* state 0 full scale */
+#define CCT_Q31_D_X0_BASE 1.280000000e+02f /* state 0 full scale */
 #define CCT_Q31_D_X1_BASE 1.000000000e+00f /* state 1 full scale */
 #define CCT_Q31_Q_X0_BASE 6.400000000e+01f /* state 0 full scale */
 #define CCT_Q31_Q_X1_BASE 1.000000000e+00f /* state 1 full scale */
@@ -296,13 +305,13 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
 #define CCT_Q31_DEC_DE_SHIFT 33u
 /* d axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY
  * (the Q31 law below runs its own quantised coefficients):
- *   Kp = 697462062L / 2^33 (0.0811953 p.u.)
- *   Ki Ts = 828425081L / 2^39 (0.0015069 p.u.)
+ *   Kp = 1068107950L / 2^34 (0.0621721 p.u.)
+ *   Ki Ts = 971431896L / 2^40 (0.000883512 p.u.)
  */
 /* q axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY
  * (the Q31 law below runs its own quantised coefficients):
- *   Kp = 697462062L / 2^32 (0.162391 p.u.)
- *   Ki Ts = 828425081L / 2^38 (0.00301379 p.u.)
+ *   Kp = 1068107950L / 2^33 (0.124344 p.u.)
+ *   Ki Ts = 971431896L / 2^39 (0.00176702 p.u.)
  */
 
 typedef struct {
@@ -393,9 +402,9 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[4] = { 175983533L, 0L, 87991767L, -87991767L };
+    static const int32_t co[4] = { 134462158L, 0L, 33615539L, -33615539L };
     static const int32_t ca[10] = {
-        134217728L, 2097152L, 1234017L, -1234017L, 15058405L,
+        134217728L, 1048576L, 473470L, -473470L, 7561745L,
         0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[2] = { 27u, 31u };
@@ -403,7 +412,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
     unsigned i, j;
     int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
     for (j = 0u; j < 2u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 30u);
+    acc = cct_shr(acc, 29u);
     for (i = 0u; i < 2u; ++i) {
         const int32_t *m = &ca[5u * i];
         int64_t a = (int64_t)m[2] * r + (int64_t)m[3] * y;
@@ -416,7 +425,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[2] = { 15058405L, 0L };
+    static const int32_t aw[2] = { 7561745L, 0L };
     static const unsigned fa[2] = { 27u, 31u };
     unsigned i;
     for (i = 0u; i < 2u; ++i) {
@@ -427,9 +436,9 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[4] = { 175983533L, 0L, 87991767L, -87991767L };
+    static const int32_t co[4] = { 134462158L, 0L, 67231079L, -67231079L };
     static const int32_t ca[10] = {
-        134217728L, 2097152L, 1234017L, -1234017L, 7529202L,
+        134217728L, 2097152L, 946939L, -946939L, 7561745L,
         0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[2] = { 27u, 31u };
@@ -450,7 +459,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[2] = { 7529202L, 0L };
+    static const int32_t aw[2] = { 7561745L, 0L };
     static const unsigned fa[2] = { 27u, 31u };
     unsigned i;
     for (i = 0u; i < 2u; ++i) {
@@ -488,8 +497,8 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
 
 #if defined(CCT_MCSDK) || defined(CCT_IQMATH)
 /* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;
- *   d: Kp = 2.622359 V/A, Ki = 0.0482206862 V/A per sample, Kaw = 0.0183882856
- *   q: Kp = 5.24471799 V/A, Ki = 0.0964413724 V/A per sample, Kaw = 0.0183882856
+ *   d: Kp = 2.00364229 V/A, Ki = 0.0282723892 V/A per sample, Kaw = 0.0141104974
+ *   q: Kp = 4.00728457 V/A, Ki = 0.0565447784 V/A per sample, Kaw = 0.0141104974
  * ranges: currents and speed beyond these are clamped (status CLAMPED) */
 #define CCT_MCSDK_I_FS 2.000000000e+01f /* A = 32768 digits (s16A) */
 #define CCT_MCSDK_V_FS 1.732050781e+02f /* V = 32768 digits (s16V) */
@@ -545,17 +554,17 @@ static inline int cct_limit64(int64_t *vd, int64_t *vq, int64_t vmax)
  * gains int16 with power-of-two divisors, v = (KP e >> KP_DIV) + (integral >> KI_DIV),
  * integral += KI e (int32, clamped to +-V_FS), back-calculation anti-windup.
  */
-#define CCT_MCSDK_D_KP_GAIN (9922) /* d_kp: gain / 2^DIV */
+#define CCT_MCSDK_D_KP_GAIN (7581) /* d_kp: gain / 2^DIV */
 #define CCT_MCSDK_D_KP_DIV 15
-#define CCT_MCSDK_D_KI_GAIN (182) /* d_ki: gain / 2^DIV */
+#define CCT_MCSDK_D_KI_GAIN (107) /* d_ki: gain / 2^DIV */
 #define CCT_MCSDK_D_KI_DIV 15
-#define CCT_MCSDK_D_KAW_GAIN (603) /* d_kaw: gain / 2^DIV */
+#define CCT_MCSDK_D_KAW_GAIN (462) /* d_kaw: gain / 2^DIV */
 #define CCT_MCSDK_D_KAW_DIV 15
-#define CCT_MCSDK_Q_KP_GAIN (19845) /* q_kp: gain / 2^DIV */
+#define CCT_MCSDK_Q_KP_GAIN (15162) /* q_kp: gain / 2^DIV */
 #define CCT_MCSDK_Q_KP_DIV 15
-#define CCT_MCSDK_Q_KI_GAIN (365) /* q_ki: gain / 2^DIV */
+#define CCT_MCSDK_Q_KI_GAIN (214) /* q_ki: gain / 2^DIV */
 #define CCT_MCSDK_Q_KI_DIV 15
-#define CCT_MCSDK_Q_KAW_GAIN (603) /* q_kaw: gain / 2^DIV */
+#define CCT_MCSDK_Q_KAW_GAIN (462) /* q_kaw: gain / 2^DIV */
 #define CCT_MCSDK_Q_KAW_DIV 15
 #define CCT_MCSDK_DD_GAIN (-9747) /* dd: gain / 2^DIV */
 #define CCT_MCSDK_DD_DIV 15
@@ -684,12 +693,12 @@ static inline void cct_step_s16(cct_state_s16_t *s, const cct_input_s16_t *in, c
  * Currents and speed beyond +-1 p.u. are clamped (status CLAMPED).
  */
 #define CCT_IQ_ONE ((int32_t)1 << 24)
-#define CCT_IQ_D_KP ((int32_t)10160414L)
-#define CCT_IQ_D_KI ((int32_t)186833L)
-#define CCT_IQ_D_KAW ((int32_t)308504L)
-#define CCT_IQ_Q_KP ((int32_t)20320828L)
-#define CCT_IQ_Q_KI ((int32_t)373665L)
-#define CCT_IQ_Q_KAW ((int32_t)308504L)
+#define CCT_IQ_D_KP ((int32_t)7763176L)
+#define CCT_IQ_D_KI ((int32_t)109542L)
+#define CCT_IQ_D_KAW ((int32_t)236735L)
+#define CCT_IQ_Q_KP ((int32_t)15526353L)
+#define CCT_IQ_Q_KI ((int32_t)219085L)
+#define CCT_IQ_Q_KAW ((int32_t)236735L)
 #define CCT_IQ_DD ((int32_t)-9980795L)
 #define CCT_IQ_DQ ((int32_t)4990397L)
 #define CCT_IQ_DE ((int32_t)21387417L)

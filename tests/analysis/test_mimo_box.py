@@ -57,10 +57,42 @@ def test_box_equals_the_one_plant_reference():
 
 def test_compare_rows_carry_the_box_worst_case(pi_145):
     spec, art = pi_145
-    # the tuner's model set made equal to the box's: nominal + corners, the same 5 speeds
+    # the tuner's R, Ld, Lq models made equal to the box's (nominal + corners, the same 5
+    # speeds), with the speed-sensor errors on top: the box sees an exact sensor
     rob = make("robust_pi", {"samples": 0, "n_speeds": 5, "zero_ratios": [10.0]})[1]
     rows = compare_designs([art, rob], spec.motor, spec.drive, sweep_sets=20, certificate=False)
     assert rows[0]["mimo_box"]["worst_disk_margin"] == 0.0 and rows[0]["mimo_box"]["n_unstable"] > 0
     assert rows[1]["mimo_box"]["worst_disk_margin"] >= 0.5 * 0.99   # the tuner's target, 1 % grid tolerance
     assert rows[1]["mimo_box"]["n_unstable"] == 0
     assert np.isfinite(rows[1]["mimo_box"]["worst_speed_rad_s"])
+
+
+def test_sensor_errors_per_model_equal_the_one_plant_reference():
+    """MultiModelLoops with a speed-sensor error per model (``w_meas = g w + o``
+    in the decoupling, the voltage placement and the stability check) equals
+    mimo_disk_margins with the same sensor; models sharing a plant share its
+    precomputed response without mixing their sensors; the loop at ``(-w, o)``
+    is the loop at ``(w, -o)``."""
+    from toolbox.analysis.margins import MultiModelLoops
+
+    spec, art = make("pi")
+    corner = spec.motor.with_overrides(None, {"R": 0.5, "Ld": 0.5, "Lq": 0.5})
+    motors = [corner, spec.motor, corner]
+    gain, offset = [1.1, 0.9, 1.0], [40.0, -40.0, 0.0]
+    speeds = [0.0, 920.0]
+    M = MultiModelLoops(motors, speeds, art.sample_time, art.delay_samples, 600,
+                        speed_gain=gain, speed_offset=offset).disk_margins(art)
+    for i, motor in enumerate(motors):
+        ref = mimo_disk_margins(art, motor, n_speeds=3, n_grid=600, max_speed_rad_s=920.0,
+                                speed_gain=gain[i], speed_offset=offset[i])
+        assert ref.disk_margin[1] == pytest.approx(M[i, 0], rel=1e-9)          # 0 rad/s
+        assert ref.disk_margin[2] == pytest.approx(M[i, 1], rel=1e-9)          # +920
+        mirror = mimo_disk_margins(art, motor, n_speeds=3, n_grid=600, max_speed_rad_s=920.0,
+                                   speed_gain=gain[i], speed_offset=-offset[i])
+        assert mirror.disk_margin[0] == pytest.approx(M[i, 1], rel=1e-9)       # -920, -o
+    # the sensor matters at the corner: 1.1 and +40 rad/s cost margin against exact
+    assert M[0, 1] < M[2, 1]
+    exact = MultiModelLoops(motors, speeds, art.sample_time, art.delay_samples,
+                            600).disk_margins(art)
+    assert exact[0] == pytest.approx(exact[2], rel=1e-12)
+    assert exact[2] == pytest.approx(M[2], rel=1e-12)

@@ -211,7 +211,8 @@ def _loop_response(artifact, motor, omega: float, w: np.ndarray, x: np.ndarray,
 
 def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
                       n_grid: int = 1500, discrete: bool = True,
-                      max_speed_rad_s: float | None = None) -> MimoMarginsResult:
+                      max_speed_rad_s: float | None = None, speed_gain: float = 1.0,
+                      speed_offset: float = 0.0) -> MimoMarginsResult:
     """Balanced multiloop input disk margin of the coupled loop over speed.
 
     Parameters
@@ -231,6 +232,10 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
         Sampled loop (default) or continuous loop with ``exp(-s tau)``.
     max_speed_rad_s : float, optional
         Electrical speed range override (rad/s).
+    speed_gain, speed_offset : float
+        Speed sensor: the controller measures ``g w + o`` (offset in
+        electrical rad/s) and uses it in the decoupling, the voltage
+        placement and hence the stability check; default exact.
 
     Returns
     -------
@@ -251,13 +256,15 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
     C = _controllers(artifact, x, discrete)
     dm, du, st = [], [], []
     for om in speeds:
+        om_meas = speed_gain * om + speed_offset
         if discrete:
             loop = coupled_closed_loop(laws, artifact.decoupling, Ts, artifact.delay_samples,
-                                       R=motor.R, Ld=motor.Ld, Lq=motor.Lq, omega=om)
+                                       R=motor.R, Ld=motor.Ld, Lq=motor.Lq, omega=om,
+                                       omega_meas=om_meas)
             stable = bool(loop.spectral_radius()[0] < 1 - 1e-9)
         else:
-            stable = _continuous_coupled_stable(artifact, motor, om)
-        Li = _loop_response(artifact, motor, om, w, x, C, discrete, None)
+            stable = _continuous_coupled_stable(artifact, motor, om, om_meas)
+        Li = _loop_response(artifact, motor, om, w, x, C, discrete, om_meas)
         S = inv_2x2(np.eye(2) + Li)
         M = S - 0.5 * np.eye(2)
         a_mu = 1.0 / float(np.max(mu_upper_2x2(M))) if stable else 0.0
@@ -271,15 +278,18 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
                              (lo, hi), ph, "discrete" if discrete else "continuous+exact_delay")
 
 
-def _continuous_coupled_stable(artifact, motor, omega: float, pade_order: int = 3) -> bool:
-    """Closed-loop stability of the continuous coupled loop (Pade delay)."""
+def _continuous_coupled_stable(artifact, motor, omega: float, omega_meas: float | None = None,
+                               pade_order: int = 3) -> bool:
+    """Closed-loop stability of the continuous coupled loop (Pade delay), the
+    decoupling at the measured speed ``omega_meas`` (default ``omega``)."""
     Ts, d = artifact.sample_time, artifact.delay_samples
     Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
     P = StateSpace(Ac[0], Bc[0], np.eye(2), np.zeros((2, 2)))
     Dl = StateSpace(*pade((d + 0.5) * Ts, pade_order))
     P = P * append(Dl, Dl)
     Ks = [StateSpace(*axis_law(artifact.axes[name], False).error_controller()) for name in AXES]
-    C = append(*Ks) - static_gain(decoupling_matrix(artifact.decoupling, omega)[0])
+    om_meas = omega if omega_meas is None else omega_meas
+    C = append(*Ks) - static_gain(decoupling_matrix(artifact.decoupling, om_meas)[0])
     cl = feedback(P * C, np.eye(2))
     return bool(np.all(np.real(cl.poles()) < 0))
 
@@ -287,11 +297,22 @@ def _continuous_coupled_stable(artifact, motor, omega: float, pade_order: int = 
 class MultiModelLoops:
     """The coupled sampled dq loop over a set of plants and speeds, plant side precomputed.
 
-    The plant responses ``P(e^{jwTs})`` (ZOH, ``z^-d``) of every (motor,
+    The plant responses ``P(e^{jwTs})`` (ZOH, ``z^-d``) of every (plant,
     speed) pair are computed once; :meth:`disk_margins` then closes them with
-    the error controllers and the decoupling of an artifact, exactly as
-    :func:`mimo_loop_response` does for one pair, so a tuner evaluating many
-    candidate controllers on one model set pays for the plant once.
+    the error controllers, the decoupling and the voltage placement of an
+    artifact, exactly as :func:`mimo_loop_response` does for one pair, so a
+    tuner evaluating many candidate controllers on one model set pays for the
+    plant once.
+
+    A model may carry a speed-sensor error: the measured electrical speed is
+    ``w_meas = g w + o`` (the robustness sweep's sensor model,
+    :mod:`toolbox.analysis.robustness`, paper 000 sect. 3). It enters what
+    the controller computes from the measurement - the decoupling ``W``
+    (:func:`decoupling_matrix`) and the placement rotation ``R(eps)``,
+    ``eps = t_c w_meas - (d + 1/2) Ts w`` (:func:`placement_error`) - and
+    the stability check (:func:`coupled_closed_loop` with ``omega_meas``);
+    the plant responses depend on the true speed only, so models that differ
+    only in their sensor share them.
 
     Parameters
     ----------
@@ -299,64 +320,84 @@ class MultiModelLoops:
         True plants (R, Ld, Lq are read; the back-EMF does not enter a
         linear margin).
     speeds : array_like
-        Electrical speeds (rad/s). The margin is even in the speed (the
-        similarity ``diag(1, -1)`` maps the loop at ``-omega`` onto the loop
-        at ``omega`` and leaves the diagonal D-scaling unchanged), so
-        ``speeds >= 0`` cover the range.
+        True electrical speeds (rad/s). The margin is even in the speed
+        jointly with the sensor offset (the similarity ``diag(1, -1)`` maps
+        the loop at ``(-w, o)`` onto the loop at ``(w, -o)`` and leaves the
+        diagonal D-scaling unchanged), so ``speeds >= 0`` cover the range
+        when every offset ``o`` of the set comes with ``-o`` (no offsets:
+        always).
     sample_time : float
         Controller period (s).
     delay_samples : int
         Computation delay (periods).
     n_grid : int
         Frequency points (log grid 1e-2 rad/s .. Nyquist, Nyquist excluded).
+    speed_gain, speed_offset : array_like, optional
+        Per model (one entry per motor, or a scalar for all): the sensor's
+        gain ``g`` and offset ``o`` (electrical rad/s); default 1 and 0
+        (the speed measured exactly).
     """
 
     def __init__(self, motors, speeds, sample_time: float, delay_samples: int,
-                 n_grid: int = 300) -> None:
+                 n_grid: int = 300, *, speed_gain=None, speed_offset=None) -> None:
         self.speeds = np.atleast_1d(np.asarray(speeds, float))
         self.Ts, self.d = float(sample_time), int(delay_samples)
         self.R = np.array([m.R for m in motors], float)
         self.Ld = np.array([m.Ld for m in motors], float)
         self.Lq = np.array([m.Lq for m in motors], float)
+        nm, ns = self.R.size, self.speeds.size
+        gain = np.broadcast_to(np.asarray(1.0 if speed_gain is None else speed_gain, float),
+                               (nm,))
+        offset = np.broadcast_to(np.asarray(0.0 if speed_offset is None else speed_offset,
+                                            float), (nm,))
+        #: measured electrical speeds ``g w + o`` (motors, speeds), rad/s
+        self.omega_meas = gain[:, None] * self.speeds[None, :] + offset[:, None]
         self.w = log_grid(1e-2, math.pi / self.Ts, n_grid, True)[:-1]
         self.z = np.exp(1j * self.w * self.Ts)
-        nm, ns = self.R.size, self.speeds.size
-        R, Ld, Lq, om = (np.repeat(self.R, ns), np.repeat(self.Ld, ns),
-                         np.repeat(self.Lq, ns), np.tile(self.speeds, nm))
+        # the plant depends on (R, Ld, Lq, w) only: each distinct plant once
+        _, first, inverse = np.unique(np.column_stack([self.R, self.Ld, self.Lq]), axis=0,
+                                         return_index=True, return_inverse=True)
+        nu = first.size
+        R, Ld, Lq, om = (np.repeat(self.R[first], ns), np.repeat(self.Ld[first], ns),
+                         np.repeat(self.Lq[first], ns), np.tile(self.speeds, nu))
         Ac, Bc = coupled_plant(R, Ld, Lq, om)
         Phi, Gam = zoh_coupled(Ac, Bc, self.Ts)
-        # P = (z I - Phi)^-1 Gamma z^-d entry by entry, as contiguous (nm*ns, Nw)
+        # P = (z I - Phi)^-1 Gamma z^-d entry by entry, as contiguous (nu*ns, Nw)
         # arrays (issue 13: stacked 2x2 products and inverses cost 3x more)
         z = self.z[None, :]
         a, b = z - Phi[:, 0, 0, None], -Phi[:, 0, 1, None]
         c, d = -Phi[:, 1, 0, None], z - Phi[:, 1, 1, None]
         g = z ** (-self.d) / (a * d - b * c)
         G = Gam[:, :, :, None]
+        rows = (inverse.reshape(-1)[:, None] * ns + np.arange(ns)[None, :]).reshape(-1)
         #: entries ``(P_00, P_01, P_10, P_11)`` of the plant responses, each (nm*ns, Nw)
-        self.P = ((d * G[:, 0, 0] - b * G[:, 1, 0]) * g, (d * G[:, 0, 1] - b * G[:, 1, 1]) * g,
-                  (a * G[:, 1, 0] - c * G[:, 0, 0]) * g, (a * G[:, 1, 1] - c * G[:, 0, 1]) * g)
+        self.P = tuple(e[rows] for e in (
+            (d * G[:, 0, 0] - b * G[:, 1, 0]) * g, (d * G[:, 0, 1] - b * G[:, 1, 1]) * g,
+            (a * G[:, 1, 0] - c * G[:, 0, 0]) * g, (a * G[:, 1, 1] - c * G[:, 0, 1]) * g))
         self.shape = (nm, ns)
 
     def disk_margins(self, artifact) -> np.ndarray:
         """``(motors, speeds)`` balanced multiloop disk margins of ``artifact``.
 
         ``alpha = 1/max_w mu_ub(S_i - I/2)`` (module docstring), 0 where the
-        coupled closed loop (:func:`coupled_closed_loop`, spectral radius)
-        is unstable.
+        coupled closed loop (:func:`coupled_closed_loop`, spectral radius,
+        with each model's measured speed) is unstable.
         """
         laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
         stable = np.zeros(self.shape, bool)
         for j, om in enumerate(self.speeds):
             loop = coupled_closed_loop(laws, artifact.decoupling, self.Ts, self.d,
-                                       R=self.R, Ld=self.Ld, Lq=self.Lq, omega=om)
+                                       R=self.R, Ld=self.Ld, Lq=self.Lq, omega=om,
+                                       omega_meas=self.omega_meas[:, j])
             stable[:, j] = loop.spectral_radius() < 1 - 1e-9
         kd, kq = (FreqResponse(*laws[name].error_controller())(self.z)[:, 0, 0] for name in AXES)
         # L_i = (K - W) P R(eps) with K = diag(K_d, K_q), the off-diagonal W and
-        # the placement rotation, entry by entry
+        # the placement rotation, entry by entry (W and eps from the measured speed)
         speeds = np.tile(self.speeds, self.shape[0])
-        W = decoupling_matrix(artifact.decoupling, speeds)
+        meas = self.omega_meas.reshape(-1)
+        W = decoupling_matrix(artifact.decoupling, meas)
         w01, w10 = W[:, 0, 1, None], W[:, 1, 0, None]
-        eps = placement_error(artifact.decoupling, self.Ts, self.d, speeds, speeds)[:, None]
+        eps = placement_error(artifact.decoupling, self.Ts, self.d, speeds, meas)[:, None]
         c, s = np.cos(eps), np.sin(eps)
         q00, q01, q10, q11 = self.P
         p00, p01 = q00 * c + q01 * s, q01 * c - q00 * s
@@ -370,15 +411,23 @@ class MultiModelLoops:
         return np.where(stable, 1.0 / np.max(mu, axis=-1).reshape(self.shape), 0.0)
 
 
-def multimodel_disk_margins(artifact, motors, speeds, *, n_grid: int = 300) -> np.ndarray:
+def multimodel_disk_margins(artifact, motors, speeds, *, n_grid: int = 300,
+                            speed_gain=None, speed_offset=None) -> np.ndarray:
     """Multiloop disk margins of one design over a set of plants and speeds.
 
     Each entry is what :func:`mimo_disk_margins` computes at one speed for
     one plant: the executed sampled loop (ZOH, the artifact's computation
-    delay, the decoupling with the controller's parameters),
+    delay, the decoupling with the controller's parameters and the voltage
+    placement, both from the measured speed ``g w + o``),
     ``alpha = 1/max_w mu_ub(S_i - I/2)``, 0 where the coupled closed loop is
     unstable (:class:`MultiModelLoops`, which the robust PI tuner
     ``toolbox.design.robust_pi`` reuses across candidates).
+
+    Parameters
+    ----------
+    speed_gain, speed_offset : array_like, optional
+        Speed-sensor gain and offset (electrical rad/s) per motor (or one for
+        all); default an exact measurement.
 
     Returns
     -------
@@ -386,9 +435,8 @@ def multimodel_disk_margins(artifact, motors, speeds, *, n_grid: int = 300) -> n
         ``(len(motors), len(speeds))`` balanced multiloop disk margins.
     """
     return MultiModelLoops(motors, speeds, artifact.sample_time, artifact.delay_samples,
-                           n_grid).disk_margins(artifact)
-
-
+                           n_grid, speed_gain=speed_gain,
+                           speed_offset=speed_offset).disk_margins(artifact)
 
 
 @dataclass(frozen=True)

@@ -15,14 +15,28 @@ nominal parameters (controller side).
 Constraint, on every model: the balanced multiloop (input, diagonal) disk
 margin of the coupled dq loop **as executed** - ZOH plant, the drive's
 computation delay, the decoupling with the controller's parameters, the
-Tustin-discretised PI - is at least ``disk_margin``, and the coupled closed
-loop is stable (:func:`toolbox.analysis.margins.multimodel_disk_margins`,
-the same loop as ``mimo_at_speed`` and the robustness sweep). Models: the
-nominal motor, the ``2^3`` corners of the box of ``R``, ``Ld``, ``Lq`` scale
-factors and ``samples`` Latin-hypercube sets inside it (log-uniform,
+Tustin-discretised PI, the voltage placed at ``theta_k + t_c w_meas``
+(``drive.angle_compensation``: ``eps = t_c w_meas - (d + 1/2) Ts w`` below) -
+is at least ``disk_margin``, and the coupled closed loop is stable
+(:class:`toolbox.analysis.margins.MultiModelLoops`, the same loop as
+``mimo_at_speed`` and the robustness sweep).
+
+Models: the box of ``R``, ``Ld``, ``Lq`` scale factors and of the speed
+sensor - gain ``g`` and offset ``o`` of the measured speed
+``w_meas = g w + p o`` (``o`` mechanical), the sensor errors the robustness
+sweep applies (:data:`toolbox.analysis.robustness.DEFAULT_RANGES`:
+0.9..1.1 and +/-10 rad/s, paper 000 sect. 3 "robustness to speed error") -
+as the nominal point, the corners (``2^5`` by default) and ``samples``
+Latin-hypercube sets inside it (log-uniform scale factors, uniform offset,
 :func:`toolbox.analysis.robustness.sample_parameters`), each at
-``n_speeds`` electrical speeds ``linspace(0, p max_speed)`` (the margin is
-even in the speed).
+``n_speeds`` true electrical speeds ``linspace(0, p max_speed)``. The
+measured speed enters what the controller computes from it: the decoupling
+``W`` and the placement rotation ``R(eps)``,
+``eps = t_c w_meas - (d + 1/2) Ts w``, in the loop response and in the
+stability check alike. The margin is even in the speed jointly with the
+offset (the loop at ``(-w, o)`` is the loop at ``(w, -o)``), so a symmetric
+offset range needs only ``w >= 0``; an asymmetric one is evaluated at
+``linspace(-p max_speed, p max_speed, 2 n_speeds - 1)``.
 
 Search: for each zero choice, a log grid of ``wc`` from
 ``wc_max/100`` to the largest stable bandwidth of the sampled PI
@@ -32,7 +46,11 @@ set need not be an interval: at low bandwidth the residual coupling of a
 mismatched decoupling at speed is what breaks the margin, at high bandwidth
 the delay); the largest feasible ``wc`` over the zero choices wins. The
 winner is re-checked on a 4x finer frequency grid and backed off by 2 % at a
-time until it passes (``design_parameters["verification"]``).
+time until it passes (``design_parameters["verification"]``). When no
+bandwidth meets the margin, the largest margin over the search (the grid,
+refined by a golden-section search around its best point) is reported with
+the model that limits it and what the same design keeps without the sensor
+errors, at standstill and on the nominal motor (``DesignInfeasible``).
 
 Spec: ``[controller.robust_pi]`` with ``disk_margin`` (default 0.5: gain
 factors 0.6..1.67, +/-28 deg simultaneously in both channels),
@@ -40,8 +58,11 @@ factors 0.6..1.67, +/-28 deg simultaneously in both channels),
 default 0.5..2 each: the robustness sweep's default box), ``max_speed``
 (mechanical rad/s, default ``drive.max_speed``, the motor's rated speed or the
 back-EMF limit, :func:`toolbox.plant.max_electrical_speed`), ``n_speeds``
-(default 4), ``samples`` (default 8), ``seed`` (0), ``zero_ratios``
-(default ``[4, 10]``), ``decoupling`` (true).
+(default 4), ``speed_gain`` (``[lo, hi]``, default ``[0.9, 1.1]``, ``lo <= 1 <=
+hi``), ``speed_offset`` (``[lo, hi]`` mechanical rad/s, default
+``[-10, 10]``, ``lo <= 0 <= hi``; ``[1, 1]`` and ``[0, 0]`` model an exact
+sensor), ``samples`` (default 8), ``seed`` (0), ``zero_ratios`` (default
+``[4, 10]``), ``decoupling`` (true).
 """
 
 from __future__ import annotations
@@ -52,16 +73,20 @@ from typing import Any
 
 import numpy as np
 
-from ..analysis.robustness import DEFAULT_BOX, sample_parameters
+from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES, sample_parameters
 from ..errors import DesignInfeasible, SpecError
 from ..spec import Table
 from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
 
-__all__ = ["RobustPiCfg", "read_cfg", "design", "model_set", "tune"]
+__all__ = ["RobustPiCfg", "ModelSet", "read_cfg", "design", "model_set", "tune"]
 
-_KEYS = ("disk_margin", "parameter_box", "max_speed", "n_speeds", "samples", "seed",
-         "zero_ratios", "decoupling")
+_KEYS = ("disk_margin", "parameter_box", "max_speed", "n_speeds", "speed_gain", "speed_offset",
+         "samples", "seed", "zero_ratios", "decoupling")
+#: The robustness sweep's speed-sensor ranges (toolbox/analysis/_sampling.py,
+#: paper 000 sect. 3): gain 0.9..1.1, offset +/-10 rad/s mechanical.
+DEFAULT_SPEED_GAIN = tuple(DEFAULT_RANGES["speed_gain"][:2])
+DEFAULT_SPEED_OFFSET = tuple(DEFAULT_RANGES["speed_offset"][:2])
 _BOX_KEYS = ("R", "Ld", "Lq")
 N_GRID = 300          # frequency points of the search (the check uses 4x more)
 N_WC = 16             # log grid of the bandwidth per zero choice (factor 1.36)
@@ -83,6 +108,10 @@ class RobustPiCfg:
         Mechanical speed range ``|Omega| <= max_speed`` (rad/s).
     n_speeds : int
         Speeds ``linspace(0, p max_speed, n_speeds)`` per model.
+    speed_gain : tuple
+        ``(lo, hi)`` gain of the speed measurement.
+    speed_offset : tuple
+        ``(lo, hi)`` offset of the speed measurement (rad/s mechanical).
     samples : int
         Latin-hypercube sets inside the box (besides nominal and corners).
     seed : int
@@ -99,6 +128,8 @@ class RobustPiCfg:
     parameter_box: dict = field(default_factory=lambda: dict(DEFAULT_BOX))
     max_speed: float = 0.0
     n_speeds: int = 4
+    speed_gain: tuple = DEFAULT_SPEED_GAIN
+    speed_offset: tuple = DEFAULT_SPEED_OFFSET
     samples: int = 8
     seed: int = 0
     zero_ratios: tuple = (4.0, 10.0)
@@ -110,6 +141,7 @@ class RobustPiCfg:
         return {"disk_margin": self.disk_margin,
                 "parameter_box": {k: list(v) for k, v in self.parameter_box.items()},
                 "max_speed": self.max_speed, "n_speeds": self.n_speeds,
+                "speed_gain": list(self.speed_gain), "speed_offset": list(self.speed_offset),
                 "samples": self.samples, "seed": self.seed,
                 "zero_ratios": list(self.zero_ratios), "decoupling": self.decoupling}
 
@@ -121,7 +153,8 @@ def read_cfg(method: str, table: Table, motor, drive) -> RobustPiCfg:
     ------
     SpecError
         Unknown key, a disk margin outside (0, 2), a box bound <= 0 or
-        lo > hi, a non-positive speed; key path ``controller.robust_pi.<key>``.
+        lo > hi, a non-positive speed, a sensor range not containing the exact
+        sensor; key path ``controller.robust_pi.<key>``.
     """
     from ..plant import max_electrical_speed
 
@@ -148,37 +181,104 @@ def read_cfg(method: str, table: Table, motor, drive) -> RobustPiCfg:
     if not t.has("max_speed"):
         details["max_speed"] = (f"default {default_speed:.6g} rad/s "
                                 "(drive max_speed, rated speed or EMF limit)")
+    gain = t.numbers("speed_gain", DEFAULT_SPEED_GAIN, length=2)
+    if not 0 < gain[0] <= 1.0 <= gain[1]:
+        raise SpecError(t.key("speed_gain"), "[lo, hi] with 0 < lo <= 1 <= hi (gain of the "
+                        "measured speed)", list(gain))
+    offset = t.numbers("speed_offset", DEFAULT_SPEED_OFFSET, length=2, unit="rad/s mechanical")
+    if not offset[0] <= 0.0 <= offset[1]:
+        raise SpecError(t.key("speed_offset"), "[lo, hi] with lo <= 0 <= hi (rad/s mechanical)",
+                        list(offset))
+    if not (t.has("speed_gain") and t.has("speed_offset")):
+        details["speed_sensor"] = ("default: the robustness sweep's speed-sensor errors, gain "
+                                   f"{DEFAULT_SPEED_GAIN[0]:g}..{DEFAULT_SPEED_GAIN[1]:g}, offset "
+                                   f"{DEFAULT_SPEED_OFFSET[0]:g}..{DEFAULT_SPEED_OFFSET[1]:g} "
+                                   "rad/s mechanical")
     ratios = t.numbers("zero_ratios", (4.0, 10.0), min_length=0, max_length=8)
     for r in ratios:
         if not r > 1.0:
             raise SpecError(t.key("zero_ratios"), "numbers > 1 (wc / integral zero)", list(ratios))
     return RobustPiCfg(disk_margin=alpha, parameter_box=box, max_speed=float(speed),
                        n_speeds=t.integer("n_speeds", 4, minimum=1, maximum=32),
+                       speed_gain=tuple(gain), speed_offset=tuple(offset),
                        samples=t.integer("samples", 8, minimum=0, maximum=256),
                        seed=t.integer("seed", 0, minimum=0),
                        zero_ratios=tuple(ratios), decoupling=t.boolean("decoupling", True),
                        details=details)
 
 
-def model_set(motor, cfg: RobustPiCfg) -> tuple[list, list[dict], np.ndarray]:
-    """The tuner's models: nominal, box corners and Latin-hypercube samples.
+@dataclass(frozen=True)
+class ModelSet:
+    """The tuner's models (:func:`model_set`).
 
-    Returns
-    -------
+    Attributes
+    ----------
     motors : list of Motor
     params : list of dict
-        Scale factors ``{R, Ld, Lq}`` of each motor.
+        Per model: scale factors ``R``, ``Ld``, ``Lq``, the sensor's
+        ``speed_gain`` and ``speed_offset`` (rad/s mechanical).
     speeds : ndarray
-        Electrical speeds (rad/s), ``linspace(0, p max_speed, n_speeds)``.
+        True electrical speeds (rad/s).
+    speed_gain : ndarray
+        Sensor gain per model.
+    speed_offset : ndarray
+        Sensor offset per model, electrical rad/s (``p`` times the mechanical).
+    """
+
+    motors: list
+    params: list
+    speeds: np.ndarray
+    speed_gain: np.ndarray
+    speed_offset: np.ndarray
+
+    def loops(self, sample_time: float, delay_samples: int, n_grid: int):
+        """:class:`toolbox.analysis.margins.MultiModelLoops` of the set."""
+        from ..analysis.margins import MultiModelLoops
+
+        return MultiModelLoops(self.motors, self.speeds, sample_time, delay_samples, n_grid,
+                               speed_gain=self.speed_gain, speed_offset=self.speed_offset)
+
+    def disk_margins(self, artifact, n_grid: int = N_GRID) -> np.ndarray:
+        """``(models, speeds)`` multiloop disk margins of ``artifact`` on the set."""
+        return self.loops(artifact.sample_time, artifact.delay_samples,
+                          n_grid).disk_margins(artifact)
+
+    def measured_speed(self, i: int, j: int) -> float:
+        """Measured electrical speed of model ``i`` at speed ``j`` (rad/s)."""
+        return float(self.speed_gain[i] * self.speeds[j] + self.speed_offset[i])
+
+
+def model_set(motor, cfg: RobustPiCfg) -> ModelSet:
+    """The tuner's models: nominal, box corners and Latin-hypercube samples.
+
+    The box spans ``R``, ``Ld``, ``Lq`` and the speed sensor's gain and offset
+    (a range of zero width is held at its value rather than doubling the
+    corners); module docstring.
     """
     ranges = {k: (lo, hi, "scale") for k, (lo, hi) in cfg.parameter_box.items()}
+    fixed = {}
+    for name, (lo, hi), kind in (("speed_gain", cfg.speed_gain, "scale"),
+                                 ("speed_offset", cfg.speed_offset, "offset")):
+        if hi > lo:
+            ranges[name] = (lo, hi, kind)
+        else:
+            fixed[name] = float(lo)
     P = sample_parameters(ranges, cfg.samples, cfg.seed)
     n = len(P["R"])
-    params = [{k: float(P[k][i]) for k in _BOX_KEYS} for i in range(n)]
-    motors = [motor.with_overrides(None, p) for p in params]
-    wmax = cfg.max_speed * motor.pole_pairs
-    speeds = np.linspace(0.0, wmax, cfg.n_speeds) if wmax > 0 else np.zeros(1)
-    return motors, params, speeds
+    params = [dict({k: float(P[k][i]) for k in ranges}, **fixed) for i in range(n)]
+    motors = [motor.with_overrides(None, {k: p[k] for k in _BOX_KEYS}) for p in params]
+    p = motor.pole_pairs
+    wmax = cfg.max_speed * p
+    lo, hi = cfg.speed_offset
+    if wmax <= 0:
+        speeds = np.zeros(1)
+    elif lo == -hi:                    # (-w, o) is (w, -o): w >= 0 covers the range
+        speeds = np.linspace(0.0, wmax, cfg.n_speeds)
+    else:
+        speeds = np.linspace(-wmax, wmax, 2 * cfg.n_speeds - 1)
+    gain = np.array([q["speed_gain"] for q in params])
+    offset = np.array([q["speed_offset"] * p for q in params])
+    return ModelSet(motors, params, speeds, gain, offset)
 
 
 def _gains(motor, wc: float, ratio: float | None) -> tuple[tuple, tuple]:
@@ -207,64 +307,83 @@ def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
     dict
         ``Kp``, ``Ki`` (d, q), ``bandwidth_rad_s`` (``wc``), ``zero`` (the
         choice: ``"cancellation"`` or ``wc/<ratio>``), ``worst_disk_margin``,
-        ``worst_model`` (scale factors and electrical speed), ``margins``
-        (the ``(models, speeds)`` array of the winner), ``candidates``
-        (best feasible ``wc`` per zero choice).
+        ``worst_model`` (scale factors, sensor errors, true and measured
+        electrical speed), ``margins`` (the ``(models, speeds)`` array of the
+        winner), ``models`` (the :class:`ModelSet`), ``candidates`` (best
+        feasible ``wc`` per zero choice).
 
     Raises
     ------
     DesignInfeasible
         No bandwidth meets the disk margin on every model; the message gives
-        the best margin found and where.
+        the largest margin reached, its bandwidth, the model that limits it
+        and the margins of the same design without the sensor errors, at
+        standstill and on the nominal motor (:func:`_limitation`).
     """
-    from ..analysis.margins import MultiModelLoops
-
     cfg = cfg or spec.controller.cfg
     motor = spec.motor
-    motors, params, speeds = model_set(motor, cfg)
+    models = model_set(motor, cfg)
     wc_max = _defaults.largest_stable_pi_bandwidth(spec.drive)
     alpha = cfg.disk_margin
     Ts, d = spec.drive.sample_time, spec.drive.delay_samples
-    coarse = MultiModelLoops(motors, speeds, Ts, d, N_GRID)
-    fine = MultiModelLoops(motors, speeds, Ts, d, 4 * N_GRID)
+    coarse = models.loops(Ts, d, N_GRID)
+    fine = models.loops(Ts, d, 4 * N_GRID)
 
     def margins(wc, ratio, loops=coarse):
         art = _candidate(spec, cfg, *_gains(motor, wc, ratio))
         return loops.disk_margins(art)
 
     grid = np.geomspace(wc_max / 100.0, wc_max * 0.999, N_WC)
-    best_seen = (-1.0, None, None)
+    # candidates are ranked by (worst margin, - unstable pairs): with every
+    # bandwidth unstable somewhere the refusal reports the least unstable one
+    best_seen = ((-1.0, 0), None, None)           # score, wc, ratio
     results = {}
     for ratio in (None,) + tuple(cfg.zero_ratios):
-        k = None
+        def score(x, r=ratio):
+            M = margins(x, r)
+            return float(np.min(M)), -int(np.count_nonzero(M == 0.0))
+
+        lo, best_i = None, ((-1.0, 0), 0)
         for i in range(len(grid) - 1, -1, -1):    # from the top: the largest feasible point
-            m = float(np.min(margins(grid[i], ratio)))
-            if m > best_seen[0]:
-                best_seen = (m, float(grid[i]), ratio)
-            if m >= alpha:
-                k = i
+            sc = score(grid[i])
+            best_i = max(best_i, (sc, i))
+            if sc[0] >= alpha:
+                lo = float(grid[i])
                 break
-        if k is None:
+        sc, i = best_i
+        x = float(grid[i])
+        if lo is None and sc[0] > 0:
+            # the feasible window may fall between two grid points (with the
+            # sensor errors it spans ~1.2x on paper 003's motor, the grid steps
+            # 1.36x): maximise between the best point's neighbours
+            m, x = _golden_max(lambda v: score(v)[0], float(grid[max(i - 1, 0)]),
+                               float(grid[min(i + 1, len(grid) - 1)]), (sc[0], x))
+            sc = (m, 0)
+            if m >= alpha:
+                lo = x
+        if sc > best_seen[0]:
+            best_seen = (sc, x if lo is None else lo, ratio)
+        if lo is None:
             results[ratio] = None
             continue
-        lo = float(grid[k])
-        hi = float(grid[k + 1]) if k + 1 < len(grid) else None
+        above = grid[grid > lo]                   # infeasible (scanned from the top)
+        hi = float(above[0]) if above.size else None
         if hi is not None:
             for _ in range(N_BISECT):
                 mid = math.sqrt(lo * hi)
-                if float(np.min(margins(mid, ratio))) >= alpha:
+                if score(mid)[0] >= alpha:
                     lo = mid
                 else:
                     hi = mid
         results[ratio] = lo
     feasible = {r: wc for r, wc in results.items() if wc is not None}
     if not feasible:
-        m, wc, ratio = best_seen
+        (m, _), wc, ratio = best_seen
         raise DesignInfeasible(
             "controller.robust_pi.disk_margin",
             f"a disk margin the model set allows (best found {m:.3g} at wc = {wc:.4g} rad/s, "
             f"zero {_zero_name(ratio)})", alpha,
-            hint="lower disk_margin, shrink parameter_box or max_speed")
+            hint=_limitation(spec, cfg, models, wc, ratio, margins))
     ratio = max(feasible, key=lambda r: feasible[r])
     wc = feasible[ratio]
     # re-check on a finer grid; back off until it passes
@@ -278,15 +397,86 @@ def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
     if float(np.min(M)) < alpha:
         raise DesignInfeasible("controller.robust_pi.disk_margin",
                                "a disk margin the fine-grid check confirms", alpha,
-                               hint="lower disk_margin slightly")
+                               hint=f"{float(np.min(M)):.3g} after {backoffs} back-offs of 2 % "
+                               f"to wc = {wc:.4g} rad/s; lower disk_margin slightly")
     i, j = np.unravel_index(int(np.argmin(M)), M.shape)
     Kp, Ki = _gains(motor, wc, ratio)
     return {"Kp": Kp, "Ki": Ki, "bandwidth_rad_s": wc, "zero": _zero_name(ratio),
             "worst_disk_margin": float(M[i, j]),
-            "worst_model": dict(params[i], speed_rad_s=float(speeds[j])),
-            "margins": M, "params": params, "speeds": speeds,
+            "worst_model": _model_record(models, i, j),
+            "margins": M, "params": models.params, "speeds": models.speeds, "models": models,
             "candidates": {_zero_name(r): v for r, v in results.items()},
             "backoffs": backoffs, "largest_stable_pi_bandwidth": wc_max}
+
+
+def _model_record(models: ModelSet, i: int, j: int) -> dict[str, float]:
+    """Scale factors, sensor errors, true and measured electrical speed of a model."""
+    return dict(models.params[i], speed_rad_s=float(models.speeds[j]),
+                measured_speed_rad_s=models.measured_speed(i, j))
+
+
+def _golden_max(f, lo: float, hi: float, best: tuple, steps: int = N_BISECT) -> tuple:
+    """``(f, x)`` of the largest ``f`` seen by a golden-section search of ``log x``
+    on ``[lo, hi]``, starting from ``best``."""
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = math.log(lo), math.log(hi)
+    c, e = b - g * (b - a), a + g * (b - a)
+    fc, fe = f(math.exp(c)), f(math.exp(e))
+    for _ in range(steps):
+        for v, x in ((fc, c), (fe, e)):
+            if v > best[0]:
+                best = (v, math.exp(x))
+        if fc >= fe:
+            b, e, fe = e, c, fc
+            c = b - g * (b - a)
+            fc = f(math.exp(c))
+        else:
+            a, c, fc = c, e, fe
+            e = a + g * (b - a)
+            fe = f(math.exp(e))
+    for v, x in ((fc, c), (fe, e)):
+        if v > best[0]:
+            best = (v, math.exp(x))
+    return best
+
+
+def _limitation(spec, cfg: RobustPiCfg, models: ModelSet, wc: float, ratio, margins) -> str:
+    """Why the best design misses the margin, from its margins on the set:
+    the limiting model, the same design without the speed-sensor errors, at
+    standstill and on the nominal motor, and the trend either side of ``wc``."""
+    M = margins(wc, ratio)
+    unstable = M == 0.0
+    if np.any(unstable):          # the unstable pair at the lowest speed
+        cols = np.nonzero(unstable.any(axis=0))[0]
+        j = int(cols[np.argmin(np.abs(models.speeds[cols]))])
+        i = int(np.nonzero(unstable[:, j])[0][0])
+    else:
+        i, j = np.unravel_index(int(np.argmin(M)), M.shape)
+    rec = _model_record(models, i, j)
+    where = ", ".join(f"{k} x{rec[k]:.3g}" for k in _BOX_KEYS)
+    parts = [f"limited by {where} at {rec['speed_rad_s']:.4g} rad/s electrical, the speed "
+             f"measured {rec['measured_speed_rad_s']:.4g} (gain {rec['speed_gain']:.3g}, offset "
+             f"{rec['speed_offset']:+.3g} rad/s mechanical)"]
+    if np.any(unstable):
+        speeds = np.abs(models.speeds[unstable.any(axis=0)])
+        parts.append(f"{int(np.count_nonzero(unstable))} of {M.size} (model, speed) pairs "
+                     f"unstable, at {speeds.min():.4g}..{speeds.max():.4g} rad/s electrical")
+    art = _candidate(spec, cfg, *_gains(spec.motor, wc, ratio))
+    if np.any(models.speed_gain != 1.0) or np.any(models.speed_offset != 0.0):
+        from ..analysis.margins import multimodel_disk_margins
+        exact = multimodel_disk_margins(art, models.motors, models.speeds, n_grid=N_GRID)
+        parts.append(f"without the speed-sensor errors the same design keeps "
+                     f"{float(np.min(exact)):.3g}"
+                     + (f" ({int(np.count_nonzero(exact == 0.0))} pairs unstable)"
+                        if np.any(exact == 0.0) else ""))
+    still = models.speeds == 0.0
+    if np.any(still) and not np.all(still):
+        parts.append(f"at standstill {float(np.min(M[:, still])):.3g}")
+    parts.append(f"on the nominal motor {float(np.min(M[0])):.3g}")
+    lower, higher = (float(np.min(margins(wc * f, ratio))) for f in (0.8, 1.25))
+    parts.append(f"either side of wc the worst margin falls: {lower:.3g} at 0.8 wc, "
+                 f"{higher:.3g} at 1.25 wc")
+    return "; ".join(parts)
 
 
 def _zero_name(ratio) -> str:
@@ -328,6 +518,8 @@ def design(spec):
             "worst_model": res["worst_model"],
             "n_models": len(res["params"]), "speeds_rad_s": [float(s) for s in res["speeds"]],
             "parameter_box": {k: list(v) for k, v in cfg.parameter_box.items()},
+            "speed_gain": list(cfg.speed_gain),
+            "speed_offset_rad_s_mechanical": list(cfg.speed_offset),
             "candidates_rad_s": res["candidates"],
             "largest_stable_pi_bandwidth_rad_s": res["largest_stable_pi_bandwidth"],
             "verification": f"{4 * N_GRID}-point grid, {res['backoffs']} back-off(s) of 2 %",
@@ -336,5 +528,6 @@ def design(spec):
     if cfg.details:
         params["defaults"] = dict(cfg.details)
     equations = ["Kp = L wc, Ki = Kp w_z (robust PI: max wc s.t. multiloop disk margin "
-                 ">= alpha on every model of the set, sampled coupled loop with delay)"]
+                 ">= alpha on every model of the set, sampled coupled loop with delay, "
+                 "decoupling and voltage placement from the measured speed g w + o)"]
     return make_artifact(spec, axes, dec, params, equations)
