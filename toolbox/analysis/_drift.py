@@ -201,7 +201,8 @@ class DriftVerdict:
         if "speed_offset" in f:
             where += f", speed offset {f['speed_offset']:+.3g} rad/s"
         return (f"the coupled sampled loop is unstable for {self.n_unstable} of {self.n_sets} "
-                f"parameter sets of the {self.box_text.split(':')[0]}; first: {where} at "
+                f"parameter sets of the {self.box_text.split(':')[0]} at electrical speeds "
+                f"up to {self.max_speed_rad_s:.4g} rad/s; first: {where} at "
                 f"{f['speed_rad_s']:.4g} rad/s electrical (largest closed-loop pole "
                 f"{f['spectral_radius']:.4g})")
 
