@@ -95,6 +95,15 @@ def drift_ranges(motor, drive, parameter_drift: dict | None = None) -> tuple[str
     speed). ``ranges`` maps every name of
     :data:`toolbox.analysis.DEFAULT_RANGES` to ``[low, high]`` or None (held
     nominal; the delay is always the design's).
+
+    Parameters
+    ----------
+    motor : Motor
+        Nominal plant (pole pairs for the mechanical speed offset).
+    drive : Drive
+        Speed range (:func:`toolbox.plant.max_electrical_speed`).
+    parameter_drift : dict, optional
+        The spec's ``[requirements] parameter_drift``.
     """
     from ._sampling import DEFAULT_RANGES
 
