@@ -206,7 +206,11 @@ def _robustness_line(result) -> None:
         from ..analysis import DriftVerdict
 
         text = DriftVerdict(**{k: rob[k] for k in DriftVerdict.__dataclass_fields__}).summary()
-        click.echo(text if not rob["n_unstable"] else f"{text}: FAILED")
+        if any(k in result.informational for k in ("default.robustness", "parameter_drift")):
+            text += " (informational: the baseline PI does not run)"
+        elif rob["n_unstable"]:
+            text += ": FAILED"
+        click.echo(text)
 
 
 def _summary(out) -> None:
