@@ -1,6 +1,6 @@
 """A corpus of real motors, each designed with every method on defaults (issue 12 item 4).
 
-``tests/corpus/motors/*.toml`` holds 33 motors in datasheet form (line-to-line
+``tests/corpus/motors/*.toml`` holds 36 motors in datasheet form (line-to-line
 R and L, V/krpm or N m/A, rpm, kHz strings), from a 10 W gimbal motor at 12 V
 to 150 kW traction machines at 800 V, surface and interior PM; each file
 cites its source and marks every value the source does not print as assumed.
