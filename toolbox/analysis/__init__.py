@@ -3,7 +3,9 @@
 * :mod:`.margins` - per-axis margins (continuous and sampled with delay) and
   the multiloop disk margin of the coupled dq loop over speed;
 * :mod:`.robustness` - vectorised sweeps over parameter drift, speed-sensor
-  errors and delay;
+  errors and delay; :func:`drift_verdict` judges a design on the drift box of
+  a drive (:data:`DRIVE_DRIFT`, its sources cited in ``_drift``) or the
+  spec's ``parameter_drift``;
 * :mod:`.certificate` - common quadratic Lyapunov function over a parameter
   box (vertex LMIs solved by Clarabel, called directly), continuous loop;
 * :func:`largest_certified_sampled_scale` - the same question for the sampled
@@ -28,13 +30,15 @@ from .margins import (MARGIN_KEYS, FrequencyMargins, MarginsResult, MimoBoxResul
                       grid_margins, json_ready, lti_loop_margins, mimo_disk_margins,
                       mimo_over_box)
 from .robustness import DEFAULT_RANGES, SweepResult, robustness_sweep
+from ._drift import DRIVE_DRIFT, DriftVerdict, drift_ranges, drift_verdict
 from ._sampled_certificate import (SampledBox, SampledCertificate, certify_sampled,
                                    largest_certified_sampled_scale)
 
 __all__ = ["MARGIN_KEYS", "MarginsResult", "MimoMarginsResult", "compute_margins",
            "disk_variations", "mimo_disk_margins", "MimoBoxResult", "mimo_over_box",
            "DEFAULT_RANGES", "SweepResult",
-           "robustness_sweep", "CertificateResult", "ParameterBox", "certify",
+           "robustness_sweep", "DRIVE_DRIFT", "DriftVerdict", "drift_ranges", "drift_verdict",
+           "CertificateResult", "ParameterBox", "certify",
            "largest_certified_scale", "SampledBox", "SampledCertificate", "certify_sampled",
            "largest_certified_sampled_scale", "analysis_report", "compare_designs", "ANALYSIS_SCHEMA",
            "FrequencyMargins", "frequency_margins", "grid_margins", "lti_loop_margins",

@@ -157,7 +157,10 @@ class SweepResult:
     n_unstable : int
         Sets whose coupled closed loop is unstable at some speed.
     unstable_examples : list of dict
-        Up to five unstable sets (parameters and spectral radius).
+        Up to five unstable sets, in the order evaluated (nominal, corners,
+        samples): parameters, ``spectral_radius`` (largest closed-loop pole
+        modulus over the speeds) and ``speed_rad_s`` (the electrical speed
+        where it occurs).
     worst_spectral_radius : float
         Largest closed-loop pole modulus over all sets and speeds.
     worst : dict
@@ -275,6 +278,7 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
     speeds = np.linspace(-wmax, wmax, n_speeds) if (wmax > 0 and n_speeds > 1) else np.zeros(1)
     laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
     rho = np.zeros(N)
+    rho_speed = np.zeros(N)  # the speed of each set's largest pole modulus
     i_ref = i_ref or (0.0, motor.rated_current or 10.0)
     err = np.full(N, np.nan)
     for dv in np.unique(d):
@@ -282,6 +286,7 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
         for om in speeds:
             r = _spectral_radii(laws, artifact.decoupling, Ts, int(dv), R[sel], Ld[sel],
                                 Lq[sel], om, g[sel] * om + off[sel])
+            rho_speed[sel] = np.where(r > rho[sel], om, rho_speed[sel])
             rho[sel] = np.maximum(rho[sel], r)
             if om == speeds[-1]:
                 ok = r < 1 - 1e-9
@@ -314,8 +319,8 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
     return SweepResult(
         n_sets=N, ranges={k: list(v) for k, v in rng.items()},
         speeds_rad_s=[float(s) for s in speeds], n_unstable=int(unstable.size),
-        unstable_examples=[dict(_params_of(P, int(i)), spectral_radius=float(rho[i]))
-                           for i in unstable[:5]],
+        unstable_examples=[dict(_params_of(P, int(i)), spectral_radius=float(rho[i]),
+                                speed_rad_s=float(rho_speed[i])) for i in unstable[:5]],
         worst_spectral_radius=float(np.max(rho)), worst=worst,
         static_error={"reference_A": list(i_ref), "speed_rad_s": float(speeds[-1]),
                       "worst_A": float(err[j]), "params": _params_of(P, j)},

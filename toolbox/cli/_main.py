@@ -199,6 +199,20 @@ def _notices(notice: str | None, warnings: list[str]) -> None:
         click.echo(f"cct: warning: {w}", err=True)
 
 
+def _robustness_line(result) -> None:
+    """The drift-box verdict in one line, next to the margins (``DriftVerdict.summary``)."""
+    rob = result.robustness
+    if rob:
+        from ..analysis import DriftVerdict
+
+        text = DriftVerdict(**{k: rob[k] for k in DriftVerdict.__dataclass_fields__}).summary()
+        if any(k in result.informational for k in ("default.robustness", "parameter_drift")):
+            text += " (informational: the baseline PI does not run)"
+        elif rob["n_unstable"]:
+            text += ": FAILED"
+        click.echo(text)
+
+
 def _summary(out) -> None:
     warnings = list(out.warnings)
     if out.verification is not None:
@@ -210,11 +224,17 @@ def _summary(out) -> None:
         click.echo(f"{axis} axis (sampled loop): GM {_fmt(m.get('gain_margin_db'))} dB, "
                    f"PM {_fmt(m.get('phase_margin_deg'))} deg, "
                    f"Mm {_fmt(m.get('stability_margin'))}")
+    if out.verification is not None:
+        _robustness_line(out.verification)
     failed = []
     if out.analysis is not None:
         failed += [k for k, c in out.analysis.get("requirements", {}).items() if not c["pass"]]
     if out.verification is not None:
-        failed += [k for k, c in out.verification.margin_checks.items() if not c["pass"]]
+        from ..sim import ROBUSTNESS_CHECKS
+
+        # the drift-box verdict names its first failing set (factors and speed)
+        failed += [k if k not in ROBUSTNESS_CHECKS else f"{k} ({c.get('reason')})"
+                   for k, c in out.verification.margin_checks.items() if not c["pass"]]
         for sc in out.verification.scenarios:
             failed += [f"{sc.name}: {k} ({c.get('reason')})" for k, c in sc.checks.items()
                        if not c["pass"]]
@@ -259,6 +279,7 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
         for axis, s in result.stability.items():
             verdict = {True: "stable", False: "UNSTABLE", None: "not analysed"}[s["stable"]]
             click.echo(f"{axis} axis: {verdict} ({s['basis']})")
+        _robustness_line(result)
         for sc in result.scenarios:
             status = "pass" if sc.passed else "FAIL"
             t5 = _fmt(sc.metrics.get('response_time_5pct'))

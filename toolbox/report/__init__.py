@@ -280,7 +280,7 @@ def _robustness_of(analysis: Mapping | None) -> dict | None:
                           "params": entry.get("params", {}),
                           "metrics": {quantity: entry.get("value")}, "pass": True})
     cases += [{"label": f"unstable set {k + 1}", "params": {
-        n: v for n, v in ex.items() if n != "spectral_radius"},
+        n: v for n, v in ex.items() if n not in ("spectral_radius", "speed_rad_s")},
         "metrics": {"spectral_radius": ex.get("spectral_radius")}, "pass": False}
         for k, ex in enumerate(sweep.get("unstable_examples", []))]
     worst_rho = _as_float(sweep.get("worst_spectral_radius"))
@@ -290,6 +290,22 @@ def _robustness_of(analysis: Mapping | None) -> dict | None:
              f"{fmt(worst_rho)}.")
     return {"cases": cases, "worst": [c["label"] for c in cases if not c["pass"]],
             "notes": notes}
+
+
+def _verdict_card(verification: Mapping | None) -> dict | None:
+    """The robustness card: verify.json's drift-box verdict (``robustness``),
+    pass (green) or fail (red), with the worst multiloop disk margin, the
+    unstable sets and the box; None without verification."""
+    rob = (verification or {}).get("robustness")
+    if not rob:
+        return None
+    passed = int(rob.get("n_unstable") or 0) == 0
+    first = rob.get("first_unstable") or {}
+    return {"status": "pass" if passed else "fail",
+            "disk_margin": fmt(_as_float(rob.get("worst_disk_margin"))),
+            "unstable": f"{rob.get('n_unstable')} / {rob.get('n_sets')}",
+            "box": str(rob.get("box_text", "")),
+            "first": (", ".join(f"{k} {fmt(v)}" for k, v in first.items()) if first else None)}
 
 
 def _certificate_of(analysis: Mapping | None) -> dict | None:
@@ -579,7 +595,8 @@ def build_context(data: ReportData) -> dict:
     -------
     dict
         Keys ``title, motor, drive, requirements, equations, controller,
-        margins, checks, figures, step, robustness, certificate, scenarios,
+        margins, checks, figures, step, robustness, verdict_card (the
+        robustness card: drift-box verdict), certificate, scenarios,
         provenance, margins_given``; the HTML and typst templates render it.
         ``step`` holds the analysis' linear step figures per axis (numbers,
         s and %). SVG strings are generated here (trusted); every other
@@ -617,6 +634,7 @@ def build_context(data: ReportData) -> dict:
         "figures_given": bool(responses),
         "step": _step_of(data.analysis),
         "robustness": _robustness(_robustness_of(data.analysis)),
+        "verdict_card": _verdict_card(data.verification),
         "certificate": ([(str(k), fmt(v)) for k, v in certificate.items()]
                         if certificate else None),
         "scenarios": (_scenarios(data.verification, traces)

@@ -9,8 +9,8 @@ __all__ = ["METRIC_NAMES", "step_metrics", "INVERTER_KINDS", "SCENARIO_KINDS", "
            "AxisLaw", "BatchResult", "ControlLaw", "DriveParams", "FcsWeights",
            "SimResult", "SpeedLoop", "discrete_pi", "simulate", "simulate_batch"]
 
-from ._verify import (NO_REQUIREMENTS, VERIFY_SCHEMA, ScenarioOutcome, VerifyResult, control_law,
+from ._verify import (NO_REQUIREMENTS, ROBUSTNESS_CHECKS, VERIFY_SCHEMA, ScenarioOutcome, VerifyResult, control_law,
                       default_scenarios, drive_params, scenario_setup, verify)
 
-__all__ += ["NO_REQUIREMENTS", "VERIFY_SCHEMA", "ScenarioOutcome", "VerifyResult", "control_law",
+__all__ += ["NO_REQUIREMENTS", "ROBUSTNESS_CHECKS", "VERIFY_SCHEMA", "ScenarioOutcome", "VerifyResult", "control_law",
             "default_scenarios", "drive_params", "scenario_setup", "verify"]

@@ -227,6 +227,16 @@ class VerifyResult:
     header: dict | None = None
 
     @property
+    def robustness(self) -> dict | None:
+        """The drift-box verdict (:class:`toolbox.analysis.DriftVerdict` as JSON) of
+        the ``default.robustness`` or ``parameter_drift`` check, None when absent."""
+        for checks in (self.margin_checks, self.informational):
+            for key in ROBUSTNESS_CHECKS:
+                if key in checks:
+                    return checks[key].get("robustness")
+        return None
+
+    @property
     def passed(self) -> bool:
         return (all(s.passed for s in self.scenarios)
                 and all(c["pass"] for c in self.margin_checks.values())
@@ -235,7 +245,7 @@ class VerifyResult:
     def to_json(self) -> dict:
         out = {"schema": VERIFY_SCHEMA, "method": self.method, "passed": self.passed,
                "notice": self.notice, "warnings": list(self.warnings),
-               "stability": self.stability,
+               "stability": self.stability, "robustness": self.robustness,
                "margin_requirements": {k: finalise_check(c)
                                        for k, c in self.margin_checks.items()},
                "scenarios": [s.to_json() for s in self.scenarios]}
@@ -251,6 +261,9 @@ class VerifyResult:
 #: default checks when the scenario does not ask for them: 10 values of 8 bytes
 #: a row, 16 MB. Longer runs fall back on the simulator's (stricter) 5 % time.
 MAX_CHECK_TRACE_ROWS = 200_000
+
+#: The checks that hold the drift-box verdict: the default drive box, or the spec's box.
+ROBUSTNESS_CHECKS = ("default.robustness", "parameter_drift")
 
 #: The notice of a spec without ``[requirements]`` (CLI, verify.json, report).
 NO_REQUIREMENTS = "no requirements given; default checks only"
@@ -285,47 +298,33 @@ def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict,
             "reason": (f"the executed sampled loop of the {' and '.join(unstable)} axis is "
                        "unstable (a closed-loop pole on or outside the unit circle)"
                        if unstable else None)})
-    if spec.requirements.parameter_drift:
-        (informational if artifact.method in INFORMATIONAL_METHODS else checks)[
-            "parameter_drift"] = _drift_check(artifact, spec)
+    # the drift box every design is judged on: the spec's parameter_drift, else the
+    # default drive box (toolbox/ARCHITECTURE.md "Robustness verdict")
+    drift = _drift_check(artifact, spec)
+    key = "parameter_drift" if spec.requirements.parameter_drift else "default.robustness"
+    (informational if artifact.method in INFORMATIONAL_METHODS else checks)[key] = drift
     linear = {ax: LinearFigures(m.bandwidth_rad_s, m.response_time_5pct)
               for ax, m in margins.items()}
     return checks, stability, linear, warnings, informational
 
 
-#: The ``parameter_drift`` check evaluates the nominal set, the 2^k corners of
-#: the stated box (k <= 4) and this many Latin-hypercube sets inside it ...
-DRIFT_SETS = 200
-#: ... each at this many electrical speeds, -max..max (0 included).
-DRIFT_SPEEDS = 9
-
-
 def _drift_check(artifact, spec) -> dict:
-    """``[requirements] parameter_drift``: the executed coupled sampled loop
-    (delay, decoupling with the controller's own parameters) stays stable for
-    every evaluated set of the stated box at every speed up to the maximum
-    (:func:`toolbox.analysis.robustness_sweep`, the sweep's other parameters
-    held at their nominal values)."""
-    from ..analysis import DEFAULT_RANGES, robustness_sweep
+    """The robustness verdict: the executed coupled sampled loop (delay,
+    decoupling with the controller's own parameters, speed-sensor errors)
+    stays stable for every evaluated set of the drift box at every speed up to
+    the maximum (:func:`toolbox.analysis.drift_verdict`: the spec's
+    ``[requirements] parameter_drift``, else the default drive box
+    :data:`toolbox.analysis.DRIVE_DRIFT`). The record carries the worst
+    multiloop disk margin over the box and the box itself (``robustness``).
+    """
+    from ..analysis import drift_verdict
 
-    drift = spec.requirements.parameter_drift
-    ranges = {name: (list(drift[name]) if name in drift else None) for name in DEFAULT_RANGES}
-    sweep = robustness_sweep(artifact, spec.motor, ranges, n=DRIFT_SETS, drive=spec.drive,
-                             n_speeds=DRIFT_SPEEDS)
-    speed = max(sweep.speeds_rad_s)
-    reason = None
-    if sweep.n_unstable:
-        first = sweep.unstable_examples[0]
-        where = ", ".join(f"{k} x{first[k]:.3g}" for k in drift)
-        reason = (f"the coupled sampled loop is unstable for {sweep.n_unstable} of "
-                  f"{sweep.n_sets} parameter sets of the stated drift at electrical speeds "
-                  f"up to {speed:.4g} rad/s, e.g. {where} (largest closed-loop pole "
-                  f"{first['spectral_radius']:.4g})")
+    v = drift_verdict(artifact, spec.motor, spec.drive, spec.requirements.parameter_drift)
     return finalise_check({
-        "quantity": (f"unstable sets of {sweep.n_sets} (box corners and samples of the "
-                     f"drift, speeds up to {speed:.4g} rad/s electrical)"),
-        "bound": 0, "value": sweep.n_unstable, "unit": "sets",
-        "pass": sweep.n_unstable == 0, "reason": reason})
+        "quantity": (f"unstable sets of {v.n_sets} ({v.box_text}; corners and samples, "
+                     f"electrical speeds up to {v.max_speed_rad_s:.4g} rad/s)"),
+        "bound": 0, "value": v.n_unstable, "unit": "sets",
+        "pass": v.passed, "reason": v.failure(), "robustness": v.to_json()})
 
 
 def _fcs_linear_figures(drive) -> dict[str, LinearFigures]:
