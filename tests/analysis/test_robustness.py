@@ -81,14 +81,22 @@ PAPER000 = Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4, J=1.11e-3
                  friction=1.4e-3, convention="power", rated_current=20.0, rated_speed=230.0)
 
 
-def _eq17(motor, K, omega, eps, id_ref, iq_ref):
+def _eq17(motor, K, omega, eps, id_ref, iq_ref, rot=0.0):
     """Static currents of total compensation with a speed error w_m = (1 + eps) w,
     re-derived from paper 000 eq (1)-(2) and (11) (exact controller parameters):
+    the commanded v_c = R i + L K (i* - i) + w_m J L i + w_m psi e_q, applied
+    rotated by ``rot`` (the voltage placement's error, toolbox/ARCHITECTURE.md
+    "The digital loop"), equals the plant's R i + w J L i + w psi e_q. With
+    ``rot = 0`` this is eq (14)-(17):
       d: L_d K (i_d* - i_d) - eps w L_q i_q = 0
-      q: L_q K (i_q* - i_q) + eps w (L_d i_d + psi) = 0     (eq (14)-(17))."""
-    A = np.array([[motor.Ld * K, eps * omega * motor.Lq],
-                  [-eps * omega * motor.Ld, motor.Lq * K]])
-    b = np.array([motor.Ld * K * id_ref, motor.Lq * K * iq_ref + eps * omega * motor.flux])
+      q: L_q K (i_q* - i_q) + eps w (L_d i_d + psi) = 0."""
+    JL = np.array([[0.0, -motor.Lq], [motor.Ld, 0.0]])
+    LK = np.diag([motor.Ld * K, motor.Lq * K])
+    e_q = np.array([0.0, motor.flux])
+    Rot = np.array([[np.cos(rot), -np.sin(rot)], [np.sin(rot), np.cos(rot)]])
+    w_m = (1 + eps) * omega
+    A = Rot @ (motor.R * np.eye(2) - LK + w_m * JL) - motor.R * np.eye(2) - omega * JL
+    b = omega * e_q - Rot @ (LK @ np.array([id_ref, iq_ref]) + w_m * e_q)
     return np.linalg.solve(A, b)
 
 
@@ -99,20 +107,30 @@ def test_total_compensation_speed_error_eq17(eps, iq_eq17):
     i_q* = 10 A. The stacked sampled closed loop's static currents (ZOH, one-period
     delay: a DC quantity, so they equal the continuous ones) match the re-derived
     eq (17) to 1e-9 relative, and eq (17) itself (5.0052 A / 14.7337 A, 1e-4 A: the
-    printed digits); the paper's simulation printed 4.98 A and 14.83 A (0.5 % and
-    0.7 % away). With PI integrators the static error vanishes."""
+    printed digits), when the voltage is placed at the true mid-period angle
+    (the paper's continuous model: a placement time 1.5 Ts / (1 + eps) with the
+    measured speed); the paper's simulation printed 4.98 A and 14.83 A (0.5 % and
+    0.7 % away). The firmware places with the measured speed (1.5 Ts w_m): its
+    rotation error 1.5 Ts eps w moves them (to the re-derivation with that
+    rotation, 1e-9). With PI integrators the static error vanishes."""
+    from dataclasses import replace
     K, om, ref = 800.0, 4 * 200.0, (0.0, 10.0)
     tc = tc_artifact(K, PAPER000)
     laws = {k: M.axis_law(tc.axes[k], True) for k in "dq"}
-    cl = M.coupled_closed_loop(laws, tc.decoupling, TS, 1, R=PAPER000.R, Ld=PAPER000.Ld,
-                               Lq=PAPER000.Lq, omega=om, omega_meas=(1 + eps) * om,
-                               flux=PAPER000.flux)
-    assert cl.spectral_radius()[0] < 1
-    i = cl.steady_currents(ref)[0]
-    ref17 = _eq17(PAPER000, K, om, eps, *ref)
-    print(f"\neps={eps:+.1f}: i_d={i[0]:.3f} A, i_q={i[1]:.3f} A (eq 17: {ref17[1]:.3f} A)")
-    np.testing.assert_allclose(i, ref17, rtol=1e-9, atol=1e-9)
-    assert i[1] == pytest.approx(iq_eq17, abs=1e-4)
+    ideal = replace(tc.decoupling, delay_compensation_time=1.5 * TS / (1 + eps))
+    firmware = replace(tc.decoupling, delay_compensation_time=1.5 * TS)
+    for dec, rot in ((ideal, 0.0), (firmware, 1.5 * TS * eps * om)):
+        cl = M.coupled_closed_loop(laws, dec, TS, 1, R=PAPER000.R, Ld=PAPER000.Ld,
+                                   Lq=PAPER000.Lq, omega=om, omega_meas=(1 + eps) * om,
+                                   flux=PAPER000.flux)
+        assert cl.spectral_radius()[0] < 1
+        i = cl.steady_currents(ref)[0]
+        ref17 = _eq17(PAPER000, K, om, eps, *ref, rot=rot)
+        print(f"\neps={eps:+.3f}, placement error {rot:+.4f} rad: i_d={i[0]:.3f} A, "
+              f"i_q={i[1]:.3f} A (re-derived: {ref17[1]:.3f} A)")
+        np.testing.assert_allclose(i, ref17, rtol=1e-9, atol=1e-9)
+        if rot == 0.0:
+            assert i[1] == pytest.approx(iq_eq17, abs=1e-4)
     pi = pi_artifact(1000.0, PAPER000)
     laws = {k: M.axis_law(pi.axes[k], True) for k in "dq"}
     cl = M.coupled_closed_loop(laws, pi.decoupling, TS, 1, R=PAPER000.R, Ld=PAPER000.Ld,

@@ -147,6 +147,10 @@ def test_symmetric_optimum_gym_electric_motor_formula():
 
 
 def test_complex_vector_records_delay_compensation():
+    """The complex-vector PI's 1.5 Ts angle compensation is the drive's voltage
+    placement, which every method shares (toolbox/ARCHITECTURE.md "The digital
+    loop"): (delay + 1/2) Ts by default, 0 with angle_compensation = "none",
+    a given time otherwise."""
     art = design(make_spec("pi", {"rule": "complex_vector", "bandwidth": 2000}))
     assert art.design_parameters["Kp"]["q"] == pytest.approx(2.8e-3 * 2000, rel=1e-15)
     assert art.design_parameters["Ki"]["d"] == pytest.approx(0.6 * 2000, rel=1e-15)
@@ -154,7 +158,13 @@ def test_complex_vector_records_delay_compensation():
     assert art.decoupling.delay_compensation_time == pytest.approx(1.5 * TS, rel=1e-15)
     assert "delay_compensation_time" not in art.design_parameters
     plain = design(make_spec("pi", {"rule": "cancellation", "bandwidth": 2000}))
-    assert plain.decoupling.delay_compensation_time == 0.0
+    assert plain.decoupling.delay_compensation_time == pytest.approx(1.5 * TS, rel=1e-15)
+    for placement, t_c in (("none", 0.0), (2e-4, 2e-4)):
+        drive = {"vdc": 150, "sample_time": TS, "angle_compensation": placement}
+        art = design(make_spec("pi", {"rule": "complex_vector", "bandwidth": 2000}, drive))
+        assert art.decoupling.delay_compensation_time == t_c
+    two = design(make_spec("lq", {}, {"vdc": 150, "sample_time": TS, "delay_samples": 2}))
+    assert two.decoupling.delay_compensation_time == pytest.approx(2.5 * TS, rel=1e-15)
 
 
 def test_symmetric_optimum_reproduces_gem_control():

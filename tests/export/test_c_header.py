@@ -65,7 +65,7 @@ def test_header_structure(case):
         assert item in h
     assert "static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)" in h
     assert "NEGATED" in h and "arm_biquad_cascade_df2T_f32" in h
-    assert "NEXT period" in h
+    assert "DELAY_SAMPLES periods later" in h
     assert not re.search(r"\b(malloc|calloc|free|double)\b", h)
     # sinf/cosf only for the delay compensation's rotation (the PI case: 1.5 Ts)
     trig = {"sinf", "cosf"} if art.decoupling.delay_compensation_time > 0 else set()
@@ -113,7 +113,9 @@ def test_pi_gains_and_delay_compensation():
     no_comp = replace(art, decoupling=replace(art.decoupling, delay_compensation_time=0.0))
     h2 = write_header(no_comp, A.MOTOR, A.DRIVE)
     assert _comment_gain(h2, "q", "Kp") == pytest.approx(kp, rel=1e-6)
-    assert "DELAY_COMP" not in h2
+    # angle_compensation = "none": the macro says 0 and nothing rotates
+    assert float(re.search(r"#define CCT_DELAY_COMP_TIME (\S+)f", h2).group(1)) == 0.0
+    assert "cosf" not in h2 and 'angle_compensation = "none"' in h2
     h3 = write_header(replace(art, decoupling=replace(art.decoupling,
                                                       delay_compensation_time=2e-4)),
                       A.MOTOR, A.DRIVE)

@@ -527,8 +527,9 @@ class ReferenceLaw:
     * ``"circle"``: radial scaling onto ``|v| <= v_max``;
     * ``"hexagon"``: the SVM hexagon of apothem ``v_max`` (vertex radius
       ``2 v_max / sqrt(3)``, vertices at 0, 60, ... deg in the stationary frame),
-      seen at the electrical angle ``theta_e + w_e Ts (delay + 1/2)`` (the middle
-      of the application period); radial scaling onto its edge.
+      seen at the placement angle ``theta_e + t_c w_e`` (``t_c`` the
+      decoupling's ``delay_compensation_time``, toolbox/ARCHITECTURE.md "The
+      digital loop"); radial scaling onto its edge.
 
     Faults, as the header: a non-finite input returns the last good output
     with ``status = 1`` and leaves the state unchanged; a non-finite result
@@ -550,8 +551,7 @@ class ReferenceLaw:
         self.dec = artifact.decoupling
         self.v_max = float(v_max)
         self.limit = limit
-        self.ts = float(artifact.sample_time)
-        self.delay = int(artifact.delay_samples)
+        self.t_comp = float(artifact.decoupling.delay_compensation_time)
         self.laws = [artifact.axes[ax].law for ax in AXES]
         self.aws = [np.zeros(l.order) if artifact.axes[ax].antiwindup is None
                     else artifact.axes[ax].antiwindup.ravel()
@@ -565,7 +565,7 @@ class ReferenceLaw:
         if self.limit == "circle":
             mag = math.hypot(vd, vq)
             return self.v_max / mag if mag > self.v_max else 1.0
-        th = theta_e + w * self.ts * (self.delay + 0.5)
+        th = theta_e + w * self.t_comp
         c, sn = math.cos(th), math.sin(th)
         va, vb = vd * c - vq * sn, vd * sn + vq * c
         # largest projection on the edge normals at 30, 90 and 150 deg
