@@ -23,7 +23,8 @@ from analysis_helpers import plain_bisection
 from toolbox.analysis import (SampledBox, certify_sampled, largest_certified_sampled_scale,
                               largest_certified_scale, robustness_sweep)
 from toolbox.analysis import _sampled_certificate as S
-from toolbox.analysis._coupled import coupled_closed_loop, coupled_state_matrix
+from toolbox.analysis._coupled import (coupled_closed_loop, coupled_state_matrix,
+                                       placement_error, rotation)
 from toolbox.analysis._laws import axis_law
 from toolbox.analysis._statespace import zoh_2x2
 from toolbox.pipeline import design_spec
@@ -66,7 +67,8 @@ def _laws(art):
 
 
 def test_state_matrix_is_the_executed_loop():
-    """coupled_state_matrix with the exact ZOH matrices is coupled_closed_loop's
+    """coupled_state_matrix with the exact ZOH matrices and the voltage's input
+    matrix ``Gamma R(eps)`` (the placement error) is coupled_closed_loop's
     state matrix (the certificate's loop is the sweep's loop), bit for bit."""
     spec, art = gallery_design("hinf003")
     rng = np.random.default_rng(3)
@@ -76,7 +78,10 @@ def test_state_matrix_is_the_executed_loop():
     loop = coupled_closed_loop(_laws(art), art.decoupling, art.sample_time, art.delay_samples,
                                R=R, Ld=Ld, Lq=Lq, omega=w, omega_meas=wm)
     Phi, Gam = zoh_2x2(*dq_matrices(R, Ld, Lq, w), art.sample_time)
-    A = coupled_state_matrix(_laws(art), art.decoupling, art.delay_samples, Phi, Gam, wm)
+    eps = placement_error(art.decoupling, art.sample_time, art.delay_samples, w, wm)
+    assert np.all(eps != 0)           # the voltage placement is part of the loop
+    A = coupled_state_matrix(_laws(art), art.decoupling, art.delay_samples, Phi,
+                             Gam @ rotation(eps), wm)
     assert np.array_equal(A, loop.A)
 
 

@@ -79,7 +79,8 @@ from scipy.linalg import expm
 from .._lti import diagonal_scaling
 from ..artifact import json_ready
 from ..plant import dq_matrices, max_electrical_speed
-from ._coupled import coupled_closed_loop, coupled_state_matrix
+from ._coupled import (coupled_closed_loop, coupled_state_matrix, placement_error,
+                       rotation)
 from ._laws import AXES, axis_law
 from ._lmi import (ACTIVE_STEP, above_identity, lmi_rows, problem_data,
                    solve_by_constraint_generation, solve_feasibility, symmetric_basis,
@@ -91,7 +92,9 @@ __all__ = ["SampledBox", "SampledCertificate", "certify_sampled",
 
 #: strict margin of the vertex LMIs (the data are normalised to order 1)
 _EPS = 1e-7
-#: corner matrices per cell: the 2^6 corners of Theta times the two measured-speed ends
+#: corner matrices per cell without placement error: the 2^6 corners of Theta times
+#: the two measured-speed ends (times the placement polygon's 4 vertices when the
+#: placement error varies over the cell)
 _N_VERTICES = 2 ** 6 * 2
 
 
@@ -180,7 +183,9 @@ class SampledCertificate:
     speed_cells : int
         Speed cells (one Lyapunov matrix each).
     n_vertices : int
-        Corner matrices per cell (64 plant coordinates x 2 measured speeds).
+        Corner matrices per cell, the largest over the certified cells (64
+        plant coordinates x 2 measured speeds, x 4 vertices of the placement
+        polygon when the placement error varies over the cell).
     remainder_bound : float
         Largest linearisation remainder ``rho`` of the certified cells.
     condition_P : float
@@ -224,6 +229,7 @@ class _CellOutcome:
     condition_P: float
     worst_corner: np.ndarray      # (R, Ld, Lq, w, g, o) of the largest exact radius
     worst_radius: float
+    n_vertices: int = _N_VERTICES  # corner matrices of the cell's polytope
 
 
 def _laws(artifact) -> dict:
@@ -308,24 +314,66 @@ def _zoh_polytope(cell: SampledBox, Ts: float):
     return Phi, Psi @ b, b, lin.rho
 
 
+def _placement_polygon(artifact, cell: SampledBox) -> tuple[float, np.ndarray]:
+    """``(eps_c, Q)``: the centre of the placement error's range over the cell
+    and the vertices ``Q`` (m, 2) of a polygon containing every
+    ``(cos delta, sin delta)``, ``delta = eps - eps_c`` (module docstring,
+    step 3).
+
+    ``eps = t_c (g w + o) - (d + 1/2) Ts w``
+    (:func:`~toolbox.analysis._coupled.placement_error`) is affine in ``w``
+    for fixed ``g`` and affine in ``(g, o)`` for fixed ``w``: its range over
+    the cell is attained at the cell's corners. With ``D`` the half-width:
+    ``D = 0`` gives the single vertex ``(1, 0)`` (no extra corners);
+    ``0 < D < pi`` the trapezoid bounded by the chord at ``cos D`` and the
+    tangents at ``delta = -D, 0, D``, vertices ``(cos D, +/-sin D)`` and
+    ``(1, +/-tan(D/2))``; ``D >= pi`` the square ``[-1, 1]^2``.
+    """
+    c = cell.corners()
+    eps = placement_error(artifact.decoupling, artifact.sample_time,
+                          int(artifact.delay_samples), c[:, 3], c[:, 4] * c[:, 3] + c[:, 5])
+    lo, hi = float(np.min(eps)), float(np.max(eps))
+    eps_c = 0.5 * (lo + hi)
+    if hi == lo:
+        return eps_c, np.array([[1.0, 0.0]])
+    # widened by far more than the rounding of eps, eps_c and D
+    D = 0.5 * (hi - lo) + 1e-12 * max(abs(lo), abs(hi))
+    if D >= math.pi:
+        return eps_c, np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
+    t = math.tan(0.5 * D)
+    return eps_c, np.array([[math.cos(D), -math.sin(D)], [math.cos(D), math.sin(D)],
+                            [1.0, -t], [1.0, t]])
+
+
 def _vertices(artifact, laws, cell: SampledBox):
-    """Corner matrices ``A_i`` (N, n, n), ``V_i`` (N, 4, n) and ``rho`` (steps 1-3)."""
+    """Corner matrices ``A_i`` (N, n, n), ``V_i`` (N, 4, n) and ``rho`` (steps 1-3).
+
+    ``N = 64 x 2 x m``: the corners of ``Theta``, the two measured-speed ends
+    and the ``m`` vertices of the placement polygon (:func:`_placement_polygon`;
+    ``m = 1`` when the placement error is constant over the cell)."""
     Ts, d = artifact.sample_time, int(artifact.delay_samples)
     Phi, Gam, b, rho = _zoh_polytope(cell, Ts)
     wm = np.array(cell.measured_speed())
-    k = Phi.shape[0]
-    Phi, Gam, b = (np.repeat(M, 2, axis=0) for M in (Phi, Gam, b))
-    wm = np.tile(wm, k)
+    eps_c, Q = _placement_polygon(artifact, cell)
+    # R(eps) = R(eps_c) (cos delta I + sin delta J) at the polygon's vertices
+    J = np.array([[0.0, -1.0], [1.0, 0.0]])
+    Rot = rotation(eps_c)[0] @ (Q[:, 0, None, None] * np.eye(2) + Q[:, 1, None, None] * J)
+    k, m = Phi.shape[0], Q.shape[0]
+    Phi, Gam, b = (np.repeat(M, 2 * m, axis=0) for M in (Phi, Gam, b))
+    wm = np.tile(np.repeat(wm, m), k)
+    Rot = np.tile(Rot, (2 * k, 1, 1))
     dec = artifact.decoupling
-    A = coupled_state_matrix(laws, dec, d, Phi, Gam, wm)
+    # the commanded voltage enters through Gamma R(eps) (coupled_closed_loop)
+    A = coupled_state_matrix(laws, dec, d, Phi, Gam @ Rot, wm)
     n = A.shape[-1]
     zero = np.zeros_like(Phi)
-    # the applied voltage's state map u(x): the current rows' gain on Gamma
+    # the commanded voltage's state map: the current rows' gain on Gamma R(eps)
     S = (coupled_state_matrix(laws, dec, d, zero, np.broadcast_to(np.eye(2), Phi.shape), wm)
          - coupled_state_matrix(laws, dec, d, zero, zero, wm))[:, :2, :]
     V = np.zeros((A.shape[0], 4, n))
     V[:, 0, 0] = V[:, 1, 1] = 1.0
-    V[:, 2:, :] = b @ S
+    # the rotated (applied) voltage scaled by b: the remainder's Psi factor multiplies it
+    V[:, 2:, :] = b @ Rot @ S
     return A, V, rho
 
 
@@ -421,12 +469,17 @@ def _solve_lmi(A, G, U, order: np.ndarray, step: int = ACTIVE_STEP):
     the verdict is then the solve over all corners'
     (:func:`toolbox.analysis._lmi.solve_by_constraint_generation`)."""
     n = A.shape[-1]
-    identity, (Ac, bc) = _lmi_blocks(A, G, U)
-    n_x = Ac.shape[-1]
+    n_x = n * (n + 1) // 2 + 1
+    identity = above_identity(n, n_x)
+    rows: dict = {}     # corner -> its rows, assembled when the corner first enters a solve
 
     def solve(idx):
+        new = [i for i in idx if i not in rows]
+        if new:
+            _, (Ac, bc) = _lmi_blocks(A[new], G[new], U)
+            rows.update(zip(new, zip(Ac, bc)))
         x, status = solve_feasibility(*problem_data(
-            [identity] + list(zip(Ac[idx], bc[idx])), n_x, nonneg=[n_x - 1]))
+            [identity] + [rows[i] for i in idx], n_x, nonneg=[n_x - 1]))
         return (None if x is None else (symmetric_matrix(x[:-1], n), float(x[-1]))), status
 
     sol, status = solve_by_constraint_generation(
@@ -463,11 +516,13 @@ class _CellLMI:
     t: np.ndarray
     radii: np.ndarray
     rho: float
+    n_vertices: int
 
 
 def _cell_lmi(artifact, laws, cell: SampledBox) -> _CellLMI:
     """The corner data of a cell (steps 1-4), balanced, repeated corners dropped."""
     A, V, rho = _vertices(artifact, laws, cell)
+    n_vertices = A.shape[0]
     G = rho ** 2 * np.transpose(V, (0, 2, 1)) @ V
     n = A.shape[-1]
     U = np.zeros((n, 2))
@@ -478,7 +533,7 @@ def _cell_lmi(artifact, laws, cell: SampledBox) -> _CellLMI:
     A, G = A[keep], G[keep]
     return _CellLMI(A * t[None, None, :] / t[None, :, None],
                     G * t[None, :, None] * t[None, None, :], U / t[:, None], t,
-                    np.max(np.abs(np.linalg.eigvals(A)), axis=1), rho)
+                    np.max(np.abs(np.linalg.eigvals(A)), axis=1), rho, n_vertices)
 
 
 def _mirror_signs(laws, delay_samples: int) -> np.ndarray:
@@ -524,7 +579,7 @@ def _certify_cell(artifact, laws, cell: SampledBox, guesses: Sequence[tuple] = (
     # polytope that is not Schur makes the LMIs infeasible, no need to solve them
     if np.max(c.radii) >= 1.0:
         return _CellOutcome(False, "a corner of the polytope over the cell is unstable", c.rho,
-                            math.nan, *worst), None, 0.0
+                            math.nan, *worst, c.n_vertices), None, 0.0
     # constraint generation starts with the corners a rejected warm start
     # violates most, else with the least stable ones
     order = np.argsort(-c.radii)
@@ -532,17 +587,17 @@ def _certify_cell(artifact, laws, cell: SampledBox, guesses: Sequence[tuple] = (
         Pg = guess * c.t[:, None] * c.t[None, :]
         lam = _multiplier(c.A, c.G, c.U, Pg) if lam is None else lam
         if _verified(c.A, c.G, c.U, Pg, lam):
-            return (_CellOutcome(True, "warm start", c.rho, float(np.linalg.cond(Pg)), *worst),
-                    guess, lam)
+            return (_CellOutcome(True, "warm start", c.rho, float(np.linalg.cond(Pg)), *worst,
+                                 c.n_vertices), guess, lam)
         order = np.argsort(-_corner_slack(c.A, c.G, c.U, Pg, lam))
     P, lam, status = _solve_lmi(c.A, c.G, c.U, order)
     if P is None:
         return _CellOutcome(False, f"no Lyapunov matrix found ({status})", c.rho, math.nan,
-                            *worst), None, 0.0
+                            *worst, c.n_vertices), None, 0.0
     if not _verified(c.A, c.G, c.U, P, lam):
         return _CellOutcome(False, "the solver's Lyapunov matrix fails the numpy check", c.rho,
-                            math.nan, *worst), None, 0.0
-    return (_CellOutcome(True, status, c.rho, float(np.linalg.cond(P)), *worst),
+                            math.nan, *worst, c.n_vertices), None, 0.0
+    return (_CellOutcome(True, status, c.rho, float(np.linalg.cond(P)), *worst, c.n_vertices),
             P / c.t[:, None] / c.t[None, :], lam)
 
 
@@ -655,7 +710,8 @@ def largest_certified_sampled_scale(artifact, motor, drive=None, *, R=DEFAULT_BO
             certified=bool(outcomes and all(o.certified for o in outcomes)), scale=k,
             box=json_ready(asdict(b)), speed_range_rad_s=list(b.omega),
             delay_samples=int(artifact.delay_samples), speed_cells=speed_cells,
-            n_vertices=_N_VERTICES, remainder_bound=max((o.rho for o in ok), default=math.nan),
+            n_vertices=max((o.n_vertices for o in ok), default=_N_VERTICES),
+            remainder_bound=max((o.rho for o in ok), default=math.nan),
             condition_P=max((o.condition_P for o in ok), default=math.nan),
             first_uncertified=first)
 
