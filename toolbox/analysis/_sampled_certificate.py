@@ -7,7 +7,11 @@ half the inductance). This certificate is about the loop the robustness
 sweep and the simulator run: :func:`toolbox.analysis.margins.coupled_closed_loop`
 (ZOH plant at constant speed, the executed discrete laws of both axes, the
 decoupling with the controller's parameters and the measured speed, the
-delay line of ``delay_samples`` periods).
+delay line of ``delay_samples`` periods, and the voltage placement: the
+commanded voltage enters through ``Gamma R(eps)``,
+``eps = t_c w_m - (d + 1/2) Ts w``, toolbox/ARCHITECTURE.md "The digital
+loop"; the back-EMF, an input that does not affect stability, through
+``Gamma``).
 
 Uncertainty: true ``R``, ``Ld``, ``Lq``, electrical speed ``w``, and the
 measured speed ``w_m = g w + o`` of the decoupling (sensor gain ``g`` and
@@ -22,6 +26,18 @@ Soundness argument (every step is an over-bound, none an approximation):
    entry (``Ts R/Ld``, ``Ts w Lq/Ld``, ``Ts/Ld``, ...) is monotone in each
    physical parameter, so its range over a cell is attained at the cell's
    16 corners; the box ``Theta`` of these ranges contains the cell's image.
+   The placement error ``eps = t_c (g w + o) - (d + 1/2) Ts w``
+   (:func:`~toolbox.analysis._coupled.placement_error`) is multi-affine in
+   ``(w, g, o)``, so its range ``[eps_c - h, eps_c + h]`` over the cell is
+   attained at the corners too; ``R(eps) = R(eps_c) (cos delta I + sin delta J)``,
+   ``J = [[0, -1], [1, 0]]``, ``|delta| <= h``, and ``(cos delta, sin delta)``
+   lies in the trapezoid ``Q`` with vertices ``(cos h, +/-sin h)``,
+   ``(1, +/-tan(h/2))`` (bounded by the chord and the arc's tangents at
+   ``delta = -h, 0, h``; valid for ``h < pi``, the square ``[-1, 1]^2``
+   beyond; ``h`` widened by 1e-12 relative for rounding). When ``eps`` is
+   constant over the cell (``h = 0``: the default ``t_c = (d + 1/2) Ts``
+   without speed-sensor error gives ``eps = 0`` exactly) ``Q`` is the point
+   ``(1, 0)``.
 2. *Linearisation with a remainder.* At the centre ``X_c`` of ``Theta``,
    ``exp(X_c + D) = exp(X_c) + Dexp[D] + r`` and likewise for ``Psi`` with
    the Frechet derivatives (block-triangular exponentials, exact), and
@@ -31,23 +47,35 @@ Soundness argument (every step is an over-bound, none an approximation):
    at a corner). Hence ``[r_Phi, r_Psi]`` has 2-norm at most
    ``rho = sqrt(2) e^a (e^b - 1 - b)``.
 3. *Polytope.* With the linear parts, the closed-loop matrix is multi-affine
-   in (the ``X`` coordinates, the ``b`` coordinates, ``w_m``): the loop is
-   affine in ``(Phi, Gamma)`` and, through the decoupling, in ``w_m``
+   in (the ``X`` coordinates, the ``b`` coordinates, ``w_m``) and affine in
+   ``(cos delta, sin delta)``: the loop is affine in ``(Phi, Gamma_v)`` and,
+   through the decoupling, in ``w_m``
    (:func:`~toolbox.analysis._coupled.coupled_state_matrix`), and
-   ``Gamma_lin = Psi_lin diag(b)``. A multi-affine function on a box is a
-   convex combination of its values at the box's corners (the same weights
-   for all factors), so ``A_cl = sum_i l_i A_i + U r V`` with the 64 x 2
-   corner matrices ``A_i``, ``U`` the current rows and ``V x = [i; diag(b) u]``
-   (``u``: the applied voltage's state map, same weights ``l_i``).
+   ``Gamma_v,lin = Psi_lin diag(b) R(eps_c) (cos delta I + sin delta J)``, a
+   product of factors each depending on one group of coordinates. Treating
+   ``w_m`` and ``(cos delta, sin delta)`` as free in their ranges (ignoring
+   their tie to ``w``, ``g``, ``o`` and the arc) only enlarges the set.
+   A function multi-affine on a box times a polygon (affine in the polygon's
+   point) is a convex combination of its values at the products of the box's
+   corners and the polygon's vertices (the box's multi-affine weights times
+   any convex weights of the point in the polygon; the same weights for all
+   factors), so ``A_cl = sum_i l_i A_i + U r V x`` with the 64 x 2 x ``m``
+   corner matrices ``A_i`` (``m`` = 4 vertices of ``Q``, 1 when ``h = 0``),
+   ``U`` the current rows, ``r = [r_Phi, r_Psi]`` and
+   ``V x = [i; diag(b) R(eps) u]`` (``u``: the commanded voltage's state map,
+   so ``R(eps) u`` is the voltage applied in the rotor frame, on which the
+   remainder ``r_Psi diag(b)`` acts); ``V`` is affine in the same
+   coordinates, so ``V = sum_i l_i V_i`` with the same weights.
 4. *Lyapunov with the S-procedure.* For ``w = r V x``, ``|w| <= rho |V x|``;
    if ``P > 0``, ``lam >= 0`` satisfy at every corner
    ``[[P - lam rho^2 V_i'V_i, 0, A_i'P], [0, lam I, U'P], [P A_i, P U, P]] > 0``
    then ``x'(.)x`` decreases along ``x+ = A_i x + U w`` for all such ``w``
    (Schur complement of the S-procedure inequality). That inequality is
    jointly matrix-convex in ``(A, V)`` (``[A U]'P[A U] + lam rho^2 V'V``),
-   so it holds for every convex combination, hence for every plant of the
-   cell and every remainder: every frozen set of the cell has a Schur
-   closed loop (in fact the cell is quadratically stable).
+   so it holds for every convex combination ``(sum l_i A_i, sum l_i V_i)``,
+   hence for every plant, measured speed and placement error of the cell and
+   every remainder: every frozen set of the cell has a Schur closed loop (in
+   fact the cell is quadratically stable).
 5. *Cells and check.* The speed range is split into cells (a Lyapunov
    matrix per cell: the certificate is for constant speed, as the sweep's
    loops are). The LMIs are handed to Clarabel directly
@@ -56,7 +84,10 @@ Soundness argument (every step is an over-bound, none an approximation):
    corner inequality is re-checked with numpy eigenvalues of the returned
    ``P, lam`` (a cell counts as certified only when that check passes).
    Warm starts (a smaller box's ``P``, the mirror image of the opposite
-   speed cell's) pass the same check or are not used.
+   speed cell's: ``(w, w_m) -> (-w, -w_m)`` maps ``eps`` to ``-eps`` and
+   ``R(-eps) = S2 R(eps) S2``, ``S2 = diag(1, -1)``, the same similarity)
+   pass the same check or are not used. A corner's LMI rows are assembled
+   when it first enters a solve (constraint generation needs a few).
 
 The box at scale ``k`` interpolates from the nominal point (``k = 0``) to the
 given ranges (``k = 1``); the bisection on ``k`` reports the largest certified
@@ -212,7 +243,8 @@ class SampledCertificate:
     first_uncertified: dict | None = None
     basis: str = field(default=(
         "sampled coupled dq loop as executed (ZOH plant, computation delay, decoupling with "
-        "the controller's parameters and the measured speed): common quadratic Lyapunov "
+        "the controller's parameters and the measured speed, voltage placement Gamma R(eps)): "
+        "common quadratic Lyapunov "
         "function per speed cell over a polytope containing the exact ZOH model "
         "(linearisation plus a norm-bounded remainder, S-procedure)"))
 
@@ -321,13 +353,13 @@ def _placement_polygon(artifact, cell: SampledBox) -> tuple[float, np.ndarray]:
     step 3).
 
     ``eps = t_c (g w + o) - (d + 1/2) Ts w``
-    (:func:`~toolbox.analysis._coupled.placement_error`) is affine in ``w``
-    for fixed ``g`` and affine in ``(g, o)`` for fixed ``w``: its range over
-    the cell is attained at the cell's corners. With ``D`` the half-width:
-    ``D = 0`` gives the single vertex ``(1, 0)`` (no extra corners);
-    ``0 < D < pi`` the trapezoid bounded by the chord at ``cos D`` and the
-    tangents at ``delta = -D, 0, D``, vertices ``(cos D, +/-sin D)`` and
-    ``(1, +/-tan(D/2))``; ``D >= pi`` the square ``[-1, 1]^2``.
+    (:func:`~toolbox.analysis._coupled.placement_error`) is multi-affine in
+    ``(w, g, o)``: its range over the cell is attained at the cell's
+    corners. With ``D`` the half-width: ``D = 0`` gives the single vertex
+    ``(1, 0)`` (no extra corners); ``0 < D < pi`` the trapezoid bounded by
+    the chord at ``cos D`` and the tangents at ``delta = -D, 0, D``,
+    vertices ``(cos D, +/-sin D)`` and ``(1, +/-tan(D/2))``; ``D >= pi`` the
+    square ``[-1, 1]^2``.
     """
     c = cell.corners()
     eps = placement_error(artifact.decoupling, artifact.sample_time,
