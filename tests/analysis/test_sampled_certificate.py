@@ -540,3 +540,30 @@ def test_no_placement_error_keeps_128_corners():
                                 art0.delay_samples, R=m.R, Ld=m.Ld, Lq=m.Lq, omega=900.0).A
     assert A.shape[0] == 128
     np.testing.assert_allclose(A, np.broadcast_to(exact, A.shape), rtol=0, atol=1e-12)
+
+
+def test_speed_range_stated_in_mechanical_and_electrical(case):
+    """The certificate's JSON states the covered speed range in mechanical rad/s
+    (as the spec's ``max_speed``) beside the electrical one, and the report
+    renders the speeds as mechanical with electrical in brackets (electrical
+    alone for a JSON without ``pole_pairs``)."""
+    from toolbox.report import _sampled_certificate_of
+
+    spec, art, cert = case
+    pp = spec.motor.pole_pairs
+    assert cert.pole_pairs == pp
+    assert cert.speed_range_mech_rad_s == [w / pp for w in cert.speed_range_rad_s]
+    wmax = max_electrical_speed(spec.motor, spec.drive)
+    assert cert.speed_range_mech_rad_s[1] == pytest.approx(cert.scale * wmax / pp, rel=1e-12)
+    data = json.loads(json.dumps(cert.to_json(), allow_nan=False))
+    facts = _sampled_certificate_of(data)
+    lo, hi = cert.speed_range_rad_s
+    covered = facts["sampled loop: speed range covered"]
+    assert covered.endswith(f"rad/s mechanical ({lo:.4g} .. {hi:.4g} rad/s electrical)")
+    assert covered.startswith(f"{lo / pp:.4g} .. {hi / pp:.4g}")
+    assert "rad/s mechanical" in facts["sampled loop: box speed-sensor offset"]
+    assert facts["sampled loop: box R"].endswith(" ohm")
+    assert "mechanical (" in facts["sampled loop: first uncertified corner"]
+    del data["pole_pairs"]
+    assert _sampled_certificate_of(data)["sampled loop: speed range covered"] == (
+        f"{lo:.4g} .. {hi:.4g} rad/s electrical")

@@ -206,9 +206,15 @@ class SampledCertificate:
     scale : float
         Largest certified box scale (0 nominal .. ``max_scale``).
     box : dict
-        The certified :class:`SampledBox` (ohm, H, H, rad/s, 1, rad/s).
+        The certified :class:`SampledBox` (ohm, H, H, electrical rad/s, 1,
+        electrical rad/s).
     speed_range_rad_s : list
         Certified true electrical speed range (rad/s).
+    speed_range_mech_rad_s : list
+        The same range in mechanical rad/s (``speed_range_rad_s / pole_pairs``;
+        the spec's ``max_speed`` is mechanical).
+    pole_pairs : int
+        Pole pairs of the motor (electrical = ``pole_pairs`` x mechanical).
     delay_samples : int
         Computation delay of the certified loop (the design's).
     speed_cells : int
@@ -235,6 +241,8 @@ class SampledCertificate:
     scale: float
     box: dict
     speed_range_rad_s: list
+    speed_range_mech_rad_s: list
+    pole_pairs: int
     delay_samples: int
     speed_cells: int
     n_vertices: int
@@ -741,6 +749,8 @@ def largest_certified_sampled_scale(artifact, motor, drive=None, *, R=DEFAULT_BO
         return SampledCertificate(
             certified=bool(outcomes and all(o.certified for o in outcomes)), scale=k,
             box=json_ready(asdict(b)), speed_range_rad_s=list(b.omega),
+            speed_range_mech_rad_s=[w / motor.pole_pairs for w in b.omega],
+            pole_pairs=int(motor.pole_pairs),
             delay_samples=int(artifact.delay_samples), speed_cells=speed_cells,
             n_vertices=max((o.n_vertices for o in ok), default=_N_VERTICES),
             remainder_bound=max((o.rho for o in ok), default=math.nan),
