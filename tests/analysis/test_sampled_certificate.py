@@ -486,10 +486,10 @@ def test_ignoring_the_rotation_would_certify_an_unstable_set(monkeypatch):
     """(b) Paper 002's PI with ``t_c = 0`` at 600..700 rad/s (about 4.6 times
     its top speed; the placement error -0.30..-0.35 rad): the loop as executed
     is unstable inside the cell, while the loop without the rotation is not
-    (radius about 0.88; its polytope corners 0.91). The certificate refuses the cell, and so does its
-    polytope alone; the polytope of the unrotated Gamma (the certificate
-    before the placement) admits a Lyapunov matrix that passes the numpy
-    check: it would have certified an unstable set."""
+    (radius about 0.88; its polytope corners 0.91). The certificate refuses
+    the cell, and so does its polytope alone; the polytope of the unrotated
+    Gamma (the certificate before the placement) admits a Lyapunov matrix
+    that passes the numpy check: it would have certified an unstable set."""
     spec, art = placement_design("pi002", "none")
     laws, m = _laws(art), spec.motor
     cell = SampledBox((m.R, m.R), (m.Ld, m.Ld), (m.Lq, m.Lq), (600.0, 700.0))

@@ -34,10 +34,10 @@ Soundness argument (every step is an over-bound, none an approximation):
    lies in the trapezoid ``Q`` with vertices ``(cos h, +/-sin h)``,
    ``(1, +/-tan(h/2))`` (bounded by the chord and the arc's tangents at
    ``delta = -h, 0, h``; valid for ``h < pi``, the square ``[-1, 1]^2``
-   beyond; ``h`` widened by 1e-12 relative for rounding). When ``eps`` is
-   constant over the cell (``h = 0``: the default ``t_c = (d + 1/2) Ts``
-   without speed-sensor error gives ``eps = 0`` exactly) ``Q`` is the point
-   ``(1, 0)``.
+   beyond; ``h`` widened by 1e-12 of the terms of ``eps`` for rounding).
+   When ``eps`` is constant over the cell (``h = 0``: the default
+   ``t_c = (d + 1/2) Ts`` without speed-sensor error gives ``eps = 0``
+   exactly) ``Q`` is the point ``(1, 0)``.
 2. *Linearisation with a remainder.* At the centre ``X_c`` of ``Theta``,
    ``exp(X_c + D) = exp(X_c) + Dexp[D] + r`` and likewise for ``Psi`` with
    the Frechet derivatives (block-triangular exponentials, exact), and
@@ -370,14 +370,18 @@ def _placement_polygon(artifact, cell: SampledBox) -> tuple[float, np.ndarray]:
     square ``[-1, 1]^2``.
     """
     c = cell.corners()
-    eps = placement_error(artifact.decoupling, artifact.sample_time,
-                          int(artifact.delay_samples), c[:, 3], c[:, 4] * c[:, 3] + c[:, 5])
+    d = int(artifact.delay_samples)
+    wm = c[:, 4] * c[:, 3] + c[:, 5]
+    eps = placement_error(artifact.decoupling, artifact.sample_time, d, c[:, 3], wm)
     lo, hi = float(np.min(eps)), float(np.max(eps))
     eps_c = 0.5 * (lo + hi)
     if hi == lo:
         return eps_c, np.array([[1.0, 0.0]])
-    # widened by far more than the rounding of eps, eps_c and D
-    D = 0.5 * (hi - lo) + 1e-12 * max(abs(lo), abs(hi))
+    # widened by far more than the rounding of eps (a difference of two terms
+    # that may nearly cancel), eps_c and D
+    terms = max(float(np.max(np.abs(artifact.decoupling.delay_compensation_time * wm))),
+                float(np.max(np.abs((d + 0.5) * artifact.sample_time * c[:, 3]))))
+    D = 0.5 * (hi - lo) + 1e-12 * terms
     if D >= math.pi:
         return eps_c, np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
     t = math.tan(0.5 * D)
