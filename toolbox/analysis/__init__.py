@@ -136,7 +136,8 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
     disk margin over the parameter box and the speeds, with its speed and
     parameters, :func:`mimo_over_box`), ``certificate``
     (``{"certified_scale", "certified"}`` or None) and ``sampled_certificate``
-    (the same for the sampled coupled loop, with ``speed_range_rad_s``, or None).
+    (the same for the sampled coupled loop, with ``speed_range_rad_s``, electrical,
+    and ``speed_range_mech_rad_s``, mechanical, or None).
 
     Parameters
     ----------
@@ -179,6 +180,8 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = 500
             "sampled_certificate": (None if scert is None else
                                     {"certified_scale": scert.scale,
                                      "certified": scert.certified,
-                                     "speed_range_rad_s": scert.speed_range_rad_s}),
+                                     "speed_range_rad_s": scert.speed_range_rad_s,
+                                     "speed_range_mech_rad_s":
+                                         scert.speed_range_mech_rad_s}),
         }))
     return rows

@@ -7,7 +7,11 @@ half the inductance). This certificate is about the loop the robustness
 sweep and the simulator run: :func:`toolbox.analysis.margins.coupled_closed_loop`
 (ZOH plant at constant speed, the executed discrete laws of both axes, the
 decoupling with the controller's parameters and the measured speed, the
-delay line of ``delay_samples`` periods).
+delay line of ``delay_samples`` periods, and the voltage placement: the
+commanded voltage enters through ``Gamma R(eps)``,
+``eps = t_c w_m - (d + 1/2) Ts w``, toolbox/ARCHITECTURE.md "The digital
+loop"; the back-EMF, an input that does not affect stability, through
+``Gamma``).
 
 Uncertainty: true ``R``, ``Ld``, ``Lq``, electrical speed ``w``, and the
 measured speed ``w_m = g w + o`` of the decoupling (sensor gain ``g`` and
@@ -22,6 +26,18 @@ Soundness argument (every step is an over-bound, none an approximation):
    entry (``Ts R/Ld``, ``Ts w Lq/Ld``, ``Ts/Ld``, ...) is monotone in each
    physical parameter, so its range over a cell is attained at the cell's
    16 corners; the box ``Theta`` of these ranges contains the cell's image.
+   The placement error ``eps = t_c (g w + o) - (d + 1/2) Ts w``
+   (:func:`~toolbox.analysis._coupled.placement_error`) is multi-affine in
+   ``(w, g, o)``, so its range ``[eps_c - h, eps_c + h]`` over the cell is
+   attained at the corners too; ``R(eps) = R(eps_c) (cos delta I + sin delta J)``,
+   ``J = [[0, -1], [1, 0]]``, ``|delta| <= h``, and ``(cos delta, sin delta)``
+   lies in the trapezoid ``Q`` with vertices ``(cos h, +/-sin h)``,
+   ``(1, +/-tan(h/2))`` (bounded by the chord and the arc's tangents at
+   ``delta = -h, 0, h``; valid for ``h < pi``, the square ``[-1, 1]^2``
+   beyond; ``h`` widened by 1e-12 of the terms of ``eps`` for rounding).
+   When ``eps`` is constant over the cell (``h = 0``: the default
+   ``t_c = (d + 1/2) Ts`` without speed-sensor error gives ``eps = 0``
+   exactly) ``Q`` is the point ``(1, 0)``.
 2. *Linearisation with a remainder.* At the centre ``X_c`` of ``Theta``,
    ``exp(X_c + D) = exp(X_c) + Dexp[D] + r`` and likewise for ``Psi`` with
    the Frechet derivatives (block-triangular exponentials, exact), and
@@ -31,23 +47,35 @@ Soundness argument (every step is an over-bound, none an approximation):
    at a corner). Hence ``[r_Phi, r_Psi]`` has 2-norm at most
    ``rho = sqrt(2) e^a (e^b - 1 - b)``.
 3. *Polytope.* With the linear parts, the closed-loop matrix is multi-affine
-   in (the ``X`` coordinates, the ``b`` coordinates, ``w_m``): the loop is
-   affine in ``(Phi, Gamma)`` and, through the decoupling, in ``w_m``
+   in (the ``X`` coordinates, the ``b`` coordinates, ``w_m``) and affine in
+   ``(cos delta, sin delta)``: the loop is affine in ``(Phi, Gamma_v)`` and,
+   through the decoupling, in ``w_m``
    (:func:`~toolbox.analysis._coupled.coupled_state_matrix`), and
-   ``Gamma_lin = Psi_lin diag(b)``. A multi-affine function on a box is a
-   convex combination of its values at the box's corners (the same weights
-   for all factors), so ``A_cl = sum_i l_i A_i + U r V`` with the 64 x 2
-   corner matrices ``A_i``, ``U`` the current rows and ``V x = [i; diag(b) u]``
-   (``u``: the applied voltage's state map, same weights ``l_i``).
+   ``Gamma_v,lin = Psi_lin diag(b) R(eps_c) (cos delta I + sin delta J)``, a
+   product of factors each depending on one group of coordinates. Treating
+   ``w_m`` and ``(cos delta, sin delta)`` as free in their ranges (ignoring
+   their tie to ``w``, ``g``, ``o`` and the arc) only enlarges the set.
+   A function multi-affine on a box times a polygon (affine in the polygon's
+   point) is a convex combination of its values at the products of the box's
+   corners and the polygon's vertices (the box's multi-affine weights times
+   any convex weights of the point in the polygon; the same weights for all
+   factors), so ``A_cl = sum_i l_i A_i + U r V x`` with the 64 x 2 x ``m``
+   corner matrices ``A_i`` (``m`` = 4 vertices of ``Q``, 1 when ``h = 0``),
+   ``U`` the current rows, ``r = [r_Phi, r_Psi]`` and
+   ``V x = [i; diag(b) R(eps) u]`` (``u``: the commanded voltage's state map,
+   so ``R(eps) u`` is the voltage applied in the rotor frame, on which the
+   remainder ``r_Psi diag(b)`` acts); ``V`` is affine in the same
+   coordinates, so ``V = sum_i l_i V_i`` with the same weights.
 4. *Lyapunov with the S-procedure.* For ``w = r V x``, ``|w| <= rho |V x|``;
    if ``P > 0``, ``lam >= 0`` satisfy at every corner
    ``[[P - lam rho^2 V_i'V_i, 0, A_i'P], [0, lam I, U'P], [P A_i, P U, P]] > 0``
    then ``x'(.)x`` decreases along ``x+ = A_i x + U w`` for all such ``w``
    (Schur complement of the S-procedure inequality). That inequality is
    jointly matrix-convex in ``(A, V)`` (``[A U]'P[A U] + lam rho^2 V'V``),
-   so it holds for every convex combination, hence for every plant of the
-   cell and every remainder: every frozen set of the cell has a Schur
-   closed loop (in fact the cell is quadratically stable).
+   so it holds for every convex combination ``(sum l_i A_i, sum l_i V_i)``,
+   hence for every plant, measured speed and placement error of the cell and
+   every remainder: every frozen set of the cell has a Schur closed loop (in
+   fact the cell is quadratically stable).
 5. *Cells and check.* The speed range is split into cells (a Lyapunov
    matrix per cell: the certificate is for constant speed, as the sweep's
    loops are). The LMIs are handed to Clarabel directly
@@ -56,7 +84,10 @@ Soundness argument (every step is an over-bound, none an approximation):
    corner inequality is re-checked with numpy eigenvalues of the returned
    ``P, lam`` (a cell counts as certified only when that check passes).
    Warm starts (a smaller box's ``P``, the mirror image of the opposite
-   speed cell's) pass the same check or are not used.
+   speed cell's: ``(w, w_m) -> (-w, -w_m)`` maps ``eps`` to ``-eps`` and
+   ``R(-eps) = S2 R(eps) S2``, ``S2 = diag(1, -1)``, the same similarity)
+   pass the same check or are not used. A corner's LMI rows are assembled
+   when it first enters a solve (constraint generation needs a few).
 
 The box at scale ``k`` interpolates from the nominal point (``k = 0``) to the
 given ranges (``k = 1``); the bisection on ``k`` reports the largest certified
@@ -79,7 +110,8 @@ from scipy.linalg import expm
 from .._lti import diagonal_scaling
 from ..artifact import json_ready
 from ..plant import dq_matrices, max_electrical_speed
-from ._coupled import coupled_closed_loop, coupled_state_matrix
+from ._coupled import (coupled_closed_loop, coupled_state_matrix, placement_error,
+                       rotation)
 from ._laws import AXES, axis_law
 from ._lmi import (ACTIVE_STEP, above_identity, lmi_rows, problem_data,
                    solve_by_constraint_generation, solve_feasibility, symmetric_basis,
@@ -91,7 +123,9 @@ __all__ = ["SampledBox", "SampledCertificate", "certify_sampled",
 
 #: strict margin of the vertex LMIs (the data are normalised to order 1)
 _EPS = 1e-7
-#: corner matrices per cell: the 2^6 corners of Theta times the two measured-speed ends
+#: corner matrices per cell without placement error: the 2^6 corners of Theta times
+#: the two measured-speed ends (times the placement polygon's 4 vertices when the
+#: placement error varies over the cell)
 _N_VERTICES = 2 ** 6 * 2
 
 
@@ -172,15 +206,23 @@ class SampledCertificate:
     scale : float
         Largest certified box scale (0 nominal .. ``max_scale``).
     box : dict
-        The certified :class:`SampledBox` (ohm, H, H, rad/s, 1, rad/s).
+        The certified :class:`SampledBox` (ohm, H, H, electrical rad/s, 1,
+        electrical rad/s).
     speed_range_rad_s : list
         Certified true electrical speed range (rad/s).
+    speed_range_mech_rad_s : list
+        The same range in mechanical rad/s (``speed_range_rad_s / pole_pairs``;
+        the spec's ``max_speed`` is mechanical).
+    pole_pairs : int
+        Pole pairs of the motor (electrical = ``pole_pairs`` x mechanical).
     delay_samples : int
         Computation delay of the certified loop (the design's).
     speed_cells : int
         Speed cells (one Lyapunov matrix each).
     n_vertices : int
-        Corner matrices per cell (64 plant coordinates x 2 measured speeds).
+        Corner matrices per cell, the largest over the certified cells (64
+        plant coordinates x 2 measured speeds, x 4 vertices of the placement
+        polygon when the placement error varies over the cell).
     remainder_bound : float
         Largest linearisation remainder ``rho`` of the certified cells.
     condition_P : float
@@ -199,6 +241,8 @@ class SampledCertificate:
     scale: float
     box: dict
     speed_range_rad_s: list
+    speed_range_mech_rad_s: list
+    pole_pairs: int
     delay_samples: int
     speed_cells: int
     n_vertices: int
@@ -207,7 +251,8 @@ class SampledCertificate:
     first_uncertified: dict | None = None
     basis: str = field(default=(
         "sampled coupled dq loop as executed (ZOH plant, computation delay, decoupling with "
-        "the controller's parameters and the measured speed): common quadratic Lyapunov "
+        "the controller's parameters and the measured speed, voltage placement Gamma R(eps)): "
+        "common quadratic Lyapunov "
         "function per speed cell over a polytope containing the exact ZOH model "
         "(linearisation plus a norm-bounded remainder, S-procedure)"))
 
@@ -224,6 +269,7 @@ class _CellOutcome:
     condition_P: float
     worst_corner: np.ndarray      # (R, Ld, Lq, w, g, o) of the largest exact radius
     worst_radius: float
+    n_vertices: int = _N_VERTICES  # corner matrices of the cell's polytope
 
 
 def _laws(artifact) -> dict:
@@ -308,24 +354,70 @@ def _zoh_polytope(cell: SampledBox, Ts: float):
     return Phi, Psi @ b, b, lin.rho
 
 
+def _placement_polygon(artifact, cell: SampledBox) -> tuple[float, np.ndarray]:
+    """``(eps_c, Q)``: the centre of the placement error's range over the cell
+    and the vertices ``Q`` (m, 2) of a polygon containing every
+    ``(cos delta, sin delta)``, ``delta = eps - eps_c`` (module docstring,
+    step 3).
+
+    ``eps = t_c (g w + o) - (d + 1/2) Ts w``
+    (:func:`~toolbox.analysis._coupled.placement_error`) is multi-affine in
+    ``(w, g, o)``: its range over the cell is attained at the cell's
+    corners. With ``D`` the half-width: ``D = 0`` gives the single vertex
+    ``(1, 0)`` (no extra corners); ``0 < D < pi`` the trapezoid bounded by
+    the chord at ``cos D`` and the tangents at ``delta = -D, 0, D``,
+    vertices ``(cos D, +/-sin D)`` and ``(1, +/-tan(D/2))``; ``D >= pi`` the
+    square ``[-1, 1]^2``.
+    """
+    c = cell.corners()
+    d = int(artifact.delay_samples)
+    wm = c[:, 4] * c[:, 3] + c[:, 5]
+    eps = placement_error(artifact.decoupling, artifact.sample_time, d, c[:, 3], wm)
+    lo, hi = float(np.min(eps)), float(np.max(eps))
+    eps_c = 0.5 * (lo + hi)
+    if hi == lo:
+        return eps_c, np.array([[1.0, 0.0]])
+    # widened by far more than the rounding of eps (a difference of two terms
+    # that may nearly cancel), eps_c and D
+    terms = max(float(np.max(np.abs(artifact.decoupling.delay_compensation_time * wm))),
+                float(np.max(np.abs((d + 0.5) * artifact.sample_time * c[:, 3]))))
+    D = 0.5 * (hi - lo) + 1e-12 * terms
+    if D >= math.pi:
+        return eps_c, np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
+    t = math.tan(0.5 * D)
+    return eps_c, np.array([[math.cos(D), -math.sin(D)], [math.cos(D), math.sin(D)],
+                            [1.0, -t], [1.0, t]])
+
+
 def _vertices(artifact, laws, cell: SampledBox):
-    """Corner matrices ``A_i`` (N, n, n), ``V_i`` (N, 4, n) and ``rho`` (steps 1-3)."""
+    """Corner matrices ``A_i`` (N, n, n), ``V_i`` (N, 4, n) and ``rho`` (steps 1-3).
+
+    ``N = 64 x 2 x m``: the corners of ``Theta``, the two measured-speed ends
+    and the ``m`` vertices of the placement polygon (:func:`_placement_polygon`;
+    ``m = 1`` when the placement error is constant over the cell)."""
     Ts, d = artifact.sample_time, int(artifact.delay_samples)
     Phi, Gam, b, rho = _zoh_polytope(cell, Ts)
     wm = np.array(cell.measured_speed())
-    k = Phi.shape[0]
-    Phi, Gam, b = (np.repeat(M, 2, axis=0) for M in (Phi, Gam, b))
-    wm = np.tile(wm, k)
+    eps_c, Q = _placement_polygon(artifact, cell)
+    # R(eps) = R(eps_c) (cos delta I + sin delta J) at the polygon's vertices
+    J = np.array([[0.0, -1.0], [1.0, 0.0]])
+    Rot = rotation(eps_c)[0] @ (Q[:, 0, None, None] * np.eye(2) + Q[:, 1, None, None] * J)
+    k, m = Phi.shape[0], Q.shape[0]
+    Phi, Gam, b = (np.repeat(M, 2 * m, axis=0) for M in (Phi, Gam, b))
+    wm = np.tile(np.repeat(wm, m), k)
+    Rot = np.tile(Rot, (2 * k, 1, 1))
     dec = artifact.decoupling
-    A = coupled_state_matrix(laws, dec, d, Phi, Gam, wm)
+    # the commanded voltage enters through Gamma R(eps) (coupled_closed_loop)
+    A = coupled_state_matrix(laws, dec, d, Phi, Gam @ Rot, wm)
     n = A.shape[-1]
     zero = np.zeros_like(Phi)
-    # the applied voltage's state map u(x): the current rows' gain on Gamma
+    # the commanded voltage's state map: the current rows' gain on Gamma R(eps)
     S = (coupled_state_matrix(laws, dec, d, zero, np.broadcast_to(np.eye(2), Phi.shape), wm)
          - coupled_state_matrix(laws, dec, d, zero, zero, wm))[:, :2, :]
     V = np.zeros((A.shape[0], 4, n))
     V[:, 0, 0] = V[:, 1, 1] = 1.0
-    V[:, 2:, :] = b @ S
+    # the rotated (applied) voltage scaled by b: the remainder's Psi factor multiplies it
+    V[:, 2:, :] = b @ Rot @ S
     return A, V, rho
 
 
@@ -421,12 +513,17 @@ def _solve_lmi(A, G, U, order: np.ndarray, step: int = ACTIVE_STEP):
     the verdict is then the solve over all corners'
     (:func:`toolbox.analysis._lmi.solve_by_constraint_generation`)."""
     n = A.shape[-1]
-    identity, (Ac, bc) = _lmi_blocks(A, G, U)
-    n_x = Ac.shape[-1]
+    n_x = n * (n + 1) // 2 + 1
+    identity = above_identity(n, n_x)
+    rows: dict = {}     # corner -> its rows, assembled when the corner first enters a solve
 
     def solve(idx):
+        new = [i for i in idx if i not in rows]
+        if new:
+            _, (Ac, bc) = _lmi_blocks(A[new], G[new], U)
+            rows.update(zip(new, zip(Ac, bc)))
         x, status = solve_feasibility(*problem_data(
-            [identity] + list(zip(Ac[idx], bc[idx])), n_x, nonneg=[n_x - 1]))
+            [identity] + [rows[i] for i in idx], n_x, nonneg=[n_x - 1]))
         return (None if x is None else (symmetric_matrix(x[:-1], n), float(x[-1]))), status
 
     sol, status = solve_by_constraint_generation(
@@ -463,11 +560,13 @@ class _CellLMI:
     t: np.ndarray
     radii: np.ndarray
     rho: float
+    n_vertices: int
 
 
 def _cell_lmi(artifact, laws, cell: SampledBox) -> _CellLMI:
     """The corner data of a cell (steps 1-4), balanced, repeated corners dropped."""
     A, V, rho = _vertices(artifact, laws, cell)
+    n_vertices = A.shape[0]
     G = rho ** 2 * np.transpose(V, (0, 2, 1)) @ V
     n = A.shape[-1]
     U = np.zeros((n, 2))
@@ -478,7 +577,7 @@ def _cell_lmi(artifact, laws, cell: SampledBox) -> _CellLMI:
     A, G = A[keep], G[keep]
     return _CellLMI(A * t[None, None, :] / t[None, :, None],
                     G * t[None, :, None] * t[None, None, :], U / t[:, None], t,
-                    np.max(np.abs(np.linalg.eigvals(A)), axis=1), rho)
+                    np.max(np.abs(np.linalg.eigvals(A)), axis=1), rho, n_vertices)
 
 
 def _mirror_signs(laws, delay_samples: int) -> np.ndarray:
@@ -524,7 +623,7 @@ def _certify_cell(artifact, laws, cell: SampledBox, guesses: Sequence[tuple] = (
     # polytope that is not Schur makes the LMIs infeasible, no need to solve them
     if np.max(c.radii) >= 1.0:
         return _CellOutcome(False, "a corner of the polytope over the cell is unstable", c.rho,
-                            math.nan, *worst), None, 0.0
+                            math.nan, *worst, c.n_vertices), None, 0.0
     # constraint generation starts with the corners a rejected warm start
     # violates most, else with the least stable ones
     order = np.argsort(-c.radii)
@@ -532,17 +631,17 @@ def _certify_cell(artifact, laws, cell: SampledBox, guesses: Sequence[tuple] = (
         Pg = guess * c.t[:, None] * c.t[None, :]
         lam = _multiplier(c.A, c.G, c.U, Pg) if lam is None else lam
         if _verified(c.A, c.G, c.U, Pg, lam):
-            return (_CellOutcome(True, "warm start", c.rho, float(np.linalg.cond(Pg)), *worst),
-                    guess, lam)
+            return (_CellOutcome(True, "warm start", c.rho, float(np.linalg.cond(Pg)), *worst,
+                                 c.n_vertices), guess, lam)
         order = np.argsort(-_corner_slack(c.A, c.G, c.U, Pg, lam))
     P, lam, status = _solve_lmi(c.A, c.G, c.U, order)
     if P is None:
         return _CellOutcome(False, f"no Lyapunov matrix found ({status})", c.rho, math.nan,
-                            *worst), None, 0.0
+                            *worst, c.n_vertices), None, 0.0
     if not _verified(c.A, c.G, c.U, P, lam):
         return _CellOutcome(False, "the solver's Lyapunov matrix fails the numpy check", c.rho,
-                            math.nan, *worst), None, 0.0
-    return (_CellOutcome(True, status, c.rho, float(np.linalg.cond(P)), *worst),
+                            math.nan, *worst, c.n_vertices), None, 0.0
+    return (_CellOutcome(True, status, c.rho, float(np.linalg.cond(P)), *worst, c.n_vertices),
             P / c.t[:, None] / c.t[None, :], lam)
 
 
@@ -654,8 +753,11 @@ def largest_certified_sampled_scale(artifact, motor, drive=None, *, R=DEFAULT_BO
         return SampledCertificate(
             certified=bool(outcomes and all(o.certified for o in outcomes)), scale=k,
             box=json_ready(asdict(b)), speed_range_rad_s=list(b.omega),
+            speed_range_mech_rad_s=[w / motor.pole_pairs for w in b.omega],
+            pole_pairs=int(motor.pole_pairs),
             delay_samples=int(artifact.delay_samples), speed_cells=speed_cells,
-            n_vertices=_N_VERTICES, remainder_bound=max((o.rho for o in ok), default=math.nan),
+            n_vertices=max((o.n_vertices for o in ok), default=_N_VERTICES),
+            remainder_bound=max((o.rho for o in ok), default=math.nan),
             condition_P=max((o.condition_P for o in ok), default=math.nan),
             first_uncertified=first)
 

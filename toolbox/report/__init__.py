@@ -338,25 +338,64 @@ def _certificate_of(analysis: Mapping | None) -> dict | None:
     return facts or None
 
 
+#: units of the sampled certificate's box entries other than the speeds
+_SAMPLED_BOX_UNITS = {"R": " ohm", "Ld": " H", "Lq": " H"}
+#: labels of its speed entries (electrical rad/s in the JSON)
+_SAMPLED_BOX_SPEEDS = {"omega": "speed", "speed_offset": "speed-sensor offset"}
+#: labels of the other box entries
+_SAMPLED_BOX_LABELS = {"speed_gain": "speed-sensor gain"}
+
+
+def _speed_text(lo: Any, hi: Any, pole_pairs: Any) -> str:
+    """An electrical speed range (rad/s) as mechanical rad/s with electrical in
+    brackets (the spec's ``max_speed`` is mechanical); electrical alone when
+    the pole pairs are unknown (an analysis.json written before they were)."""
+    elec = f"{fmt(lo)} .. {fmt(hi)} rad/s electrical"
+    lo, hi, pp = _as_float(lo), _as_float(hi), _as_float(pole_pairs)
+    if lo is None or hi is None or not pp:
+        return elec
+    return f"{fmt(lo / pp)} .. {fmt(hi / pp)} rad/s mechanical ({elec})"
+
+
 def _sampled_certificate_of(cert: Mapping | None) -> dict[str, Any]:
-    """Named facts of ``analysis.sampled_certificate`` (empty when absent)."""
+    """Named facts of ``analysis.sampled_certificate`` (empty when absent); its
+    speeds (electrical in the JSON) are stated in mechanical rad/s with
+    electrical in brackets."""
     if not isinstance(cert, Mapping):
         return {}
-    where = "sampled coupled loop as executed (ZOH, delay, decoupling)"
+    where = "sampled coupled loop as executed (ZOH, delay, decoupling, voltage placement)"
+    pp = cert.get("pole_pairs")
     facts: dict[str, Any] = {
         f"stability certificate, {where}": "certified" if cert.get("certified")
         else "not certified, not even the nominal point",
         "sampled loop: largest certified box scale": cert.get("scale")}
+    speed = cert.get("speed_range_rad_s")
+    if isinstance(speed, (list, tuple)) and len(speed) == 2:
+        facts["sampled loop: speed range covered"] = _speed_text(*speed, pp)
     for name, (lo, hi) in (cert.get("box") or {}).items():
-        facts[f"sampled loop: box {name}"] = f"{lo:.4g} .. {hi:.4g}"
+        if name == "omega" and "sampled loop: speed range covered" in facts:
+            continue            # the same range
+        if name in _SAMPLED_BOX_SPEEDS:
+            facts[f"sampled loop: box {_SAMPLED_BOX_SPEEDS[name]}"] = _speed_text(lo, hi, pp)
+        else:
+            unit = _SAMPLED_BOX_UNITS.get(name, "")
+            label = _SAMPLED_BOX_LABELS.get(name, name)
+            facts[f"sampled loop: box {label}"] = f"{lo:.4g} .. {hi:.4g}{unit}"
     first = cert.get("first_uncertified")
     if isinstance(first, Mapping):
         c = first.get("corner") or {}
         state = ("unstable" if c.get("unstable") else "stable there, not proven on its cell")
+
+        def speed_at(v):
+            w, p = _as_float(v), _as_float(pp)
+            if w is None or not p:
+                return f"{fmt(v)} rad/s electrical"
+            return f"{fmt(w / p)} rad/s mechanical ({fmt(w)} rad/s electrical)"
+
         facts["sampled loop: first uncertified corner"] = (
             f"scale {fmt(first.get('scale'))}: R x{fmt(c.get('R'))}, Ld x{fmt(c.get('Ld'))}, "
-            f"Lq x{fmt(c.get('Lq'))}, w {fmt(c.get('omega_rad_s'))} rad/s, speed gain "
-            f"{fmt(c.get('speed_gain'))}, offset {fmt(c.get('speed_offset_rad_s'))} rad/s; "
+            f"Lq x{fmt(c.get('Lq'))}, w {speed_at(c.get('omega_rad_s'))}, speed gain "
+            f"{fmt(c.get('speed_gain'))}, offset {speed_at(c.get('speed_offset_rad_s'))}; "
             f"spectral radius {fmt(c.get('spectral_radius'))} ({state}); {first.get('reason')}")
     return facts
 
