@@ -4,7 +4,9 @@ Written independently of toolbox.sim._kernel, from the equations of the
 interface: dq plant + mechanics integrated by RK4 at h, discrete controllers
 at Ts with ZOH and `delay` periods of delay, decoupling with the measured
 speed, circle voltage limit with back-calculation anti-windup, speed sensor
-gain/offset. Returns the samples at the controller instants and the
+gain/offset, the voltage placed at ``theta_k + t_c w_meas`` and held in the
+rotor frame, rotated by its error from the true mid-period angle
+(toolbox/ARCHITECTURE.md "The digital loop"). Returns the samples at the controller instants and the
 time-weighted mean-square torque and i_d errors.
 """
 
@@ -45,7 +47,7 @@ def reference(plant, law, Ts, delay, v_max, duration, h, iq_ref, id_ref=0.0,
     n_per = int(round(duration / Ts))
     n_sub = int(math.ceil(Ts / h - 1e-9))
     dt = Ts / n_sub
-    queue = [(0.0, 0.0)] * delay
+    queue = [(0.0, 0.0, 0.0)] * delay           # (v_d, v_q, placement angle)
     rows = []
     sq_t = sq_id = 0.0
     tref = tf * p * (dec.flux_c * iq_ref + (dec.Ld_c - dec.Lq_c) * id_ref * iq_ref)
@@ -67,9 +69,12 @@ def reference(plant, law, Ts, delay, v_max, duration, h, iq_ref, id_ref=0.0,
             ax = axes[a]
             ax["x"] = ax["A"] @ ax["x"] + ax["B"] @ np.array([refs[a], meas[a]]) \
                 + ax["W"] * (sat[a] - v_un)
-        queue.append(sat)
-        v_app = queue.pop(0)
-        rows.append([k * Ts, x[0], x[1], v_app[0], v_app[1], x[2]])
+        queue.append((*sat, x[3] + dec.delay_compensation_time * w_m))
+        vd_c, vq_c, phi = queue.pop(0)
+        rows.append([k * Ts, x[0], x[1], vd_c, vq_c, x[2]])
+        err = phi - (x[3] + p * x[2] * Ts / 2) if (vd_c, vq_c) != (0.0, 0.0) else 0.0
+        v_app = (vd_c * math.cos(err) - vq_c * math.sin(err),
+                 vd_c * math.sin(err) + vq_c * math.cos(err))
         for _ in range(n_sub):
             torque = tf * p * (flux * x[1] + (Ld - Lq) * x[0] * x[1])
             sq_t += (torque - tref) ** 2 * dt

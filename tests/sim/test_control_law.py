@@ -44,7 +44,8 @@ def test_the_law_predicts_with_its_own_model_not_the_plants():
     exactly the run of the nominal law (same numbers in, same bits out)."""
     law = tc_law(M, 800, 800, Ts)
     base = simulate(law, M, STEP, DRIVE).metrics
-    same = dataclasses.replace(law, decoupling=Decoupling.from_motor(M))
+    same = dataclasses.replace(law, decoupling=Decoupling.from_motor(
+        M, delay_compensation_time=law.decoupling.delay_compensation_time))
     assert _same(simulate(same, M, STEP, DRIVE).metrics, base)
     wrong = dataclasses.replace(law, decoupling=dataclasses.replace(law.decoupling,
                                                                     Lq_c=2 * M.Lq))

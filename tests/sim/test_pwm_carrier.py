@@ -24,8 +24,10 @@ M = Motor(R=1.0, Ld=5e-3, Lq=5e-3, flux=0.1, pole_pairs=4, J=1.0, friction=0.0)
 TS = 1e-4
 VDC = 200.0
 R_HEX = 2.0 / 3.0 * VDC          # amplitude-invariant active-vector length
+# the default voltage placement for one period of delay (ARCHITECTURE "The digital loop")
 LAW = ControlLaw(d=discrete_pi(5.0, 1000.0, TS), q=discrete_pi(5.0, 1000.0, TS),
-                 sample_time=TS, decoupling=Decoupling.from_motor(M))
+                 sample_time=TS,
+                 decoupling=Decoupling.from_motor(M, delay_compensation_time=1.5 * TS))
 DRIVE = DriveParams(vdc=VDC, sample_time=TS, delay_samples=1, v_limit="hexagon",
                     inverter="svm")
 
@@ -135,11 +137,13 @@ def test_switched_average_converges_to_the_stationary_hold():
 
 
 def _open_loop_law(Ts):
-    """v = 1 V/A * i_ref on each axis, no feedback, no decoupling."""
+    """v = 1 V/A * i_ref on each axis, no feedback, no decoupling; placed at the
+    mid-period angle of a law without delay (t_c = Ts/2)."""
     static = AxisLaw(np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)),
                      np.array([[1.0, 0.0]]))
     return ControlLaw(d=static, q=static, sample_time=Ts,
-                      decoupling=Decoupling.from_motor(M, cross=False, emf=False))
+                      decoupling=Decoupling.from_motor(M, cross=False, emf=False,
+                                                       delay_compensation_time=0.5 * Ts))
 
 
 def test_stationary_hold_matches_the_rotating_vector_closed_form():

@@ -22,7 +22,8 @@ DRIVE = DriveParams(vdc=150, sample_time=Ts, delay_samples=1)
 def _pi(wc=2000.0, speed_loop=None):
     return ControlLaw(d=discrete_pi(M.Ld * wc, M.R * wc, Ts),
                       q=discrete_pi(M.Lq * wc, M.R * wc, Ts), sample_time=Ts,
-                      decoupling=Decoupling.from_motor(M), speed_loop=speed_loop)
+                      decoupling=Decoupling.from_motor(M, delay_compensation_time=1.5 * Ts),
+                      speed_loop=speed_loop)
 
 
 @pytest.mark.parametrize("threads", [1, 3])
@@ -111,7 +112,8 @@ def test_noise_is_seeded():
     a = simulate(law, M, Scenario(**base, seed=1), DRIVE).metrics
     b = simulate(law, M, Scenario(**base, seed=1), DRIVE).metrics
     c = simulate(law, M, Scenario(**base, seed=2, noise="gaussian"), DRIVE).metrics
-    assert a == b
+    assert a.keys() == b.keys()
+    assert all(a[k] == b[k] or (np.isnan(a[k]) and np.isnan(b[k])) for k in a)  # bit for bit
     assert a["mse_iq"] != c["mse_iq"]
 
 
@@ -139,6 +141,6 @@ def test_axis_law_from_error_controller_equals_two_input_form():
     wide = [AxisLaw.from_error_controller(ax.A, ax.B[:, :1], ax.C, ax.D[0, 0], ax.antiwindup)
             for ax in (pi_d, pi_q)]
     law2 = ControlLaw(d=wide[0], q=wide[1], sample_time=Ts,
-                      decoupling=Decoupling.from_motor(M))
+                      decoupling=Decoupling.from_motor(M, delay_compensation_time=1.5 * Ts))
     sc = Scenario(kind="unloaded_start", duration=0.01, iq_ref=5.0)
     assert simulate(law2, M, sc, DRIVE).metrics == simulate(_pi(), M, sc, DRIVE).metrics
