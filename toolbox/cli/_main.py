@@ -410,7 +410,11 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
     # refusals name the design file the controller came from
     if prefix is not None:
         from ..export import prefix_name
-        prefix_name(prefix, key="--prefix")      # a bad option is bad input (exit 2)
+        try:
+            prefix_name(prefix, key="--prefix")  # a bad option is bad input (exit 2)
+        except SpecError as err:
+            raise SpecError(err.key, err.expected, prefix,
+                            hint="the rule of the spec's export.prefix") from None
     text = write_header(artifact, spec.motor, spec.drive, source=file,
                         prefix=prefix if prefix is not None else spec.export_prefix)
     _write_file(output or Path(out_dir) / "controller.h", text, "--output")

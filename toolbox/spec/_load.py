@@ -33,8 +33,9 @@ TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario",
             "campaign")
 EXPORT_KEYS = ("prefix",)
 #: a C identifier prefix (letter first, at most 31 characters); the export
-#: (toolbox.export.prefix_name) applies the same rule
-_C_PREFIX = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,30}$")
+#: (toolbox.export.prefix_name) applies the same rule. Used with fullmatch:
+#: ``$`` of re.match also matches before a trailing newline ("m\n").
+_C_PREFIX = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,30}")
 MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "convention", "rated_current", "max_current", "rated_speed",
               # datasheet forms (toolbox/spec/_datasheet.py)
@@ -323,7 +324,7 @@ def _export_prefix(value: Any) -> str:
     """``[export] prefix``: the C prefix of controller.h (default ``cct_``)."""
     t = Table(value, "export", EXPORT_KEYS)
     prefix = t.string("prefix", "cct_")
-    if not _C_PREFIX.match(prefix) or prefix == "_":
+    if not _C_PREFIX.fullmatch(prefix) or prefix == "_":
         raise SpecError("export.prefix", "a C identifier prefix: a letter, then letters, "
                         'digits or _ (at most 31 characters), e.g. "motor1_"', prefix)
     return prefix
