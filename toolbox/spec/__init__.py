@@ -1,6 +1,7 @@
 """Spec files: TOML -> validated frozen dataclasses."""
 
-from ._bounds import RATE_TS, SCALE_RANGE, check_rate, check_scale, check_time_constant
+from ._bounds import (RATE_TS, SCALE_RANGE, check_gain, check_rate, check_scale,
+                      check_time_constant)
 from ._campaign import (CAMPAIGN_PARAMETERS, DISTRIBUTIONS, OPERATING_POINT_KEYS, CampaignCfg,
                         ParameterDist)
 from ._catalog import CATALOG, CATALOG_NOTES
@@ -17,5 +18,5 @@ __all__ = ["CATALOG", "CATALOG_NOTES", "Collector", "SpecErrors", "Table", "chec
            "motor_from_dict", "drive_from_dict", "read_method_cfg",
            "register_method_reader", "registered_methods", "spec_to_toml",
            "CAMPAIGN_PARAMETERS", "DISTRIBUTIONS", "OPERATING_POINT_KEYS", "CampaignCfg",
-           "ParameterDist", "RATE_TS", "SCALE_RANGE", "check_rate", "check_scale",
+           "ParameterDist", "RATE_TS", "SCALE_RANGE", "check_gain", "check_rate", "check_scale",
            "check_time_constant"]

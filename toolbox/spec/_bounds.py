@@ -25,7 +25,7 @@ __all__ = ["MOTOR_RANGES", "DRIVE_RANGES", "MAX_SCENARIOS", "MAX_PLANT_STEPS",
            "MAX_TRACE_ROWS", "MIN_PLANT_STEP", "TAU_SAMPLES", "RATE_TS", "SCALE_RANGE",
            "MAX_POLE_PAIRS", "check_motor", "check_drive", "check_motor_drive",
            "check_scenario_count", "check_work", "check_rate", "check_time_constant",
-           "check_scale", "check_speed", "check_plant_variant"]
+           "check_scale", "check_gain", "check_speed", "check_plant_variant"]
 
 #: key -> (low, high, what, unit) for the motor parameters.
 MOTOR_RANGES = {
@@ -222,6 +222,22 @@ def check_time_constant(key: str, value: float, drive, scale: float = 1.0) -> fl
         raise SpecError(key, f"a time between {scale * ts / high:.3g} and "
                         f"{scale * ts / low:.3g} s (a rate of {low:g} to {high:g} / "
                         "drive.sample_time)", value)
+    return value
+
+
+def check_gain(key: str, value: float, L: float, drive, unit: str, order: int = 1) -> float:
+    """Refuse a loop gain whose rate ``(value / L) ** (1 / order)`` is outside
+    :data:`RATE_TS` / sample time: ``Kp / L`` (order 1) and ``sqrt(Ki / L)``
+    (order 2) for a PI on ``1 / (R + L s)``; ``L = 1`` for gains already in
+    1/s or 1/s^2."""
+    low, high = RATE_TS
+    ts = drive.sample_time
+    if not low <= (value / L) ** (1.0 / order) * ts <= high:
+        lo, hi = L * (low / ts) ** order, L * (high / ts) ** order
+        rate = "K / L" if L != 1.0 else "K"
+        rate = f"({rate}) ** (1/{order})" if order != 1 else rate
+        raise SpecError(key, f"a number between {lo:.3g} and {hi:.3g} {unit} (the rate "
+                        f"{rate} between {low:g} and {high:g} / drive.sample_time)", value)
     return value
 
 
