@@ -12,7 +12,7 @@ import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 from ._io import check_text_depth, read_limited, write_set
 from .artifact import ControllerArtifact
@@ -415,6 +415,63 @@ def _check_analysis(data: dict, file: str) -> None:
             v = check.get(name)
             if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
                 raise ArtifactError(f"{where}.{name}", "a number or null", v, file=file)
+    _check_shapes(data, file)
+
+
+def _is_num(v: Any) -> bool:
+    return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
+
+
+def _shape(value: Any, key: str, kind: str, file: str) -> Any:
+    """``value`` of the ``kind`` the report reads ("object", "list", "number",
+    "numbers": a list of numbers, "pair": two numbers), else ArtifactError."""
+    ok = {"object": lambda v: isinstance(v, dict),
+          "list": lambda v: isinstance(v, list),
+          "number": _is_num,
+          "real": lambda v: _is_num(v) and v is not None,
+          "numbers": lambda v: isinstance(v, list) and all(_is_num(x) for x in v),
+          "pair": lambda v: (isinstance(v, list) and len(v) == 2
+                             and all(_is_num(x) and x is not None for x in v))}[kind](value)
+    if not ok:
+        what = {"object": "an object", "list": "a list", "number": "a number or null",
+                "real": "a number",
+                "numbers": "a list of numbers", "pair": "[low, high] numbers"}[kind]
+        raise ArtifactError(key, what, value if not isinstance(value, (dict, list))
+                            else type(value).__name__, file=file,
+                            hint="analysis.json as cct design writes it; re-run cct design")
+    return value
+
+
+def _check_shapes(data: dict, file: str) -> None:
+    """The nested fields the report reads from the sweep, the certificates and
+    the MIMO summaries (a wrong shape made ``cct report`` crash)."""
+    sweep = data.get("sweep") or {}
+    if sweep:
+        for axis, worst in _shape(sweep.get("worst", {}), "sweep.worst", "object",
+                                  file).items():
+            for quantity, entry in _shape(worst, f"sweep.worst.{axis}", "object",
+                                          file).items():
+                where = f"sweep.worst.{axis}.{quantity}"
+                _shape(entry, where, "object", file)
+                _shape(entry.get("params", {}), f"{where}.params", "object", file)
+                _shape(entry.get("value"), f"{where}.value", "number", file)
+        for k, ex in enumerate(_shape(sweep.get("unstable_examples", []),
+                                      "sweep.unstable_examples", "list", file)):
+            _shape(ex, f"sweep.unstable_examples[{k}]", "object", file)
+        for name in ("worst_spectral_radius", "n_sets", "n_unstable"):
+            _shape(sweep.get(name), f"sweep.{name}", "number", file)
+        if sweep.get("speeds_rad_s") is not None:
+            _shape(sweep["speeds_rad_s"], "sweep.speeds_rad_s", "numbers", file)
+    cert = data.get("certificate") or {}
+    for name, pair in _shape(cert.get("box") or {}, "certificate.box", "object",
+                             file).items():
+        _shape(pair, f"certificate.box.{name}", "pair", file)
+    box = data.get("mimo_over_box") or {}
+    for name, v in _shape(box.get("worst_params") or {}, "mimo_over_box.worst_params",
+                          "object", file).items():
+        _shape(v, f"mimo_over_box.worst_params.{name}", "real", file)
+    if box.get("speeds_rad_s") is not None:
+        _shape(box["speeds_rad_s"], "mimo_over_box.speeds_rad_s", "list", file)
 
 
 def spec_of_artifact(artifact: ControllerArtifact, file: str | None = None) -> Spec:

@@ -58,7 +58,7 @@ def _matrix(value: Any, key: str, rows: int | None = None,
     """Read a JSON matrix (list of lists of finite numbers)."""
     try:
         arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: a 400-digit integer
         raise ArtifactError(key, "a matrix (list of lists of numbers)", value) from None
     if arr.ndim == 1 and arr.size == 0:
         arr = arr.reshape(0, 0 if cols is None else cols)
@@ -637,8 +637,9 @@ def _check_margins(margins: Mapping) -> None:
             raise ArtifactError(f"margins.{axis}", "an object (MARGINS)", values)
         for name in MARGIN_NUMBERS:
             v = values.get(name)
-            ok = (v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
-                  or v in ("inf", "-inf", "nan"))
+            ok = (v is None or (isinstance(v, (int, float)) and not isinstance(v, bool)
+                                and not (isinstance(v, int) and abs(v) >= 2 ** 1024))
+                  or v in ("inf", "-inf", "nan"))  # 2**1024: no double holds it
             if not ok:
                 raise ArtifactError(f"margins.{axis}.{name}",
                                     'a number, "inf", "-inf", "nan" or null', v)
