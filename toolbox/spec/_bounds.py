@@ -235,7 +235,7 @@ def check_gain(key: str, value: float, L: float, drive, unit: str, order: int = 
     if not low <= (value / L) ** (1.0 / order) * ts <= high:
         lo, hi = L * (low / ts) ** order, L * (high / ts) ** order
         rate = "K / L" if L != 1.0 else "K"
-        rate = f"({rate}) ** (1/{order})" if order != 1 else rate
+        rate = {1: rate, 2: f"sqrt({rate})"}.get(order, f"({rate}) ** (1/{order})")
         raise SpecError(key, f"a number between {lo:.3g} and {hi:.3g} {unit} (the rate "
                         f"{rate} between {low:g} and {high:g} / drive.sample_time)", value)
     return value
