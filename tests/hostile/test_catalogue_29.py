@@ -278,3 +278,98 @@ def test_export_prefix_option_with_a_newline(design_dir, tmp_path, prefix):
     assert "export.prefix" in res.output
     assert len(res.output.strip().splitlines()) == 1  # the newline is shown escaped
     assert not (tmp_path / "m.h").exists()
+
+
+# ---------------------------------------------------------------- integrity
+
+
+def _tamper(design_dir: Path, tmp_path: Path, change) -> Path:
+    out = _copy(design_dir, tmp_path)
+    data = json.loads((out / "controller.json").read_text())
+    change(data)
+    (out / "controller.json").write_text(json.dumps(data))
+    return out
+
+
+def _retime(data: dict, ts: float) -> None:
+    """Another sample time, consistent inside the law (every dt)."""
+    data["sample_time"] = ts
+    for axis in data["axes"].values():
+        for view in (axis, axis.get("full_order") or {}, axis.get("reduced") or {}):
+            if "law" in view:
+                view["law"]["dt"] = ts
+
+
+@pytest.mark.parametrize("command", ["export", "verify"])
+def test_sample_time_other_than_the_spec_is_refused(design_dir, tmp_path, command):
+    out = _tamper(design_dir, tmp_path, lambda d: _retime(d, 2e-4))
+    before = (out / "controller.h").read_bytes()
+    res = run_cli(command, out)
+    assert res.exit_code == 2, res.output
+    assert (f"cct: error: {out / 'controller.json'}: sample_time: expected the stored spec's "
+            "drive.sample_time (0.0001 s), got 0.0002") in res.output
+    assert (out / "controller.h").read_bytes() == before
+
+
+@pytest.mark.parametrize("command", ["export", "verify"])
+def test_delay_other_than_the_spec_is_refused(design_dir, tmp_path, command):
+    out = _tamper(design_dir, tmp_path, lambda d: d.update(delay_samples=2))
+    res = run_cli(command, out)
+    assert res.exit_code == 2, res.output
+    assert (f"{out / 'controller.json'}: delay_samples: expected the stored spec's "
+            "drive.delay_samples (1), got 2") in res.output
+
+
+@pytest.mark.parametrize("command", ["verify", "export", "report"])
+def test_spec_changed_after_design_is_refused(design_dir, tmp_path, command):
+    """A valid but different stored spec (R 0.6 -> 0.7): the digest of
+    provenance.spec_sha256 no longer holds."""
+    def change(d):
+        d["spec"]["motor"]["R"] = 0.7
+
+    out = _tamper(design_dir, tmp_path, change)
+    res = run_cli(command, out)
+    assert res.exit_code == 2, res.output
+    assert (f"{out / 'controller.json'}: provenance.spec_sha256: expected the sha256 of the "
+            "stored spec") in res.output
+    assert "changed after cct design" in res.output
+
+
+def test_antiwindup_that_diverges_in_saturation_is_refused_for_export(design_dir, tmp_path):
+    """x' = (A - aw C) x at full saturation: aw = 3 / C on the PI's integrator
+    (A = 1) gives 1 - 3 = -2, spectral radius 2."""
+    def change(d):
+        law = d["axes"]["d"]["law"]
+        assert law["A"] == [[1.0]], law["A"]
+        d["axes"]["d"]["antiwindup"] = [[3.0 / law["C"][0][0]]]
+
+    out = _tamper(design_dir, tmp_path, change)
+    target = tmp_path / "h.h"
+    res = run_cli("export", out, "-o", target)
+    assert res.exit_code == 2, res.output
+    assert (f"{out / 'controller.json'}: axes.d.antiwindup: expected a back-calculation gain "
+            "aw whose saturated recursion x' = (A - aw C) x is stable (spectral radius < 1), "
+            'got "spectral radius 2"') in res.output
+    assert not target.exists()
+
+
+def test_hand_edited_header_fails_verify(design_dir, tmp_path):
+    """The law sha256 line is intact but a coefficient was edited: the whole
+    regenerated header is compared (exit 1, the line named)."""
+    out = _copy(design_dir, tmp_path)
+    lines = (out / "controller.h").read_text().split("\n")
+    k = next(i for i, line in enumerate(lines) if "V_MAX_PER_VDC" in line and "#define" in line)
+    lines[k] = lines[k] + " /* tuned on the bench */"
+    (out / "controller.h").write_text("\n".join(lines))
+    res = run_cli("verify", out, "-q")
+    assert res.exit_code == 1, res.output
+    assert (f"FAIL  controller.h: differs from the header regenerated from controller.json at "
+            f"line {k + 1}") in res.output
+    header = json.loads((out / "verify.json").read_text())["header"]
+    assert header == {"file": "controller.h", "law_sha256": header["law_sha256"],
+                      "matches": False, "text_matches": False, "first_difference_line": k + 1}
+    # the header as exported (another prefix included) matches again
+    assert run_cli("export", out, "--prefix", "motor1_").exit_code == 0
+    res = run_cli("verify", out, "-q")
+    assert res.exit_code == 0, res.output
+    assert json.loads((out / "verify.json").read_text())["header"]["matches"] is True

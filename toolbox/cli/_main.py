@@ -275,17 +275,18 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
     """
     from dataclasses import replace
 
-    from ..pipeline import (header_agreement, load_artifact, run_verification,
-                            spec_of_artifact, write_outputs)
+    from ..pipeline import (check_integrity, header_agreement, load_artifact,
+                            run_verification, spec_of_artifact, write_outputs)
 
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=file)
+    check_integrity(artifact, spec, file=file)
     # margins and stability are recomputed from the executed law, never read back
     with StepBar(["verification"], quiet=quiet, desc="verify") as bar:
         bar("verification")
         result = run_verification(artifact, spec, file=file)
-    result = replace(result, header=header_agreement(out_dir, artifact))
+    result = replace(result, header=header_agreement(out_dir, artifact, spec))
     text = json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n"
     write_outputs({"verify.json": text}, out_dir)
     _notices(result.notice, result.warnings)
@@ -308,10 +309,17 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
             click.echo(f"{'pass' if check['pass'] else 'FAIL'}  {key}: "
                        f"{_fmt(check['value'])} (bound {_fmt(check['bound'])})"
                        + ("" if check["pass"] else f": {check.get('reason')}"))
-        if result.header is not None and not result.header["matches"]:
-            click.echo(f"FAIL  controller.h: exported from another controller.json (law "
-                       f"sha256 {result.header['law_sha256'] or 'missing'}, controller.json "
-                       f"{artifact.law_sha256()}): run cct export {out_dir} before flashing it")
+        header = result.header
+        if header is not None and not header["matches"]:
+            if header["law_sha256"] != artifact.law_sha256():
+                click.echo(f"FAIL  controller.h: exported from another controller.json (law "
+                           f"sha256 {header['law_sha256'] or 'missing'}, controller.json "
+                           f"{artifact.law_sha256()}): run cct export {out_dir} before "
+                           "flashing it")
+            else:
+                click.echo(f"FAIL  controller.h: differs from the header regenerated from "
+                           f"controller.json at line {header['first_difference_line']} (edited "
+                           f"after export?): run cct export {out_dir} before flashing it")
     sys.exit(EXIT_OK if result.passed else EXIT_REQUIREMENT)
 
 
@@ -331,8 +339,9 @@ def report(out_dir: str, quiet: bool) -> None:
     Example:
       cct report out/003
     """
-    from ..pipeline import (DesignOutputs, analyse, load_analysis, load_artifact, report_data,
-                            run_verification, spec_of_artifact, write_outputs)
+    from ..pipeline import (DesignOutputs, analyse, check_integrity, load_analysis,
+                            load_artifact, report_data, run_verification, spec_of_artifact,
+                            write_outputs)
     from ..report import build_context, write_html, write_pdf
 
     from ..analysis import compute_margins
@@ -341,6 +350,7 @@ def report(out_dir: str, quiet: bool) -> None:
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=file)
+    check_integrity(artifact, spec, file=file)
     with StepBar(["verification", "analysis", "report"], quiet=quiet, desc="report") as bar:
         # verified first, on the artifact as stored: its margins are compared, not trusted
         bar("verification")
@@ -402,10 +412,11 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
             click.echo(text, nl=False)
         return
     from ..export import write_header
-    from ..pipeline import refuse_unstable_export
+    from ..pipeline import check_integrity, refuse_unstable_export
 
     file = str(Path(out_dir) / "controller.json")
     spec = spec_of_artifact(artifact, file=file)
+    check_integrity(artifact, spec, file=file)
     refuse_unstable_export(artifact, spec.motor, file=file)
     # refusals name the design file the controller came from
     if prefix is not None:
