@@ -204,7 +204,19 @@ def _rate_text(ts: float, unit: str) -> str:
 
 
 def check_rate(key: str, value: float, drive, unit: str = "rad/s") -> float:
-    """Refuse a design rate outside :data:`RATE_TS` / sample time."""
+    """Refuse a design rate outside :data:`RATE_TS` / sample time.
+
+    Parameters
+    ----------
+    key : str
+        Dotted key path named in the error (``controller.pi.bandwidth``).
+    value : float
+        The rate (``unit``, rad/s by default).
+    drive : Drive
+        Supplies the sample time.
+    unit : str
+        Unit shown in the message.
+    """
     low, high = RATE_TS
     ts = drive.sample_time
     if not low <= value * ts <= high:
@@ -215,7 +227,19 @@ def check_rate(key: str, value: float, drive, unit: str = "rad/s") -> float:
 def check_time_constant(key: str, value: float, drive, scale: float = 1.0) -> float:
     """Refuse a design time constant ``T`` whose rate ``scale / T`` is
     outside :data:`RATE_TS` / sample time (``scale = ln 20`` for a 5 %
-    response time)."""
+    response time).
+
+    Parameters
+    ----------
+    key : str
+        Dotted key path named in the error.
+    value : float
+        The time constant (s).
+    drive : Drive
+        Supplies the sample time.
+    scale : float
+        The rate is ``scale / value``.
+    """
     low, high = RATE_TS
     ts = drive.sample_time
     if not low <= scale / value * ts <= high:
@@ -229,7 +253,23 @@ def check_gain(key: str, value: float, L: float, drive, unit: str, order: int = 
     """Refuse a loop gain whose rate ``(value / L) ** (1 / order)`` is outside
     :data:`RATE_TS` / sample time: ``Kp / L`` (order 1) and ``sqrt(Ki / L)``
     (order 2) for a PI on ``1 / (R + L s)``; ``L = 1`` for gains already in
-    1/s or 1/s^2."""
+    1/s or 1/s^2.
+
+    Parameters
+    ----------
+    key : str
+        Dotted key path named in the error (``controller.pi.Kp``).
+    value : float
+        The gain.
+    L : float
+        The inductance (H) the gain divides by, 1 for gains in 1/s.
+    drive : Drive
+        Supplies the sample time.
+    unit : str
+        Unit of the gain in the message.
+    order : int
+        1 for a proportional gain, 2 for an integral gain.
+    """
     low, high = RATE_TS
     ts = drive.sample_time
     if not low <= (value / L) ** (1.0 / order) * ts <= high:
@@ -242,7 +282,21 @@ def check_gain(key: str, value: float, L: float, drive, unit: str, order: int = 
 
 
 def check_scale(key: str, value: float, nominal: float, what: str, unit: str) -> float:
-    """Refuse a design scale outside :data:`SCALE_RANGE` x its nominal value."""
+    """Refuse a design scale outside :data:`SCALE_RANGE` x its nominal value.
+
+    Parameters
+    ----------
+    key : str
+        Dotted key path named in the error (``controller.lq.current_limit``).
+    value : float
+        The scale given.
+    nominal : float
+        Its nominal value (the default the method would use).
+    what : str
+        What it is, for the message ("current limit").
+    unit : str
+        Its unit.
+    """
     low, high = SCALE_RANGE
     if not low * nominal <= value <= high * nominal:
         raise SpecError(key, f"a {what} between {low * nominal:.3g} and {high * nominal:.3g} "

@@ -66,7 +66,13 @@ def _is_number(value: Any) -> bool:
 
 def is_finite_number(value: Any) -> bool:
     """An int or float (not a bool) that is a finite double: an integer of
-    400 digits is not (``math.isfinite`` raises ``OverflowError`` on it)."""
+    400 digits is not (``math.isfinite`` raises ``OverflowError`` on it).
+
+    Parameters
+    ----------
+    value : object
+        Any value read from a spec or JSON.
+    """
     if not _is_number(value):
         return False
     try:
