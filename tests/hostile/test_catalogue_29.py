@@ -43,6 +43,13 @@ SPEC_CASES = [
     ("vdc_400_digits", dict(drive={"vdc": BIG}), "drive.vdc", "expected a number > 0 (V)"),
     ("delay_400_digits", dict(drive={"delay_samples": BIG}), "drive.delay_samples",
      "expected an integer >= 0"),
+    ("R_ll_400_digits", dict(motor={"R_ll": BIG}), "motor.R_ll",
+     "expected a number > 0 (ohm) or a string with a unit"),
+    ("requirement_400_digits", dict(requirements={"min_phase_margin_deg": BIG}),
+     "requirements.min_phase_margin_deg", "expected a number >= 0 (deg)"),
+    ("speed_loop_400_digits", dict(scenario=[{"kind": "speed_step", "duration": 0.02,
+                                               "speed_loop": {"kp": BIG}}]),
+     "scenario[0].speed_loop.kp", "expected a finite number >= 0"),
     ("bandwidth_400_digits", dict(controller=_pi(bandwidth=BIG)), "controller.pi.bandwidth",
      "expected a number > 0 (rad/s)"),
     ("duration_400_digits", dict(scenario=_scenario(duration=BIG)), "scenario[0].duration",
@@ -168,6 +175,17 @@ def test_plausible_extremes_give_a_verdict_not_a_crash(write_spec, tmp_path, sec
     assert "Traceback" not in res.output and "internal error" not in res.output
     assert "RuntimeWarning" not in res.output
     assert (tmp_path / "out" / "controller.json").exists()
+
+
+def test_sample_frequency_400_digits(write_spec):
+    data = spec_dict()
+    del data["drive"]["sample_time"]
+    data["drive"]["sample_frequency"] = BIG
+    path = write_spec(data)
+    res = run_cli("check", path)
+    assert res.exit_code == 2, res.output
+    assert res.output.startswith(f"cct: error: {path}: drive.sample_frequency: expected a "
+                                 "number > 0 (Hz), got 1000")
 
 
 def test_500k_character_key_gives_a_short_message(write_spec):
