@@ -30,7 +30,6 @@ Speed handling by ``kind``:
 from __future__ import annotations
 
 import difflib
-import math
 from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
