@@ -389,7 +389,7 @@ _STALE = re.compile(r"^\.(?P<base>.+)\.[A-Za-z0-9_]{8}$")
 
 def _is_temporary(name: str, names: Collection[str]) -> bool:
     """``.<name>.XXXXXXXX``: a :func:`write_atomic` temporary of one of ``names``."""
-    m = _STALE.match(name)
+    m = _STALE.fullmatch(name)
     return bool(m) and m.group("base") in names
 
 

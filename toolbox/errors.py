@@ -21,10 +21,34 @@ from typing import Any
 __all__ = ["ArtifactError", "CctError", "DesignInfeasible", "ExportRefused", "SpecError"]
 
 
+#: Echo of a found value or a key path cut to this many characters (a
+#: 500,000-character key or string must not make a 1 MB message) when it is
+#: longer than :data:`MAX_WHOLE` (a long file path is still shown whole).
+MAX_SHOWN = 80
+MAX_WHOLE = 256
+
+
+def _clip(text: str, limit: int = MAX_SHOWN, whole: int = MAX_WHOLE) -> str:
+    """``text`` with control characters escaped (a message is one line per
+    error: ``"m\\n"`` shows as ``m\\n``); longer than ``whole``, cut to
+    ``limit`` characters with the length said."""
+    if not text.isprintable():
+        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    if len(text) <= max(limit, whole):
+        return text
+    return f"{text[:limit - 3]}... ({len(text)} characters)"
+
+
 def _show(value: Any) -> str:
     if isinstance(value, str):
-        return f'"{value}"'
-    return repr(value)
+        return f'"{_clip(value)}"'
+    try:
+        text = repr(value)
+    except ValueError:  # an int beyond the interpreter's digit limit
+        return f"an integer of about {int(value.bit_length() * 0.30103) + 1} digits"
+    if isinstance(value, int) and len(text) > MAX_SHOWN:  # digits are never worth reading
+        return f"{text[:20]}... (an integer of {len(text.lstrip('-'))} digits)"
+    return _clip(text)
 
 
 class CctError(ValueError):
@@ -64,12 +88,12 @@ class CctError(ValueError):
 
     def _text(self) -> str:
         where = f"{self.file}: " if self.file else ""
-        key = f"{self.key}: " if self.key else ""
-        text = f"{where}{key}expected {self.expected}"
+        key = f"{_clip(str(self.key))}: " if self.key else ""
+        text = f"{where}{key}expected {_clip(str(self.expected), 1000, 1000)}"
         if self.has_got:
             text += f", got {_show(self.got)}"
         if self.hint:
-            text += f" ({self.hint})"
+            text += f" ({_clip(str(self.hint), 1000, 1000)})"
         return text
 
     def _copy(self, key: str, file: str | None) -> "CctError":

@@ -9,10 +9,13 @@ stage succeeded (bad input writes nothing), each file atomically.
 from __future__ import annotations
 
 import json
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
+
+import numpy as np
 
 from ._io import check_text_depth, read_limited, write_set
 from .artifact import ControllerArtifact
@@ -22,7 +25,7 @@ from .spec import Spec, load_spec, spec_from_dict
 __all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_data",
            "design_spec", "analyse", "run_verification", "build_outputs", "write_outputs",
            "load_artifact", "load_analysis", "header_agreement", "spec_of_artifact",
-           "OUTPUT_FILES"]
+           "OUTPUT_FILES", "check_integrity", "saturated_spectral_radius"]
 
 OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h",
                 "report.html", "report.pdf")
@@ -126,6 +129,60 @@ def refuse_unstable_export(artifact: ControllerArtifact, motor, file: str | None
                             f"closed-loop spectral radius {rho}", file=file,
                             hint="no firmware header is written for an unstable loop; slow "
                                  "the design down or shorten the sample time")
+    for ax in sorted(artifact.axes):
+        rho = saturated_spectral_radius(artifact.axes[ax])
+        if rho is not None and rho > 1 + 1e-9:
+            raise ExportRefused(f"axes.{ax}.antiwindup", "a back-calculation gain aw whose "
+                                "saturated recursion x' = (A - aw C) x is stable (spectral "
+                                "radius < 1)", f"spectral radius {rho:.6g}", file=file,
+                                hint="in voltage saturation the law's state would diverge; "
+                                     "re-run cct design (Hanus's gain is stable)")
+
+
+def saturated_spectral_radius(axis) -> float | None:
+    """Spectral radius of the law's recursion with the back-calculation loop
+    closed at full saturation (the output held by the limit): ``x' = A x +
+    aw (v_sat - C x - D e)``, i.e. ``A - aw C`` (controller.h, toolbox/
+    ARCHITECTURE.md "controller.h"). None for a static law or no anti-windup."""
+    law, aw = axis.law, axis.antiwindup
+    if aw is None or law.A.size == 0:
+        return None
+    M = law.A - np.asarray(aw, float).reshape(-1, 1) @ np.asarray(law.C, float)[:1, :]
+    if not np.all(np.isfinite(M)):
+        return math.inf
+    return float(np.max(np.abs(np.linalg.eigvals(M))))
+
+
+def check_integrity(artifact: ControllerArtifact, spec: Spec, file: str | None = None) -> None:
+    """A controller.json that agrees with itself: ``provenance.spec_sha256``
+    is the digest of the stored spec, and the law's ``sample_time`` and
+    ``delay_samples`` are the stored spec's drive (a controller designed for
+    another period or delay must not be exported or verified against this one).
+
+    Raises
+    ------
+    ArtifactError
+        Naming the key that disagrees, the value expected and the one found.
+    """
+    from .artifact import spec_sha256
+
+    stored = artifact.provenance.get("spec_sha256")
+    digest = spec_sha256(artifact.spec)
+    if stored != digest:
+        raise ArtifactError("provenance.spec_sha256", f"the sha256 of the stored spec ({digest})",
+                            stored, file=file,
+                            hint="the spec in controller.json was changed after cct design; "
+                                 "re-run cct design")
+    if not math.isclose(artifact.sample_time, spec.drive.sample_time, rel_tol=1e-9):
+        raise ArtifactError("sample_time", "the stored spec's drive.sample_time "
+                            f"({spec.drive.sample_time:g} s)", artifact.sample_time, file=file,
+                            hint="the law was made for another controller period; re-run "
+                                 "cct design")
+    if artifact.delay_samples != spec.drive.delay_samples:
+        raise ArtifactError("delay_samples", "the stored spec's drive.delay_samples "
+                            f"({spec.drive.delay_samples})", artifact.delay_samples, file=file,
+                            hint="the law was made for another computation delay; re-run "
+                                 "cct design")
 
 
 def run_verification(artifact: ControllerArtifact, spec: Spec,
@@ -332,26 +389,60 @@ def load_artifact(out_dir: str | Path) -> ControllerArtifact:
     return ControllerArtifact.loads(text, file=str(path))
 
 
-def header_agreement(out_dir: str | Path, artifact: ControllerArtifact) -> dict | None:
+def header_agreement(out_dir: str | Path, artifact: ControllerArtifact,
+                     spec: Spec | None = None) -> dict | None:
     """Whether ``out_dir/controller.h`` was exported from ``artifact``: its
-    ``law sha256`` line against :meth:`ControllerArtifact.law_sha256` (None when
-    there is no controller.h). A header without the line (older toolbox) does
-    not match.
+    ``law sha256`` line against :meth:`ControllerArtifact.law_sha256` and,
+    with ``spec`` (the artifact's stored spec), its whole text against the
+    header regenerated from the artifact with the header's own prefix (None
+    when there is no controller.h). A header without the line (older toolbox)
+    or edited by hand (a coefficient, the decoupling, a limit) does not match.
 
     Returns
     -------
     dict or None
         ``{"file": "controller.h", "law_sha256": <header's digest or None>,
-        "matches": bool}``.
+        "matches": bool}``; with ``spec`` also ``text_matches`` (bool) and
+        ``first_difference_line`` (1-based, or None).
     """
     path = Path(out_dir) / "controller.h"
     if not path.is_file():
         return None
-    head = read_limited(path, ArtifactError, what="controller.h file")[:4096]
-    found = re.search(rb"^ \* law sha256:\s+([0-9a-f]{64})\s*$", head, re.MULTILINE)
+    raw = read_limited(path, ArtifactError, what="controller.h file")
+    found = re.search(rb"^ \* law sha256:\s+([0-9a-f]{64})\s*$", raw[:4096], re.MULTILINE)
     digest = found.group(1).decode() if found else None
-    return {"file": "controller.h", "law_sha256": digest,
-            "matches": digest == artifact.law_sha256()}
+    out = {"file": "controller.h", "law_sha256": digest,
+           "matches": digest == artifact.law_sha256()}
+    if spec is not None:
+        line = _header_difference(raw, artifact, spec)
+        out.update(text_matches=line is None, first_difference_line=line)
+        out["matches"] = out["matches"] and line is None
+    return out
+
+
+def _header_difference(raw: bytes, artifact: ControllerArtifact, spec: Spec) -> int | None:
+    """First line (1-based) where ``raw`` differs from the header regenerated
+    from ``artifact`` with the prefix the header uses; None when equal."""
+    from .export import write_header
+
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        return 1
+    named = re.search(r"^static inline void ([A-Za-z][A-Za-z0-9_]{0,30})init\(", text,
+                      re.MULTILINE)
+    prefix = named.group(1) if named else spec.export_prefix
+    try:
+        expected = write_header(artifact, spec.motor, spec.drive, prefix=prefix)
+    except CctError:  # the artifact cannot be exported: no header can be its own
+        return 1
+    if text == expected:
+        return None
+    got, want = text.splitlines(), expected.splitlines()
+    for k, (a, b) in enumerate(zip(got, want)):
+        if a != b:
+            return k + 1
+    return min(len(got), len(want)) + 1
 
 
 def load_analysis(out_dir: str | Path, artifact: ControllerArtifact) -> dict | None:
@@ -415,6 +506,63 @@ def _check_analysis(data: dict, file: str) -> None:
             v = check.get(name)
             if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
                 raise ArtifactError(f"{where}.{name}", "a number or null", v, file=file)
+    _check_shapes(data, file)
+
+
+def _is_num(v: Any) -> bool:
+    return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
+
+
+def _shape(value: Any, key: str, kind: str, file: str) -> Any:
+    """``value`` of the ``kind`` the report reads ("object", "list", "number",
+    "numbers": a list of numbers, "pair": two numbers), else ArtifactError."""
+    ok = {"object": lambda v: isinstance(v, dict),
+          "list": lambda v: isinstance(v, list),
+          "number": _is_num,
+          "real": lambda v: _is_num(v) and v is not None,
+          "numbers": lambda v: isinstance(v, list) and all(_is_num(x) for x in v),
+          "pair": lambda v: (isinstance(v, list) and len(v) == 2
+                             and all(_is_num(x) and x is not None for x in v))}[kind](value)
+    if not ok:
+        what = {"object": "an object", "list": "a list", "number": "a number or null",
+                "real": "a number",
+                "numbers": "a list of numbers", "pair": "[low, high] numbers"}[kind]
+        raise ArtifactError(key, what, value if not isinstance(value, (dict, list))
+                            else type(value).__name__, file=file,
+                            hint="analysis.json as cct design writes it; re-run cct design")
+    return value
+
+
+def _check_shapes(data: dict, file: str) -> None:
+    """The nested fields the report reads from the sweep, the certificates and
+    the MIMO summaries (a wrong shape made ``cct report`` crash)."""
+    sweep = data.get("sweep") or {}
+    if sweep:
+        for axis, worst in _shape(sweep.get("worst", {}), "sweep.worst", "object",
+                                  file).items():
+            for quantity, entry in _shape(worst, f"sweep.worst.{axis}", "object",
+                                          file).items():
+                where = f"sweep.worst.{axis}.{quantity}"
+                _shape(entry, where, "object", file)
+                _shape(entry.get("params", {}), f"{where}.params", "object", file)
+                _shape(entry.get("value"), f"{where}.value", "number", file)
+        for k, ex in enumerate(_shape(sweep.get("unstable_examples", []),
+                                      "sweep.unstable_examples", "list", file)):
+            _shape(ex, f"sweep.unstable_examples[{k}]", "object", file)
+        for name in ("worst_spectral_radius", "n_sets", "n_unstable"):
+            _shape(sweep.get(name), f"sweep.{name}", "number", file)
+        if sweep.get("speeds_rad_s") is not None:
+            _shape(sweep["speeds_rad_s"], "sweep.speeds_rad_s", "numbers", file)
+    cert = data.get("certificate") or {}
+    for name, pair in _shape(cert.get("box") or {}, "certificate.box", "object",
+                             file).items():
+        _shape(pair, f"certificate.box.{name}", "pair", file)
+    box = data.get("mimo_over_box") or {}
+    for name, v in _shape(box.get("worst_params") or {}, "mimo_over_box.worst_params",
+                          "object", file).items():
+        _shape(v, f"mimo_over_box.worst_params.{name}", "real", file)
+    if box.get("speeds_rad_s") is not None:
+        _shape(box["speeds_rad_s"], "mimo_over_box.speeds_rad_s", "list", file)
 
 
 def spec_of_artifact(artifact: ControllerArtifact, file: str | None = None) -> Spec:

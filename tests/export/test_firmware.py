@@ -106,7 +106,8 @@ def test_prefix_names():
     assert write_header(art, A.MOTOR, A.DRIVE, prefix="cct_") == default
 
 
-@pytest.mark.parametrize("bad", ["1motor", "_m", "_", "mo tor", "m-1", "x" * 32, "", 5])
+@pytest.mark.parametrize("bad", ["1motor", "_m", "_", "mo tor", "m-1", "x" * 32, "", 5,
+                                 "m\n", "motor1_\n"])
 def test_prefix_refused(bad):
     """Not a C identifier starting with a letter (<= 31 characters): SpecError
     naming export.prefix, nothing rendered."""

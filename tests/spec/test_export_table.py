@@ -26,6 +26,8 @@ def test_default_and_given_prefix():
     ({"prefix": "1m"}, "export.prefix", "C identifier prefix"),
     ({"prefix": "_"}, "export.prefix", "C identifier prefix"),
     ({"prefix": "a" * 32}, "export.prefix", "C identifier prefix"),
+    ({"prefix": "m\n"}, "export.prefix", "C identifier prefix"),   # re.match's $ took it
+    ({"prefix": "motor1_\n"}, "export.prefix", "C identifier prefix"),
     ({"prefix": 3}, "export.prefix", "a string"),
     ({"prefx": "m_"}, "export.prefx", "did you mean"),
 ])

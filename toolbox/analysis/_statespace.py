@@ -187,10 +187,25 @@ def zoh_2x2(A: np.ndarray, B: np.ndarray, Ts: float) -> tuple[np.ndarray, np.nda
     x = D * Ts
     small = np.abs(x) < 1e-3
     xs = np.where(small, 1.0, x)
-    sinhc = np.where(small, 1 + x * x / 6 + x ** 4 / 120, np.sinh(xs) / xs)
-    e = np.exp(m * Ts)
-    c0 = np.real(e * np.cosh(x))
-    c1 = np.real(e * Ts * sinhc)
+    with np.errstate(over="ignore", invalid="ignore"):
+        sinhc = np.where(small, 1 + x * x / 6 + x ** 4 / 120, np.sinh(xs) / xs)
+        e = np.exp(m * Ts)
+        c0 = np.real(e * np.cosh(x))
+        c1 = np.real(e * Ts * sinhc)
+    bad = ~(np.isfinite(c0) & np.isfinite(c1))
+    if np.any(bad):
+        # a fast stiff plant (L/R far below Ts, e.g. R x2 and L x0.5 of a
+        # plausible motor at a slow sample time): exp(m T) underflows to 0 while
+        # cosh(D T) overflows, 0 x inf = nan. The same coefficients with the
+        # exponents added first, exp(m T +- D T), stay finite because
+        # |Re D| < |m| (det A > 0); only where the product form failed, so
+        # every other number keeps its bits.
+        mb, xb = m[bad] * Ts, x[bad]
+        with np.errstate(over="ignore", invalid="ignore", under="ignore"):
+            ep, em = np.exp(mb + xb), np.exp(mb - xb)
+            c0[bad] = np.real(0.5 * (ep + em))
+            c1[bad] = np.real(np.where(small[bad], np.exp(mb) * Ts * sinhc[bad],
+                                       Ts * (ep - em) / (2 * xs[bad])))
     I = np.eye(2)
     Phi = c0[:, None, None] * I + c1[:, None, None] * (A - m[:, None, None] * I)
     Gam = np.linalg.solve(A, (Phi - I) @ B)

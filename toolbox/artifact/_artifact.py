@@ -30,7 +30,7 @@ import numpy as np
 from .._io import check_data_depth, check_text_depth
 from .._lti import StateSpace, acker, as_statespace, c2d, ss2tf
 from ..errors import ArtifactError
-from ._fields import AxisWeights, FcsWeights, TransferFunctionData
+from ._fields import AxisWeights, FcsWeights, TransferFunctionData, finite_number
 
 __all__ = [
     "SCHEMA",
@@ -58,7 +58,7 @@ def _matrix(value: Any, key: str, rows: int | None = None,
     """Read a JSON matrix (list of lists of finite numbers)."""
     try:
         arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: a 400-digit integer
         raise ArtifactError(key, "a matrix (list of lists of numbers)", value) from None
     if arr.ndim == 1 and arr.size == 0:
         arr = arr.reshape(0, 0 if cols is None else cols)
@@ -167,7 +167,7 @@ class StateSpaceData:
         dt = method = None
         if discrete:
             dt = data.get("dt")
-            if not isinstance(dt, (int, float)) or isinstance(dt, bool) or not dt > 0:
+            if not finite_number(dt) or not dt > 0:
                 raise ArtifactError(f"{key}.dt", "a sample time > 0 (s)", dt)
             method = data.get("method")
             if method not in DISCRETISATIONS:
@@ -212,7 +212,7 @@ class Zpk:
             arr = _matrix(data.get(name, []), f"{key}.{name}", cols=2)
             roots[name] = arr[:, 0] + 1j * arr[:, 1]
         gain = data.get("gain")
-        if not isinstance(gain, (int, float)) or isinstance(gain, bool) or not math.isfinite(gain):
+        if not finite_number(gain):
             raise ArtifactError(f"{key}.gain", "a finite number", gain)
         return cls(roots["zeros"], roots["poles"], float(gain))
 
@@ -607,14 +607,13 @@ class Decoupling:
                 raise ArtifactError(f"{key}.{name}", "true or false", data.get(name))
         for name in ("R_c", "Ld_c", "Lq_c", "flux_c"):
             v = data.get(name)
-            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or v < 0:
+            if not finite_number(v) or v < 0:
                 raise ArtifactError(f"{key}.{name}", "a finite number >= 0", v)
         pp = data.get("pole_pairs")
         if not isinstance(pp, int) or isinstance(pp, bool) or pp < 1:
             raise ArtifactError(f"{key}.pole_pairs", "an integer >= 1", pp)
         t_comp = data.get("delay_compensation_time", 0.0)
-        if not isinstance(t_comp, (int, float)) or isinstance(t_comp, bool) \
-                or not math.isfinite(t_comp) or t_comp < 0:
+        if not finite_number(t_comp) or t_comp < 0:
             raise ArtifactError(f"{key}.delay_compensation_time", "a finite number >= 0 (s)",
                                 t_comp)
         return cls(data["cross"], data["emf"], float(data["R_c"]), float(data["Ld_c"]),
@@ -638,8 +637,9 @@ def _check_margins(margins: Mapping) -> None:
             raise ArtifactError(f"margins.{axis}", "an object (MARGINS)", values)
         for name in MARGIN_NUMBERS:
             v = values.get(name)
-            ok = (v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
-                  or v in ("inf", "-inf", "nan"))
+            ok = (v is None or (isinstance(v, (int, float)) and not isinstance(v, bool)
+                                and not (isinstance(v, int) and abs(v) >= 2 ** 1024))
+                  or v in ("inf", "-inf", "nan"))  # 2**1024: no double holds it
             if not ok:
                 raise ArtifactError(f"margins.{axis}.{name}",
                                     'a number, "inf", "-inf", "nan" or null', v)
@@ -870,11 +870,13 @@ class ControllerArtifact:
         if data["method"] not in METHODS:
             raise ArtifactError("method", "one of " + ", ".join(METHODS), data["method"])
         ts = data["sample_time"]
-        if not isinstance(ts, (int, float)) or isinstance(ts, bool) or not ts > 0:
-            raise ArtifactError("sample_time", "a number > 0 (s)", ts)
+        if not finite_number(ts) or not ts > 0:  # Infinity parses as a JSON float
+            raise ArtifactError("sample_time", "a finite number > 0 (s)", ts)
         delay = data.get("delay_samples", 0)
         if not isinstance(delay, int) or isinstance(delay, bool) or delay < 0:
             raise ArtifactError("delay_samples", "an integer >= 0", delay)
+        if delay > 10:  # as drive.delay_samples of a spec
+            raise ArtifactError("delay_samples", "an integer from 0 to 10", delay)
         axes_data = data["axes"]
         if not isinstance(axes_data, Mapping) or set(axes_data) != set(AXES):
             raise ArtifactError("axes", 'an object with the axes "d" and "q"',

@@ -29,16 +29,27 @@ import numpy as np
 
 from ..errors import ArtifactError
 
-__all__ = ["FcsWeights", "TransferFunctionData", "AxisWeights", "WEIGHT_NAMES"]
+__all__ = ["FcsWeights", "TransferFunctionData", "AxisWeights", "WEIGHT_NAMES", "finite_number"]
 
 #: H-infinity weight names of one axis: w1 on S, w2 on K S, w3 on T (003 eq (41)-(43)).
 WEIGHT_NAMES = ("w1", "w2", "w3")
 
 
+def finite_number(value: Any) -> bool:
+    """A JSON number (not a bool) that is a finite double: an integer of 400
+    digits is not (``math.isfinite`` raises ``OverflowError`` on it)."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 def _number(value: Any, key: str, what: str = "a finite number",
             minimum: float | None = None, strict: bool = False) -> float:
     """A JSON number (not a bool), finite, optionally bounded below."""
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    ok = finite_number(value)
     if ok and minimum is not None:
         ok = value > minimum if strict else value >= minimum
     if not ok:

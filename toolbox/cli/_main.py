@@ -2,13 +2,15 @@
 
 Exit codes (toolbox/ARCHITECTURE.md "Errors and exit codes"): 0 every
 requirement holds, 1 a requirement fails (outputs still written), 2 bad input
-(nothing written). Only
-:class:`~toolbox.errors.CctError` and its subclasses are turned into exit 2;
-anything else is a bug and keeps its traceback.
+(nothing written): :class:`~toolbox.errors.CctError` and its subclasses; 3 an
+internal error (a bug: one line naming the command, its stage and the file
+holding the traceback, ``_failsafe``); 130 Ctrl-C, 143 ``SIGTERM``. No
+traceback reaches the terminal.
 """
 
 from __future__ import annotations
 
+import errno
 import functools
 import json
 import math
@@ -18,32 +20,66 @@ from pathlib import Path
 import click
 
 from ..errors import CctError, SpecError
+from ._failsafe import (EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated,
+                        internal_error_message, signal_handlers, where)
 from ._progress import CountBar, StepBar, design_stages
 
 #: -q/--quiet of the long-running commands: the bar goes, the summary stays.
 _QUIET = click.option("--quiet", "-q", is_flag=True,
                       help="No progress bar (the result summary is still printed).")
 
-EXIT_OK, EXIT_REQUIREMENT, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_REQUIREMENT, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def _spec_errors(func):
-    """Turn any CctError into a one-line message and exit code 2."""
+    """Turn any CctError into a one-line message and exit code 2; record the
+    command and its output directory for the top-level handler
+    (:class:`_Cct`)."""
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
+        where.command = func.__name__
+        out_dir = kwargs.get("out_dir") or kwargs.get("design_dir")
+        where.out_dir = str(out_dir) if out_dir is not None else None
         try:
             return func(*args, **kwargs)
         except CctError as err:
             click.echo(f"cct: error: {err}", err=True)
             sys.exit(EXIT_BAD_INPUT)
-        except KeyboardInterrupt:
-            # outputs are swapped in as a set, so an interrupt leaves the old
-            # set or the new one; 130 = 128 + SIGINT, as shells report it
-            click.echo("cct: interrupted (no output half-written)", err=True)
-            sys.exit(EXIT_INTERRUPTED)
 
     return wrapper
+
+
+class _Cct(click.Group):
+    """The ``cct`` group: every command runs under explicit signal
+    dispositions and a top-level handler, so that nothing but a one-line
+    message reaches the user (toolbox/ARCHITECTURE.md "Errors and exit
+    codes"): Ctrl-C exit 130, ``SIGTERM`` exit 143 (outputs are swapped in as
+    a set, so an interrupt leaves the old set or the new one and no staging
+    directory), any unexpected exception exit 3 with its traceback in a
+    file."""
+
+    def invoke(self, ctx: click.Context):
+        where.reset()
+        with signal_handlers():
+            try:
+                return super().invoke(ctx)
+            except (click.exceptions.Exit, click.ClickException, click.exceptions.Abort):
+                raise
+            except KeyboardInterrupt:
+                click.echo("cct: interrupted (no output half-written)", err=True)
+                sys.exit(EXIT_INTERRUPTED)
+            except Terminated:
+                click.echo("cct: terminated (no output half-written)", err=True)
+                sys.exit(EXIT_TERMINATED)
+            except OSError as err:
+                if err.errno == errno.EPIPE:  # click's own handling: a closed pipe
+                    raise
+                click.echo(internal_error_message(err), err=True)
+                sys.exit(EXIT_INTERNAL)
+            except Exception as err:  # a bug: one line, the traceback in a file
+                click.echo(internal_error_message(err), err=True)
+                sys.exit(EXIT_INTERNAL)
 
 
 def _write_file(path: str | Path, data: str | bytes, option: str) -> None:
@@ -61,7 +97,7 @@ def _write_file(path: str | Path, data: str | bytes, option: str) -> None:
                         str(path), hint=hint) from None
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=_Cct, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="current-control-toolbox")
 def main() -> None:
     """Current Control Toolbox: PMSM current-controller design from spec to
@@ -259,17 +295,18 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
     """
     from dataclasses import replace
 
-    from ..pipeline import (header_agreement, load_artifact, run_verification,
-                            spec_of_artifact, write_outputs)
+    from ..pipeline import (check_integrity, header_agreement, load_artifact,
+                            run_verification, spec_of_artifact, write_outputs)
 
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=file)
+    check_integrity(artifact, spec, file=file)
     # margins and stability are recomputed from the executed law, never read back
     with StepBar(["verification"], quiet=quiet, desc="verify") as bar:
         bar("verification")
         result = run_verification(artifact, spec, file=file)
-    result = replace(result, header=header_agreement(out_dir, artifact))
+    result = replace(result, header=header_agreement(out_dir, artifact, spec))
     text = json.dumps(result.to_json(), indent=1, allow_nan=False) + "\n"
     write_outputs({"verify.json": text}, out_dir)
     _notices(result.notice, result.warnings)
@@ -293,10 +330,17 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
             click.echo(f"{'pass' if check['pass'] else 'FAIL'}  {key}: "
                        f"{_fmt(check['value'])} (bound {_fmt(check['bound'])})"
                        + ("" if check["pass"] else f": {check.get('reason')}"))
-        if result.header is not None and not result.header["matches"]:
-            click.echo(f"FAIL  controller.h: exported from another controller.json (law "
-                       f"sha256 {result.header['law_sha256'] or 'missing'}, controller.json "
-                       f"{artifact.law_sha256()}): run cct export {out_dir} before flashing it")
+        header = result.header
+        if header is not None and not header["matches"]:
+            if header["law_sha256"] != artifact.law_sha256():
+                click.echo(f"FAIL  controller.h: exported from another controller.json (law "
+                           f"sha256 {header['law_sha256'] or 'missing'}, controller.json "
+                           f"{artifact.law_sha256()}): run cct export {out_dir} before "
+                           "flashing it")
+            else:
+                click.echo(f"FAIL  controller.h: differs from the header regenerated from "
+                           f"controller.json at line {header['first_difference_line']} (edited "
+                           f"after export?): run cct export {out_dir} before flashing it")
     sys.exit(EXIT_OK if result.passed else EXIT_REQUIREMENT)
 
 
@@ -316,8 +360,9 @@ def report(out_dir: str, quiet: bool) -> None:
     Example:
       cct report out/003
     """
-    from ..pipeline import (DesignOutputs, analyse, load_analysis, load_artifact, report_data,
-                            run_verification, spec_of_artifact, write_outputs)
+    from ..pipeline import (DesignOutputs, analyse, check_integrity, load_analysis,
+                            load_artifact, report_data, run_verification, spec_of_artifact,
+                            write_outputs)
     from ..report import build_context, write_html, write_pdf
 
     from ..analysis import compute_margins
@@ -326,6 +371,7 @@ def report(out_dir: str, quiet: bool) -> None:
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=file)
+    check_integrity(artifact, spec, file=file)
     with StepBar(["verification", "analysis", "report"], quiet=quiet, desc="report") as bar:
         # verified first, on the artifact as stored: its margins are compared, not trusted
         bar("verification")
@@ -387,15 +433,20 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
             click.echo(text, nl=False)
         return
     from ..export import write_header
-    from ..pipeline import refuse_unstable_export
+    from ..pipeline import check_integrity, refuse_unstable_export
 
     file = str(Path(out_dir) / "controller.json")
     spec = spec_of_artifact(artifact, file=file)
+    check_integrity(artifact, spec, file=file)
     refuse_unstable_export(artifact, spec.motor, file=file)
     # refusals name the design file the controller came from
     if prefix is not None:
         from ..export import prefix_name
-        prefix_name(prefix, key="--prefix")      # a bad option is bad input (exit 2)
+        try:
+            prefix_name(prefix, key="--prefix")  # a bad option is bad input (exit 2)
+        except SpecError as err:
+            raise SpecError(err.key, err.expected, prefix,
+                            hint="the rule of the spec's export.prefix") from None
     text = write_header(artifact, spec.motor, spec.drive, source=file,
                         prefix=prefix if prefix is not None else spec.export_prefix)
     _write_file(output or Path(out_dir) / "controller.h", text, "--output")
@@ -591,10 +642,11 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
         with CountBar(quiet=quiet, desc="campaign") as bar:
             run = run_campaign(s, out_dir, scheduler=scheduler, workers=workers,
                                artifact=artifact, progress=bar, report=not no_report)
-    except KeyboardInterrupt:
-        click.echo(f"cct: interrupted; the chunks written are kept in {out_dir}/chunks: "
+    except (KeyboardInterrupt, Terminated) as err:
+        what = "interrupted" if isinstance(err, KeyboardInterrupt) else "terminated"
+        click.echo(f"cct: {what}; the chunks written are kept in {out_dir}/chunks: "
                    "run the same command again to resume", err=True)
-        sys.exit(EXIT_INTERRUPTED)
+        sys.exit(EXIT_INTERRUPTED if isinstance(err, KeyboardInterrupt) else EXIT_TERMINATED)
     sm = run.summary
     if not quiet:
         for path in run.files:

@@ -22,6 +22,9 @@ from __future__ import annotations
 
 import sys
 from typing import Iterable
+
+from ._failsafe import where
+
 __all__ = ["CountBar", "StepBar", "design_stages"]
 
 
@@ -74,6 +77,7 @@ class StepBar:
         if step not in self.steps:
             self.message(step)
             return
+        where.stage = step  # named by the top-level handler if this step fails
         if self._started:
             self._bar.update(1)
         self._started += 1

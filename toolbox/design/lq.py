@@ -39,7 +39,7 @@ from .._lti import StateSpace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
-from ..spec import Table
+from ..spec import Table, check_rate, check_scale
 from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
 
@@ -418,6 +418,14 @@ def read_cfg(method: str, table, motor, drive) -> LqCfg:
     i_max = t.number("current_limit", i_default, positive=True, unit="A")
     v_drive = drive.max_voltage(motor.convention)
     v_max = t.number("voltage_limit", v_drive, positive=True, unit="V")
+    # Bryson's weights are inverse squares of these: one design range for all
+    # (toolbox/spec/_bounds.py; 1e-300 A or 1e300 V overflowed here)
+    if t.has("bandwidth"):
+        check_rate(t.key("bandwidth"), bandwidth, drive)
+    if t.has("current_limit"):
+        check_scale(t.key("current_limit"), i_max, i_default, "current limit", "A")
+    if t.has("voltage_limit"):
+        check_scale(t.key("voltage_limit"), v_max, v_drive, "voltage limit", "V")
     v_axis = {ax: (v_max if t.has("voltage_limit") else min(v_drive, bw.value * L * i_max))
               for ax, L in zip(AXES, (motor.Ld, motor.Lq))}
     defaults = None

@@ -102,7 +102,7 @@ import numpy as np
 from .._lti import StateSpace, as_statespace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
-from ..spec import Table
+from ..spec import Table, check_gain, check_rate, check_time_constant
 from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
 
@@ -390,6 +390,32 @@ def _bandwidth(t: Table, default: float | None = None) -> tuple[float, float]:
     return t.per_axis("bandwidth", positive=True, unit="rad/s")
 
 
+def _check_rates(t: Table, drive, names: tuple[str, ...]) -> None:
+    """The rates and time constants given in ``t`` within the one design range
+    (toolbox/spec/_bounds.py ``RATE_TS``; ``cct check`` refuses them)."""
+    times = {"response_time": LN20, "lag_time_constant": 1.0, "small_time_constant": 1.0}
+    for name in names:
+        if not t.has(name):
+            continue
+        for value in set(t.per_axis(name, positive=True)):
+            if name in times:
+                check_time_constant(t.key(name), value, drive, times[name])
+            else:
+                check_rate(t.key(name), value, drive)
+
+
+def _check_gains(t: Table, Kp: tuple, Ki: tuple, L: tuple, drive) -> None:
+    """Explicit gains within the design range: ``Kp / L`` and ``sqrt(Ki / L)``
+    as rates (toolbox/spec/_bounds.py ``check_gain``)."""
+    normalised = t.has("Kp_normalised") or t.has("Ki_normalised")
+    kp_key = t.key("Kp_normalised" if normalised else "Kp")
+    ki_key = t.key("Ki_normalised" if normalised else "Ki")
+    for k in (0, 1):
+        check_gain(kp_key, Kp[k], L[k], drive, "V/A" if not normalised else "V/A (after scaling)")
+        check_gain(ki_key, Ki[k], L[k], drive,
+                   "V/(A s)" if not normalised else "V/(A s) (after scaling)", order=2)
+
+
 def _default_lag(drive) -> float:
     """Default ``lag_time_constant`` of ``pi_lag`` (s): one sample period, an
     anti-aliasing filter at the sampling rate (paper 001 gives no value)."""
@@ -538,6 +564,9 @@ def read_cfg(method: str, table: Table, motor, drive) -> PiCfg:
     else:
         Kp, Ki, explicit_details = _explicit(t, method, drive)
         details.update(explicit_details)
+        _check_gains(t, Kp, Ki, L, drive)
+    _check_rates(t, drive, ("bandwidth", "response_time", "integral_bandwidth",
+                            "lag_time_constant", "small_time_constant"))
     if method == "ip" and rule in ("cancellation", "bandwidth", "complex_vector"):
         warnings.warn(
             f'ip with rule = "{rule}": the loop has the PI\'s poles (-R/L, -wc), but the '

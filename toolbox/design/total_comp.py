@@ -41,10 +41,10 @@ import numpy as np
 from .._lti import StateSpace, static_gain
 from ..artifact import AxisController, ControllerArtifact, Decoupling
 from ..errors import SpecError
-from ..spec import Table
+from ..spec import Table, check_gain, check_time_constant
 from . import _defaults
 from ._common import make_artifact
-from .pi import DISCRETISATIONS, _explicit
+from .pi import DISCRETISATIONS, LN20, _check_gains, _explicit
 
 __all__ = ["TotalCompCfg", "read_cfg", "design", "design_total_compensation",
            "total_comp_law", "gains_from_poles", "gains_from_response_time",
@@ -302,6 +302,32 @@ def _default_gains(method: str, drive) -> tuple[tuple, tuple | None, dict]:
                                "K": "K11 = K21 = wc, K12 = K22 = wc^2/4 (damping 1)"}}}
 
 
+def _check_design_rates(t: Table, group: str, K_prop: tuple, K_int: tuple | None,
+                        model: dict, drive) -> None:
+    """The error dynamics' rates within the one design range
+    (toolbox/spec/_bounds.py ``RATE_TS``): ``K`` (1/s) and ``sqrt(K')``
+    (1/s^2), each refusal naming the key the user wrote."""
+    if group == "response_time":
+        for value in set(t.per_axis("response_time", positive=True)):
+            check_time_constant(t.key("response_time"), value, drive, LN20)
+        return
+    if group == "match_pi":
+        Kp, Ki, _ = _explicit(t, "pi", drive)
+        _check_gains(t, Kp, Ki, (model["Lq"], model["Lq"]), drive)
+        return
+    if group == "gains":
+        prop_keys = ("K1", "K2") if K_int is None else ("K11", "K21")
+        int_keys = ("K12", "K22")
+    elif group == "natural_frequency":  # natural_frequency itself: _read_tci
+        prop_keys, int_keys = ("damping", "damping"), ("natural_frequency",) * 2
+    else:  # poles: the gains they give, named by that key
+        prop_keys = int_keys = (group, group)
+    for k in (0, 1):
+        check_gain(t.key(prop_keys[k]), K_prop[k], 1.0, drive, "1/s")
+        if K_int is not None:
+            check_gain(t.key(int_keys[k]), K_int[k], 1.0, drive, "1/s^2", order=2)
+
+
 def _read_tc(t: Table) -> tuple[tuple, None, dict]:
     group = _one_group(t, _TC_GROUPS)
     if group == "gains":
@@ -327,6 +353,8 @@ def _read_tci(t: Table, model: dict, drive) -> tuple[tuple, tuple, dict]:
         return (K11, K21), (K12, K22), {}
     if group == "natural_frequency":
         wn = t.per_axis("natural_frequency", positive=True, unit="rad/s")
+        for value in set(wn):  # before wn^2 (1e300 overflowed)
+            check_gain(t.key("natural_frequency"), value, 1.0, drive, "rad/s")
         if not t.has("damping"):
             raise SpecError(t.key("damping"), "a number > 0 (missing)")
         zeta = t.per_axis("damping", positive=True)
@@ -375,8 +403,10 @@ def read_cfg(method: str, table: Table, motor, drive) -> TotalCompCfg:
         K_prop, K_int, details = _default_gains(method, drive)
     elif method == "tc":
         K_prop, K_int, details = _read_tc(t)
+        _check_design_rates(t, _one_group(t, groups), K_prop, K_int, model, drive)
     else:
         K_prop, K_int, details = _read_tci(t, model, drive)
+        _check_design_rates(t, _one_group(t, groups), K_prop, K_int, model, drive)
     return TotalCompCfg(method=method, K_prop=tuple(map(float, K_prop)),
                         K_int=None if K_int is None else tuple(map(float, K_int)),
                         model=model,

@@ -634,7 +634,7 @@ def reference_law(artifact, inputs: np.ndarray, v_max: float, limit: str = "circ
 # ---------------------------------------------------------------------------
 # C text
 # ---------------------------------------------------------------------------
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,30}$")
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,30}")  # fullmatch (no trailing newline)
 TEMPLATES = Path(__file__).parent / "templates"
 _ENV = None
 
@@ -1207,7 +1207,8 @@ def write_header(artifact, motor=None, drive=None, *, name: str = "cct",
         raise
 
 
-PREFIX_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,30}$")
+#: Used with fullmatch: ``$`` of re.match also matches before a trailing newline.
+PREFIX_RE = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,30}")
 
 
 def prefix_name(prefix: Any, key: str = "export.prefix") -> str:
@@ -1226,7 +1227,7 @@ def prefix_name(prefix: Any, key: str = "export.prefix") -> str:
     SpecError
         Not such an identifier.
     """
-    if not isinstance(prefix, str) or not PREFIX_RE.match(prefix):
+    if not isinstance(prefix, str) or not PREFIX_RE.fullmatch(prefix):
         raise SpecError(key, "a C identifier prefix: a letter, then letters, digits or _ "
                         "(at most 31 characters), e.g. \"motor1_\"", prefix)
     stem = prefix[:-1] if prefix.endswith("_") else prefix
@@ -1237,7 +1238,7 @@ def prefix_name(prefix: Any, key: str = "export.prefix") -> str:
 
 def _write_header(artifact, motor, drive, name: str, title: str | None,
                   example: bool = True) -> str:
-    if not isinstance(name, str) or not _IDENT.match(name):
+    if not isinstance(name, str) or not _IDENT.fullmatch(name):
         raise SpecError("export.name", "a C identifier of at most 31 characters", name)
     motor, drive = _motor_drive(artifact, motor, drive)
     if artifact.method == "fcs_mpc":

@@ -209,7 +209,7 @@ def _transform(v: np.ndarray, lim: tuple[float, float], log: bool, p0: float,
                p1: float) -> np.ndarray:
     """Data -> pt (``lim[0]`` at ``p0``, ``lim[1]`` at ``p1``); NaN where not drawable."""
     v = np.asarray(v, float)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         if log:
             v = np.where(v > 0, np.log10(np.where(v > 0, v, 1.0)), np.nan)
             a, b = math.log10(lim[0]), math.log10(lim[1])

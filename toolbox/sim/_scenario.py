@@ -30,12 +30,11 @@ Speed handling by ``kind``:
 from __future__ import annotations
 
 import difflib
-import math
 from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
 from toolbox.errors import SpecError
-from toolbox.spec import MOTOR_PARAMETER_KEYS
+from toolbox.spec import MOTOR_PARAMETER_KEYS, is_finite_number
 
 __all__ = ["Scenario", "SCENARIO_KINDS", "INVERTER_KINDS", "PLANT_KEYS"]
 
@@ -175,7 +174,7 @@ class Scenario:
             v = getattr(self, f.name)
             if isinstance(v, bool) or v is None or isinstance(v, (str, Mapping)):
                 continue
-            if isinstance(v, (int, float)) and not math.isfinite(v):
+            if isinstance(v, (int, float)) and not is_finite_number(v):
                 raise err(f.name, "a finite number", v)
         if not self.duration > 0:
             raise err("duration", "a number > 0 (s)", self.duration)
@@ -212,8 +211,7 @@ class Scenario:
             if name not in SPEED_LOOP_KEYS:
                 raise err(f"speed_loop.{name}", "one of " + ", ".join(SPEED_LOOP_KEYS), name,
                           _did_you_mean(name, SPEED_LOOP_KEYS))
-            if isinstance(v, bool) or not isinstance(v, (int, float)) \
-                    or not math.isfinite(v) or v < 0:
+            if not is_finite_number(v) or v < 0:
                 raise err(f"speed_loop.{name}", "a finite number >= 0", v)
         for table in ("plant_values", "plant_scale"):
             for name, v in getattr(self, table).items():
@@ -221,8 +219,7 @@ class Scenario:
                     raise err(f"{table}.{name}", "a plant parameter ("
                               + ", ".join(PLANT_KEYS) + ")", name,
                               _did_you_mean(name, PLANT_KEYS))
-                if isinstance(v, bool) or not isinstance(v, (int, float)) \
-                        or not math.isfinite(v) or v < 0 \
+                if not is_finite_number(v) or v < 0 \
                         or (v == 0 and name not in ("friction",)):
                     raise err(f"{table}.{name}", "a finite number > 0", v)
 
@@ -299,12 +296,14 @@ def _check_type(path: str, name: str, v: Any) -> Any:
     if name in ("seed", "current_delay_d", "current_delay_q"):
         if isinstance(v, bool) or not isinstance(v, int) or v < 0:
             raise SpecError(path, "an integer >= 0", v)
+        if v > 2 ** 53:  # as toolbox.spec's integer keys (Table.integer)
+            raise SpecError(path, "an integer >= 0 of magnitude at most 2**53", v)
         return v
     if v is None and name in ("torque_ref", "trace_step"):
         return v
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise SpecError(path, "a number", v)
-    if not math.isfinite(v):
+    if not is_finite_number(v):
         raise SpecError(path, "a finite number", v)
     return v
 

@@ -212,9 +212,12 @@ class VerifyResult:
         Checks shown but not deciding (fcs_mpc's baseline PI margins).
     header : dict or None
         ``cct verify`` only, when a controller.h lies next to controller.json:
-        ``{"file", "law_sha256", "matches"}`` (the header's law digest against
-        :meth:`~toolbox.artifact.ControllerArtifact.law_sha256`); a header
-        exported from another controller.json fails the verdict.
+        ``{"file", "law_sha256", "text_matches", "first_difference_line",
+        "matches"}`` (the header's law digest against
+        :meth:`~toolbox.artifact.ControllerArtifact.law_sha256`, its whole text
+        against the header regenerated from the artifact,
+        ``toolbox.pipeline.header_agreement``); a header exported from another
+        controller.json or edited by hand fails the verdict.
     """
 
     method: str

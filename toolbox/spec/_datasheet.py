@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
 from ..errors import SpecError
-from ._fields import Collector
+from ._fields import Collector, is_finite_number
 from ._units import KINDS, _Shown, looks_like_quantity, parse_quantity
 
 __all__ = ["Conversion", "GROUPS", "MOTOR_KINDS", "DRIVE_KINDS", "CONVENTION_TEXT",
@@ -284,8 +284,7 @@ _NOT_DERIVED = 1.0
 def _positive(value: Any, written: Any, key: str, unit: str,
               errors: Collector) -> float | None:
     """``value`` if a finite number > 0; else record why (once) and return None."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool) \
-            and math.isfinite(value) and value > 0:
+    if is_finite_number(value) and value > 0:  # a 400-digit integer is not
         return float(value)
     if not looks_like_quantity(written):  # a unit string was already reported
         errors.add(SpecError(key, f"a number > 0 ({unit}) or a string with a unit", written))
@@ -304,8 +303,7 @@ def resolve_drive(user: Mapping[str, Any], errors: Collector) -> tuple[dict, lis
     merged, log = convert_units(user, DRIVE_KINDS, "drive", errors)
     if "sample_frequency" in merged and "sample_time" not in user:
         fs = merged.pop("sample_frequency")
-        if isinstance(fs, (int, float)) and not isinstance(fs, bool) and math.isfinite(fs) \
-                and fs > 0:
+        if is_finite_number(fs) and fs > 0:
             merged["sample_time"] = 1.0 / fs
             log.append(Conversion("sample_time", 1.0 / fs, "s",
                                   {"sample_frequency": user["sample_frequency"]},

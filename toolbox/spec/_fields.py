@@ -21,6 +21,8 @@ __all__ = [
     "as_table",
     "SpecErrors",
     "Collector",
+    "MAX_INTEGER",
+    "is_finite_number",
 ]
 
 _MISSING = object()
@@ -60,6 +62,28 @@ def as_table(value: Any, key: str) -> Mapping:
 
 def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def is_finite_number(value: Any) -> bool:
+    """An int or float (not a bool) that is a finite double: an integer of
+    400 digits is not (``math.isfinite`` raises ``OverflowError`` on it).
+
+    Parameters
+    ----------
+    value : object
+        Any value read from a spec or JSON.
+    """
+    if not _is_number(value):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+#: Largest magnitude of an integer key without its own maximum (2**53: every
+#: integer up to it is exact as a double, which the numerics use).
+MAX_INTEGER = 2 ** 53
 
 
 class Table:
@@ -115,7 +139,7 @@ class Table:
         value = self._get(name, default, expected)
         if value is default and name not in self.data:
             return value
-        if not _is_number(value) or not math.isfinite(value):
+        if not is_finite_number(value):
             raise SpecError(self.key(name), expected, value)
         bad = ((positive and not value > 0) or (nonnegative and value < 0)
                or (negative and not value < 0)
@@ -138,6 +162,8 @@ class Table:
                 minimum is not None and value < minimum) or (
                 maximum is not None and value > maximum):
             raise SpecError(self.key(name), expected, value)
+        if abs(value) > MAX_INTEGER:  # 400 digits: no integer the numerics can use
+            raise SpecError(self.key(name), f"{expected} of magnitude at most 2**53", value)
         return value
 
     def boolean(self, name: str, default: Any = _MISSING) -> Any:
@@ -173,7 +199,7 @@ class Table:
             raise SpecError(self.key(name), f"a list of at most {max_length} numbers"
                             + (f" ({unit})" if unit else ""), f"{len(value)} numbers")
         if (not isinstance(value, (list, tuple))
-                or not all(_is_number(v) and math.isfinite(v) for v in value)
+                or not all(is_finite_number(v) for v in value)
                 or (length is not None and len(value) != length)
                 or len(value) < min_length):
             raise SpecError(self.key(name), expected, value)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import difflib
+import math
 import re
 import tomllib
 from pathlib import Path
@@ -20,8 +21,8 @@ from ._campaign import read_campaign
 from ._catalog import CATALOG
 from ._datasheet import (catalog_kept, relocate, reported_keys, resolve_drive,
                          resolve_motor)
-from ._bounds import (check_drive, check_motor, check_motor_drive, check_scenario_count,
-                      check_work)
+from ._bounds import (check_drive, check_motor, check_motor_drive, check_plant_variant,
+                      check_scenario_count, check_speed, check_work)
 from ._fields import Collector, Table, check_keys
 from ._methods import read_method_cfg
 from ._model import (DRIFT_FACTOR_RANGE, DRIFT_PARAMETERS, METHODS, REQUIREMENT_KEYS,
@@ -33,8 +34,9 @@ TOP_KEYS = ("title", "motor", "drive", "controller", "requirements", "scenario",
             "campaign")
 EXPORT_KEYS = ("prefix",)
 #: a C identifier prefix (letter first, at most 31 characters); the export
-#: (toolbox.export.prefix_name) applies the same rule
-_C_PREFIX = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,30}$")
+#: (toolbox.export.prefix_name) applies the same rule. Used with fullmatch:
+#: ``$`` of re.match also matches before a trailing newline ("m\n").
+_C_PREFIX = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,30}")
 MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "convention", "rated_current", "max_current", "rated_speed",
               # datasheet forms (toolbox/spec/_datasheet.py)
@@ -144,6 +146,8 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
         with errors.check():
             scenarios = _scenarios(top.raw("scenario", []), drive, method)
         check_work(scenarios, drive.sample_time, errors)
+        if motor is not None and not errors.failed:  # against a plausible motor and drive
+            _check_scenario_plants(scenarios, motor, drive, errors)
     campaign = None
     if top.has("campaign"):
         with errors.check():
@@ -338,7 +342,7 @@ def _export_prefix(value: Any) -> str:
     """``[export] prefix``: the C prefix of controller.h (default ``cct_``)."""
     t = Table(value, "export", EXPORT_KEYS)
     prefix = t.string("prefix", "cct_")
-    if not _C_PREFIX.match(prefix) or prefix == "_":
+    if not _C_PREFIX.fullmatch(prefix) or prefix == "_":
         raise SpecError("export.prefix", "a C identifier prefix: a letter, then letters, "
                         'digits or _ (at most 31 characters), e.g. "motor1_"', prefix)
     return prefix
@@ -401,6 +405,35 @@ def _scenarios(value: Any, drive: Drive, method: str | None) -> tuple:
                             hint="longer runs: call toolbox.sim.simulate directly")
         out.append(scenario)
     return tuple(out)
+
+
+def _check_scenario_plants(scenarios: tuple, motor: Motor, drive: Drive,
+                           errors: Collector) -> None:
+    """What a scenario asks of the motor and drive, by the rules of [motor] and
+    [drive] (toolbox/spec/_bounds.py): its true plant within the motor ranges,
+    its speeds below the Nyquist speed, and at least one controller period."""
+    for k, sc in enumerate(scenarios):
+        key = f"scenario[{k}]"
+        check_plant_variant(motor, drive, dict(sc.plant_values), dict(sc.plant_scale), key,
+                            errors)
+        with errors.check():
+            if not sc.duration >= drive.sample_time:
+                raise SpecError(f"{key}.duration", "at least one controller period "
+                                f"(drive.sample_time = {drive.sample_time:g} s)", sc.duration)
+        with errors.check():
+            check_speed(f"{key}.initial_speed", sc.initial_speed, motor, drive)
+        with errors.check():
+            if sc.acceleration:
+                final = sc.initial_speed + sc.acceleration * sc.duration
+                if not math.isfinite(final):
+                    final = math.copysign(math.inf, sc.acceleration)
+                try:
+                    check_speed(f"{key}.acceleration", final, motor, drive)
+                except SpecError as err:
+                    raise SpecError(err.key, err.expected.replace(
+                        "a mechanical speed", "an acceleration whose final speed "
+                        "initial_speed + acceleration x duration is", 1),
+                        sc.acceleration) from None
 
 
 def motor_from_dict(table: Mapping[str, Any]) -> Motor:

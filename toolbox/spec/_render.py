@@ -19,7 +19,7 @@ from ._model import Spec
 
 __all__ = ["spec_to_toml", "toml_value"]
 
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")  # fullmatch (no trailing newline)
 
 
 def _string(text: str) -> str:
@@ -42,7 +42,7 @@ def _string(text: str) -> str:
 
 def _key(name: Any) -> str:
     name = str(name)
-    return name if _BARE_KEY.match(name) else _string(name)
+    return name if _BARE_KEY.fullmatch(name) else _string(name)
 
 
 def toml_value(value: Any) -> str:
