@@ -540,6 +540,11 @@ def _fmt(value) -> str:
     return str(value)
 
 
+#: cct campaign: the cluster or the output disk is not usable (the input is
+#: sound; retry on a working cluster). README.md "Campaigns".
+EXIT_INFRASTRUCTURE = 4
+
+
 @main.command()
 @click.argument("spec", type=click.Path(dir_okay=False))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
@@ -563,9 +568,12 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
     simulate every sample on Dask, write one row per sample to
     OUT/results.parquet, a summary and a report.
 
-    Exit 0 when the yield reaches campaign.min_yield (or none is given), 1
-    below it, 2 on bad input. Run the same command again after an interrupt
-    to resume (chunks already written are skipped).
+    Exit 0 when the gated yield's 95 % lower bound reaches
+    campaign.min_yield (or none is given), 1 below it, 2 on bad input, 4 when
+    the cluster or the output disk is not usable (scheduler unreachable or
+    silent, no workers, workers without the toolbox or of another build, disk
+    full or read-only). Run the same command again after an interrupt or an
+    exit 4 to resume (chunks already written are skipped).
 
     \b
     Example:
@@ -574,14 +582,16 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
       cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c_pi --controller out/003_pi
     """
     from ..campaign import run_campaign
+    from ..campaign._cluster import parse_address
+    from ..errors import InfrastructureError
     from ..spec import load_spec
 
     s = load_spec(spec)
     if s.campaign is None:
         raise SpecError("campaign", "a [campaign] table (missing)", file=spec,
                         hint="README.md \"Campaigns\"")
-    if scheduler is not None and scheduler not in ("local", "serial") and "://" not in scheduler:
-        raise SpecError("--scheduler", "tcp://host:port, 'local' or 'serial'", scheduler)
+    if scheduler is not None and scheduler not in ("local", "serial"):
+        parse_address(scheduler)  # http://, no port: exit 2 before anything runs
     artifact = None
     if design_dir is not None:
         from ..pipeline import load_artifact
@@ -591,6 +601,9 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
         with CountBar(quiet=quiet, desc="campaign") as bar:
             run = run_campaign(s, out_dir, scheduler=scheduler, workers=workers,
                                artifact=artifact, progress=bar, report=not no_report)
+    except InfrastructureError as err:
+        click.echo(f"cct: infrastructure error: {err}", err=True)
+        sys.exit(EXIT_INFRASTRUCTURE)
     except KeyboardInterrupt:
         click.echo(f"cct: interrupted; the chunks written are kept in {out_dir}/chunks: "
                    "run the same command again to resume", err=True)
