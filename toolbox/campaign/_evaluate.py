@@ -113,7 +113,7 @@ def chunk_range(cfg, chunk: int) -> tuple[int, int]:
     return start, min(cfg.samples, start + cfg.chunk_size)
 
 
-_NOT_MOTOR = ("sample", "measured_row") + OPERATING_POINT_KEYS
+_NOT_MOTOR = ("sample", "motor", "point", "measured_row") + OPERATING_POINT_KEYS
 
 
 def _physical(cols: dict, n: int) -> np.ndarray:
@@ -247,7 +247,14 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
     R = np.where(ok, cols.get("R", np.full(n, motor.R)), motor.R)
     Ld = np.where(ok, cols.get("Ld", np.full(n, motor.Ld)), motor.Ld)
     Lq = np.where(ok, cols.get("Lq", np.full(n, motor.Lq)), motor.Lq)
-    margins = _margins(plan, R, Ld, Lq, cols.get("delay_samples"))
+    # a motor's margins depend on (R, Ld, Lq, delay) only: computed once per
+    # distinct tuple (elementwise, so the values are those of any batching)
+    delay = np.asarray(cols.get("delay_samples", np.full(n, plan.artifact.delay_samples)), float)
+    key = np.column_stack([R, Ld, Lq, delay])
+    uniq, inv = np.unique(key, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    margins = {k: v[inv] for k, v in _margins(plan, uniq[:, 0], uniq[:, 1], uniq[:, 2],
+                                               uniq[:, 3].astype(int)).items()}
     for k, v in margins.items():
         out[k] = np.where(ok, v, np.nan)
     for key, bound in plan.bounds.items():

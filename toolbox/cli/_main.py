@@ -612,10 +612,24 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
     if not quiet:
         for path in run.files:
             click.echo(f"wrote {path}", err=True)
-    click.echo(f"campaign: {sm['samples']} samples, {sm['passed']} pass: yield "
-               f"{100 * sm['yield']:.2f} % (95 % interval {100 * sm['yield_95'][0]:.2f} - "
-               f"{100 * sm['yield_95'][1]:.2f} %); {run.chunks_run} chunks run, "
+    ys = sm["yields"]
+
+    def pct(y) -> str:
+        return (f"{100 * y['yield']:.2f} % (95 % interval {100 * y['yield_95'][0]:.2f} - "
+                f"{100 * y['yield_95'][1]:.2f} %)")
+
+    click.echo(f"campaign: {sm['motors']} motors x {sm['operating_points']} operating points "
+               f"= {sm['samples']} samples, {sm['passed']} pass; {run.chunks_run} chunks run, "
                f"{run.chunks_resumed} resumed")
+    worst = ys["per_point"]["points"][ys["per_point"]["worst_point"]]
+    where = ", ".join(f"{k} {v:g}" for k, v in worst.items()
+                      if k not in ("point", "n", "passed", "yield", "yield_95", "failures"))
+    for gate, label, y in (("per_sample", "per-sample yield", ys["per_sample"]),
+                           ("per_motor", f"per-motor yield ({ys['per_motor']['n']} motors at "
+                            "every point)", ys["per_motor"]),
+                           ("per_point", f"per-point yield (worst of {ys['per_point']['n']} "
+                            f"points{': ' + where if where else ''})", ys["per_point"])):
+        click.echo(f"  {label}: {pct(y)}" + ("  <- gate" if gate == sm["gate"] else ""))
     for name, count in list(sm["failure_reasons"].items())[:5]:
         click.echo(f"  fails {name}: {count}")
     ranked = [e for e in sm["sensitivity"] if e["rank_correlation"] is not None][:3]
@@ -623,7 +637,8 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
         click.echo("  most sensitive: " + ", ".join(
             f"{e['parameter']} ({e['rank_correlation']:+.2f})" for e in ranked))
     if sm["min_yield"] is not None:
-        click.echo(f"  min_yield {sm['min_yield']:g}: "
+        click.echo(f"  min_yield {sm['min_yield']:g} on the {sm['gate'].replace('_', '-')} "
+                   f"yield's 95 % lower bound {100 * sm['gate_lower_95']:.2f} %: "
                    + ("pass" if run.passed else "FAIL"))
     sys.exit(EXIT_OK if run.passed else EXIT_REQUIREMENT)
 
