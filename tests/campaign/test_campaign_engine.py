@@ -382,3 +382,35 @@ def test_provenance_pinned(serial_run, designed, tmp_path, monkeypatch):
     text = str(info.value)
     assert f"computed by toolbox {toolbox_version()} (source {source_hash()[:12]})" in text
     assert f"this is toolbox {toolbox_version()} (source ffffffffffff)" in text
+
+
+def test_worst_cases_as_ready_to_run_specs(serial_run, designed, tmp_path):
+    """worst/sample-NNNNNN.toml: the spec without [campaign], the drawn motor as
+    the scenario's true plant and the operating point; cct design reproduces
+    the row's metrics exactly (a failing sample at the design's own delay)."""
+    from toolbox.campaign._summary import worst_spec
+
+    out = serial_run.out_dir
+    names = serial_run.summary["worst_specs"]
+    assert len(names) == 5 and all((out / n).is_file() for n in names)
+    assert all(load_spec(out / n).campaign is None for n in names)
+    t = serial_run.table
+    passed = t.column("passed").to_numpy(zero_copy_only=False)
+    delay = t.column("delay_samples").to_numpy()
+    i = int(np.nonzero(~passed & (delay == 1))[0][0])
+    row = {c: t.column(c)[i].as_py() for c in t.column_names}
+    path = tmp_path / "one.toml"
+    path.write_text(worst_spec(designed[0], row))
+    spec = load_spec(path)
+    sc = spec.scenarios[0]
+    assert spec.campaign is None
+    assert sc.plant_values == {k: row[k] for k in ("R", "Ld", "Lq", "flux")}
+    assert (sc.initial_speed, sc.speed_offset) == (row["speed"], row["speed_offset"])
+    res = CliRunner().invoke(main, ["design", str(path), "--out", str(tmp_path / "d"), "-q"])
+    assert res.exit_code == 1, res.output  # the sample fails its requirement again
+    metrics = json.loads((tmp_path / "d" / "verify.json").read_text())["scenarios"][0]["metrics"]
+    for m in ("overshoot_pct", "rise_time_10_90", "mse_iq"):
+        assert metrics[m] == row[f"iq_step.{m}"], m
+    html = (out / "report.html").read_text()
+    assert "Per motor (every point)" in html and "Failure rate by operating point" in html
+    assert "Drivers of each failure mode" in html and names[0] in html

@@ -192,11 +192,78 @@ def summarize(table, spec, artifact) -> dict:
     }
 
 
+#: Worst failing samples written as ready-to-run spec files.
+N_WORST_SPECS = 5
+
+
+def worst_spec(spec, row: dict, source: str = "campaign") -> str:
+    """A spec (TOML) that runs one campaign sample on its own: the campaign's
+    spec without ``[campaign]``, whose scenarios (those the campaign runs)
+    carry the sample's drawn motor as their true plant (``plant_values``, SI)
+    and its operating point (initial speed, speed-sensor gain error and
+    offset; the DC link voltage in ``[drive]``). ``cct design FILE --out DIR``
+    designs the same controller (the nominal motor is kept) and simulates the
+    sample. A computation delay other than the design's cannot be expressed in
+    a spec (the design would follow it): such a file says so in its header."""
+    import dataclasses
+
+    from ..sim import default_scenarios
+    from ..spec import spec_to_toml
+    from ._evaluate import _NOT_MOTOR
+
+    cfg = spec.campaign
+    scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
+    if cfg.scenarios:
+        scenarios = tuple(s for s in scenarios if (s.name or s.kind) in cfg.scenarios)
+    plant = {k: float(v) for k, v in row.items()
+             if k in parameter_columns_of(row) and k not in _NOT_MOTOR}
+    point = {k: row[k] for k in ("speed", "speed_gain_error", "speed_offset",
+                                 "delay_samples", "vdc") if k in row}
+    new = tuple(dataclasses.replace(
+        sc, plant_values={**sc.plant_values, **plant},
+        **{("initial_speed" if k == "speed" else k): float(v) for k, v in point.items()
+           if k in ("speed", "speed_gain_error", "speed_offset")}) for sc in scenarios)
+    drive = spec.drive
+    if "vdc" in point:
+        drive = dataclasses.replace(drive, vdc=float(point["vdc"]))
+    raw = {k: v for k, v in spec.raw.items() if k != "campaign"}
+    one = dataclasses.replace(spec, scenarios=new, drive=drive, campaign=None, raw=raw,
+                              title=f"{spec.title or 'campaign'}: sample {row['sample']}")
+    head = [f"# Sample {row['sample']} of the campaign {source} (motor {row.get('motor')}, "
+            f"operating point {row.get('point')}): {row.get('failure') or 'passes'}",
+            "# Reproduce: cct design THIS_FILE --out DIR (the controller is designed from "
+            "the nominal [motor]; the scenario's plant_values is the drawn motor)."]
+    if "delay_samples" in point and int(point["delay_samples"]) != spec.drive.delay_samples:
+        head.append(f"# NOTE: the campaign ran this sample with delay_samples = "
+                    f"{int(point['delay_samples'])} (the design keeps "
+                    f"{spec.drive.delay_samples}); a spec cannot say so without redesigning: "
+                    "cct design simulates the design's delay.")
+    return "\n".join(head) + "\n" + spec_to_toml(one, source=f"sample {row['sample']}")
+
+
+def parameter_columns_of(row: dict) -> list[str]:
+    """The drawn columns of one worst-case row (as :func:`parameter_columns`)."""
+    return [c for c in row if "." not in c and c not in _NOT_PARAMETERS]
+
+
 def write_outputs(out_dir: Path, table, summary: dict, spec, artifact, *,
                   report: bool = True) -> list[Path]:
-    """Write summary.json, controller.json and report.html (atomically);
+    """Write summary.json, controller.json, the worst failing samples as spec
+    files (``worst/sample-NNNNNN.toml``) and report.html (atomically);
     ``table`` holds the columns of :func:`toolbox.campaign._report.report_columns`."""
-    files = [write_atomic(out_dir / "summary.json",
+    worst_files = []
+    for row in [w for w in summary["worst_cases"] if w.get("failure")][:N_WORST_SPECS]:
+        path = out_dir / "worst" / f"sample-{int(row['sample']):06d}.toml"
+        full = dict(row)
+        full["motor"] = int(table.column("motor")[int(row["sample"])].as_py())
+        full["point"] = int(table.column("point")[int(row["sample"])].as_py())
+        worst_files.append(write_atomic(path, worst_spec(spec, full, source=str(out_dir))))
+    summary["worst_specs"] = [str(p.relative_to(out_dir)) for p in worst_files]
+    if (out_dir / "worst").is_dir():  # those of an earlier run of other rows
+        for old in (out_dir / "worst").glob("sample-*.toml"):
+            if old not in worst_files:
+                old.unlink()
+    files = worst_files + [write_atomic(out_dir / "summary.json",
                           json.dumps(summary, indent=1, default=_finite) + "\n"),
              write_atomic(out_dir / "controller.json", artifact.dumps())]
     if report:
