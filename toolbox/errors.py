@@ -12,13 +12,21 @@ escaping the toolbox is a bug and keeps its traceback.
   malformed, tampered with or from an incompatible version.
 - :class:`ExportRefused`: a sound artifact that the requested firmware format
   cannot represent (range, precision, unsupported law).
+
+:class:`InfrastructureError` is not a ``CctError``: the input is sound but
+the machinery to run it is not (a Dask scheduler that cannot be reached or
+does not answer, no workers, workers without the toolbox or with another
+build of it, a full or read-only output disk). ``cct campaign`` turns it into
+exit code 4 so that a release gate can tell "retry on a working cluster"
+from "the design fails" (1) and "the input is wrong" (2).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["ArtifactError", "CctError", "DesignInfeasible", "ExportRefused", "SpecError"]
+__all__ = ["ArtifactError", "CctError", "DesignInfeasible", "ExportRefused",
+           "InfrastructureError", "SpecError"]
 
 
 #: Echo of a found value or a key path cut to this many characters (a
@@ -124,3 +132,26 @@ class ArtifactError(CctError):
 
 class ExportRefused(CctError):
     """A sound artifact that the requested firmware format cannot represent."""
+
+
+class InfrastructureError(RuntimeError):
+    """The run cannot proceed for a reason outside the input (exit code 4).
+
+    Parameters
+    ----------
+    message : str
+        What failed, in one line (names the address, worker or path).
+    hint : str, optional
+        What to do about it.
+
+    Examples
+    --------
+    >>> str(InfrastructureError("no Dask worker joined tcp://127.0.0.1:8786 within 30 s",
+    ...                         hint="start workers: dask worker tcp://127.0.0.1:8786"))
+    'no Dask worker joined tcp://127.0.0.1:8786 within 30 s (start workers: dask worker tcp://127.0.0.1:8786)'
+    """
+
+    def __init__(self, message: str, *, hint: str | None = None) -> None:
+        self.message = message
+        self.hint = hint
+        super().__init__(f"{message} ({hint})" if hint else message)

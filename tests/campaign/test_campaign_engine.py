@@ -36,25 +36,51 @@ def test_draws_do_not_depend_on_chunking(designed):
 def test_distributions_and_correlation(designed):
     """Marginals stay in their supports; the copula sets the rank correlation.
 
-    Ld, Lq: normal copula with r = 0.8, hence Spearman 6/pi asin(r/2) = 0.786.
-    With n = 4000 the standard error of Spearman's rho is about
-    (1 - rho^2)/sqrt(n) = 0.006; tolerance 0.03 (5 sigma). Uncorrelated pairs
-    (R, flux): |rho| < 0.06 (about 4 sigma of 1/sqrt(n)).
+    Over 4000 motors (one row each, point 0): Ld, Lq: normal copula with
+    r = 0.8, hence Spearman 6/pi asin(r/2) = 0.786. With n = 4000 the
+    standard error of Spearman's rho is about (1 - rho^2)/sqrt(n) = 0.006;
+    tolerance 0.03 (5 sigma). Uncorrelated pairs (R, flux): |rho| < 0.06
+    (about 4 sigma of 1/sqrt(n)).
     """
     spec, _ = designed
     m = spec.motor
-    d = draw_samples(spec.campaign, m, 0, 4000)
+    P = spec.campaign.n_operating_points
+    rows = draw_samples(spec.campaign, m, 0, 4000 * P)
+    assert set(np.unique(rows["speed"])) == {0.0, 100.0}
+    points = set(zip(rows["speed"], rows["speed_offset"], rows["delay_samples"]))
+    assert len(points) == 8 and rows["delay_samples"].dtype.kind == "i"
+    d = {k: v[rows["point"] == 0] for k, v in rows.items()}
+    np.testing.assert_array_equal(d["motor"], np.arange(4000))
     assert np.all((d["R"] >= m.R * 1.0) & (d["R"] <= m.R * 1.4))
     assert np.all((d["Ld"] >= m.Ld * 0.7) & (d["Ld"] <= m.Ld * 1.0))
     assert np.all((d["Lq"] >= m.Lq * 0.5) & (d["Lq"] <= m.Lq * 1.0))
     flux = d["flux"] / m.flux  # normal(0.95, 0.02): mean within 4 standard errors
     assert abs(flux.mean() - 0.95) < 4 * 0.02 / np.sqrt(4000)
     assert abs(flux.std() - 0.02) < 0.002
-    assert set(np.unique(d["speed"])) == {0.0, 100.0}
-    points = set(zip(d["speed"], d["speed_offset"], d["delay_samples"]))
-    assert len(points) == 8 and d["delay_samples"].dtype.kind == "i"
     assert spearmanr(d["Ld"], d["Lq"])[0] == pytest.approx(6 / np.pi * np.arcsin(0.4), abs=0.03)
     assert abs(spearmanr(d["R"], d["flux"])[0]) < 0.06
+
+
+def test_every_motor_at_every_point(designed):
+    """Row i is motor i // P at point i % P: a motor's rows share its drawn
+    parameters exactly and cover the grid once, whatever range is drawn."""
+    from toolbox.campaign._sampling import point_values
+
+    spec, _ = designed
+    cfg = spec.campaign
+    P = cfg.n_operating_points
+    d = draw_samples(cfg, spec.motor, 13, 13 + 5 * P)  # starts mid-motor
+    np.testing.assert_array_equal(d["motor"], np.arange(13, 13 + 5 * P) // P)
+    np.testing.assert_array_equal(d["point"], np.arange(13, 13 + 5 * P) % P)
+    for motor in np.unique(d["motor"]):
+        sel = d["motor"] == motor
+        for name in ("R", "Ld", "Lq", "flux"):
+            assert np.unique(d[name][sel]).size == 1, name
+    for i in range(len(d["sample"])):
+        for key, value in point_values(cfg, d["point"][i]).items():
+            assert d[key][i] == value
+    full = draw_samples(cfg, spec.motor, 16, 24)  # motor 2 whole
+    assert sorted(full["point"]) == list(range(P))
 
 
 def test_measured_rows_are_drawn(tmp_path):
@@ -178,7 +204,9 @@ def test_cli_campaign_exit_codes(designed, tmp_path):
     res = CliRunner().invoke(main, ["campaign", str(path), "--out", str(tmp_path / "a"),
                                     "--scheduler", "serial"])
     assert res.exit_code == 0, res.output
-    assert "campaign: 100 samples" in res.output and "2 chunks run, 0 resumed" in res.output
+    assert "13 motors x 8 operating points = 100 samples" in res.output
+    assert "2 chunks run, 0 resumed" in res.output
+    assert "per-sample yield" in res.output and "per-motor yield (12 motors" in res.output
     # progress on stderr (no terminal here: one line per tenth), then the files
     assert "- campaign: 50/100 samples" in res.stderr and "- campaign: 100/100" in res.stderr
     assert "wrote " in res.stderr and "results.parquet" in res.stderr
@@ -189,7 +217,8 @@ def test_cli_campaign_exit_codes(designed, tmp_path):
     summary = json.loads((tmp_path / "b" / "summary.json").read_text())
     assert summary["failed"] > 0  # or exit 1 would not be tested
     assert res.exit_code == 1, res.output
-    assert "min_yield 1: FAIL" in res.output
+    assert "min_yield 1 on the per-sample yield's 95 % lower bound" in res.output
+    assert "FAIL" in res.output
     res = CliRunner().invoke(main, ["campaign", str(path), "--out", str(tmp_path / "c"),
                                     "--scheduler", "nowhere"])
     assert res.exit_code == 2 and "--scheduler" in res.output
@@ -281,3 +310,107 @@ def test_yield_extremes(designed, tmp_path, bounds, passed):
     assert all(e["rank_correlation"] is None for e in sm["sensitivity"])
     assert "Yield" in (tmp_path / "out" / "report.html").read_text()
     assert run.passed  # no min_yield: the exit code does not depend on the yield
+
+
+def test_yields_recomputed_from_the_table(serial_run, designed):
+    """Per-motor: a motor passes when all its 8 rows pass; per-point: the
+    yield at each grid point, the figure is the worst point's lower bound."""
+    from toolbox.campaign import wilson_interval
+
+    spec, _ = designed
+    t = serial_run.table
+    motor = t.column("motor").to_numpy()
+    point = t.column("point").to_numpy()
+    passed = t.column("passed").to_numpy(zero_copy_only=False)
+    ys = serial_run.summary["yields"]
+    good = [all(passed[motor == m]) for m in range(50)]
+    assert ys["per_motor"]["n"] == 50 and ys["per_motor"]["passed"] == sum(good)
+    assert ys["per_motor"]["yield_95"] == list(wilson_interval(sum(good), 50))
+    assert ys["per_motor"]["yield"] <= ys["per_sample"]["yield"]
+    per_point = [passed[point == p].mean() for p in range(8)]
+    assert [e["yield"] for e in ys["per_point"]["points"]] == per_point
+    lows = [wilson_interval(int(passed[point == p].sum()), 50)[0] for p in range(8)]
+    assert ys["per_point"]["yield_95"][0] == min(lows)
+    assert serial_run.summary["gate"] == "per_sample"
+    assert serial_run.summary["gate_lower_95"] == ys["per_sample"]["yield_95"][0]
+    # each failure mode ranked on its own; the grid cells count them
+    modes = serial_run.summary["sensitivity_by_mode"]
+    assert set(modes) == set(serial_run.summary["failure_reasons"])
+    for mode, count in serial_run.summary["failure_reasons"].items():
+        assert sum(e["failures"].get(mode, 0) for e in ys["per_point"]["points"]) == count
+
+
+@pytest.mark.parametrize("gate", ["per_sample", "per_motor", "per_point"])
+def test_gate_on_lower_bound(designed, serial_run, tmp_path, gate):
+    """min_yield is held against the chosen yield's 95 % lower bound; the gate
+    and min_yield change no row (the chunks are kept)."""
+    import shutil
+
+    out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
+    y = serial_run.summary["yields"][gate]
+    lo, mid = y["yield_95"][0], y["yield"]
+    for min_yield, meets in ((lo * 0.999, True), ((lo + mid) / 2, False)):
+        path = write_spec(tmp_path)
+        path.write_text(path.read_text().replace(
+            "seed = 3", f'seed = 3\nmin_yield = {min_yield!r}\ngate = "{gate}"'))
+        run = run_campaign(load_spec(path), out, scheduler="serial", artifact=designed[1],
+                           report=False)
+        assert (run.chunks_resumed, run.chunks_run) == (4, 0)
+        assert run.summary["gate"] == gate and run.passed is meets
+
+
+def test_provenance_pinned(serial_run, designed, tmp_path, monkeypatch):
+    """Version and source hash in every chunk's and results.parquet's metadata
+    (with seed and spec hash); a resume under another build is refused with
+    both builds named."""
+    import shutil
+
+    from toolbox._version import source_hash, toolbox_version
+    from toolbox.campaign import _run
+
+    meta = json.loads(pq.read_schema(serial_run.out_dir / "results.parquet").metadata[b"cct"])
+    assert meta["toolbox"] == toolbox_version() and meta["source"] == source_hash()
+    assert meta["seed"] == 3 and len(meta["spec_sha256"]) == 64
+    chunk = json.loads(pq.read_schema(chunk_path(serial_run.out_dir, 2)).metadata[b"cct"])
+    assert (chunk["toolbox"], chunk["source"], chunk["start"]) == (toolbox_version(),
+                                                                   source_hash(), 200)
+    out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
+    monkeypatch.setattr(_run, "source_hash", lambda: "f" * 64)
+    spec, artifact = designed
+    with pytest.raises(SpecError) as info:
+        run_campaign(spec, out, scheduler="serial", artifact=artifact)
+    text = str(info.value)
+    assert f"computed by toolbox {toolbox_version()} (source {source_hash()[:12]})" in text
+    assert f"this is toolbox {toolbox_version()} (source ffffffffffff)" in text
+
+
+def test_worst_cases_as_ready_to_run_specs(serial_run, designed, tmp_path):
+    """worst/sample-NNNNNN.toml: the spec without [campaign], the drawn motor as
+    the scenario's true plant and the operating point; cct design reproduces
+    the row's metrics exactly (a failing sample at the design's own delay)."""
+    from toolbox.campaign._summary import worst_spec
+
+    out = serial_run.out_dir
+    names = serial_run.summary["worst_specs"]
+    assert len(names) == 5 and all((out / n).is_file() for n in names)
+    assert all(load_spec(out / n).campaign is None for n in names)
+    t = serial_run.table
+    passed = t.column("passed").to_numpy(zero_copy_only=False)
+    delay = t.column("delay_samples").to_numpy()
+    i = int(np.nonzero(~passed & (delay == 1))[0][0])
+    row = {c: t.column(c)[i].as_py() for c in t.column_names}
+    path = tmp_path / "one.toml"
+    path.write_text(worst_spec(designed[0], row))
+    spec = load_spec(path)
+    sc = spec.scenarios[0]
+    assert spec.campaign is None
+    assert sc.plant_values == {k: row[k] for k in ("R", "Ld", "Lq", "flux")}
+    assert (sc.initial_speed, sc.speed_offset) == (row["speed"], row["speed_offset"])
+    res = CliRunner().invoke(main, ["design", str(path), "--out", str(tmp_path / "d"), "-q"])
+    assert res.exit_code == 1, res.output  # the sample fails its requirement again
+    metrics = json.loads((tmp_path / "d" / "verify.json").read_text())["scenarios"][0]["metrics"]
+    for m in ("overshoot_pct", "rise_time_10_90", "mse_iq"):
+        assert metrics[m] == row[f"iq_step.{m}"], m
+    html = (out / "report.html").read_text()
+    assert "Per motor (every point)" in html and "Failure rate by operating point" in html
+    assert "Drivers of each failure mode" in html and names[0] in html

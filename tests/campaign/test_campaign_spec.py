@@ -138,3 +138,18 @@ def test_cct_check_round_trips_the_campaign(tmp_path):
     again = tmp_path / "resolved.toml"
     again.write_text(res.output)
     assert load_spec(again).campaign == load_spec(path).campaign
+
+
+def test_motors_key_and_gate(tmp_path):
+    """motors = M runs M motors at every grid point (M x 8 rows); one of
+    motors / samples; gate is one of three."""
+    spec = _load(tmp_path, ("samples = 400", 'motors = 30\ngate = "per_motor"'))
+    cfg = spec.campaign
+    assert (cfg.samples, cfg.n_motors, cfg.complete_motors, cfg.gate) == (240, 30, 30,
+                                                                          "per_motor")
+    legacy = _load(tmp_path).campaign
+    assert (legacy.n_motors, legacy.complete_motors, legacy.gate) == (50, 50, "per_sample")
+    with pytest.raises(SpecError, match="campaign.motors: expected one of motors"):
+        _load(tmp_path, ("samples = 400", "samples = 400\nmotors = 3"))
+    with pytest.raises(SpecError, match='campaign.gate: .*did you mean "per_motor"'):
+        _load(tmp_path, ("samples = 400", 'samples = 400\ngate = "per_motr"'))

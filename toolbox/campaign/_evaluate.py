@@ -62,6 +62,10 @@ class Plan:
     threads : int or None
         Threads of each simulation batch (:func:`toolbox.sim.simulate_batch`'s
         ``threads``; None: its default, one per core).
+    build : tuple
+        ``(toolbox version, source hash)`` of the client; a worker of another
+        build refuses the chunk (:class:`toolbox.campaign._cluster.BuildMismatch`).
+        Empty: not checked (in-process runs).
     """
 
     cfg: Any
@@ -70,6 +74,7 @@ class Plan:
     bounds: dict
     artifact: Any
     threads: int | None = None
+    build: tuple = ()
 
 
 def scenario_slug(name: str) -> str:
@@ -77,7 +82,7 @@ def scenario_slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_") or "scenario"
 
 
-def make_plan(spec, artifact, threads: int | None = None) -> Plan:
+def make_plan(spec, artifact, threads: int | None = None, build: tuple = ()) -> Plan:
     """The :class:`Plan` of ``spec``'s campaign for the designed ``artifact``.
 
     Scenarios: those named in ``campaign.scenarios``, else every
@@ -99,7 +104,7 @@ def make_plan(spec, artifact, threads: int | None = None) -> Plan:
         runs.append((slug, dataclasses.replace(sc, keep_traces=False), law, drive))
     return Plan(cfg=cfg, motor=spec.motor, runs=tuple(runs),
                 bounds=dict(spec.requirements.bounds), artifact=artifact,
-                threads=threads)
+                threads=threads, build=tuple(build))
 
 
 def chunk_range(cfg, chunk: int) -> tuple[int, int]:
@@ -108,7 +113,7 @@ def chunk_range(cfg, chunk: int) -> tuple[int, int]:
     return start, min(cfg.samples, start + cfg.chunk_size)
 
 
-_NOT_MOTOR = ("sample", "measured_row") + OPERATING_POINT_KEYS
+_NOT_MOTOR = ("sample", "motor", "point", "measured_row") + OPERATING_POINT_KEYS
 
 
 def _physical(cols: dict, n: int) -> np.ndarray:
@@ -183,6 +188,15 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
     """
     from ..sim import METRIC_NAMES, simulate_batch
 
+    if plan.build:
+        from ._cluster import BuildMismatch, mismatch_message, worker_build
+
+        if worker_build() != tuple(plan.build):
+            import os
+            import socket
+
+            raise BuildMismatch(mismatch_message(f"on {socket.gethostname()} (pid "
+                                                 f"{os.getpid()})", worker_build(), plan.build))
     cfg, motor = plan.cfg, plan.motor
     start, stop = chunk_range(cfg, chunk)
     n = stop - start
@@ -233,7 +247,14 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
     R = np.where(ok, cols.get("R", np.full(n, motor.R)), motor.R)
     Ld = np.where(ok, cols.get("Ld", np.full(n, motor.Ld)), motor.Ld)
     Lq = np.where(ok, cols.get("Lq", np.full(n, motor.Lq)), motor.Lq)
-    margins = _margins(plan, R, Ld, Lq, cols.get("delay_samples"))
+    # a motor's margins depend on (R, Ld, Lq, delay) only: computed once per
+    # distinct tuple (elementwise, so the values are those of any batching)
+    delay = np.asarray(cols.get("delay_samples", np.full(n, plan.artifact.delay_samples)), float)
+    key = np.column_stack([R, Ld, Lq, delay])
+    uniq, inv = np.unique(key, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    margins = {k: v[inv] for k, v in _margins(plan, uniq[:, 0], uniq[:, 1], uniq[:, 2],
+                                               uniq[:, 3].astype(int)).items()}
     for k, v in margins.items():
         out[k] = np.where(ok, v, np.nan)
     for key, bound in plan.bounds.items():

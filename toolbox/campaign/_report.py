@@ -3,9 +3,12 @@
 Figures (matplotlib, serialised by :func:`toolbox.report.plots.svg_from_figure`
 so that ids are unique and the bytes deterministic):
 
-* failure regions: scatter of the two parameters ranked most sensitive
-  (failing samples in red), parallel coordinates of the failing samples over
-  the passing ones (each parameter scaled to its drawn range);
+* failure regions: scatter over the two strongest drivers (the parameters
+  with the largest rank correlation with any failure mode), one seeded
+  subset of all rows shared by the scatter and the parallel coordinates (so
+  the pass/fail proportions are the table's), parallel coordinates of the
+  failing samples over the passing ones (each parameter scaled to its drawn
+  range);
 * sensitivity ranking (bar chart of the rank correlations);
 * histograms of the per-sample loop margins (gain, phase; d and q axes), of
   the response metrics bounded by ``[requirements]`` in each scenario (the
@@ -67,6 +70,20 @@ def _svg(fig, prefix: str) -> str:
         plt.close(fig)
 
 
+def strongest_drivers(summary) -> list[str]:
+    """Parameters by their largest |rank correlation| with any failure mode
+    (the pooled ranking when no mode can be ranked)."""
+    best: dict[str, float] = {}
+    for entries in summary.get("sensitivity_by_mode", {}).values():
+        for e in entries:
+            if e["rank_correlation"] is not None:
+                best[e["parameter"]] = max(best.get(e["parameter"], 0.0),
+                                           abs(e["rank_correlation"]))
+    ranked = sorted(best, key=lambda k: -best[k])
+    return ranked + [s["parameter"] for s in summary["sensitivity"]
+                     if s["parameter"] not in best]
+
+
 def _region_figures(table, summary) -> list[dict]:
     import matplotlib
 
@@ -75,34 +92,36 @@ def _region_figures(table, summary) -> list[dict]:
 
     figs = []
     failed = ~_col(table, "passed").astype(bool)
-    ranked = [s["parameter"] for s in summary["sensitivity"]]
+    ranked = strongest_drivers(summary)
     params = parameter_columns(table)
+    shared = _subset(len(failed), MAX_POINTS)  # one subset: proportions kept
     if len(ranked) >= 2:
         a, b = ranked[0], ranked[1]
         x, y = _col(table, a).astype(float), _col(table, b).astype(float)
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
         for mask, color, label in ((~failed, PASS_COLOR, "pass"), (failed, FAIL_COLOR, "fail")):
-            idx = np.nonzero(mask)[0]
-            idx = idx[_subset(idx.size, MAX_POINTS)]
+            idx = shared[mask[shared]]
             ax.scatter(x[idx], y[idx], s=6, c=color, label=f"{label} ({int(mask.sum())})",
                        alpha=0.7, linewidths=0)
         ax.set_xlabel(a)
         ax.set_ylabel(b)
         ax.legend(loc="best")
-        ax.set_title("Samples over the two most sensitive parameters")
+        ax.set_title("Samples over the two strongest drivers of failure")
         fig.tight_layout()
+        shown = (f"; {shared.size} of {len(failed)} rows drawn (one seeded subset)"
+                 if shared.size < len(failed) else "")
         figs.append({"id": "scatter", "svg": _svg(fig, "cs"),
-                     "caption": f"Failing samples (red) over {a} and {b}, the two parameters "
-                                "ranked most sensitive."})
+                     "caption": f"Failing samples (red) over {a} and {b}, the parameters most "
+                                f"rank-correlated with a failure mode{shown}."})
     if len(params) >= 2 and failed.any():
         X = np.column_stack([_col(table, p).astype(float) for p in params])
         lo, hi = X.min(axis=0), X.max(axis=0)
         Xn = (X - lo) / np.where(hi > lo, hi - lo, 1.0)
         fig, ax = plt.subplots(figsize=(6.4, 3.8))
         pos = np.arange(len(params))
+        lines = shared[_subset(shared.size, MAX_LINES)]
         for mask, color, alpha in ((~failed, PASS_COLOR, 0.15), (failed, FAIL_COLOR, 0.35)):
-            idx = np.nonzero(mask)[0]
-            for i in idx[_subset(idx.size, MAX_LINES)]:
+            for i in lines[mask[lines]]:
                 ax.plot(pos, Xn[i], color=color, alpha=alpha, linewidth=0.7)
         ax.set_xticks(pos, params)
         ax.set_ylabel("scaled to the drawn range")
@@ -220,6 +239,27 @@ def campaign_html(table, summary: dict, spec, artifact) -> str:
             d = f"normal (mean {p.mean:g}, std {p.std:g}) truncated to [{p.low:g}, {p.high:g}]"
         params.append({"name": p.name, "dist": d, "mode": p.mode,
                        "nominal": _fmt(getattr(spec.motor, p.name))})
+    ys = summary["yields"]
+
+    def pct(y):
+        return {"yield": f"{100 * y['yield']:.2f} %",
+                "ci": " - ".join(f"{100 * v:.2f} %" for v in y["yield_95"])}
+
+    axes = [k for k, _v in cfg.operating_points]
+    yields = [{"key": "per_sample", "label": "Per sample", "n": f"{ys['per_sample']['n']} rows",
+               **pct(ys["per_sample"])},
+              {"key": "per_motor", "label": "Per motor (every point)",
+               "n": f"{ys['per_motor']['n']} motors", **pct(ys["per_motor"])},
+              {"key": "per_point", "label": "Per point (worst point)",
+               "n": f"{ys['per_point']['n']} points", **pct(ys["per_point"])}]
+    grid = [{"point": e["point"], "values": [_fmt(e[k]) for k in axes], "n": e["n"],
+             "fail_rate": f"{100 * (1 - e['yield']):.2f} %", **pct(e),
+             "modes": "; ".join(f"{m}: {c}" for m, c in e["failures"].items()) or "-"}
+            for e in ys["per_point"]["points"]]
+    by_mode = [{"mode": m, "count": summary["failure_reasons"].get(m, 0),
+                "top": ", ".join([f"{e['parameter']} ({e['rank_correlation']:+.2f})"
+                                  for e in entries if e["rank_correlation"] is not None][:3])
+                or "-"} for m, entries in summary["sensitivity_by_mode"].items()]
     worst_head = ["sample"] + summary["parameters"] + ["worst check", "worst_ratio", "failure"]
     worst_rows = [[_fmt(w.get(h if h != "worst check" else "worst_check"))
                    for h in worst_head] for w in summary["worst_cases"]]
@@ -229,6 +269,10 @@ def campaign_html(table, summary: dict, spec, artifact) -> str:
         failed=summary["failed"], yield_pct=f"{100 * summary['yield']:.2f} %",
         yield_ci=" - ".join(f"{100 * v:.2f} %" for v in summary["yield_95"]),
         min_yield=cfg.min_yield, meets=summary["meets_min_yield"], parameters=params,
+        yields=yields, gate=summary["gate"], gate_lower=f"{100 * summary['gate_lower_95']:.2f} %",
+        grid=grid, axes=axes, by_mode=by_mode, motors=summary["motors"],
+        n_points=summary["operating_points"],
+        worst_specs=summary.get("worst_specs", []),
         correlation=(", ".join(cfg.correlation[0]) + " with matrix "
                      + str([list(r) for r in cfg.correlation[1]])) if cfg.correlation else "",
         measured=(f"{len(cfg.measured_rows)} rows of {', '.join(cfg.measured_columns)}"

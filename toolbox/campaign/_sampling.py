@@ -1,11 +1,16 @@
-"""Per-sample draws of a campaign: deterministic whatever the chunking.
+"""Per-row draws of a campaign: deterministic whatever the chunking.
 
-Sample ``i`` draws from its own stream ``numpy.random.SeedSequence([seed, i])``
-(PCG64), always in the same order: one standard normal per drawn parameter
-(in the order of ``[campaign.parameters]``), then one uniform for the row of
-the measured-motor table, then one uniform for the operating point. The
-values of a sample therefore depend on ``(seed, i)`` only: not on the chunk
-it falls in, nor on the worker that runs it.
+A campaign draws motors and runs each of them at every point of the
+operating-point grid (``P`` points, 1 without a grid): row (``sample``) ``i``
+is motor ``m = i // P`` at point ``p = i % P`` (mixed radix over the grid's
+axes, the last axis fastest). Motor ``m`` draws from its own stream
+``numpy.random.SeedSequence([seed, m])`` (PCG64), always in the same order:
+one standard normal per drawn parameter (in the order of
+``[campaign.parameters]``), then one uniform for the row of the
+measured-motor table. The values of a row therefore depend on
+``(seed, m, p)`` only: not on the chunk it falls in, nor on the worker that
+runs it; and the rows of one motor share its parameters exactly, so that
+"this motor passes everywhere" (the per-motor yield) is well defined.
 
 Correlated parameters use a Gaussian copula: the normals of the listed
 parameters are multiplied by the Cholesky factor of the correlation matrix,
@@ -20,22 +25,31 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["draw_samples", "sample_streams"]
+__all__ = ["draw_samples", "sample_streams", "point_values"]
 
 
-def sample_streams(seed: int, indices: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """The raw draws of samples ``indices``: ``(Z, U)``.
+def point_values(cfg, point: int) -> dict:
+    """The operating point of grid index ``point``: ``{axis: value}``."""
+    out, k = {}, int(point)
+    for key, values in reversed(cfg.operating_points):  # mixed radix, last axis fastest
+        out[key] = values[k % len(values)]
+        k //= len(values)
+    return {key: out[key] for key, _values in cfg.operating_points}
 
-    ``Z`` is ``(n, k)`` standard normals, ``U`` ``(n, 2)`` uniforms (measured
-    row, operating point), each row from ``SeedSequence([seed, i])``.
+
+def sample_streams(seed: int, motors: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """The raw draws of ``motors``: ``(Z, U)``.
+
+    ``Z`` is ``(n, k)`` standard normals, ``U`` ``(n,)`` uniforms (measured
+    row), each motor from ``SeedSequence([seed, m])``.
     """
-    n = len(indices)
+    n = len(motors)
     Z = np.empty((n, k))
-    U = np.empty((n, 2))
-    for j, i in enumerate(indices):
-        rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, int(i)])))
+    U = np.empty(n)
+    for j, m in enumerate(motors):
+        rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, int(m)])))
         Z[j] = rng.standard_normal(k)
-        U[j] = rng.random(2)
+        U[j] = rng.random()
     return Z, U
 
 
@@ -55,7 +69,7 @@ def _marginal(p, z: np.ndarray) -> np.ndarray:
 
 
 def draw_samples(cfg, motor, start: int, stop: int) -> dict[str, np.ndarray]:
-    """Drawn values of samples ``start .. stop - 1`` of a campaign.
+    """Drawn values of rows ``start .. stop - 1`` of a campaign.
 
     Parameters
     ----------
@@ -64,31 +78,35 @@ def draw_samples(cfg, motor, start: int, stop: int) -> dict[str, np.ndarray]:
         The nominal motor (``scale`` draws multiply its values, or the
         measured motor's).
     start, stop : int
-        Sample index range.
+        Row index range.
 
     Returns
     -------
     dict
-        ``sample`` (int64), one column per motor parameter that varies
-        (absolute SI values), ``measured_row`` when a measured table is given,
-        and one column per axis of the operating-point grid (``speed``,
-        ``speed_gain_error``, ``speed_offset``, ``delay_samples``, ``vdc``):
-        the sample's point, drawn uniformly from the grid.
+        ``sample`` (the row, int64), ``motor`` and ``point`` (int64), one
+        column per motor parameter that varies (absolute SI values),
+        ``measured_row`` when a measured table is given, and one column per
+        axis of the operating-point grid (``speed``, ``speed_gain_error``,
+        ``speed_offset``, ``delay_samples``, ``vdc``): the row's point.
     """
     idx = np.arange(start, stop, dtype=np.int64)
+    n_points = cfg.n_operating_points
+    motor_of, point_of = idx // n_points, idx % n_points
+    motors, which = np.unique(motor_of, return_inverse=True)
     names = [p.name for p in cfg.parameters]
-    Z, U = sample_streams(cfg.seed, idx, len(names))
+    Zm, Um = sample_streams(cfg.seed, motors, len(names))
+    Z, U = Zm[which], Um[which]
     if cfg.correlation:
         cnames, matrix = cfg.correlation
         cols = [names.index(c) for c in cnames]
         Lc = np.linalg.cholesky(np.array(matrix))
         Z[:, cols] = Z[:, cols] @ Lc.T
-    out: dict[str, np.ndarray] = {"sample": idx}
+    out: dict[str, np.ndarray] = {"sample": idx, "motor": motor_of, "point": point_of}
     n = len(idx)
     values = {}
     if cfg.measured_rows:
         rows = np.array(cfg.measured_rows)
-        r = np.minimum((U[:, 0] * len(rows)).astype(np.int64), len(rows) - 1)
+        r = np.minimum((U * len(rows)).astype(np.int64), len(rows) - 1)
         out["measured_row"] = r
         for j, c in enumerate(cfg.measured_columns):
             values[c] = rows[r, j]
@@ -99,8 +117,7 @@ def draw_samples(cfg, motor, start: int, stop: int) -> dict[str, np.ndarray]:
     for name in sorted(values):
         out[name] = np.asarray(values[name], dtype=float)
     if cfg.operating_points:
-        n_points = cfg.n_operating_points
-        k = np.minimum((U[:, 1] * n_points).astype(np.int64), n_points - 1)
+        k = point_of.copy()
         point = {}
         for key, values in reversed(cfg.operating_points):  # mixed radix, last axis fastest
             point[key] = np.array(values)[k % len(values)]

@@ -9,11 +9,13 @@ own ``[[scenario]]`` tables and ``[requirements]``.
 Layout (README.md "Campaigns")::
 
     [campaign]
-    samples = 20000           # number of samples (closed-loop plants)
-    seed = 7                  # sample i draws from SeedSequence([seed, i])
-    chunk_size = 500          # samples per task / per Parquet file
+    motors = 1000             # drawn motors, each run at every operating point
+    # samples = 18000         # or: rows (motor x point); give one of the two
+    seed = 7                  # motor m draws from SeedSequence([seed, m])
+    chunk_size = 500          # rows per task / per Parquet file
     scenarios = ["i_q step"]  # names of [[scenario]] tables (default: all)
-    min_yield = 0.99          # exit 1 below this yield (optional)
+    min_yield = 0.99          # exit 1 when the gated yield's 95 % lower bound is below
+    gate = "per_sample"       # per_sample | per_motor | per_point
 
     [campaign.parameters.R]   # one table per motor parameter drawn
     distribution = "uniform"  # uniform | normal | truncnormal
@@ -22,7 +24,7 @@ Layout (README.md "Campaigns")::
     # mean, std               # normal, truncnormal
     mode = "scale"            # scale (x nominal, default) | value (SI)
 
-    [campaign.operating_points]   # a grid: each sample takes one point of it
+    [campaign.operating_points]   # a grid: every motor runs at every point
     speed = [0.0, 100.0]      # rad/s (mechanical): the scenarios' initial speed
     speed_gain_error = [-0.02, 0.0, 0.02]   # speed sensor (scenario keys)
     speed_offset = [0.0, 2.0] # rad/s
@@ -48,7 +50,7 @@ from ._fields import Table
 from ._model import MOTOR_PARAMETER_KEYS
 
 __all__ = ["CampaignCfg", "ParameterDist", "read_campaign", "CAMPAIGN_PARAMETERS",
-           "DISTRIBUTIONS", "MAX_SAMPLES", "OPERATING_POINT_KEYS"]
+           "DISTRIBUTIONS", "GATES", "MAX_SAMPLES", "OPERATING_POINT_KEYS"]
 
 #: Motor parameters a campaign may draw (pole pairs are not a spread).
 CAMPAIGN_PARAMETERS = tuple(k for k in MOTOR_PARAMETER_KEYS if k != "pole_pairs")
@@ -61,8 +63,11 @@ _POSITIVE = ("R", "Ld", "Lq", "J")
 #: A normal draw is refused when its mean lies within this many standard
 #: deviations of the physical bound (0): use truncnormal instead.
 _NORMAL_SIGMAS = 6.0
-CAMPAIGN_KEYS = ("samples", "seed", "chunk_size", "operating_points", "scenarios",
-                 "min_yield", "parameters", "correlation", "measured")
+CAMPAIGN_KEYS = ("samples", "motors", "seed", "chunk_size", "operating_points", "scenarios",
+                 "min_yield", "gate", "parameters", "correlation", "measured")
+#: What ``min_yield`` gates on (the 95 % Wilson lower bound of): the share
+#: of passing rows, of motors passing at every point, of the worst point.
+GATES = ("per_sample", "per_motor", "per_point")
 #: ``[campaign.operating_points]`` keys, in the order of the grid's axes.
 OPERATING_POINT_KEYS = ("speed", "speed_gain_error", "speed_offset", "delay_samples", "vdc")
 MAX_OPERATING_POINTS = 100_000
@@ -101,7 +106,11 @@ class CampaignCfg:
 
     Attributes
     ----------
-    samples, seed, chunk_size : int
+    samples : int
+        Rows (closed-loop runs): row ``i`` is motor ``i // P`` at grid point
+        ``i % P`` (``P``: :attr:`n_operating_points`); ``motors x P`` when
+        ``motors`` is given.
+    seed, chunk_size : int
     parameters : tuple of ParameterDist
         In the order written (the order of the per-sample normal draws).
     correlation : tuple
@@ -115,6 +124,8 @@ class CampaignCfg:
     scenarios : tuple of str
         Scenario names to run (``()``: every scenario of the spec).
     min_yield : float or None
+    gate : str
+        One of :data:`GATES`.
     """
 
     samples: int
@@ -127,6 +138,18 @@ class CampaignCfg:
     operating_points: tuple = ()
     scenarios: tuple = ()
     min_yield: float | None = None
+    gate: str = "per_sample"
+
+    @property
+    def n_motors(self) -> int:
+        """Motors drawn (the last one incomplete when ``samples`` is not a
+        multiple of the grid size)."""
+        return -(-self.samples // self.n_operating_points)
+
+    @property
+    def complete_motors(self) -> int:
+        """Motors run at every point of the grid (the per-motor yield's count)."""
+        return self.samples // self.n_operating_points
 
     @property
     def n_operating_points(self) -> int:
@@ -283,9 +306,23 @@ def read_campaign(value: Any) -> CampaignCfg:
     (1, 1.4)
     """
     t = Table(value, "campaign", CAMPAIGN_KEYS)
-    samples = t.integer("samples", minimum=1, maximum=MAX_SAMPLES)
+    points = (_operating_points(t.raw("operating_points"))
+              if t.has("operating_points") else ())
+    n_points = 1
+    for _key, values in points:
+        n_points *= len(values)
+    if t.has("motors") == t.has("samples"):
+        raise SpecError("campaign.motors", "one of motors (drawn motors, each run at every "
+                        "operating point) or samples (rows)",
+                        hint="both given" if t.has("motors") else "none given")
+    if t.has("motors"):
+        motors = t.integer("motors", minimum=1, maximum=MAX_SAMPLES // n_points)
+        samples = motors * n_points
+    else:
+        samples = t.integer("samples", minimum=1, maximum=MAX_SAMPLES)
     seed = t.integer("seed", minimum=0, maximum=2**63 - 1)
     chunk_size = t.integer("chunk_size", min(samples, 500), minimum=1, maximum=1_000_000)
+    gate = t.string("gate", "per_sample", choices=GATES)
     params_t = t.table("parameters", CAMPAIGN_PARAMETERS)
     params = tuple(_parameter(n, v) for n, v in params_t.data.items())
     drawn = {p.name: p for p in params}
@@ -295,8 +332,6 @@ def read_campaign(value: Any) -> CampaignCfg:
     if not params and not rows:
         raise SpecError("campaign.parameters", "at least one drawn parameter or a "
                         "[campaign.measured] table (nothing varies)")
-    points = (_operating_points(t.raw("operating_points"))
-              if t.has("operating_points") else ())
     scen = t.raw("scenarios", [])
     if not isinstance(scen, list) or not all(isinstance(s, str) for s in scen):
         raise SpecError("campaign.scenarios", "a list of scenario names", scen)
@@ -304,4 +339,4 @@ def read_campaign(value: Any) -> CampaignCfg:
     return CampaignCfg(samples=samples, seed=seed, chunk_size=chunk_size, parameters=params,
                        correlation=correlation, measured_columns=cols, measured_rows=rows,
                        operating_points=points, scenarios=tuple(scen),
-                       min_yield=min_yield)
+                       min_yield=min_yield, gate=gate)
