@@ -10,7 +10,9 @@ document is an error message instead of a ``RecursionError``.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
+import fcntl
 import os
 import re
 import shutil
@@ -245,6 +247,34 @@ def write_set(files: Mapping[str, str | bytes], out_dir: str | Path, *,
     parent.mkdir(parents=True, exist_ok=True)
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(20, "Not a directory", str(out))
+    with output_lock(out):
+        return _write_set_locked(files, out, drop)
+
+
+@contextlib.contextmanager
+def output_lock(out: Path):
+    """Hold an advisory lock (``flock``) on the directory holding ``out``: runs
+    writing there are serialised (the second waits, saying so on stderr; the
+    write phase takes milliseconds), so the temporaries found while holding it
+    are a dead run's, never a live one's (:func:`remove_stale`). The kernel
+    releases the lock when its holder dies; no lock file is left behind."""
+    fd = os.open(out.parent, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            sys.stderr.write(f"cct: another run is writing in {out.parent}; waiting for it\n")
+            sys.stderr.flush()
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
+
+
+def _write_set_locked(files: Mapping[str, str | bytes], out: Path,
+                      drop: Collection[str]) -> list[Path]:
+    """:func:`write_set` with the output lock held."""
+    parent = out.parent
     remove_stale(out, set(files) | set(drop))
     if out.exists() and not _swappable(out):
         return _write_in_place(files, out, drop)

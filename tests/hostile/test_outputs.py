@@ -232,3 +232,27 @@ def test_directory_with_subdirectories_is_written_in_place(tmp_path):
     assert out.stat().st_ino == inode  # same directory, not a swapped-in copy
     assert (out / "src" / "main.c").exists()
     assert sorted(p.name for p in out.iterdir()) == sorted([*OUTPUT_FILES, "src"])
+
+
+def test_concurrent_writers_are_serialised_and_keep_each_others_staging(tmp_path):
+    """Two runs into one output directory: the second waits for the first
+    (one line on stderr) instead of removing the first one's live staging
+    directory as a stale temporary, then writes its own complete set."""
+    from toolbox._io import output_lock
+    out = tmp_path / "out"
+    write_outputs({"controller.json": "a"}, out)
+    live = tmp_path / ".out.stage.a1b2c3d4"           # the first run's staging, in use
+    live.mkdir()
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    code = ("import sys; from toolbox.pipeline import write_outputs; "
+            "write_outputs({'controller.json': 'b'}, sys.argv[1])")
+    with output_lock(out):
+        proc = subprocess.Popen([sys.executable, "-c", code, str(out)], env=env,
+                                stderr=subprocess.PIPE, text=True)
+        line = proc.stderr.readline()                  # it waits, and says so
+        assert "another run is writing" in line
+        assert proc.poll() is None and live.is_dir()
+        live.rmdir()                                   # the first run finishes
+    assert proc.wait(timeout=60) == 0
+    assert (out / "controller.json").read_text() == "b"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]

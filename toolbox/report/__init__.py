@@ -548,8 +548,9 @@ def _controller(artifact) -> dict:
                   ("R_c (controller model)", fmt(dec.R_c), "ohm"),
                   ("Ld_c", fmt(dec.Ld_c), "H"), ("Lq_c", fmt(dec.Lq_c), "H"),
                   ("flux_c", fmt(dec.flux_c), "Wb"), ("pole_pairs", str(dec.pole_pairs), "1")]
-    if dec.delay_compensation_time:
-        decoupling.append(("Delay compensation (v_dq rotated by t w_e)",
+    if artifact.fcs is None:
+        decoupling.append(("Voltage placement: v_dq placed at theta_k + t_c w_e "
+                           "(drive.angle_compensation; 0: none)",
                            fmt(dec.delay_compensation_time), "s"))
     if artifact.fcs is not None:
         f = artifact.fcs
