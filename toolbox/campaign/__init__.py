@@ -12,6 +12,7 @@ Dask, pyarrow, scipy and matplotlib are imported only when a campaign runs
 (``cct --help`` stays light).
 """
 
+from ._cluster import parse_address
 from ._evaluate import DIVERGED, Plan, evaluate_chunk, make_plan, scenario_slug
 from ._run import (CAMPAIGN_SCHEMA, CampaignRun, campaign_hash, chunk_path, read_results,
                    run_campaign, valid_chunks)
@@ -21,4 +22,4 @@ from ._summary import parameter_columns, summarize, wilson_interval
 __all__ = ["DIVERGED", "Plan", "evaluate_chunk", "make_plan", "scenario_slug",
            "CAMPAIGN_SCHEMA", "CampaignRun", "campaign_hash", "chunk_path", "read_results",
            "run_campaign", "valid_chunks", "draw_samples", "parameter_columns", "summarize",
-           "wilson_interval"]
+           "wilson_interval", "parse_address"]

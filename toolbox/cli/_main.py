@@ -632,8 +632,7 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
       cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c --scheduler tcp://scheduler-host:8786
       cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c_pi --controller out/003_pi
     """
-    from ..campaign import run_campaign
-    from ..campaign._cluster import parse_address
+    from ..campaign import parse_address, run_campaign
     from ..errors import InfrastructureError
     from ..spec import load_spec
 
