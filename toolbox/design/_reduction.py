@@ -23,9 +23,9 @@ import numpy as np
 import scipy.linalg as sla
 
 from .._lti import (StateSpace, _balanced_blocks, _balanced_companion, _eigvals,
-                    _leading_identity, _linf_norm, _pencil_eigval_list, _solve, as_statespace,
+                    _leading_identity, _linf_peak, _pencil_eigval_list, _solve, as_statespace,
                     parallel, state_scaling)
-from ._hinf_riccati import _ss_blocks, _zpk
+from ._hinf_plant import _ss_blocks, _zpk
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -452,10 +452,6 @@ class LoopMargins:
 MARGIN_BAND = (1e-3, 1e8)
 #: a zero of the crossing function counts as imaginary when |Re| <= this * |zero|
 _IMAG_TOL = 1e-6
-#: half-width (a factor in w) of the band searched for the reduced loop's
-#: peak of |S| around the full loop's: a reduction keeping the margins moves
-#: it little (paper 003's q axis: by 4e-5, relative)
-_PEAK_BAND = 1.01
 
 
 def _balanced_series(first: tuple,
@@ -539,10 +535,10 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     the rule of :func:`toolbox.analysis.frequency_margins` (python-control's:
     the crossing closest to instability), and
     ``M_m = 1/||S||_inf`` is the L-infinity norm of ``S = 1/(1 + L)``
-    (:func:`toolbox._lti.linf_norm`, Bruinsma-Steinbuch as SLICOT ab13dd,
-    relative tolerance 1e-10). The tests check the numbers
-    against :func:`toolbox.analysis.lti_loop_margins` (the toolbox's grid
-    route, 20000 points and refinement, ~20 times slower) and python-control.
+    (:func:`toolbox._lti.linf_norm`: SLICOT ab13dd, relative tolerance
+    1e-10). The tests check the numbers against
+    :func:`toolbox.analysis.lti_loop_margins` (the toolbox's grid route,
+    20000 points and refinement, ~20 times slower) and python-control.
 
     Parameters
     ----------
@@ -556,30 +552,21 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     return _margins(_ss_blocks(G), _ss_blocks(K))[0]
 
 
-def _margins(g: tuple, k: tuple,
-             peak_near: float | None = None) -> tuple[LoopMargins, np.ndarray, float]:
+def _margins(g: tuple, k: tuple) -> tuple[LoopMargins, np.ndarray, float]:
     """:func:`loop_margins` of the loop of the realisations ``g`` and ``k``,
     the closed-loop poles (those of ``S``, whose norm gave ``M_m``) and the
-    frequency of the peak of ``|S|``.
-
-    The norm's first lower bound searches a band expected to hold that peak
-    (:func:`toolbox._lti._linf_norm`: one Hamiltonian instead of two when it
-    does): :data:`_PEAK_BAND` around ``peak_near`` (the full loop's peak when
-    ``k`` is its reduced controller), else between the headline gain and
-    phase crossovers, where ``|1 + L|`` is smallest on most loops (the
-    Nyquist curve passes closest to -1 between |L| = 1 and the real axis).
-    """
+    frequency of the peak of ``|S|``."""
     A, B, C, d = _balanced_series(k, g)
     if A.shape[0] == 0:
         gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
         return (LoopMargins(gm_db, w_gm, pm, w_pm, abs(1.0 + d), abs(1.0 / (1.0 + d))),
                 np.zeros(0, complex), math.inf)
     gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
-    band = ((peak_near / _PEAK_BAND, peak_near * _PEAK_BAND) if peak_near is not None
-            else (min(w_gm, w_pm), max(w_gm, w_pm)))   # with a nan: no band (lo < hi fails)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
     fB = f * B
-    peak, w_peak, poles = _linf_norm(A - fB @ C, fB, -f * C, np.array([[f]]), band=band)
+    Acl = A - fB @ C
+    peak, w_peak = _linf_peak(Acl, fB, -f * C, np.array([[f]]))
+    poles = _eigvals(Acl)
     if any(abs(z) < 1e-12 for z in _eigvals(A).tolist()):   # an integrator: no static error
         ess = 0.0
     else:
@@ -651,10 +638,8 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
     MarginComparison
     """
     g = _ss_blocks(G)
-    a, _, w_peak = _margins(g, _ss_blocks(K))
-    # the reduction moves the peak of |S| little: the full loop's frequency
-    # lets the reduced loop's first Hamiltonian certify its norm
-    b, poles, _ = _margins(g, _ss_blocks(Kr), peak_near=w_peak)
+    a = _margins(g, _ss_blocks(K))[0]
+    b, poles, _ = _margins(g, _ss_blocks(Kr))
     flags = []
     pairs = {"gain margin": (10 ** (a.gain_margin_db / 20), 10 ** (b.gain_margin_db / 20)),
              "phase margin": (a.phase_margin_deg, b.phase_margin_deg),
