@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..errors import SpecError
 from ._hinf_plant import PartitionedPlant, _blocks2x2, balance_plant
@@ -49,7 +48,7 @@ def _imag_axis_modes(A: np.ndarray, tol: float) -> list[complex]:
     of the imaginary axis."""
     if A.shape[0] == 0:
         return []
-    lam = sla.eigvals(A)
+    lam = np.linalg.eigvals(A)
     lim = tol * max(1.0, float(np.abs(lam).max()))
     return [complex(z) for z in lam if abs(z.real) <= lim]
 
@@ -63,7 +62,7 @@ def _rank_defect(M: np.ndarray, tol: float, sv: np.ndarray | None = None) -> boo
         return False
     if M.shape[0] < M.shape[1]:
         return True
-    sv = (sla.svdvals(M) if sv is None else sv).tolist()
+    sv = (np.linalg.svd(M, compute_uv=False) if sv is None else sv).tolist()
     hi, lo = sv[0], sv[-1]
     return lo <= tol * max(hi, 1e-300)
 
@@ -72,7 +71,7 @@ def _blame_mode(P: PartitionedPlant, lam: complex) -> str:
     """Name the block (plant or weight) whose states own eigenvalue lam."""
     if not P.state_labels:
         return "a weight or the plant"
-    w, V = sla.eig(P.A)
+    w, V = np.linalg.eig(P.A)
     k = int(np.argmin(np.abs(w - lam)))
     idx = int(np.argmax(np.abs(V[:, k])))
     return P.state_labels[idx]

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
-import scipy.linalg as sla
 
 from .._lti import StateSpace, _linf_peak
 from ..errors import DesignInfeasible, SpecError
@@ -237,7 +236,7 @@ def hinf_norm(sys: Any) -> float:
 
 
 def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> float:
-    if A.shape[0] and sla.eigvals(A).real.max() >= -1e-8:
+    if A.shape[0] and np.linalg.eigvals(A).real.max() >= -1e-8:
         return math.inf
     return _linf_peak(A, B, C, D)[0]
 

@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 
 from .._lti import (StateSpace, TransferFunction, _balanced_companion, _minreal_coeffs,
                     _trimmed, as_statespace, diagonal_scaling)
@@ -356,7 +355,7 @@ def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ..
     systems, ~1.5 ms, issue 13)."""
     Ak, Bk, Ck, Dk = K
     if np.count_nonzero(P.D22):
-        Mi = sla.inv(np.eye(P.nu) - Dk @ P.D22)
+        Mi = np.linalg.inv(np.eye(P.nu) - Dk @ P.D22)
         Ux, Uk, Uw = Mi @ Dk @ P.C2, Mi @ Ck, Mi @ Dk @ P.D21    # u = Ux x + Uk xk + Uw w
         Yx, Yk, Yw = P.C2 + P.D22 @ Ux, P.D22 @ Uk, P.D21 + P.D22 @ Uw
         Ak = Ak + Bk @ Yk

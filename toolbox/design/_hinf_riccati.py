@@ -5,7 +5,8 @@ Glover & Doyle (1988) and Zhou, Doyle & Glover, *Robust and Optimal Control*
 (1995), ch. 17 (the general case with D11 != 0): the normalisation of eq
 (65)-(67), the Riccati data of eq (10)-(17), the feasibility tests of
 Theorem 1 (eq 18-22) and the central controller of Theorem 2 (eq 23-32).
-Linear algebra through scipy.linalg's documented functions, options by keyword.
+Linear algebra through the documented functions of numpy.linalg and
+scipy.linalg (``schur``, ``solve_continuous_are``), options by keyword.
 
 Damaged or wrong equations of the paper, re-derived here:
 
@@ -58,7 +59,7 @@ def _normalise(P: PartitionedPlant, svds: tuple[tuple, tuple] | None = None) -> 
     """
     m2, p2 = P.nu, P.ny
     # D12 = U [S;0] V^T, D21 = U21 [S 0] V21^T
-    (U, s12, V12t), (U21, s21, V21t) = svds or (sla.svd(P.D12), sla.svd(P.D21))
+    (U, s12, V12t), (U21, s21, V21t) = svds or (np.linalg.svd(P.D12), np.linalg.svd(P.D21))
     Uz = np.concatenate([U[:, m2:], U[:, :m2]], axis=1).T   # Uz D12 = [0; S V^T]
     VwT = np.concatenate([V21t[p2:], V21t[:p2]]).T           # D21 VwT = [0, U S]
     # R12 = S V^T and R21 = U S are inverted from their factors (orthogonal
@@ -136,8 +137,8 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
         except (np.linalg.LinAlgError, ValueError):
             return None, ("the Hamiltonian has eigenvalues on the imaginary axis "
                           "or no stabilising solution exists")
-        F = sla.solve(r, b.T @ X + s.T)
-        ev = sla.eigvals(a - b @ F)
+        F = np.linalg.solve(r, b.T @ X + s.T)
+        ev = np.linalg.eigvals(a - b @ F)
         wr, wi = ev.real, ev.imag
         X = _symmetric_part(X)
     # a few poles: scalar code beats array calls (as in _imag_axis_modes)
@@ -161,12 +162,12 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     parts of the closed-loop poles (the n selected eigenvalues of H, those of
     ``a - b r^-1 (b^T X + s^T)``); ``(None, None, None)`` if it does not exist
     or its basis Z11 is too ill-conditioned to give X = Z21 Z11^-1 accurately
-    (1-norm condition estimate above 1e14). X is symmetrised (rounding
+    (1-norm condition number above 1e14). X is symmetrised (rounding
     leaves it slightly asymmetric)."""
     n = h.a.shape[0]
     try:
-        rv = sla.solve(r, h.V)                              # r^-1 [s^T, b^T]
-    except (np.linalg.LinAlgError, sla.LinAlgWarning):      # singular r: the pencil route
+        rv = np.linalg.solve(r, h.V)                        # r^-1 [s^T, b^T]
+    except np.linalg.LinAlgError:                           # singular r: the pencil route
         return None, None, None
     H = h.H0 - h.W @ rv
     if not np.count_nonzero(H[n:, :n]):
@@ -181,8 +182,8 @@ def _ric_schur_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, ...
     # X = Z21 Z11^-1 only from a well-conditioned basis (1-norm condition <= 1e14)
     if not np.linalg.cond(Z11, p=1) <= 1e14:
         return None, None, None
-    X = sla.solve(Z11.T, Z21.T).T
-    lam = sla.eigvals(T[:n, :n])                            # the n stable eigenvalues of H
+    X = np.linalg.solve(Z11.T, Z21.T).T
+    lam = np.linalg.eigvals(T[:n, :n])                      # the n stable eigenvalues of H
     return _symmetric_part(X), lam.real, lam.imag
 
 
@@ -201,7 +202,7 @@ def _ric_zero(a_cl: np.ndarray) -> tuple[np.ndarray | None, ...]:
     solution iff ``a_cl`` is Hurwitz; its eigenvalues are the closed-loop
     poles. One eigenvalue problem of order n instead of the Schur form of
     order 2n; otherwise ``(None, None, None)`` (no stabilising solution)."""
-    lam = sla.eigvals(a_cl)
+    lam = np.linalg.eigvals(a_cl)
     if not max(lam.real.tolist(), default=-1.0) < 0.0:             # all Re < 0
         return None, None, None
     return np.zeros(a_cl.shape), lam.real, lam.imag
@@ -249,7 +250,7 @@ def _not_psd(X: np.ndarray, tol: float = 1e-9) -> float | None:
     eigenvalue (or empty), else its smallest eigenvalue."""
     if not X.size:
         return None
-    ev = sla.eigvalsh(X)
+    ev = np.linalg.eigvalsh(X)
     lo, hi = float(ev[0]), float(ev[-1])
     return None if lo >= -tol * max(1.0, -lo, hi) else lo
 
@@ -330,7 +331,7 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
 
 def _spectral_radius(M: np.ndarray) -> float:
     """max |eigenvalue| of a non-empty real square matrix."""
-    return float(np.abs(sla.eigvals(M)).max())
+    return float(np.abs(np.linalg.eigvals(M)).max())
 
 
 @dataclass(slots=True)
@@ -353,7 +354,7 @@ def _prepare(P: PartitionedPlant) -> _Prepared:
     if not isinstance(P, PartitionedPlant):
         raise TypeError(f"expected a PartitionedPlant, got {type(P).__name__}")
     Ps, t = balance_plant(P)
-    svds = (sla.svd(Ps.D12), sla.svd(Ps.D21))          # for both A2 and the normalisation
+    svds = (np.linalg.svd(Ps.D12), np.linalg.svd(Ps.D21))   # for A2 and the normalisation
     _check_balanced(Ps, d_sv=(svds[0][1], svds[1][1])).raise_if_failed()
     norm = _normalise(Ps, svds)
     return _Prepared(P=P, t=t, norm=norm, gf=_gamma_free(norm.P))
@@ -424,22 +425,24 @@ def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.
     m1, m2, p1, p2 = Pn.nw, Pn.nu, Pn.nz, Pn.ny
     D1111, D1112, D1121, D1122 = w.d11
     B, C, A = w.B, w.C, Pn.A
-    F = -sla.solve(Rnh, w.Hx.s.T + B.T @ X)                 # eq (20); Hx.s^T = D1s^T C1
+    F = -np.linalg.solve(Rnh, w.Hx.s.T + B.T @ X)                 # eq (20); Hx.s^T = D1s^T C1
     # eq (21): L = -(B1 Ds1^T + Y C^T) Rnj^-1, Rnj symmetric (eq 15); Hy.s = B1 Ds1^T
-    L = -sla.solve(Rnj, w.Hy.s.T + C @ Y.T).T
+    L = -np.linalg.solve(Rnj, w.Hy.s.T + C @ Y.T).T
     F12, F2 = F[m1 - p2:m1], F[m1:]
     L12, L2 = L[:, p1 - m2:p1], L[:, p1:]
     # eq (27): Z = (I - Y X / gamma^2)^-1, applied to both B2 + L12 and L2 at once
-    ZB = sla.solve(np.eye(A.shape[0]) - (Y @ X) / g2, np.concatenate([Pn.B2 + L12, L2], axis=1))
+    ZB = np.linalg.solve(np.eye(A.shape[0]) - (Y @ X) / g2,
+                         np.concatenate([Pn.B2 + L12, L2], axis=1))
     if D1111.size:
         r, c = D1111.shape
-        Ka = sla.solve(g2 * np.eye(r) - D1111 @ D1111.T, D1112)         # (g2 I - D D^T)^-1 D1112
-        Kb = sla.solve(g2 * np.eye(c) - D1111.T @ D1111, D1121.T)
+        # (g2 I - D D^T)^-1 D1112
+        Ka = np.linalg.solve(g2 * np.eye(r) - D1111 @ D1111.T, D1112)
+        Kb = np.linalg.solve(g2 * np.eye(c) - D1111.T @ D1111, D1121.T)
         D11h = -D1121 @ D1111.T @ Ka - D1122                          # eq (24)
-        D12h = sla.cholesky(np.eye(m2) - D1121 @ Kb, lower=True)    # D12h D12h^T = T2, eq (25)
+        D12h = np.linalg.cholesky(np.eye(m2) - D1121 @ Kb)      # D12h D12h^T = T2, eq (25)
         T3 = np.eye(p2) - D1112.T @ Ka                                # eq (26)
         B2h = ZB[:, :m2] @ D12h                                       # eq (27)
-        B1h = B2h @ sla.solve(D12h, D11h) - ZB[:, m2:]                   # eq (29)
+        B1h = B2h @ np.linalg.solve(D12h, D11h) - ZB[:, m2:]                   # eq (29)
     else:
         # eq (24)-(25) with an empty D1111: T2 = I, so D12h = I and eq (27), (29)
         # lose their products by it (exact: products by an identity round nothing)
@@ -447,9 +450,9 @@ def _central_normalised(Pn: PartitionedPlant, res: HinfFeasibility) -> tuple[np.
         T3 = np.eye(p2) - (D1112.T @ D1112) / g2                      # eq (26)
         B2h = ZB[:, :m2]                                              # eq (27)
         B1h = B2h @ D11h - ZB[:, m2:]                                 # eq (29)
-    D21h = sla.cholesky(T3, lower=True).T                                 # D21h^T D21h = T3
+    D21h = np.linalg.cholesky(T3).T                         # D21h^T D21h = T3
     C2h = -D21h @ (Pn.C2 + F12)                                       # eq (28), D21h
-    S = sla.solve(D21h, C2h)                                    # D21h^-1 C2h of eq (30), (31)
+    S = np.linalg.solve(D21h, C2h)                                    # D21h^-1 C2h of eq (30), (31)
     C1h = F2 + D11h @ S                                      # eq (30), no U12
     Ah = A + B @ F + B1h @ S                                 # eq (31)
     return Ah, B1h, C1h, D11h                                         # eq (32)
@@ -493,14 +496,15 @@ def _controller_from(prep: _Prepared, res: HinfFeasibility) -> tuple[np.ndarray,
     """A, B, C, D of the central controller in the coordinates of the given plant."""
     Ah, Bh, Ch, Dh = _central_normalised(prep.norm.P, res)
     # undo u = R12^-1 u~ and y~ = R21^-1 y
-    Bh, Ch, Dh = Bh @ prep.norm.R21inv, prep.norm.R12inv @ Ch, prep.norm.R12inv @ Dh @ prep.norm.R21inv
+    R12inv, R21inv = prep.norm.R12inv, prep.norm.R21inv
+    Bh, Ch, Dh = Bh @ R21inv, R12inv @ Ch, R12inv @ Dh @ R21inv
     # undo the state balancing x = T x_s (controller states live in plant coordinates)
     t = prep.t[:, None]
     Ah, Bh, Ch = Ah * (t / prep.t), Bh * t, Ch / prep.t      # exact: powers of two
     D22 = prep.P.D22
     if np.count_nonzero(D22):
         # loop shift u = K0 (y - D22 u): M = (I + Dk D22)^-1, u = M (Ck xk + Dk y)
-        M = sla.inv(np.eye(Dh.shape[0]) + Dh @ D22)
+        M = np.linalg.inv(np.eye(Dh.shape[0]) + Dh @ D22)
         Ah, Bh = Ah - Bh @ D22 @ M @ Ch, Bh @ (np.eye(D22.shape[0]) - D22 @ M @ Dh)
         Ch, Dh = M @ Ch, M @ Dh
     return Ah, Bh, Ch, Dh
