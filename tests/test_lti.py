@@ -409,7 +409,7 @@ def test_linf_norm_between_a_dense_grid_and_the_bounded_real_lemma(seed):
     reports shows six digits)."""
     for g in (_rss(seed, 4, 2, 2), _LIGHTLY_DAMPED):
         A, B, C, D = (np.asarray(m, float) for m in (g.A, g.B, g.C, g.D))
-        norm, w = L._linf_peak(A, B, C, D)
+        norm, w = L.linf_peak(A, B, C, D)
         assert norm == L.linf_norm(g)
         assert norm >= _grid_peak(g) * (1 - 2e-6)
         assert _below_level(g, norm * (1 + 1e-5))
@@ -445,7 +445,7 @@ def test_zeros_refuse_a_system_with_two_inputs():
     input and one output): two inputs get a clear error, not a broadcast one."""
     A, B, C, D = -np.eye(2), np.ones((2, 2)), np.ones((1, 2)), np.zeros((1, 2))
     with pytest.raises(ValueError, match="a SISO system expected, got 1 outputs and 2 inputs"):
-        L._zeros(A, B, C, D)
+        L.invariant_zeros(A, B, C, D)
 
 
 def test_pencil_eigval_list_is_numpys_quotient():
@@ -459,5 +459,5 @@ def test_pencil_eigval_list_is_numpys_quotient():
     alpha = ar + 1j * ai
     fin = np.abs(beta) > 1e-13 * np.abs(alpha)
     assert np.count_nonzero(fin) == 5
-    assert np.allclose(np.array(L._pencil_eigval_list(M, E)), alpha[fin] / beta[fin],
+    assert np.allclose(np.array(L.pencil_eigvals(M, E)), alpha[fin] / beta[fin],
                        rtol=5e-16, atol=0.0)

@@ -37,7 +37,10 @@ from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev,
 
 __all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d",
            "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
-           "linf_norm", "C2D_METHODS"]
+           "linf_norm", "linf_peak", "invariant_zeros", "pencil_eigvals", "balanced",
+           "balanced_blocks", "balanced_companion", "state_scaling", "diagonal_scaling",
+           "modal_form", "minreal_coeffs", "trimmed_coeffs", "poly_roots", "spectral_norm",
+           "C2D_METHODS"]
 
 #: Discretisation methods of :func:`c2d` (python-control / scipy names); the
 #: generalised bilinear transform of each is ``_GBT_ALPHA``.
@@ -81,7 +84,7 @@ def balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, .
     return A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
 
 
-def _balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A, B, C of the SISO system matrix ``M = [[A, B], [C, 0]]`` in the
     coordinates of :func:`balanced` (the same powers of two, so the same
     numbers), as views of one scaled copy of ``M``: for a caller that wrote
@@ -96,14 +99,14 @@ def _balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return M[:n, :n], M[:n, n:], M[n:, :n]
 
 
-def _balanced_companion(num: list[float], den: list[float]) -> tuple[np.ndarray, ...]:
+def balanced_companion(num: list[float], den: list[float]) -> tuple[np.ndarray, ...]:
     """A, B, C, D of :func:`tf2ss`'s controllable canonical form of the proper
     ``num/den`` (trimmed Python floats, ``den[0] != 0``) in the coordinates of
     :func:`balanced`: the same numbers as ``balanced(*tf2ss(num, den)[:3])``,
     with the system matrix ``[[A, B], [C, 0]]`` written once from the
     coefficients (``-den[1:]`` on A's first row, ones below its diagonal,
     ``B = e1``, ``C = num[1:] - num[0] den[1:]``, normalised by ``den[0]``) and
-    scaled by :func:`_balanced_blocks`. A, B, C are views of that matrix."""
+    scaled by :func:`balanced_blocks`. A, B, C are views of that matrix."""
     n, d0 = len(den) - 1, den[0]
     num = [v / d0 for v in [0.0] * (n + 1 - len(num)) + num]
     den = [v / d0 for v in den]
@@ -113,7 +116,7 @@ def _balanced_companion(num: list[float], den: list[float]) -> tuple[np.ndarray,
         M.reshape(-1)[n + 1:n * (n + 1):n + 2] = 1.0     # A's subdiagonal
         M[0, n] = 1.0
         M[n, :n] = [u - num[0] * v for u, v in zip(num[1:], den[1:])]
-    return (*_balanced_blocks(M), np.array([[num[0]]]))
+    return (*balanced_blocks(M), np.array([[num[0]]]))
 
 
 def modal_form(A: np.ndarray, B: np.ndarray,
@@ -224,7 +227,7 @@ def _eigvals(A: np.ndarray) -> np.ndarray:
     return wr + 1j * wi
 
 
-def _pencil_eigval_list(M: np.ndarray, N: np.ndarray) -> list[complex]:
+def pencil_eigvals(M: np.ndarray, N: np.ndarray) -> list[complex]:
     """Finite generalised eigenvalues of (M, N) (LAPACK dggev; the infinite
     ones, |beta| <= 1e-13 |alpha|, are dropped) as Python numbers (a pencil of a small system
     has a dozen eigenvalues: scalar code beats the nine array operations of
@@ -244,14 +247,14 @@ def _pencil_eigval_list(M: np.ndarray, N: np.ndarray) -> list[complex]:
     return out
 
 
-def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
+def invariant_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
     """Invariant zeros of a SISO system: the finite eigenvalues of the system
     pencil ``([A B; C D], diag(I, 0))`` (QZ), after a power-of-two diagonal
     scaling of its states (exact, :func:`balanced`: one input and one output)
     that evens the entries of controllers spanning many decades; the infinite
     eigenvalues (relative degree) are dropped."""
     if B.shape[1] != 1 or C.shape[0] != 1:
-        raise ValueError(f"_zeros: a SISO system expected, got {C.shape[0]} outputs and "
+        raise ValueError(f"invariant_zeros: a SISO system expected, got {C.shape[0]} outputs and "
                          f"{B.shape[1]} inputs")
     n = A.shape[0]
     if n == 0:
@@ -259,7 +262,7 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     A, B, C = balanced(A, B, C)
     M = np.zeros((n + C.shape[0], n + B.shape[1]))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
-    return np.array(_pencil_eigval_list(M, _leading_identity(*M.shape, n)), complex)
+    return np.array(pencil_eigvals(M, _leading_identity(*M.shape, n)), complex)
 
 
 def _matrix(value: Any, name: str) -> np.ndarray:
@@ -362,11 +365,11 @@ class StateSpace:
 
     @cached_property
     def _poles_zeros(self) -> tuple[np.ndarray, np.ndarray]:
-        """Poles (dgeev) and invariant zeros (:func:`_zeros`) of a SISO system,
+        """Poles (dgeev) and invariant zeros (:func:`invariant_zeros`) of a SISO system,
         computed once:
         the H-infinity synthesis tests its controller's fastest pole with them
         and the order reduction starts from the same zeros and poles (issue 13)."""
-        return _eigvals(self.A), _zeros(self.A, self.B, self.C, self.D)
+        return _eigvals(self.A), invariant_zeros(self.A, self.B, self.C, self.D)
 
     @cached_property
     def _zpk(self) -> tuple[np.ndarray, np.ndarray, float]:
@@ -579,7 +582,7 @@ def feedback(plant: Any, other: Any = 1.0, sign: int = -1) -> StateSpace:
 
 
 # -- transfer functions -------------------------------------------------------
-def _trimmed(coeffs: Any) -> list[float]:
+def trimmed_coeffs(coeffs: Any) -> list[float]:
     """The coefficients of a polynomial as Python floats without leading zeros
     (zero -> ``[0.0]``): the small transfer functions of a design need no array."""
     p = np.asarray(coeffs, dtype=float).reshape(-1).tolist()
@@ -588,11 +591,11 @@ def _trimmed(coeffs: Any) -> list[float]:
 
 
 def _poly(coeffs: Any) -> np.ndarray:
-    """:func:`_trimmed` as a fresh 1-D float array."""
-    return np.array(_trimmed(coeffs))
+    """:func:`trimmed_coeffs` as a fresh 1-D float array."""
+    return np.array(trimmed_coeffs(coeffs))
 
 
-def _roots(p: np.ndarray) -> np.ndarray:
+def poly_roots(p: np.ndarray) -> np.ndarray:
     """Roots of a trimmed polynomial; a first-order one without ``np.roots``'s
     companion-matrix eigenvalues (weights are mostly first-order)."""
     if p.size <= 1:
@@ -607,7 +610,7 @@ def _roots(p: np.ndarray) -> np.ndarray:
 _CANCEL_TOL = float(np.sqrt(np.finfo(float).eps))
 
 
-def _minreal_coeffs(num: np.ndarray, den: np.ndarray,
+def minreal_coeffs(num: np.ndarray, den: np.ndarray,
                     tol: float = _CANCEL_TOL) -> tuple[np.ndarray, np.ndarray]:
     """:meth:`TransferFunction.minreal` on trimmed coefficients: the same
     ``num`` and ``den`` objects when nothing cancels, else new trimmed ones
@@ -617,10 +620,10 @@ def _minreal_coeffs(num: np.ndarray, den: np.ndarray,
         return num, den                        # no zero or no pole: nothing to cancel
     if num.size == 2 and den.size == 2:        # one zero, one pole (most weights): scalars
         (n0, n1), (d0, d1) = num.tolist(), den.tolist()
-        z, p = -n1 / n0, -d1 / d0               # the roots _roots gives, as floats
+        z, p = -n1 / n0, -d1 / d0               # the roots poly_roots gives, as floats
         return (num[:1], den[:1]) if abs(p - z) <= tol * max(1.0, abs(z)) else (num, den)
-    zeros = list(_roots(num)) if num.any() else []
-    poles = list(_roots(den))
+    zeros = list(poly_roots(num)) if num.any() else []
+    poles = list(poly_roots(den))
     kept = []
     for z in zeros:
         near = [i for i, p in enumerate(poles) if abs(p - z) <= tol * max(1.0, abs(z))]
@@ -809,11 +812,11 @@ class TransferFunction:
 
     def poles(self) -> np.ndarray:
         """Roots of the denominator."""
-        return _roots(self.den)
+        return poly_roots(self.den)
 
     def zeros(self) -> np.ndarray:
         """Roots of the numerator (none for a constant or zero numerator)."""
-        return _roots(self.num) if self.num.any() else np.zeros(0, complex)
+        return poly_roots(self.num) if self.num.any() else np.zeros(0, complex)
 
     def __call__(self, x: Any) -> Any:
         """``num(x) / den(x)`` at complex point(s) ``x`` (scalar or array)."""
@@ -863,7 +866,7 @@ class TransferFunction:
         """Cancel the poles and zeros closer than ``tol max(1, |z|)`` (the
         rule of python-control's transfer-function ``minreal``); unchanged
         coefficients when nothing cancels (roots are not re-expanded)."""
-        num, den = _minreal_coeffs(self.num, self.den, tol)
+        num, den = minreal_coeffs(self.num, self.den, tol)
         return self if num is self.num else TransferFunction(num, den)
 
     def to_statespace(self) -> StateSpace:
@@ -1052,17 +1055,17 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
     accuracy.
     """
     g = as_statespace(sys)
-    return _linf_peak(g.A, g.B, g.C, g.D, tol)[0]
+    return linf_peak(g.A, g.B, g.C, g.D, tol)[0]
 
 
-def _linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+def linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
                tol: float = 1e-10) -> tuple[float, float]:
     """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` and a
     frequency (rad/s) where the response attains it (ab13dd's ``fpeak``;
     ``inf`` for a norm reached only as w -> inf)."""
     n = A.shape[0]
     if n == 0 or D.size == 0:
-        return _spectral_norm(D), inf
+        return spectral_norm(D), inf
     from slycot import ab13dd
 
     A, B, C, D = (np.array(m, dtype=float, order="F") for m in (A, B, C, D))
@@ -1071,7 +1074,7 @@ def _linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     return float(gpeak), float(fpeak)
 
 
-def _spectral_norm(M: np.ndarray) -> float:
+def spectral_norm(M: np.ndarray) -> float:
     """Largest singular value of a matrix (0 when empty); a row or column is
     its 2-norm, a scalar its modulus."""
     if M.shape == (1, 1):

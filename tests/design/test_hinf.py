@@ -131,11 +131,11 @@ def test_weight_realisation_is_minimal_and_exact():
                                       ([3.0, 1.0, 1.0], [-2.0, 3.0, 2.5e4])])
 def test_tf_realisation_is_tf2ss_then_balanced(num, den):
     """The system matrix written from the coefficients and balanced once
-    (``_lti._balanced_companion``) gives the same bits as cancellation, tf2ss
+    (``_lti.balanced_companion``) gives the same bits as cancellation, tf2ss
     and the power-of-two balancing on arrays (the fifth pair cancels to the
     gain 1/3)."""
     from toolbox import _lti as L
-    A, B, C, D = L._tf2ss_arrays(*L._minreal_coeffs(L._poly(num), L._poly(den)))
+    A, B, C, D = L._tf2ss_arrays(*L.minreal_coeffs(L._poly(num), L._poly(den)))
     ref = (*L.balanced(A, B, C), D)
     got = HP._tf_realisation(num, den)
     for a, b in zip(got, ref):

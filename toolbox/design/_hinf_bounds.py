@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import _roots, _trimmed
+from .._lti import poly_roots, trimmed_coeffs
 from ._hinf_plant import _tf_coeffs, _zpk
 
 __all__ = ["WeightBound", "weight_bound_check"]
@@ -76,7 +76,7 @@ def _factors(sys: Any) -> tuple[_Factor, _Factor]:
     division), a number, or a state-space system (its zeros, poles and gain,
     :func:`_zpk`)."""
     if (coeffs := _tf_coeffs(sys)) is not None:
-        return tuple(_Factor(c[0], _roots(np.array(c)).tolist()) for c in map(_trimmed, coeffs))
+        return tuple(_Factor(c[0], poly_roots(np.array(c)).tolist()) for c in map(trimmed_coeffs, coeffs))
     if np.isscalar(sys):
         return _Factor(float(sys), []), _Factor(1.0, [])
     z, p, k = _zpk(sys)

@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .._lti import StateSpace, _linf_peak
+from .._lti import StateSpace, linf_peak
 from ..errors import DesignInfeasible, SpecError
 from ._hinf_plant import PartitionedPlant, _lft, _poles_zeros
 from ._hinf_riccati import (GAMMA_KEY, _check_gamma, _controller_from, _prepare, _Prepared,
@@ -238,7 +238,7 @@ def hinf_norm(sys: Any) -> float:
 def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> float:
     if A.shape[0] and np.linalg.eigvals(A).real.max() >= -1e-8:
         return math.inf
-    return _linf_peak(A, B, C, D)[0]
+    return linf_peak(A, B, C, D)[0]
 
 
 def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal",

@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import (StateSpace, TransferFunction, _balanced_companion, _minreal_coeffs,
-                    _trimmed, as_statespace, diagonal_scaling)
+from .._lti import (StateSpace, TransferFunction, balanced_companion, minreal_coeffs,
+                    trimmed_coeffs, as_statespace, diagonal_scaling)
 
 __all__ = ["PartitionedPlant", "augment_mixed_sensitivity", "balance_plant", "closed_loop"]
 
@@ -197,13 +197,13 @@ def _tf_realisation(num: Any, den: Any) -> tuple[np.ndarray, ...]:
     """Minimal realisation (A, B, C, D) of the proper SISO ``num/den``.
 
     Common roots of num and den are cancelled first
-    (:func:`toolbox._lti._minreal_coeffs`, python-control's rule), then
-    :func:`toolbox._lti._balanced_companion` gives the controllable canonical
+    (:func:`toolbox._lti.minreal_coeffs`, python-control's rule), then
+    :func:`toolbox._lti.balanced_companion` gives the controllable canonical
     form, whose states are scaled by powers of two (exact) so that B and C
     have comparable entries (paper 003's w3 has C ~ -2.7e10 for B = 1
     otherwise).
     """
-    num, den = _trimmed(num), _trimmed(den)
+    num, den = trimmed_coeffs(num), trimmed_coeffs(den)
     if not any(den):
         raise ValueError("augment_mixed_sensitivity: zero denominator")
     if len(num) > len(den):
@@ -212,8 +212,8 @@ def _tf_realisation(num: Any, den: Any) -> tuple[np.ndarray, ...]:
                          f"{len(den) - 1}")
     if not any(num):
         return _ss_blocks(0.0)
-    num, den = _minreal_coeffs(np.array(num), np.array(den))
-    return _balanced_companion(num.tolist(), den.tolist())
+    num, den = minreal_coeffs(np.array(num), np.array(den))
+    return balanced_companion(num.tolist(), den.tolist())
 
 
 def _ours(K: Any) -> StateSpace:

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import StateSpace, _spectral_norm
+from .._lti import StateSpace, spectral_norm
 from ..errors import DesignInfeasible, SpecError
 from ._hinf_assumptions import _check_balanced
 from ._hinf_plant import PartitionedPlant, balance_plant
@@ -280,7 +280,7 @@ def _gamma_free(Pn: PartitionedPlant) -> _GammaFree:
     D1s = np.concatenate([Pn.D11, Pn.D12], axis=1)
     Ds1 = np.concatenate([Pn.D11, Pn.D21])
     # [D1111 D1112] and [D1111; D1121] are the first rows and columns of D11
-    bound = max(_spectral_norm(Pn.D11[:r]), _spectral_norm(Pn.D11[:, :c]))
+    bound = max(spectral_norm(Pn.D11[:r]), spectral_norm(Pn.D11[:, :c]))
     Ew, Ez = np.diag([1.0] * Pn.nw + [0.0] * Pn.nu), np.diag([1.0] * Pn.nz + [0.0] * Pn.ny)
     return _GammaFree(B=B, C=C, DtD=D1s.T @ D1s, DDt=Ds1 @ Ds1.T, Ew=Ew, Ez=Ez,
                       Hx=_hamiltonian(Pn.A, B, Pn.C1.T @ Pn.C1, Pn.C1.T @ D1s),

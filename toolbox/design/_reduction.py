@@ -22,9 +22,8 @@ from typing import Any, Literal
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import (StateSpace, _balanced_blocks, _balanced_companion, _eigvals,
-                    _leading_identity, _linf_peak, _pencil_eigval_list, _solve, as_statespace,
-                    parallel, state_scaling)
+from .._lti import (StateSpace, as_statespace, balanced_blocks, balanced_companion, linf_peak,
+                    parallel, pencil_eigvals, state_scaling)
 from ._hinf_plant import _ss_blocks, _zpk
 
 __all__ = [
@@ -47,7 +46,7 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
     (the controllable canonical form of :func:`toolbox._lti.tf2ss`) without its
     argument handling (~0.3 ms a call, issue 13), then the diagonal balancing
     of :func:`toolbox._lti.balanced`: the same numbers, from the polynomials'
-    coefficients as Python floats (:func:`toolbox._lti._balanced_companion`,
+    coefficients as Python floats (:func:`toolbox._lti.balanced_companion`,
     ~10 array calls instead of ~30)."""
     if p.size == 0:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(k)]])
@@ -56,7 +55,7 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
     num = _poly_from_roots(_real_conj(z))
     if len(num) > n + 1:
         raise ValueError(f"improper transfer function ({len(num) - 1} zeros, {n} poles)")
-    A, B, C, D = _balanced_companion([float(k) * v for v in num], den)
+    A, B, C, D = balanced_companion([float(k) * v for v in num], den)
     return A.copy(), B.copy(), C.copy(), D
 
 
@@ -65,7 +64,7 @@ def _poly_from_roots(r: list[complex]) -> list[float]:
     conjugate-closed set (those of a real system, as :func:`_real_conj`
     leaves them): a linear factor per real root and the real quadratic
     ``s^2 - Re(x + y) s + Re(x y)`` per pair ``x, y`` (``y = conj(x)`` up to
-    rounding: the zeros from a QZ pencil, :func:`toolbox._lti._zeros`, differ
+    rounding: the zeros from a QZ pencil, :func:`toolbox._lti.invariant_zeros`, differ
     in the last bits; exact conjugates give ``-2 Re(x)`` and ``|x|^2``), in
     Python floats (a few roots: ~1 us where ``np.poly``'s ``np.convolve`` per
     root took ~4-8). As accurate as ``np.poly``'s complex products, whose
@@ -459,7 +458,7 @@ def _balanced_series(first: tuple,
     """A, B, C, d of ``second * first`` (SISO; the signal passes ``first``
     first), with A, B, C in the coordinates of :func:`toolbox._lti.balanced`
     (the same powers of two, so the same numbers): the system matrix
-    ``[[A, B], [C, 0]]`` is written once (:func:`toolbox._lti._balanced_blocks`)."""
+    ``[[A, B], [C, 0]]`` is written once (:func:`toolbox._lti.balanced_blocks`)."""
     A1, B1, C1, D1 = first
     A2, B2, C2, D2 = second
     n1, n = A1.shape[0], A1.shape[0] + A2.shape[0]
@@ -467,7 +466,7 @@ def _balanced_series(first: tuple,
     M = np.zeros((n + 1, n + 1))
     M[:n1, :n1], M[n1:n, n1:n], M[n1:n, :n1] = A1, A2, B2 * C1
     M[:n1, n:], M[n1:n, n:], M[n:, :n1], M[n:, n1:n] = B1, B2 * d1, d2 * C1, C2
-    return (*_balanced_blocks(M), d2 * d1)
+    return (*balanced_blocks(M), d2 * d1)
 
 
 def _imag_axis_zeros(lam: list[complex]) -> list[float]:
@@ -503,16 +502,14 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
     Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
     Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = minus_A, minus_b, -c
-    E = _leading_identity(2 * n + 1, 2 * n + 1, 2 * n)
-    return (_imag_axis_zeros(_pencil_eigval_list(Mg, E)),
-            _imag_axis_zeros(_pencil_eigval_list(Mp, E)))
+    E = np.diag([1.0] * (2 * n) + [0.0])
+    return (_imag_axis_zeros(pencil_eigvals(Mg, E)),
+            _imag_axis_zeros(pencil_eigvals(Mp, E)))
 
 
 def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
               w: list[float]) -> list[complex]:
-    """``L(jw)`` at a few frequencies (one LU solve each, :func:`toolbox._lti._solve`:
-    numpy's batched ``solve`` costs ~10 us of dispatch for the one or two
-    crossings here)."""
+    """``L(jw)`` at a few frequencies (one LU solve each)."""
     if not w:
         return []
     n = A.shape[0]
@@ -522,7 +519,7 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
     for wi in w:
         M = minus_A.copy()
         M.reshape(-1)[::n + 1] += 1j * wi               # the diagonal (a view: M is contiguous)
-        out.append(complex(c @ _solve(M, Bc)[:, 0]) + d)
+        out.append(complex(c @ np.linalg.solve(M, Bc)[:, 0]) + d)
     return out
 
 
@@ -565,12 +562,12 @@ def _margins(g: tuple, k: tuple) -> tuple[LoopMargins, np.ndarray, float]:
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
     fB = f * B
     Acl = A - fB @ C
-    peak, w_peak = _linf_peak(Acl, fB, -f * C, np.array([[f]]))
-    poles = _eigvals(Acl)
-    if any(abs(z) < 1e-12 for z in _eigvals(A).tolist()):   # an integrator: no static error
+    peak, w_peak = linf_peak(Acl, fB, -f * C, np.array([[f]]))
+    poles = np.linalg.eigvals(Acl)
+    if any(abs(z) < 1e-12 for z in np.linalg.eigvals(A).tolist()):   # an integrator: no static error
         ess = 0.0
     else:
-        ess = float(abs(1.0 / (1.0 + d - float((C @ _solve(A, B))[0, 0]))))
+        ess = float(abs(1.0 / (1.0 + d - float((C @ np.linalg.solve(A, B))[0, 0]))))
     return LoopMargins(gm_db, w_gm, pm, w_pm, 1.0 / peak, ess), poles, w_peak
 
 

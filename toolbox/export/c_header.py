@@ -86,7 +86,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import _zeros
+from .._lti import invariant_zeros as _zeros
 from ..errors import CctError, ExportRefused, SpecError
 from . import _fixed, _vendor
 from ._minimal import MinimalLaw, minimal_law
