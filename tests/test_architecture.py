@@ -52,13 +52,22 @@ def _owner_of_private(target: str, root: Path = PACKAGE) -> str | None:
 
     A private module ``toolbox.x._m`` belongs to ``toolbox.x``; a private name
     ``_n`` of a module ``toolbox.x.m`` belongs to the module's package
-    ``toolbox.x`` too (siblings in one package may share helpers).
+    ``toolbox.x`` too (siblings in one package may share helpers). The root
+    package's modules (``toolbox._lti``, ``toolbox._io``, ...) serve every
+    package through their public names: a private name of one of them
+    belongs to that module alone (otherwise every package would be its
+    sibling and no reach-in into them would ever be flagged).
     """
     parts = target.split(".")
     if parts[0] != "toolbox":
         return None
     for i, part in enumerate(parts[1:], start=1):
         if part.startswith("_") and not part.startswith("__"):
+            root_module = root.joinpath(parts[1] + ".py").is_file()
+            name_private = i == 2 or (len(parts) > 2 and parts[2].startswith("_")
+                                      and not parts[2].startswith("__"))
+            if root_module and name_private:
+                return ".".join(parts[:2])        # toolbox._m._n, toolbox.m._n: the module's
             prefix = parts[:i]
             is_package = root.parent.joinpath(*prefix).is_dir()
             return ".".join(prefix if is_package else prefix[:-1])
@@ -100,12 +109,14 @@ def test_no_private_reach_ins():
      "toolbox.analysis.margins._electrical_max_speed"),
     ("import toolbox.design._common\n", "toolbox.design._common"),
     ("from toolbox.design import _hinf_riccati as H\n", "toolbox.design._hinf_riccati"),
+    ("from .._lti import _zeros\n", "toolbox._lti._zeros"),
 ])
 def test_checker_catches_reach_ins(tmp_path, source, expected):
     """The checker flags the reach-ins issue 11 item 8 removed (so it can fail)."""
     root = tmp_path / "toolbox"
     for sub in ("export", "spec", "analysis", "design"):
         (root / sub).mkdir(parents=True)
+    (root / "_lti.py").write_text("")
     f = root / "export" / "c_header.py"
     f.write_text(source)
     (line, target), = _imports(f, root)

@@ -108,8 +108,10 @@ def test_design_analysis_and_report_equations_need_no_sympy_or_cvxpy(tmp_path):
 
 
 #: Not on the path of ``cct design`` (issue 13): python-control and what it
-#: pulls in (scipy.signal, matplotlib.pyplot, slycot), and cvxpy.
-NOT_ON_DESIGN_PATH = ("control", "scipy.signal", "matplotlib", "slycot", "cvxpy")
+#: pulls in (scipy.signal, matplotlib.pyplot), and cvxpy. slycot is: the
+#: H-infinity design computes its norms with SLICOT ab13dd (~15 ms to import
+#: after numpy and scipy, toolbox/ARCHITECTURE.md "H-infinity numerics").
+NOT_ON_DESIGN_PATH = ("control", "scipy.signal", "matplotlib", "cvxpy")
 #: Every design of designs/ (H-infinity included) is made without python-control.
 DESIGNS = tuple(sorted(p.stem for p in
                        (Path(__file__).resolve().parents[1] / "designs").glob("*.toml")))

@@ -25,9 +25,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
-from math import hypot, inf, log, nan
+from math import hypot, inf
 from sys import modules as sys_modules
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import scipy.linalg
@@ -37,7 +37,10 @@ from scipy.linalg.lapack import (dgebal as _dgebal, dgeev as _dgeev,
 
 __all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d",
            "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
-           "linf_norm", "C2D_METHODS"]
+           "linf_norm", "linf_peak", "invariant_zeros", "pencil_eigvals", "balanced",
+           "balanced_blocks", "balanced_companion", "state_scaling", "diagonal_scaling",
+           "modal_form", "minreal_coeffs", "trimmed_coeffs", "poly_roots", "spectral_norm",
+           "C2D_METHODS"]
 
 #: Discretisation methods of :func:`c2d` (python-control / scipy names); the
 #: generalised bilinear transform of each is ``_GBT_ALPHA``.
@@ -81,7 +84,7 @@ def balanced(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, .
     return A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
 
 
-def _balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A, B, C of the SISO system matrix ``M = [[A, B], [C, 0]]`` in the
     coordinates of :func:`balanced` (the same powers of two, so the same
     numbers), as views of one scaled copy of ``M``: for a caller that wrote
@@ -96,14 +99,14 @@ def _balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return M[:n, :n], M[:n, n:], M[n:, :n]
 
 
-def _balanced_companion(num: list[float], den: list[float]) -> tuple[np.ndarray, ...]:
+def balanced_companion(num: list[float], den: list[float]) -> tuple[np.ndarray, ...]:
     """A, B, C, D of :func:`tf2ss`'s controllable canonical form of the proper
     ``num/den`` (trimmed Python floats, ``den[0] != 0``) in the coordinates of
     :func:`balanced`: the same numbers as ``balanced(*tf2ss(num, den)[:3])``,
     with the system matrix ``[[A, B], [C, 0]]`` written once from the
     coefficients (``-den[1:]`` on A's first row, ones below its diagonal,
     ``B = e1``, ``C = num[1:] - num[0] den[1:]``, normalised by ``den[0]``) and
-    scaled by :func:`_balanced_blocks`. A, B, C are views of that matrix."""
+    scaled by :func:`balanced_blocks`. A, B, C are views of that matrix."""
     n, d0 = len(den) - 1, den[0]
     num = [v / d0 for v in [0.0] * (n + 1 - len(num)) + num]
     den = [v / d0 for v in den]
@@ -113,7 +116,7 @@ def _balanced_companion(num: list[float], den: list[float]) -> tuple[np.ndarray,
         M.reshape(-1)[n + 1:n * (n + 1):n + 2] = 1.0     # A's subdiagonal
         M[0, n] = 1.0
         M[n, :n] = [u - num[0] * v for u, v in zip(num[1:], den[1:])]
-    return (*_balanced_blocks(M), np.array([[num[0]]]))
+    return (*balanced_blocks(M), np.array([[num[0]]]))
 
 
 def modal_form(A: np.ndarray, B: np.ndarray,
@@ -224,7 +227,7 @@ def _eigvals(A: np.ndarray) -> np.ndarray:
     return wr + 1j * wi
 
 
-def _pencil_eigval_list(M: np.ndarray, N: np.ndarray) -> list[complex]:
+def pencil_eigvals(M: np.ndarray, N: np.ndarray) -> list[complex]:
     """Finite generalised eigenvalues of (M, N) (LAPACK dggev; the infinite
     ones, |beta| <= 1e-13 |alpha|, are dropped) as Python numbers (a pencil of a small system
     has a dozen eigenvalues: scalar code beats the nine array operations of
@@ -244,14 +247,14 @@ def _pencil_eigval_list(M: np.ndarray, N: np.ndarray) -> list[complex]:
     return out
 
 
-def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
+def invariant_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
     """Invariant zeros of a SISO system: the finite eigenvalues of the system
     pencil ``([A B; C D], diag(I, 0))`` (QZ), after a power-of-two diagonal
     scaling of its states (exact, :func:`balanced`: one input and one output)
     that evens the entries of controllers spanning many decades; the infinite
     eigenvalues (relative degree) are dropped."""
     if B.shape[1] != 1 or C.shape[0] != 1:
-        raise ValueError(f"_zeros: a SISO system expected, got {C.shape[0]} outputs and "
+        raise ValueError(f"invariant_zeros: a SISO system expected, got {C.shape[0]} outputs and "
                          f"{B.shape[1]} inputs")
     n = A.shape[0]
     if n == 0:
@@ -259,7 +262,7 @@ def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.nda
     A, B, C = balanced(A, B, C)
     M = np.zeros((n + C.shape[0], n + B.shape[1]))
     M[:n, :n], M[:n, n:], M[n:, :n], M[n:, n:] = A, B, C, D
-    return np.array(_pencil_eigval_list(M, _leading_identity(*M.shape, n)), complex)
+    return np.array(pencil_eigvals(M, _leading_identity(*M.shape, n)), complex)
 
 
 def _matrix(value: Any, name: str) -> np.ndarray:
@@ -362,11 +365,11 @@ class StateSpace:
 
     @cached_property
     def _poles_zeros(self) -> tuple[np.ndarray, np.ndarray]:
-        """Poles (dgeev) and invariant zeros (:func:`_zeros`) of a SISO system,
+        """Poles (dgeev) and invariant zeros (:func:`invariant_zeros`) of a SISO system,
         computed once:
         the H-infinity synthesis tests its controller's fastest pole with them
         and the order reduction starts from the same zeros and poles (issue 13)."""
-        return _eigvals(self.A), _zeros(self.A, self.B, self.C, self.D)
+        return _eigvals(self.A), invariant_zeros(self.A, self.B, self.C, self.D)
 
     @cached_property
     def _zpk(self) -> tuple[np.ndarray, np.ndarray, float]:
@@ -579,7 +582,7 @@ def feedback(plant: Any, other: Any = 1.0, sign: int = -1) -> StateSpace:
 
 
 # -- transfer functions -------------------------------------------------------
-def _trimmed(coeffs: Any) -> list[float]:
+def trimmed_coeffs(coeffs: Any) -> list[float]:
     """The coefficients of a polynomial as Python floats without leading zeros
     (zero -> ``[0.0]``): the small transfer functions of a design need no array."""
     p = np.asarray(coeffs, dtype=float).reshape(-1).tolist()
@@ -588,11 +591,11 @@ def _trimmed(coeffs: Any) -> list[float]:
 
 
 def _poly(coeffs: Any) -> np.ndarray:
-    """:func:`_trimmed` as a fresh 1-D float array."""
-    return np.array(_trimmed(coeffs))
+    """:func:`trimmed_coeffs` as a fresh 1-D float array."""
+    return np.array(trimmed_coeffs(coeffs))
 
 
-def _roots(p: np.ndarray) -> np.ndarray:
+def poly_roots(p: np.ndarray) -> np.ndarray:
     """Roots of a trimmed polynomial; a first-order one without ``np.roots``'s
     companion-matrix eigenvalues (weights are mostly first-order)."""
     if p.size <= 1:
@@ -607,7 +610,7 @@ def _roots(p: np.ndarray) -> np.ndarray:
 _CANCEL_TOL = float(np.sqrt(np.finfo(float).eps))
 
 
-def _minreal_coeffs(num: np.ndarray, den: np.ndarray,
+def minreal_coeffs(num: np.ndarray, den: np.ndarray,
                     tol: float = _CANCEL_TOL) -> tuple[np.ndarray, np.ndarray]:
     """:meth:`TransferFunction.minreal` on trimmed coefficients: the same
     ``num`` and ``den`` objects when nothing cancels, else new trimmed ones
@@ -617,10 +620,10 @@ def _minreal_coeffs(num: np.ndarray, den: np.ndarray,
         return num, den                        # no zero or no pole: nothing to cancel
     if num.size == 2 and den.size == 2:        # one zero, one pole (most weights): scalars
         (n0, n1), (d0, d1) = num.tolist(), den.tolist()
-        z, p = -n1 / n0, -d1 / d0               # the roots _roots gives, as floats
+        z, p = -n1 / n0, -d1 / d0               # the roots poly_roots gives, as floats
         return (num[:1], den[:1]) if abs(p - z) <= tol * max(1.0, abs(z)) else (num, den)
-    zeros = list(_roots(num)) if num.any() else []
-    poles = list(_roots(den))
+    zeros = list(poly_roots(num)) if num.any() else []
+    poles = list(poly_roots(den))
     kept = []
     for z in zeros:
         near = [i for i, p in enumerate(poles) if abs(p - z) <= tol * max(1.0, abs(z))]
@@ -809,11 +812,11 @@ class TransferFunction:
 
     def poles(self) -> np.ndarray:
         """Roots of the denominator."""
-        return _roots(self.den)
+        return poly_roots(self.den)
 
     def zeros(self) -> np.ndarray:
         """Roots of the numerator (none for a constant or zero numerator)."""
-        return _roots(self.num) if self.num.any() else np.zeros(0, complex)
+        return poly_roots(self.num) if self.num.any() else np.zeros(0, complex)
 
     def __call__(self, x: Any) -> Any:
         """``num(x) / den(x)`` at complex point(s) ``x`` (scalar or array)."""
@@ -863,7 +866,7 @@ class TransferFunction:
         """Cancel the poles and zeros closer than ``tol max(1, |z|)`` (the
         rule of python-control's transfer-function ``minreal``); unchanged
         coefficients when nothing cancels (roots are not re-expanded)."""
-        num, den = _minreal_coeffs(self.num, self.den, tol)
+        num, den = minreal_coeffs(self.num, self.den, tol)
         return self if num is self.num else TransferFunction(num, den)
 
     def to_statespace(self) -> StateSpace:
@@ -918,9 +921,9 @@ def c2d(sys: Any, dt: float, method: str = "zoh") -> StateSpace:
 
     ``method`` is ``zoh``, ``foh`` or a generalised bilinear transform
     (``tustin``/``bilinear``, ``euler``/``forward_diff``, ``backward_diff``).
-    The arithmetic is that of ``scipy.signal.cont2discrete`` (same operations
-    in the same order), so results equal ``control.sample_system`` without
-    pre-warping to the last bit.
+    The formulas of ``scipy.signal.cont2discrete`` (``control.sample_system``
+    without pre-warping), with numpy's solves for the bilinear transforms:
+    the same numbers within rounding (``tests/test_lti.py``).
     """
     g = as_statespace(sys)
     if g.discrete:
@@ -941,9 +944,10 @@ def c2d(sys: Any, dt: float, method: str = "zoh") -> StateSpace:
     if method in _GBT_ALPHA:
         alpha = _GBT_ALPHA[method]
         ima = np.eye(n) - alpha * dt * a
-        ad = scipy.linalg.solve(ima, np.eye(n) + (1.0 - alpha) * dt * a)
-        bd = scipy.linalg.solve(ima, dt * b)
-        cd = scipy.linalg.solve(ima.transpose(), c.transpose()).transpose()
+        # numpy's solve: scipy 1.17's batched one costs 0.1-4 ms a call here
+        ad = np.linalg.solve(ima, np.eye(n) + (1.0 - alpha) * dt * a)
+        bd = np.linalg.solve(ima, dt * b)
+        cd = np.linalg.solve(ima.transpose(), c.transpose()).transpose()
         return StateSpace(ad, bd, cd, d + alpha * np.dot(c, bd), dt)
     raise ValueError(f"c2d: unknown method {method!r}; one of {list(C2D_METHODS)}")
 
@@ -1041,257 +1045,36 @@ def minreal(sys: Any, tol: float | None = None) -> StateSpace:
 
 
 # -- norms ---------------------------------------------------------------------
-def _gain_function(A: np.ndarray, B: np.ndarray, C: np.ndarray,
-                   D: np.ndarray) -> tuple[np.ndarray, Callable[[list[float]], list[float]]]:
-    """Eigenvalues of A and ``w -> sigma_max(G(j w))`` (a few frequencies in,
-    their gains out, as Python lists: the norm's searches fit parabolas to
-    them in scalar code).
-
-    The modal sum of :attr:`StateSpace.modal` while A's eigenvectors are well
-    conditioned, else a stacked LU solve (:meth:`StateSpace.freqresp`). A
-    single row or column needs no SVD: its largest singular value is its
-    2-norm.
-    """
-    modal = modal_form(A, B, C)
-    if modal is None:
-        g = StateSpace(A, B, C, D)
-        return (_eigvals(A),
-                lambda w: _largest_sv(np.moveaxis(g.freqresp(w), -1, 0)).tolist())
-    lam, R = modal
-    p, m = D.shape
-    if p == m == 1:
-        return lam, _modal_gains(R[0, 0].tolist(), lam.tolist(), float(D[0, 0]))
-    col = lam[:, None]
-    if p == 1 or m == 1:                             # residues of the entries (p m, n)
-        Rv, d = R.reshape(p * m, -1), D.reshape(-1, 1)
-        return lam, lambda w: np.sqrt(
-            (np.abs(Rv @ (1.0 / (1j * np.array(w) - col)) + d) ** 2).sum(0)).tolist()
-    return lam, lambda w: _largest_sv(
-        np.einsum("pmk,kN->Npm", R, 1.0 / (1j * np.array(w) - col)) + D).tolist()
-
-
-def _modal_gains(r: list[complex], lam: list[complex],
-                 d: float) -> Callable[[list[float]], list[float]]:
-    """``w -> |sum_k r_k / (j w - lam_k) + d|`` at a few frequencies, in
-    Python numbers: the norm's searches ask for one to six points at a time,
-    where scalar code beats the array calls of a vectorised sum (~2 us
-    against ~4 us for three points of a 5-state loop). The same sum as
-    numpy's, rounded in another order (within a few units of the last place
-    of the sum's terms)."""
-    terms = list(zip(r, lam))
-
-    def gains(w: list[float]) -> list[float]:
-        out = []
-        for x in w:
-            s, g = complex(0.0, x), 0j
-            for rk, lk in terms:
-                g += rk / (s - lk)
-            out.append(abs(g + d))
-        return out
-
-    return gains
-
-
-def _largest_sv(G: np.ndarray) -> np.ndarray:
-    """Largest singular value of each matrix of the stack ``G`` (N, p, m)."""
-    return np.linalg.svd(G, compute_uv=False)[:, 0]
-
-
-def _refined_peak(gains: Callable[[list[float]], list[float]], crossings: list[float],
-                  tol: float) -> tuple[float, float]:
-    """Largest gain found in the bands between consecutive ``crossings`` (sorted
-    frequencies) by successive parabolas in log w, and its frequency.
-
-    Each band starts at its geometric mean (SLICOT ab13dd's point) with
-    half-width a quarter of the band; each step fits the parabola through
-    the gains at the centre and at its two neighbours, moves to its vertex
-    and shrinks the spacing a hundredfold (the vertex error falls with the
-    square of the spacing). Once the parabolas promise less than ``tol``
-    (relative) above the gains found, the gains at their vertices end the
-    search (far closer to the peaks than ``tol``): the next Hamiltonian then
-    usually certifies the peak at once instead of narrowing the band down
-    (one eigenvalue problem saved). The bands are few (one per local
-    peak above the level): the fits are scalar arithmetic, and one call of
-    ``gains`` (Python lists in and out) per step serves all bands.
-    """
-    bands = [(log(max(a, 1e-6 * b)), log(b))        # 1e-6: a crossing at w = 0
-             for a, b in zip(crossings[:-1], crossings[1:]) if b > 0.0]
-    if not bands:                                    # the crossings are all at w = 0
-        return 0.0, nan
-    x = [0.5 * (a + b) for a, b in bands]
-    h = [0.125 * (b - a) for a, b in bands]
-    best = (0.0, nan)
-    for _ in range(4):                               # spacing 1e-6 of the first: converged
-        w = np.exp([v for c, d in zip(x, h) for v in (c - d, c, c + d)]).tolist()
-        y = gains(w)
-        best = max(best, *zip(y, w))
-        promise = best[0]
-        for i, (a, b) in enumerate(bands):
-            y0, y1, y2 = y[3 * i:3 * i + 3]
-            curv, slope = y0 - 2.0 * y1 + y2, y0 - y2
-            if curv < 0.0:                           # else the peak is at an edge (next Hamiltonian)
-                promise = max(promise, y1 - 0.125 * slope * slope / curv)
-                x[i] = min(max(x[i] + 0.5 * h[i] * slope / curv, a), b)
-        if promise <= best[0] * (1.0 + tol):
-            w = np.exp(x).tolist()
-            return max(best, *zip(gains(w), w))
-        h = [0.01 * d for d in h]
-    return best
-
-
-def _hamiltonian(A: np.ndarray, B: np.ndarray, C: np.ndarray,
-                 D: np.ndarray) -> Callable[[float], list[float]]:
-    """``level -> `` the sorted frequencies ``w >= 0`` where a singular value
-    of ``G(j w)`` equals ``level``: the imaginary eigenvalues of the
-    Hamiltonian of the Bounded Real Lemma (``level`` above ``sigma_max(D)``)
-
-        H = [[F, -g B R^-1 B'], [g C' S^-1 C, -F']],  F = A - B R^-1 D' C,
-        R = D'D - g^2 I,  S = D D' - g^2 I.
-
-    With the SVD ``D = U Sigma V'`` (once), ``R^-1`` and ``S^-1`` are
-    diagonal in the rotated ``b_i`` (columns of ``B V``) and ``c_i`` (rows of
-    ``U' C``), so ``H = blkdiag(A, -A') + X' diag(coef(g)) Y``, a sum of
-    fixed rank-one terms ``x_i y_i'`` with scalar coefficients (``s_i = 0``
-    past the singular values of D):
-    ``[-b_i; 0][c_i; 0]'`` and ``[0; c_i][0; b_i]'`` with ``s_i/(s_i^2 - g^2)``,
-    ``[b_i; 0][0; -b_i]'`` with ``g/(s_i^2 - g^2)`` and ``[0; c_j][c_j; 0]'``
-    with ``g/(s_j^2 - g^2)``. Each level costs one product and one real
-    ``dgeev``; and a level just above ``sigma_max(D)`` (the first lower bound
-    is often ``||D||``) scales one exact rank-one term instead of going
-    through a solve with a nearly singular R, which lost the crossings.
-    """
-    n, m, p = A.shape[0], B.shape[1], C.shape[0]
-    if D.shape == (1, 1):
-        # SISO: the SVD by hand, D = sign(d) |d| 1, so B V = B and U' C = sign(d) C
-        # exactly (products by +-1)
-        d = float(D[0, 0])
-        s, Bv, Cu = np.array([abs(d)]), B.T, -C if d < 0 else C
-    else:
-        U, s, Vt = _svd(D)
-        Bv, Cu = (B @ Vt.T).T, U.T @ C
-    k = s.size
-    X, Y = np.zeros((2 * k + m + p, 2 * n)), np.zeros((2 * k + m + p, 2 * n))
-    X[:k, :n], Y[:k, :n] = -Bv[:k], Cu[:k]
-    X[k:2 * k, n:], Y[k:2 * k, n:] = Cu[:k], Bv[:k]
-    X[2 * k:2 * k + m, :n], Y[2 * k:2 * k + m, n:] = Bv, -Bv
-    X[2 * k + m:, n:], Y[2 * k + m:, :n] = Cu, Cu
-    # the coefficients' parts as scalars (a few: scalar code beats four array
-    # operations per level): s_i^2 of each term (0 past the k singular values)
-    # and the fixed numerators s_i of the first 2 k (the others are g)
-    sq = (s * s).tolist()
-    s2, fixed = sq * 3 + [0.0] * (m - k) + sq + [0.0] * (p - k), s.tolist() * 2
-    H0 = np.zeros((2 * n, 2 * n))
-    H0[:n, :n], H0[n:, n:] = A, -A.T
-    XT = X.T
-
-    def crossings(level: float) -> list[float]:
-        g2 = level * level
-        coef = [f / (q - g2) for f, q in zip(fixed, s2)] + [level / (q - g2) for q in s2[2 * k:]]
-        H = H0 + (XT * np.array(coef)) @ Y
-        # H' is Fortran-ordered (no copy) and has the eigenvalues of H
-        wr, wi, _, _, info = _dgeev(H.T, compute_vl=0, compute_vr=0, overwrite_a=1)
-        if info != 0:
-            raise np.linalg.LinAlgError(f"dgeev failed (info {info})")
-        # the eigenvalues are few (2 n): scalar code beats array calls here
-        wr, wi = wr.tolist(), wi.tolist()
-        tiny = 1e-8 * max(1.0, *map(hypot, wr, wi))
-        w = sorted(b for a, b in zip(wr, wi) if abs(a) <= tiny and b >= 0.0)
-        # a crossing at w = 0 is a double eigenvalue: keep it once
-        return w[1:] if len(w) > 1 and w[1] == 0.0 else w
-
-    return crossings
-
-
 def linf_norm(sys: Any, tol: float = 1e-10) -> float:
     """``sup_w sigma_max(G(j w))`` of a continuous system (L-infinity norm).
 
-    Bruinsma & Steinbuch (1990), "A fast algorithm to compute the
-    H-infinity-norm of a transfer function matrix", the algorithm of SLICOT
-    ``ab13dd``: a lower bound ``g`` from the response at 0, at the poles'
-    moduli and at infinity; then, while the Hamiltonian of level
-    ``(1 + 2 tol) g`` has imaginary eigenvalues ``j w_i``, ``g`` becomes the
-    largest response between consecutive ``w_i`` (:func:`_refined_peak`). The result is a
-    response actually attained, within ``2 tol`` (relative) of the norm.
-    Unstable systems are allowed (the norm on the axis); a pole on the
-    imaginary axis gives ``inf``.
+    SLICOT ``ab13dd`` through slycot (Bruinsma & Steinbuch 1990, the routine
+    behind python-control's ``norm``; states equilibrated first), imported on
+    first use. Unstable systems are allowed (the norm on the imaginary axis);
+    a pole on the imaginary axis gives ``inf``. ``tol``: ab13dd's relative
+    accuracy.
     """
     g = as_statespace(sys)
-    return _linf_norm(g.A, g.B, g.C, g.D, tol)[0]
+    return linf_peak(g.A, g.B, g.C, g.D, tol)[0]
 
 
-def _linf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
-               tol: float = 1e-10, band: tuple[float, float] | None = None,
-               peak_at_zero: bool = False) -> tuple[float, float, np.ndarray]:
-    """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` (no system
-    object built: the synthesis calls it on arrays it has just formed), a
-    frequency where the response attains it (inf for ``sigma_max(D)``, nan for
-    a zero or infinite norm) and the eigenvalues of ``A`` it computed on the
-    way (a caller testing the stability of A needs no second eigenvalue
-    problem).
+def linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+               tol: float = 1e-10) -> tuple[float, float]:
+    """:func:`linf_norm` of the float realisation ``(A, B, C, D)`` and a
+    frequency (rad/s) where the response attains it (ab13dd's ``fpeak``;
+    ``inf`` for a norm reached only as w -> inf)."""
+    n = A.shape[0]
+    if n == 0 or D.size == 0:
+        return spectral_norm(D), inf
+    from slycot import ab13dd
 
-    ``band``: frequencies ``(lo, hi)`` expected to bracket the peak (e.g.
-    around the peak of a nearby system: the loop before a controller
-    reduction). The peak found in it (:func:`_refined_peak`) joins the first
-    lower bound, so that the first Hamiltonian usually certifies it at once
-    (one eigenvalue problem and one band search saved); a wrong band costs
-    that search and changes nothing else: the Hamiltonian test at
-    ``(1 + 2 tol)`` times the bound stays the stopping rule.
-
-    ``peak_at_zero``: the peak is expected at w = 0 (a mixed-sensitivity
-    closed loop whose w1 nearly integrates). The steady-state gain
-    ``D - C A^-1 B``, by one LU solve, is then the first lower bound, tested
-    by the first Hamiltonian before anything else: when it certifies it, no
-    modal form (eigenvectors, ~25 us of the ~90 us) is computed and the
-    poles come from dgeev without vectors. The solve is also the accurate
-    value there (paper 003's d-axis loop: 1.5e-11 relative from a 50-digit
-    evaluation, where the modal sum lost 4e-7). Otherwise the usual lower
-    bound and the peaks between that Hamiltonian's crossings join it, and
-    the search goes on as without it.
-    """
-    dnorm = _spectral_norm(D)
-    if A.shape[0] == 0 or D.size == 0:
-        return dnorm, inf, _eigvals(A)
-    best, first, crossings = (dnorm, inf), [], None
-    if peak_at_zero:
-        poles = _eigvals(A)
-        if _on_axis(poles.tolist()):
-            return inf, nan, poles
-        best = max(best, (_gain_at(A, B, C, D, 0.0), 0.0))
-        if best[0] > 0.0:
-            crossings = _hamiltonian(A, B, C, D)
-            first = crossings((1.0 + 2.0 * tol) * best[0])
-            # crossings next to a flat peak at 0 may be spurious (the Hamiltonian's
-            # eigenvalue pair near 0 is ill-conditioned): the bound stands when the
-            # response between them is below it, the test of the loop below
-            if len(first) < 2 or all(
-                    _gain_at(A, B, C, D, (max(a, 1e-6 * b) * b) ** 0.5) <= best[0]
-                    for a, b in zip(first[:-1], first[1:])):
-                return best[0], best[1], poles
-    poles, gains = _gain_function(A, B, C, D)
-    lam = poles.tolist()                             # a few: scalar code is cheaper
-    if _on_axis(lam):
-        return inf, nan, poles
-    w = [0.0] + [abs(z) for z in lam]
-    best = max(best, *zip(gains(w), w))
-    if band is not None and 0.0 < band[0] < band[1] < inf:
-        best = max(best, _refined_peak(gains, list(band), tol))
-    if first:                                        # the crossings above the gain at 0
-        best = max(best, _refined_peak(gains, first, tol))
-    if best[0] == 0.0:
-        return 0.0, nan, poles
-    crossings = crossings or _hamiltonian(A, B, C, D)
-    for _ in range(100):
-        w = crossings((1.0 + 2.0 * tol) * best[0])
-        if len(w) < 2:
-            break
-        peak = _refined_peak(gains, w, tol)
-        if peak[0] <= best[0]:
-            break
-        best = peak
-    return best[0], best[1], poles
+    A, B, C, D = (np.array(m, dtype=float, order="F") for m in (A, B, C, D))
+    gpeak, fpeak = ab13dd("C", "I", "S", "D", n, B.shape[1], C.shape[0], A,
+                          np.eye(n), B, C, D, tol)
+    return float(gpeak), float(fpeak)
 
 
-def _spectral_norm(M: np.ndarray) -> float:
+def spectral_norm(M: np.ndarray) -> float:
     """Largest singular value of a matrix (0 when empty); a row or column is
     its 2-norm, a scalar its modulus."""
     if M.shape == (1, 1):
@@ -1300,17 +1083,3 @@ def _spectral_norm(M: np.ndarray) -> float:
         sq = M * M if M.dtype.kind == "f" else M.real * M.real + M.imag * M.imag
         return float(np.sqrt(sq.sum()))
     return float(np.linalg.norm(M, 2)) if M.size else 0.0
-
-
-def _gain_at(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, w: float) -> float:
-    """``sigma_max(G(j w))`` by one LU solve (real at w = 0); inf on a pole."""
-    try:
-        G = D - C @ _solve(A, B) if w == 0.0 else C @ _solve(1j * w * _identity(A.shape[0]) - A, B) + D
-    except np.linalg.LinAlgError:
-        return inf
-    return _spectral_norm(G)
-
-
-def _on_axis(poles: list[complex]) -> bool:
-    """A pole within 1e-12 (relative) of the imaginary axis: an infinite norm."""
-    return any(abs(z.real) <= 1e-12 * max(1.0, abs(z)) for z in poles)

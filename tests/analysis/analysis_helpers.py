@@ -3,7 +3,7 @@
 * PI by pole-zero cancellation: Kp = L wc, Ki = R wc (paper 000 sect. 2 / 002 eq 19-20);
 * total compensation without integrators (paper 000 eq 11): v = L K (i_ref - i) + R i
   (+ decoupling and EMF compensation), a two-input law;
-* paper 003 central H-infinity controllers at gamma = 1 (eq 68, 70) from toolbox/design/_hinf_riccati.py.
+* paper 003 central H-infinity controllers at gamma = 1 (eq 68, 70) from toolbox/design/_hinf_riccati.py (Theorem 2).
 Motor: paper 003 sect. 6 (amplitude-invariant), Ts = 1e-4 s, one period of delay.
 """
 import control as ct
@@ -11,7 +11,7 @@ import numpy as np
 from toolbox.artifact import (AxisController, AxisWeights, ControllerArtifact, Decoupling,
                               TransferFunctionData)
 from toolbox.spec import Motor, Drive
-from toolbox.design import _hinf_riccati as H
+from toolbox.design import _hinf_plant as HP, _hinf_riccati as HR
 from toolbox._lti import TransferFunction
 from toolbox.design._weights import weight_from_tf
 
@@ -44,7 +44,7 @@ def hinf_artifact(Ts=1e-4, d=1):
                weight_from_tf([25, 25e3], [1, 5e4]), weight_from_tf([1e4, 1e4 * 577.3503], [1, 1.1547e7]))}
     ax, weights = {}, {}
     for n, (G, w1, w2, w3) in W.items():
-        K = H.central_controller(H.augment_mixed_sensitivity(G, w1, w2, w3), 1.0).to_control()
+        K = HR.central_controller(HP.augment_mixed_sensitivity(G, w1, w2, w3), 1.0).to_control()
         ax[n] = AxisController.from_error_controller(K, Ts)
         weights[n] = AxisWeights(1.0, _tf_data(w1), _tf_data(w2), _tf_data(w3))
     return art("hinf", ax, AZAIZ, Ts, d, weights=weights)

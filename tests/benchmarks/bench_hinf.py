@@ -57,7 +57,9 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 sys.path.insert(0, ROOT)
 
 from toolbox.design import hinf  # noqa: E402
-from toolbox.design._hinf_riccati import augment_mixed_sensitivity, central_controller, synthesize  # noqa: E402
+from toolbox.design._hinf_gamma import synthesize  # noqa: E402
+from toolbox.design._hinf_plant import augment_mixed_sensitivity  # noqa: E402
+from toolbox.design._hinf_riccati import central_controller  # noqa: E402
 from toolbox.design._reduction import reduce_controller  # noqa: E402
 from toolbox.spec import load_spec  # noqa: E402
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 import toolbox
-from toolbox.design import _hinf_riccati as H
+from toolbox.design import _hinf_gamma as HG
 from toolbox.errors import DesignInfeasible, SpecError
 
 DESIGNS = Path(__file__).parents[2] / "designs"
@@ -35,7 +35,7 @@ def test_axis_error_carries_condition_as_data():
     spec = hinf_spec(0.8)
     from toolbox.design.hinf import design_hinf_axis
     from toolbox.plant import axis_plants
-    with pytest.raises(H.GammaBelowOptimum) as info:
+    with pytest.raises(HG.GammaBelowOptimum) as info:
         design_hinf_axis(axis_plants(spec.motor)["q"], **spec.controller.cfg.weights["q"],
                          gamma=0.8, sample_time=spec.drive.sample_time, axis="q")
     err = info.value

@@ -223,7 +223,7 @@ def test_balanced_series_is_the_balanced_series_connection():
     """The loop's system matrix written once, balanced in one scaling: the
     numbers of the series connection and toolbox._lti.balanced, bit for bit."""
     from toolbox._lti import StateSpace, balanced, series
-    from toolbox.design._hinf_riccati import _ss_blocks
+    from toolbox.design._hinf_plant import _ss_blocks
     G = ct.tf([1.0], [2.8e-3, 0.6])
     K = 49.7 * (s + 214.3) * (s + 5e4) / (s * (s**2 + 4814 * s + 6.17e6))
     g, k = _ss_blocks(G), _ss_blocks(K)

@@ -73,13 +73,13 @@ def ip_tc_artifact() -> ControllerArtifact:
 
 
 def hinf_controller() -> ct.StateSpace:
-    from toolbox.design import _hinf_riccati as H
+    from toolbox.design import _hinf_plant as HP, _hinf_riccati as HR
     from toolbox.design._weights import weight_from_tf
     G = ct.tf([1], [2.8e-3, 0.6])                          # paper 003 eq (34)
     w1 = weight_from_tf([1 / 1.51, 177.3493 / 1.51], [1, 0.0117])   # eq (44)
     w2 = weight_from_tf([0.5e-3, 0.5], [2e-5, 1])                   # eq (45)
     w3 = weight_from_tf([1e4, 1e4 * 135.68], [1, 2.7135e6])         # eq (46)
-    return H.central_controller(H.augment_mixed_sensitivity(G, w1, w2, w3), 1.0).to_control()
+    return HR.central_controller(HP.augment_mixed_sensitivity(G, w1, w2, w3), 1.0).to_control()
 
 
 def hinf_artifact() -> ControllerArtifact:

@@ -17,7 +17,10 @@ import pytest
 import control as ct
 import slycot
 
-from toolbox.design import _hinf_riccati as H
+from toolbox.design import _hinf_bounds as HB
+from toolbox.design import _hinf_gamma as HG
+from toolbox.design import _hinf_plant as HP
+from toolbox.design import _hinf_riccati as HR
 from toolbox.design import _reduction as R
 from toolbox.design._weights import weight_from_tf
 from toolbox.errors import SpecError
@@ -60,7 +63,7 @@ def ctl(sys):
 
 def plant(axis):
     a = AXES[axis]
-    return H.augment_mixed_sensitivity(a["G"], a["w1"], a["w2"], a["w3"])
+    return HP.augment_mixed_sensitivity(a["G"], a["w1"], a["w2"], a["w3"])
 
 
 @pytest.fixture(scope="module", params=["q", "d"])
@@ -71,7 +74,7 @@ def axis(request):
 @pytest.fixture(scope="module")
 def K1():
     """Central controllers at gamma = 1 (sect. 3.3: 'Let gamma be chosen as 1')."""
-    return {ax: H.central_controller(plant(ax), 1.0) for ax in AXES}
+    return {ax: HR.central_controller(plant(ax), 1.0) for ax in AXES}
 
 
 def crossing(mag_fn, lo, hi):
@@ -129,7 +132,7 @@ def paper_plant_q(c1_12=117.4421, c1_34=-1e4 * (2.7135e6 - 135.68), a44=-2.7135e
                   [0, 0, -5e4, 0], [357.1428, 0, 0, a44]])
     C1 = np.array([[-236.5184, c1_12, 0, 0], [0, 0, -1225e3, 0],
                    [357.1429e4, 0, 0, c1_34]])
-    return H.PartitionedPlant(A=A, B1=[[0], [1], [0], [0]], B2=[[1], [0], [1], [0]], C1=C1,
+    return HP.PartitionedPlant(A=A, B1=[[0], [1], [0], [0]], B2=[[1], [0], [1], [0]], C1=C1,
                               C2=[[-357.1429, 0, 0, 0]], D11=[[0.6623], [0], [0]],
                               D12=[[0], [25], [0]], D21=[[1]], D22=[[0]])
 
@@ -189,8 +192,8 @@ def test_central_controller_meets_gamma_1(axis, K1):
     """||[w1 S; w2 KS; w3 T]||_inf < 1 (eq 40) recomputed by python-control, and
     each of (41)-(43) holds on a dense grid (Fig. 9-11)."""
     a = AXES[axis]
-    n = H.hinf_norm(H.closed_loop(plant(axis), K1[axis]))
-    b = H.weight_bound_check(a["G"], K1[axis], a["w1"], a["w2"], a["w3"])
+    n = HG.hinf_norm(HP.closed_loop(plant(axis), K1[axis]))
+    b = HB.weight_bound_check(a["G"], K1[axis], a["w1"], a["w2"], a["w3"])
     print(f"\n{axis}: ||Tzw|| = {n:.5f}; worst |S w1|={b['S'].worst_ratio:.3f} "
           f"|KS w2|={b['KS'].worst_ratio:.3f} |T w3|={b['T'].worst_ratio:.3f}")
     assert n < 1.0
@@ -305,7 +308,7 @@ def test_optimal_gamma_matches_sb10ad(axis):
     a = AXES[axis]
     _, _, info = ct.mixsyn(a["G"], *(a[w].to_control() for w in ("w1", "w2", "w3")))
     g_sl = float(info[0])
-    g_us = H.gamma_iteration(plant(axis), tol=1e-4)
+    g_us = HG.gamma_iteration(plant(axis), tol=1e-4)
     print(f"\n{axis}: gamma_opt ours {g_us:.6f}, sb10ad/mixsyn {g_sl:.6f}")
     assert g_us == pytest.approx(g_sl, rel=3e-4)
     assert g_us >= g_sl * (1 - 1e-4)
@@ -326,9 +329,9 @@ def test_mixsyn_fast_pole_and_our_backoff():
     fastest_mixsyn = float(np.max(np.abs(Km.poles())))
     assert info[0] == pytest.approx(0.952, abs=1e-3)
     assert fastest_mixsyn > 1e9
-    assert H.fastest_pole_modulus(Km) > H.pole_limit(TS)          # not realisable at 10 kHz
+    assert HG.fastest_pole_modulus(Km) > HG.pole_limit(TS)          # not realisable at 10 kHz
 
-    res = H.synthesize(plant("q"), "optimal", backoff=0.05, sample_time=TS)
+    res = HG.synthesize(plant("q"), "optimal", backoff=0.05, sample_time=TS)
     print(f"\nmixsyn: gamma {info[0]:.5f}, fastest pole {fastest_mixsyn:.3g} rad/s; ours: "
           f"gamma_opt {res.gamma_opt:.5f}, gamma {res.gamma:.5f} (backoff {res.backoff}), "
           f"fastest non-cancelled pole {res.fastest_pole:.4g} rad/s, limit {res.pole_limit:.4g}, "
@@ -337,21 +340,21 @@ def test_mixsyn_fast_pole_and_our_backoff():
     assert res.fastest_pole <= res.pole_limit
     assert res.gamma == pytest.approx((1 + res.backoff) * res.gamma_opt)
     assert res.closed_loop_norm <= res.gamma
-    b = H.weight_bound_check(a["G"], res.K, a["w1"], a["w2"], a["w3"])
+    b = HB.weight_bound_check(a["G"], res.K, a["w1"], a["w2"], a["w3"])
     assert all(v.worst_ratio <= (1 + res.backoff) * res.gamma_opt for v in b.values())
 
 
 def test_zero_backoff_is_increased_until_realisable():
     """With backoff = 0 the first design is at the optimum itself; the
     geometric back-off search must move away until the pole limit holds."""
-    res = H.synthesize(plant("q"), "optimal", backoff=0.0, sample_time=TS)
+    res = HG.synthesize(plant("q"), "optimal", backoff=0.0, sample_time=TS)
     assert res.backoff > 0 and res.fastest_pole <= res.pole_limit
 
 
 # ---------------------------------------------------------------- infeasible requests
 def test_gamma_below_optimum_names_condition_and_best():
     with pytest.raises(SpecError) as err:
-        H.synthesize(plant("q"), 0.9)
+        HG.synthesize(plant("q"), 0.9)
     text = str(err.value)
     assert err.value.key == "controller.hinf.gamma"
     assert "best achievable 0.95" in text
@@ -361,7 +364,7 @@ def test_gamma_below_optimum_names_condition_and_best():
 def test_w1_with_pole_at_zero_is_an_assumption_error():
     w1 = (1 / 1.51) * (s + 177.3493) / s
     with pytest.raises(SpecError, match="A1.*w1 has a pole at s = 0.*small negative value"):
-        H.synthesize(H.augment_mixed_sensitivity(AXES["q"]["G"], w1, AXES["q"]["w2"],
+        HG.synthesize(HP.augment_mixed_sensitivity(AXES["q"]["G"], w1, AXES["q"]["w2"],
                                                  AXES["q"]["w3"]), 1.0)
     with pytest.raises(SpecError, match="s = 0"):
         weight_from_tf([1, 177.3493], [1, 0], key="controller.hinf.weights.q.w1")

@@ -22,10 +22,9 @@ from typing import Any, Literal
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import (StateSpace, _balanced_blocks, _balanced_companion, _eigvals,
-                    _leading_identity, _linf_norm, _pencil_eigval_list, _solve, as_statespace,
-                    parallel, state_scaling)
-from ._hinf_riccati import _ss_blocks, _zpk
+from .._lti import (StateSpace, as_statespace, balanced_blocks, balanced_companion, linf_peak,
+                    parallel, pencil_eigvals, state_scaling)
+from ._hinf_plant import _ss_blocks, _zpk
 
 __all__ = [
     "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
@@ -47,7 +46,7 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
     (the controllable canonical form of :func:`toolbox._lti.tf2ss`) without its
     argument handling (~0.3 ms a call, issue 13), then the diagonal balancing
     of :func:`toolbox._lti.balanced`: the same numbers, from the polynomials'
-    coefficients as Python floats (:func:`toolbox._lti._balanced_companion`,
+    coefficients as Python floats (:func:`toolbox._lti.balanced_companion`,
     ~10 array calls instead of ~30)."""
     if p.size == 0:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(k)]])
@@ -56,7 +55,7 @@ def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray
     num = _poly_from_roots(_real_conj(z))
     if len(num) > n + 1:
         raise ValueError(f"improper transfer function ({len(num) - 1} zeros, {n} poles)")
-    A, B, C, D = _balanced_companion([float(k) * v for v in num], den)
+    A, B, C, D = balanced_companion([float(k) * v for v in num], den)
     return A.copy(), B.copy(), C.copy(), D
 
 
@@ -65,7 +64,7 @@ def _poly_from_roots(r: list[complex]) -> list[float]:
     conjugate-closed set (those of a real system, as :func:`_real_conj`
     leaves them): a linear factor per real root and the real quadratic
     ``s^2 - Re(x + y) s + Re(x y)`` per pair ``x, y`` (``y = conj(x)`` up to
-    rounding: the zeros from a QZ pencil, :func:`toolbox._lti._zeros`, differ
+    rounding: the zeros from a QZ pencil, :func:`toolbox._lti.invariant_zeros`, differ
     in the last bits; exact conjugates give ``-2 Re(x)`` and ``|x|^2``), in
     Python floats (a few roots: ~1 us where ``np.poly``'s ``np.convolve`` per
     root took ~4-8). As accurate as ``np.poly``'s complex products, whose
@@ -452,10 +451,6 @@ class LoopMargins:
 MARGIN_BAND = (1e-3, 1e8)
 #: a zero of the crossing function counts as imaginary when |Re| <= this * |zero|
 _IMAG_TOL = 1e-6
-#: half-width (a factor in w) of the band searched for the reduced loop's
-#: peak of |S| around the full loop's: a reduction keeping the margins moves
-#: it little (paper 003's q axis: by 4e-5, relative)
-_PEAK_BAND = 1.01
 
 
 def _balanced_series(first: tuple,
@@ -463,7 +458,7 @@ def _balanced_series(first: tuple,
     """A, B, C, d of ``second * first`` (SISO; the signal passes ``first``
     first), with A, B, C in the coordinates of :func:`toolbox._lti.balanced`
     (the same powers of two, so the same numbers): the system matrix
-    ``[[A, B], [C, 0]]`` is written once (:func:`toolbox._lti._balanced_blocks`)."""
+    ``[[A, B], [C, 0]]`` is written once (:func:`toolbox._lti.balanced_blocks`)."""
     A1, B1, C1, D1 = first
     A2, B2, C2, D2 = second
     n1, n = A1.shape[0], A1.shape[0] + A2.shape[0]
@@ -471,7 +466,7 @@ def _balanced_series(first: tuple,
     M = np.zeros((n + 1, n + 1))
     M[:n1, :n1], M[n1:n, n1:n], M[n1:n, :n1] = A1, A2, B2 * C1
     M[:n1, n:], M[n1:n, n:], M[n:, :n1], M[n:, n1:n] = B1, B2 * d1, d2 * C1, C2
-    return (*_balanced_blocks(M), d2 * d1)
+    return (*balanced_blocks(M), d2 * d1)
 
 
 def _imag_axis_zeros(lam: list[complex]) -> list[float]:
@@ -507,16 +502,14 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
     Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
     Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
     Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = minus_A, minus_b, -c
-    E = _leading_identity(2 * n + 1, 2 * n + 1, 2 * n)
-    return (_imag_axis_zeros(_pencil_eigval_list(Mg, E)),
-            _imag_axis_zeros(_pencil_eigval_list(Mp, E)))
+    E = np.diag([1.0] * (2 * n) + [0.0])
+    return (_imag_axis_zeros(pencil_eigvals(Mg, E)),
+            _imag_axis_zeros(pencil_eigvals(Mp, E)))
 
 
 def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
               w: list[float]) -> list[complex]:
-    """``L(jw)`` at a few frequencies (one LU solve each, :func:`toolbox._lti._solve`:
-    numpy's batched ``solve`` costs ~10 us of dispatch for the one or two
-    crossings here)."""
+    """``L(jw)`` at a few frequencies (one LU solve each)."""
     if not w:
         return []
     n = A.shape[0]
@@ -526,7 +519,7 @@ def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
     for wi in w:
         M = minus_A.copy()
         M.reshape(-1)[::n + 1] += 1j * wi               # the diagonal (a view: M is contiguous)
-        out.append(complex(c @ _solve(M, Bc)[:, 0]) + d)
+        out.append(complex(c @ np.linalg.solve(M, Bc)[:, 0]) + d)
     return out
 
 
@@ -539,10 +532,10 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     the rule of :func:`toolbox.analysis.frequency_margins` (python-control's:
     the crossing closest to instability), and
     ``M_m = 1/||S||_inf`` is the L-infinity norm of ``S = 1/(1 + L)``
-    (:func:`toolbox._lti.linf_norm`, Bruinsma-Steinbuch as SLICOT ab13dd,
-    relative tolerance 1e-10). The tests check the numbers
-    against :func:`toolbox.analysis.lti_loop_margins` (the toolbox's grid
-    route, 20000 points and refinement, ~20 times slower) and python-control.
+    (:func:`toolbox._lti.linf_norm`: SLICOT ab13dd, relative tolerance
+    1e-10). The tests check the numbers against
+    :func:`toolbox.analysis.lti_loop_margins` (the toolbox's grid route,
+    20000 points and refinement, ~20 times slower) and python-control.
 
     Parameters
     ----------
@@ -556,34 +549,25 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     return _margins(_ss_blocks(G), _ss_blocks(K))[0]
 
 
-def _margins(g: tuple, k: tuple,
-             peak_near: float | None = None) -> tuple[LoopMargins, np.ndarray, float]:
+def _margins(g: tuple, k: tuple) -> tuple[LoopMargins, np.ndarray, float]:
     """:func:`loop_margins` of the loop of the realisations ``g`` and ``k``,
     the closed-loop poles (those of ``S``, whose norm gave ``M_m``) and the
-    frequency of the peak of ``|S|``.
-
-    The norm's first lower bound searches a band expected to hold that peak
-    (:func:`toolbox._lti._linf_norm`: one Hamiltonian instead of two when it
-    does): :data:`_PEAK_BAND` around ``peak_near`` (the full loop's peak when
-    ``k`` is its reduced controller), else between the headline gain and
-    phase crossovers, where ``|1 + L|`` is smallest on most loops (the
-    Nyquist curve passes closest to -1 between |L| = 1 and the real axis).
-    """
+    frequency of the peak of ``|S|``."""
     A, B, C, d = _balanced_series(k, g)
     if A.shape[0] == 0:
         gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
         return (LoopMargins(gm_db, w_gm, pm, w_pm, abs(1.0 + d), abs(1.0 / (1.0 + d))),
                 np.zeros(0, complex), math.inf)
     gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
-    band = ((peak_near / _PEAK_BAND, peak_near * _PEAK_BAND) if peak_near is not None
-            else (min(w_gm, w_pm), max(w_gm, w_pm)))   # with a nan: no band (lo < hi fails)
     f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
     fB = f * B
-    peak, w_peak, poles = _linf_norm(A - fB @ C, fB, -f * C, np.array([[f]]), band=band)
-    if any(abs(z) < 1e-12 for z in _eigvals(A).tolist()):   # an integrator: no static error
+    Acl = A - fB @ C
+    peak, w_peak = linf_peak(Acl, fB, -f * C, np.array([[f]]))
+    poles = np.linalg.eigvals(Acl)
+    if any(abs(z) < 1e-12 for z in np.linalg.eigvals(A).tolist()):   # an integrator: no static error
         ess = 0.0
     else:
-        ess = float(abs(1.0 / (1.0 + d - float((C @ _solve(A, B))[0, 0]))))
+        ess = float(abs(1.0 / (1.0 + d - float((C @ np.linalg.solve(A, B))[0, 0]))))
     return LoopMargins(gm_db, w_gm, pm, w_pm, 1.0 / peak, ess), poles, w_peak
 
 
@@ -651,10 +635,8 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
     MarginComparison
     """
     g = _ss_blocks(G)
-    a, _, w_peak = _margins(g, _ss_blocks(K))
-    # the reduction moves the peak of |S| little: the full loop's frequency
-    # lets the reduced loop's first Hamiltonian certify its norm
-    b, poles, _ = _margins(g, _ss_blocks(Kr), peak_near=w_peak)
+    a = _margins(g, _ss_blocks(K))[0]
+    b, poles, _ = _margins(g, _ss_blocks(Kr))
     flags = []
     pairs = {"gain margin": (10 ** (a.gain_margin_db / 20), 10 ** (b.gain_margin_db / 20)),
              "phase margin": (a.phase_margin_deg, b.phase_margin_deg),

@@ -63,7 +63,7 @@ def validate_weight(w: Any, key: str = _DEFAULT_KEY,
         ``controller.hinf.weights.q.w1``.
     allow_integrator : bool
         Accept poles on the imaginary axis (they violate assumptions A3/A4 of
-        paper 003 later, where :func:`toolbox.design._hinf_riccati.check_assumptions`
+        paper 003 later, where :func:`toolbox.design._hinf_assumptions.check_assumptions`
         gives the remedy).  Default ``False``.
 
     Returns

@@ -3,9 +3,11 @@
 A. Azaiz, Y. Ramdani, A. Meroufel, B. Belabbes, "H-infinity design of
 controllers ensuring the regulation of currents of the decoupled field
 orientation control applied to a PMS motor" (2007). Equation numbers refer to
-it. The numerics live in :mod:`toolbox.design._hinf_riccati` (augmented plant eq
-(35)-(40), (50)-(64); Riccati formulae eq (10)-(32), (65)-(67); gamma
-iteration with back-off), :mod:`._weights` (eq (44)-(49) and ``makeweight``)
+it. The numerics live in :mod:`._hinf_plant` (augmented plant eq
+(35)-(40), (50)-(64)), :mod:`._hinf_assumptions` (A1-A4),
+:mod:`._hinf_riccati` (Riccati formulae eq (10)-(32), (65)-(67)),
+:mod:`._hinf_gamma` (gamma iteration with back-off), :mod:`._hinf_bounds`
+(eq (41)-(43)), :mod:`._weights` (eq (44)-(49) and ``makeweight``)
 and :mod:`._reduction` (eq (71)-(72)); this module turns a spec into them and
 the result into a :class:`~toolbox.artifact.ControllerArtifact`.
 
@@ -54,9 +56,9 @@ from ._common import decoupling_from_motor, make_artifact
 from ._hinf_defaults import default_w2, w1_params, w2_params, w2_toml
 from ._hinf_speed import (WEIGHT_GAINS, AtSpeedCfg, coupled_weight, coupling_gains,
                           read_at_speed, small_gain_peak)
-from ._hinf_riccati import (GammaBelowOptimum, _ss_blocks, augment_mixed_sensitivity,
-                            fastest_pole_modulus,
-                            gamma_iteration, synthesize, weight_bound_check)
+from ._hinf_bounds import weight_bound_check
+from ._hinf_gamma import GammaBelowOptimum, fastest_pole_modulus, gamma_iteration, synthesize
+from ._hinf_plant import _ss_blocks, augment_mixed_sensitivity
 from ._reduction import compare_margins, loop_margins, reduce_controller
 from ._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
 

@@ -59,7 +59,7 @@ message names the axis) when:
   image of a continuous pole faster than ~12 x the Nyquist frequency) that
   no zero cancels to within 1 % of its distance to the unit circle (the pair
   then changes |K| by at most 1 % at any frequency, the rule of
-  :func:`toolbox.design._hinf_riccati.effective_poles` transposed to z);
+  :func:`toolbox.design._hinf_gamma.effective_poles` transposed to z);
 * **coefficient dynamic range** of one coefficient set (SOS stage or state
   row) above ``2**30`` (beyond Q31 resolution even with per-set scaling);
 * **rounding sensitivity**: rounding the executed coefficients to float32
@@ -86,7 +86,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import _zeros
+from .._lti import invariant_zeros as _zeros
 from ..errors import CctError, ExportRefused, SpecError
 from . import _fixed, _vendor
 from ._minimal import MinimalLaw, minimal_law
