@@ -220,8 +220,12 @@ def _summary(out) -> None:
     # the notice describes what was checked: nothing is checked without verification
     _notices(out.notice if out.verification is not None else None, warnings)
     # the result summary is printed even with -q: -q silences progress only
+    # fcs_mpc's axes hold the baseline PI, which does not run: its margins say nothing
+    # about the executed loop (toolbox.report.BASELINE_LABEL)
+    basis = ("baseline PI, informational, not executed" if out.artifact.method == "fcs_mpc"
+             else "sampled loop")
     for axis, m in out.artifact.margins.items():
-        click.echo(f"{axis} axis (sampled loop): GM {_fmt(m.get('gain_margin_db'))} dB, "
+        click.echo(f"{axis} axis ({basis}): GM {_fmt(m.get('gain_margin_db'))} dB, "
                    f"PM {_fmt(m.get('phase_margin_deg'))} deg, "
                    f"Mm {_fmt(m.get('stability_margin'))}")
     if out.verification is not None:
