@@ -12,7 +12,7 @@ import difflib
 import re
 import tomllib
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 from .._io import check_data_depth, check_text_depth, read_limited
 from ..errors import SpecError
@@ -45,13 +45,17 @@ DRIVE_KEYS = ("vdc", "sample_time", "delay_samples", "switching_frequency",
               "angle_compensation")
 
 
-def load_spec(path: str | Path) -> Spec:
+def load_spec(path: str | Path, overrides: Sequence[tuple[str, str]] = ()) -> Spec:
     """Read and validate a spec file.
 
     Parameters
     ----------
     path : str or Path
         TOML file (format: README.md "Spec files", toolbox/ARCHITECTURE.md).
+    overrides : sequence of (option, "key.path=value"), optional
+        Values replacing those of the file before validation, in order
+        (``cct design --set``/``--method``, :mod:`toolbox.spec._overrides`);
+        an error on an overridden key names the override.
 
     Returns
     -------
@@ -74,7 +78,18 @@ def load_spec(path: str | Path) -> Spec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SpecError("", "valid TOML", str(err), file=name) from None
-    return spec_from_dict(data, file=name)
+    if not overrides:
+        return spec_from_dict(data, file=name)
+    from ._overrides import apply_overrides, blame_overrides
+
+    try:
+        data = apply_overrides(data, overrides)
+    except SpecError as err:
+        raise err.with_file(name) from None
+    try:
+        return spec_from_dict(data, file=name)
+    except SpecError as err:
+        raise blame_overrides(err, overrides) from None
 
 
 def spec_from_dict(data: Mapping[str, Any], file: str | None = None) -> Spec:
