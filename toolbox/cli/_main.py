@@ -549,13 +549,12 @@ def _executed_step_figures(result) -> dict:
 
 def _failures(result) -> list[str]:
     """``key: reason`` of every failing check of a verification."""
-    from ..sim._checks import finalise_check  # fills the reason of a margin check
-
-    out = [f"{k}: {finalise_check(c).get('reason')}" for k, c in result.margin_checks.items()
+    doc = result.to_json()  # verify.json's checks carry the reason of every failure
+    out = [f"{k}: {c.get('reason')}" for k, c in doc["margin_requirements"].items()
            if not c["pass"]]
-    for sc in result.scenarios:
-        out += [f"{sc.name}: {k}: {finalise_check(c).get('reason')}"
-                for k, c in sc.checks.items() if not c["pass"]]
+    for sc in doc["scenarios"]:
+        out += [f"{sc['name']}: {k}: {c.get('reason')}"
+                for k, c in (sc.get("requirements") or {}).items() if not c["pass"]]
     return out
 
 

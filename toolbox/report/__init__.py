@@ -198,7 +198,17 @@ RESOLUTION_NOTE = ("Numbers to 4 significant digits; values below the resolution
 
 
 def fmt_q(value: Any, unit: str, digits: int = 4) -> str:
-    """:func:`fmt` of a quantity in ``unit``: below :data:`RESOLUTION` it is 0."""
+    """:func:`fmt` of a quantity in ``unit``: below :data:`RESOLUTION` it is 0.
+
+    Parameters
+    ----------
+    value : float, int, str or None
+        The quantity (a string is shown as it is).
+    unit : str
+        Its unit, a key of :data:`RESOLUTION` (others: no resolution).
+    digits : int
+        Significant digits.
+    """
     v = _as_float(value) if not isinstance(value, str) else None
     res = RESOLUTION.get(unit)
     if v is not None and res is not None and math.isfinite(v) and abs(v) < res:
@@ -223,7 +233,15 @@ SPEED_KINDS = ("speed_step", "load_step")
 
 
 def sim_metric_unit(name: str, kind: str = "") -> str:
-    """Unit of a simulated metric of a scenario of ``kind`` ("" when unknown)."""
+    """Unit of a simulated metric of a scenario of ``kind`` ("" when unknown).
+
+    Parameters
+    ----------
+    name : str
+        Metric name (:mod:`toolbox.sim._metrics`).
+    kind : str
+        Scenario kind: the static error and final value of a speed scenario are rad/s.
+    """
     unit = SIM_METRIC_UNITS.get(name, "")
     if unit == "signal":
         return "rad/s" if kind in SPEED_KINDS else "A"
