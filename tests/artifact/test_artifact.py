@@ -55,7 +55,7 @@ def test_ip_error_controller_is_pi_of_same_loop():
 
 def test_python_control_conversion():
     art = make_artifact()
-    sys = art.axes["d"].to_statespace()
+    sys = art.axes["d"].to_statespace(domain="continuous")
     assert np.isclose(sys(1j * 1000.0), 2.8 + 1200.0 / (1j * 1000.0))
     assert np.isclose(control.evalfr(sys.to_control(), 1j * 1000.0), 2.8 + 1200.0 / (1j * 1000.0))
     assert art.axes["d"].to_statespace(discrete=True).dt == TS

@@ -39,7 +39,7 @@ def test_artifact_holds_eq19_20_pi():
     art = design(spec(alpha=1.0, beta=1.0, gamma=0.01))
     Kp, Ki = baseline_pi(0.02, 112.6e-6)
     assert Kp == pytest.approx(0.2) and Ki == pytest.approx(0.2 * 0.02 / 112.6e-6)
-    K = art.axes["q"].to_statespace()
+    K = art.axes["q"].to_statespace(domain="continuous")
     assert float(np.real(K(1e12j))) == pytest.approx(Kp, rel=1e-9)
     assert float(np.real(K(1.0) - K(2.0))) == pytest.approx(Ki / 2, rel=1e-9)
     assert art.design_parameters["baseline"] == "002 eq (19)-(20)"

@@ -46,7 +46,7 @@ def test_characteristic_equation_eq4_matches_assembled_loop(axis):
     art = design(spec(poles={"d": -800.0, "q": -1000.0}, sigma={"d": 3000.0, "q": 2500.0}))
     s_star, sigma = {"d": (-800.0, 3000.0), "q": (-1000.0, 2500.0)}[axis]
     G = axis_plants(art_motor())[axis]
-    K = art.axes[axis].to_statespace()
+    K = art.axes[axis].to_statespace(domain="continuous")
     cl = np.sort_complex(ct.feedback(ct.ss(G) * K, 1).poles())
     ref = np.sort_complex(np.roots([1.0, sigma - A, -sigma * s_star]).astype(complex))
     assert cl == pytest.approx(ref, rel=1e-8)

@@ -88,7 +88,7 @@ def test_continuous_artifact_tustin_and_error_controller():
     sp = spec(domain="continuous")
     art = design(sp)
     k = np.asarray(art.design_parameters["K"]["q"]).ravel()
-    C = art.axes["q"].to_statespace()            # k_i + (-k_z)/s
+    C = art.axes["q"].to_statespace(domain="continuous")            # k_i + (-k_z)/s
     assert float(np.real(C(1e9j))) == pytest.approx(k[0], rel=1e-6)
     assert art.axes["q"].discrete.method == "tustin"
     G = axis_plants(sp.motor)["q"]

@@ -39,7 +39,7 @@ def continuous_poles(art, motor, omega_e):
     A, B = plant.A(omega_e), plant.B()
     dec = art.decoupling
     Dec = omega_e * dec.cross * np.array([[0.0, -dec.Lq_c], [dec.Ld_c, 0.0]])
-    Ks = [art.axes[ax].to_statespace() for ax in "dq"]
+    Ks = [art.axes[ax].to_statespace(domain="continuous") for ax in "dq"]
     n = sum(K.nstates for K in Ks)
     Ac = block_diag(*[np.asarray(K.A) for K in Ks]) if n else np.zeros((0, 0))
     Bc = block_diag(*[np.asarray(K.B) for K in Ks]) if Ac.size else np.zeros((0, 2))
@@ -120,7 +120,7 @@ def test_bandwidth_rule_is_open_loop_crossover():
     """|L(j wc)| = 1 for L = (Kp + Ki/s)/(R + L s) with cancellation gains."""
     spec = make_spec("pi", {"rule": "bandwidth", "bandwidth": 1500})
     art = design(spec)
-    loop = art.axes["q"].to_statespace().to_control() * axis_plants(spec.motor)["q"]
+    loop = art.axes["q"].to_statespace(domain="continuous").to_control() * axis_plants(spec.motor)["q"]
     mag = abs(ct.frequency_response(loop, [1500.0]).complex.ravel()[0])
     assert mag == pytest.approx(1.0, rel=1e-9)
 

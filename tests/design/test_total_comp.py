@@ -51,7 +51,7 @@ def continuous_poles(art, motor, omega_e):
     A, B = plant.A(omega_e), plant.B()
     dec = art.decoupling
     Dec = omega_e * dec.cross * np.array([[0.0, -dec.Lq_c], [dec.Ld_c, 0.0]])
-    Ks = [art.axes[ax].to_statespace() for ax in "dq"]
+    Ks = [art.axes[ax].to_statespace(domain="continuous") for ax in "dq"]
     Ac, Bc, Cc = _blocks(Ks)
     Dc = np.diag([float(np.asarray(K.D)[0, 0]) for K in Ks])
     M = np.block([[A + B @ (Dec - Dc), B @ Cc], [-Bc, Ac]])
@@ -150,12 +150,12 @@ def test_tc_law_has_resistance_feedback_in_measurement_channel():
     assert dec.cross and dec.emf
     assert (dec.R_c, dec.Ld_c, dec.Lq_c, dec.flux_c, dec.pole_pairs) == (0.5, LD, LQ, 0.12, 4)
     # error controller = minus the measurement channel = K L_c - R_c
-    assert float(art.axes["q"].to_statespace().D[0, 0]) == pytest.approx(800 * LQ - 0.5)
+    assert float(art.axes["q"].to_statespace(domain="continuous").D[0, 0]) == pytest.approx(800 * LQ - 0.5)
 
 
 def test_tci_error_controller_is_pi_minus_resistance():
     art = design(make_spec("tci", {"K11": 3000, "K12": 4e5, "K21": 3000, "K22": 4e5}))
-    K = art.axes["d"].to_statespace().to_control()
+    K = art.axes["d"].to_statespace(domain="continuous").to_control()
     w = np.array([50.0, 2000.0])
     ref = 3000 * LD + 4e5 * LD / (1j * w) - R
     assert np.allclose(ct.frequency_response(K, w).complex.ravel(), ref, rtol=1e-12)

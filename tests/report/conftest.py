@@ -133,6 +133,23 @@ def full_data() -> ReportData:
 
 
 @pytest.fixture(scope="session")
+def passing_data(full_data) -> ReportData:
+    """``full_data`` with every check passing (a passing design)."""
+    import copy
+
+    analysis = copy.deepcopy(full_data.analysis)
+    for c in analysis["requirements"].values():
+        c["pass"] = True
+    verify = copy.deepcopy(full_data.verification)
+    verify["passed"] = True
+    for sc in verify["scenarios"]:
+        sc["passed"] = True
+        for c in sc["requirements"].values():
+            c["pass"] = True
+    return dataclasses.replace(full_data, analysis=analysis, verification=verify)
+
+
+@pytest.fixture(scope="session")
 def minimal_data() -> ReportData:
     spec = _spec("Minimal report")
     return ReportData(title="Minimal report", spec=spec, artifact=_artifact(spec))

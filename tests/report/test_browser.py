@@ -96,3 +96,59 @@ def test_checker_catches_bad_pages(browser, tmp_path):
     assert external == ["http://127.0.0.1:9/x.png"]
     assert any(w == 0 or h == 0 for w, h in sizes)
     assert n_scripts == 1
+
+
+#: The banner's colours (report.css --pass / --fail) as the browser computes them.
+BANNER_RGB = {"pass": (31, 122, 58), "fail": (179, 38, 30)}
+SCREENSHOTS = __import__("pathlib").Path(__file__).parents[2] / "reports" / "screenshots"
+
+
+@pytest.mark.parametrize("verdict", ["pass", "fail"])
+def test_verdict_banner_colour_and_text(browser, full_data, passing_data, verdict, tmp_path):
+    """The report opens with the verdict: a green PASS or a red FAIL banner
+    with the first failing reason, above the cards. CCT_WRITE_SCREENSHOTS=1
+    also writes the top of the page to reports/screenshots/<verdict>.png (the
+    gallery's; normal runs leave the tree alone)."""
+    import dataclasses
+
+    from toolbox.report import build_context
+    from toolbox.report.html import render_html
+
+    data = passing_data if verdict == "pass" else full_data
+    data = dataclasses.replace(data, title="Paper 003 motor, PI at 1500 rad/s (report test "
+                                           "fixture)")
+    ctx = build_context(data)
+    page_path = tmp_path / "report.html"
+    page_path.write_text(render_html(ctx), encoding="utf-8")
+    page = browser.new_page(viewport={"width": 1100, "height": 760})
+    try:
+        page.goto(page_path.as_uri(), wait_until="load")
+        got = page.evaluate("""() => {
+            const b = document.getElementById('verdict');
+            const r = b.getBoundingClientRect();
+            const first = document.querySelector('body > *:not(header)');
+            return {bg: getComputedStyle(b).backgroundColor, text: b.innerText, left: r.left,
+                    top: r.top, height: r.height, first: first.id,
+                    cards: document.querySelector('.summary').getBoundingClientRect().top}; }""")
+        shot = tmp_path / f"{verdict}.png"
+        page.screenshot(path=str(shot))
+    finally:
+        page.context.close()
+    assert got["bg"] == "rgb({}, {}, {})".format(*BANNER_RGB[verdict]), got
+    assert got["first"] == "verdict" and got["top"] < got["cards"], got  # above the cards
+    headline = got["text"].split()[0]
+    assert headline == verdict.upper(), got["text"]
+    assert ctx["banner"]["reason"] in got["text"]
+    if verdict == "fail":
+        assert "checks fail" in got["text"] and "min_gain_margin_db" in got["text"], got["text"]
+
+    from PIL import Image
+
+    with Image.open(shot) as img:  # the rendered pixels carry the colour, not only the CSS
+        x, y = int(got["left"]) + 6, int(got["top"] + got["height"] / 2)
+        r, g, b = img.convert("RGB").getpixel((x, y))
+    assert max(abs(r - BANNER_RGB[verdict][0]), abs(g - BANNER_RGB[verdict][1]),
+               abs(b - BANNER_RGB[verdict][2])) <= 8, (r, g, b)
+    if os.environ.get("CCT_WRITE_SCREENSHOTS") == "1":
+        SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+        (SCREENSHOTS / f"{verdict}.png").write_bytes(shot.read_bytes())

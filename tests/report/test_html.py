@@ -153,7 +153,7 @@ def test_reduced_controller_and_simresult(full_data):
                                 iq_ref=np.r_[0.0, np.full(49, 5.0)], id=None)
     rows = _scenarios({"scenarios": [{"name": "x", "metrics": sim.metrics}]},
                       [traces_dict(sim)])
-    assert rows[0]["metrics"] == [("overshoot_pct", "1")] and rows[0]["svg"].startswith("<svg")
+    assert rows[0]["metrics"] == [("overshoot_pct", "1", "%")] and rows[0]["svg"].startswith("<svg")
     (axis, k, ts, y), = _simulated_steps([traces_dict(sim)])
     assert (axis, k) == ("q", 1) and ts[0] == 0.0 and y[0] == pytest.approx(0.2)
 

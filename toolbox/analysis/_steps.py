@@ -24,6 +24,14 @@ def step_response(loop: "AxisLoop", A, B, C, D) -> tuple[np.ndarray, np.ndarray]
     """Fine-grid step response ``(t, y)`` of the reference loop ``(A, B, C, D)``
     (doubling the horizon until settled, at most 32000 periods or 3.2 s)."""
     Ts = loop.sample_time
+    # an unstable loop's orbit overflows (inf, then inf - inf = nan): expected, judged
+    # by the stability verdict and read as "not reached" by the step figures, so the
+    # arithmetic on it warns nobody (cct compare printed numpy's RuntimeWarning)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _step_response(loop, A, B, C, D, Ts)
+
+
+def _step_response(loop, A, B, C, D, Ts) -> tuple[np.ndarray, np.ndarray]:
     if loop.discrete:
         n_steps = 2000
         while True:
@@ -41,8 +49,8 @@ def step_response(loop: "AxisLoop", A, B, C, D) -> tuple[np.ndarray, np.ndarray]
             e, g = zoh_first_order(loop.R, loop.L, s)   # the plant held over s
             y = (i_k[:, None] * e + u_k[:, None] * g).reshape(-1)
             t = (np.arange(n_steps + 1)[:, None] * Ts + s).reshape(-1)
-            if _settled(y) or n_steps >= 32000:
-                return t, y
+            if _settled(y) or n_steps >= 32000 or not np.all(np.isfinite(y)):
+                return t, y  # non-finite: diverging, a longer window only overflows sooner
             n_steps *= 2
     t_end = 2000 * Ts
     while True:
@@ -54,7 +62,7 @@ def step_response(loop: "AxisLoop", A, B, C, D) -> tuple[np.ndarray, np.ndarray]
         M[:n, n:] = B * h
         E = expm(M)
         y = _affine_orbit(E[:n, :n], E[:n, n], t.size - 1) @ C[0] + D[0, 0]
-        if _settled(y) or t_end >= 3.2:
+        if _settled(y) or t_end >= 3.2 or not np.all(np.isfinite(y)):
             return t, y
         t_end *= 2
 
@@ -95,5 +103,6 @@ def step_figures(loop: "AxisLoop", cl: tuple) -> dict:
     from ..sim import step_metrics
 
     t, y = step_response(loop, *cl)
-    figs = step_metrics(t, y, 0.0, 1.0, 0.0)
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverging response: see above
+        figs = step_metrics(t, y, 0.0, 1.0, 0.0)
     return {k: float(v) for k, v in figs.items()}

@@ -482,12 +482,33 @@ class AxisController:
             antiwindup=aw,
         )
 
-    def to_statespace(self, discrete: bool = False) -> StateSpace:
+    def to_statespace(self, domain: str = "discrete", *,
+                      discrete: bool | None = None) -> StateSpace:
         """The error -> voltage controller (:class:`toolbox._lti.StateSpace`;
-        ``.to_control()`` gives the python-control one)."""
-        if discrete or self.continuous is None:
+        ``.to_control()`` gives the python-control one).
+
+        Parameters
+        ----------
+        domain : {"discrete", "continuous"}
+            ``"discrete"`` (default): the law the firmware executes, ``dt =
+            sample_time``. ``"continuous"``: the design model (s domain); a
+            design made in discrete time has none (ValueError).
+        discrete : bool, optional
+            Older spelling: True is ``domain="discrete"``, False ``"continuous"``
+            (falling back on the discrete law when there is no continuous one).
+        """
+        if discrete is not None:
+            if discrete or self.continuous is None:
+                return self.discrete.to_statespace()
+            return self.continuous.to_statespace()
+        if domain == "discrete":
             return self.discrete.to_statespace()
-        return self.continuous.to_statespace()
+        if domain == "continuous":
+            if self.continuous is None:
+                raise ValueError("this axis was designed in discrete time: it has no "
+                                 'continuous model (use domain="discrete")')
+            return self.continuous.to_statespace()
+        raise ValueError(f'domain: expected "discrete" or "continuous", got {domain!r}')
 
     def to_json(self) -> dict:
         out: dict[str, Any] = {}

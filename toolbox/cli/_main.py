@@ -198,10 +198,17 @@ def derive(spec: str, fmt: str | None) -> None:
 @click.option("--sampled-certificate", is_flag=True,
               help="Also certify the sampled coupled dq loop over the parameter box and "
                    "speeds (up to about a second more per design).")
+@click.option("--method", "method", default=None, metavar="M",
+              help="Design with method M instead of the spec's controller.method "
+                   "(pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi).")
+@click.option("--set", "sets", multiple=True, metavar="KEY.PATH=VALUE",
+              help="Override one spec value before validation (repeatable); VALUE is a "
+                   "TOML scalar or array, e.g. --set controller.pi.bandwidth=1500 "
+                   "--set 'requirements.parameter_drift.R=[0.8, 1.5]'.")
 @_QUIET
 @_spec_errors
 def design(spec: str, out_dir: str, only_controller: bool, sampled_certificate: bool,
-           quiet: bool) -> None:
+           method: str | None, sets: tuple[str, ...], quiet: bool) -> None:
     """Design the controller of SPEC and write controller.json, analysis.json,
     verify.json, controller.h, report.html and report.pdf into OUT.
 
@@ -211,11 +218,14 @@ def design(spec: str, out_dir: str, only_controller: bool, sampled_certificate: 
     \b
     Example:
       cct design designs/003_azaiz2007_hinf.toml --out out/003
+      cct design designs/003_azaiz2007_hinf.toml --method pi --set controller.pi.bandwidth=1500 --out out/003_pi
     """
     from ..pipeline import build_outputs, write_outputs
     from ..spec import load_spec
 
-    s = load_spec(spec)
+    overrides = ([("--method", f"controller.method={json.dumps(method)}")] if method else [])
+    overrides += [("--set", text) for text in sets]
+    s = load_spec(spec, overrides)
     full = not only_controller
     with StepBar(design_stages(full, full, full, full), quiet=quiet, desc="design") as bar:
         out = build_outputs(s, analysis=full, verification=full, report=full, header=full,
@@ -256,8 +266,12 @@ def _summary(out) -> None:
     # the notice describes what was checked: nothing is checked without verification
     _notices(out.notice if out.verification is not None else None, warnings)
     # the result summary is printed even with -q: -q silences progress only
+    # fcs_mpc's axes hold the baseline PI, which does not run: its margins say nothing
+    # about the executed loop (toolbox.report.BASELINE_LABEL)
+    basis = ("baseline PI, informational, not executed" if out.artifact.method == "fcs_mpc"
+             else "sampled loop")
     for axis, m in out.artifact.margins.items():
-        click.echo(f"{axis} axis (sampled loop): GM {_fmt(m.get('gain_margin_db'))} dB, "
+        click.echo(f"{axis} axis ({basis}): GM {_fmt(m.get('gain_margin_db'))} dB, "
                    f"PM {_fmt(m.get('phase_margin_deg'))} deg, "
                    f"Mm {_fmt(m.get('stability_margin'))}")
     if out.verification is not None:
@@ -463,10 +477,17 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
 @_spec_errors
 def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: bool,
             quiet: bool) -> None:
-    """Design every SPEC and print margins and robustness side by side.
+    """Design every SPEC and print bandwidth, 5 % time, margins and robustness
+    side by side, ranked.
 
     Each design is also verified (margins and stability of the executed law,
-    requirements and default checks); exit 1 when any design fails.
+    requirements and default checks, the drift-box robustness verdict of cct
+    design). A spec that cannot be designed (bad input, infeasible, another
+    motor or drive than the first) is listed as refused with its file and
+    reason; the others are still compared. Rank: passing designs first, then
+    the larger worst multiloop disk margin over the drift box, then the
+    shorter 5 % response time (worst axis). Exit 1 when any design fails or
+    is refused.
 
     \b
     Example:
@@ -476,45 +497,93 @@ def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: 
     from ..pipeline import design_spec, run_verification
     from ..spec import load_spec
 
-    loaded = [load_spec(s) for s in specs]
-    first = loaded[0]
-    for s in loaded[1:]:  # each artifact carries its own delay; the plant must be common
-        if (s.motor, s.drive.vdc, s.drive.sample_time) != (
-                first.motor, first.drive.vdc, first.drive.sample_time):
-            raise SpecError("motor", f"the motor, vdc and sample_time of {specs[0]} "
-                            "(compare designs for one drive)", "a different one", file=s.source)
-    names = [Path(p).name for p in specs]
+    refused: list[dict] = []
+    loaded: list = []
+    for path in specs:
+        try:
+            s = load_spec(path)
+        except CctError as err:
+            refused.append({"spec": path, "refused": str(err)})
+            continue
+        if loaded and (s.motor, s.drive.vdc, s.drive.sample_time) != (
+                loaded[0][1].motor, loaded[0][1].drive.vdc, loaded[0][1].drive.sample_time):
+            # each artifact carries its own delay; the plant must be common
+            refused.append({"spec": path, "refused": str(SpecError(
+                "motor", f"the motor, vdc and sample_time of {loaded[0][0]} (compare "
+                "designs for one drive)", "a different one", file=s.source))})
+            continue
+        loaded.append((path, s))
+    names = [Path(p).name for p, _ in loaded]
     steps = ([f"design {n}" for n in names] + ["analysis"]
              + [f"verification {n}" for n in names])
-    failed = False
+    designed = []
+    rows: list[dict] = []
     with StepBar(steps, quiet=quiet, desc="compare") as bar:
-        artifacts = []
-        for name, s in zip(names, loaded):
+        for name, (path, s) in zip(names, loaded):
             bar(f"design {name}")
-            artifacts.append(design_spec(s))
+            try:
+                designed.append((path, s, design_spec(s)))
+            except CctError as err:
+                refused.append({"spec": path, "refused": str(err)})
         bar("analysis")
-        rows = compare_designs(artifacts, loaded[0].motor, loaded[0].drive,
-                               sampled_certificate=sampled_certificate)
-        for name, spec_path, row, art, s in zip(names, specs, rows, artifacts, loaded):
-            bar(f"verification {name}")
+        if designed:
+            rows = compare_designs([a for _, _, a in designed], designed[0][1].motor,
+                                   designed[0][1].drive,
+                                   sampled_certificate=sampled_certificate)
+        for (spec_path, s, art), row in zip(designed, rows):
+            bar(f"verification {Path(spec_path).name}")
             row["spec"] = spec_path
             result = run_verification(art, s)
             row["passed"] = result.passed
             row["failures"] = _failures(result)
             row["notice"] = result.notice
+            # the drift-box verdict cct design prints (one sweep for both commands)
+            rob = result.robustness or {}
+            row["robustness"] = {k: rob.get(k) for k in (
+                "n_unstable", "n_sets", "worst_disk_margin", "box_text")}
             if art.method == "fcs_mpc":
                 # its axes hold the baseline PI: margins informational, step figures
                 # from what it executes (the switching law, simulated)
                 row["margins_basis"] = "baseline PI (informational, not executed)"
                 row["response_times"] = _executed_step_figures(result)
-            failed |= not result.passed
+    for k, row in enumerate(sorted(rows, key=_rank_key)):
+        row["rank"] = k + 1
     if json_path:
-        _write_file(json_path, json.dumps(rows, indent=1, allow_nan=False) + "\n", "--json")
-    _print_table(rows)
-    for row in rows:
+        _write_file(json_path, json.dumps(rows + refused, indent=1, allow_nan=False) + "\n",
+                    "--json")
+    if rows:
+        _print_table(sorted(rows, key=_rank_key))
+    for row in sorted(rows, key=_rank_key):
         if not row["passed"]:
-            click.echo(f"FAIL  {row['spec']}: " + "; ".join(row["failures"]))
+            _echo_wrapped(f"FAIL  {row['spec']}: ", "; ".join(row["failures"]))
+    for entry in refused:
+        # the message names the file, the key, what was expected and what was found
+        _echo_wrapped("REFUSED  ", entry["refused"])
+    failed = bool(refused) or any(not r["passed"] for r in rows)
     sys.exit(EXIT_REQUIREMENT if failed else EXIT_OK)
+
+
+#: The ranking cct compare states under its table.
+RANK_CRITERION = ("rank: passing designs first, then the larger worst multiloop disk margin "
+                  "over the drift box, then the shorter 5 % response time (worst axis)")
+
+
+def _rank_key(row: dict) -> tuple:
+    """Sort key of :data:`RANK_CRITERION` (missing numbers rank last)."""
+    dm = (row.get("robustness") or {}).get("worst_disk_margin")
+    dm = float(dm) if isinstance(dm, (int, float)) and math.isfinite(dm) else -math.inf
+    t5 = _worst(row.get("response_times") or {}, "response_time_5pct", max)
+    return (not row.get("passed", False), -dm, t5 if math.isfinite(t5) else math.inf)
+
+
+def _echo_wrapped(head: str, text: str, width: int = 100) -> None:
+    """``head`` + ``text`` wrapped at ``width`` columns, continuation lines indented
+    (a failure summary may run to a thousand characters)."""
+    import textwrap
+
+    click.echo(textwrap.fill(text, width=width, initial_indent=head,
+                             subsequent_indent="      ", break_on_hyphens=False,
+                             break_long_words=True))
 
 
 def _executed_step_figures(result) -> dict:
@@ -531,23 +600,31 @@ def _executed_step_figures(result) -> dict:
 
 def _failures(result) -> list[str]:
     """``key: reason`` of every failing check of a verification."""
-    out = [f"{k}: {c.get('reason')}" for k, c in result.margin_checks.items() if not c["pass"]]
-    for sc in result.scenarios:
-        out += [f"{sc.name}: {k}: {c.get('reason')}" for k, c in sc.checks.items()
-                if not c["pass"]]
+    doc = result.to_json()  # verify.json's checks carry the reason of every failure
+    out = [f"{k}: {c.get('reason')}" for k, c in doc["margin_requirements"].items()
+           if not c["pass"]]
+    for sc in doc["scenarios"]:
+        out += [f"{sc['name']}: {k}: {c.get('reason')}"
+                for k, c in (sc.get("requirements") or {}).items() if not c["pass"]]
     return out
 
 
 #: Columns of the compare table: (header, value of a row); worst axis throughout.
 _COLUMNS = (
+    ("rank", lambda r: r.get("rank", "")),
     ("method", lambda r: r["method"]),
+    ("BW rad/s", lambda r: _worst(r["margins"], "bandwidth_rad_s", min)),
     ("GM dB", lambda r: _worst(r["margins"], "gain_margin_db", min)),
     ("PM deg", lambda r: _worst(r["margins"], "phase_margin_deg", min)),
     ("Mm", lambda r: _worst(r["margins"], "stability_margin", min)),
     ("t5% ms", lambda r: 1e3 * _worst(r["response_times"], "response_time_5pct", max)),
     ("OS %", lambda r: _worst(r["response_times"], "overshoot_pct", max)),
     ("worst GM dB", lambda r: _worst(r["worst_case"], "gain_margin_db", min)),
-    ("unstable", lambda r: f"{r['n_unstable']}/{r['n_sets']}"),
+    ("unstable", lambda r: "{}/{}".format(*(
+        (r["robustness"]["n_unstable"], r["robustness"]["n_sets"])
+        if (r.get("robustness") or {}).get("n_sets") is not None
+        else (r["n_unstable"], r["n_sets"])))),
+    ("drift disk", lambda r: (r.get("robustness") or {}).get("worst_disk_margin")),
     ("MIMO disk", lambda r: r["mimo_worst_disk_margin"]),
     ("box MIMO", lambda r: r["mimo_box"]["worst_disk_margin"]),
     ("box worst at", lambda r: _box_where(r["mimo_box"])),
@@ -570,17 +647,23 @@ def _worst(per_axis: dict, key: str, pick) -> float:
 
 def _print_table(rows: list[dict]) -> None:
     """Sampled-loop margins and step figures, robustness over the sweep."""
-    informational = {"GM dB", "PM deg", "Mm", "worst GM dB", "unstable", "MIMO disk",
-                     "cert. scale", "sampled cert."}
+    informational = {"BW rad/s", "GM dB", "PM deg", "Mm", "worst GM dB", "unstable",
+                     "drift disk", "MIMO disk", "cert. scale", "sampled cert."}
     table = [[h for h, _ in _COLUMNS]] + [
         [_fmt(get(r)) + ("*" if h in informational and r.get("margins_basis") else "")
          for h, get in _COLUMNS] for r in rows]
     widths = [max(len(line[k]) for line in table) for k in range(len(_COLUMNS))]
     for spec, line in zip(["spec"] + [r["spec"] for r in rows], table):
         click.echo("  ".join(c.rjust(w) for c, w in zip(line, widths)) + f"  {spec}")
+    _echo_wrapped("", "worst axis throughout; unstable: sets of the drift box (as cct "
+                  "design) whose coupled sampled loop is unstable; drift disk: worst "
+                  "multiloop disk margin over it; worst GM: over the stress sweep of the "
+                  "report")
+    _echo_wrapped("", RANK_CRITERION)
     if any(r.get("margins_basis") for r in rows):
-        click.echo("* fcs_mpc: margins and robustness of its baseline PI (informational, not "
-                   "executed); its t5% and OS are simulated from the switching law")
+        _echo_wrapped("", "* fcs_mpc: margins and robustness of its baseline PI "
+                      "(informational, not executed); its t5% and OS are simulated from the "
+                      "switching law")
 
 
 def _fmt(value) -> str:

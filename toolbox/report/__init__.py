@@ -35,8 +35,8 @@ import numpy as np
 
 from . import plots
 
-__all__ = ["ReportData", "build_context", "write_html", "write_pdf", "zpk_text", "fmt", "NOT_COMPUTED",
-           "METHOD_NAMES", "MARGIN_ROWS"]
+__all__ = ["ReportData", "build_context", "write_html", "write_pdf", "zpk_text", "fmt", "fmt_q", "NOT_COMPUTED",
+           "METHOD_NAMES", "MARGIN_ROWS", "BASELINE_LABEL", "RESOLUTION", "sim_metric_unit"]
 
 NOT_COMPUTED = "not computed"
 
@@ -186,6 +186,68 @@ def fmt(value: Any, digits: int = 4) -> str:
     return str(value)
 
 
+#: Display resolution of each unit: a value whose magnitude is below it is
+#: round-off (e.g. a static error of 4.4e-14) and is shown as 0 (stated in the
+#: report under the tables, :data:`RESOLUTION_NOTE`).
+RESOLUTION = {"s": 1e-7, "A": 1e-6, "V": 1e-6, "%": 1e-3, "dB": 1e-3, "deg": 1e-3,
+              "rad/s": 1e-3, "rad": 1e-6, "Hz": 1e-3, "1/s": 1e-3, "1": 1e-9,
+              "A^2": 1e-12, "(N m)^2": 1e-12}
+RESOLUTION_NOTE = ("Numbers to 4 significant digits; values below the resolution of their "
+                   "unit are shown as 0 (s: 0.1 us, A and V: 1 uA and 1 uV, %, dB, deg, "
+                   "rad/s and 1/s: 0.001, dimensionless: 1e-9, A^2 and (N m)^2: 1e-12).")
+
+
+def fmt_q(value: Any, unit: str, digits: int = 4) -> str:
+    """:func:`fmt` of a quantity in ``unit``: below :data:`RESOLUTION` it is 0.
+
+    Parameters
+    ----------
+    value : float, int, str or None
+        The quantity (a string is shown as it is).
+    unit : str
+        Its unit, a key of :data:`RESOLUTION` (others: no resolution).
+    digits : int
+        Significant digits.
+    """
+    v = _as_float(value) if not isinstance(value, str) else None
+    res = RESOLUTION.get(unit)
+    if v is not None and res is not None and math.isfinite(v) and abs(v) < res:
+        return "0"
+    return fmt(value if not isinstance(value, (int, float, np.number)) or v is None else v,
+               digits)
+
+
+#: Units of the simulated metrics (:mod:`toolbox.sim._metrics`); ``signal``:
+#: the stepped signal's unit (A, or rad/s for a speed scenario).
+SIM_METRIC_UNITS = {
+    "response_time_5pct": "s", "rise_time_10_90": "s", "settling_time_2pct": "s",
+    "overshoot_pct": "%", "static_error": "signal", "final_value": "signal",
+    "static_error_abs": "A", "static_speed_error_abs": "rad/s",
+    "mse_torque": "(N m)^2", "mse_id": "A^2", "mse_iq": "A^2",
+    "commutations_per_s": "1/s", "cell_transitions_per_s": "1/s",
+    "saturation_time": "s", "final_speed": "rad/s",
+    "E_torque": "(N m)^2", "E_id": "A^2",
+}
+
+SPEED_KINDS = ("speed_step", "load_step")
+
+
+def sim_metric_unit(name: str, kind: str = "") -> str:
+    """Unit of a simulated metric of a scenario of ``kind`` ("" when unknown).
+
+    Parameters
+    ----------
+    name : str
+        Metric name (:mod:`toolbox.sim._metrics`).
+    kind : str
+        Scenario kind: the static error and final value of a speed scenario are rad/s.
+    """
+    unit = SIM_METRIC_UNITS.get(name, "")
+    if unit == "signal":
+        return "rad/s" if kind in SPEED_KINDS else "A"
+    return unit
+
+
 def _poly_factors(roots: np.ndarray, var: str = "s") -> str:
     """``(s + a)(s^2 + b s + c)`` text for real / complex-pair roots (rad/s)."""
     parts: list[str] = []
@@ -268,31 +330,81 @@ def _checks_of(data: ReportData) -> list | None:
     return checks
 
 
+#: Sweep parameters (``analysis.sweep.ranges``): name -> (label, unit text).
+_SWEEP_LABELS = {"R": "R", "Ld": "Ld", "Lq": "Lq", "flux": "flux", "speed_gain": "speed gain",
+                 "speed_offset": "speed offset", "delay_samples": "delay"}
+
+#: Quantities of the sweep's worst cases: key -> (words, unit).
+_WORST_WORDS = {"gain_margin_db": ("smallest gain margin", "dB"),
+                "phase_margin_deg": ("smallest phase margin", "deg"),
+                "stability_margin": ("smallest stability margin 1/max|S|", "1"),
+                "disk_margin": ("smallest disk margin", "1"),
+                "spectral_radius": ("largest closed-loop pole modulus", "1")}
+
+
+def _range_text(name: str, entry: Sequence) -> str:
+    """``R x0.5..2``, ``speed offset -10..10 rad/s (mechanical)``, ``delay +0..1 periods``."""
+    lo, hi = entry[0], entry[1]
+    kind = entry[2] if len(entry) > 2 else "scale"
+    label = _SWEEP_LABELS.get(name, name)
+    if kind == "offset":
+        return f"{label} {fmt(lo)}..{fmt(hi)} rad/s (mechanical)"
+    if kind == "int":
+        return f"{label} {fmt(lo)}..{fmt(hi)} periods"
+    return f"{label} x{fmt(lo)}..{fmt(hi)}"
+
+
+def _params_text(params: Mapping) -> str:
+    """One sweep set: ``R x0.5, Ld x0.5, ..., speed offset -10 rad/s, delay 1 period(s)``."""
+    parts = []
+    for k, v in params.items():
+        label = _SWEEP_LABELS.get(k, k)
+        if k == "speed_offset":
+            parts.append(f"{label} {fmt(_as_float(v))} rad/s")
+        elif k == "delay_samples":
+            parts.append(f"{label} {fmt(v)} period(s)")
+        else:
+            parts.append(f"{label} x{fmt(_as_float(v))}")
+    return ", ".join(parts)
+
+
 def _robustness_of(analysis: Mapping | None) -> dict | None:
-    """Sweep summary cases from ``analysis.sweep``: worst cases and unstable sets."""
+    """The stress sweep of ``analysis.sweep``, counted as the sweep counts
+    (unstable sets / sets), its worst cases and its first unstable sets."""
     sweep = (analysis or {}).get("sweep") or {}
     if not sweep:
         return None
     cases = []
     for axis, worst in sorted(sweep.get("worst", {}).items()):
         for quantity, entry in worst.items():
-            cases.append({"label": f"{axis} axis: worst {quantity}",
+            words, unit = _WORST_WORDS.get(quantity, (quantity, ""))
+            cases.append({"label": f"{axis} axis: {words}",
                           "params": entry.get("params", {}),
-                          "metrics": {quantity: entry.get("value")}, "pass": True})
+                          "metrics": {quantity: entry.get("value")}, "pass": True,
+                          "value": f"{fmt_q(entry.get('value'), unit)} {unit}".strip()})
     cases += [{"label": f"unstable set {k + 1}", "params": {
         n: v for n, v in ex.items() if n not in ("spectral_radius", "speed_rad_s")},
-        "metrics": {"spectral_radius": ex.get("spectral_radius")}, "pass": False}
+        "metrics": {"spectral_radius": ex.get("spectral_radius")}, "pass": False,
+        "value": (f"largest closed-loop pole modulus {fmt(_as_float(ex.get('spectral_radius')))}"
+                  + (f" at {fmt(_as_float(ex.get('speed_rad_s')))} rad/s electrical"
+                     if ex.get("speed_rad_s") is not None else ""))}
         for k, ex in enumerate(sweep.get("unstable_examples", []))]
     worst_rho = _as_float(sweep.get("worst_spectral_radius"))
-    notes = (f"{sweep.get('n_sets')} parameter sets over {sweep.get('ranges')}, at speeds "
-             f"{sweep.get('speeds_rad_s')} rad/s (electrical): {sweep.get('n_unstable')} "
-             f"unstable, worst closed-loop spectral radius "
-             f"{fmt(worst_rho)}.")
-    return {"cases": cases, "worst": [c["label"] for c in cases if not c["pass"]],
-            "notes": notes}
+    speeds = [_as_float(s) for s in sweep.get("speeds_rad_s") or []]
+    speeds = [s for s in speeds if s is not None]
+    ranges = ", ".join(_range_text(k, v) for k, v in (sweep.get("ranges") or {}).items())
+    n_sets, n_unstable = sweep.get("n_sets"), sweep.get("n_unstable")
+    speed_text = (f"electrical speeds {fmt(min(speeds))}..{fmt(max(speeds))} rad/s "
+                  f"({len(speeds)} speeds)" if speeds else "zero speed")
+    notes = (f"Stress sweep (wider than the drift box of the robustness verdict): "
+             f"{ranges}; {speed_text}. Largest closed-loop pole modulus over the sweep "
+             f"{fmt(worst_rho)} (stable below 1).")
+    return {"cases": cases, "worst": [c["label"] for c in cases],
+            "notes": notes, "n_sets": n_sets, "n_unstable": n_unstable,
+            "examples_shown": len(sweep.get("unstable_examples", []))}
 
 
-def _verdict_card(verification: Mapping | None) -> dict | None:
+def _verdict_card(verification: Mapping | None, baseline: bool = False) -> dict | None:
     """The robustness card: verify.json's drift-box verdict (``robustness``),
     pass (green) or fail (red), with the worst multiloop disk margin, the
     unstable sets and the box; None without verification."""
@@ -301,11 +413,74 @@ def _verdict_card(verification: Mapping | None) -> dict | None:
         return None
     passed = int(rob.get("n_unstable") or 0) == 0
     first = rob.get("first_unstable") or {}
-    return {"status": "pass" if passed else "fail",
+    # the baseline PI of fcs_mpc does not run: its verdict decides nothing (neutral)
+    return {"status": "info" if baseline else "pass" if passed else "fail",
             "disk_margin": fmt(_as_float(rob.get("worst_disk_margin"))),
             "unstable": f"{rob.get('n_unstable')} / {rob.get('n_sets')}",
             "box": str(rob.get("box_text", "")),
-            "first": (", ".join(f"{k} {fmt(v)}" for k, v in first.items()) if first else None)}
+            "first": (", ".join(f"{k} {fmt(v)}" for k, v in first.items()) if first else None),
+            "informational": BASELINE_LABEL if baseline else None}
+
+
+#: How the loop figures of a method whose axes do not run are labelled (fcs_mpc:
+#: the axes hold paper 002's baseline PI, the switching law runs instead).
+BASELINE_LABEL = "baseline PI, informational, not executed"
+
+
+def _first_failure(check: Mapping) -> str:
+    """One sentence saying why ``check`` (a failing requirement check) fails."""
+    key = str(check.get("key", ""))
+    quantity = str(check.get("quantity", ""))
+    unit = str(check.get("unit", ""))
+    if quantity in MARGIN_ROWS and check.get("value") is not None:
+        label, _ = MARGIN_ROWS[quantity]
+        side = "below" if key.startswith("min") else "above"
+        where = f" ({check['axis']} axis)" if check.get("axis") else ""
+        text = (f"{label}{where} {fmt_q(check.get('value'), unit)} {unit} is {side} the "
+                f"required {fmt_q(check.get('bound'), unit)} {unit} ({key})")
+    else:
+        reason = str(check.get("reason") or "").strip() or (
+            f"{quantity} = {fmt_q(_as_float(check.get('value')), unit)} {unit} against the "
+            f"bound {_bound_text(check)} {unit}")
+        where = check.get("scenario")
+        text = (f"scenario \u201c{where}\u201d, {key}: {reason}" if where
+                else f"{key}: {reason}")
+    text = " ".join(text.split()).rstrip(".")
+    return text[:1].upper() + text[1:] + "."
+
+
+def _banner(data: ReportData, checks: list | None) -> dict:
+    """The verdict banner: PASS (green) / FAIL (red) / NOT VERIFIED (grey),
+    the failing count and the first failing reason in one sentence.
+
+    A design passes when every requirement and default check holds
+    (verify.json ``passed`` when given) and no executed axis is unstable.
+    """
+    failing = [c for c in checks or [] if not c.get("pass")]
+    unstable = [ax for ax, s in sorted(((data.analysis or {}).get("stability") or {}).items())
+                if isinstance(s, Mapping) and s.get("stable") is False]
+    verified = (data.verification or {}).get("passed")
+    if checks is None and verified is None:
+        return {"status": "none", "headline": "NOT VERIFIED", "count": "",
+                "reason": "No analysis or verification was run: nothing was checked."}
+    passed = not failing and not unstable and verified is not False
+    n = len(checks or [])
+    if passed:
+        return {"status": "pass", "headline": "PASS",
+                "count": f"{n} / {n} checks pass",
+                "reason": "Every requirement and default check holds."}
+    if failing:
+        reason = _first_failure(failing[0])
+    elif unstable:
+        reason = (f"The executed sampled loop of the {' and '.join(unstable)} axis is unstable "
+                  "(a closed-loop pole on or outside the unit circle).")
+    else:
+        reason = next((f"{w.rstrip('.')}." for w in data.warnings or []
+                       if "controller.h" in str(w) or "header" in str(w)),
+                      "The verification failed (see the requirement checks).")
+    return {"status": "fail", "headline": "FAIL",
+            "count": f"{len(failing)} / {n} checks fail" if n else "",
+            "reason": reason}
 
 
 def _certificate_of(analysis: Mapping | None) -> dict | None:
@@ -435,7 +610,7 @@ def _margin_table(margins: dict | None, checks: list | None) -> list[dict]:
         bound = "; ".join(dict.fromkeys(_bound_text(c) for c in req)) if req else ""
         status = ("pass" if all(c.get("pass") for c in req) else "fail") if req else ""
         rows.append({"key": key, "label": label, "unit": unit,
-                     "d": fmt(vals["d"]), "q": fmt(vals["q"]),
+                     "d": fmt_q(vals["d"], unit), "q": fmt_q(vals["q"], unit),
                      "requirement": bound, "status": status})
     return rows
 
@@ -443,7 +618,7 @@ def _margin_table(margins: dict | None, checks: list | None) -> list[dict]:
 def _bound_text(check: Mapping) -> str:
     key = str(check.get("key", ""))
     op = ">=" if key.startswith("min") else "<=" if key.startswith("max") else "vs"
-    return f"{op} {fmt(check.get('bound'))}"
+    return f"{op} {fmt_q(check.get('bound'), str(check.get('unit', '')))}"
 
 
 def _check_rows(checks: list | None) -> list[dict]:
@@ -454,8 +629,8 @@ def _check_rows(checks: list | None) -> list[dict]:
         why = f" ({c['reason']})" if not c.get("pass") and c.get("reason") else ""
         rows.append({"key": str(c.get("key", "")), "quantity": str(c.get("quantity", "")) + why,
                      "where": str(where), "bound": _bound_text(c),
-                     "value": fmt(_as_float(c.get("value")) if c.get("value") is not None
-                                  else None),
+                     "value": fmt_q(_as_float(c.get("value")) if c.get("value") is not None
+                                    else None, str(c.get("unit", ""))),
                      "unit": str(c.get("unit", "")),
                      "status": "pass" if c.get("pass") else "fail"})
     return rows
@@ -583,7 +758,9 @@ def _scenarios(verification: Mapping | None, traces: Sequence) -> list[dict]:
             "name": str(sc.get("name", f"scenario {k + 1}")),
             "kind": str(sc.get("kind", "")),
             "status": "" if passed is None else ("pass" if passed else "fail"),
-            "metrics": [(str(m), fmt(_as_float(v) if not isinstance(v, str) else v))
+            "metrics": [(str(m), (fmt_q(_as_float(v), sim_metric_unit(str(m), sc.get("kind", "")))
+                                  if not isinstance(v, str) else v),
+                         sim_metric_unit(str(m), str(sc.get("kind", ""))))
                         for m, v in metrics.items()],
             "svg": plots.scenario_svg(tr, prefix=f"sc{k}") if tr else None,
         })
@@ -595,21 +772,25 @@ def _robustness(rob: Mapping | None) -> dict | None:
         return None
     cases = list(rob.get("cases", []))
     worst = [str(w.get("label") if isinstance(w, Mapping) else w) for w in rob.get("worst", [])]
-    metric_names: list[str] = []
-    for c in cases:
-        for m in (c.get("metrics") or {}):
-            if m not in metric_names:
-                metric_names.append(str(m))
     worst_rows = []
     for c in cases:
         if str(c.get("label")) in worst:
-            worst_rows.append({"label": str(c.get("label")), "params": fmt(c.get("params", {})),
-                               "metrics": fmt(c.get("metrics", {})),
+            worst_rows.append({"label": str(c.get("label")),
+                               "params": _params_text(c.get("params") or {}),
+                               "metrics": str(c.get("value") or fmt(c.get("metrics", {}))),
                                "status": "pass" if c.get("pass") else "fail"})
-    n_fail = sum(1 for c in cases if c.get("pass") is False)
-    return {"n_cases": len(cases), "n_fail": n_fail, "notes": str(rob.get("notes", "")),
-            "metrics": metric_names, "worst": worst_rows,
-            "svg": plots.robustness_svg(cases, worst) if cases else None}
+    n_sets, n_unstable = rob.get("n_sets"), rob.get("n_unstable")
+    n_unstable_i = int(n_unstable) if isinstance(n_unstable, (int, float)) else None
+    count = (f"{n_unstable} / {n_sets} sets unstable" if n_sets is not None
+             else f"{sum(1 for c in cases if c.get('pass') is False)} failing cases")
+    return {"count": count, "status": ("pass" if n_unstable_i == 0 else "fail"
+                                       if n_unstable_i else ""),
+            "notes": str(rob.get("notes", "")),
+            "shown": (f"The first {rob.get('examples_shown')} unstable sets are listed."
+                      if rob.get("examples_shown") else ""),
+            "worst": worst_rows,
+            "svg": (plots.robustness_svg(cases, [str(c.get("label")) for c in cases if c.get("pass")])
+                    if cases else None)}
 
 
 def _provenance(data: ReportData) -> list[tuple[str, str]]:
@@ -636,8 +817,10 @@ def build_context(data: ReportData) -> dict:
     dict
         Keys ``title, motor, drive, requirements, equations, controller,
         margins, checks, figures, step, robustness, verdict_card (the
-        robustness card: drift-box verdict), certificate, scenarios,
-        provenance, margins_given``; the HTML and typst templates render it.
+        robustness card: drift-box verdict), banner (the verdict banner:
+        ``status`` pass/fail/none, ``headline``, ``count``, ``reason``),
+        baseline (the label of informational margins, or None), certificate,
+        scenarios, provenance, margins_given, resolution_note``; the HTML and typst templates render it.
         ``step`` holds the analysis' linear step figures per axis (numbers,
         s and %). SVG strings are generated here (trusted); every other
         string is user or derived text that the templates escape.
@@ -661,6 +844,8 @@ def build_context(data: ReportData) -> dict:
     traces = _scenario_traces(data)
     responses = (data.analysis or {}).get("responses")
     certificate = _certificate_of(data.analysis)
+    # fcs_mpc: the axes (margins, loop figures, sweeps) are the baseline PI, which does not run
+    baseline = getattr(art, "fcs", None) is not None or art.method == "fcs_mpc"
     return {
         "title": str(data.title),
         "motor": motor_rows, "drive": drive_rows, "requirements": req_rows,
@@ -674,7 +859,10 @@ def build_context(data: ReportData) -> dict:
         "figures_given": bool(responses),
         "step": _step_of(data.analysis),
         "robustness": _robustness(_robustness_of(data.analysis)),
-        "verdict_card": _verdict_card(data.verification),
+        "verdict_card": _verdict_card(data.verification, baseline),
+        "banner": _banner(data, checks),
+        "baseline": BASELINE_LABEL if baseline else None,
+        "resolution_note": RESOLUTION_NOTE,
         "certificate": ([(str(k), fmt(v)) for k, v in certificate.items()]
                         if certificate else None),
         "scenarios": (_scenarios(data.verification, traces)

@@ -432,29 +432,49 @@ def scenario_svg(traces: dict, prefix: str | None = None) -> str:
     return fig.svg(prefix)
 
 
+#: Panel titles of the robustness figure.
+ROBUSTNESS_PANELS = {"spectral_radius": "largest pole modulus",
+                     "gain_margin_db": "gain margin", "phase_margin_deg": "phase margin",
+                     "stability_margin": "1/max|S|", "disk_margin": "disk margin"}
+
+
 def robustness_svg(cases: Sequence[Mapping], worst: Sequence[str], prefix: str = "rob") -> str:
-    """Metric values over the sweep cases; failing cases red, worst cases ringed."""
+    """Sweep cases per metric: failing (unstable) sets red, passing green,
+    worst cases ringed.
+
+    A panel holds the cases that carry its metric (a case's ``metrics``);
+    the failing sets' panel (``spectral_radius``, the largest closed-loop
+    pole modulus, with the stability limit 1) comes first, so every set the
+    legend calls "fail" is drawn.
+    """
     names: list[str] = []
-    for c in cases:
+    failing = [c for c in cases if c.get("pass") is False]
+    for c in failing + [c for c in cases if c.get("pass") is not False]:
         for m in (c.get("metrics") or {}):
             if m not in names:
                 names.append(m)
     names = names[:3] or ["(none)"]
     fig = Figure(7.2, 1.2 + 1.9 * len(names), rows=len(names))
     axs = fig.axes
-    idx = np.arange(len(cases))
-    ok = np.array([c.get("pass") is not False for c in cases])
-    is_worst = np.array([str(c.get("label")) in set(worst) for c in cases])
+    worst_set = set(worst)
     for ax, m in zip(axs, names):
-        vals = np.array([float((c.get("metrics") or {}).get(m, np.nan)) for c in cases])
-        ax.markers(idx[ok], vals[ok], "#2a7f3f", size=4, label="pass")
+        idx = np.array([k for k, c in enumerate(cases) if m in (c.get("metrics") or {})], int)
+        vals = np.array([float(cases[k]["metrics"][m]) if cases[k]["metrics"][m] is not None
+                         else np.nan for k in idx])
+        ok = np.array([cases[k].get("pass") is not False for k in idx], bool)
+        is_worst = np.array([str(cases[k].get("label")) in worst_set for k in idx], bool)
+        if ok.any():
+            ax.markers(idx[ok], vals[ok], "#2a7f3f", size=4, label="pass")
         if (~ok).any():
-            ax.markers(idx[~ok], vals[~ok], "#c23b22", size=4, label="fail")
+            ax.markers(idx[~ok], vals[~ok], "#c23b22", size=6, label="fail (unstable set)")
+        if m == "spectral_radius":
+            ax.hline(1.0, "#5b6472", 0.8)
         if is_worst.any():
             ax.markers(idx[is_worst], vals[is_worst], "#000000", size=10, filled=False,
                        label="worst")
-        ax.ylabel, ax.ylabel_size = f"{m} ({METRIC_UNITS.get(m, '1')})", 8.0
+        ax.ylabel = f"{ROBUSTNESS_PANELS.get(m, m)} ({METRIC_UNITS.get(m, '1')})"
+        ax.ylabel_size = 8.0
         ax.legend_loc, ax.legend_size = "upper right", 7.0
-    axs[-1].xlabel = "sweep case (index in the sweep)"
-    axs[0].title = "Robustness sweep"
+    axs[-1].xlabel = "case (row of the table below)"
+    axs[0].title = "Robustness stress sweep"
     return fig.svg(prefix)

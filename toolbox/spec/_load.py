@@ -13,7 +13,7 @@ import math
 import re
 import tomllib
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 from .._io import check_data_depth, check_text_depth, read_limited
 from ..errors import SpecError
@@ -47,13 +47,17 @@ DRIVE_KEYS = ("vdc", "sample_time", "delay_samples", "switching_frequency",
               "angle_compensation")
 
 
-def load_spec(path: str | Path) -> Spec:
+def load_spec(path: str | Path, overrides: Sequence[tuple[str, str]] = ()) -> Spec:
     """Read and validate a spec file.
 
     Parameters
     ----------
     path : str or Path
         TOML file (format: README.md "Spec files", toolbox/ARCHITECTURE.md).
+    overrides : sequence of (option, "key.path=value"), optional
+        Values replacing those of the file before validation, in order
+        (``cct design --set``/``--method``, :mod:`toolbox.spec._overrides`);
+        an error on an overridden key names the override.
 
     Returns
     -------
@@ -76,7 +80,18 @@ def load_spec(path: str | Path) -> Spec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SpecError("", "valid TOML", str(err), file=name) from None
-    return spec_from_dict(data, file=name)
+    if not overrides:
+        return spec_from_dict(data, file=name)
+    from ._overrides import apply_overrides, blame_overrides
+
+    try:
+        data = apply_overrides(data, overrides)
+    except SpecError as err:
+        raise err.with_file(name) from None
+    try:
+        return spec_from_dict(data, file=name)
+    except SpecError as err:
+        raise blame_overrides(err, overrides) from None
 
 
 def spec_from_dict(data: Mapping[str, Any], file: str | None = None) -> Spec:
@@ -199,6 +214,22 @@ class _Unreported(Table):
         return super()._get(name, default, expected)
 
 
+def _lenient_table(value: Any, prefix: str, allowed: Sequence[str], errors: Collector) -> Table:
+    """``Table(value, prefix, allowed)`` that records each unknown key in
+    ``errors`` and goes on reading the known ones (every error of the table in
+    one run, not only the first)."""
+    if not isinstance(value, Mapping):
+        return Table(value, prefix, allowed)  # not a table: nothing else to read
+    known = {}
+    for key, item in value.items():
+        if key in allowed:
+            known[key] = item
+        else:
+            with errors.check():
+                check_keys({key: item}, allowed, prefix)
+    return Table(known, prefix)
+
+
 class _AlreadyReported(SpecError):
     def __init__(self) -> None:
         super().__init__("", "reported already")
@@ -214,12 +245,12 @@ def _motor_logged(value: Any) -> tuple[Motor, dict, list]:
     conversion log of the datasheet keys and unit strings."""
     if value is None:
         raise SpecError("motor", "a [motor] table (missing)")
-    t = Table(value, "motor", MOTOR_KEYS)
+    errors = Collector()
+    t = _lenient_table(value, "motor", MOTOR_KEYS, errors)
     catalog: dict[str, Any] = {}
     if t.has("catalog"):
         name = t.string("catalog", choices=sorted(CATALOG))
         catalog = {k: v for k, v in CATALOG[name].items() if v is not None}
-    errors = Collector()
     # datasheet keys -> model keys; the raw table keeps what was written, so
     # reloading it (controller.json's spec) converts the same way again
     merged, log = resolve_motor(t.data, catalog, errors)
@@ -255,8 +286,8 @@ def _drive(value: Any) -> Drive:
 def _drive_logged(value: Any) -> tuple[Drive, list]:
     if value is None:
         raise SpecError("drive", "a [drive] table (missing)")
-    t = Table(value, "drive", DRIVE_KEYS)
     errors = Collector()
+    t = _lenient_table(value, "drive", DRIVE_KEYS, errors)
     merged, log = resolve_drive(t.data, errors)
     t = _Unreported(merged, "drive", reported_keys(errors, "drive"))
     fields = dict(
@@ -349,18 +380,27 @@ def _export_prefix(value: Any) -> str:
 
 
 def _requirements(value: Any) -> Requirements:
-    t = Table(value, "requirements", (*REQUIREMENT_KEYS, "parameter_drift"))
+    errors = Collector()
+    t = _lenient_table(value, "requirements", (*REQUIREMENT_KEYS, "parameter_drift"), errors)
     bounds = {}
-    for key in t.data:
+    for key in t.data:  # every bound checked: all errors of the table in one run
         if key == "parameter_drift":
             continue
         unit = REQUIREMENT_KEYS[key][3]
-        bounds[key] = t.number(key, unit=unit, nonnegative=key != "min_gain_margin_db")
-    drift = t.table("parameter_drift", DRIFT_PARAMETERS)
-    if t.has("parameter_drift") and not drift.data:
-        raise SpecError(drift.prefix, "factor ranges of at least one of "
-                        + ", ".join(DRIFT_PARAMETERS), {})
-    return Requirements(bounds, {name: _drift_range(drift, name) for name in drift.data})
+        with errors.check():
+            bounds[key] = t.number(key, unit=unit, nonnegative=key != "min_gain_margin_db")
+    ranges = {}
+    if t.has("parameter_drift"):
+        drift = _lenient_table(t.raw("parameter_drift"), t.key("parameter_drift"),
+                               DRIFT_PARAMETERS, errors)
+        if not drift.data and not errors.failed:
+            errors.add(SpecError(drift.prefix, "factor ranges of at least one of "
+                                 + ", ".join(DRIFT_PARAMETERS), {}))
+        for name in drift.data:
+            with errors.check():
+                ranges[name] = _drift_range(drift, name)
+    errors.raise_if_any()
+    return Requirements(bounds, ranges)
 
 
 def _drift_range(table: Table, name: str) -> tuple[float, float]:
