@@ -4,7 +4,8 @@
   both may then fold ``isfinite()`` to 1), a NaN or infinite input still gives
   ``status = STATUS_BAD_INPUT`` and a finite (held) output: the header tests
   the IEEE-754 bits. Measured currents beyond ``I_PLAUSIBLE`` (2 x
-  ``motor.max_current``, else 2 x 2 x rated) and a speed beyond ``W_PLAUSIBLE``
+  ``motor.max_current``, else 2 x the largest of 2 x rated,
+  ``V_MAX / R`` and ``flux / min(Ld, Lq)``) and a speed beyond ``W_PLAUSIBLE``
   (2 x ``drive.max_speed``) give ``STATUS_IMPLAUSIBLE``, the output held and
   the state kept; ``set_vdc`` refuses NaN, inf, 0 (1) and readings outside
   ``[VDC_MIN, VDC_PLAUSIBLE]`` = [1e-3, 2] x the nominal bus (4), keeping the

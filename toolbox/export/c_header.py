@@ -922,20 +922,22 @@ def plausibility_limits(artifact, motor, drive, v_max: float) -> dict[str, float
     -------
     dict
         ``i`` (A): ``|i_d|``, ``|i_q|`` measured beyond it are refused;
-        ``PLAUSIBLE_MARGIN`` x the current range (``motor.max_current``, else
-        2 x rated, else the larger of the voltage-limited current
-        ``V_MAX / R`` and the short-circuit current ``flux / min(Ld, Lq)``).
+        ``PLAUSIBLE_MARGIN`` x the current range: ``motor.max_current``, else
+        the largest of 2 x rated, the voltage-limited current ``V_MAX / R``
+        and the short-circuit current ``flux / min(Ld, Lq)`` (currents the
+        drive can produce are never refused without a stated maximum).
         ``w`` (rad/s, mechanical): ``PLAUSIBLE_MARGIN`` x ``drive.max_speed``,
         else x the larger of ``motor.rated_speed`` and the speed at which the
         back-EMF is twice ``V_MAX``. ``vdc_min``, ``vdc_max`` (V): the bus
         readings ``set_vdc`` accepts, ``1e-3`` and ``2`` x ``drive.vdc``.
     """
     dec = artifact.decoupling
-    i_rng = None
-    if motor is not None:
-        i_rng = motor.max_current or (2.0 * motor.rated_current if motor.rated_current else None)
+    i_rng = motor.max_current if motor is not None else None
     if not i_rng:
-        i_rng = max(v_max / max(dec.R_c, 1e-9), dec.flux_c / max(min(dec.Ld_c, dec.Lq_c), 1e-12))
+        # currents the drive can produce: never refused without a stated maximum
+        rated = 2.0 * motor.rated_current if motor is not None and motor.rated_current else 0.0
+        i_rng = max(rated, v_max / max(dec.R_c, 1e-9),
+                    dec.flux_c / max(min(dec.Ld_c, dec.Lq_c), 1e-12))
     w_rng = getattr(drive, "max_speed", None) if drive is not None else None
     if not w_rng:
         w_emf = 2.0 * v_max / max(dec.pole_pairs * dec.flux_c, 1e-9)
