@@ -53,9 +53,17 @@ static int faults_ = 0, last_status_ = 0, clamped_ = 0;
 static double theta_at(double t) { return W_ * t; }
 
 /* ---- drivers: what the usage example's stand-ins stand for */
+#ifndef SIL_GLITCH_K
 static float adc_i_d(void) { return (float)id_; }
 static float adc_i_q(void) { return (float)iq_; }
 static float adc_vdc(void) { return (float)VDC_; }
+#else
+/* sensor glitches (tests/export/test_hardened.py): a 1e6 A current sample in
+ * period SIL_GLITCH_K, a 1e30 V bus reading in period SIL_GLITCH_K + 1 */
+static float adc_i_d(void) { return (float)id_; }
+static float adc_i_q(void) { return k_ == SIL_GLITCH_K ? 1e6f : (float)iq_; }
+static float adc_vdc(void) { return k_ == SIL_GLITCH_K + 1 ? 1e30f : (float)VDC_; }
+#endif
 static float encoder_speed(void) { return (float)OMEGA_M_; }
 static float encoder_theta_e(void)
 {

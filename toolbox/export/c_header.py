@@ -896,8 +896,112 @@ def _environment():
     return _ENV
 
 
+#: the plausible ranges of the measured signals are this many times the
+#: ranges the drive is rated for (a transient overshoot never trips them; an
+#: ADC or encoder glitch does)
+PLAUSIBLE_MARGIN = 2.0
+#: set_vdc accepts VDC_MIN_PER_NOMINAL x .. VDC_MAX_PER_NOMINAL x the nominal bus
+VDC_MIN_PER_NOMINAL = 1e-3
+VDC_MAX_PER_NOMINAL = 2.0
+
+
+def plausibility_limits(artifact, motor, drive, v_max: float) -> dict[str, float]:
+    """The plausible ranges the float header checks its measurements against.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+        Controller (its decoupling model supplies the fallbacks).
+    motor, drive : Motor, Drive or None
+        Ratings: ``motor.max_current`` (else 2 x ``motor.rated_current``),
+        ``drive.max_speed``, ``drive.vdc``.
+    v_max : float
+        Voltage limit at the nominal bus (V).
+
+    Returns
+    -------
+    dict
+        ``i`` (A): ``|i_d|``, ``|i_q|`` measured beyond it are refused;
+        ``PLAUSIBLE_MARGIN`` x the current range: ``motor.max_current``, else
+        the largest of 2 x rated, the voltage-limited current ``V_MAX / R``
+        and the short-circuit current ``flux / min(Ld, Lq)`` (currents the
+        drive can produce are never refused without a stated maximum).
+        ``w`` (rad/s, mechanical): ``PLAUSIBLE_MARGIN`` x ``drive.max_speed``,
+        else x the larger of ``motor.rated_speed`` and the speed at which the
+        back-EMF is twice ``V_MAX``. ``vdc_min``, ``vdc_max`` (V): the bus
+        readings ``set_vdc`` accepts, ``1e-3`` and ``2`` x ``drive.vdc``.
+    """
+    dec = artifact.decoupling
+    i_rng = motor.max_current if motor is not None else None
+    if not i_rng:
+        # currents the drive can produce: never refused without a stated maximum
+        rated = 2.0 * motor.rated_current if motor is not None and motor.rated_current else 0.0
+        i_rng = max(rated, v_max / max(dec.R_c, 1e-9),
+                    dec.flux_c / max(min(dec.Ld_c, dec.Lq_c), 1e-12))
+    w_rng = getattr(drive, "max_speed", None) if drive is not None else None
+    if not w_rng:
+        w_emf = 2.0 * v_max / max(dec.pole_pairs * dec.flux_c, 1e-9)
+        w_rng = max(w_emf, (motor.rated_speed or 0.0) if motor is not None else 0.0)
+    vdc = drive.vdc if drive is not None else v_max * math.sqrt(3.0)
+    return {"i": PLAUSIBLE_MARGIN * float(i_rng), "w": PLAUSIBLE_MARGIN * float(w_rng),
+            "vdc_min": VDC_MIN_PER_NOMINAL * float(vdc), "vdc_max": VDC_MAX_PER_NOMINAL * float(vdc)}
+
+
+def _plausible_context(artifact, motor, drive, v_max: float) -> dict[str, str]:
+    """The plausibility macros' values, formatted and range-checked."""
+    lim = plausibility_limits(artifact, motor, drive, v_max)
+    return {"i": _f(lim["i"], "motor.max_current", "I_PLAUSIBLE"),
+            "w": _f(lim["w"], "drive.max_speed", "W_PLAUSIBLE"),
+            "vdc_min": _f(lim["vdc_min"], "drive.vdc", "VDC_MIN"),
+            "vdc_max": _f(lim["vdc_max"], "drive.vdc", "VDC_PLAUSIBLE")}
+
+
+def preset_coefficients(real: Realisation) -> tuple[np.ndarray, np.ndarray]:
+    """The bumpless-transfer state of one axis law: ``x = g c + H u``.
+
+    For inputs ``u = [i_ref, i_meas]`` held and a wanted linear-law output
+    ``v``, ``c = v - D u``; ``x`` solves ``C x = c`` exactly (the next output is
+    ``v``) and, among those states, is the closest to the steady-state manifold
+    ``(I - A) x = B u`` in least squares: with an integrator (a pole at z = 1)
+    on the manifold exactly, so the output stays ``v`` while the error stays
+    0. ``[I - A; C]`` has full column rank for an observable (minimal) law,
+    which makes the solution unique. In the executed coordinates of ``real``
+    (SOS: the df2T states ``x[2k], x[2k+1]`` of stage ``k``).
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        ``g`` (n,) and ``H`` (n, 2); empty for a static law (n = 0).
+    """
+    n = real.order
+    if n == 0:
+        return np.zeros(0), np.zeros((0, 2))
+    M = np.eye(n) - real.A
+    C = real.C.reshape(1, n)
+    K = np.block([[M.T @ M, C.T], [C, np.zeros((1, 1))]])
+    # right-hand sides for c (unit) and for each input channel of u
+    rhs = np.zeros((n + 1, 3))
+    rhs[n, 0] = 1.0
+    rhs[:n, 1:] = M.T @ real.B
+    sol = np.linalg.solve(K, rhs)
+    return sol[:n, 0], sol[:n, 1:]
+
+
+def _preset_context(real: Realisation, key: str, ax: str) -> dict:
+    what = f"{ax}-axis preset coefficient"
+    g, H = preset_coefficients(real)
+    ctx = {"n": real.order, "d0": _f(real.D[0, 0], key, what), "d1": _f(real.D[0, 1], key, what),
+           "one_dof": real.form == "sos"}
+    if real.order:
+        # coefficients below 1e-30 are round-off of exact zeros
+        clean = lambda a: np.where(np.abs(a) < 1e-30, 0.0, a)  # noqa: E731
+        ctx.update(g=_farr(clean(g), key, what), h=_farr(clean(H).ravel(), key, what))
+    return ctx
+
+
 def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: bool,
-                   comp: bool) -> None:
+                   comp: bool, plausible: dict | None = None, convention: str = "amplitude",
+                   ) -> None:
     """The float path (templates/float.c.j2)."""
     inputs = ["i_d_ref", "i_q_ref", "i_d", "i_q", "omega_m"] + (["theta_e"] if hexagon else [])
     checks = [f"{N}_finite(in->{v})" for v in inputs]
@@ -911,6 +1015,8 @@ def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: boo
         axes=[_axis_context(reals[ax], ax, key) for ax in AXES],
         checks=checks,
         check_pairs=[" && ".join(checks[i:i + 2]) for i in range(2, len(checks), 2)],
+        plausible=plausible, convention=convention,
+        presets=[_preset_context(reals[ax], key, ax) for ax in AXES],
         aw=[ln.strip().replace("s->", "nx.") for ln in aw]))
 
 
@@ -1121,7 +1227,9 @@ def _write_fcs_header(artifact, motor, drive, name: str, title: str | None,
     t.lines.extend(_render("fcs_top.c.j2", prov=_provenance(artifact, title), N=N, P=P,
                            U=N.upper(), guard=guard, delay=int(artifact.delay_samples), d=d))
     t("")
-    t.lines.extend(_render("fcs.c.j2", N=N, P=P, U=N.upper(), predict=predict))
+    v_hex = k_hex * drive.vdc * math.sqrt(3.0) / 2.0        # the hexagon's apothem
+    t.lines.extend(_render("fcs.c.j2", N=N, P=P, U=N.upper(), predict=predict,
+                           plausible=_plausible_context(artifact, motor, drive, v_hex)))
     if example:
         t("")
         _example(t, N, P, fcs=True)
@@ -1267,7 +1375,9 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
             t(f"#define {P}{ax.upper()}_NUM_STAGES {r.sos.shape[0]}")
     t("")
     _float_section(t, check.realisations, N, P, _law_key(artifact), check.limit == "hexagon",
-                   _delay_comp_time(artifact) is not None)
+                   _delay_comp_time(artifact) is not None,
+                   _plausible_context(artifact, motor, drive, check.v_max),
+                   motor.convention if motor is not None else "amplitude")
     if _delay_comp_time(artifact) is not None:
         t.lines.extend(_render("placement.c.j2", N=N, P=P))
     _fixed_section(t, check, N, P, artifact, drive)
