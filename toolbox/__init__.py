@@ -18,7 +18,7 @@ from . import design as _design  # noqa: F401  registers the methods' parameter 
 
 #: public name -> defining module, imported on first access (PEP 562): the
 #: artifact and pipeline import scipy (its linear algebra, for toolbox._lti);
-#: ``import toolbox`` and ``cct --help`` must not pay for it (issue 13).
+#: ``import toolbox`` and ``cct --help`` must not pay for it.
 _LAZY = {
     "ControllerArtifact": "artifact",
     "analyse": "pipeline", "build_outputs": "pipeline", "design_spec": "pipeline",

@@ -1,4 +1,4 @@
-"""On-disk cache of results that depend only on source code (issue 13).
+"""On-disk cache of results that depend only on source code.
 
 :func:`~toolbox.plant.derive_dq_model` takes about 2.4 s of sympy work per
 Park convention, redone by every ``cct`` process; the numeric functions
@@ -130,7 +130,7 @@ def template_bytecode_cache(owner: str | Path):
     """jinja2's on-disk cache of compiled templates, in :func:`cache_dir`.
 
     Compiling the header's and the reports' templates costs about 0.15 s per
-    process (issue 13). jinja2 keys an entry by the template's name and checks
+    process. jinja2 keys an entry by the template's name and checks
     the template source's checksum and the Python bytecode version on load, and
     writes entries atomically (temporary file, rename). The compiled code also
     depends on the environment's options (delimiters, whitespace control), which

@@ -1,7 +1,7 @@
 """The toolbox's own linear time-invariant systems (numpy and scipy.linalg only).
 
 ``import control`` pulls scipy.signal and matplotlib.pyplot (0.8-1.0 s of
-every ``cct design``, issue 13), while the toolbox needs only a handful of
+every ``cct design``), while the toolbox needs only a handful of
 operations on small systems: this module provides them. python-control stays
 the independent route of the tests (``tests/test_lti.py``) and what users may
 pass in: :func:`as_statespace` duck-types its ``StateSpace`` and
@@ -90,7 +90,7 @@ def balanced_blocks(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     numbers), as views of one scaled copy of ``M``: for a caller that wrote
     the system matrix itself, one array operation for the three blocks
     instead of a system matrix rebuilt by :func:`state_scaling` and three
-    scalings (issue 13)."""
+    scalings."""
     n = M.shape[0] - 1
     if n:
         t = diagonal_scaling(M)
@@ -128,7 +128,7 @@ def modal_form(A: np.ndarray, B: np.ndarray,
     One eigen-decomposition ``A = V diag(lam) V^-1`` then serves every point:
     O(N n) array work instead of N LU factorisations (20000 points of a
     5-state loop: ~1 ms instead of ~13 ms; python-control's per-frequency
-    SLICOT ``tb05ad`` takes ~40 ms, issue 13). The sum loses about
+    SLICOT ``tb05ad`` takes ~40 ms). The sum loses about
     ``cond(V) eps`` relative accuracy, so it is offered only while
     ``n ||V^-1||_1`` (eig's columns have unit 2-norm, so this bounds
     ``cond_2(V)`` from above, without an SVD) is at most
@@ -368,14 +368,14 @@ class StateSpace:
         """Poles (dgeev) and invariant zeros (:func:`invariant_zeros`) of a SISO system,
         computed once:
         the H-infinity synthesis tests its controller's fastest pole with them
-        and the order reduction starts from the same zeros and poles (issue 13)."""
+        and the order reduction starts from the same zeros and poles."""
         return _eigvals(self.A), invariant_zeros(self.A, self.B, self.C, self.D)
 
     @cached_property
     def _zpk(self) -> tuple[np.ndarray, np.ndarray, float]:
         """Zeros, poles and leading gain of a SISO system, computed once: the
         H-infinity weight-bound check and the order reduction both start from
-        them (issue 13). The gain is the value at a test point away from the
+        them. The gain is the value at a test point away from the
         poles and zeros, divided by their factors there."""
         p, z = self._poles_zeros
         s0 = 1j * (1.0 + 3.0 * max([1.0] + [abs(x) for x in z.tolist() + p.tolist()]))
@@ -615,7 +615,7 @@ def minreal_coeffs(num: np.ndarray, den: np.ndarray,
     """:meth:`TransferFunction.minreal` on trimmed coefficients: the same
     ``num`` and ``den`` objects when nothing cancels, else new trimmed ones
     (the H-infinity augmentation realises four transfer functions per axis
-    and needs no object of them, issue 13)."""
+    and needs no object of them)."""
     if num.size == 1 or den.size == 1:
         return num, den                        # no zero or no pole: nothing to cancel
     if num.size == 2 and den.size == 2:        # one zero, one pole (most weights): scalars
@@ -651,7 +651,7 @@ def tf2ss(num: Any, den: Any, dt: float | None = None) -> StateSpace:
 def _tf2ss_arrays(num: np.ndarray, den: np.ndarray) -> tuple[np.ndarray, ...]:
     """A, B, C, D of :func:`tf2ss` for trimmed 1-D float polynomials (no
     system object: the H-infinity augmentation realises four transfer
-    functions per axis and keeps only the arrays, issue 13)."""
+    functions per axis and keeps only the arrays)."""
     if not den.any():
         raise ValueError("tf2ss: zero denominator")
     if num.size > den.size:

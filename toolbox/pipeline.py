@@ -88,7 +88,7 @@ def analyse(artifact: ControllerArtifact, spec: Spec, *,
     artifact = artifact.with_margins(margins)
     checks = spec.requirements.check_margins(artifact.margins)
     if artifact.method in INFORMATIONAL_METHODS:
-        # the baseline PI does not run: its margins never decide (issue 10)
+        # the baseline PI does not run: its margins never decide
         report["requirements"] = {}
         report["informational_requirements"] = checks
     else:

@@ -102,7 +102,7 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = SWEEP_SETS
         :meth:`MarginsResult.to_json`.
     """
     # every block below is JSON-ready already (its to_json / json_ready): walking
-    # the whole document again cost ~30 ms (issue 13), so only the header is
+    # the whole document again cost ~30 ms, so only the header is
     out = {
         **json_ready({"schema": ANALYSIS_SCHEMA, "method": artifact.method,
                       "sample_time": artifact.sample_time,

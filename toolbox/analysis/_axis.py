@@ -81,7 +81,7 @@ class AxisLoop:
 
     # The controllers' and the plant's responses are built once per loop: the
     # margins, the bandwidth, the responses and the sweep's exact recomputations
-    # evaluate one loop thousands of times (issue 13). cached_property writes
+    # evaluate one loop thousands of times. cached_property writes
     # the instance __dict__ directly, which a frozen dataclass allows.
     @cached_property
     def _controller(self) -> FreqResponse:
@@ -280,7 +280,7 @@ class MarginsResult:
     def to_json(self, extras: bool = True) -> dict:
         """JSON-ready dict: the MARGINS keys first, then (``extras``) the rest."""
         # json_ready copies every list and dict: asdict's deep copy first was a
-        # third of the cost (issue 13)
+        # third of the cost
         data = {f.name: getattr(self, f.name) for f in fields(self)}
         out = {k: data[k] for k in MARGIN_KEYS}
         if extras:
@@ -418,7 +418,7 @@ def compute_margins(artifact, motor, *, discrete: bool = True, delay: str | None
     Each axis's result is kept while its :class:`AxisController` lives (frozen,
     hashed by identity) and returned again for the same loop: ``cct design``'s
     verification recomputes the sampled margins the analysis just computed
-    (issue 13).
+   .
     """
     out = {}
     for name, L in (("d", motor.Ld), ("q", motor.Lq)):

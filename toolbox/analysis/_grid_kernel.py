@@ -1,4 +1,4 @@
-"""Compiled passes over the robustness sweep's stacked loops (issue 13).
+"""Compiled passes over the robustness sweep's stacked loops.
 
 :func:`grid_pass` serves :func:`toolbox.analysis._siso.grid_margins`,
 :func:`plant_factors` the sweep's loops (``toolbox.analysis.robustness``).
@@ -6,7 +6,7 @@
 The robustness sweep hands ``grid_margins`` thousands of loops of a thousand
 points; in numpy each full-size quantity (``|1 + L|^2``, ``|1 - L|^2/|1 + L|^2``,
 their row extrema, the sign-change masks of ``|L| - 1`` and ``Im L``) is a pass
-over memory of its own, together 70 % of ``grid_margins``' time (issue 13). This
+over memory of its own, together 70 % of ``grid_margins``' time. This
 kernel does them in one pass with the same IEEE operations in the same order
 (no ``fastmath``: no fused multiply-add, no reassociation), so its numbers are
 numpy's bit for bit (tested). ``|L|`` itself stays numpy's ``abs`` (its

@@ -56,7 +56,7 @@ def axis_law(axis, discrete: bool) -> Law:
     The continuous law of an :class:`AxisController` (frozen, hashed by
     identity) is converted once and kept while the controller lives: the
     certificate's bisection asks for it hundreds of times and a conversion
-    can take a matrix logarithm (issue 13).
+    can take a matrix logarithm.
     """
     s = axis.law
     if discrete:

@@ -1,4 +1,4 @@
-"""Feasibility LMIs handed to Clarabel directly, and constraint generation (issue 13).
+"""Feasibility LMIs handed to Clarabel directly, and constraint generation.
 
 Shared by the continuous certificate (:mod:`toolbox.analysis.certificate`)
 and the sampled-loop certificate (:mod:`toolbox.analysis._sampled_certificate`):
@@ -26,7 +26,7 @@ __all__ = ["ACTIVE_STEP", "STATUS", "above_identity", "lmi_rows", "problem_data"
            "symmetric_matrix"]
 
 #: Clarabel status -> the status names reported (those cvxpy gave them, so that
-#: analysis.json reads as before issue 13).
+#: analysis.json reads as before).
 STATUS = {"Solved": "optimal", "AlmostSolved": "optimal_inaccurate",
           "PrimalInfeasible": "infeasible", "AlmostPrimalInfeasible": "infeasible_inaccurate",
           "DualInfeasible": "unbounded", "AlmostDualInfeasible": "unbounded_inaccurate",
@@ -133,7 +133,7 @@ def solve_by_constraint_generation(solve: Callable[[list[int]], tuple[object, st
     binding: the most violated by a rejected warm start, else the least
     stable) are solved; the vertices whose LMI the solution violates
     (``slack >= -margin``) are added, most violated first, and so on, until
-    the solution holds on every vertex (issue 13: the certificates' boxes
+    the solution holds on every vertex (the certificates' boxes
     need a tenth to a fifth of their vertices, and a solve costs about
     linearly in the vertices). A subset the solver proves infeasible has no
     solution for all vertices either (status ``"infeasible"``). Any other

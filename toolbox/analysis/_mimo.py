@@ -107,7 +107,7 @@ def inv_2x2(M: np.ndarray) -> np.ndarray:
     """Inverses of stacked 2x2 matrices by the adjugate, ``adj(M)/det M``.
 
     ``numpy.linalg.inv`` calls LAPACK once per matrix: ~20 times slower on the
-    tens of thousands of 2x2 sensitivities of a box analysis (issue 13). The
+    tens of thousands of 2x2 sensitivities of a box analysis. The
     adjugate's rounding is of the order of ``cond(M) eps``, as LU's.
     """
     det = M[..., 0, 0] * M[..., 1, 1] - M[..., 0, 1] * M[..., 1, 0]
@@ -128,7 +128,7 @@ def mu_upper_2x2(M: np.ndarray) -> np.ndarray:
     increases with ``f``, so the best ``d`` minimises
     ``f(d) = |M00|^2 + |M11|^2 + |M01|^2 d^2 + |M10|^2/d^2``: at
     ``d^2 = |M10|/|M01|``, ``f = |M00|^2 + |M11|^2 + 2 |M01| |M10|``
-    (closed form, issue 13: it replaced a 49-point grid plus a 40-step
+    (closed form: it replaced a 49-point grid plus a 40-step
     ternary search over ``log d``, 1300 evaluations per call, whose result it
     equals to rounding). With one off-diagonal entry zero the infimum is
     approached as ``d -> 0`` or ``inf``; it is still an upper bound of mu,
@@ -182,7 +182,7 @@ def _grid_point(artifact, w: np.ndarray, discrete: bool) -> np.ndarray:
 def _controllers(artifact, x: np.ndarray, discrete: bool) -> np.ndarray:
     """``K = diag(K_d, K_q)`` (Nw, 2, 2), the error controllers at the grid points
     ``x`` (:func:`_grid_point`): the same at every speed, so
-    :func:`mimo_disk_margins` evaluates them once (issue 13)."""
+    :func:`mimo_disk_margins` evaluates them once."""
     C = np.zeros((x.size, 2, 2), complex)
     for k, name in enumerate(AXES):
         law = axis_law(artifact.axes[name], discrete)
@@ -363,7 +363,7 @@ class MultiModelLoops:
         Ac, Bc = coupled_plant(R, Ld, Lq, om)
         Phi, Gam = zoh_coupled(Ac, Bc, self.Ts)
         # P = (z I - Phi)^-1 Gamma z^-d entry by entry, as contiguous (nu*ns, Nw)
-        # arrays (issue 13: stacked 2x2 products and inverses cost 3x more)
+        # arrays (stacked 2x2 products and inverses cost 3x more)
         z = self.z[None, :]
         a, b = z - Phi[:, 0, 0, None], -Phi[:, 0, 1, None]
         c, d = -Phi[:, 1, 0, None], z - Phi[:, 1, 1, None]

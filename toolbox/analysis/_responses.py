@@ -75,7 +75,7 @@ def round_sig(values: Any, digits: int = 6) -> Any:
         into the strings ``"inf"``/``"nan"`` later).
     """
     arr = np.asarray(values, float)
-    # Python floats: formatting a numpy scalar costs several times more (issue 13)
+    # Python floats: formatting a numpy scalar costs several times more
     flat = [float(f"{v:.{digits}g}") if math.isfinite(v) else v for v in arr.ravel().tolist()]
     if arr.ndim == 0:
         return flat[0]

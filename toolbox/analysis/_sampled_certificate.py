@@ -1,4 +1,4 @@
-"""Robust-stability certificate of the sampled coupled dq loop as executed (issue 17).
+"""Robust-stability certificate of the sampled coupled dq loop as executed.
 
 The continuous certificate (:mod:`toolbox.analysis.certificate`) ignores the
 sampling and the computation delay, so it can certify a box on which the
@@ -79,7 +79,7 @@ Soundness argument (every step is an over-bound, none an approximation):
 5. *Cells and check.* The speed range is split into cells (a Lyapunov
    matrix per cell: the certificate is for constant speed, as the sweep's
    loops are). The LMIs are handed to Clarabel directly
-   (:mod:`toolbox.analysis._lmi`, issue 13) and solved by constraint
+   (:mod:`toolbox.analysis._lmi`) and solved by constraint
    generation over the corners (its verdict is the full solve's), and every
    corner inequality is re-checked with numpy eigenvalues of the returned
    ``P, lam`` (a cell counts as certified only when that check passes).

@@ -35,7 +35,7 @@ def latin_hypercube(n: int, d: int, seed: int) -> np.ndarray:
     column (McKay, Beckman, Conover 1979). The same draws in the same order
     as ``scipy.stats.qmc.LatinHypercube(d, seed=seed).random(n)`` (tested
     equal), without importing scipy.stats (0.5 to 1 s of every ``cct``
-    process, issue 13).
+    process).
     """
     rng = np.random.default_rng(seed)
     u = rng.uniform(size=(n, d))

@@ -136,7 +136,7 @@ def log_grid(w_lo: float, w_hi: float, n: int, discrete: bool) -> np.ndarray:
     exactly ``w_hi`` (the Nyquist frequency) so that ``L(-1)`` is evaluated.
 
     Read-only and cached: every margin computation of a design asks for the
-    same 20000-point grid (~0.5 ms of ``logspace`` each time, issue 13)."""
+    same 20000-point grid (~0.5 ms of ``logspace`` each time)."""
     w = np.logspace(math.log10(w_lo), math.log10(w_hi), n)
     if discrete:
         w[-1] = w_hi
@@ -338,7 +338,7 @@ def grid_margins(w: np.ndarray, response: np.ndarray, *, nyquist: bool = False) 
 
 
 def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
-    # issue 13: thousands of loops of a thousand points each; every full-size
+    # thousands of loops of a thousand points each; every full-size
     # quantity is made in one compiled pass (_grid_kernel, numpy's numbers bit for
     # bit), the complex divisions replaced by real arithmetic, and everything
     # else is evaluated only at the crossing cells

@@ -65,7 +65,7 @@ class FreqResponse:
         """Response of a SISO system at one point ``x`` (a Python complex).
 
         The modal form is summed in plain Python arithmetic (~2 us, where any
-        numpy call costs more, issue 13); otherwise, or exactly on a pole, one
+        numpy call costs more); otherwise, or exactly on a pole, one
         LU solve.
         """
         if self._siso is not None:

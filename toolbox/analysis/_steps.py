@@ -71,7 +71,7 @@ def _affine_orbit(A: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
     """States ``x_0 .. x_n`` (n + 1, dim) of ``x_{k+1} = A x_k + b``, ``x_0 = 0``.
 
     Filled in blocks of doubling length, ``x_{k+m} = A^m x_k + x_m``: about
-    ``log2 n`` stacked products instead of ``n`` Python-level steps (issue 13:
+    ``log2 n`` stacked products instead of ``n`` Python-level steps (
     8000-step responses cost 8 ms each). The blocks round differently from
     the step-by-step recursion (observed 1e-15 relative on settled loops). An
     unstable loop's response overflows to inf or nan: expected, and judged

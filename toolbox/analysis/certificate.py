@@ -319,7 +319,7 @@ def _lmi_data(As: np.ndarray, alpha: float, eps: float = 1e-6):
 def _solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
     """Solve ``A_i' P + P A_i + 2 alpha P << -eps I`` (every vertex ``A_i``), ``P >> I``.
 
-    The semidefinite program is handed to Clarabel directly (issue 13: cvxpy's
+    The semidefinite program is handed to Clarabel directly (cvxpy's
     canonicalisation was 60 % of the certificate's time and cvxpy's import
     another second; :mod:`toolbox.analysis._lmi`). The unknown ``x`` is the
     upper triangle of ``P``; ``P >> I`` is the cone constraint
@@ -500,7 +500,7 @@ def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5
         return top
     # the nominal result is reported when it fails: solved, never prescreened;
     # elsewhere a box with an unstable vertex is infeasible without a solve
-    # (issue 13: 3 of the 6 solves of paper 003's H-infinity bisection)
+    # (3 of the 6 solves of paper 003's H-infinity bisection)
     nominal, P_best = at(0.0, prescreen=False)
     if not nominal.certified:
         return nominal

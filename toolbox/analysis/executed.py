@@ -1,5 +1,5 @@
 """Margins and stability of the law a controller.json actually executes,
-recomputed on demand (issue 10: never trust stored numbers).
+recomputed on demand (never trust stored numbers).
 
 ``cct verify`` and ``cct report`` read a controller.json that may have been
 edited by hand or by a tool. The ``margins`` stored in it are a cache of the

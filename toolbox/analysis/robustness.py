@@ -70,7 +70,7 @@ def batch_axis_margins(K_fr: np.ndarray, z: np.ndarray, w: np.ndarray, R: np.nda
     """
     # the loop depends on (R, L, d) only: the box corners of a sweep repeat those
     # triples (a tenth of the sets of the default sweep), so each is evaluated once,
-    # grouped by delay (issue 13); the rows are independent, the numbers the same
+    # grouped by delay; the rows are independent, the numbers the same
     keys, inverse = np.unique(np.column_stack([d, R, L]), axis=0, return_inverse=True)
     d_u, R_u, L_u = keys.T
     a, b = zoh_axis(R_u, L_u, Ts)
@@ -92,7 +92,7 @@ def _loop_block(Kz: np.ndarray, zr: np.ndarray, qi: np.ndarray, a: np.ndarray,
     """``L = K z^-d b/(z - a)`` (n, Nw) for one delay (``Kz``, (Nw,)) and plants ``a, b`` (n,).
 
     ``b/(z - a) = b conj(z - a)/|z - a|^2`` in real arithmetic: numpy's complex
-    division of (n, Nw) arrays cost 4x (issue 13). The real factors come from one
+    division of (n, Nw) arrays cost 4x. The real factors come from one
     compiled pass (:func:`toolbox.analysis._grid_kernel.plant_factors`); the
     complex product stays numpy's, operand order kept (its fused multiply-add
     kernels make the order matter): the numbers of
@@ -201,7 +201,7 @@ def _spectral_radii(laws: dict, decoupling, Ts: float, d: int, R: np.ndarray, Ld
 
     The state matrix depends on neither the flux (the back-EMF enters the
     constant term only) nor, at zero speed, the speed-sensor gain: the box
-    corners repeat matrices, and each distinct one is analysed once (issue 13;
+    corners repeat matrices, and each distinct one is analysed once (
     the eigenvalues of a matrix do not depend on the others in the stack).
     """
     _, first, inverse = np.unique(np.column_stack([R, Ld, Lq, omega_meas]), axis=0,

@@ -686,7 +686,7 @@ def json_ready(value: Any) -> Any:
         The same structure in plain JSON types.
     """
     # exact plain types first: analysis.json holds tens of thousands of floats, and
-    # the ABC check isinstance(x, Mapping) on each cost most of its encoding (issue 13)
+    # the ABC check isinstance(x, Mapping) on each cost most of its encoding
     kind = type(value)
     if kind is float:
         return value if math.isfinite(value) else _non_finite(value)

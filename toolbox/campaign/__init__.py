@@ -1,4 +1,4 @@
-"""Robustness campaigns: Monte-Carlo closed-loop qualification on Dask (issue 14).
+"""Robustness campaigns: Monte-Carlo closed-loop qualification on Dask.
 
 The ``[campaign]`` table of a spec (read by :mod:`toolbox.spec`) says how the
 true plants are drawn; the spec's scenarios and requirements say what each

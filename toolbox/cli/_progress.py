@@ -1,4 +1,4 @@
-"""Progress bars of the long-running commands (issue 13).
+"""Progress bars of the long-running commands.
 
 ``cct design``, ``verify``, ``report``, ``compare`` and ``gallery`` take from
 one second to a minute; they show a :mod:`tqdm` bar on **stderr** (stdout

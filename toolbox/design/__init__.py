@@ -19,7 +19,7 @@ from ._registry import METHOD_MODULES, design, read_method_cfg
 
 #: public name -> defining submodule. The method modules import scipy (and
 #: steady_state sympy): they are loaded on first attribute access (PEP 562)
-#: so that ``import toolbox`` stays light (issue 13).
+#: so that ``import toolbox`` stays light.
 _LAZY = {
     "design_hinf_axis": "hinf",
     "design_ilq": "ilq", "inverse_lq": "ilq", "inverse_lq_sdp": "ilq", "sigma_bound": "ilq",

@@ -141,7 +141,7 @@ class PartitionedPlant:
         ``S = [[A, B1, B2], [C1, D11, D12], [C2, D21, D22]]`` (float, assembled
         here: the augmentation). Only the finiteness of the entries, which come
         from the caller's weights, is tested, once on S; the conversions and
-        size checks of ``__post_init__`` (~15 us) are skipped (issue 13)."""
+        size checks of ``__post_init__`` (~15 us) are skipped."""
         n, m1, p1 = nx, nw, nz
         new = object.__new__(cls)
         new.__dict__.update(                 # frozen: no __setattr__ per block
@@ -157,7 +157,7 @@ class PartitionedPlant:
         """Copy with some blocks replaced by float arrays computed from valid ones
         (similarity, rotation, scaling): same sizes by construction, so the
         checks of ``__post_init__`` (tens of microseconds, per copy) are skipped.
-        Internal: the synthesis makes three such copies per call (issue 13)."""
+        Internal: the synthesis makes three such copies per call."""
         new = object.__new__(PartitionedPlant)
         new.__dict__.update(self.__dict__, **blocks)    # frozen: no __setattr__ per block
         return new
@@ -352,7 +352,7 @@ def closed_loop(P: PartitionedPlant, K: Any) -> StateSpace:
 def _lft(P: PartitionedPlant, K: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
     """Matrices of F_l(P, K) for ``K = (Ak, Bk, Ck, Dk)``: u = M (Dk C2 x + Ck xk +
     Dk D21 w), M = (I - Dk D22)^-1 (numpy; python-control's ``lft`` builds named
-    systems, ~1.5 ms, issue 13)."""
+    systems, ~1.5 ms)."""
     Ak, Bk, Ck, Dk = K
     if np.count_nonzero(P.D22):
         Mi = np.linalg.inv(np.eye(P.nu) - Dk @ P.D22)

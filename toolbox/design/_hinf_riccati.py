@@ -91,7 +91,7 @@ class _Hamiltonian:
 
     (whose blocks are ``a - b r^-1 s^T``, ``-b r^-1 b^T``, ``-(q - s r^-1 s^T)``
     and ``-(a - b r^-1 s^T)^T`` for a symmetric r), formed once per plant for the
-    whole gamma iteration (issue 13)."""
+    whole gamma iteration."""
 
     a: np.ndarray
     b: np.ndarray
@@ -258,7 +258,7 @@ def _not_psd(X: np.ndarray, tol: float = 1e-9) -> float | None:
 @dataclass(slots=True)
 class _GammaFree:
     """The parts of eq (10)-(17) that do not depend on gamma, formed once per
-    plant and reused at every gamma of the iteration (issue 13)."""
+    plant and reused at every gamma of the iteration."""
 
     B: np.ndarray       # eq (10)
     C: np.ndarray       # eq (11)

@@ -1,4 +1,4 @@
-"""H-infinity synthesis against the coupled dq plant at speed (issue 17 item 4).
+"""H-infinity synthesis against the coupled dq plant at speed.
 
 Paper 003 designs each axis on its decoupled plant ``G_x = 1/(R + s L_x)``
 (eq (33)-(34)); the cross-coupling is cancelled by the decoupling with the

@@ -44,7 +44,7 @@ def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
 def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray, ...]:
     """A, B, C, D of k prod(s - z)/prod(s - p): scipy.signal's ``zpk2ss``
     (the controllable canonical form of :func:`toolbox._lti.tf2ss`) without its
-    argument handling (~0.3 ms a call, issue 13), then the diagonal balancing
+    argument handling (~0.3 ms a call), then the diagonal balancing
     of :func:`toolbox._lti.balanced`: the same numbers, from the polynomials'
     coefficients as Python floats (:func:`toolbox._lti.balanced_companion`,
     ~10 array calls instead of ~30)."""

@@ -45,7 +45,7 @@ class _LazyReader:
     """A method's ``read_cfg`` that imports its module on first call.
 
     Importing every method module at registration would pull scipy into every
-    ``import toolbox``, ``cct --help`` and ``cct check`` (issue 13); only the
+    ``import toolbox``, ``cct --help`` and ``cct check``; only the
     method a spec names is imported, when the spec is read.
     """
 

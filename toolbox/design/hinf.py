@@ -511,7 +511,7 @@ def design(spec) -> ControllerArtifact:
     if at_speed is not None:
         params["at_speed"] = at_speed
         eqs.append("coupled dq plant at speed, 003 eq (3)-(4): small-gain S weight "
-                   "w1 + k sqrt(c_d c_q) G (issue 17)")
+                   "w1 + k sqrt(c_d c_q) G")
     return make_artifact(spec, axes, decoupling, params, eqs, weights=weights)
 
 

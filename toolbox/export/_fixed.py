@@ -274,7 +274,7 @@ def _fftconvolve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Full linear convolution of two real 1-D arrays by FFT.
 
     ``scipy.signal.fftconvolve`` without importing scipy.signal (~0.4 s of
-    every ``cct design``, issue 13): the same scipy.fft transforms at the same
+    every ``cct design``): the same scipy.fft transforms at the same
     length, so the same numbers (tests/export/test_propagate_bound.py).
     """
     from scipy.fft import irfft, next_fast_len, rfft

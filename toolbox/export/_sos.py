@@ -107,7 +107,7 @@ def _cascade(sos: np.ndarray, gain: float) -> tuple[np.ndarray, ...]:
 
 # -- scipy.signal.zpk2sos(z, p, 1.0, pairing="nearest"), digital --------------
 # scipy.signal is not imported for it: importing it costs ~0.4 s of every
-# `cct design` (issue 13). The port keeps scipy's operations (same sections,
+# `cct design`. The port keeps scipy's operations (same sections,
 # same floating-point numbers: tests/export/test_sos.py compares with ==) for
 # the case used here, equal numbers of zeros and poles.
 def _cplxreal(z: np.ndarray, tol: float = 100 * np.finfo(float).eps) -> tuple[np.ndarray, ...]:

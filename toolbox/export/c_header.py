@@ -296,7 +296,7 @@ class ExportCheck:
     minimal : dict
         ``{"d": MinimalLaw, "q": MinimalLaw}`` (:func:`minimal_laws`), which
         the realisations and the vendor plan are made from (computed once:
-        about half of a header's time, issue 13; an empty dict: the vendor
+        about half of a header's time; an empty dict: the vendor
         plan computes them).
     """
 

@@ -3,7 +3,7 @@
 The symbolic names (the derivation, its symbols, :func:`describe_model`) are
 imported on first access (PEP 562): they import sympy (about 0.7 s with the
 units module its ``simplify`` pulls in), which a design whose numeric model
-comes from the on-disk cache does not need (issue 13).
+comes from the on-disk cache does not need.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ from .._lti import StateSpace
 
 __all__ = ["ElectricalPlant", "numeric_plant", "axis_plant_models", "axis_plants", "linearise"]
 
-#: The modules the lambdified code is made from (its cache key, issue 13).
+#: The modules the lambdified code is made from (its cache key).
 _SOURCES = (Path(__file__).with_name("_symbolic.py"), Path(__file__))
 
 
@@ -69,7 +69,7 @@ def _electrical_matrices(convention: str):
 
     The generated code is cached on disk with the derivation
     (:mod:`toolbox._cache`, keyed by this module's and the derivation's
-    sources): a cache hit needs neither sympy nor the derivation (issue 13).
+    sources): a cache hit needs neither sympy nor the derivation.
     """
     sources = cached(f"dq_numeric-{convention}", _SOURCES,
                      lambda: _electrical_sources(convention),
@@ -165,7 +165,7 @@ def axis_plants(motor) -> dict:
 
     Imports python-control (about 1 s with the scipy.signal and
     matplotlib.pyplot it pulls in): for users and for the H-infinity design
-    until it reads :func:`axis_plant_models` (issue 13). The transfer
+    until it reads :func:`axis_plant_models`. The transfer
     functions are SLICOT's (``tb04ad``) of the two-state model's diagonal
     entries, as before that function existed.
 

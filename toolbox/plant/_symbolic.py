@@ -117,7 +117,7 @@ def _simplified_product(*factors: sp.Matrix) -> sp.Matrix:
     """:func:`_simplify` of each entry of the product of ``factors``, multiplied as
     polynomials in ``c, s``: the same expanded polynomials as expanding the
     trigonometric product, without ``expand_trig`` on the long product
-    terms (issue 13: four times faster on ``T L_abc T^-1``)."""
+    terms (four times faster on ``T L_abc T^-1``)."""
     prod = factors[0].applyfunc(_to_cs)
     for f in factors[1:]:
         prod = prod * f.applyfunc(_to_cs)
@@ -132,7 +132,7 @@ def _trig_inverse(m: sp.Matrix) -> sp.Matrix:
     reduced modulo ``c^2 + s^2 - 1`` (a constant for a Park matrix): equal
     to ``m.inv()`` (Gaussian elimination on the trigonometric entries, whose
     results :func:`_simplify` did not always bring to their simplest form),
-    in a sixth of the time (issue 13: 0.6-0.8 s of the 2 s derivation).
+    in a sixth of the time (0.6-0.8 s of the 2 s derivation).
     """
     cs = m.applyfunc(_to_cs)
     det = _reduce(cs.det(method="berkowitz"))

@@ -625,7 +625,7 @@ def _check_rows(checks: list | None) -> list[dict]:
     rows = []
     for c in checks or []:
         where = c.get("axis") or c.get("scenario") or ""
-        # a failing check says why (issue 10: a verdict the user can follow)
+        # a failing check says why (a verdict the user can follow)
         why = f" ({c['reason']})" if not c.get("pass") and c.get("reason") else ""
         rows.append({"key": str(c.get("key", "")), "quantity": str(c.get("quantity", "")) + why,
                      "where": str(where), "bound": _bound_text(c),
@@ -644,7 +644,7 @@ def _equations(spec, given: list | None = None) -> list[dict]:
     rows depend only on the convention and on source code, so they are cached
     on disk (:mod:`toolbox._cache`, keyed by the derivation's, this module's
     and the plotting module's sources and the sympy and matplotlib versions):
-    a cache hit imports neither sympy nor matplotlib (issue 13).
+    a cache hit imports neither sympy nor matplotlib.
     """
     if given is not None:
         return [{"label": str(e["label"]), "latex": str(e["latex"]), "text": str(e["text"]),

@@ -1,4 +1,4 @@
-"""A small deterministic SVG line-plot writer for the report figures (issue 13).
+"""A small deterministic SVG line-plot writer for the report figures.
 
 Why not matplotlib: its layout engine and text measurement drew the 7 report
 figures in about 3.5 s per design; the figures are line and marker plots on

@@ -1,7 +1,7 @@
 """Report figures as deterministic, self-contained SVG strings.
 
 The loop, scenario and robustness figures are written by the small SVG
-plotter :mod:`toolbox.report._svgplot` (issue 13: matplotlib's layout and
+plotter :mod:`toolbox.report._svgplot` (matplotlib's layout and
 text measurement took about 3.5 s per report); its output depends only on
 the numbers drawn, so equal inputs give byte-identical SVG, and element ids
 are prefixed per figure so several SVGs can share one HTML document.

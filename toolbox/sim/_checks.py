@@ -1,4 +1,4 @@
-"""Default checks applied to every verification scenario (issue 10: "a pass
+"""Default checks applied to every verification scenario ("a pass
 must mean something").
 
 A spec without ``[requirements]`` used to pass whatever the simulated loop

@@ -46,9 +46,9 @@ arrays and :func:`_periods` runs the periods, a short loop over small
 ``@njit`` helpers (sensors, references, speed loop, law step with
 anti-windup and voltage limit, predictive choice, inverter and plant RK4);
 the plant state lives in local scalars, not in an array, so that LLVM keeps
-it in registers across the RK4 stages (issue 13).
+it in registers across the RK4 stages.
 
-Loop structure (issue 13; gcc -O3 -march=native's plain C loop of the same
+Loop structure (gcc -O3 -march=native's plain C loop of the same
 arithmetic, ``tests/benchmarks/bench_sim.py``, is the yardstick: both are
 bound by the latency of the RK4 chain, ~100 cycles per plant step, so what
 ours adds must stay off that chain and out of its way):
@@ -76,7 +76,7 @@ advancing the angle where nothing reads it (rotor-frame hold without the
 hexagon limit), and, as an experiment, no metrics at all (same time: they
 are off the chain).
 
-Arithmetic (issue 13). The 1 us loop is bound by the latency of one
+Arithmetic. The 1 us loop is bound by the latency of one
 dependency chain (the four RK4 stages in sequence, each ending in a
 division), so the plant multiplies by ``1/Ld``, ``1/Lq``, ``1/J`` computed once
 per run (:func:`_plant`) instead of dividing: a division costs ~13 cycles, a
@@ -97,7 +97,7 @@ disabled through GLIBC_TUNABLES, 1 in 1,300 sines differed by 1 ulp.)
 that assume finite values ("nnan", "ninf") would break the divergence
 detection of the metrics.
 
-Cold compile (issue 13). A process without a numba cache (a fresh clone,
+Cold compile. A process without a numba cache (a fresh clone,
 each pytest-xdist worker) compiles :func:`run` on its first call; what it
 compiles is kept to what the speed needs:
 
@@ -201,14 +201,14 @@ def pack_indices(array: str = "SC") -> dict[str, int]:
 #: Decorator of the kernel's functions. ``error_model="numpy"``: a division by
 #: zero gives inf/nan (IEEE) instead of a Python ZeroDivisionError, which drops
 #: a compare-and-branch before every division of the 1 us loop; every divisor
-#: there is a validated positive parameter or guarded (issue 13). Cached on
+#: there is a validated positive parameter or guarded. Cached on
 #: disk although :func:`run`'s cache holds every helper's code: the tests
 #: call helpers and ``run.py_func`` from Python, which compiled each helper
 #: again in every process without it (~10 s of the kernel's test files).
 _jit = njit(cache=True, error_model="numpy")
 #: The helpers of the 1 us substep loop, inlined into it in numba's IR: called
 #: as separate functions, each RK4 step passed ~20 arguments through the stack
-#: and returned its state through memory (issue 13: 43.3 -> 41.5 ns per step).
+#: and returned its state through memory (43.3 -> 41.5 ns per step).
 #: The law step too, once per period (its fixed cost per period ~170 -> ~110 ns),
 #: and every helper of the period loop that reads an array: called from the
 #: loop compiled without reference counting (:data:`_jit_no_rc`), a function
@@ -221,7 +221,7 @@ _jit_inline = njit(cache=True, error_model="numpy", inline="always")
 #: read-modify-writes per period, each a full memory barrier that kept the
 #: next period's plant steps from starting before the previous ones had
 #: retired: ~60-80 ns per period, 0.6-0.8 ns per plant step at 100 steps per
-#: period (issue 13).
+#: period.
 _jit_no_rc = njit(cache=True, error_model="numpy", _nrt=False)
 
 
@@ -346,7 +346,7 @@ def _load_acc(acc_m):
     """The accumulators :func:`_accumulate` updates (slots ``_A_OUT5`` ..
     ``_A_SQIQ``) as a tuple: local values that LLVM keeps in registers over a
     run of plant steps, where the array's elements were loaded and stored at
-    every step and could only be updated by branches (issue 13)."""
+    every step and could only be updated by branches."""
     return (acc_m[_A_OUT5], acc_m[_A_OUT2], acc_m[_A_T10], acc_m[_A_T90], acc_m[_A_YEXT],
             acc_m[_A_SQT], acc_m[_A_SQID], acc_m[_A_STAT], acc_m[_A_STATT],
             acc_m[_A_FINAL], acc_m[_A_SQIQ])
@@ -438,7 +438,7 @@ def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
     itself). Inlined into its callers, so that the loop is one call away from
     the period loop, as it was when both loops were inlined here: numba
     copied the loop's inlined IR into each of them, ~1 s of cold compile
-    each (issue 13)."""
+    each."""
     if t_load == 0.0 or mech == 1:
         return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, False, mech, acc, omega0,
                       acc_m, refs, mset)
@@ -456,7 +456,7 @@ def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, loaded, mech, acc, omega0, ac
     integrates without the load torque, with the constant 0 in its place:
     ``x - 0.0`` is x exactly, so LLVM drops the subtraction, the last one
     before the multiplication by 1/J on the speed's dependency chain (~4 % of
-    the plant step's latency, issue 13)."""
+    the plant step's latency)."""
     t_load = t_load if loaded else 0.0
     m = _load_acc(acc_m)
     for _ in range(n):
@@ -464,7 +464,7 @@ def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, loaded, mech, acc, omega0, ac
         # the metrics of the step's start state after its RK4 stages in program
         # order: the out-of-order core runs the oldest ready instruction first,
         # so the step's own stages (the dependency chain) win the execution
-        # ports over the metrics that become ready with them (issue 13)
+        # ports over the metrics that become ready with them
         m = _accumulate(m, x[0], x[1], x[2], t, dt, pl, refs, mset)
         x = x1
         t += dt

@@ -253,7 +253,7 @@ def discrete_pi(kp: float, ki: float, sample_time: float, antiwindup: bool = Tru
         at the PI zero (``x+ = (1 - Ts ki/kp) x + ...``) instead of being
         loaded with the whole clipped voltage (``aw = 1/ki``, deadbeat),
         which left ``v`` at ``ki x ~ R i_ref`` after saturation and the
-        current crawling at the open-loop ``R/L`` (issue 10).
+        current crawling at the open-loop ``R/L``.
     """
     Ts = sample_time
     aw = np.array([Ts / kp]) if (antiwindup and kp != 0) else None
@@ -526,7 +526,7 @@ def simulate_batch(law: ControlLaw,
     Each thread runs its share of the rows through the compiled kernel
     (``_kernel.run_rows``, a loop over :func:`simulate`'s ``_kernel.run``),
     which releases the GIL: the batch reuses the single run's compiled code
-    (issue 13: a ``prange`` entry point compiled ~5 s more per process; the
+    (a ``prange`` entry point compiled ~5 s more per process; the
     share loop ~0.5 s). The rows are independent: the metrics are
     :func:`simulate`'s, bit for bit, for any ``threads`` and ``chunk``.
 

@@ -1,4 +1,4 @@
-"""The ``[campaign]`` table: a Monte-Carlo robustness campaign (issue 14).
+"""The ``[campaign]`` table: a Monte-Carlo robustness campaign.
 
 Read here, with the spec stage's conventions (unknown keys are errors with
 the key path and a did-you-mean, every value range-checked); executed by
