@@ -558,7 +558,7 @@ def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: 
             _echo_wrapped(f"FAIL  {row['spec']}: ", "; ".join(row["failures"]))
     for entry in refused:
         # the message names the file, the key, what was expected and what was found
-        _echo_wrapped("REFUSED  ", entry["refused"])
+        _echo_wrapped("REFUSED  ", entry["refused"], file_key=True)
     failed = bool(refused) or any(not r["passed"] for r in rows)
     sys.exit(EXIT_REQUIREMENT if failed else EXIT_OK)
 
@@ -576,11 +576,16 @@ def _rank_key(row: dict) -> tuple:
     return (not row.get("passed", False), -dm, t5 if math.isfinite(t5) else math.inf)
 
 
-def _echo_wrapped(head: str, text: str, width: int = 100) -> None:
+def _echo_wrapped(head: str, text: str, width: int = 100, file_key: bool = False) -> None:
     """``head`` + ``text`` wrapped at ``width`` columns, continuation lines indented
-    (a failure summary may run to a thousand characters)."""
+    (a failure summary may run to a thousand characters); with ``file_key`` the
+    leading ``file: key:`` of an error message stays whole on its first line."""
     import textwrap
 
+    parts = text.split(": ", 2)
+    if file_key and len(parts) == 3 and len(head) + len(parts[0]) + len(parts[1]) + 3 > width:
+        click.echo(f"{head}{parts[0]}: {parts[1]}:")
+        head, text = "      ", parts[2]
     click.echo(textwrap.fill(text, width=width, initial_indent=head,
                              subsequent_indent="      ", break_on_hyphens=False,
                              break_long_words=True))
