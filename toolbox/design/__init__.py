@@ -6,7 +6,11 @@ One module per method (``pi``, ``total_comp``, ``ilq``, ``lq``, ``hinf``,
 re-exported here. ``steady_state`` holds the symbolic steady-state analysis
 of paper 000. ``_defaults`` derives the parameters a spec leaves out from
 the sample time and the delay (``default_bandwidth``, ``current_scale``,
-``speed_scale``, ``largest_stable_pi_bandwidth``).
+``speed_scale``, ``largest_stable_pi_bandwidth``). ``cv_discrete`` is the
+direct discrete-time complex-vector design (Hinkkanen et al. 2016) with its
+exact closed-loop analysis, stand-alone: not a registered method, as no
+artifact executes its speed-dependent gains (its module docstring says what
+one would need).
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ _LAZY = {
     "tc_speed_error_steady_state": "steady_state",
     "tci_acceleration_steady_state": "steady_state",
     "design_total_compensation": "total_comp", "gains_match_pi": "total_comp",
+    "design_cv_discrete": "cv_discrete", "CvDiscreteLaw": "cv_discrete",
 }
 
 
@@ -40,5 +45,6 @@ __all__ = ["METHOD_MODULES", "design", "read_method_cfg", "design_hinf_axis", "d
            "lqi_continuous", "lqi_discrete", "design_pi", "gains_cancellation",
            "gains_symmetric_optimum", "pi_acceleration_steady_state",
            "tc_speed_error_steady_state", "tci_acceleration_steady_state",
-           "design_total_compensation", "gains_match_pi", "default_bandwidth",
+           "design_total_compensation", "gains_match_pi", "design_cv_discrete",
+           "CvDiscreteLaw", "default_bandwidth",
            "largest_stable_pi_bandwidth", "current_scale", "speed_scale"]
