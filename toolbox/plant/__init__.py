@@ -9,6 +9,7 @@ comes from the on-disk cache does not need.
 from __future__ import annotations
 
 from .._lazy import lazy_attributes
+from ._envelope import OperatingEnvelope, OperatingPoint, mtpa_d_current
 from ._limits import max_electrical_speed
 from ._linear import (axis_coefficients, dq_matrices, steady_state_voltage,
                       voltage_limited_speed, zoh_first_order)
@@ -22,7 +23,7 @@ _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_sym
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
 
 
-__all__ = ["describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
+__all__ = ["OperatingEnvelope", "OperatingPoint", "mtpa_d_current", "describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
            "zoh_first_order", "steady_state_voltage", "voltage_limited_speed",
            "ElectricalPlant", "axis_plant_models", "axis_plants", "linearise", "numeric_plant",
            "SYMBOLS", "DqModel", "derive_dq_model", "park_matrix"]
