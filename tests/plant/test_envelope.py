@@ -110,10 +110,10 @@ def _slsqp_reference(env, T, speed):
             {"type": "ineq", "fun": lambda x: (env.V ** 2 - env._vmag(*x, speed) ** 2) / env.V},
             {"type": "ineq", "fun": lambda x: (env.I ** 2 - x @ x) / env.I}]
     best = None
-    for b in np.linspace(0.1, math.pi - 0.1, 7):
+    for b in (0.8, 1.6, 2.4):
         x0 = 0.5 * env.I * np.array([math.cos(b), math.copysign(math.sin(b), T or 1.0)])
         r = minimize(lambda x: x @ x, x0, constraints=cons, method="SLSQP",
-                     options={"ftol": 1e-14, "maxiter": 500})
+                     options={"ftol": 1e-12, "maxiter": 200})
         if r.success and all(c["fun"](r.x) > -1e-7 if c["type"] == "ineq"
                              else abs(c["fun"](r.x)) < 1e-8 for c in cons):
             if best is None or r.fun < best.fun:
@@ -125,10 +125,10 @@ def _slsqp_max_torque(env, speed, sign):
     cons = [{"type": "ineq", "fun": lambda x: (env.V ** 2 - env._vmag(*x, speed) ** 2) / env.V},
             {"type": "ineq", "fun": lambda x: (env.I ** 2 - x @ x) / env.I}]
     best = None
-    for b in np.linspace(0.1, math.pi - 0.1, 9):
+    for b in (0.8, 1.6, 2.4):
         x0 = 0.3 * env.I * np.array([math.cos(b), sign * math.sin(b)])
         r = minimize(lambda x: -sign * env.torque(*x) / env.kt, x0, constraints=cons,
-                     method="SLSQP", options={"ftol": 1e-14, "maxiter": 500})
+                     method="SLSQP", options={"ftol": 1e-12, "maxiter": 200})
         if r.success and all(c["fun"](r.x) > -1e-7 for c in cons):
             if best is None or r.fun < best.fun:
                 best = r
@@ -144,7 +144,7 @@ def test_references_match_numeric_optimisation(motor_name):
     equals SLSQP's largest torque to 1e-4 relative."""
     if motor_name == "traction":
         env = OperatingEnvelope(TRACTION, TRACTION_DRIVE)
-        speeds = np.array([0.5, 1.0, 1.5, 2.0, 3.0, 4.0])
+        speeds = np.array([0.5, 1.5, 2.0, 4.0])
     else:
         spec = toolbox.load_spec(ROOT / "designs" / "003_azaiz2007_pi.toml")
         env = OperatingEnvelope(spec.motor, spec.drive)
@@ -153,11 +153,13 @@ def test_references_match_numeric_optimisation(motor_name):
     t0 = env.max_torque_point(0.0).torque
     regions = set()
     n = 0
+    worst = dt_worst = 0.0
     for speed in speeds * wb:
         for sign in (1.0, -1.0):
             lim = env.max_torque_point(speed, sign)
             ref = _slsqp_max_torque(env, speed, sign)
             assert ref is not None
+            dt_worst = max(dt_worst, abs(lim.torque - sign * (-ref.fun) * env.kt) / t0)
             assert abs(lim.torque - sign * (-ref.fun) * env.kt) <= 1e-4 * t0, (speed, sign)
             for frac in (0.0, 0.25, 0.5, 0.75, 1.0):
                 T = sign * frac * t0
@@ -173,9 +175,10 @@ def test_references_match_numeric_optimisation(motor_name):
                 assert r is not None, (T, speed)
                 err = math.hypot(op.i_d - r.x[0], op.i_q - r.x[1])
                 n += 1
+                worst = max(worst, err)
                 assert err < 2e-3, (T, speed, op, r.x)
     print(f"\n{motor_name}: base speed {wb:.2f} rad/s, {n} references checked, "
-          f"regions {sorted(regions)}")
+          f"regions {sorted(regions)}; worst |di| {worst:.2e} A, torque limit {dt_worst:.2e}")
     assert "field_weakening" in regions and "mtpa" in regions
     if motor_name == "traction":
         assert "voltage_limit" in regions      # MTPV reached: psi/Ld inside the current limit
