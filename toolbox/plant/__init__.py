@@ -9,7 +9,6 @@ comes from the on-disk cache does not need.
 from __future__ import annotations
 
 from .._lazy import lazy_attributes
-from ._envelope import OperatingEnvelope, OperatingPoint, mtpa_d_current
 from ._limits import max_electrical_speed
 from ._linear import (axis_coefficients, dq_matrices, steady_state_voltage,
                       voltage_limited_speed, zoh_first_order)
@@ -17,7 +16,10 @@ from ._numeric import ElectricalPlant, axis_plant_models, axis_plants, linearise
 
 #: public name -> defining private module, imported on first use
 _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_symbolic",
-         "derive_dq_model": "_symbolic", "park_matrix": "_symbolic"}
+         "derive_dq_model": "_symbolic", "park_matrix": "_symbolic",
+         # the operating envelope imports scipy.optimize
+         "OperatingEnvelope": "_envelope", "OperatingPoint": "_envelope",
+         "mtpa_d_current": "_envelope"}
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
