@@ -18,6 +18,10 @@ implements the whole current-control law of the artifact in one
    ``drive.max_voltage(convention)``, or the SVM hexagon with that apothem
    seen at the electrical angle ``theta_e + w_e Ts (delay + 1/2)`` (the header
    then takes the input ``theta_e``);
+   With ``drive.voltage_priority = "d_axis"`` the limit keeps ``v_d``
+   (clamped to the limit's d extent) and gives ``v_q`` the rest instead
+   (``sign(v_q) sqrt(V_MAX^2 - v_d^2)`` on the circle, the hexagon's chord at
+   that ``v_d``), as the simulator's ``_voltage_limit``;
 4. back-calculation anti-windup ``x += aw (v_sat - v_unsat)`` with the
    artifact's vector mapped into the executed coordinates.
 
@@ -71,8 +75,8 @@ message names the axis) when:
 
 The fixed-point variant is additionally refused (the header then carries an
 ``#error`` under ``CCT_FIXED_POINT``) when no finite state bound exists, when
-one of its constants is out of range, and for ``voltage_limit = "hexagon"``
-(not implemented in Q31).
+one of its constants is out of range, for ``voltage_limit = "hexagon"`` and
+for ``voltage_priority = "d_axis"`` (not implemented in Q31, MCSDK, IQmath).
 """
 
 from __future__ import annotations
@@ -266,6 +270,12 @@ def realisations(artifact) -> dict[str, Realisation]:
             for ax, m in minimal_laws(artifact).items()}
 
 
+#: ``drive.voltage_priority`` values the float path executes.
+PRIORITIES = ("radial", "d_axis")
+_D_PRIORITY_FLOAT_ONLY = ('voltage_priority = "d_axis" is implemented in the float path only; '
+                          '{variant} need voltage_priority = "radial"')
+
+
 @dataclass
 class ExportCheck:
     """What :func:`check_exportable` found.
@@ -293,6 +303,8 @@ class ExportCheck:
         distance from the centre to an edge, r_hex sqrt(3)/2: the same number).
     limit : str
         ``"circle"`` or ``"hexagon"`` (``drive.voltage_limit``).
+    priority : str
+        ``"radial"`` or ``"d_axis"`` (``drive.voltage_priority``).
     minimal : dict
         ``{"d": MinimalLaw, "q": MinimalLaw}`` (:func:`minimal_laws`), which
         the realisations and the vendor plan are made from (computed once:
@@ -307,6 +319,7 @@ class ExportCheck:
     fixed_pole_shift: dict = field(default_factory=dict)
     v_max: float = math.inf
     limit: str = "circle"
+    priority: str = "radial"
     saturated_radius: dict = field(default_factory=dict)
     fixed_error_bound: dict = field(default_factory=dict)
     minimal: dict = field(default_factory=dict)
@@ -372,7 +385,8 @@ def _dec_coeffs(dec) -> dict[str, float]:
 
 
 def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = False,
-                     v_max: float | None = None, limit: str | None = None) -> ExportCheck:
+                     v_max: float | None = None, limit: str | None = None,
+                     priority: str | None = None) -> ExportCheck:
     """Refuse controllers that must not reach firmware; plan the export.
 
     Parameters
@@ -389,6 +403,8 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
         Override of the voltage-limit radius (V).
     limit : {"circle", "hexagon"}, optional
         Voltage-limit shape (default ``drive.voltage_limit``, else circle).
+    priority : {"radial", "d_axis"}, optional
+        Voltage-limit priority (default ``drive.voltage_priority``, else radial).
 
     Returns
     -------
@@ -413,6 +429,10 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
         limit = getattr(drive, "voltage_limit", None) or "circle"
     if limit not in ("circle", "hexagon"):
         raise ExportRefused("drive.voltage_limit", '"circle" or "hexagon"', limit)
+    if priority is None:
+        priority = getattr(drive, "voltage_priority", None) or "radial"
+    if priority not in PRIORITIES:
+        raise ExportRefused("drive.voltage_priority", '"radial" or "d_axis"', priority)
     ts = artifact.sample_time
     for ax in AXES:
         law = artifact.axes[ax].law
@@ -437,7 +457,8 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
                                 hint="ill-conditioned realisation; reduce or rescale the controller")
         exact = np.linalg.eigvals(real.A) if real.order else np.zeros(0)
         shifts[ax] = _check_shift(exact, _rounded_poles_f32(real), ts, key, f"{ax}-axis float32")
-    res = ExportCheck(reals, shifts, v_max=float(v_max), limit=limit, minimal=mins)
+    res = ExportCheck(reals, shifts, v_max=float(v_max), limit=limit, priority=priority,
+                      minimal=mins)
     for ax in AXES:
         r = reals[ax]
         if r.order and np.any(r.aw != 0):
@@ -454,6 +475,8 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
         # the hexagon needs sin/cos of the electrical angle: not written in Q31
         plan, reason = None, ('voltage_limit = "hexagon" is implemented in the float path '
                               'only; the Q31 variant needs voltage_limit = "circle"')
+    elif priority != "radial":
+        plan, reason = None, _D_PRIORITY_FLOAT_ONLY.format(variant="the Q31 variant")
     else:
         plan, reason = _fixed.plan_fixed(reals, I_MAX=i_max, W_MAX=w_max, V_MAX=v_max,
                                          dec_coeffs=dec_coeffs)
@@ -465,7 +488,9 @@ def check_exportable(artifact, motor=None, drive=None, *, fixed_point: bool = Fa
             plan, reason = None, str(err)
     res.fixed, res.fixed_reason = plan, reason
     if fixed_point and plan is None:
-        raise ExportRefused("drive.voltage_limit" if limit == "hexagon" else "export.fixed_point", "a controller the Q31 variant can represent",
+        raise ExportRefused("drive.voltage_limit" if limit == "hexagon" else
+                            "drive.voltage_priority" if priority != "radial" else
+                            "export.fixed_point", "a controller the Q31 variant can represent",
                         reason)
     return res
 
@@ -531,6 +556,12 @@ class ReferenceLaw:
       decoupling's ``delay_compensation_time``, toolbox/ARCHITECTURE.md "The
       digital loop"); radial scaling onto its edge.
 
+    Priority (``drive.voltage_priority``): ``"radial"`` as above; ``"d_axis"``
+    keeps ``v_d`` (clamped to the limit's d extent) and clips ``v_q`` into
+    what is left: ``|v_q| <= sqrt(v_max^2 - v_d^2)`` on the circle, the
+    hexagon's chord at that ``v_d`` in the placement frame
+    (:func:`d_priority_limit`).
+
     Faults, as the header: a non-finite input returns the last good output
     with ``status = 1`` and leaves the state unchanged; a non-finite result
     (overflow) does the same with ``status = 2``; ``status = 0`` otherwise.
@@ -543,11 +574,17 @@ class ReferenceLaw:
         Voltage-limit radius (V): the circle's radius or the hexagon's apothem.
     limit : {"circle", "hexagon"}
         Voltage-limit shape.
+    priority : {"radial", "d_axis"}
+        Voltage-limit priority.
     """
 
-    def __init__(self, artifact, v_max: float, limit: str = "circle") -> None:
+    def __init__(self, artifact, v_max: float, limit: str = "circle",
+                 priority: str = "radial") -> None:
         if limit not in ("circle", "hexagon"):
             raise ExportRefused("drive.voltage_limit", '"circle" or "hexagon"', limit)
+        if priority not in PRIORITIES:
+            raise ExportRefused("drive.voltage_priority", '"radial" or "d_axis"', priority)
+        self.priority = priority
         self.dec = artifact.decoupling
         self.v_max = float(v_max)
         self.limit = limit
@@ -561,7 +598,7 @@ class ReferenceLaw:
         self.status = 0
 
     def _limit(self, vd: float, vq: float, w: float, theta_e: float) -> float:
-        """Scale factor k <= 1 applied to (vd, vq)."""
+        """Scale factor k <= 1 applied to (vd, vq) (radial priority)."""
         if self.limit == "circle":
             mag = math.hypot(vd, vq)
             return self.v_max / mag if mag > self.v_max else 1.0
@@ -588,9 +625,16 @@ class ReferenceLaw:
             w = dec.pole_pairs * omega_m
             vd = v_lin[0] - dec.cross * w * dec.Lq_c * i_q
             vq = v_lin[1] + dec.cross * w * dec.Ld_c * i_d + dec.emf * w * dec.flux_c
-            k = self._limit(vd, vq, w, theta_e) if math.isfinite(vd) and math.isfinite(vq) \
-                else math.nan
-            vds, vqs, sat = (vd * k, vq * k, 1) if k < 1.0 else (vd, vq, 0)
+            if not (math.isfinite(vd) and math.isfinite(vq)):
+                vds = vqs = math.nan
+                sat = 0
+            elif self.priority == "d_axis":
+                vds, vqs = d_priority_limit(vd, vq, self.v_max, self.limit,
+                                            theta_e + w * self.t_comp)
+                sat = int(vds != vd or vqs != vq)
+            else:
+                k = self._limit(vd, vq, w, theta_e)
+                vds, vqs, sat = (vd * k, vq * k, 1) if k < 1.0 else (vd, vq, 0)
             dv = (vds - vd, vqs - vq)
             xs = [l.A @ x + l.B @ uu + a * d
                   for l, x, uu, a, d in zip(self.laws, self.xs, u, self.aws, dv)]
@@ -602,8 +646,41 @@ class ReferenceLaw:
         return vds, vqs, sat
 
 
+def d_priority_limit(vd: float, vq: float, v_max: float, limit: str = "circle",
+                     theta: float = 0.0) -> tuple[float, float]:
+    """d-axis priority voltage limit (the limiter of field-weakening drives,
+    Briz et al., IEEE Trans. Ind. Appl. 37(1) 2001): ``v_d`` clamped to the
+    limit's d extent, then ``v_q`` clipped into the chord at that ``v_d``.
+
+    Circle of radius ``v_max``: ``|v_d| <= v_max``, ``|v_q| <= sqrt(v_max^2 -
+    v_d^2)``. Hexagon of apothem ``v_max`` (vertex radius ``r = 2 v_max /
+    sqrt(3)``) seen from the dq frame at ``theta``: the edge normal at ``alpha``
+    (30, 90, 150 deg) is ``(cos(alpha - theta), sin(alpha - theta))`` in dq, each
+    edge pair bounds ``|c v_d + s v_q| <= v_max``; the d extent is the support
+    function ``r max_j |cos(theta - 60 j deg)|``.
+    """
+    if limit == "circle":
+        vds = min(max(vd, -v_max), v_max)
+        q = math.sqrt(max(v_max * v_max - vds * vds, 0.0))
+        return vds, min(max(vq, -q), q)
+    h = math.sqrt(3.0) / 2.0
+    r_hex = v_max / h
+    c0, s0 = math.cos(theta), math.sin(theta)
+    d_max = r_hex * max(abs(c0), abs(0.5 * c0 + h * s0), abs(-0.5 * c0 + h * s0))
+    vds = min(max(vd, -d_max), d_max)
+    lo, hi = -math.inf, math.inf
+    for ca, sa in ((h, 0.5), (0.0, 1.0), (-h, 0.5)):
+        ck, sk = ca * c0 + sa * s0, sa * c0 - ca * s0
+        if abs(sk) > 1e-12:
+            b1, b2 = sorted(((v_max - ck * vds) / sk, (-v_max - ck * vds) / sk))
+            lo, hi = max(lo, b1), min(hi, b2)
+    if lo > hi:  # v_d on a vertex, rounding: the chord is one point
+        lo = hi = 0.5 * (lo + hi)
+    return vds, min(max(vq, lo), hi)
+
+
 def reference_law(artifact, inputs: np.ndarray, v_max: float, limit: str = "circle",
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  priority: str = "radial") -> tuple[np.ndarray, np.ndarray]:
     """Run :class:`ReferenceLaw` over an input sequence.
 
     Parameters
@@ -617,13 +694,15 @@ def reference_law(artifact, inputs: np.ndarray, v_max: float, limit: str = "circ
         Voltage-limit radius (V).
     limit : {"circle", "hexagon"}
         Voltage-limit shape.
+    priority : {"radial", "d_axis"}
+        Voltage-limit priority.
 
     Returns
     -------
     (ndarray, ndarray)
         (N, 2) voltages ``v_d, v_q`` (V) and (N,) saturation flags.
     """
-    law = ReferenceLaw(artifact, v_max, limit)
+    law = ReferenceLaw(artifact, v_max, limit, priority)
     out = np.zeros((len(inputs), 2))
     sat = np.zeros(len(inputs), dtype=int)
     for k, row in enumerate(np.asarray(inputs, float)):
@@ -793,6 +872,7 @@ def _header_top(t: _Text, artifact, motor, drive, N: str, check: ExportCheck,
         "top.c.j2", prov=_provenance(artifact, title), N=N, U=N.upper(),
         equations=sanitise_comment('; '.join(map(str, eqs)), 400) if eqs else None,
         hexagon=check.limit == "hexagon", comp=_delay_comp_time(artifact) is not None,
+        d_priority=check.priority == "d_axis",
         warnings=[(ax, f"{check.saturated_radius[ax]:.9g}") for ax in check.marginal_antiwindup]))
 
 
@@ -1001,7 +1081,7 @@ def _preset_context(real: Realisation, key: str, ax: str) -> dict:
 
 def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: bool,
                    comp: bool, plausible: dict | None = None, convention: str = "amplitude",
-                   ) -> None:
+                   d_priority: bool = False) -> None:
     """The float path (templates/float.c.j2)."""
     inputs = ["i_d_ref", "i_q_ref", "i_d", "i_q", "omega_m"] + (["theta_e"] if hexagon else [])
     checks = [f"{N}_finite(in->{v})" for v in inputs]
@@ -1009,7 +1089,7 @@ def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: boo
         _aw_lines(reals["q"], "q", "(vqs - vq)", key)
     t.lines.extend(_render(
         "float.c.j2", N=N, P=P, U=N.upper(), hexagon=hexagon, comp=comp,
-        nd=max(reals["d"].order, 1), nq=max(reals["q"].order, 1),
+        d_priority=d_priority, nd=max(reals["d"].order, 1), nq=max(reals["q"].order, 1),
         form_d=reals["d"].form, order_d=reals["d"].order,
         form_q=reals["q"].form, order_q=reals["q"].order,
         axes=[_axis_context(reals[ax], ax, key) for ax in AXES],
@@ -1056,6 +1136,8 @@ def vendor_plan(artifact, motor, drive, check: ExportCheck):
     if check.limit == "hexagon":
         return None, ('voltage_limit = "hexagon" is implemented in the float path only; '
                       'the MCSDK/IQmath variants need voltage_limit = "circle"')
+    if check.priority != "radial":
+        return None, _D_PRIORITY_FLOAT_ONLY.format(variant="the MCSDK/IQmath variants")
     # an ExportCheck built by hand may lack the minimal laws check_exportable keeps
     minimal = check.minimal or minimal_laws(artifact)
     return _vendor.plan_vendor(minimal, i_max, w_max, check.v_max, dec_coeffs)
@@ -1377,7 +1459,8 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     _float_section(t, check.realisations, N, P, _law_key(artifact), check.limit == "hexagon",
                    _delay_comp_time(artifact) is not None,
                    _plausible_context(artifact, motor, drive, check.v_max),
-                   motor.convention if motor is not None else "amplitude")
+                   motor.convention if motor is not None else "amplitude",
+                   d_priority=check.priority == "d_axis")
     if _delay_comp_time(artifact) is not None:
         t.lines.extend(_render("placement.c.j2", N=N, P=P))
     _fixed_section(t, check, N, P, artifact, drive)

@@ -16,13 +16,16 @@ from ._numeric import ElectricalPlant, axis_plant_models, axis_plants, linearise
 
 #: public name -> defining private module, imported on first use
 _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_symbolic",
-         "derive_dq_model": "_symbolic", "park_matrix": "_symbolic"}
+         "derive_dq_model": "_symbolic", "park_matrix": "_symbolic",
+         # the operating envelope imports scipy.optimize
+         "OperatingEnvelope": "_envelope", "OperatingPoint": "_envelope",
+         "mtpa_d_current": "_envelope"}
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
 
 
-__all__ = ["describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
+__all__ = ["OperatingEnvelope", "OperatingPoint", "mtpa_d_current", "describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
            "zoh_first_order", "steady_state_voltage", "voltage_limited_speed",
            "ElectricalPlant", "axis_plant_models", "axis_plants", "linearise", "numeric_plant",
            "SYMBOLS", "DqModel", "derive_dq_model", "park_matrix"]

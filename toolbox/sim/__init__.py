@@ -14,3 +14,7 @@ from ._verify import (NO_REQUIREMENTS, ROBUSTNESS_CHECKS, VERIFY_SCHEMA, Scenari
 
 __all__ += ["NO_REQUIREMENTS", "ROBUSTNESS_CHECKS", "VERIFY_SCHEMA", "ScenarioOutcome", "VerifyResult", "control_law",
             "default_scenarios", "drive_params", "scenario_setup", "verify"]
+
+from ._envelope_grid import DEFAULT_SPEEDS, DEFAULT_TORQUES, GridPoint, torque_speed_grid
+
+__all__ += ["DEFAULT_SPEEDS", "DEFAULT_TORQUES", "GridPoint", "torque_speed_grid"]

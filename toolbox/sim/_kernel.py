@@ -147,14 +147,15 @@ __all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_i
 #: 2 fcs_mpc; ``half_periods``: carrier half periods per sample of the svm
 #: inverter, 0 = one centred pattern per sample; ``hold``: frame in which the
 #: average inverter holds the voltage, 0 rotor dq, 1 stationary; ``t_comp``: the
-#: voltage placement's compensation time, s) and scenario ``SC``. ``_simulate._pack*`` fill them by name
+#: voltage placement's compensation time, s; ``vprio``: voltage-limit priority,
+#: 0 radial, 1 d axis) and scenario ``SC``. ``_simulate._pack*`` fill them by name
 #: through :func:`pack_indices`.
 LAYOUTS: dict[str, tuple[str, ...]] = {
     "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor"),
     "LP": ("R_c", "Ld_c", "Lq_c", "flux_c", "cross", "emf", "alpha", "beta", "gamma"),
     "SP": ("enabled", "kp", "ki", "kd", "decim", "iq_limit"),
     "DP": ("Ts", "delay", "vlim", "v_max", "r_hex", "inverter", "half_periods", "hold",
-           "t_comp"),
+           "t_comp", "vprio"),
     "SC": ("duration", "mech", "omega0", "acc", "id0", "iq0", "id1", "iq1",
            "t_step", "speed0", "speed1", "load", "load_time", "iq_amp", "f_sin",
            "ref_mode", "signal", "gain", "offset", "speed_noise", "noise_kind",
@@ -572,17 +573,70 @@ def _update(A, B, Baw, ax, x, xn, r, y, dv):
 
 
 @_jit_inline
+def _d_priority_hexagon(vd_u, vq_u, c0, s0, r_hex):
+    """d-axis priority inside the SVM hexagon of vertex radius ``r_hex`` seen
+    in a dq frame at the angle whose cos, sin are ``c0``, ``s0``: ``v_d`` clamped
+    to the hexagon's d extent, then ``v_q`` clipped into the chord at that ``v_d``.
+
+    The hexagon is ``|n_k . v_ab| <= a`` (apothem ``a = r_hex sqrt(3)/2``, edge
+    normals at 30, 90, 150 deg); in dq the normal at ``alpha`` is
+    ``(cos(alpha - theta), sin(alpha - theta))``. The d extent is the support
+    function ``r_hex max_j |cos(theta - 60 j deg)|`` (vertices at 0, 60, 120 deg).
+    """
+    a = r_hex * _SQ3_2
+    # d extent: vertices at 0, 60, 120 deg (and their opposites)
+    d_max = r_hex * max(abs(c0), abs(0.5 * c0 + _SQ3_2 * s0), abs(-0.5 * c0 + _SQ3_2 * s0))
+    vd = min(max(vd_u, -d_max), d_max)
+    lo = -1e300
+    hi = 1e300
+    for k in range(3):
+        if k == 0:
+            ca, sa = _SQ3_2, 0.5
+        elif k == 1:
+            ca, sa = 0.0, 1.0
+        else:
+            ca, sa = -_SQ3_2, 0.5
+        ck = ca * c0 + sa * s0    # cos(alpha - theta)
+        sk = sa * c0 - ca * s0    # sin(alpha - theta)
+        if abs(sk) > 1e-12:
+            b1 = (a - ck * vd) / sk
+            b2 = (-a - ck * vd) / sk
+            if b1 > b2:
+                b1, b2 = b2, b1
+            lo = max(lo, b1)
+            hi = min(hi, b2)
+    if lo > hi:  # v_d on a vertex, rounding: the chord is one point
+        lo = hi = 0.5 * (lo + hi)
+    return vd, min(max(vq_u, lo), hi)
+
+
+@_jit_inline
 def _voltage_limit(vd_u, vq_u, th_m, w_m, DP):
     """Saturated dq voltage: circle of radius v_max, or the SVM hexagon at the
-    angle where the voltage is placed (theta + t_comp w)."""
+    angle where the voltage is placed (theta + t_comp w).
+
+    ``vprio`` 0 (radial): ``v_dq`` scaled radially onto the limit. ``vprio`` 1
+    (d-axis priority, the limiter of field-weakening drives, Briz et al.,
+    IEEE Trans. Ind. Appl. 37(1) 2001): ``v_d`` kept (clamped to the limit's
+    d extent), ``v_q`` gets the rest, ``sign(v_q) sqrt(v_max^2 - v_d^2)`` on
+    the circle, the chord of the hexagon at that ``v_d`` otherwise.
+    """
     vlim = int(DP[DP_VLIM])
+    prio = int(DP[DP_VPRIO])
     if vlim == 1:
         v_max = DP[DP_V_MAX]
+        if prio == 1:
+            vd = min(max(vd_u, -v_max), v_max)
+            q_max = math.sqrt(max(v_max * v_max - vd * vd, 0.0))
+            return vd, min(max(vq_u, -q_max), q_max)
         mag = math.hypot(vd_u, vq_u)
         if mag > v_max:
             return vd_u * v_max / mag, vq_u * v_max / mag
     elif vlim == 2:
         thc = th_m + w_m * DP[DP_T_COMP]
+        if prio == 1:
+            return _d_priority_hexagon(vd_u, vq_u, math.cos(thc), math.sin(thc),
+                                       DP[DP_R_HEX])
         va, vb = _to_ab(vd_u, vq_u, math.cos(thc), math.sin(thc))
         sc = hexagon_scale(va, vb, DP[DP_R_HEX])
         return vd_u * sc, vq_u * sc

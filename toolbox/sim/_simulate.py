@@ -73,6 +73,14 @@ class DriveParams:
         rotating in dq: what a PWM inverter averages to); the rotor hold
         applies ``v_dq`` rotated by the placement's error from the true
         mid-period angle.
+    voltage_priority : str
+        How the law's voltage limit brings an unreachable ``v_dq`` back:
+        ``"radial"`` (default: scaled towards the origin, both components
+        shrink) or ``"d_axis"`` (``v_d`` kept, clamped to the limit, and
+        ``v_q`` given the rest, ``sign(v_q) sqrt(V^2 - v_d^2)`` on the circle,
+        the hexagon's chord at that ``v_d`` otherwise: what field-weakening
+        drives use, so that ``i_d`` holds when ``v_q`` saturates). Anti-windup is
+        back-calculation on the difference either way.
     """
 
     vdc: float
@@ -84,6 +92,7 @@ class DriveParams:
     inverter: str = "average"
     switching_frequency: float | None = None
     hold_frame: str = "rotor"
+    voltage_priority: str = "radial"
 
     def radii(self, torque_factor: float) -> tuple[float, float]:
         """(hexagon vertex radius, circle radius) in V for a dq convention."""
@@ -362,13 +371,17 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams,
         raise SpecError("drive.v_limit", '"circle", "hexagon" or "none"', drive.v_limit)
     if inv_code == 1 and vl == 0:
         vl = 2  # SVM cannot exceed its hexagon: let the anti-windup know it
+    vprio = {"radial": 0, "d_axis": 1}.get(drive.voltage_priority)
+    if vprio is None:
+        raise SpecError("drive.voltage_priority", '"radial" or "d_axis"',
+                        drive.voltage_priority)
     r_hex, v_max = drive.radii(plant.torque_factor)
     hold = {"rotor": 0, "stationary": 1}.get(drive.hold_frame)
     if hold is None:
         raise SpecError("drive.hold_frame", '"rotor" or "stationary"', drive.hold_frame)
     DP = _packed("DP", Ts=Ts, delay=drive.delay_samples, vlim=vl, v_max=v_max, r_hex=r_hex,
                  inverter=inv_code, half_periods=_half_periods(drive) if inv_code == 1 else 0,
-                 hold=hold, t_comp=law.decoupling.delay_compensation_time)
+                 hold=hold, t_comp=law.decoupling.delay_compensation_time, vprio=vprio)
 
     kind = scenario.kind
     sl = law.speed_loop

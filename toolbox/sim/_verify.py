@@ -40,7 +40,8 @@ def drive_params(drive, inverter: str = "average") -> DriveParams:
     return DriveParams(vdc=drive.vdc, sample_time=drive.sample_time,
                        delay_samples=drive.delay_samples, v_limit=drive.voltage_limit,
                        inverter=inverter, switching_frequency=drive.switching_frequency,
-                       hold_frame=drive.hold_frame)
+                       hold_frame=drive.hold_frame,
+                       voltage_priority=drive.voltage_priority)
 
 
 def _axis_law(axis) -> AxisLaw:

@@ -44,7 +44,7 @@ MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "rated_current_rms", "max_current_rms")
 DRIVE_KEYS = ("vdc", "sample_time", "delay_samples", "switching_frequency",
               "voltage_limit", "max_speed", "sample_frequency", "hold_frame",
-              "angle_compensation")
+              "angle_compensation", "voltage_priority")
 
 
 def load_spec(path: str | Path, overrides: Sequence[tuple[str, str]] = ()) -> Spec:
@@ -302,6 +302,8 @@ def _drive_logged(value: Any) -> tuple[Drive, list]:
         hold_frame=_collect(errors, t.string, "hold_frame", "rotor",
                             choices=("rotor", "stationary")),
         angle_compensation=_collect(errors, _angle_compensation, t),
+        voltage_priority=_collect(errors, t.string, "voltage_priority", "radial",
+                                  choices=("radial", "d_axis")),
     )
     if errors.failed:
         errors.raise_if_any()

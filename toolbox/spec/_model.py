@@ -184,6 +184,11 @@ class Drive:
         the sampled angle. ``"mid_period"`` (default): ``(delay_samples + 1/2)
         Ts``, the angle of the middle of the application period; ``"none"``: 0
         (the voltage lags by ``(delay_samples + 1/2) Ts w_e``); or a time (s).
+    voltage_priority : str
+        How the law's voltage limit acts (simulator and header alike):
+        ``"radial"`` (default; ``v_dq`` scaled onto the limit) or ``"d_axis"``
+        (``v_d`` kept, ``v_q`` gets the rest: the limiter of field-weakening
+        drives, which holds ``i_d`` during a saturated q step).
     """
 
     vdc: float
@@ -194,6 +199,7 @@ class Drive:
     max_speed: float | None = None
     hold_frame: str = "rotor"
     angle_compensation: str | float = "mid_period"
+    voltage_priority: str = "radial"
 
     @property
     def angle_compensation_time(self) -> float:

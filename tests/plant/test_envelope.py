@@ -1,0 +1,201 @@
+"""Operating envelope (toolbox/plant/_envelope.py): MTPA closed form, field
+weakening, MTPV and the torque limit against independent routes.
+
+* MTPA: the closed form against a bounded numeric maximisation of the torque
+  over the current angle (and dT/d(angle) = 0), both conventions, both
+  saliencies and the non-salient motor; against motulator 0.5's
+  ``TorqueCharacteristics.mtpa`` (Morimoto 1990) on paper 003's motor.
+* MTPV with R neglected against motulator's ``mtpv`` flux angle.
+* References and torque limits against scipy SLSQP (least |i| subject to the
+  torque, voltage and current constraints; largest torque subject to the
+  limits), multi-start, on a traction-like motor whose characteristic current
+  psi/Ld is inside the current limit (so MTPV is reached): within 2e-3 A and
+  1e-4 relative torque (SLSQP's own accuracy is ~1e-6).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize, minimize_scalar
+
+import toolbox
+from toolbox.plant import OperatingEnvelope, mtpa_d_current
+from toolbox.spec import Drive, Motor
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
+TRACTION = Motor(R=0.02, Ld=0.4e-3, Lq=1.1e-3, flux=0.04, pole_pairs=4, J=0.01,
+                 friction=0.0, convention="amplitude", max_current=200.0)  # psi/Ld = 100 A
+TRACTION_DRIVE = Drive(vdc=300.0, sample_time=1e-4)
+
+
+def _motors():
+    base = dict(R=0.6, J=1e-3, friction=0.0, pole_pairs=4, max_current=20.0)
+    return [Motor(Ld=1.4e-3, Lq=2.8e-3, flux=0.12, convention="amplitude", **base),
+            Motor(Ld=1.4e-3, Lq=2.8e-3, flux=0.12, convention="power", **base),
+            Motor(Ld=2.8e-3, Lq=1.4e-3, flux=0.12, convention="amplitude", **base),
+            Motor(Ld=2.0e-3, Lq=2.0e-3, flux=0.12, convention="amplitude", **base)]
+
+
+@pytest.mark.parametrize("k", range(4))
+def test_mtpa_closed_form(k):
+    """The closed form is the numeric maximiser of T(i_s cos b, i_s sin b) over
+    b to 1e-7 A, and dT/db vanishes there (central difference, 1e-7 of T)."""
+    m = _motors()[k]
+    env = OperatingEnvelope(m, v_max=1e6)
+    for i_s in (0.5, 5.0, 20.0, 60.0):
+        i_d = mtpa_d_current(i_s, m.Ld, m.Lq, m.flux)
+        b0 = math.atan2(math.sqrt(i_s ** 2 - i_d ** 2), i_d)
+        res = minimize_scalar(lambda b: -env.torque(i_s * math.cos(b), i_s * math.sin(b)),
+                              bounds=(0.0, math.pi), method="bounded",
+                              options={"xatol": 1e-12})
+        assert abs(i_s * math.cos(res.x) - i_d) < 1e-7 * max(i_s, 1.0)
+        h = 1e-6
+        dT = (env.torque(i_s * math.cos(b0 + h), i_s * math.sin(b0 + h))
+              - env.torque(i_s * math.cos(b0 - h), i_s * math.sin(b0 - h))) / (2 * h)
+        assert abs(dT) < 1e-7 * env.torque(i_d, math.sqrt(i_s ** 2 - i_d ** 2)) / h * 1e-6 + 1e-9
+        # the textbook form for Lq > Ld
+        if m.Lq > m.Ld:
+            dL = m.Lq - m.Ld
+            text = (m.flux - math.sqrt(m.flux ** 2 + 8 * dL ** 2 * i_s ** 2)) / (4 * dL)
+            assert abs(text - i_d) < 1e-12 * i_s
+        # mtpa(torque) inverts it
+        T = float(env.torque(i_d, math.sqrt(i_s ** 2 - i_d ** 2)))
+        d2, q2 = env.mtpa(T)
+        assert abs(d2 - i_d) < 1e-9 * i_s and abs(math.hypot(d2, q2) - i_s) < 1e-9 * i_s
+        d3, q3 = env.mtpa(-T)
+        assert abs(d3 - d2) < 1e-12 and abs(q3 + q2) < 1e-12
+
+
+def test_mtpa_and_mtpv_match_motulator():
+    """Paper 003's motor (amplitude-invariant, as motulator): motulator's MTPA
+    angle gives the same i_d to 1e-12 relative; with R neglected, its MTPV flux
+    angle at |psi_s| = V / w gives the same currents as the envelope's largest
+    torque on the voltage limit, to 1e-7 relative (the torque to 1e-12)."""
+    from motulator.drive.control.sm import TorqueCharacteristics
+    from motulator.drive.utils import SynchronousMachinePars
+    spec = toolbox.load_spec(ROOT / "designs" / "003_azaiz2007_pi.toml")
+    m = spec.motor
+    tc = TorqueCharacteristics(SynchronousMachinePars(n_p=m.pole_pairs, R_s=m.R, L_d=m.Ld,
+                                                      L_q=m.Lq, psi_f=m.flux))
+    for i_s in (1.0, 10.0, 20.0, 100.0):
+        beta = tc.mtpa(i_s)
+        assert abs(i_s * math.cos(beta) - mtpa_d_current(i_s, m.Ld, m.Lq, m.flux)) \
+            < 1e-12 * i_s
+        assert abs(tc.torque(tc.flux(i_s * np.exp(1j * beta)))
+                   - OperatingEnvelope(m, spec.drive).torque(i_s * math.cos(beta),
+                                                             i_s * math.sin(beta))) < 1e-12 * i_s
+    # MTPV on the traction motor, R neglected
+    mt = TRACTION
+    env = OperatingEnvelope(mt, TRACTION_DRIVE, resistive=False)
+    tct = TorqueCharacteristics(SynchronousMachinePars(n_p=mt.pole_pairs, R_s=0.0,
+                                                       L_d=mt.Ld, L_q=mt.Lq, psi_f=mt.flux))
+    for speed in (800.0, 1500.0, 3000.0):
+        psi = env.V / (mt.pole_pairs * speed)
+        delta = tct.mtpv(psi)
+        i_ref = tct.current(psi * np.exp(1j * delta))
+        d, q = env.mtpv(speed)
+        print(f"\nMTPV {speed:g} rad/s: motulator ({i_ref.real:.6f}, {i_ref.imag:.6f}) "
+              f"envelope ({d:.6f}, {q:.6f}) A")
+        # the torque is flat at its maximum: the argmax to ~sqrt(eps) relative
+        assert abs(complex(d, q) - i_ref) < 1e-7 * abs(i_ref)
+        assert abs(env.torque(d, q) - tct.torque(tct.flux(i_ref))) < 1e-12 * abs(env.torque(d, q))
+
+
+def _slsqp_reference(env, T, speed):
+    """Least |i| with T(i) = T, |v| <= V, |i| <= I by SLSQP from several starts."""
+    cons = [{"type": "eq", "fun": lambda x: (env.torque(*x) - T) / env.kt},
+            {"type": "ineq", "fun": lambda x: (env.V ** 2 - env._vmag(*x, speed) ** 2) / env.V},
+            {"type": "ineq", "fun": lambda x: (env.I ** 2 - x @ x) / env.I}]
+    best = None
+    for b in (0.8, 1.6, 2.4):
+        x0 = 0.5 * env.I * np.array([math.cos(b), math.copysign(math.sin(b), T or 1.0)])
+        r = minimize(lambda x: x @ x, x0, constraints=cons, method="SLSQP",
+                     options={"ftol": 1e-12, "maxiter": 200})
+        if r.success and all(c["fun"](r.x) > -1e-7 if c["type"] == "ineq"
+                             else abs(c["fun"](r.x)) < 1e-8 for c in cons):
+            if best is None or r.fun < best.fun:
+                best = r
+    return best
+
+
+def _slsqp_max_torque(env, speed, sign):
+    cons = [{"type": "ineq", "fun": lambda x: (env.V ** 2 - env._vmag(*x, speed) ** 2) / env.V},
+            {"type": "ineq", "fun": lambda x: (env.I ** 2 - x @ x) / env.I}]
+    best = None
+    for b in (0.8, 1.6, 2.4):
+        x0 = 0.3 * env.I * np.array([math.cos(b), sign * math.sin(b)])
+        r = minimize(lambda x: -sign * env.torque(*x) / env.kt, x0, constraints=cons,
+                     method="SLSQP", options={"ftol": 1e-12, "maxiter": 200})
+        if r.success and all(c["fun"](r.x) > -1e-7 for c in cons):
+            if best is None or r.fun < best.fun:
+                best = r
+    return best
+
+
+@pytest.mark.parametrize("motor_name", ["traction", "paper003"])
+def test_references_match_numeric_optimisation(motor_name):
+    """0 / 25 / 50 / 75 / 100 % of the standstill torque limit, both signs, at
+    0.5 .. 4 x base speed (paper 003's motor: up to 1.5 x, beyond it nothing
+    fits): the envelope's reference has the least |i| SLSQP finds, to 2e-3 A;
+    a torque beyond the limit at that speed comes back as the limit, which
+    equals SLSQP's largest torque to 1e-4 relative."""
+    if motor_name == "traction":
+        env = OperatingEnvelope(TRACTION, TRACTION_DRIVE)
+        speeds = np.array([0.5, 1.5, 2.0, 4.0])
+    else:
+        spec = toolbox.load_spec(ROOT / "designs" / "003_azaiz2007_pi.toml")
+        env = OperatingEnvelope(spec.motor, spec.drive)
+        speeds = np.array([0.5, 1.0, 1.2, 1.5])
+    wb = env.base_speed()
+    t0 = env.max_torque_point(0.0).torque
+    regions = set()
+    n = 0
+    worst = dt_worst = 0.0
+    for speed in speeds * wb:
+        for sign in (1.0, -1.0):
+            lim = env.max_torque_point(speed, sign)
+            ref = _slsqp_max_torque(env, speed, sign)
+            assert ref is not None
+            dt_worst = max(dt_worst, abs(lim.torque - sign * (-ref.fun) * env.kt) / t0)
+            assert abs(lim.torque - sign * (-ref.fun) * env.kt) <= 1e-4 * t0, (speed, sign)
+            for frac in (0.0, 0.25, 0.5, 0.75, 1.0):
+                T = sign * frac * t0
+                op = env.operating_point(T, speed)
+                regions.add(op.region)
+                assert math.hypot(op.i_d, op.i_q) <= env.I * (1 + 1e-9)
+                assert env._vmag(op.i_d, op.i_q, speed) <= env.V * (1 + 1e-9)
+                if sign * T > sign * lim.torque + 1e-9 * t0:
+                    assert op == lim
+                    continue
+                assert abs(float(env.torque(op.i_d, op.i_q)) - T) < 1e-9 * t0
+                r = _slsqp_reference(env, T, speed)
+                assert r is not None, (T, speed)
+                err = math.hypot(op.i_d - r.x[0], op.i_q - r.x[1])
+                n += 1
+                worst = max(worst, err)
+                assert err < 2e-3, (T, speed, op, r.x)
+    print(f"\n{motor_name}: base speed {wb:.2f} rad/s, {n} references checked, "
+          f"regions {sorted(regions)}; worst |di| {worst:.2e} A, torque limit {dt_worst:.2e}")
+    assert "field_weakening" in regions and "mtpa" in regions
+    if motor_name == "traction":
+        assert "voltage_limit" in regions      # MTPV reached: psi/Ld inside the current limit
+
+
+def test_base_speed_and_limits():
+    """At base speed the current-limit MTPA point is on the voltage limit; the
+    envelope refuses to be built without a current or voltage limit."""
+    env = OperatingEnvelope(TRACTION, TRACTION_DRIVE)
+    wb = env.base_speed()
+    d = mtpa_d_current(env.I, TRACTION.Ld, TRACTION.Lq, TRACTION.flux)
+    q = math.sqrt(env.I ** 2 - d ** 2)
+    assert abs(env._vmag(d, q, wb) - env.V) < 1e-9 * env.V
+    assert env.max_torque_point(0.5 * wb).region == "current_limit"
+    from toolbox.errors import SpecError
+    with pytest.raises(SpecError, match="max_current"):
+        OperatingEnvelope(Motor(R=0.1, Ld=1e-3, Lq=1e-3, flux=0.1, pole_pairs=2, J=1e-3,
+                                friction=0.0), TRACTION_DRIVE)
+    with pytest.raises(SpecError, match="drive"):
+        OperatingEnvelope(TRACTION)
