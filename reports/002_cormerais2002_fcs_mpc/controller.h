@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 600c2c7e54f2d6f6e865680421b0620963b931525a29cc6dcbde689c5dbfef36
  * law sha256:  7eb7eb09cc055079980ece9e31d17b2583a9e3efb2cee518b12af18fc369f046
- * created:     2026-11-25T17:26:11+00:00
+ * created:     2026-11-27T18:30:59+00:00
  *
  * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no
  * fixed-point variant: CCT_FIXED_POINT is an error).
@@ -19,8 +19,10 @@
  * No computation delay: the state returned is applied at once, for this period.
  * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
  * cct_step() once per period (example at the end of this file).
- * Faults: out->status CCT_STATUS_BAD_INPUT (an input is inf/nan) or
- * CCT_STATUS_BAD_STATE (the cost overflowed): the previous state is held.
+ * Faults: out->status CCT_STATUS_BAD_INPUT (an input is inf/nan),
+ * CCT_STATUS_IMPLAUSIBLE (a measured current or the speed beyond
+ * CCT_I_PLAUSIBLE / CCT_W_PLAUSIBLE) or CCT_STATUS_BAD_STATE (the cost
+ * overflowed): the previous state is held.
  */
 #ifndef CCT_CONTROLLER_H
 #define CCT_CONTROLLER_H
@@ -61,6 +63,15 @@ typedef struct {
 #define CCT_STATUS_OK 0         /* the law ran */
 #define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: switch state held */
 #define CCT_STATUS_BAD_STATE 2  /* non-finite cost (overflow): switch state held */
+#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: switch state held */
+
+/* plausible ranges (a sample beyond them is a sensor or ADC fault): cct_step
+ * refuses measured currents or speed beyond them, cct_set_vdc bus readings
+ * outside [VDC_MIN, VDC_PLAUSIBLE] */
+#define CCT_I_PLAUSIBLE 3.000000000e+02f /* A, 2 x motor.max_current (else 2 x max(2 x rated, V_MAX/R, flux/L)) */
+#define CCT_W_PLAUSIBLE 9.367203522e+01f /* rad/s mechanical, 2 x drive.max_speed (else see the docs) */
+#define CCT_VDC_MIN 1.200000010e-02f /* V, 1e-3 x DRIVE_VDC */
+#define CCT_VDC_PLAUSIBLE 2.400000000e+01f /* V, 2 x DRIVE_VDC */
 
 typedef struct {
     int state;     /* inverter state 0..7 = 4 m1 + 2 m2 + m3 (paper 002 numbering) */
@@ -91,12 +102,16 @@ static inline int cct_finite(float v)
 }
 
 /* measured DC-link voltage (V) -> active vector length CCT_R_HEX_PER_VDC * vdc.
- * Returns CCT_STATUS_OK, or CCT_STATUS_BAD_INPUT (not finite or not > 0)
- * leaving the length in use unchanged. */
+ * Returns CCT_STATUS_OK; CCT_STATUS_BAD_INPUT (not finite or not > 0) or
+ * CCT_STATUS_IMPLAUSIBLE (outside [CCT_VDC_MIN, CCT_VDC_PLAUSIBLE]) leave
+ * the length in use unchanged. */
 static inline int cct_set_vdc(cct_state_t *s, float vdc)
 {
     if (!(cct_finite(vdc) && vdc > 0.0f)) {
         return CCT_STATUS_BAD_INPUT;
+    }
+    if (!(vdc >= CCT_VDC_MIN && vdc <= CCT_VDC_PLAUSIBLE)) {
+        return CCT_STATUS_IMPLAUSIBLE;
     }
     s->r_hex = CCT_R_HEX_PER_VDC * vdc;
     return CCT_STATUS_OK;
@@ -160,6 +175,12 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         cct_emit(out, s->conf, 0, CCT_STATUS_BAD_INPUT); /* state held */
         return;
     }
+    if (!(in->i_d <= CCT_I_PLAUSIBLE && in->i_d >= -CCT_I_PLAUSIBLE
+          && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE
+          && in->omega_m <= CCT_W_PLAUSIBLE && in->omega_m >= -CCT_W_PLAUSIBLE)) {
+        cct_emit(out, s->conf, 0, CCT_STATUS_IMPLAUSIBLE); /* state held */
+        return;
+    }
     c = cosf(thp);
     sn = sinf(thp);
     for (cand = 0; cand < 8; ++cand) {
@@ -205,8 +226,9 @@ static void control_isr(float i_d_ref, float i_q_ref)
 {
     cct_input_t in;
     cct_output_t out;
-    if (cct_set_vdc(&ctl, adc_vdc()) != CCT_STATUS_OK) {
-        fault_report(CCT_STATUS_BAD_INPUT); /* bus reading lost: previous vectors kept */
+    const int bus = cct_set_vdc(&ctl, adc_vdc());
+    if (bus != CCT_STATUS_OK) {
+        fault_report(bus); /* bus reading lost or implausible: previous vectors kept */
     }
     in.i_d_ref = i_d_ref;
     in.i_q_ref = i_q_ref;

@@ -4,15 +4,16 @@
  * method:      hinf
  * version:     0.1.0
  * spec sha256: 3d54e1585f891859bcd0067354f5511ea79262f496eb1149a44680506a72995a
- * law sha256:  563f2e457105eae9cee7171107f5b7cfb827703aa6dbcec36ee43c264d757b4a
- * created:     2026-11-25T18:52:46+00:00
- * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72); coupled dq plant at speed, 003 eq (3)-(4): small-gain S weight w1 + k sqrt(c_d c_q) G (issue 17)
+ * law sha256:  752644d99d675ee8e3b8802cb9ae06ceb0d98bab56bd7e7fc5123bfb3afb276f
+ * created:     2026-11-27T18:31:03+00:00
+ * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72); coupled dq plant at speed, 003 eq (3)-(4): small-gain S weight w1 + k sqrt(c_d c_q) G
  *
- * C99, header-only, no dynamic memory; libm: sqrtf only (float path).
+ * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
  * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
  * cct_step() once per controller period (example at the end of this file). The
- * voltage returned is applied by the inverter in the NEXT period: the
- * computation delay is part of the plant the design assumed, not of this code.
+ * voltage returned is applied by the inverter DELAY_SAMPLES periods later (the
+ * next period for DELAY_SAMPLES = 1, this one for 0): the computation delay is
+ * part of the plant the design assumed, not of this code.
  * Law per axis: x' = A x + B [i_ref; i_meas], v = C x + D [i_ref; i_meas]
  *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),
  * then decoupling  v_d += -cross w_e Lq_c i_q,
@@ -22,14 +23,29 @@
  * back-calculation anti-windup x += aw (v_sat - v_unsat).
  * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc
  * (V_MAX, the nominal bus, after init).
+ * Voltage placement (toolbox/ARCHITECTURE.md "The digital loop"; every analysis,
+ * the simulation and the certificates model exactly this): v_d_comp, v_q_comp
+ * are v_dq rotated by DELAY_COMP_TIME w_e (the middle of the application
+ * period); apply them with the inverse Park transform at the SAMPLED angle
+ * theta_e, the angle of this period's currents, during the period DELAY_SAMPLES
+ * later. v_d, v_q are the law's own (unrotated) output.
  * Faults: out->status is
- *   CCT_STATUS_OK (0)        the law ran;
- *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
- *   CCT_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).
- * On 1 and 2 the last good output is repeated (0 V before the first good
+ *   CCT_STATUS_OK (0)          the law ran;
+ *   CCT_STATUS_BAD_INPUT (1)   an input is inf or nan;
+ *   CCT_STATUS_BAD_STATE (2)   the result overflowed (inf/nan in v or the state);
+ *   CCT_STATUS_IMPLAUSIBLE (4) a measured current beyond I_PLAUSIBLE or the
+ *                                  speed beyond W_PLAUSIBLE (a sensor fault).
+ * On 1, 2 and 4 the last good output is repeated (0 V before the first good
  * period), saturated = 0, and the state is left exactly as it was: the next
  * valid period continues as if the bad one had not happened. Finiteness is
  * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
+ * cct_set_vdc refuses a bus reading that is not finite and > 0 (1) or lies
+ * outside [VDC_MIN, VDC_PLAUSIBLE] (4), keeping the limit in use.
+ * Handover and restart: cct_reset() zeroes the states and the held output
+ * (the limit in use kept); cct_preset_at(&s, &in, v_d, v_q) puts the states
+ * where the next step with the inputs in outputs (v_d, v_q) (bumpless transfer
+ * from an open-loop voltage); cct_preset(&s, v_d, v_q) the linear laws' part
+ * alone. out->sat_d, out->sat_q say which axis the voltage limit reduced.
  * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:
  *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the
  *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.
@@ -38,7 +54,7 @@
 #ifndef CCT_CONTROLLER_H
 #define CCT_CONTROLLER_H
 
-#include <math.h> /* sqrtf */
+#include <math.h> /* sqrtf, sinf, cosf */
 #include <stdint.h> /* uint32_t */
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
@@ -65,29 +81,47 @@
 #define CCT_DEC_LQ 2.799999900e-03f /* H */
 #define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
+#define CCT_DELAY_COMP_TIME 1.500000071e-04f /* s (1.5 Ts, drive.angle_compensation = "mid_period"): v_dq is placed at theta_e + CCT_DELAY_COMP_TIME * w_e (rad); applied inside cct_step, outputs v_d_comp, v_q_comp */
 
 #define CCT_Q_GAIN 8.533594012e-02f /* q axis SOS output gain, V/A */
 #define CCT_Q_NUM_STAGES 2
 
-/* inputs: currents in A, measured MECHANICAL speed in rad/s */
+/* inputs: currents in A, measured MECHANICAL speed in rad/s.
+ * dq frame (amplitude-invariant Park transform: |i_dq| = peak phase current, |v_dq| = peak phase voltage):
+ * d along the rotor's permanent-magnet flux, q 90 electrical degrees ahead of
+ * it in the direction of positive rotation (phase order a, b, c);
+ * i_d = 2/3 (i_a cos th + i_b cos(th - 2pi/3) + i_c cos(th + 2pi/3)),
+ * i_q = -2/3 (i_a sin th + i_b sin(th - 2pi/3) + i_c sin(th + 2pi/3)),
+ * th = theta_e the electrical angle of the d axis from phase a's axis. */
 typedef struct {
     float i_d_ref; /* A */
     float i_q_ref; /* A */
-    float i_d;     /* measured, A */
-    float i_q;     /* measured, A */
-    float omega_m; /* measured mechanical speed, rad/s */
+    float i_d;     /* measured, A; |i_d| <= CCT_I_PLAUSIBLE else refused */
+    float i_q;     /* measured, A; |i_q| <= CCT_I_PLAUSIBLE else refused */
+    float omega_m; /* measured mechanical speed, rad/s (w_e = POLE_PAIRS omega_m); |omega_m| <= CCT_W_PLAUSIBLE */
 } cct_input_t;
 
 #define CCT_STATUS_OK 0         /* the law ran */
 #define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
 #define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
+#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: output held, state kept */
+
+/* plausible ranges (a sample beyond them is a sensor or ADC fault, not a
+ * current or speed the drive can have): cct_step refuses measured currents
+ * or speed beyond them, cct_set_vdc bus readings outside [VDC_MIN, VDC_PLAUSIBLE] */
+#define CCT_I_PLAUSIBLE 4.000000000e+01f /* A, 2 x motor.max_current (else 2 x max(2 x rated, V_MAX/R, flux/L)) */
+#define CCT_W_PLAUSIBLE 7.216878662e+02f /* rad/s mechanical, 2 x drive.max_speed (else see the docs) */
+#define CCT_VDC_MIN 1.500000060e-01f /* V, 1e-3 x DRIVE_VDC */
+#define CCT_VDC_PLAUSIBLE 3.000000000e+02f /* V, 2 x DRIVE_VDC */
 
 typedef struct {
-    float v_d;     /* V, the law's output (limited), to apply next period */
+    float v_d;     /* V, the law's output (limited), applied DELAY_SAMPLES periods later */
     float v_q;     /* V */
-    float v_d_comp; /* V, = v_d (this design has no delay compensation): */
-    float v_q_comp; /* V, feed these to the inverse Park transform at theta_e */
+    float v_d_comp; /* V, v_dq rotated by CCT_DELAY_COMP_TIME w_e (voltage placement): */
+    float v_q_comp; /* V, feed these to the inverse Park transform at the SAMPLED theta_e */
     int saturated; /* 1 when the voltage limit acted */
+    int sat_d;     /* 1 when the limit reduced |v_d| (e.g. stop an outer d loop's integrator) */
+    int sat_q;     /* 1 when the limit reduced |v_q| (e.g. stop the speed loop's integrator) */
     int status;    /* CCT_STATUS_* */
 } cct_output_t;
 
@@ -103,8 +137,9 @@ typedef struct {
     float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
 } cct_state_t;
 
-/* zero states and held outputs; voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
-static inline void cct_init(cct_state_t *s)
+/* zero states and held outputs (0 V), keeping the voltage limit in use:
+ * e.g. after a trip, before the PWM is enabled again */
+static inline void cct_reset(cct_state_t *s)
 {
     unsigned i;
     for (i = 0u; i < 3u; ++i) { s->d[i] = 0.0f; }
@@ -113,6 +148,12 @@ static inline void cct_init(cct_state_t *s)
     s->v_q_hold = 0.0f;
     s->v_d_comp_hold = 0.0f;
     s->v_q_comp_hold = 0.0f;
+}
+
+/* cct_reset and the voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
+static inline void cct_init(cct_state_t *s)
+{
+    cct_reset(s);
     s->v_max = CCT_V_MAX;
 }
 
@@ -127,15 +168,28 @@ static inline int cct_finite(float v)
 
 /* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
  * circle's radius); call whenever a new bus measurement arrives (e.g. once per
- * period, before cct_step). Returns CCT_STATUS_OK, or CCT_STATUS_BAD_INPUT
- * (vdc not finite or not > 0) leaving the limit in use unchanged. */
+ * period, before cct_step). Returns CCT_STATUS_OK; CCT_STATUS_BAD_INPUT
+ * (vdc not finite or not > 0) or CCT_STATUS_IMPLAUSIBLE (vdc outside
+ * [CCT_VDC_MIN, CCT_VDC_PLAUSIBLE]) leave the limit in use unchanged. */
 static inline int cct_set_vdc(cct_state_t *s, float vdc)
 {
     if (!(cct_finite(vdc) && vdc > 0.0f)) {
         return CCT_STATUS_BAD_INPUT;
     }
+    if (!(vdc >= CCT_VDC_MIN && vdc <= CCT_VDC_PLAUSIBLE)) {
+        return CCT_STATUS_IMPLAUSIBLE;
+    }
     s->v_max = CCT_V_MAX_PER_VDC * vdc;
     return CCT_STATUS_OK;
+}
+
+/* 1 when the measured currents and speed lie within their plausible ranges
+ * (finite inputs: cct_step tests finiteness first) */
+static inline int cct_plausible(const cct_input_t *in)
+{
+    return in->i_d <= CCT_I_PLAUSIBLE && in->i_d >= -CCT_I_PLAUSIBLE
+        && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE
+        && in->omega_m <= CCT_W_PLAUSIBLE && in->omega_m >= -CCT_W_PLAUSIBLE;
 }
 
 static inline int cct_state_finite(const cct_state_t *s)
@@ -154,6 +208,8 @@ static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
     out->v_d_comp = s->v_d_comp_hold;
     out->v_q_comp = s->v_q_comp_hold;
     out->saturated = 0;
+    out->sat_d = 0;
+    out->sat_q = 0;
     out->status = status;
 }
 
@@ -200,9 +256,91 @@ static inline float cct_q_linear(float *x, float r, float y)
     return CCT_Q_GAIN * in;
 }
 
+/* d axis: the state for which the linear law outputs v with the inputs
+ * (r, y) (exactly: C x = v - D [r; y]), on the steady-state manifold
+ * (I - A) x = B [r; y] when the law has an integrator (else the closest
+ * state to it in least squares) */
+static inline void cct_d_preset(float *x, float v, float r, float y)
+{
+    static const float g[3] = { -8.595733155e-19f, 1.171742180e-18f, 4.558700323e-02f };
+    static const float h[6] = { 3.524745580e-07f, -3.524745580e-07f, 1.114347856e-02f, -1.114347856e-02f, -6.376361847e-02f, 6.376361847e-02f };
+    const float c = v - (1.342158020e-01f * r + -1.342158020e-01f * y);
+    unsigned i;
+    for (i = 0u; i < 3u; ++i) {
+        x[i] = g[i] * c + h[2u * i] * r + h[2u * i + 1u] * y;
+    }
+}
+
+/* q axis: the state for which the linear law outputs v with the inputs
+ * (r, y) (exactly: C x = v - D [r; y]), on the steady-state manifold
+ * (I - A) x = B [r; y] when the law has an integrator (else the closest
+ * state to it in least squares) */
+static inline void cct_q_preset(float *x, float v, float r, float y)
+{
+    static const float g[4] = { 0.0f, 0.0f, 1.171839142e+01f, 0.0f };
+    static const float h[8] = { 1.770283508e+01f, -1.770283508e+01f, -6.715672493e+00f, 6.715672493e+00f, -1.770283508e+01f, 1.770283508e+01f, -1.295085251e-02f, 1.295085251e-02f };
+    const float c = v - (8.533594012e-02f * r + -8.533594012e-02f * y);
+    unsigned i;
+    for (i = 0u; i < 4u; ++i) {
+        x[i] = g[i] * c + h[2u * i] * r + h[2u * i + 1u] * y;
+    }
+}
+
+/* bumpless transfer (e.g. open-loop voltage -> closed loop): puts the states
+ * where the next cct_step with the inputs *in outputs v_d, v_q (V, the
+ * law's output: decoupling included, before the limit, so keep |v| within
+ * it), and holds that voltage as the last good output. Call it in the period
+ * of the handover, with the inputs of the step that follows (references
+ * typically set to the measured currents). A static law (no state) cannot be
+ * preset: its output follows from the inputs alone; only the held output is
+ * set. Returns CCT_STATUS_OK, or _BAD_INPUT / _IMPLAUSIBLE (nothing changed). */
+static inline int cct_preset_at(cct_state_t *s, const cct_input_t *in, float v_d, float v_q)
+{
+    if (!(cct_finite(v_d) && cct_finite(v_q)
+          && cct_finite(in->i_d_ref) && cct_finite(in->i_q_ref)
+          && cct_finite(in->i_d) && cct_finite(in->i_q)
+          && cct_finite(in->omega_m))) {
+        return CCT_STATUS_BAD_INPUT;
+    }
+    if (!cct_plausible(in)) {
+        return CCT_STATUS_IMPLAUSIBLE;
+    }
+    const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
+    const float vd_lin = v_d + (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
+    const float vq_lin = v_q - (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
+                       - (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
+    cct_d_preset(s->d, vd_lin, in->i_d_ref, in->i_d);
+    cct_q_preset(s->q, vq_lin, in->i_q_ref, in->i_q);
+    s->v_d_hold = v_d;
+    s->v_q_hold = v_q;
+    {
+        const float thc = CCT_DELAY_COMP_TIME * w;
+        const float cc = cosf(thc);
+        const float sc = sinf(thc);
+        s->v_d_comp_hold = v_d * cc - v_q * sc;
+        s->v_q_comp_hold = v_d * sc + v_q * cc;
+    }
+    return CCT_STATUS_OK;
+}
+
+/* the linear laws' part only: the states where each axis law outputs v_d, v_q
+ * (V) at zero error, i.e. with i_ref = i_meas for a one-degree-of-freedom law
+ * (v = K (i_ref - i_meas)) and with zero currents otherwise;
+ * decoupling terms come on top at speed. Held output set to (v_d, v_q).
+ * Use cct_preset_at for an exact handover at speed or with currents. */
+static inline void cct_preset(cct_state_t *s, float v_d, float v_q)
+{
+    cct_d_preset(s->d, v_d, 0.0f, 0.0f);
+    cct_q_preset(s->q, v_q, 0.0f, 0.0f);
+    s->v_d_hold = v_d;
+    s->v_q_hold = v_q;
+    s->v_d_comp_hold = v_d;
+    s->v_q_comp_hold = v_q;
+}
+
 /* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
- * out->status: CCT_STATUS_OK, or _BAD_INPUT / _BAD_STATE with the last good
- * output repeated and the state left as it was (see the top of this file). */
+ * out->status: CCT_STATUS_OK, or _BAD_INPUT / _IMPLAUSIBLE / _BAD_STATE with
+ * the last good output repeated and the state left as it was (see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
     cct_state_t nx;
@@ -210,6 +348,10 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
           && cct_finite(in->i_d) && cct_finite(in->i_q)
           && cct_finite(in->omega_m))) {
         cct_hold(s, out, CCT_STATUS_BAD_INPUT);
+        return;
+    }
+    if (!cct_plausible(in)) {
+        cct_hold(s, out, CCT_STATUS_IMPLAUSIBLE);
         return;
     }
     nx = *s;
@@ -230,7 +372,7 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         saturated = 1;
     }
     /* back-calculation anti-windup */
-    nx.d[0] += -1.377759967e-03f * (vds - vd);
+    nx.d[0] += -1.377760083e-03f * (vds - vd);
     nx.d[1] += 7.884165272e-03f * (vds - vd);
     nx.d[2] += 1.821898150e-05f * (vds - vd);
     nx.q[0] += 1.432562065e+01f * (vqs - vq);
@@ -240,8 +382,13 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
     }
-    const float vdr = vds; /* no delay compensation in this design */
-    const float vqr = vqs;
+    /* voltage placement (toolbox/ARCHITECTURE.md "The digital loop"): v_dq rotated
+     * by DELAY_COMP_TIME w_e, i.e. placed at theta_e + DELAY_COMP_TIME w_e */
+    const float thc = CCT_DELAY_COMP_TIME * w;
+    const float cc = cosf(thc);
+    const float sc = sinf(thc);
+    const float vdr = vds * cc - vqs * sc;
+    const float vqr = vds * sc + vqs * cc;
     nx.v_d_hold = vds;
     nx.v_q_hold = vqs;
     nx.v_d_comp_hold = vdr;
@@ -252,8 +399,28 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     out->v_d_comp = vdr;
     out->v_q_comp = vqr;
     out->saturated = saturated;
+    out->sat_d = vds != vd;
+    out->sat_q = vqs != vq;
     out->status = CCT_STATUS_OK;
 }
+#if defined(CCT_FIXED_POINT) || defined(CCT_MCSDK) || defined(CCT_IQMATH)
+#include <stdint.h>
+/* integer voltage placement: (pd, pq) = v_dq rotated by x (Q30 rad, |x| <= 1.5) */
+static inline void cct_place_q30(int64_t vd, int64_t vq, int64_t x, int64_t *pd, int64_t *pq)
+{
+    const int64_t one = (int64_t)1 << 30;
+    const int64_t x2 = (x * x) >> 30;
+    const int64_t c3 = one - x2 / 30;
+    const int64_t c2 = one - ((x2 * c3) >> 30) / 12;
+    const int64_t cs = one - ((x2 * c2) >> 30) / 2;
+    const int64_t s3 = one - x2 / 42;
+    const int64_t s2 = one - ((x2 * s3) >> 30) / 20;
+    const int64_t s1 = one - ((x2 * s2) >> 30) / 6;
+    const int64_t sn = (x * s1) >> 30;
+    *pd = (vd * cs - vq * sn) >> 30;
+    *pq = (vd * sn + vq * cs) >> 30;
+}
+#endif
 
 #ifdef CCT_FIXED_POINT
 /*
@@ -264,8 +431,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
  * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 86.6025 V: bases below are powers of two above rigorous
  * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000376 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000406 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000377 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000392 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
@@ -297,9 +464,15 @@ typedef struct {
     int32_t omega_m; /* Q31 of Q31_W_BASE (mechanical) */
 } cct_input_q31_t;
 
+/* voltage placement: rotation angle at full-scale speed, Q30 rad
+ * (0.1536 rad = DELAY_COMP_TIME x POLE_PAIRS x Q31_W_BASE) */
+#define CCT_Q31_COMP_K 164926744
+
 typedef struct {
-    int32_t v_d; /* Q31 of Q31_V_BASE */
+    int32_t v_d; /* Q31 of Q31_V_BASE, the law's output (limited) */
     int32_t v_q;
+    int32_t v_d_comp; /* Q31 of Q31_V_BASE, v_dq placed as the float path does: feed */
+    int32_t v_q_comp; /* these to the inverse Park transform at the SAMPLED theta_e */
     int saturated;
 } cct_output_q31_t;
 
@@ -377,10 +550,10 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[5] = { 21989917L, 263230626L, 92006576L, 2251767L, -2251767L };
+    static const int32_t co[5] = { 21989917L, 263230628L, 92006577L, 2251767L, -2251767L };
     static const int32_t ca[18] = {
-        8525594L, -163937188L, 0L, 14616916L, -14616916L, -189357895L,
-        7308458L, 58715280L, 0L, 748386L, -748386L, 135448934L,
+        8525594L, -163937189L, 0L, 14616916L, -14616916L, -189357899L,
+        7308458L, 58715280L, 0L, 748386L, -748386L, 135448932L,
         11694L, 201319L, 134217728L, 1197L, -1197L, 313000L,
     };
     static const unsigned fa[3] = { 27u, 26u, 27u };
@@ -401,7 +574,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[3] = { -189357895L, 135448934L, 313000L };
+    static const int32_t aw[3] = { -189357899L, 135448932L, 313000L };
     static const unsigned fa[3] = { 27u, 26u, 27u };
     unsigned i;
     for (i = 0u; i < 3u; ++i) {
@@ -414,8 +587,8 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
     static const int32_t co[6] = { 183257540L, 0L, 91628770L, 0L, 715850L, -715850L };
     static const int32_t ca[28] = {
-        164984225L, 33554432L, 0L, 0L, 1393452L, -1393452L, 240344028L,
-        -102537228L, 0L, 0L, 0L, 48854L, -48854L, -150196425L,
+        164984225L, 33554432L, 0L, 0L, 1393452L, -1393452L, 240344030L,
+        -102537228L, 0L, 0L, 0L, 48854L, -48854L, -150196426L,
         371758L, 0L, 134217728L, 32768L, 1452L, -1452L, 544551L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
@@ -437,7 +610,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 240344028L, -150196425L, 544551L, 0L };
+    static const int32_t aw[4] = { 240344030L, -150196426L, 544551L, 0L };
     static const unsigned fa[4] = { 27u, 26u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
@@ -470,6 +643,13 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
     cct_q_antiwindup_q31(s->q, vqs - vq);
     out->v_d = (int32_t)vds;
     out->v_q = (int32_t)vqs;
+    {
+        /* voltage placement: v_dq rotated by DELAY_COMP_TIME w_e */
+        int64_t pd, pq;
+        cct_place_q30(vds, vqs, ((int64_t)in->omega_m * CCT_Q31_COMP_K) >> 31, &pd, &pq);
+        out->v_d_comp = (int32_t)cct_sat32(pd);
+        out->v_q_comp = (int32_t)cct_sat32(pq);
+    }
 }
 #endif /* CCT_FIXED_POINT */
 
@@ -502,8 +682,9 @@ static void control_isr(float i_d_ref, float i_q_ref)
     cct_input_t in;
     cct_output_t out;
     const float theta_e = encoder_theta_e();
-    if (cct_set_vdc(&ctl, adc_vdc()) != CCT_STATUS_OK) {
-        fault_report(CCT_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
+    const int bus = cct_set_vdc(&ctl, adc_vdc());
+    if (bus != CCT_STATUS_OK) {
+        fault_report(bus); /* bus reading lost or implausible: previous limit kept */
     }
     in.i_d_ref = i_d_ref;
     in.i_q_ref = i_q_ref;
@@ -515,7 +696,9 @@ static void control_isr(float i_d_ref, float i_q_ref)
     if (out.status != CCT_STATUS_OK) {
         fault_report(out.status); /* output held, state kept: decide to trip or ride through */
     }
-    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e); /* applied during the next period */
+    /* inverse Park at the SAMPLED theta_e (wrapped to [-pi, pi)); the PWM applies
+     * it DELAY_SAMPLES periods later (the next period for DELAY_SAMPLES = 1) */
+    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e);
 }
 
 int main(void)
