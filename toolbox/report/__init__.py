@@ -543,7 +543,11 @@ def _sampled_certificate_of(cert: Mapping | None) -> dict[str, Any]:
     facts: dict[str, Any] = {
         f"stability certificate, {where}": "certified" if cert.get("certified")
         else "not certified, not even the nominal point",
-        "sampled loop: largest certified box scale": cert.get("scale")}
+        "sampled loop: largest certified box scale": cert.get("scale"),
+        "sampled loop: what the scale means": "scale k shrinks every range of the "
+        "sweep's box towards the nominal point by the factor k, the speed range "
+        "included (k = 1: the whole box and speeds up to the maximum); the box "
+        "certified is listed below in the spec's units"}
     speed = cert.get("speed_range_rad_s")
     if isinstance(speed, (list, tuple)) and len(speed) == 2:
         facts["sampled loop: speed range covered"] = _speed_text(*speed, pp)
