@@ -87,7 +87,7 @@ def plan_vendor(mins: dict, I_FS: float, W_FS: float, V_MAX: float,
     Parameters
     ----------
     mins : dict
-        ``{"d": MinimalLaw, "q": MinimalLaw}`` (:func:`toolbox.export.c_header.minimal_laws`).
+        ``{"d": MinimalLaw, "q": MinimalLaw}`` (:func:`toolbox.export._check.minimal_laws`).
     I_FS, W_FS, V_MAX : float
         Current range (A), speed range (mechanical rad/s), nominal voltage limit (V).
     dec_coeffs : dict
