@@ -27,7 +27,7 @@ from ..artifact import json_ready
 from ._laws import AXES, axis_law
 from ._sampling import DEFAULT_BOX, sample_parameters
 from ._siso import disk_variations, log_grid
-from ._statespace import FreqResponse, pade, zoh_coupled
+from ._statespace import FreqResponse, pade, zoh_2x2, zoh_coupled
 from .._lti import StateSpace, append, feedback, static_gain
 
 __all__ = ["MimoMarginsResult", "sigma_max_2x2", "mu_upper_2x2", "mimo_loop_response",
@@ -364,7 +364,9 @@ class MultiModelLoops:
             self.omega_meas = (gain * self.speeds + offset)[:, None]
             self.w = log_grid(1e-2, math.pi / self.Ts, n_grid, True)[:-1]
             self.z = np.exp(1j * self.w * self.Ts)
-            self.P = self._plant_entries(self.R, self.Ld, self.Lq, self.speeds)
+            # one plant per point (thousands in a dense check): the closed-form
+            # ZOH of the coupled loop's stability check, equal to expm to rounding
+            self.P = self._plant_entries(self.R, self.Ld, self.Lq, self.speeds, closed_form=True)
             self.shape = (nm, 1)
             return
         #: measured electrical speeds ``g w + o`` (motors, speeds), rad/s
@@ -382,11 +384,12 @@ class MultiModelLoops:
         self.P = tuple(e[rows] for e in self._plant_entries(R, Ld, Lq, om))
         self.shape = (nm, ns)
 
-    def _plant_entries(self, R, Ld, Lq, om) -> tuple:
+    def _plant_entries(self, R, Ld, Lq, om, closed_form: bool = False) -> tuple:
         """``(P_00, P_01, P_10, P_11)``, each (N, Nw), of the plants ``(R, Ld, Lq)``
-        at the electrical speeds ``om`` (N each)."""
+        at the electrical speeds ``om`` (N each); ZOH by ``expm`` or, with
+        ``closed_form``, by :func:`zoh_2x2`."""
         Ac, Bc = coupled_plant(R, Ld, Lq, om)
-        Phi, Gam = zoh_coupled(Ac, Bc, self.Ts)
+        Phi, Gam = (zoh_2x2 if closed_form else zoh_coupled)(Ac, Bc, self.Ts)
         # P = (z I - Phi)^-1 Gamma z^-d entry by entry, as contiguous (N, Nw)
         # arrays (issue 13: stacked 2x2 products and inverses cost 3x more)
         z = self.z[None, :]
