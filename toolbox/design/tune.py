@@ -153,7 +153,7 @@ def read_cfg(method: str, table: Table, motor, drive) -> TuneCfg:
 
 
 # ------------------------------------------------------------------ candidates
-def _unpack(x, motor, tune_k: bool) -> tuple[tuple, tuple, float]:
+def _unpack(x, tune_k: bool) -> tuple[tuple, tuple, float]:
     Kp = (math.exp(x[0]), math.exp(x[1]))
     Ki = (math.exp(x[2]), math.exp(x[3]))
     k = math.exp(x[4]) if tune_k else 1.0
@@ -397,7 +397,7 @@ def tune(spec, cfg: TuneCfg | None = None) -> dict[str, Any]:
     n_eval = [0]
 
     def evaluate(x):
-        Kp, Ki, k = _unpack(x, motor, cfg.tune_decoupling)
+        Kp, Ki, k = _unpack(x, cfg.tune_decoupling)
         art = _candidate(spec, cfg, Kp, Ki, k)
         t5 = nominal_response_times(art, motor)
         worst = min(float(np.min(L.disk_margins(art))) for L in grid.values())
@@ -431,6 +431,13 @@ def tune(spec, cfg: TuneCfg | None = None) -> dict[str, Any]:
         r = optimise(starts if x_best is None else [x_best], cfg.evaluations)
         x_best = r.x
         art, t5, worst = evaluate(x_best)
+        if worst < alpha:
+            # infeasible on the active set itself: more models cannot help
+            rounds.append({"round": rnd + 1, "objective": float(r.fun),
+                           "response_time_5pct_s": {"d": t5[0], "q": t5[1]},
+                           "worst_margin_search": worst, "evaluations": int(r.nfev),
+                           "violations_added": []})
+            break
         # worst-case search from the worst grid models of each delay
         added = []
         for d in delays:
@@ -442,9 +449,9 @@ def tune(spec, cfg: TuneCfg | None = None) -> dict[str, Any]:
                     added.append(dict(p, delay=d, margin=m_found, source="worst-case search"))
         if not added:
             dense = dense_check(spec, cfg, art)
+            pts = dense_points(spec, cfg)
             for d, v in dense.items():
                 bad = np.argsort(v)[:4]
-                pts = dense_points(spec, cfg) if bad.size else []
                 for b in bad:
                     if v[b] < alpha:
                         added.append(dict(pts[b], delay=d, margin=float(v[b]),
@@ -459,7 +466,7 @@ def tune(spec, cfg: TuneCfg | None = None) -> dict[str, Any]:
                                           "speed_offset")} for p in added)
         extra = _Paired(spec, active, delays, N_SEARCH)
         dense = None
-    Kp, Ki, k = _unpack(x_best, motor, cfg.tune_decoupling)
+    Kp, Ki, k = _unpack(x_best, cfg.tune_decoupling)
     art = _candidate(spec, cfg, Kp, Ki, k)
     if dense is None:
         dense = dense_check(spec, cfg, art)
@@ -486,10 +493,12 @@ def tune(spec, cfg: TuneCfg | None = None) -> dict[str, Any]:
         d_w = min(per_delay, key=lambda d: per_delay[d]["worst_disk_margin"])
         raise DesignInfeasible(
             "controller.tune.disk_margin",
-            f"a disk margin the model box allows (best found {worst:.3g} with delay {d_w}, "
-            f"after {len(rounds)} rounds)", alpha,
-            hint=f"worst model {per_delay[d_w]['worst_model']}; lower disk_margin, set "
-                 "extra_delay = false or narrow parameter_box")
+            f"a disk margin the model box allows (the best candidate keeps {worst:.3g} "
+            f"with delay {d_w}, after {len(rounds)} rounds)", alpha,
+            hint=f"worst model {per_delay[d_w]['worst_model']}; "
+                 + ("" if cfg.tune_decoupling else "tune_decoupling = true (the scale of the "
+                    "cross-coupling feedforward) may open the window; ")
+                 + "lower disk_margin, set extra_delay = false or narrow parameter_box")
     t5 = nominal_response_times(art, motor)
     binding = _binding(per_delay, alpha, t5, x_best, bounds, cfg, spec)
     return {"Kp": Kp, "Ki": Ki, "decoupling_scale": k, "artifact": art,
