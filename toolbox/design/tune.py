@@ -64,7 +64,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DesignInfeasible, SpecError
+from ..errors import DesignInfeasible
 from ..spec import Table
 from . import _defaults
 from . import robust_pi as RP
