@@ -107,7 +107,7 @@ CANCEL_TOL = 1e-2
 DYNAMIC_RANGE = 2.0 ** 30
 POLE_REL_TOL = 1e-2
 POLE_ABS_RAD_S = 1e-2
-PI_METHODS = ("pi", "ip", "pi_lag", "robust_pi")
+PI_METHODS = ("pi", "ip", "pi_lag", "robust_pi", "tune")
 HORIZON = 0.02   # s, window of the reported quantisation error bound
 
 
