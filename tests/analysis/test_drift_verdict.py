@@ -9,7 +9,7 @@ import pytest
 
 import toolbox
 from toolbox.analysis import DRIVE_DRIFT, drift_ranges, drift_verdict
-from toolbox.analysis._drift import (ALPHA_CU, FLUX_TEMPERATURE_COEFF, SPEED_OFFSET_FRACTION,
+from toolbox.analysis._drift import (ALPHA_CU, DEFAULT_DRIFT_SETS, FLUX_TEMPERATURE_COEFF, SPEED_OFFSET_FRACTION,
                                      WINDING_TEMPERATURE_C, box_text)
 
 
@@ -53,7 +53,7 @@ def test_verdict_of_a_sound_and_a_hot_pi():
                                                            "pi": {"bandwidth": 1000.0}}})
     v = drift_verdict(toolbox.design_spec(sound), sound.motor, sound.drive)
     assert v.passed and v.n_unstable == 0 and v.first_unstable is None
-    assert v.n_sets == 1 + 2 ** 6 + 1000 and v.delay_samples == 1
+    assert v.n_sets == 1 + 2 ** 6 + DEFAULT_DRIFT_SETS and v.delay_samples == 1
     assert 0 < v.worst_disk_margin < 2 and v.max_speed_rad_s == pytest.approx(920.0)
     assert v.summary().startswith("robustness (default drift box: R x0.843..1.511")
     # 8800 rad/s: stable at nominal, past the sampled limit once L drops by 20 %

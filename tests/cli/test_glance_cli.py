@@ -98,6 +98,6 @@ def test_compare_lists_refused_specs_and_ranks(tmp_path):
     rows = json.loads(out.read_text())
     designed = [r for r in rows if "refused" not in r]
     assert len(designed) == 1 and designed[0]["rank"] == 1
-    assert designed[0]["robustness"]["n_sets"] == 1065   # the drift box, as cct design
+    assert designed[0]["robustness"]["n_sets"] == 565    # the drift box, as cct design
     assert designed[0]["n_sets"] == SWEEP_SETS + 129     # the report's stress sweep
     assert [r["spec"] for r in rows if "refused" in r] == [str(bad), str(other)]

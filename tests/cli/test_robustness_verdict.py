@@ -30,7 +30,7 @@ def test_sound_design_prints_the_line_and_passes(tmp_path):
     lines = res.stdout.splitlines()
     i = next(k for k, x in enumerate(lines) if x.startswith("robustness ("))
     assert lines[i - 1].startswith("q axis (sampled loop): GM")   # next to the margins
-    assert lines[i].startswith(LINE) and lines[i].endswith("unstable 0 / 1065 sets")
+    assert lines[i].startswith(LINE) and lines[i].endswith("unstable 0 / 565 sets")
     check = json.loads((tmp_path / "o" / "verify.json").read_text())[
         "margin_requirements"]["default.robustness"]
     assert check["pass"] is True and check["value"] == 0 and check["bound"] == 0

@@ -19,14 +19,23 @@ def test_kernel_sources_cover_what_it_compiles_in():
     """Every module _kernel imports from the sim package (helpers compiled
     in, constants frozen in) and every file defining one of its compiled
     functions is in KERNEL_SOURCES: a new dependency must join the digest."""
-    tree = ast.parse((SIM / "_kernel.py").read_text())
-    imported = {f"{node.module}.py" for node in ast.walk(tree)
-                if isinstance(node, ast.ImportFrom) and node.level == 1}
+    imported, todo = set(), ["_kernel.py"]
+    while todo:                   # the kernel's parts import each other: follow them
+        tree = ast.parse((SIM / todo.pop()).read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                name = f"{node.module}.py"
+                if name not in imported:
+                    imported.add(name)
+                    todo.append(name)
     compiled = {Path(inspect.getsourcefile(f.py_func)).name
                 for f in vars(_kernel).values() if isinstance(f, CPUDispatcher)}
-    assert imported == {"_inverter.py", "_metrics.py"}
-    assert compiled == {"_kernel.py", "_inverter.py"}
+    parts = {"_kernel_layout.py", "_kernel_plant.py", "_kernel_metrics.py",
+             "_kernel_steps.py", "_kernel_pwm.py"}
+    assert imported == {"_inverter.py", "_metrics.py"} | parts
+    assert compiled == {"_kernel.py", "_inverter.py"} | parts - {"_kernel_layout.py"}
     assert set(_kernel.KERNEL_SOURCES) == imported | compiled
+    assert {f"{p}.py" for p in _kernel._KERNEL_PARTS} == compiled - {"_inverter.py"}
 
 
 def test_digest_follows_each_source(tmp_path, monkeypatch):
@@ -45,12 +54,13 @@ def test_digest_follows_each_source(tmp_path, monkeypatch):
 
 
 def test_stale_indexes_are_dropped_once(tmp_path):
-    """Without a stamp, or with another digest, the kernel's indexes go (its
-    data files and _inverter's own indexes stay) and the digest is recorded;
-    with the recorded digest nothing is touched."""
+    """Without a stamp, or with another digest, the indexes of the kernel and
+    its parts go (their data files and _inverter's own indexes stay) and the
+    digest is recorded; with the recorded digest nothing is touched."""
     names = ["_kernel.run-810.py311.nbi", "_kernel.run-810.py311.1.nbc",
              "_inverter.svm_times-77.py311.nbi"]
-    for name in names:
+    parts = ["_kernel_steps._steps-60.py311.nbi"]           # a part of the kernel
+    for name in names + parts:
         (tmp_path / name).write_bytes(b"x")
     _kernel._drop_stale_cache(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(

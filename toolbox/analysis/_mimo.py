@@ -27,7 +27,7 @@ from ..artifact import json_ready
 from ._laws import AXES, axis_law
 from ._sampling import DEFAULT_BOX, sample_parameters
 from ._siso import disk_variations, log_grid
-from ._statespace import FreqResponse, pade, zoh_coupled
+from ._statespace import FreqResponse, pade, zoh_2x2, zoh_coupled
 from .._lti import StateSpace, append, feedback, static_gain
 
 __all__ = ["MimoMarginsResult", "sigma_max_2x2", "mu_upper_2x2", "mimo_loop_response",
@@ -336,20 +336,39 @@ class MultiModelLoops:
         Per model (one entry per motor, or a scalar for all): the sensor's
         gain ``g`` and offset ``o`` (electrical rad/s); default 1 and 0
         (the speed measured exactly).
+    paired : bool
+        ``speeds`` holds one speed per motor (a sample of the box of
+        parameters and speed, e.g. a dense check or a worst-case search):
+        the margins are then ``(motors, 1)``, model ``i`` at ``speeds[i]``
+        only, instead of every motor at every speed.
     """
 
     def __init__(self, motors, speeds, sample_time: float, delay_samples: int,
-                 n_grid: int = 300, *, speed_gain=None, speed_offset=None) -> None:
+                 n_grid: int = 300, *, speed_gain=None, speed_offset=None,
+                 paired: bool = False) -> None:
         self.speeds = np.atleast_1d(np.asarray(speeds, float))
         self.Ts, self.d = float(sample_time), int(delay_samples)
         self.R = np.array([m.R for m in motors], float)
         self.Ld = np.array([m.Ld for m in motors], float)
         self.Lq = np.array([m.Lq for m in motors], float)
         nm, ns = self.R.size, self.speeds.size
+        self.paired = bool(paired)
+        if self.paired and ns != nm:
+            raise ValueError(f"paired: one speed per motor expected, got {ns} for {nm}")
         gain = np.broadcast_to(np.asarray(1.0 if speed_gain is None else speed_gain, float),
                                (nm,))
         offset = np.broadcast_to(np.asarray(0.0 if speed_offset is None else speed_offset,
                                             float), (nm,))
+        if self.paired:
+            #: measured electrical speeds ``g w + o`` (motors, 1), rad/s
+            self.omega_meas = (gain * self.speeds + offset)[:, None]
+            self.w = log_grid(1e-2, math.pi / self.Ts, n_grid, True)[:-1]
+            self.z = np.exp(1j * self.w * self.Ts)
+            # one plant per point (thousands in a dense check): the closed-form
+            # ZOH of the coupled loop's stability check, equal to expm to rounding
+            self.P = self._plant_entries(self.R, self.Ld, self.Lq, self.speeds, closed_form=True)
+            self.shape = (nm, 1)
+            return
         #: measured electrical speeds ``g w + o`` (motors, speeds), rad/s
         self.omega_meas = gain[:, None] * self.speeds[None, :] + offset[:, None]
         self.w = log_grid(1e-2, math.pi / self.Ts, n_grid, True)[:-1]
@@ -360,21 +379,26 @@ class MultiModelLoops:
         nu = first.size
         R, Ld, Lq, om = (np.repeat(self.R[first], ns), np.repeat(self.Ld[first], ns),
                          np.repeat(self.Lq[first], ns), np.tile(self.speeds, nu))
+        rows = (inverse.reshape(-1)[:, None] * ns + np.arange(ns)[None, :]).reshape(-1)
+        #: entries ``(P_00, P_01, P_10, P_11)`` of the plant responses, each (nm*ns, Nw)
+        self.P = tuple(e[rows] for e in self._plant_entries(R, Ld, Lq, om))
+        self.shape = (nm, ns)
+
+    def _plant_entries(self, R, Ld, Lq, om, closed_form: bool = False) -> tuple:
+        """``(P_00, P_01, P_10, P_11)``, each (N, Nw), of the plants ``(R, Ld, Lq)``
+        at the electrical speeds ``om`` (N each); ZOH by ``expm`` or, with
+        ``closed_form``, by :func:`zoh_2x2`."""
         Ac, Bc = coupled_plant(R, Ld, Lq, om)
-        Phi, Gam = zoh_coupled(Ac, Bc, self.Ts)
-        # P = (z I - Phi)^-1 Gamma z^-d entry by entry, as contiguous (nu*ns, Nw)
+        Phi, Gam = (zoh_2x2 if closed_form else zoh_coupled)(Ac, Bc, self.Ts)
+        # P = (z I - Phi)^-1 Gamma z^-d entry by entry, as contiguous (N, Nw)
         # arrays (stacked 2x2 products and inverses cost 3x more)
         z = self.z[None, :]
         a, b = z - Phi[:, 0, 0, None], -Phi[:, 0, 1, None]
         c, d = -Phi[:, 1, 0, None], z - Phi[:, 1, 1, None]
         g = z ** (-self.d) / (a * d - b * c)
         G = Gam[:, :, :, None]
-        rows = (inverse.reshape(-1)[:, None] * ns + np.arange(ns)[None, :]).reshape(-1)
-        #: entries ``(P_00, P_01, P_10, P_11)`` of the plant responses, each (nm*ns, Nw)
-        self.P = tuple(e[rows] for e in (
-            (d * G[:, 0, 0] - b * G[:, 1, 0]) * g, (d * G[:, 0, 1] - b * G[:, 1, 1]) * g,
-            (a * G[:, 1, 0] - c * G[:, 0, 0]) * g, (a * G[:, 1, 1] - c * G[:, 0, 1]) * g))
-        self.shape = (nm, ns)
+        return ((d * G[:, 0, 0] - b * G[:, 1, 0]) * g, (d * G[:, 0, 1] - b * G[:, 1, 1]) * g,
+                (a * G[:, 1, 0] - c * G[:, 0, 0]) * g, (a * G[:, 1, 1] - c * G[:, 0, 1]) * g)
 
     def disk_margins(self, artifact) -> np.ndarray:
         """``(motors, speeds)`` balanced multiloop disk margins of ``artifact``.
@@ -385,15 +409,17 @@ class MultiModelLoops:
         """
         laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
         stable = np.zeros(self.shape, bool)
-        for j, om in enumerate(self.speeds):
+        for j, om in enumerate(self.speeds[:, None] if self.paired else self.speeds):
             loop = coupled_closed_loop(laws, artifact.decoupling, self.Ts, self.d,
                                        R=self.R, Ld=self.Ld, Lq=self.Lq, omega=om,
                                        omega_meas=self.omega_meas[:, j])
             stable[:, j] = loop.spectral_radius() < 1 - 1e-9
+            if self.paired:
+                break
         kd, kq = (FreqResponse(*laws[name].error_controller())(self.z)[:, 0, 0] for name in AXES)
         # L_i = (K - W) P R(eps) with K = diag(K_d, K_q), the off-diagonal W and
         # the placement rotation, entry by entry (W and eps from the measured speed)
-        speeds = np.tile(self.speeds, self.shape[0])
+        speeds = self.speeds if self.paired else np.tile(self.speeds, self.shape[0])
         meas = self.omega_meas.reshape(-1)
         W = decoupling_matrix(artifact.decoupling, meas)
         w01, w10 = W[:, 0, 1, None], W[:, 1, 0, None]

@@ -1,7 +1,8 @@
 """Controller artifact (controller.json) and its state-space views (toolbox._lti)."""
 
-from ._artifact import (SCHEMA, AxisController, ControllerArtifact, Decoupling,
-                        StateSpaceData, Zpk, json_ready, spec_sha256)
+from ._artifact import SCHEMA, ControllerArtifact, json_ready, spec_sha256
+from ._axis import AxisController, StateSpaceData, Zpk
+from ._decoupling import Decoupling
 from ._fields import WEIGHT_NAMES, AxisWeights, FcsWeights, TransferFunctionData
 
 __all__ = ["SCHEMA", "AxisController", "AxisWeights", "ControllerArtifact", "Decoupling",

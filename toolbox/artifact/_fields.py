@@ -63,6 +63,13 @@ def _only(data: Mapping, allowed: tuple[str, ...], key: str) -> None:
             raise ArtifactError(f"{key}.{name}", f"one of {sorted(allowed)}", "unknown key")
 
 
+def _no_unknown(data: Mapping, allowed: set[str], key: str) -> None:
+    for name in data:
+        if name not in allowed:
+            raise ArtifactError(f"{key}.{name}" if key else name,
+                            f"one of {sorted(allowed)}", "unknown key")
+
+
 @dataclass(frozen=True)
 class FcsWeights:
     """Weights of paper 002 criterion (23), executed by the predictive switching.

@@ -11,43 +11,21 @@ traceback reaches the terminal.
 from __future__ import annotations
 
 import errno
-import functools
 import json
-import math
 import sys
 from pathlib import Path
 
 import click
 
-from ..errors import CctError, SpecError
+from ..errors import SpecError
+from ._campaign import campaign
+from ._compare import compare
+from ._conventions import (_QUIET, EXIT_OK, EXIT_REQUIREMENT, _spec_errors,
+                           _write_file)
+from ._echo import _fmt, _notices, _robustness_line
 from ._failsafe import (EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated,
                         internal_error_message, signal_handlers, where)
-from ._progress import CountBar, StepBar, design_stages
-
-#: -q/--quiet of the long-running commands: the bar goes, the summary stays.
-_QUIET = click.option("--quiet", "-q", is_flag=True,
-                      help="No progress bar (the result summary is still printed).")
-
-EXIT_OK, EXIT_REQUIREMENT, EXIT_BAD_INPUT = 0, 1, 2
-
-
-def _spec_errors(func):
-    """Turn any CctError into a one-line message and exit code 2; record the
-    command and its output directory for the top-level handler
-    (:class:`_Cct`)."""
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        where.command = func.__name__
-        out_dir = kwargs.get("out_dir") or kwargs.get("design_dir")
-        where.out_dir = str(out_dir) if out_dir is not None else None
-        try:
-            return func(*args, **kwargs)
-        except CctError as err:
-            click.echo(f"cct: error: {err}", err=True)
-            sys.exit(EXIT_BAD_INPUT)
-
-    return wrapper
+from ._progress import StepBar, design_stages
 
 
 class _Cct(click.Group):
@@ -82,21 +60,6 @@ class _Cct(click.Group):
                 sys.exit(EXIT_INTERNAL)
 
 
-def _write_file(path: str | Path, data: str | bytes, option: str) -> None:
-    """Write one output file atomically; an unusable path is bad input (exit 2)."""
-    from .._io import write_atomic
-
-    try:
-        write_atomic(path, data)
-    except OSError as err:
-        # mkdir reports "File exists" for a parent that is a regular file: name it
-        blocking = next((p for p in Path(path).parents if p.exists() and not p.is_dir()), None)
-        hint = (f"{blocking} is a file, not a directory" if blocking is not None
-                else err.strerror or str(err))
-        raise SpecError(option, "a writable file path (its directory must be creatable)",
-                        str(path), hint=hint) from None
-
-
 @click.group(cls=_Cct, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="current-control-toolbox")
 def main() -> None:
@@ -107,6 +70,11 @@ def main() -> None:
     Example:
       cct design designs/003_azaiz2007_hinf.toml --out out/003
     """
+
+
+# the commands with modules of their own
+main.add_command(compare)
+main.add_command(campaign)
 
 
 @main.command()
@@ -200,7 +168,7 @@ def derive(spec: str, fmt: str | None) -> None:
                    "speeds (up to about a second more per design).")
 @click.option("--method", "method", default=None, metavar="M",
               help="Design with method M instead of the spec's controller.method "
-                   "(pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi).")
+                   "(pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi, tune).")
 @click.option("--set", "sets", multiple=True, metavar="KEY.PATH=VALUE",
               help="Override one spec value before validation (repeatable); VALUE is a "
                    "TOML scalar or array, e.g. --set controller.pi.bandwidth=1500 "
@@ -235,28 +203,6 @@ def design(spec: str, out_dir: str, only_controller: bool, sampled_certificate: 
             click.echo(f"wrote {path}", err=True)
     _summary(out)
     sys.exit(EXIT_OK if out.passed else EXIT_REQUIREMENT)
-
-
-def _notices(notice: str | None, warnings: list[str]) -> None:
-    """The no-requirements notice and warnings, on stderr (stdout may be JSON)."""
-    if notice:
-        click.echo(f"cct: notice: {notice}", err=True)
-    for w in warnings:
-        click.echo(f"cct: warning: {w}", err=True)
-
-
-def _robustness_line(result) -> None:
-    """The drift-box verdict in one line, next to the margins (``DriftVerdict.summary``)."""
-    rob = result.robustness
-    if rob:
-        from ..analysis import DriftVerdict
-
-        text = DriftVerdict(**{k: rob[k] for k in DriftVerdict.__dataclass_fields__}).summary()
-        if any(k in result.informational for k in ("default.robustness", "parameter_drift")):
-            text += " (informational: the baseline PI does not run)"
-        elif rob["n_unstable"]:
-            text += ": FAILED"
-        click.echo(text)
 
 
 def _summary(out) -> None:
@@ -464,322 +410,6 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
     text = write_header(artifact, spec.motor, spec.drive, source=file,
                         prefix=prefix if prefix is not None else spec.export_prefix)
     _write_file(output or Path(out_dir) / "controller.h", text, "--output")
-
-
-@main.command()
-@click.argument("specs", nargs=-1, required=True, type=click.Path(dir_okay=False))
-@click.option("--json", "json_path", type=click.Path(dir_okay=False),
-              help="Also write the table as JSON to this file.")
-@click.option("--sampled-certificate", is_flag=True,
-              help="Also certify the sampled coupled dq loop over the parameter box and "
-                   "speeds (up to about a second more per design).")
-@_QUIET
-@_spec_errors
-def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: bool,
-            quiet: bool) -> None:
-    """Design every SPEC and print bandwidth, 5 % time, margins and robustness
-    side by side, ranked.
-
-    Each design is also verified (margins and stability of the executed law,
-    requirements and default checks, the drift-box robustness verdict of cct
-    design). A spec that cannot be designed (bad input, infeasible, another
-    motor or drive than the first) is listed as refused with its file and
-    reason; the others are still compared. Rank: passing designs first, then
-    the larger worst multiloop disk margin over the drift box, then the
-    shorter 5 % response time (worst axis). Exit 1 when any design fails or
-    is refused.
-
-    \b
-    Example:
-      cct compare designs/000_*.toml designs/003_azaiz2007_hinf.toml
-    """
-    from ..analysis import compare_designs
-    from ..pipeline import design_spec, run_verification
-    from ..spec import load_spec
-
-    refused: list[dict] = []
-    loaded: list = []
-    for path in specs:
-        try:
-            s = load_spec(path)
-        except CctError as err:
-            refused.append({"spec": path, "refused": str(err)})
-            continue
-        if loaded and (s.motor, s.drive.vdc, s.drive.sample_time) != (
-                loaded[0][1].motor, loaded[0][1].drive.vdc, loaded[0][1].drive.sample_time):
-            # each artifact carries its own delay; the plant must be common
-            refused.append({"spec": path, "refused": str(SpecError(
-                "motor", f"the motor, vdc and sample_time of {loaded[0][0]} (compare "
-                "designs for one drive)", "a different one", file=s.source))})
-            continue
-        loaded.append((path, s))
-    names = [Path(p).name for p, _ in loaded]
-    steps = ([f"design {n}" for n in names] + ["analysis"]
-             + [f"verification {n}" for n in names])
-    designed = []
-    rows: list[dict] = []
-    with StepBar(steps, quiet=quiet, desc="compare") as bar:
-        for name, (path, s) in zip(names, loaded):
-            bar(f"design {name}")
-            try:
-                designed.append((path, s, design_spec(s)))
-            except CctError as err:
-                refused.append({"spec": path, "refused": str(err)})
-        bar("analysis")
-        if designed:
-            rows = compare_designs([a for _, _, a in designed], designed[0][1].motor,
-                                   designed[0][1].drive,
-                                   sampled_certificate=sampled_certificate)
-        for (spec_path, s, art), row in zip(designed, rows):
-            bar(f"verification {Path(spec_path).name}")
-            row["spec"] = spec_path
-            result = run_verification(art, s)
-            row["passed"] = result.passed
-            row["failures"] = _failures(result)
-            row["notice"] = result.notice
-            # the drift-box verdict cct design prints (one sweep for both commands)
-            rob = result.robustness or {}
-            row["robustness"] = {k: rob.get(k) for k in (
-                "n_unstable", "n_sets", "worst_disk_margin", "box_text")}
-            if art.method == "fcs_mpc":
-                # its axes hold the baseline PI: margins informational, step figures
-                # from what it executes (the switching law, simulated)
-                row["margins_basis"] = "baseline PI (informational, not executed)"
-                row["response_times"] = _executed_step_figures(result)
-    for k, row in enumerate(sorted(rows, key=_rank_key)):
-        row["rank"] = k + 1
-    if json_path:
-        _write_file(json_path, json.dumps(rows + refused, indent=1, allow_nan=False) + "\n",
-                    "--json")
-    if rows:
-        _print_table(sorted(rows, key=_rank_key))
-    for row in sorted(rows, key=_rank_key):
-        if not row["passed"]:
-            _echo_wrapped(f"FAIL  {row['spec']}: ", "; ".join(row["failures"]))
-    for entry in refused:
-        # the message names the file, the key, what was expected and what was found
-        _echo_wrapped("REFUSED  ", entry["refused"], file_key=True)
-    failed = bool(refused) or any(not r["passed"] for r in rows)
-    sys.exit(EXIT_REQUIREMENT if failed else EXIT_OK)
-
-
-#: The ranking cct compare states under its table.
-RANK_CRITERION = ("rank: passing designs first, then the larger worst multiloop disk margin "
-                  "over the drift box, then the shorter 5 % response time (worst axis)")
-
-
-def _rank_key(row: dict) -> tuple:
-    """Sort key of :data:`RANK_CRITERION` (missing numbers rank last)."""
-    dm = (row.get("robustness") or {}).get("worst_disk_margin")
-    dm = float(dm) if isinstance(dm, (int, float)) and math.isfinite(dm) else -math.inf
-    t5 = _worst(row.get("response_times") or {}, "response_time_5pct", max)
-    return (not row.get("passed", False), -dm, t5 if math.isfinite(t5) else math.inf)
-
-
-def _echo_wrapped(head: str, text: str, width: int = 100, file_key: bool = False) -> None:
-    """``head`` + ``text`` wrapped at ``width`` columns, continuation lines indented
-    (a failure summary may run to a thousand characters); with ``file_key`` the
-    leading ``file: key:`` of an error message stays whole on its first line."""
-    import textwrap
-
-    parts = text.split(": ", 2)
-    if file_key and len(parts) == 3 and len(head) + len(parts[0]) + len(parts[1]) + 3 > width:
-        click.echo(f"{head}{parts[0]}: {parts[1]}:")
-        head, text = "      ", parts[2]
-    click.echo(textwrap.fill(text, width=width, initial_indent=head,
-                             subsequent_indent="      ", break_on_hyphens=False,
-                             break_long_words=True))
-
-
-def _executed_step_figures(result) -> dict:
-    """Worst 5 % time and overshoot over the simulated scenarios (one "q" entry)."""
-    def worst(key):
-        values = [float(sc.metrics[key]) for sc in result.scenarios
-                  if sc.metrics.get(key) is not None and math.isfinite(sc.metrics[key])]
-        missing = any(sc.metrics.get(key) is None or not math.isfinite(sc.metrics[key])
-                      for sc in result.scenarios)
-        return None if missing or not values else max(values)
-    return {"q": {"response_time_5pct": worst("response_time_5pct"),
-                  "overshoot_pct": worst("overshoot_pct"), "basis": "simulated (executed law)"}}
-
-
-def _failures(result) -> list[str]:
-    """``key: reason`` of every failing check of a verification."""
-    doc = result.to_json()  # verify.json's checks carry the reason of every failure
-    out = [f"{k}: {c.get('reason')}" for k, c in doc["margin_requirements"].items()
-           if not c["pass"]]
-    for sc in doc["scenarios"]:
-        out += [f"{sc['name']}: {k}: {c.get('reason')}"
-                for k, c in (sc.get("requirements") or {}).items() if not c["pass"]]
-    return out
-
-
-#: Columns of the compare table: (header, value of a row); worst axis throughout.
-_COLUMNS = (
-    ("rank", lambda r: r.get("rank", "")),
-    ("method", lambda r: r["method"]),
-    ("BW rad/s", lambda r: _worst(r["margins"], "bandwidth_rad_s", min)),
-    ("GM dB", lambda r: _worst(r["margins"], "gain_margin_db", min)),
-    ("PM deg", lambda r: _worst(r["margins"], "phase_margin_deg", min)),
-    ("Mm", lambda r: _worst(r["margins"], "stability_margin", min)),
-    ("t5% ms", lambda r: 1e3 * _worst(r["response_times"], "response_time_5pct", max)),
-    ("OS %", lambda r: _worst(r["response_times"], "overshoot_pct", max)),
-    ("worst GM dB", lambda r: _worst(r["worst_case"], "gain_margin_db", min)),
-    ("unstable", lambda r: "{}/{}".format(*(
-        (r["robustness"]["n_unstable"], r["robustness"]["n_sets"])
-        if (r.get("robustness") or {}).get("n_sets") is not None
-        else (r["n_unstable"], r["n_sets"])))),
-    ("drift disk", lambda r: (r.get("robustness") or {}).get("worst_disk_margin")),
-    ("MIMO disk", lambda r: r["mimo_worst_disk_margin"]),
-    ("box MIMO", lambda r: r["mimo_box"]["worst_disk_margin"]),
-    ("box worst at", lambda r: _box_where(r["mimo_box"])),
-    ("cert. scale", lambda r: (r["certificate"] or {}).get("certified_scale")),
-    ("sampled cert.", lambda r: (r.get("sampled_certificate") or {}).get("certified_scale")),
-    ("verdict", lambda r: "pass" if r.get("passed", True) else "FAIL"),
-)
-
-
-def _box_where(box: dict) -> str:
-    """``w=<rad/s> R<x>Ld<x>Lq<x>``: speed and scale factors of the worst box model."""
-    p = box["worst_params"]
-    return f"w={box['worst_speed_rad_s']:.0f} " + "".join(f"{k}x{v:g}" for k, v in p.items())
-
-
-def _worst(per_axis: dict, key: str, pick) -> float:
-    values = [float(v[key]) for v in per_axis.values() if v.get(key) is not None]
-    return pick(values) if values else float("nan")
-
-
-def _print_table(rows: list[dict]) -> None:
-    """Sampled-loop margins and step figures, robustness over the sweep."""
-    informational = {"BW rad/s", "GM dB", "PM deg", "Mm", "worst GM dB", "unstable",
-                     "drift disk", "MIMO disk", "cert. scale", "sampled cert."}
-    table = [[h for h, _ in _COLUMNS]] + [
-        [_fmt(get(r)) + ("*" if h in informational and r.get("margins_basis") else "")
-         for h, get in _COLUMNS] for r in rows]
-    widths = [max(len(line[k]) for line in table) for k in range(len(_COLUMNS))]
-    for spec, line in zip(["spec"] + [r["spec"] for r in rows], table):
-        click.echo("  ".join(c.rjust(w) for c, w in zip(line, widths)) + f"  {spec}")
-    _echo_wrapped("", "worst axis throughout; unstable: sets of the drift box (as cct "
-                  "design) whose coupled sampled loop is unstable; drift disk: worst "
-                  "multiloop disk margin over it; worst GM: over the stress sweep of the "
-                  "report")
-    _echo_wrapped("", RANK_CRITERION)
-    if any(r.get("margins_basis") for r in rows):
-        _echo_wrapped("", "* fcs_mpc: margins and robustness of its baseline PI "
-                      "(informational, not executed); its t5% and OS are simulated from the "
-                      "switching law")
-
-
-def _fmt(value) -> str:
-    """A metric for the terminal: 4 significant digits; a metric that could not be
-    computed (NaN, e.g. a response that never settled) reads "not reached"."""
-    if isinstance(value, float):
-        return f"{value:.4g}" if math.isfinite(value) else "not reached"
-    return str(value)
-
-
-#: cct campaign: the cluster or the output disk is not usable (the input is
-#: sound; retry on a working cluster). README.md "Campaigns".
-EXIT_INFRASTRUCTURE = 4
-
-
-@main.command()
-@click.argument("spec", type=click.Path(dir_okay=False))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
-              help="Campaign directory (chunks, results.parquet, summary.json, report.html); "
-                   "an interrupted campaign resumes from it.")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
-              help="tcp://host:8786 of a running Dask scheduler; default: a LocalCluster "
-                   "on this machine; 'serial': this process, no Dask.")
-@click.option("--workers", type=click.IntRange(min=1), default=None,
-              help="LocalCluster worker processes (default: one per core); with "
-                   "--scheduler, wait for this many workers.")
-@click.option("--controller", "design_dir", type=click.Path(file_okay=False), default=None,
-              help="A design directory (cct design --out): simulate its controller.json "
-                   "(a candidate design) instead of designing SPEC's controller.")
-@click.option("--no-report", is_flag=True, help="Do not write report.html.")
-@_QUIET
-@_spec_errors
-def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None,
-             design_dir: str | None, no_report: bool, quiet: bool) -> None:
-    """Run the robustness campaign of SPEC's [campaign] table: design once,
-    simulate every sample on Dask, write one row per sample to
-    OUT/results.parquet, a summary and a report.
-
-    Exit 0 when the gated yield's 95 % lower bound reaches
-    campaign.min_yield (or none is given), 1 below it, 2 on bad input, 4 when
-    the cluster or the output disk is not usable (scheduler unreachable or
-    silent, no workers, workers without the toolbox or of another build, disk
-    full or read-only). Run the same command again after an interrupt or an
-    exit 4 to resume (chunks already written are skipped).
-
-    \b
-    Example:
-      cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/campaign_003
-      cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c --scheduler tcp://scheduler-host:8786
-      cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c_pi --controller out/003_pi
-    """
-    from ..campaign import parse_address, run_campaign
-    from ..errors import InfrastructureError
-    from ..spec import load_spec
-
-    s = load_spec(spec)
-    if s.campaign is None:
-        raise SpecError("campaign", "a [campaign] table (missing)", file=spec,
-                        hint="README.md \"Campaigns\"")
-    if scheduler is not None and scheduler not in ("local", "serial"):
-        parse_address(scheduler)  # http://, no port: exit 2 before anything runs
-    artifact = None
-    if design_dir is not None:
-        from ..pipeline import load_artifact
-
-        artifact = load_artifact(design_dir)
-    try:
-        with CountBar(quiet=quiet, desc="campaign") as bar:
-            run = run_campaign(s, out_dir, scheduler=scheduler, workers=workers,
-                               artifact=artifact, progress=bar, report=not no_report)
-    except InfrastructureError as err:
-        click.echo(f"cct: infrastructure error: {err}", err=True)
-        sys.exit(EXIT_INFRASTRUCTURE)
-    except (KeyboardInterrupt, Terminated) as err:
-        what = "interrupted" if isinstance(err, KeyboardInterrupt) else "terminated"
-        click.echo(f"cct: {what}; the chunks written are kept in {out_dir}/chunks: "
-                   "run the same command again to resume", err=True)
-        sys.exit(EXIT_INTERRUPTED if isinstance(err, KeyboardInterrupt) else EXIT_TERMINATED)
-    sm = run.summary
-    if not quiet:
-        for path in run.files:
-            click.echo(f"wrote {path}", err=True)
-    ys = sm["yields"]
-
-    def pct(y) -> str:
-        return (f"{100 * y['yield']:.2f} % (95 % interval {100 * y['yield_95'][0]:.2f} - "
-                f"{100 * y['yield_95'][1]:.2f} %)")
-
-    click.echo(f"campaign: {sm['motors']} motors x {sm['operating_points']} operating points "
-               f"= {sm['samples']} samples, {sm['passed']} pass; {run.chunks_run} chunks run, "
-               f"{run.chunks_resumed} resumed")
-    worst = ys["per_point"]["points"][ys["per_point"]["worst_point"]]
-    where = ", ".join(f"{k} {v:g}" for k, v in worst.items()
-                      if k not in ("point", "n", "passed", "yield", "yield_95", "failures"))
-    for gate, label, y in (("per_sample", "per-sample yield", ys["per_sample"]),
-                           ("per_motor", f"per-motor yield ({ys['per_motor']['n']} motors at "
-                            "every point)", ys["per_motor"]),
-                           ("per_point", f"per-point yield (worst of {ys['per_point']['n']} "
-                            f"points{': ' + where if where else ''})", ys["per_point"])):
-        click.echo(f"  {label}: {pct(y)}" + ("  <- gate" if gate == sm["gate"] else ""))
-    for name, count in list(sm["failure_reasons"].items())[:5]:
-        click.echo(f"  fails {name}: {count}")
-    ranked = [e for e in sm["sensitivity"] if e["rank_correlation"] is not None][:3]
-    if ranked:
-        click.echo("  most sensitive: " + ", ".join(
-            f"{e['parameter']} ({e['rank_correlation']:+.2f})" for e in ranked))
-    if sm["min_yield"] is not None:
-        click.echo(f"  min_yield {sm['min_yield']:g} on the {sm['gate'].replace('_', '-')} "
-                   f"yield's 95 % lower bound {100 * sm['gate_lower_95']:.2f} %: "
-                   + ("pass" if run.passed else "FAIL"))
-    sys.exit(EXIT_OK if run.passed else EXIT_REQUIREMENT)
 
 
 @main.command()

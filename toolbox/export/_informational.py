@@ -6,7 +6,7 @@ from __future__ import annotations
 from ._check import AXES, _is_integrator
 
 
-PI_METHODS = ("pi", "ip", "pi_lag", "robust_pi")
+PI_METHODS = ("pi", "ip", "pi_lag", "robust_pi", "tune")
 
 
 def _pi_gains(artifact, ax: str) -> tuple[float, float] | None:

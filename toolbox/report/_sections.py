@@ -23,6 +23,7 @@ METHOD_NAMES = {
     "hinf": "H-infinity mixed sensitivity",
     "fcs_mpc": "Finite-control-set predictive control",
     "robust_pi": "Robust PI (multi-model disk-margin tuning at speed)",
+    "tune": "Structured robust tuning of the PI (hard disk-margin goals, fastest response)",
 }
 
 

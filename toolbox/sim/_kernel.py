@@ -48,75 +48,22 @@ anti-windup and voltage limit, predictive choice, inverter and plant RK4);
 the plant state lives in local scalars, not in an array, so that LLVM keeps
 it in registers across the RK4 stages.
 
-Loop structure (gcc -O3 -march=native's plain C loop of the same
-arithmetic, ``tests/benchmarks/bench_sim.py``, is the yardstick: both are
-bound by the latency of the RK4 chain, ~100 cycles per plant step, so what
-ours adds must stay off that chain and out of its way):
+Loop structure in brief (gcc -O3's plain C loop of the same arithmetic,
+``tests/benchmarks/bench_sim.py``, is the yardstick): the period loop and the
+plant steps are compiled without numba's reference counting
+(:data:`_jit_no_rc`); the online metrics are kept in local values over a run
+of steps (:func:`_load_acc`) and accumulated after each step's RK4 stages;
+the periods without load torque have a loop of their own (:func:`_steps`);
+the plant multiplies by ``1/Ld``, ``1/Lq``, ``1/J`` computed once per run
+(:func:`_plant`); no ``fastmath`` (same bits on every x86-64 CPU). Why, with
+the measured timings, the cold compile and the experiments tried:
+``docs/performance.md``.
 
-* the period loop and the plant steps are compiled without numba's
-  reference counting (:data:`_jit_no_rc`): its increfs and decrefs are
-  atomic read-modify-writes, full memory barriers that kept a period's
-  plant steps from overlapping the previous period's;
-* the online metrics are kept in local values over a run of steps
-  (:func:`_load_acc`), with no division per step (:func:`_overshoot`), and
-  are accumulated after the step's RK4 stages in program order;
-* the periods without load torque have a loop of their own, without the
-  load's ``- 0.0`` on the speed's chain (:func:`_steps`); the step
-  split of a period (:func:`_split`) is computed once per run.
-
-All of it leaves every result bit for bit as it was. What is left is the
-chain itself: its longest path through one step, with this machine's
-latencies (multiply 3 cycles, add 2, ~1 more per add/multiply hand-over,
-measured), is ~93 cycles; the loop runs at ~99 (~25.3 ns), gcc's at ~102
-(~26.2 ns).
-Tried without gain (measured alternately, same bits): ``mech`` as a
-compile-time constant (no branch per stage, but ~3 % slower: LLVM then
-interleaves the stages differently), the derivatives in another order, not
-advancing the angle where nothing reads it (rotor-frame hold without the
-hexagon limit), and, as an experiment, no metrics at all (same time: they
-are off the chain).
-
-Arithmetic. The 1 us loop is bound by the latency of one
-dependency chain (the four RK4 stages in sequence, each ending in a
-division), so the plant multiplies by ``1/Ld``, ``1/Lq``, ``1/J`` computed once
-per run (:func:`_plant`) instead of dividing: a division costs ~13 cycles, a
-multiplication 3, and the loop runs ~30 % faster. Each derivative then
-carries one more rounding (<= 1 ulp instead of 0.5), 1e-16 relative, far below
-the RK4 truncation error; results moved by that much once, when this was
-introduced, and are plain IEEE operations in a fixed order, the same on every
-x86-64 CPU. No ``fastmath``: ``{"contract"}`` on the substep loop (FMA) saved
-another 9 % when it was tried (29.1 -> 26.5 ns per step), and is deterministic run to run,
-but whether LLVM may fuse depends on the host CPU (the numba cache is
-compiled for it), so verify.json's digits of the dq-frame scenarios would
-differ between machines with and without FMA, which today they do not
-("same spec, same bytes", toolbox/ARCHITECTURE.md).
-(The angle-dependent scenarios already differ there in the last bits: glibc
-picks FMA variants of sin, cos, log by CPU, which numba calls: with FMA
-disabled through GLIBC_TUNABLES, 1 in 1,300 sines differed by 1 ulp.)
-``reassoc``/``arcp`` would let LLVM choose the evaluation order; the flags
-that assume finite values ("nnan", "ninf") would break the divergence
-detection of the metrics.
-
-Cold compile. A process without a numba cache (a fresh clone,
-each pytest-xdist worker) compiles :func:`run` on its first call; what it
-compiles is kept to what the speed needs:
-
-* a batch reuses :func:`run`'s compiled code from one thread per core
-  (:func:`run_rows`, ~0.5 s), where a ``prange`` entry point compiled ~5 s
-  more per process;
-* one version of each helper, except the plant loop :func:`_steps` (four:
-  ``frame`` and ``loaded``). Numba types a call from compiled code with the
-  arguments' literal types, so a literal argument (``False``, ``0``, or a
-  variable whose first value is ``0``) compiled a version of the callee of
-  its own, and the helpers below it again;
-* :func:`_steps` is a compiled function, not inlined in numba's IR: numba
-  copies an inlined callee's IR block by block, each block with all the
-  callee's variables, ~1 s per copy of the loop.
-
-Measured (CPU s, fresh cache, median of 3 alternated with the code before):
-:func:`run` 13.0 -> 10.5, a batch's own 5.2 -> 0.5 (``simulate_batch``'s
-first call, :func:`run` already compiled); the plant loop as fast as before
-(``bench_sim``).
+The plant (``_kernel_plant``), the online metrics (``_kernel_metrics``), the
+plant steps (``_kernel_steps``) and the switching inverters (``_kernel_pwm``)
+live in sibling modules compiled with the same decorators; the layouts, slot
+constants and decorators are declared in ``_kernel_layout``. All of them are
+in :data:`KERNEL_SOURCES`.
 
 Metrics are accumulated online (see :mod:`toolbox.sim._metrics` for their
 definitions); traces are optional and decimated, so memory is flat in the
@@ -133,97 +80,26 @@ from numba import njit
 
 from .._cache import cache_key
 from .._io import write_atomic
-from ._inverter import bit_changes, hexagon_scale, state_vector, svm_times
+from ._inverter import bit_changes, hexagon_scale, state_vector
+from ._kernel_layout import (LAYOUTS, N_METRICS, N_SC, N_TRACE, _A_CELLS, _A_OUT2, _A_OUT5, _A_SAT,
+                             _A_T10, _A_T90, _A_YEXT, _SQ3_2, _jit, _jit_inline, _jit_no_rc,
+                             pack_indices)
+from ._kernel_plant import _deriv, _plant, _to_ab, _to_dq, _torque  # noqa: F401 (tests)
+from ._kernel_metrics import _finalise, _metric_setup, _overshoot  # noqa: F401 (tests)
+from ._kernel_steps import _advance_n, _split
+from ._kernel_pwm import _carrier_period, _svm_period
 from ._metrics import METRIC_NAMES
 
 __all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices",
            "KERNEL_SOURCES", "sources_digest"]
 
-# ---- packed-array layouts: the one declaration of every slot ----------------
-#: Slot names of each packed parameter array, in order, keyed by the array's
-#: prefix: plant ``P`` (true motor), law ``LP`` (controller model, decoupling
-#: flags, paper 002 criterion (23) weights), speed loop ``SP``, drive ``DP``
-#: (``vlim``: 0 none, 1 circle, 2 hexagon; ``inverter``: 0 average, 1 svm,
-#: 2 fcs_mpc; ``half_periods``: carrier half periods per sample of the svm
-#: inverter, 0 = one centred pattern per sample; ``hold``: frame in which the
-#: average inverter holds the voltage, 0 rotor dq, 1 stationary; ``t_comp``: the
-#: voltage placement's compensation time, s; ``vprio``: voltage-limit priority,
-#: 0 radial, 1 d axis) and scenario ``SC``. ``_simulate._pack*`` fill them by name
-#: through :func:`pack_indices`.
-LAYOUTS: dict[str, tuple[str, ...]] = {
-    "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor"),
-    "LP": ("R_c", "Ld_c", "Lq_c", "flux_c", "cross", "emf", "alpha", "beta", "gamma"),
-    "SP": ("enabled", "kp", "ki", "kd", "decim", "iq_limit"),
-    "DP": ("Ts", "delay", "vlim", "v_max", "r_hex", "inverter", "half_periods", "hold",
-           "t_comp", "vprio"),
-    "SC": ("duration", "mech", "omega0", "acc", "id0", "iq0", "id1", "iq1",
-           "t_step", "speed0", "speed1", "load", "load_time", "iq_amp", "f_sin",
-           "ref_mode", "signal", "gain", "offset", "speed_noise", "noise_kind",
-           "current_noise", "current_quantum", "seed", "h", "trace_decim",
-           "current_gain_d", "current_gain_q", "current_delay_d", "current_delay_q"),
-}
-
-# Generated module constants ``<PREFIX>_<NAME>`` (e.g. ``P_LD``, ``SC_T_STEP``):
-# numba reads module-level ints as compile-time constants, so named slots cost
-# nothing over literal positions.
+# Generated module constants ``<PREFIX>_<NAME>`` and ``M_<NAME>`` (e.g. ``P_LD``,
+# ``M_OVERSHOOT_PCT``), the same generation from the same declarations as in
+# ``_kernel_layout`` (whose parts read them there): compile-time constants here.
 for _prefix, _names in LAYOUTS.items():
     globals().update({f"{_prefix}_{_n.upper()}": _i for _i, _n in enumerate(_names)})
 del _prefix, _names
-
-_SQ3_2 = math.sqrt(3.0) / 2.0
-
-#: Length of the scenario array.
-N_SC = len(LAYOUTS["SC"])
-#: Metrics (raw kernel output order: ``_metrics.METRIC_NAMES``, the one
-#: declaration; written through the generated slots ``M_<NAME>``, e.g.
-#: ``M_OVERSHOOT_PCT``).
-N_METRICS = len(METRIC_NAMES)
 globals().update({f"M_{_n.upper()}": _i for _i, _n in enumerate(METRIC_NAMES)})
-#: Trace columns: t, id, iq, vd, vq, speed (mech rad/s), torque, id_ref,
-#: iq_ref, speed_measured.
-N_TRACE = 10
-
-# accumulator slots of the online metrics
-_A_OUT5, _A_OUT2, _A_T10, _A_T90, _A_YEXT, _A_SQT, _A_SQID, _A_STAT, _A_STATT, \
-    _A_FINAL, _A_SQIQ, _A_CELLS, _A_SAT = range(13)
-
-
-def pack_indices(array: str = "SC") -> dict[str, int]:
-    """Slot names of a packed kernel array, as a dict name -> index.
-
-    Parameters
-    ----------
-    array : {"SC", "P", "LP", "SP", "DP"}
-        Which array (see :data:`LAYOUTS`); the scenario by default.
-    """
-    return {n: i for i, n in enumerate(LAYOUTS[array])}
-
-
-#: Decorator of the kernel's functions. ``error_model="numpy"``: a division by
-#: zero gives inf/nan (IEEE) instead of a Python ZeroDivisionError, which drops
-#: a compare-and-branch before every division of the 1 us loop; every divisor
-#: there is a validated positive parameter or guarded. Cached on
-#: disk although :func:`run`'s cache holds every helper's code: the tests
-#: call helpers and ``run.py_func`` from Python, which compiled each helper
-#: again in every process without it (~10 s of the kernel's test files).
-_jit = njit(cache=True, error_model="numpy")
-#: The helpers of the 1 us substep loop, inlined into it in numba's IR: called
-#: as separate functions, each RK4 step passed ~20 arguments through the stack
-#: and returned its state through memory (43.3 -> 41.5 ns per step).
-#: The law step too, once per period (its fixed cost per period ~170 -> ~110 ns),
-#: and every helper of the period loop that reads an array: called from the
-#: loop compiled without reference counting (:data:`_jit_no_rc`), a function
-#: would incref and decref its array arguments itself.
-_jit_inline = njit(cache=True, error_model="numpy", inline="always")
-#: The period loop (:func:`_periods`) and the plant steps (:func:`_steps`):
-#: compiled without numba's reference counting (they allocate nothing; every
-#: array is :func:`run`'s). With it, each array passed to a helper or used by
-#: an inlined one was increfed and decrefed around the use, ~20 atomic
-#: read-modify-writes per period, each a full memory barrier that kept the
-#: next period's plant steps from starting before the previous ones had
-#: retired: ~60-80 ns per period, 0.6-0.8 ns per plant step at 100 steps per
-#: period.
-_jit_no_rc = njit(cache=True, error_model="numpy", _nrt=False)
 
 
 # --------------------------------------------------------------------------- RNG
@@ -251,228 +127,6 @@ def _noise(st, amp, kind):
         u1 = 1e-300
     return amp * math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
 
-
-# ------------------------------------------------------------ frames and plant
-@_jit
-def _to_dq(va, vb, c, s):
-    """Park rotation of a stationary-frame vector by the angle whose cos, sin are c, s."""
-    return va * c + vb * s, -va * s + vb * c
-
-
-@_jit
-def _to_ab(vd, vq, c, s):
-    """Inverse Park rotation (dq -> stationary frame)."""
-    return vd * c - vq * s, vd * s + vq * c
-
-
-@_jit
-def _plant(P):
-    """The plant array as a tuple (R, Ld, Lq, flux, p, J, friction, tf, 1/Ld,
-    1/Lq, 1/J): passed by value, so the parameters stay in registers inside the
-    RK4 loop. The reciprocals are computed once per run: each RK4 stage then
-    multiplies instead of dividing (module docstring, "Arithmetic")."""
-    Ld = P[P_LD]
-    Lq = P[P_LQ]
-    J = P[P_J]
-    return (P[P_R], Ld, Lq, P[P_FLUX], P[P_POLE_PAIRS], J, P[P_FRICTION],
-            P[P_TORQUE_FACTOR], 1.0 / Ld, 1.0 / Lq, 1.0 / J)
-
-
-@_jit_inline
-def _torque(pl, i_d, i_q):
-    """Electromagnetic torque ``tf p (flux iq + (Ld - Lq) id iq)`` (N m)."""
-    return pl[7] * pl[4] * (pl[3] * i_q + (pl[1] - pl[2]) * i_d * i_q)
-
-
-@_jit_inline
-def _deriv(i_d, i_q, om, th, vx, vy, frame, pl, t_load, mech, acc):
-    """Right-hand side of the plant (module docstring); frame 1: (vx, vy) stationary."""
-    R, Ld, Lq, flux, p, _, friction, tf, inv_Ld, inv_Lq, inv_J = pl
-    w = p * om
-    if frame == 0:
-        vd = vx
-        vq = vy
-    else:  # stationary-frame voltage held constant: rotate into dq
-        vd, vq = _to_dq(vx, vy, math.cos(th), math.sin(th))
-    did = (vd - R * i_d + w * Lq * i_q) * inv_Ld
-    diq = (vq - R * i_q - w * Ld * i_d - w * flux) * inv_Lq
-    if mech == 1:
-        dom = acc
-    else:
-        torque = tf * p * (flux * i_q + (Ld - Lq) * i_d * i_q)
-        dom = (torque - friction * om - t_load) * inv_J
-    return did, diq, dom, w
-
-
-@_jit_inline
-def _rk4(i_d, i_q, om, th, vx, vy, frame, dt, pl, t_load, mech, acc):
-    """One classical RK4 step of the plant state (id, iq, Omega, theta); returns the new state."""
-    a1, b1, c1, d1 = _deriv(i_d, i_q, om, th, vx, vy, frame, pl, t_load, mech, acc)
-    h2 = 0.5 * dt
-    a2, b2, c2, d2 = _deriv(i_d + h2 * a1, i_q + h2 * b1, om + h2 * c1, th + h2 * d1,
-                            vx, vy, frame, pl, t_load, mech, acc)
-    a3, b3, c3, d3 = _deriv(i_d + h2 * a2, i_q + h2 * b2, om + h2 * c2, th + h2 * d2,
-                            vx, vy, frame, pl, t_load, mech, acc)
-    a4, b4, c4, d4 = _deriv(i_d + dt * a3, i_q + dt * b3, om + dt * c3, th + dt * d3,
-                            vx, vy, frame, pl, t_load, mech, acc)
-    k = dt / 6.0
-    return (i_d + k * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
-            i_q + k * (b1 + 2.0 * b2 + 2.0 * b3 + b4),
-            om + k * (c1 + 2.0 * c2 + 2.0 * c3 + c4),
-            th + k * (d1 + 2.0 * d2 + 2.0 * d3 + d4))
-
-
-# ---------------------------------------------------------------- online metrics
-@_jit
-def _metric_setup(SC):
-    """Constants of the step metrics: (signal, y0, yf, steady-state start, t_step).
-
-    signal 0 follows i_q, 1 i_d, 2 the speed; the steady state is the last 10 %.
-    """
-    sig = int(SC[SC_SIGNAL])
-    if sig == 0:
-        y0 = SC[SC_IQ0]
-        yf = SC[SC_IQ1]
-    elif sig == 1:
-        y0 = SC[SC_ID0]
-        yf = SC[SC_ID1]
-    else:
-        y0 = SC[SC_SPEED0]
-        yf = SC[SC_SPEED1]
-    return sig, y0, yf, 0.9 * SC[SC_DURATION] - 1e-12, SC[SC_T_STEP] - 1e-12
-
-
-@_jit_inline
-def _load_acc(acc_m):
-    """The accumulators :func:`_accumulate` updates (slots ``_A_OUT5`` ..
-    ``_A_SQIQ``) as a tuple: local values that LLVM keeps in registers over a
-    run of plant steps, where the array's elements were loaded and stored at
-    every step and could only be updated by branches."""
-    return (acc_m[_A_OUT5], acc_m[_A_OUT2], acc_m[_A_T10], acc_m[_A_T90], acc_m[_A_YEXT],
-            acc_m[_A_SQT], acc_m[_A_SQID], acc_m[_A_STAT], acc_m[_A_STATT],
-            acc_m[_A_FINAL], acc_m[_A_SQIQ])
-
-
-@_jit_inline
-def _store_acc(acc_m, m):
-    """Write back the tuple of :func:`_load_acc`."""
-    (acc_m[_A_OUT5], acc_m[_A_OUT2], acc_m[_A_T10], acc_m[_A_T90], acc_m[_A_YEXT],
-     acc_m[_A_SQT], acc_m[_A_SQID], acc_m[_A_STAT], acc_m[_A_STATT],
-     acc_m[_A_FINAL], acc_m[_A_SQIQ]) = m
-
-
-@_jit_inline
-def _accumulate(m, i_d, i_q, om, t, dt, pl, refs, mset):
-    """Online metrics at the start of a plant step of length dt (time-weighted):
-    the accumulators ``m`` (:func:`_load_acc`) updated."""
-    out5, out2, t10, t90, yext, sqt, sqid, stat, statt, final, sqiq = m
-    idr, iqr, sr, tref = refs
-    sig, y0, yf, t_stat, t_step = mset
-    e_t = _torque(pl, i_d, i_q) - tref
-    sqt += e_t * e_t * dt
-    e_id = i_d - idr
-    sqid += e_id * e_id * dt
-    e_iq = i_q - iqr
-    sqiq += e_iq * e_iq * dt
-    if sig == 0:
-        y = i_q
-        r = iqr
-    elif sig == 1:
-        y = i_d
-        r = idr
-    else:
-        y = om
-        r = sr
-    if t >= t_stat:
-        stat += (r - y) * dt
-        final += y * dt
-        statt += dt
-    delta = yf - y0
-    if t >= t_step and delta != 0.0:
-        dev = abs(y - yf)
-        if dev > 0.05 * abs(delta):
-            out5 = t + dt
-        if dev > 0.02 * abs(delta):
-            out2 = t + dt
-        # 90 % reached implies 10 % reached: no division once both are known
-        if t90 < 0.0:
-            frac = (y - y0) / delta
-            if frac >= 0.1 and t10 < 0.0:
-                t10 = t
-            if frac >= 0.9:
-                t90 = t
-        # the overshoot (y - yf)/delta is monotone in y: keep the extreme y
-        # in the direction of the step and divide once (:func:`_overshoot`)
-        if (y > yext) if delta > 0.0 else (y < yext):
-            yext = y
-    return out5, out2, t10, t90, yext, sqt, sqid, stat, statt, final, sqiq
-
-
-@_jit_inline
-def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, refs,
-             mset):
-    """Integrate the state x = (id, iq, Omega, theta) over ``dur`` with ceil(dur/h)
-    equal RK4 steps; returns (new time, new state)."""
-    if dur <= 0.0:
-        return t, x
-    n, dt = _split(dur, h)
-    return _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
-                      refs, mset)
-
-
-@_jit_inline
-def _split(dur, h):
-    """(n, dt): the ``n = ceil(dur / h)`` equal plant steps of length dt over ``dur``."""
-    n = int(math.ceil(dur / h - 1e-9))
-    if n < 1:
-        n = 1
-    return n, dur / n
-
-
-@_jit_inline
-def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m, refs,
-               mset):
-    """:func:`_advance` over ``n`` steps of length ``dt`` (:func:`_split`).
-
-    Two compiled loops (:func:`_steps`): with and without a load torque, the
-    latter with the constant 0 (LLVM does not unswitch a loop this large
-    itself). Inlined into its callers, so that the loop is one call away from
-    the period loop, as it was when both loops were inlined here: numba
-    copied the loop's inlined IR into each of them, ~1 s of cold compile
-    each."""
-    if t_load == 0.0 or mech == 1:
-        return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, False, mech, acc, omega0,
-                      acc_m, refs, mset)
-    return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, True, mech, acc, omega0, acc_m,
-                  refs, mset)
-
-
-@_jit_no_rc
-def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, loaded, mech, acc, omega0, acc_m, refs,
-           mset):
-    """``n`` RK4 steps of length dt with the metrics accumulated at the start of
-    each; returns (time, state).
-
-    ``loaded`` is a literal (one compiled version each, as ``frame``): False
-    integrates without the load torque, with the constant 0 in its place:
-    ``x - 0.0`` is x exactly, so LLVM drops the subtraction, the last one
-    before the multiplication by 1/J on the speed's dependency chain (~4 % of
-    the plant step's latency)."""
-    t_load = t_load if loaded else 0.0
-    m = _load_acc(acc_m)
-    for _ in range(n):
-        x1 = _rk4(x[0], x[1], x[2], x[3], vx, vy, frame, dt, pl, t_load, mech, acc)
-        # the metrics of the step's start state after its RK4 stages in program
-        # order: the out-of-order core runs the oldest ready instruction first,
-        # so the step's own stages (the dependency chain) win the execution
-        # ports over the metrics that become ready with them
-        m = _accumulate(m, x[0], x[1], x[2], t, dt, pl, refs, mset)
-        x = x1
-        t += dt
-    if mech == 1:  # imposed speed: remove the round-off drift of the integral
-        x = (x[0], x[1], omega0 + acc * t, x[3])
-    _store_acc(acc_m, m)
-    return t, x
 
 
 # ------------------------------------------------------------------- controller
@@ -706,169 +360,6 @@ def _fcs_choice(i_d_m, i_q_m, w_m, th_m, idr, iqr, conf_prev, predict, Ts, r_hex
     return best
 
 
-@_jit
-def _svm_period(x, t, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0, acc_m,
-                refs, mset, DP):
-    """One period of space-vector modulation, paper 002 eq (21)-(22): the symmetric
-    centred pattern 0-k-l-7-l-k-0 (six cell commutations) of ``v_dq`` placed at
-    the angle ``phi``, the plant integrated segment by segment. Returns (time,
-    state, inverter state at the end)."""
-    Ts = DP[DP_TS]
-    r_hex = DP[DP_R_HEX]
-    va, vb = _to_ab(vd, vq, math.cos(phi), math.sin(phi))
-    st1, st2, t1, t2, t0 = svm_times(va, vb, r_hex, Ts)
-    seq_s = (0, st1, st2, 7, st2, st1, 0)
-    seq_t = (0.25 * t0, 0.5 * t1, 0.5 * t2, 0.5 * t0, 0.5 * t2, 0.5 * t1, 0.25 * t0)
-    for j in range(7):
-        stj = seq_s[j]
-        acc_m[_A_CELLS] += bit_changes(conf, stj)
-        conf = stj
-        vx, vy = state_vector(stj, r_hex)
-        t, x = _advance(x, t, vx, vy, 1, seq_t[j], h, pl, t_load, mech, acc, omega0,
-                        acc_m, refs, mset)
-    return t, x, conf
-
-
-@_jit
-def _duties(va, vb, r_hex):
-    """Leg duty cycles (d_a, d_b, d_c) in [0, 1] of the stationary-frame voltage
-    (va, vb) by min-max (zero-sequence) injection: the regular-sampled carrier
-    equivalent of the centred space-vector pattern (``state_vector`` inverted,
-    the common offset chosen so that max and min duty are symmetric about 1/2)."""
-    xa = va / r_hex * (2.0 / 3.0)
-    xb = (-0.5 * va + _SQ3_2 * vb) / r_hex * (2.0 / 3.0)
-    xc = (-0.5 * va - _SQ3_2 * vb) / r_hex * (2.0 / 3.0)
-    off = 0.5 - 0.5 * (max(xa, xb, xc) + min(xa, xb, xc))
-    return (min(max(xa + off, 0.0), 1.0), min(max(xb + off, 0.0), 1.0),
-            min(max(xc + off, 0.0), 1.0))
-
-
-@_jit
-def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, omega0,
-                  acc_m, refs, mset, r_hex):
-    """One half period ``th_dur`` of the symmetric triangle carrier.
-
-    A leg is on while its duty exceeds the carrier. Falling half (carrier
-    1 -> 0, ``rising`` False): leg x turns on at ``(1 - d_x) th_dur``; rising
-    half: it turns off at ``d_x th_dur``. Legs at duty 0 or 1 do not switch.
-    The plant is integrated segment by segment between the switching
-    instants; returns (time, state, inverter state at the end).
-    """
-    start = np.int64(0)  # not the literal 0: it compiled a version of each callee
-    for leg in range(3):
-        d = dts[leg]
-        if (rising and d > 0.0) or (not rising and d >= 1.0):
-            start |= 4 >> leg
-    acc_m[_A_CELLS] += bit_changes(conf, start)
-    conf = start
-    # switching instants of legs a, b, c, visited in increasing order
-    ta = dts[0] * th_dur if rising else (1.0 - dts[0]) * th_dur
-    tb = dts[1] * th_dur if rising else (1.0 - dts[1]) * th_dur
-    tc = dts[2] * th_dur if rising else (1.0 - dts[2]) * th_dur
-    t_prev = 0.0
-    for _ in range(3):
-        leg = 0
-        tj = ta
-        if tb < tj:
-            leg = 1
-            tj = tb
-        if tc < tj:
-            leg = 2
-            tj = tc
-        if leg == 0:
-            ta = math.inf
-        elif leg == 1:
-            tb = math.inf
-        else:
-            tc = math.inf
-        if tj <= 0.0 or tj >= th_dur:
-            continue
-        vx, vy = state_vector(conf, r_hex)
-        t, x = _advance(x, t, vx, vy, 1, tj - t_prev, h, pl, t_load, mech, acc, omega0,
-                        acc_m, refs, mset)
-        t_prev = tj
-        conf ^= 4 >> leg
-        acc_m[_A_CELLS] += 1
-    vx, vy = state_vector(conf, r_hex)
-    t, x = _advance(x, t, vx, vy, 1, th_dur - t_prev, h, pl, t_load, mech, acc, omega0,
-                    acc_m, refs, mset)
-    return t, x, conf
-
-
-@_jit
-def _carrier_period(x, t, k, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0,
-                    acc_m, refs, mset, DP):
-    """One controller period of carrier-based PWM at ``drive.switching_frequency``:
-    ``half_periods`` half periods of a symmetric triangle carrier whose peak
-    falls on the first sampling instant (regular sampling, duties loaded at
-    the sample and held over the period, as the shadow registers of a PWM
-    timer). The voltage is placed in the stationary frame at the angle
-    ``phi``, as :func:`_svm_period` does; with two half periods per sample the
-    pattern is the centred 0-k-l-7-l-k-0 of that model. Returns (time, state,
-    inverter state at the end)."""
-    Ts = DP[DP_TS]
-    r_hex = DP[DP_R_HEX]
-    n = int(DP[DP_HALF_PERIODS])
-    va, vb = _to_ab(vd, vq, math.cos(phi), math.sin(phi))
-    dts = _duties(va, vb, r_hex)
-    th_dur = Ts / n
-    for i in range(n):
-        rising = (k * n + i) % 2 == 1
-        t, x, conf = _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech,
-                                   acc, omega0, acc_m, refs, mset, r_hex)
-    return t, x, conf
-
-
-# ---------------------------------------------------------------------- metrics
-@_jit
-def _overshoot(y_ext, yf, delta):
-    """``max((y - yf)/delta, 0)`` over the run from the extreme ``y_ext`` of y
-    in the direction of the step (``yf`` if y never passed it).
-
-    Equal, bit for bit, to the maximum of the per-step quotients: correctly
-    rounded subtraction and division are monotone, so the quotient of the
-    extreme is the extreme of the quotients; ``y_ext == yf`` gives +0 (the
-    quotient would be -0 for a negative step).
-    """
-    if y_ext == yf or math.isnan(delta):  # nan: no quotient ever exceeded 0
-        return 0.0
-    return (y_ext - yf) / delta
-
-
-@_jit
-def _finalise(acc_m, n_per, Ts, om_final, t_step, mset):
-    """Metrics (order of ``_metrics.METRIC_NAMES``) from the accumulators."""
-    M = np.full(N_METRICS, np.nan)
-    total = n_per * Ts
-    if acc_m[_A_OUT5] < 0.0:
-        M[M_RESPONSE_TIME_5PCT] = 0.0
-    elif acc_m[_A_OUT5] < total - 1e-12:
-        M[M_RESPONSE_TIME_5PCT] = acc_m[_A_OUT5] - t_step
-    if acc_m[_A_T10] >= 0.0 and acc_m[_A_T90] >= 0.0:
-        M[M_RISE_TIME_10_90] = acc_m[_A_T90] - acc_m[_A_T10]
-    if acc_m[_A_OUT2] < 0.0:
-        M[M_SETTLING_TIME_2PCT] = 0.0
-    elif acc_m[_A_OUT2] < total - 1e-12:
-        M[M_SETTLING_TIME_2PCT] = acc_m[_A_OUT2] - t_step
-    M[M_OVERSHOOT_PCT] = 100.0 * _overshoot(acc_m[_A_YEXT], mset[2], mset[2] - mset[1])
-    if acc_m[_A_STATT] > 0.0:
-        M[M_STATIC_ERROR] = acc_m[_A_STAT] / acc_m[_A_STATT]
-        M[M_FINAL_VALUE] = acc_m[_A_FINAL] / acc_m[_A_STATT]
-    if total > 0.0:
-        M[M_MSE_TORQUE] = acc_m[_A_SQT] / total
-        M[M_MSE_ID] = acc_m[_A_SQID] / total
-        M[M_MSE_IQ] = acc_m[_A_SQIQ] / total
-        M[M_COMMUTATIONS_PER_S] = 2.0 * acc_m[_A_CELLS] / total
-        M[M_CELL_TRANSITIONS_PER_S] = acc_m[_A_CELLS] / total
-    M[M_SATURATION_TIME] = acc_m[_A_SAT]
-    M[M_FINAL_SPEED] = om_final
-    if mset[2] - mset[1] == 0.0:  # no step: the step metrics are undefined
-        M[M_RESPONSE_TIME_5PCT] = np.nan
-        M[M_RISE_TIME_10_90] = np.nan
-        M[M_SETTLING_TIME_2PCT] = np.nan
-        M[M_OVERSHOOT_PCT] = np.nan
-    return M
-
 
 # ------------------------------------------------------------------ simulation
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -1083,6 +574,7 @@ def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
             out[i, j] = M[j]
 
 
+
 # ------------------------------------------------------------- disk cache
 #: The sources compiled into this module's cached machine code. numba keys a
 #: function's disk cache on the stamp of its own file and its own bytecode
@@ -1091,7 +583,16 @@ def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
 #: :func:`run`) or of ``_metrics.py`` (``METRIC_NAMES`` fixes the ``N_METRICS``
 #: and ``M_*`` slots compiled in) left a checkout running the old kernel, and
 #: its tests passing on it.
-KERNEL_SOURCES = ("_kernel.py", "_inverter.py", "_metrics.py")
+#: The kernel's own parts (``_kernel_*.py``, split from this module) are
+#: compiled into it and read its slot constants: they are covered too, and
+#: their cache indexes are dropped with this module's (:data:`_KERNEL_PARTS`).
+KERNEL_SOURCES = ("_kernel.py", "_inverter.py", "_metrics.py", "_kernel_layout.py",
+                  "_kernel_plant.py", "_kernel_metrics.py", "_kernel_steps.py",
+                  "_kernel_pwm.py")
+#: Modules whose numba cache indexes depend on :data:`KERNEL_SOURCES` beyond
+#: their own file (``_inverter`` is self-contained).
+_KERNEL_PARTS = ("_kernel", "_kernel_plant", "_kernel_metrics", "_kernel_steps",
+                 "_kernel_pwm")
 
 
 def sources_digest() -> str:
@@ -1102,7 +603,8 @@ def sources_digest() -> str:
 
 
 def _drop_stale_cache(cache_dir: Path) -> None:
-    """Remove this module's numba cache indexes from ``cache_dir`` when the
+    """Remove this module's numba cache indexes and its parts'
+    (:data:`_KERNEL_PARTS`) from ``cache_dir`` when the
     :func:`sources_digest` recorded there is another (numba's own workaround,
     deleting the cache, limited to what depends on the sources); the next
     call compiles and caches afresh. ``_inverter``'s own indexes stay: they
@@ -1117,8 +619,9 @@ def _drop_stale_cache(cache_dir: Path) -> None:
     try:
         if stamp.is_file() and stamp.read_text() == digest:
             return
-        for index in cache_dir.glob("_kernel.*.nbi"):
-            index.unlink(missing_ok=True)
+        for part in _KERNEL_PARTS:
+            for index in cache_dir.glob(f"{part}.*.nbi"):
+                index.unlink(missing_ok=True)
         write_atomic(stamp, digest)
     except OSError:
         pass
@@ -1126,3 +629,4 @@ def _drop_stale_cache(cache_dir: Path) -> None:
 
 if hasattr(run, "stats"):        # a numba dispatcher (not a plain function: NUMBA_DISABLE_JIT=1)
     _drop_stale_cache(Path(run.stats.cache_path))
+

@@ -1,0 +1,904 @@
+/*
+ * controller.h -- current controller exported by current-control-toolbox
+ * title:       Paper 003 motor: structured robust tuning of the PI, disk margin 0.5 over R, Ld, Lq x0.5..x2, speed-sensor errors, 0..230 rad/s, with the design delay and one period more
+ * method:      tune
+ * version:     0.1.0
+ * spec sha256: 02480abeeda782370b097f3b15bb037166aab2d66a90454d9bcecda075fe11b2
+ * law sha256:  33f23fd436f4fd5a387f4548e5143536c9f15b6b30fe38f478bc916f50ae21be
+ * created:     2026-11-27T18:42:11+00:00
+ * equations:   structured tuning of Kp_d, Ki_d, Kp_q, Ki_q and the cross-coupling feedforward scale: min max(t5_d, t5_q) s.t. multiloop disk margin >= alpha on every model (delay d and d + 1), worst-case search over the box
+ *
+ * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
+ * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
+ * cct_step() once per controller period (example at the end of this file). The
+ * voltage returned is applied by the inverter DELAY_SAMPLES periods later (the
+ * next period for DELAY_SAMPLES = 1, this one for 0): the computation delay is
+ * part of the plant the design assumed, not of this code.
+ * Law per axis: x' = A x + B [i_ref; i_meas], v = C x + D [i_ref; i_meas]
+ *   (1-DOF laws as second-order sections of K(z) = v / (i_ref - i_meas)),
+ * then decoupling  v_d += -cross w_e Lq_c i_q,
+ *                  v_q +=  cross w_e Ld_c i_d + emf w_e flux_c,  w_e = p Omega_m,
+ * then the circle limit |v| <= limit in use (radial scaling; the inscribed
+ * circle of the SVM hexagon), and
+ * back-calculation anti-windup x += aw (v_sat - v_unsat).
+ * The limit in use is V_MAX_PER_VDC x the bus voltage last given to set_vdc
+ * (V_MAX, the nominal bus, after init).
+ * Voltage placement (toolbox/ARCHITECTURE.md "The digital loop"; every analysis,
+ * the simulation and the certificates model exactly this): v_d_comp, v_q_comp
+ * are v_dq rotated by DELAY_COMP_TIME w_e (the middle of the application
+ * period); apply them with the inverse Park transform at the SAMPLED angle
+ * theta_e, the angle of this period's currents, during the period DELAY_SAMPLES
+ * later. v_d, v_q are the law's own (unrotated) output.
+ * Faults: out->status is
+ *   CCT_STATUS_OK (0)        the law ran;
+ *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
+ *   CCT_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).
+ * On 1 and 2 the last good output is repeated (0 V before the first good
+ * period), saturated = 0, and the state is left exactly as it was: the next
+ * valid period continues as if the bad one had not happened. Finiteness is
+ * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
+ * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:
+ *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the
+ *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.
+ *   y = b0 x + s1; s1 = b1 x + a1 y + s2; s2 = b2 x + a2 y.
+ */
+#ifndef CCT_CONTROLLER_H
+#define CCT_CONTROLLER_H
+
+#include <math.h> /* sqrtf, sinf, cosf */
+#include <stdint.h> /* uint32_t */
+
+#define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
+#define CCT_DELAY_SAMPLES 1 /* computation delay the design assumed, periods */
+#define CCT_V_MAX 8.660253906e+01f /* voltage limit (circle radius) at the nominal bus voltage, V; cct_init's default */
+#define CCT_V_MAX_PER_VDC 5.773502588e-01f /* voltage limit per volt of measured bus (cct_set_vdc) */
+/* motor (amplitude-invariant dq convention) */
+#define CCT_MOTOR_R 6.000000238e-01f /* stator resistance, ohm */
+#define CCT_MOTOR_LD 1.399999950e-03f /* d-axis inductance, H */
+#define CCT_MOTOR_LQ 2.799999900e-03f /* q-axis inductance, H */
+#define CCT_MOTOR_FLUX 1.199999973e-01f /* PM flux linkage, Wb */
+#define CCT_MOTOR_POLE_PAIRS 4 /* pole pairs */
+#define CCT_MOTOR_J 1.109999954e-03f /* inertia, kg m^2 */
+#define CCT_MOTOR_FRICTION 1.399999950e-03f /* viscous friction, N m s/rad */
+#define CCT_MOTOR_MAX_CURRENT 2.000000000e+01f /* dq current amplitude limit, A */
+#define CCT_MOTOR_RATED_CURRENT 2.000000000e+01f /* A */
+#define CCT_MOTOR_RATED_SPEED 2.300000000e+02f /* mechanical, rad/s */
+/* drive */
+#define CCT_DRIVE_VDC 1.500000000e+02f /* DC-link voltage, V */
+/* decoupling: controller-side model parameters */
+#define CCT_DEC_CROSS 1 /* 1: cross-coupling terms on */
+#define CCT_DEC_EMF 1 /* 1: back-EMF term on */
+#define CCT_DEC_LD 4.931088770e-04f /* H */
+#define CCT_DEC_LQ 9.862177540e-04f /* H */
+#define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
+#define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
+#define CCT_DELAY_COMP_TIME 1.500000071e-04f /* s (1.5 Ts, drive.angle_compensation = "mid_period"): v_dq is placed at theta_e + CCT_DELAY_COMP_TIME * w_e (rad); applied inside cct_step, outputs v_d_comp, v_q_comp */
+/* d axis PI gains (method tune), FOR INFORMATION ONLY: the code
+ *   runs the coefficients of the law below, derived from these gains at export;
+ *   to retune, change the spec and re-export (editing these numbers does nothing).
+ *   Kp = 1.72386531 V/A (parallel proportional gain)
+ *   Ki = 1079.76897 V/(A s) (parallel integral gain)
+ *   Ki Ts = 0.107976897 V/A (integral gain per sample)
+ *   Ti = 0.0015965131 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
+ */
+/* q axis PI gains (method tune), FOR INFORMATION ONLY: the code
+ *   runs the coefficients of the law below, derived from these gains at export;
+ *   to retune, change the spec and re-export (editing these numbers does nothing).
+ *   Kp = 4.6366345 V/A (parallel proportional gain)
+ *   Ki = 963.974821 V/(A s) (parallel integral gain)
+ *   Ki Ts = 0.0963974821 V/A (integral gain per sample)
+ *   Ti = 0.00480991246 s (series form Kp (1 + 1/(Ti s)), Ti = Kp/Ki)
+ */
+
+#define CCT_D_GAIN 1.777853727e+00f /* d axis SOS output gain, V/A */
+#define CCT_D_NUM_STAGES 1
+#define CCT_Q_GAIN 4.684833050e+00f /* q axis SOS output gain, V/A */
+#define CCT_Q_NUM_STAGES 1
+
+/* inputs: currents in A, measured MECHANICAL speed in rad/s */
+typedef struct {
+    float i_d_ref; /* A */
+    float i_q_ref; /* A */
+    float i_d;     /* measured, A */
+    float i_q;     /* measured, A */
+    float omega_m; /* measured mechanical speed, rad/s */
+} cct_input_t;
+
+#define CCT_STATUS_OK 0         /* the law ran */
+#define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
+#define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
+
+typedef struct {
+    float v_d;     /* V, the law's output (limited), applied DELAY_SAMPLES periods later */
+    float v_q;     /* V */
+    float v_d_comp; /* V, v_dq rotated by CCT_DELAY_COMP_TIME w_e (voltage placement): */
+    float v_q_comp; /* V, feed these to the inverse Park transform at the SAMPLED theta_e */
+    int saturated; /* 1 when the voltage limit acted */
+    int status;    /* CCT_STATUS_* */
+} cct_output_t;
+
+/* controller states (sos d axis: 2, sos q axis: 2; arrays have at least one element)
+ * and the last good output, held when a period fails */
+typedef struct {
+    float d[2];
+    float q[2];
+    float v_d_hold; /* V */
+    float v_q_hold; /* V */
+    float v_d_comp_hold; /* V */
+    float v_q_comp_hold; /* V */
+    float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
+} cct_state_t;
+
+/* zero states and held outputs; voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
+static inline void cct_init(cct_state_t *s)
+{
+    unsigned i;
+    for (i = 0u; i < 2u; ++i) { s->d[i] = 0.0f; }
+    for (i = 0u; i < 2u; ++i) { s->q[i] = 0.0f; }
+    s->v_d_hold = 0.0f;
+    s->v_q_hold = 0.0f;
+    s->v_d_comp_hold = 0.0f;
+    s->v_q_comp_hold = 0.0f;
+    s->v_max = CCT_V_MAX;
+}
+
+/* 1 when v is neither inf nor nan. Tested on the IEEE-754 bits, so that
+ * -ffast-math / -ffinite-math-only cannot remove the test (isfinite() may be). */
+static inline int cct_finite(float v)
+{
+    union { float f; uint32_t u; } b;
+    b.f = v;
+    return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+/* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
+ * circle's radius); call whenever a new bus measurement arrives (e.g. once per
+ * period, before cct_step). Returns CCT_STATUS_OK, or CCT_STATUS_BAD_INPUT
+ * (vdc not finite or not > 0) leaving the limit in use unchanged. */
+static inline int cct_set_vdc(cct_state_t *s, float vdc)
+{
+    if (!(cct_finite(vdc) && vdc > 0.0f)) {
+        return CCT_STATUS_BAD_INPUT;
+    }
+    s->v_max = CCT_V_MAX_PER_VDC * vdc;
+    return CCT_STATUS_OK;
+}
+
+static inline int cct_state_finite(const cct_state_t *s)
+{
+    unsigned i;
+    int ok = 1;
+    for (i = 0u; i < 2u; ++i) { ok &= cct_finite(s->d[i]); }
+    for (i = 0u; i < 2u; ++i) { ok &= cct_finite(s->q[i]); }
+    return ok;
+}
+
+static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
+{
+    out->v_d = s->v_d_hold;
+    out->v_q = s->v_q_hold;
+    out->v_d_comp = s->v_d_comp_hold;
+    out->v_q_comp = s->v_q_comp_hold;
+    out->saturated = 0;
+    out->status = status;
+}
+
+/* d axis linear law: returns v (V); updates the state to A x + B u */
+static inline float cct_d_linear(float *x, float r, float y)
+{
+    /* 1 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_D_GAIN */
+    static const float c[5] = {
+        1.000000000e+00f, -9.392656088e-01f, 0.0f, 1.000000000e+00f, 0.0f,
+    };
+    float in = r - y;
+    unsigned k;
+    for (k = 0u; k < 1u; ++k) {
+        const float *s = &c[5u * k];
+        const float out = s[0] * in + x[2u * k];
+        x[2u * k] = s[1] * in + s[3] * out + x[2u * k + 1u];
+        x[2u * k + 1u] = s[2] * in + s[4] * out;
+        in = out;
+    }
+    return CCT_D_GAIN * in;
+}
+
+/* q axis linear law: returns v (V); updates the state to A x + B u */
+static inline float cct_q_linear(float *x, float r, float y)
+{
+    /* 1 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_Q_GAIN */
+    static const float c[5] = {
+        1.000000000e+00f, -9.794235229e-01f, 0.0f, 1.000000000e+00f, 0.0f,
+    };
+    float in = r - y;
+    unsigned k;
+    for (k = 0u; k < 1u; ++k) {
+        const float *s = &c[5u * k];
+        const float out = s[0] * in + x[2u * k];
+        x[2u * k] = s[1] * in + s[3] * out + x[2u * k + 1u];
+        x[2u * k + 1u] = s[2] * in + s[4] * out;
+        in = out;
+    }
+    return CCT_Q_GAIN * in;
+}
+
+/* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
+ * out->status: CCT_STATUS_OK, or _BAD_INPUT / _BAD_STATE with the last good
+ * output repeated and the state left as it was (see the top of this file). */
+static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
+{
+    cct_state_t nx;
+    if (!(cct_finite(in->i_d_ref) && cct_finite(in->i_q_ref)
+          && cct_finite(in->i_d) && cct_finite(in->i_q)
+          && cct_finite(in->omega_m))) {
+        cct_hold(s, out, CCT_STATUS_BAD_INPUT);
+        return;
+    }
+    nx = *s;
+    const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
+    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, in->i_d);
+    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, in->i_q);
+    const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
+    const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
+                   + (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
+    float vds = vd;
+    float vqs = vq;
+    int saturated = 0;
+    const float mag2 = vd * vd + vq * vq;
+    if (mag2 > s->v_max * s->v_max) {
+        const float k = s->v_max / sqrtf(mag2);
+        vds = vd * k;
+        vqs = vq * k;
+        saturated = 1;
+    }
+    /* back-calculation anti-windup */
+    nx.d[0] += 3.416164592e-02f * (vds - vd);
+    nx.q[0] += 4.392152652e-03f * (vqs - vq);
+    if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
+        cct_hold(s, out, CCT_STATUS_BAD_STATE);
+        return;
+    }
+    /* voltage placement (toolbox/ARCHITECTURE.md "The digital loop"): v_dq rotated
+     * by DELAY_COMP_TIME w_e, i.e. placed at theta_e + DELAY_COMP_TIME w_e */
+    const float thc = CCT_DELAY_COMP_TIME * w;
+    const float cc = cosf(thc);
+    const float sc = sinf(thc);
+    const float vdr = vds * cc - vqs * sc;
+    const float vqr = vds * sc + vqs * cc;
+    nx.v_d_hold = vds;
+    nx.v_q_hold = vqs;
+    nx.v_d_comp_hold = vdr;
+    nx.v_q_comp_hold = vqr;
+    *s = nx;
+    out->v_d = vds;
+    out->v_q = vqs;
+    out->v_d_comp = vdr;
+    out->v_q_comp = vqr;
+    out->saturated = saturated;
+    out->status = CCT_STATUS_OK;
+}
+#if defined(CCT_FIXED_POINT) || defined(CCT_MCSDK) || defined(CCT_IQMATH)
+#include <stdint.h>
+/* integer voltage placement: (pd, pq) = v_dq rotated by x (Q30 rad, |x| <= 1.5) */
+static inline void cct_place_q30(int64_t vd, int64_t vq, int64_t x, int64_t *pd, int64_t *pq)
+{
+    const int64_t one = (int64_t)1 << 30;
+    const int64_t x2 = (x * x) >> 30;
+    const int64_t c3 = one - x2 / 30;
+    const int64_t c2 = one - ((x2 * c3) >> 30) / 12;
+    const int64_t cs = one - ((x2 * c2) >> 30) / 2;
+    const int64_t s3 = one - x2 / 42;
+    const int64_t s2 = one - ((x2 * s3) >> 30) / 20;
+    const int64_t s1 = one - ((x2 * s2) >> 30) / 6;
+    const int64_t sn = (x * s1) >> 30;
+    *pd = (vd * cs - vq * sn) >> 30;
+    *pq = (vd * sn + vq * cs) >> 30;
+}
+#endif
+
+#ifdef CCT_FIXED_POINT
+/*
+ * Fixed point: Q31 words (value / 2^31), int64 accumulators, arithmetic
+ * right shifts (as gcc and arm-none-eabi implement >> on negative values).
+ * Each coefficient set is an int32 mantissa vector m with one shift F:
+ * c = m / 2^F (integer gains with power-of-two divisors, as STM32 MCSDK).
+ * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
+ * voltage limit 86.6025 V: bases below are powers of two above rigorous
+ * bounds of every signal and state, so no accumulator or word overflows.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 4.75e-05 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000186 V over 20 ms from equal states.
+ */
+#include <stdint.h>
+#define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
+#define CCT_Q31_V_BASE 1.024000000e+03f /* V at full scale */
+#define CCT_Q31_W_BASE 2.560000000e+02f /* mechanical rad/s at full scale */
+#define CCT_Q31_I_MAX 2.000000000e+01f /* A, current range (cct_to_q31 clamps beyond) */
+#define CCT_Q31_W_MAX 2.300000000e+02f /* rad/s, speed range (cct_to_q31 clamps beyond) */
+#define CCT_Q31_V_MAX 181618690L /* V_MAX / V_BASE in Q31: the largest limit */
+#define CCT_Q31_VDC_BASE 1.773619995e+03f /* V of bus at full scale (cct_set_vdc_q31) */
+#define CCT_Q31_D_X0_BASE 6.400000000e+01f /* state 0 full scale */
+#define CCT_Q31_D_X1_BASE 1.000000000e+00f /* state 1 full scale */
+#define CCT_Q31_Q_X0_BASE 6.400000000e+01f /* state 0 full scale */
+#define CCT_Q31_Q_X1_BASE 1.000000000e+00f /* state 1 full scale */
+#define CCT_Q31_DEC_DD -542178960L /* decoupling coefficient -0.031559 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DD_SHIFT 34u
+#define CCT_Q31_DEC_DQ 542178960L /* decoupling coefficient 0.0157795 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DQ_SHIFT 35u
+#define CCT_Q31_DEC_DE 1030792151L /* decoupling coefficient 0.12 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DE_SHIFT 33u
+/* d axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY
+ * (the Q31 law below runs its own quantised coefficients):
+ *   Kp = 925493141L / 2^34 (0.0538708 p.u.)
+ *   Ki Ts = 927514484L / 2^38 (0.00337428 p.u.)
+ */
+/* q axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY
+ * (the Q31 law below runs its own quantised coefficients):
+ *   Kp = 622318548L / 2^32 (0.144895 p.u.)
+ *   Ki Ts = 828048066L / 2^38 (0.00301242 p.u.)
+ */
+
+typedef struct {
+    int32_t i_d_ref; /* Q31 of Q31_I_BASE */
+    int32_t i_q_ref;
+    int32_t i_d;
+    int32_t i_q;
+    int32_t omega_m; /* Q31 of Q31_W_BASE (mechanical) */
+} cct_input_q31_t;
+
+/* voltage placement: rotation angle at full-scale speed, Q30 rad
+ * (0.1536 rad = DELAY_COMP_TIME x POLE_PAIRS x Q31_W_BASE) */
+#define CCT_Q31_COMP_K 164926744
+
+typedef struct {
+    int32_t v_d; /* Q31 of Q31_V_BASE, the law's output (limited) */
+    int32_t v_q;
+    int32_t v_d_comp; /* Q31 of Q31_V_BASE, v_dq placed as the float path does: feed */
+    int32_t v_q_comp; /* these to the inverse Park transform at the SAMPLED theta_e */
+    int saturated;
+} cct_output_q31_t;
+
+typedef struct {
+    int32_t d[2];
+    int32_t q[2];
+    int32_t v_max; /* voltage limit in use, Q31 of Q31_V_BASE (cct_set_vdc_q31) */
+} cct_state_q31_t;
+
+static inline void cct_init_q31(cct_state_q31_t *s)
+{
+    unsigned i;
+    for (i = 0u; i < 2u; ++i) { s->d[i] = 0; }
+    for (i = 0u; i < 2u; ++i) { s->q[i] = 0; }
+    s->v_max = CCT_Q31_V_MAX;
+}
+
+/* measured DC-link voltage as Q31 of CCT_Q31_VDC_BASE (chosen so that the
+ * word IS the voltage limit in Q31 of Q31_V_BASE). The scaling and the state
+ * bounds were derived for the nominal bus: above it the limit is clamped to
+ * CCT_Q31_V_MAX and 1 is returned; a negative word is refused (-1, limit
+ * unchanged); 0 otherwise. */
+static inline int cct_set_vdc_q31(cct_state_q31_t *s, int32_t vdc)
+{
+    if (vdc < 0) { return -1; }
+    if (vdc > CCT_Q31_V_MAX) {
+        s->v_max = CCT_Q31_V_MAX;
+        return 1;
+    }
+    s->v_max = vdc;
+    return 0;
+}
+
+/* physical value -> Q31 word of base, clamped to +-range (the range the
+ * scaling and state bounds were derived for) with *clamped = 1 beyond it or
+ * for a non-finite value (then 0). E.g. currents: range CCT_Q31_I_MAX, base
+ * CCT_Q31_I_BASE; speed: CCT_Q31_W_MAX, CCT_Q31_W_BASE. */
+static inline int32_t cct_to_q31(float value, float range, float base, int *clamped)
+{
+    float v = value;
+    if (!(v == v)) { *clamped = 1; return 0; }
+    if (v > range) { v = range; *clamped = 1; }
+    if (v < -range) { v = -range; *clamped = 1; }
+    {
+        const float q = v / base * 2147483648.0f; /* truncated towards zero below */
+        if (q >= 2147483648.0f) { return INT32_MAX; }
+        if (q <= -2147483648.0f) { return -INT32_MAX; }
+        return (int32_t)q;
+    }
+}
+
+static inline int32_t cct_sat32(int64_t v)
+{
+    if (v > (int64_t)INT32_MAX) { return INT32_MAX; }
+    if (v < -(int64_t)INT32_MAX) { return -INT32_MAX; }
+    return (int32_t)v;
+}
+
+static inline int64_t cct_shr(int64_t acc, unsigned f)
+{
+    return f ? (acc + ((int64_t)1 << (f - 1u))) >> f : acc;
+}
+
+static inline uint32_t cct_isqrt64(uint64_t v)
+{
+    uint64_t r = 0u, bit = (uint64_t)1 << 62;
+    while (bit > v) { bit >>= 2; }
+    while (bit != 0u) {
+        if (v >= r + bit) { v -= r + bit; r = (r >> 1) + bit; } else { r >>= 1; }
+        bit >>= 2;
+    }
+    return (uint32_t)r;
+}
+
+/* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
+static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
+{
+    static const int32_t co[4] = { 238619492L, 0L, 119309746L, -119309746L };
+    static const int32_t ca[10] = {
+        134217728L, 2097152L, 4075817L, -4075817L, 73361574L,
+        0L, 0L, 0L, 0L, 0L,
+    };
+    static const unsigned fa[2] = { 27u, 31u };
+    int32_t xn[2];
+    unsigned i, j;
+    int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
+    for (j = 0u; j < 2u; ++j) { acc += (int64_t)co[j] * x[j]; }
+    acc = cct_shr(acc, 31u);
+    for (i = 0u; i < 2u; ++i) {
+        const int32_t *m = &ca[5u * i];
+        int64_t a = (int64_t)m[2] * r + (int64_t)m[3] * y;
+        for (j = 0u; j < 2u; ++j) { a += (int64_t)m[j] * x[j]; }
+        xn[i] = cct_sat32(cct_shr(a, fa[i]));
+    }
+    for (i = 0u; i < 2u; ++i) { x[i] = xn[i]; }
+    return acc;
+}
+
+static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
+{
+    static const int32_t aw[2] = { 73361574L, 0L };
+    static const unsigned fa[2] = { 27u, 31u };
+    unsigned i;
+    for (i = 0u; i < 2u; ++i) {
+        x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));
+    }
+}
+
+/* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
+static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
+{
+    static const int32_t co[4] = { 157196918L, 0L, 78598459L, -78598459L };
+    static const int32_t ca[10] = {
+        134217728L, 2097152L, 1380866L, -1380866L, 9432076L,
+        0L, 0L, 0L, 0L, 0L,
+    };
+    static const unsigned fa[2] = { 27u, 31u };
+    int32_t xn[2];
+    unsigned i, j;
+    int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
+    for (j = 0u; j < 2u; ++j) { acc += (int64_t)co[j] * x[j]; }
+    acc = cct_shr(acc, 29u);
+    for (i = 0u; i < 2u; ++i) {
+        const int32_t *m = &ca[5u * i];
+        int64_t a = (int64_t)m[2] * r + (int64_t)m[3] * y;
+        for (j = 0u; j < 2u; ++j) { a += (int64_t)m[j] * x[j]; }
+        xn[i] = cct_sat32(cct_shr(a, fa[i]));
+    }
+    for (i = 0u; i < 2u; ++i) { x[i] = xn[i]; }
+    return acc;
+}
+
+static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
+{
+    static const int32_t aw[2] = { 9432076L, 0L };
+    static const unsigned fa[2] = { 27u, 31u };
+    unsigned i;
+    for (i = 0u; i < 2u; ++i) {
+        x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));
+    }
+}
+
+static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, cct_output_q31_t *out)
+{
+    const int64_t vd_lin = cct_d_linear_q31(s->d, in->i_d_ref, in->i_d);
+    const int64_t vq_lin = cct_q_linear_q31(s->q, in->i_q_ref, in->i_q);
+    const int64_t wiq = cct_shr((int64_t)in->omega_m * in->i_q, 31u);
+    const int64_t wid = cct_shr((int64_t)in->omega_m * in->i_d, 31u);
+    const int64_t vd = vd_lin + cct_shr((int64_t)CCT_Q31_DEC_DD * wiq, CCT_Q31_DEC_DD_SHIFT);
+    const int64_t vq = vq_lin + cct_shr((int64_t)CCT_Q31_DEC_DQ * wid, CCT_Q31_DEC_DQ_SHIFT)
+                     + cct_shr((int64_t)CCT_Q31_DEC_DE * in->omega_m, CCT_Q31_DEC_DE_SHIFT);
+    const int64_t vdc = cct_sat32(vd);
+    const int64_t vqc = cct_sat32(vq);
+    const uint64_t mag2 = (uint64_t)(vdc * vdc) + (uint64_t)(vqc * vqc);
+    int64_t vds = vdc;
+    int64_t vqs = vqc;
+    out->saturated = 0;
+    if (mag2 > (uint64_t)s->v_max * (uint64_t)s->v_max) {
+        const int64_t mag = (int64_t)cct_isqrt64(mag2);
+        vds = (vdc * s->v_max) / mag;
+        vqs = (vqc * s->v_max) / mag;
+        out->saturated = 1;
+    }
+    cct_d_antiwindup_q31(s->d, vds - vd);
+    cct_q_antiwindup_q31(s->q, vqs - vq);
+    out->v_d = (int32_t)vds;
+    out->v_q = (int32_t)vqs;
+    {
+        /* voltage placement: v_dq rotated by DELAY_COMP_TIME w_e */
+        int64_t pd, pq;
+        cct_place_q30(vds, vqs, ((int64_t)in->omega_m * CCT_Q31_COMP_K) >> 31, &pd, &pq);
+        out->v_d_comp = (int32_t)cct_sat32(pd);
+        out->v_q_comp = (int32_t)cct_sat32(pq);
+    }
+}
+#endif /* CCT_FIXED_POINT */
+
+#if defined(CCT_MCSDK) || defined(CCT_IQMATH)
+/* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;
+ *   d: Kp = 1.77785376 V/A, Ki = 0.107976897 V/A per sample, Kaw = 0.060734409
+ *   q: Kp = 4.68483324 V/A, Ki = 0.0963974821 V/A per sample, Kaw = 0.0205765023
+ * ranges: currents and speed beyond these are clamped (status CLAMPED) */
+#define CCT_MCSDK_I_FS 2.000000000e+01f /* A = 32768 digits (s16A) */
+#define CCT_MCSDK_V_FS 1.732050781e+02f /* V = 32768 digits (s16V) */
+#define CCT_MCSDK_W_FS 2.300000000e+02f /* mechanical rad/s = 32768 digits */
+#define CCT_MCSDK_V_MAX 16384 /* nominal voltage limit, s16V */
+#define CCT_IQ_I_BASE 2.000000000e+01f /* A = 1.0 p.u. */
+#define CCT_IQ_V_BASE 8.660253906e+01f /* V = 1.0 p.u. (nominal limit) */
+#define CCT_IQ_W_BASE 2.300000000e+02f /* mechanical rad/s = 1.0 p.u. */
+#endif
+#if defined(CCT_MCSDK) || defined(CCT_IQMATH)
+#include <stdint.h>
+#define CCT_STATUS_CLAMPED 3 /* integer variants: an input beyond its range was clamped */
+
+static inline uint64_t cct_isqrt_u64(uint64_t v)
+{
+    uint64_t r = 0u, bit = (uint64_t)1 << 62;
+    while (bit > v) { bit >>= 2; }
+    while (bit != 0u) {
+        if (v >= r + bit) { v -= r + bit; r = (r >> 1) + bit; } else { r >>= 1; }
+        bit >>= 2;
+    }
+    return r;
+}
+
+/* clamp v to [-lim, lim]; sets *flag when it acts */
+static inline int64_t cct_clamp64(int64_t v, int64_t lim, int *flag)
+{
+    if (v > lim) { *flag = 1; return lim; }
+    if (v < -lim) { *flag = 1; return -lim; }
+    return v;
+}
+
+/* radial limit of (vd, vq) to vmax; returns 1 when it acted */
+static inline int cct_limit64(int64_t *vd, int64_t *vq, int64_t vmax)
+{
+    const uint64_t mag2 = (uint64_t)(*vd * *vd) + (uint64_t)(*vq * *vq);
+    if (mag2 > (uint64_t)vmax * (uint64_t)vmax) {
+        const int64_t mag = (int64_t)cct_isqrt_u64(mag2);
+        *vd = (*vd * vmax) / mag;
+        *vq = (*vq * vmax) / mag;
+        return 1;
+    }
+    return 0;
+}
+#endif
+
+#ifdef CCT_MCSDK
+/*
+ * STM32 MCSDK-style PI (PI_Controller): signals in int16 digits,
+ *   current  s16A: CCT_MCSDK_I_FS A = 32768 digits
+ *   voltage  s16V: CCT_MCSDK_V_FS V = 32768 digits (twice the nominal limit)
+ *   speed:         CCT_MCSDK_W_FS rad/s (mechanical) = 32768 digits
+ * gains int16 with power-of-two divisors, v = (KP e >> KP_DIV) + (integral >> KI_DIV),
+ * integral += KI e (int32, clamped to +-V_FS), back-calculation anti-windup.
+ */
+#define CCT_MCSDK_D_KP_GAIN (6727) /* d_kp: gain / 2^DIV */
+#define CCT_MCSDK_D_KP_DIV 15
+#define CCT_MCSDK_D_KI_GAIN (409) /* d_ki: gain / 2^DIV */
+#define CCT_MCSDK_D_KI_DIV 15
+#define CCT_MCSDK_D_KAW_GAIN (1990) /* d_kaw: gain / 2^DIV */
+#define CCT_MCSDK_D_KAW_DIV 15
+#define CCT_MCSDK_Q_KP_GAIN (17726) /* q_kp: gain / 2^DIV */
+#define CCT_MCSDK_Q_KP_DIV 15
+#define CCT_MCSDK_Q_KI_GAIN (365) /* q_ki: gain / 2^DIV */
+#define CCT_MCSDK_Q_KI_DIV 15
+#define CCT_MCSDK_Q_KAW_GAIN (674) /* q_kaw: gain / 2^DIV */
+#define CCT_MCSDK_Q_KAW_DIV 15
+#define CCT_MCSDK_DD_GAIN (-3433) /* dd: gain / 2^DIV */
+#define CCT_MCSDK_DD_DIV 15
+#define CCT_MCSDK_DQ_GAIN (1717) /* dq: gain / 2^DIV */
+#define CCT_MCSDK_DQ_DIV 15
+#define CCT_MCSDK_DE_GAIN (20886) /* de: gain / 2^DIV */
+#define CCT_MCSDK_DE_DIV 15
+
+/* voltage placement: rotation angle at MCSDK_W_FS (= IQ_W_BASE), Q30 rad
+ * (0.138 rad = DELAY_COMP_TIME x POLE_PAIRS x speed base) */
+#ifndef CCT_VENDOR_COMP_K
+#define CCT_VENDOR_COMP_K 148176372
+#endif
+
+typedef struct {
+    int16_t i_d_ref; /* s16A */
+    int16_t i_q_ref;
+    int16_t i_d;
+    int16_t i_q;
+    int16_t omega_m; /* digits of MCSDK_W_FS */
+} cct_input_s16_t;
+
+
+typedef struct {
+    int16_t v_d;   /* s16V, the law's output (limited) */
+    int16_t v_q;
+    int16_t v_d_comp; /* s16V, v_dq placed as the float path does: feed these to */
+    int16_t v_q_comp; /* the inverse Park transform at the SAMPLED theta_e */
+    int saturated;
+    int status;    /* CCT_STATUS_OK or CCT_STATUS_CLAMPED (an input was at the rail) */
+} cct_output_s16_t;
+
+/* run-time gains of one axis (as the SDK's PI handle): the step reads these,
+ * so retuning in the field is writing them. Change KI_DIV only with the
+ * integral at 0 (it holds integral x 2^KI_DIV). */
+typedef struct {
+    int16_t kp_gain;
+    uint16_t kp_div;  /* log2 of the divisor, 0..15 */
+    int16_t ki_gain;
+    uint16_t ki_div;
+    int16_t kaw_gain;
+    uint16_t kaw_div;
+} cct_gains_s16_t;
+
+typedef struct {
+    int32_t int_d; /* integral term x 2^KI_DIV, s16V */
+    int32_t int_q;
+    int32_t v_max; /* voltage limit in use, s16V (cct_set_vdc_s16) */
+    cct_gains_s16_t gd; /* d-axis gains, CCT_MCSDK_D_* after init */
+    cct_gains_s16_t gq; /* q-axis gains */
+} cct_state_s16_t;
+
+static inline void cct_init_s16(cct_state_s16_t *s)
+{
+    s->int_d = 0;
+    s->int_q = 0;
+    s->v_max = CCT_MCSDK_V_MAX;
+    s->gd.kp_gain = CCT_MCSDK_D_KP_GAIN; s->gd.kp_div = CCT_MCSDK_D_KP_DIV;
+    s->gd.ki_gain = CCT_MCSDK_D_KI_GAIN; s->gd.ki_div = CCT_MCSDK_D_KI_DIV;
+    s->gd.kaw_gain = CCT_MCSDK_D_KAW_GAIN; s->gd.kaw_div = CCT_MCSDK_D_KAW_DIV;
+    s->gq.kp_gain = CCT_MCSDK_Q_KP_GAIN; s->gq.kp_div = CCT_MCSDK_Q_KP_DIV;
+    s->gq.ki_gain = CCT_MCSDK_Q_KI_GAIN; s->gq.ki_div = CCT_MCSDK_Q_KI_DIV;
+    s->gq.kaw_gain = CCT_MCSDK_Q_KAW_GAIN; s->gq.kaw_div = CCT_MCSDK_Q_KAW_DIV;
+}
+
+/* amps -> s16A digits, clamped to +-32767 with *clamped = 1 beyond range */
+static inline int16_t cct_to_s16a(float amps, int *clamped)
+{
+    const float d = amps * (32768.0f / CCT_MCSDK_I_FS);
+    if (!(d < 32767.0f)) { *clamped = 1; return (int16_t)32767; }
+    if (!(d > -32767.0f)) { *clamped = 1; return (int16_t)-32767; }
+    return (int16_t)(d >= 0.0f ? d + 0.5f : d - 0.5f);
+}
+
+/* bus voltage as s16V digits of MCSDK_V_FS / V_MAX_PER_VDC; clamped to the full scale */
+static inline int cct_set_vdc_s16(cct_state_s16_t *s, int32_t vmax_digits)
+{
+    if (vmax_digits < 0) { return -1; }
+    s->v_max = vmax_digits > 32767 ? 32767 : vmax_digits;
+    return vmax_digits > 32767 ? 1 : 0;
+}
+
+static inline int64_t cct_pi_s16(int32_t *integ, int32_t e, const cct_gains_s16_t *g)
+{
+    const int64_t v = (((int64_t)g->kp_gain * e) >> g->kp_div) + ((int64_t)*integ >> g->ki_div);
+    int flag = 0;
+    *integ = (int32_t)cct_clamp64((int64_t)*integ + (int64_t)g->ki_gain * e,
+                                    (int64_t)32767 << g->ki_div, &flag);
+    return v;
+}
+
+/* back-calculation: integral += KAW (v_sat - v), in integral units */
+static inline void cct_aw_s16(int32_t *integ, int64_t dv, const cct_gains_s16_t *g)
+{
+    int flag = 0;
+    *integ = (int32_t)cct_clamp64((int64_t)*integ
+        + (((int64_t)g->kaw_gain * dv * ((int64_t)1 << g->ki_div)) >> g->kaw_div),
+        (int64_t)32767 << g->ki_div, &flag);
+}
+
+static inline void cct_step_s16(cct_state_s16_t *s, const cct_input_s16_t *in, cct_output_s16_t *out)
+{
+    int clamped = 0;
+    const int64_t idr = cct_clamp64(in->i_d_ref, 32767, &clamped);
+    const int64_t iqr = cct_clamp64(in->i_q_ref, 32767, &clamped);
+    const int64_t idm = cct_clamp64(in->i_d, 32767, &clamped);
+    const int64_t iqm = cct_clamp64(in->i_q, 32767, &clamped);
+    const int64_t w = cct_clamp64(in->omega_m, 32767, &clamped);
+    int64_t vd = cct_pi_s16(&s->int_d, (int32_t)(idr - idm), &s->gd);
+    int64_t vq = cct_pi_s16(&s->int_q, (int32_t)(iqr - iqm), &s->gq);
+    vd += (CCT_MCSDK_DD_GAIN * ((w * iqm) >> 15)) >> CCT_MCSDK_DD_DIV;
+    vq += (CCT_MCSDK_DQ_GAIN * ((w * idm) >> 15)) >> CCT_MCSDK_DQ_DIV;
+    vq += (CCT_MCSDK_DE_GAIN * w) >> CCT_MCSDK_DE_DIV;
+    {
+        const int64_t ud = vd;
+        const int64_t uq = vq;
+        int flag = 0;
+        vd = cct_clamp64(vd, (int64_t)1 << 40, &flag);
+        vq = cct_clamp64(vq, (int64_t)1 << 40, &flag);
+        out->saturated = cct_limit64(&vd, &vq, s->v_max) | flag;
+        cct_aw_s16(&s->int_d, vd - ud, &s->gd);
+        cct_aw_s16(&s->int_q, vq - uq, &s->gq);
+    }
+    out->v_d = (int16_t)vd;
+    out->v_q = (int16_t)vq;
+    {
+        int64_t pd, pq;
+        int flag = 0;
+        cct_place_q30(vd, vq, (w * CCT_VENDOR_COMP_K) >> 15, &pd, &pq);
+        out->v_d_comp = (int16_t)cct_clamp64(pd, 32767, &flag);
+        out->v_q_comp = (int16_t)cct_clamp64(pq, 32767, &flag);
+    }
+    out->status = clamped ? CCT_STATUS_CLAMPED : CCT_STATUS_OK;
+}
+#endif /* CCT_MCSDK */
+
+#ifdef CCT_IQMATH
+/*
+ * TI IQmath-style: _IQ24 per-unit int32 words (value x 2^24, +-128 p.u.),
+ * bases CCT_IQ_I_BASE A, CCT_IQ_V_BASE V (the nominal limit),
+ * CCT_IQ_W_BASE rad/s (mechanical); _IQmpy(a, b) = (a b) >> 24 in int64.
+ * Currents and speed beyond +-1 p.u. are clamped (status CLAMPED).
+ */
+#define CCT_IQ_ONE ((int32_t)1 << 24)
+#define CCT_IQ_D_KP ((int32_t)6888351L)
+#define CCT_IQ_D_KI ((int32_t)418360L)
+#define CCT_IQ_D_KAW ((int32_t)1018954L)
+#define CCT_IQ_Q_KP ((int32_t)18151537L)
+#define CCT_IQ_Q_KI ((int32_t)373495L)
+#define CCT_IQ_Q_KAW ((int32_t)345216L)
+#define CCT_IQ_DD ((int32_t)-3515442L)
+#define CCT_IQ_DQ ((int32_t)1757721L)
+#define CCT_IQ_DE ((int32_t)21387417L)
+
+static inline int32_t cct_iqmpy(int64_t a, int64_t b) { return (int32_t)((a * b) >> 24); }
+
+/* voltage placement: rotation angle at MCSDK_W_FS (= IQ_W_BASE), Q30 rad
+ * (0.138 rad = DELAY_COMP_TIME x POLE_PAIRS x speed base) */
+#ifndef CCT_VENDOR_COMP_K
+#define CCT_VENDOR_COMP_K 148176372
+#endif
+
+typedef struct {
+    int32_t i_d_ref; /* _IQ24 p.u. of IQ_I_BASE */
+    int32_t i_q_ref;
+    int32_t i_d;
+    int32_t i_q;
+    int32_t omega_m; /* _IQ24 p.u. of IQ_W_BASE */
+} cct_input_iq_t;
+
+typedef struct {
+    int32_t v_d;   /* _IQ24 p.u. of IQ_V_BASE, the law's output (limited) */
+    int32_t v_q;
+    int32_t v_d_comp; /* _IQ24 p.u., v_dq placed as the float path does: feed these */
+    int32_t v_q_comp; /* to the inverse Park transform at the SAMPLED theta_e */
+    int saturated;
+    int status;    /* CCT_STATUS_OK or CCT_STATUS_CLAMPED */
+} cct_output_iq_t;
+
+/* run-time gains of one axis (_IQ24 per unit): the step reads these */
+typedef struct {
+    int32_t kp;
+    int32_t ki;  /* per sample */
+    int32_t kaw;
+} cct_gains_iq_t;
+
+typedef struct {
+    int32_t int_d; /* integral term, _IQ24 p.u. V */
+    int32_t int_q;
+    int32_t v_max; /* voltage limit in use, _IQ24 p.u. (cct_set_vdc_iq) */
+    cct_gains_iq_t gd; /* d-axis gains, CCT_IQ_D_* after init */
+    cct_gains_iq_t gq;
+} cct_state_iq_t;
+
+static inline void cct_init_iq(cct_state_iq_t *s)
+{
+    s->int_d = 0;
+    s->int_q = 0;
+    s->v_max = CCT_IQ_ONE;
+    s->gd.kp = CCT_IQ_D_KP; s->gd.ki = CCT_IQ_D_KI; s->gd.kaw = CCT_IQ_D_KAW;
+    s->gq.kp = CCT_IQ_Q_KP; s->gq.ki = CCT_IQ_Q_KI; s->gq.kaw = CCT_IQ_Q_KAW;
+}
+
+/* bus voltage relative to nominal (_IQ24, 1.0 = DRIVE_VDC): limit = V_MAX x ratio, up to 2x */
+static inline int cct_set_vdc_iq(cct_state_iq_t *s, int32_t ratio)
+{
+    if (ratio < 0) { return -1; }
+    s->v_max = ratio > 2 * CCT_IQ_ONE ? 2 * CCT_IQ_ONE : ratio;
+    return ratio > 2 * CCT_IQ_ONE ? 1 : 0;
+}
+
+static inline void cct_step_iq(cct_state_iq_t *s, const cct_input_iq_t *in, cct_output_iq_t *out)
+{
+    int clamped = 0;
+    int flag = 0;
+    const int64_t idr = cct_clamp64(in->i_d_ref, CCT_IQ_ONE, &clamped);
+    const int64_t iqr = cct_clamp64(in->i_q_ref, CCT_IQ_ONE, &clamped);
+    const int64_t idm = cct_clamp64(in->i_d, CCT_IQ_ONE, &clamped);
+    const int64_t iqm = cct_clamp64(in->i_q, CCT_IQ_ONE, &clamped);
+    const int64_t w = cct_clamp64(in->omega_m, CCT_IQ_ONE, &clamped);
+    const int64_t ed = idr - idm;
+    const int64_t eq = iqr - iqm;
+    int64_t vd = (int64_t)cct_iqmpy(s->gd.kp, ed) + s->int_d;
+    int64_t vq = (int64_t)cct_iqmpy(s->gq.kp, eq) + s->int_q;
+    int64_t ud, uq;
+    vd += cct_iqmpy(CCT_IQ_DD, cct_iqmpy(w, iqm));
+    vq += (int64_t)cct_iqmpy(CCT_IQ_DQ, cct_iqmpy(w, idm)) + cct_iqmpy(CCT_IQ_DE, w);
+    ud = vd;
+    uq = vq;
+    out->saturated = cct_limit64(&vd, &vq, s->v_max);
+    s->int_d = (int32_t)cct_clamp64((int64_t)s->int_d + cct_iqmpy(s->gd.ki, ed)
+                                      + cct_iqmpy(s->gd.kaw, vd - ud), 64 * (int64_t)CCT_IQ_ONE, &flag);
+    s->int_q = (int32_t)cct_clamp64((int64_t)s->int_q + cct_iqmpy(s->gq.ki, eq)
+                                      + cct_iqmpy(s->gq.kaw, vq - uq), 64 * (int64_t)CCT_IQ_ONE, &flag);
+    out->v_d = (int32_t)vd;
+    out->v_q = (int32_t)vq;
+    {
+        int64_t pd, pq;
+        cct_place_q30(vd, vq, (w * CCT_VENDOR_COMP_K) >> 24, &pd, &pq);
+        out->v_d_comp = (int32_t)pd;
+        out->v_q_comp = (int32_t)pq;
+    }
+    out->status = clamped ? CCT_STATUS_CLAMPED : CCT_STATUS_OK;
+}
+#endif /* CCT_IQMATH */
+
+#if 0 /* usage example: copy the lines between BEGIN and END into main.c */
+// EXAMPLE main.c BEGIN
+#include <stdio.h>
+#include "controller.h"
+
+/* stand-ins for the board's drivers: ADC, encoder, PWM, fault output */
+static float adc_i_d(void) { return 0.0f; }
+static float adc_i_q(void) { return 0.0f; }
+static float adc_vdc(void) { return CCT_DRIVE_VDC; }
+static float encoder_speed(void) { return 0.0f; }
+static float encoder_theta_e(void) { return 0.0f; }
+static void pwm_apply(float v_d, float v_q, float theta_e)
+{
+    (void)v_d; (void)v_q; (void)theta_e; /* inverse Park at theta_e, then SVM */
+}
+static void fault_report(int status) { printf("controller status %d\n", status); }
+
+static cct_state_t ctl;
+
+/* once per controller period (CCT_SAMPLE_TIME s), e.g. in the ADC interrupt */
+static void control_isr(float i_d_ref, float i_q_ref)
+{
+    cct_input_t in;
+    cct_output_t out;
+    const float theta_e = encoder_theta_e();
+    if (cct_set_vdc(&ctl, adc_vdc()) != CCT_STATUS_OK) {
+        fault_report(CCT_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
+    }
+    in.i_d_ref = i_d_ref;
+    in.i_q_ref = i_q_ref;
+    in.i_d = adc_i_d();
+    in.i_q = adc_i_q();
+    in.omega_m = encoder_speed();
+
+    cct_step(&ctl, &in, &out);
+    if (out.status != CCT_STATUS_OK) {
+        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
+    }
+    /* inverse Park at the SAMPLED theta_e (wrapped to [-pi, pi)); the PWM applies
+     * it DELAY_SAMPLES periods later (the next period for DELAY_SAMPLES = 1) */
+    pwm_apply(out.v_d_comp, out.v_q_comp, theta_e);
+}
+
+int main(void)
+{
+    int k;
+    cct_init(&ctl);
+    for (k = 0; k < 10; ++k) {
+        control_isr(0.0f, 1.0f);
+    }
+    return 0;
+}
+// EXAMPLE main.c END
+#endif /* usage example */
+
+#endif /* CCT_CONTROLLER_H */
