@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 3d54e1585f891859bcd0067354f5511ea79262f496eb1149a44680506a72995a
  * law sha256:  752644d99d675ee8e3b8802cb9ae06ceb0d98bab56bd7e7fc5123bfb3afb276f
- * created:     2026-11-27T18:31:03+00:00
+ * created:     2026-11-27T19:06:32+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72); coupled dq plant at speed, 003 eq (3)-(4): small-gain S weight w1 + k sqrt(c_d c_q) G
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 02480abeeda782370b097f3b15bb037166aab2d66a90454d9bcecda075fe11b2
  * law sha256:  33f23fd436f4fd5a387f4548e5143536c9f15b6b30fe38f478bc916f50ae21be
- * created:     2026-11-27T18:42:11+00:00
+ * created:     2026-11-27T19:07:02+00:00
  * equations:   structured tuning of Kp_d, Ki_d, Kp_q, Ki_q and the cross-coupling feedforward scale: min max(t5_d, t5_q) s.t. multiloop disk margin >= alpha on every model (delay d and d + 1), worst-case search over the box
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
@@ -30,13 +30,22 @@
  * theta_e, the angle of this period's currents, during the period DELAY_SAMPLES
  * later. v_d, v_q are the law's own (unrotated) output.
  * Faults: out->status is
- *   CCT_STATUS_OK (0)        the law ran;
- *   CCT_STATUS_BAD_INPUT (1) an input is inf or nan;
- *   CCT_STATUS_BAD_STATE (2) the result overflowed (inf/nan in v or the state).
- * On 1 and 2 the last good output is repeated (0 V before the first good
+ *   CCT_STATUS_OK (0)          the law ran;
+ *   CCT_STATUS_BAD_INPUT (1)   an input is inf or nan;
+ *   CCT_STATUS_BAD_STATE (2)   the result overflowed (inf/nan in v or the state);
+ *   CCT_STATUS_IMPLAUSIBLE (4) a measured current beyond I_PLAUSIBLE or the
+ *                                  speed beyond W_PLAUSIBLE (a sensor fault).
+ * On 1, 2 and 4 the last good output is repeated (0 V before the first good
  * period), saturated = 0, and the state is left exactly as it was: the next
  * valid period continues as if the bad one had not happened. Finiteness is
  * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
+ * cct_set_vdc refuses a bus reading that is not finite and > 0 (1) or lies
+ * outside [VDC_MIN, VDC_PLAUSIBLE] (4), keeping the limit in use.
+ * Handover and restart: cct_reset() zeroes the states and the held output
+ * (the limit in use kept); cct_preset_at(&s, &in, v_d, v_q) puts the states
+ * where the next step with the inputs in outputs (v_d, v_q) (bumpless transfer
+ * from an open-loop voltage); cct_preset(&s, v_d, v_q) the linear laws' part
+ * alone. out->sat_d, out->sat_q say which axis the voltage limit reduced.
  * SOS coefficient layout = CMSIS-DSP arm_biquad_cascade_df2T_f32:
  *   {b0, b1, b2, a1, a2} per stage with a1, a2 NEGATED with respect to the
  *   denominator 1 + a1 z^-1 + a2 z^-2 (scipy / MATLAB convention), i.e.
@@ -95,18 +104,33 @@
 #define CCT_Q_GAIN 4.684833050e+00f /* q axis SOS output gain, V/A */
 #define CCT_Q_NUM_STAGES 1
 
-/* inputs: currents in A, measured MECHANICAL speed in rad/s */
+/* inputs: currents in A, measured MECHANICAL speed in rad/s.
+ * dq frame (amplitude-invariant Park transform: |i_dq| = peak phase current, |v_dq| = peak phase voltage):
+ * d along the rotor's permanent-magnet flux, q 90 electrical degrees ahead of
+ * it in the direction of positive rotation (phase order a, b, c);
+ * i_d = 2/3 (i_a cos th + i_b cos(th - 2pi/3) + i_c cos(th + 2pi/3)),
+ * i_q = -2/3 (i_a sin th + i_b sin(th - 2pi/3) + i_c sin(th + 2pi/3)),
+ * th = theta_e the electrical angle of the d axis from phase a's axis. */
 typedef struct {
     float i_d_ref; /* A */
     float i_q_ref; /* A */
-    float i_d;     /* measured, A */
-    float i_q;     /* measured, A */
-    float omega_m; /* measured mechanical speed, rad/s */
+    float i_d;     /* measured, A; |i_d| <= CCT_I_PLAUSIBLE else refused */
+    float i_q;     /* measured, A; |i_q| <= CCT_I_PLAUSIBLE else refused */
+    float omega_m; /* measured mechanical speed, rad/s (w_e = POLE_PAIRS omega_m); |omega_m| <= CCT_W_PLAUSIBLE */
 } cct_input_t;
 
 #define CCT_STATUS_OK 0         /* the law ran */
 #define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
 #define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
+#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: output held, state kept */
+
+/* plausible ranges (a sample beyond them is a sensor or ADC fault, not a
+ * current or speed the drive can have): cct_step refuses measured currents
+ * or speed beyond them, cct_set_vdc bus readings outside [VDC_MIN, VDC_PLAUSIBLE] */
+#define CCT_I_PLAUSIBLE 4.000000000e+01f /* A, 2 x motor.max_current (else 2 x max(2 x rated, V_MAX/R, flux/L)) */
+#define CCT_W_PLAUSIBLE 7.216878662e+02f /* rad/s mechanical, 2 x drive.max_speed (else see the docs) */
+#define CCT_VDC_MIN 1.500000060e-01f /* V, 1e-3 x DRIVE_VDC */
+#define CCT_VDC_PLAUSIBLE 3.000000000e+02f /* V, 2 x DRIVE_VDC */
 
 typedef struct {
     float v_d;     /* V, the law's output (limited), applied DELAY_SAMPLES periods later */
@@ -114,6 +138,8 @@ typedef struct {
     float v_d_comp; /* V, v_dq rotated by CCT_DELAY_COMP_TIME w_e (voltage placement): */
     float v_q_comp; /* V, feed these to the inverse Park transform at the SAMPLED theta_e */
     int saturated; /* 1 when the voltage limit acted */
+    int sat_d;     /* 1 when the limit reduced |v_d| (e.g. stop an outer d loop's integrator) */
+    int sat_q;     /* 1 when the limit reduced |v_q| (e.g. stop the speed loop's integrator) */
     int status;    /* CCT_STATUS_* */
 } cct_output_t;
 
@@ -129,8 +155,9 @@ typedef struct {
     float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
 } cct_state_t;
 
-/* zero states and held outputs; voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
-static inline void cct_init(cct_state_t *s)
+/* zero states and held outputs (0 V), keeping the voltage limit in use:
+ * e.g. after a trip, before the PWM is enabled again */
+static inline void cct_reset(cct_state_t *s)
 {
     unsigned i;
     for (i = 0u; i < 2u; ++i) { s->d[i] = 0.0f; }
@@ -139,6 +166,12 @@ static inline void cct_init(cct_state_t *s)
     s->v_q_hold = 0.0f;
     s->v_d_comp_hold = 0.0f;
     s->v_q_comp_hold = 0.0f;
+}
+
+/* cct_reset and the voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
+static inline void cct_init(cct_state_t *s)
+{
+    cct_reset(s);
     s->v_max = CCT_V_MAX;
 }
 
@@ -153,15 +186,28 @@ static inline int cct_finite(float v)
 
 /* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
  * circle's radius); call whenever a new bus measurement arrives (e.g. once per
- * period, before cct_step). Returns CCT_STATUS_OK, or CCT_STATUS_BAD_INPUT
- * (vdc not finite or not > 0) leaving the limit in use unchanged. */
+ * period, before cct_step). Returns CCT_STATUS_OK; CCT_STATUS_BAD_INPUT
+ * (vdc not finite or not > 0) or CCT_STATUS_IMPLAUSIBLE (vdc outside
+ * [CCT_VDC_MIN, CCT_VDC_PLAUSIBLE]) leave the limit in use unchanged. */
 static inline int cct_set_vdc(cct_state_t *s, float vdc)
 {
     if (!(cct_finite(vdc) && vdc > 0.0f)) {
         return CCT_STATUS_BAD_INPUT;
     }
+    if (!(vdc >= CCT_VDC_MIN && vdc <= CCT_VDC_PLAUSIBLE)) {
+        return CCT_STATUS_IMPLAUSIBLE;
+    }
     s->v_max = CCT_V_MAX_PER_VDC * vdc;
     return CCT_STATUS_OK;
+}
+
+/* 1 when the measured currents and speed lie within their plausible ranges
+ * (finite inputs: cct_step tests finiteness first) */
+static inline int cct_plausible(const cct_input_t *in)
+{
+    return in->i_d <= CCT_I_PLAUSIBLE && in->i_d >= -CCT_I_PLAUSIBLE
+        && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE
+        && in->omega_m <= CCT_W_PLAUSIBLE && in->omega_m >= -CCT_W_PLAUSIBLE;
 }
 
 static inline int cct_state_finite(const cct_state_t *s)
@@ -180,6 +226,8 @@ static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
     out->v_d_comp = s->v_d_comp_hold;
     out->v_q_comp = s->v_q_comp_hold;
     out->saturated = 0;
+    out->sat_d = 0;
+    out->sat_q = 0;
     out->status = status;
 }
 
@@ -221,9 +269,91 @@ static inline float cct_q_linear(float *x, float r, float y)
     return CCT_Q_GAIN * in;
 }
 
+/* d axis: the state for which the linear law outputs v with the inputs
+ * (r, y) (exactly: C x = v - D [r; y]), on the steady-state manifold
+ * (I - A) x = B [r; y] when the law has an integrator (else the closest
+ * state to it in least squares) */
+static inline void cct_d_preset(float *x, float v, float r, float y)
+{
+    static const float g[2] = { 5.624759793e-01f, 0.0f };
+    static const float h[4] = { 0.0f, 0.0f, -3.036720492e-02f, 3.036720492e-02f };
+    const float c = v - (1.777853727e+00f * r + -1.777853727e+00f * y);
+    unsigned i;
+    for (i = 0u; i < 2u; ++i) {
+        x[i] = g[i] * c + h[2u * i] * r + h[2u * i + 1u] * y;
+    }
+}
+
+/* q axis: the state for which the linear law outputs v with the inputs
+ * (r, y) (exactly: C x = v - D [r; y]), on the steady-state manifold
+ * (I - A) x = B [r; y] when the law has an integrator (else the closest
+ * state to it in least squares) */
+static inline void cct_q_preset(float *x, float v, float r, float y)
+{
+    static const float g[2] = { 2.134547681e-01f, 0.0f };
+    static const float h[4] = { 0.0f, 0.0f, -1.028825156e-02f, 1.028825156e-02f };
+    const float c = v - (4.684833050e+00f * r + -4.684833050e+00f * y);
+    unsigned i;
+    for (i = 0u; i < 2u; ++i) {
+        x[i] = g[i] * c + h[2u * i] * r + h[2u * i + 1u] * y;
+    }
+}
+
+/* bumpless transfer (e.g. open-loop voltage -> closed loop): puts the states
+ * where the next cct_step with the inputs *in outputs v_d, v_q (V, the
+ * law's output: decoupling included, before the limit, so keep |v| within
+ * it), and holds that voltage as the last good output. Call it in the period
+ * of the handover, with the inputs of the step that follows (references
+ * typically set to the measured currents). A static law (no state) cannot be
+ * preset: its output follows from the inputs alone; only the held output is
+ * set. Returns CCT_STATUS_OK, or _BAD_INPUT / _IMPLAUSIBLE (nothing changed). */
+static inline int cct_preset_at(cct_state_t *s, const cct_input_t *in, float v_d, float v_q)
+{
+    if (!(cct_finite(v_d) && cct_finite(v_q)
+          && cct_finite(in->i_d_ref) && cct_finite(in->i_q_ref)
+          && cct_finite(in->i_d) && cct_finite(in->i_q)
+          && cct_finite(in->omega_m))) {
+        return CCT_STATUS_BAD_INPUT;
+    }
+    if (!cct_plausible(in)) {
+        return CCT_STATUS_IMPLAUSIBLE;
+    }
+    const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
+    const float vd_lin = v_d + (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
+    const float vq_lin = v_q - (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
+                       - (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
+    cct_d_preset(s->d, vd_lin, in->i_d_ref, in->i_d);
+    cct_q_preset(s->q, vq_lin, in->i_q_ref, in->i_q);
+    s->v_d_hold = v_d;
+    s->v_q_hold = v_q;
+    {
+        const float thc = CCT_DELAY_COMP_TIME * w;
+        const float cc = cosf(thc);
+        const float sc = sinf(thc);
+        s->v_d_comp_hold = v_d * cc - v_q * sc;
+        s->v_q_comp_hold = v_d * sc + v_q * cc;
+    }
+    return CCT_STATUS_OK;
+}
+
+/* the linear laws' part only: the states where each axis law outputs v_d, v_q
+ * (V) at zero error, i.e. with i_ref = i_meas for a one-degree-of-freedom law
+ * (v = K (i_ref - i_meas): every axis of this header) and with zero currents otherwise;
+ * decoupling terms come on top at speed. Held output set to (v_d, v_q).
+ * Use cct_preset_at for an exact handover at speed or with currents. */
+static inline void cct_preset(cct_state_t *s, float v_d, float v_q)
+{
+    cct_d_preset(s->d, v_d, 0.0f, 0.0f);
+    cct_q_preset(s->q, v_q, 0.0f, 0.0f);
+    s->v_d_hold = v_d;
+    s->v_q_hold = v_q;
+    s->v_d_comp_hold = v_d;
+    s->v_q_comp_hold = v_q;
+}
+
 /* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
- * out->status: CCT_STATUS_OK, or _BAD_INPUT / _BAD_STATE with the last good
- * output repeated and the state left as it was (see the top of this file). */
+ * out->status: CCT_STATUS_OK, or _BAD_INPUT / _IMPLAUSIBLE / _BAD_STATE with
+ * the last good output repeated and the state left as it was (see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
     cct_state_t nx;
@@ -231,6 +361,10 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
           && cct_finite(in->i_d) && cct_finite(in->i_q)
           && cct_finite(in->omega_m))) {
         cct_hold(s, out, CCT_STATUS_BAD_INPUT);
+        return;
+    }
+    if (!cct_plausible(in)) {
+        cct_hold(s, out, CCT_STATUS_IMPLAUSIBLE);
         return;
     }
     nx = *s;
@@ -274,6 +408,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     out->v_d_comp = vdr;
     out->v_q_comp = vqr;
     out->saturated = saturated;
+    out->sat_d = vds != vd;
+    out->sat_q = vqs != vq;
     out->status = CCT_STATUS_OK;
 }
 #if defined(CCT_FIXED_POINT) || defined(CCT_MCSDK) || defined(CCT_IQMATH)
@@ -871,8 +1007,9 @@ static void control_isr(float i_d_ref, float i_q_ref)
     cct_input_t in;
     cct_output_t out;
     const float theta_e = encoder_theta_e();
-    if (cct_set_vdc(&ctl, adc_vdc()) != CCT_STATUS_OK) {
-        fault_report(CCT_STATUS_BAD_INPUT); /* bus reading lost: previous limit kept */
+    const int bus = cct_set_vdc(&ctl, adc_vdc());
+    if (bus != CCT_STATUS_OK) {
+        fault_report(bus); /* bus reading lost or implausible: previous limit kept */
     }
     in.i_d_ref = i_d_ref;
     in.i_q_ref = i_q_ref;
