@@ -83,7 +83,7 @@ def test_margins_as_written_are_accepted(pi_json):
 def test_unknown_method(pi_json):
     data = json.loads(pi_json)
     data["method"] = "magic"
-    _refused(data, 'method: expected one of pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi, '
+    _refused(data, 'method: expected one of pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi, tune, '
                    'got "magic"')
 
 
