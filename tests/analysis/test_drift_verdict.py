@@ -66,3 +66,18 @@ def test_verdict_of_a_sound_and_a_hot_pi():
     assert f["spectral_radius"] > 1 and math.isfinite(f["speed_rad_s"])
     assert "first: R x0.843, Ld x0.8, Lq x0.8" in v.failure()
     assert f"at {f['speed_rad_s']:.4g} rad/s electrical" in v.failure()
+
+
+def test_a_zero_disk_margin_fails_even_without_an_unstable_sample():
+    """The multiloop disk-margin check runs the box's R, Ld, Lq corners with an
+    exact speed sensor; a corner unstable there (margin 0) fails the verdict
+    even when no sampled set of the sweep is, and the reason names it."""
+    from toolbox.analysis._drift import DriftVerdict
+    v = DriftVerdict(source="default", box={"R": [0.843, 1.511]}, box_text="default drift box: R",
+                     max_speed_rad_s=920.0, delay_samples=1, n_sets=565, n_unstable=0,
+                     first_unstable=None, worst_spectral_radius=0.99, worst_disk_margin=0.0,
+                     worst_disk_margin_at={"R": 0.843, "Ld": 0.8, "Lq": 1.1, "speed_rad_s": 920.0})
+    assert not v.passed
+    assert "R x0.843, Ld x0.8, Lq x1.1" in v.failure() and "920 rad/s" in v.failure()
+    ok = DriftVerdict(**{**v.__dict__, "worst_disk_margin": 0.2})
+    assert ok.passed and ok.failure() is None

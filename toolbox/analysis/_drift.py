@@ -191,7 +191,9 @@ class DriftVerdict:
 
     @property
     def passed(self) -> bool:
-        return self.n_unstable == 0
+        """No evaluated set unstable, and no corner of the multiloop disk-margin
+        check either (a zero margin is an unstable (plant, speed) pair)."""
+        return self.n_unstable == 0 and self.worst_disk_margin > 0.0
 
     def to_json(self) -> dict:
         """JSON-ready dict of all attributes (non-finite floats as strings)."""
@@ -205,7 +207,13 @@ class DriftVerdict:
     def failure(self) -> str | None:
         """Why the design fails on the box, naming the first failing set (None: it passes)."""
         if self.first_unstable is None:
-            return None
+            if self.passed:
+                return None
+            at = self.worst_disk_margin_at
+            where = ", ".join(f"{k} x{at[k]:.3g}" for k in ("R", "Ld", "Lq") if k in at)
+            return (f"the coupled sampled loop is unstable on the corner {where} of the "
+                    f"{self.box_text.split(':')[0]} at {at.get('speed_rad_s', 0.0):.4g} rad/s "
+                    "electrical with an exact speed sensor (multiloop disk margin 0)")
         f = self.first_unstable
         where = ", ".join(f"{k} x{f[k]:.3g}" for k in ("R", "Ld", "Lq", "flux", "speed_gain")
                           if k in f)
