@@ -24,7 +24,9 @@ generalised plant is the whole 2x2 loop (:func:`coupled_plant`):
 R, Ld and Lq are real parametric uncertainty, handled as a multi-model
 problem: the models are the corners of the box (R, Ld, Lq, speed-sensor gain
 and offset) at the speeds of :data:`SPEED_FRACTIONS` of the maximum, plus the
-nominal plant at each speed (:func:`model_set`). Speeds below zero are the
+nominal plant at each speed, and the maximum speed's models again with
+``extra_delay`` more periods of delay (the robustness sweep's delay range,
+toolbox/ARCHITECTURE.md "Robustness verdict") (:func:`model_set`). Speeds below zero are the
 mirror image (``w, w_m -> -w, -w_m`` flips the q-axis states) of the same set
 with the offset negated, which the set holds.
 
@@ -79,23 +81,24 @@ _ROUNDS = 6
 class Model:
     """One plant of the model set: true ``R`` (ohm), ``Ld``, ``Lq`` (H),
     electrical speed ``w`` and the measured speed ``w_m`` the decoupling uses
-    (rad/s electrical)."""
+    (rad/s electrical), ``extra_delay`` (s) of loop delay beyond the design's."""
 
     R: float
     Ld: float
     Lq: float
     w: float
     w_m: float
+    extra_delay: float = 0.0
 
     def to_json(self) -> dict:
         return {"R_ohm": self.R, "Ld_H": self.Ld, "Lq_H": self.Lq, "speed_rad_s": self.w,
-                "measured_speed_rad_s": self.w_m}
+                "measured_speed_rad_s": self.w_m, "extra_delay_s": self.extra_delay}
 
 
 def _core(model: Model, Ld_c: float, Lq_c: float, delay: float) -> StateSpace:
     """Inputs ``[r_d, r_q, u_d, u_q]``, outputs ``[e_d, e_q, u_d, u_q, i_d, i_q]``
     (module docstring); states ``[i_d, i_q, Pade(d), Pade(q)]``."""
-    num, den = pade(delay, PADE_ORDER)
+    num, den = pade(delay + model.extra_delay, PADE_ORDER)
     pd = append(tf2ss(num, den), tf2ss(num, den))
     n = pd.nstates
     R, Ld, Lq, w, wm = model.R, model.Ld, model.Lq, model.w, model.w_m
@@ -123,7 +126,8 @@ def coupled_plant(model: Model, weights: dict, Ld_c: float, Lq_c: float,
     Ld_c, Lq_c : float
         The decoupling's inductances (H).
     delay : float
-        Loop delay (s), ``(delay_samples + 1/2) Ts``.
+        Loop delay of the design (s), ``(delay_samples + 1/2) Ts``; the model's
+        ``extra_delay`` adds to it.
 
     Returns
     -------
@@ -147,9 +151,11 @@ def _ss(W) -> StateSpace:
     return tf2ss(tf.num, tf.den)
 
 
-def model_set(motor, Ld_c: float, Lq_c: float, max_speed: float, box: dict) -> list[Model]:
+def model_set(motor, Ld_c: float, Lq_c: float, max_speed: float, box: dict,
+              extra_delay: float = 0.0) -> list[Model]:
     """Corners of the box at each speed of :data:`SPEED_FRACTIONS`, plus the
-    nominal plant (exact speed sensor) at each speed.
+    nominal plant (exact speed sensor) at each speed; with ``extra_delay > 0``
+    (s) the maximum speed's models once more with that much more delay.
 
     ``box``: ``R``, ``Ld``, ``Lq`` (scale factors ``(lo, hi)``),
     ``speed_gain`` ``(lo, hi)`` and ``speed_offset`` ``(lo, hi)`` (electrical
@@ -162,6 +168,9 @@ def model_set(motor, Ld_c: float, Lq_c: float, max_speed: float, box: dict) -> l
         sensor = sorted({(g * w + o) for g in box["speed_gain"] for o in box["speed_offset"]})
         for r, ld, lq, wm in itertools.product(box["R"], box["Ld"], box["Lq"], sensor):
             out.append(Model(r * motor.R, ld * motor.Ld, lq * motor.Lq, w, wm))
+    if extra_delay > 0:
+        out += [Model(m.R, m.Ld, m.Lq, m.w, m.w_m, extra_delay) for m in out
+                if m.w == max_speed]
     return out
 
 

@@ -21,7 +21,8 @@ from ..spec import Table
 
 __all__ = ["AtSpeedCfg", "read_at_speed", "design_at_speed"]
 
-KEYS = ("max_speed", "inductance_box", "resistance_box", "speed_gain", "speed_offset")
+KEYS = ("max_speed", "inductance_box", "resistance_box", "speed_gain", "speed_offset",
+        "extra_delay")
 
 
 @dataclass(frozen=True)
@@ -40,6 +41,9 @@ class AtSpeedCfg:
         Speed-sensor offset range (mechanical rad/s).
     resistance_box : tuple
         Scale factors ``(lo, hi)`` of the true ``R``.
+    extra_delay : int
+        Periods of delay beyond the design's that the maximum speed's models
+        also carry (default 1, the robustness sweep's range).
     """
 
     max_speed: float
@@ -47,11 +51,12 @@ class AtSpeedCfg:
     speed_gain: tuple = DEFAULT_RANGES["speed_gain"][:2]
     speed_offset: tuple = DEFAULT_RANGES["speed_offset"][:2]
     resistance_box: tuple = DEFAULT_BOX["R"]
+    extra_delay: int = 1
 
     def to_spec(self) -> dict[str, Any]:
         """The table that reads back to this configuration."""
         return {"max_speed": self.max_speed, "inductance_box": list(self.inductance_box),
-                "resistance_box": list(self.resistance_box),
+                "resistance_box": list(self.resistance_box), "extra_delay": self.extra_delay,
                 "speed_gain": list(self.speed_gain), "speed_offset": list(self.speed_offset)}
 
 
@@ -72,6 +77,8 @@ def read_at_speed(table: Table, motor, drive) -> AtSpeedCfg | None:
     the motor's rated speed or the back-EMF limit), ``inductance_box``
     (scale factors of the true Ld and Lq, default the sweep's ``[0.5, 2]``),
     ``resistance_box`` (of the true R, default the sweep's ``[0.5, 2]``),
+    ``extra_delay`` (periods of delay beyond the design's carried by the
+    models at the maximum speed, 0..4, default 1: the sweep's range),
     ``speed_gain`` (default ``[0.9, 1.1]``) and ``speed_offset`` (mechanical
     rad/s, default ``[-10, 10]``).
 
@@ -93,7 +100,8 @@ def read_at_speed(table: Table, motor, drive) -> AtSpeedCfg | None:
                       _range(t, "speed_gain", DEFAULT_RANGES["speed_gain"][:2], around=1.0),
                       _range(t, "speed_offset", DEFAULT_RANGES["speed_offset"][:2],
                              around=None),
-                      _range(t, "resistance_box", DEFAULT_BOX["R"], around=1.0))
+                      _range(t, "resistance_box", DEFAULT_BOX["R"], around=1.0),
+                      t.integer("extra_delay", 1, minimum=0, maximum=4))
 
 
 def design_at_speed(weights: dict, motor, drive, decoupling, cfg: AtSpeedCfg) -> dict:
@@ -133,17 +141,19 @@ def design_at_speed(weights: dict, motor, drive, decoupling, cfg: AtSpeedCfg) ->
     box = {"R": cfg.resistance_box, "Ld": cfg.inductance_box, "Lq": cfg.inductance_box,
            "speed_gain": cfg.speed_gain,
            "speed_offset": tuple(o * p for o in cfg.speed_offset)}
-    models = model_set(motor, decoupling.Ld_c, decoupling.Lq_c, wmax, box)
+    models = model_set(motor, decoupling.Ld_c, decoupling.Lq_c, wmax, box,
+                       cfg.extra_delay * ts)
     plants = [coupled_plant(m, weights, decoupling.Ld_c, decoupling.Lq_c, delay) for m in models]
     nominal = [i for i, m in enumerate(models)
-               if (m.R, m.Ld, m.Lq) == (motor.R, motor.Ld, motor.Lq) and m.w_m == m.w]
+               if (m.R, m.Ld, m.Lq) == (motor.R, motor.Ld, motor.Lq) and m.w_m == m.w
+               and m.extra_delay == 0]
     # start: the cancellation PI at the default crossover (integral zero counted)
     wc = default_bandwidth(drive, zero=True).value
     tau_min = ts / math.pi
     start = np.array([motor.Ld * wc, motor.R * wc, 0.1 / wc, motor.Lq * wc, motor.R * wc,
                       0.1 / wc])
-    top = [i for i, m in enumerate(models) if m.w == wmax]
-    res = synthesise_structured(plants, start, tau_min, nominal + top[:1])
+    slow = [i for i, m in enumerate(models) if m.extra_delay > 0]
+    res = synthesise_structured(plants, start, tau_min, nominal + slow[:1])
     worst = float(res.gammas[res.worst])
     if not math.isfinite(worst):
         raise DesignInfeasible("controller.hinf.at_speed", "a box and speed range over which "
@@ -164,7 +174,8 @@ def design_at_speed(weights: dict, motor, drive, decoupling, cfg: AtSpeedCfg) ->
         "full_order_gamma_nominal": lower,
         "rounds": res.rounds,
         "basis": f"continuous 2x2 coupled loop, loop delay (d + 1/2) Ts by Pade order "
-                 f"{PADE_ORDER}; H-infinity norms by SLICOT ab13dd; lower bound: full-order "
+                 f"{PADE_ORDER} (plus {cfg.extra_delay} period(s) on the maximum speed's "
+                 "models); H-infinity norms by SLICOT ab13dd; lower bound: full-order "
                  "2x2 optimum (Theorem 1) of each nominal speed model",
     }
     return {"controllers": {ax: axis_controller(res.params, ax) for ax in ("d", "q")},
