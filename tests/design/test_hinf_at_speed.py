@@ -17,7 +17,6 @@ import numpy as np
 import pytest
 
 from toolbox.analysis import compute_margins, robustness_sweep
-from toolbox.design._common import decoupling_from_motor
 from toolbox.design._hinf_coupled import (Model, _core, closed_loop_gamma, coupled_plant,
                                           full_order_gamma, model_set, structured_controller)
 from toolbox.design._hinf_speed import AtSpeedCfg

@@ -14,7 +14,10 @@ the result into a :class:`~toolbox.artifact.ControllerArtifact`.
 Per axis: ``G = axis_plant_models(motor)[axis]`` (eq (33)-(34)), weights from
 ``[controller.hinf.weights.<axis>]``, synthesis at ``gamma`` (or the optimum
 with back-off, realisable at ``drive.sample_time``), weight-bound checks (41)-(43),
-then optionally order reduction with a margin comparison.
+then optionally order reduction with a margin comparison. With
+``[controller.hinf.at_speed]`` the synthesis is instead the 2x2 coupled,
+multi-model one of :mod:`._hinf_coupled` (one structured controller per axis,
+no order reduction).
 
 Which controller runs: each axis holds one executed law (``law``, its
 continuous twin ``continuous``, the derived ``discrete`` and ``zpk`` views).
