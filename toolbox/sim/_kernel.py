@@ -84,7 +84,8 @@ from ._inverter import bit_changes, hexagon_scale, state_vector
 from ._kernel_layout import (LAYOUTS, N_METRICS, N_SC, N_TRACE, _A_CELLS, _A_OUT2, _A_OUT5, _A_SAT,
                              _A_T10, _A_T90, _A_YEXT, _SQ3_2, _jit, _jit_inline, _jit_no_rc,
                              pack_indices)
-from ._kernel_plant import _deriv, _plant, _to_ab, _to_dq, _torque  # noqa: F401 (tests)
+from ._kernel_plant import (_currents, _deriv, _initial_state, _plant, _to_ab,  # noqa: F401
+                            _to_dq, _torque, _torque_of_state)
 from ._kernel_metrics import _finalise, _metric_setup, _overshoot  # noqa: F401 (tests)
 from ._kernel_steps import _advance_n, _split
 from ._kernel_pwm import _carrier_period, _svm_period
@@ -369,9 +370,11 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     Parameters (all float64 arrays, filled by ``_simulate._pack*``; slots in
     :data:`LAYOUTS`)
     ----------
-    P : (8,)
+    P : (9,) or longer
         Plant: R (ohm), Ld, Lq (H), flux (Wb), p, J (kg m^2), friction
-        (N m s/rad), torque_factor.
+        (N m s/rad), torque_factor, magnetic (0 constant parameters; 1
+        saturated, its current-from-flux table following, see
+        ``_kernel_plant._current_of_flux``).
     A, B, C, D, Baw : (2, n, n), (2, n, 2), (2, n), (2, 2), (2, n)
         Discrete d and q controllers (inputs [i_ref, i_meas], output V),
         back-calculation anti-windup gains.
@@ -443,7 +446,9 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     Ld_c = LP[LP_LD_C]
     Lq_c = LP[LP_LQ_C]
     flux_c = LP[LP_FLUX_C]
-    x = (0.0, 0.0, omega0, 0.0)  # plant state id, iq, Omega, theta
+    # plant state id, iq, Omega, theta (a saturated motor: psi_d, psi_q, Omega,
+    # theta; its currents are _currents(pl, x))
+    x = _initial_state(pl, omega0)
     n_ts, dt_ts = _split(Ts, h)  # the plant steps of a period held constant
     nbuf = vd_buf.shape[0]
     # speed loop state
@@ -465,7 +470,8 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     ph_app = 0.0
     for k in range(n_per):
         t = k * Ts
-        i_d_m, i_q_m, om_m = _sense(x, rng, SC)
+        xi = _currents(pl, x)
+        i_d_m, i_q_m, om_m = _sense(xi, rng, SC)
         i_d_m, i_q_m = _current_sensor(i_d_m, i_q_m, k, cs_d, cs_q, SC)
         w_m = p * om_m
         th_m = x[3]
@@ -517,12 +523,12 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
         if keep_traces and k % trdec == 0:
             row = k // trdec
             tr[row, 0] = t
-            tr[row, 1] = x[0]
-            tr[row, 2] = x[1]
+            tr[row, 1] = xi[0]
+            tr[row, 2] = xi[1]
             tr[row, 3] = vd_app
             tr[row, 4] = vq_app
             tr[row, 5] = x[2]
-            tr[row, 6] = _torque(pl, x[0], x[1])
+            tr[row, 6] = _torque_of_state(pl, x)
             tr[row, 7] = idr
             tr[row, 8] = iqr
             tr[row, 9] = om_m

@@ -20,10 +20,15 @@ from ._metrics import METRIC_NAMES
 #: inverter, 0 = one centred pattern per sample; ``hold``: frame in which the
 #: average inverter holds the voltage, 0 rotor dq, 1 stationary; ``t_comp``: the
 #: voltage placement's compensation time, s; ``vprio``: voltage-limit priority,
-#: 0 radial, 1 d axis) and scenario ``SC``. ``_simulate._pack*`` fill them by name
+#: 0 radial, 1 d axis) and scenario ``SC``. The plant's ``magnetic`` slot is 0
+#: for constant parameters (state: currents) and 1 for a saturated motor
+#: (state: flux linkages), whose current-from-flux table
+#: (``toolbox.plant.MagneticModel.inverse_table``) follows the named slots
+#: in the same array (:data:`N_P` on). ``_simulate._pack*`` fill them by name
 #: through :func:`pack_indices`.
 LAYOUTS: dict[str, tuple[str, ...]] = {
-    "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor"),
+    "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor",
+          "magnetic"),
     "LP": ("R_c", "Ld_c", "Lq_c", "flux_c", "cross", "emf", "alpha", "beta", "gamma"),
     "SP": ("enabled", "kp", "ki", "kd", "decim", "iq_limit"),
     "DP": ("Ts", "delay", "vlim", "v_max", "r_hex", "inverter", "half_periods", "hold",
@@ -43,6 +48,10 @@ for _prefix, _names in LAYOUTS.items():
 del _prefix, _names
 
 _SQ3_2 = math.sqrt(3.0) / 2.0
+
+#: Length of the named part of the plant array; a saturated motor's table
+#: starts here.
+N_P = len(LAYOUTS["P"])
 
 #: Length of the scenario array.
 N_SC = len(LAYOUTS["SC"])

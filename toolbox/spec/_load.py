@@ -39,6 +39,8 @@ EXPORT_KEYS = ("prefix",)
 _C_PREFIX = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,30}")
 MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "convention", "rated_current", "max_current", "rated_speed",
+              # saturated motors (toolbox/spec/_flux_map.py)
+              "flux_map", "saturation",
               # datasheet forms (toolbox/spec/_datasheet.py)
               "R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms",
               "rated_current_rms", "max_current_rms")
@@ -131,7 +133,8 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     motor = motor_raw = drive = controller = None
     conversions: list = []
     with errors.check():
-        motor, motor_raw, motor_log = _motor_logged(top.raw("motor"))
+        motor, motor_raw, motor_log = _motor_logged(
+            top.raw("motor"), Path(file).parent if file else None)
         conversions += motor_log
     with errors.check():
         drive, drive_log = _drive_logged(top.raw("drive"))
@@ -240,12 +243,14 @@ def _motor(value: Any) -> tuple[Motor, dict]:
     return motor, raw
 
 
-def _motor_logged(value: Any) -> tuple[Motor, dict, list]:
+def _motor_logged(value: Any, base: Path | None = None) -> tuple[Motor, dict, list]:
     """The motor, the resolved table as given (catalog applied) and the
-    conversion log of the datasheet keys and unit strings."""
+    conversion log of the datasheet keys and unit strings. ``base``: the
+    spec file's folder, against which ``flux_map`` is resolved."""
     if value is None:
         raise SpecError("motor", "a [motor] table (missing)")
     errors = Collector()
+    magnetics, value = _magnetics(value, base, errors)
     t = _lenient_table(value, "motor", MOTOR_KEYS, errors)
     catalog: dict[str, Any] = {}
     if t.has("catalog"):
@@ -255,6 +260,8 @@ def _motor_logged(value: Any) -> tuple[Motor, dict, list]:
     # reloading it (controller.json's spec) converts the same way again
     merged, log = resolve_motor(t.data, catalog, errors)
     raw = {**catalog_kept(catalog, t.data), **dict(t.data)}
+    if magnetics is not None:  # derived from the model, not given: not in the raw spec
+        raw = {k: v for k, v in raw.items() if k not in ("Ld", "Lq", "flux")}
     t = _Unreported(merged, "motor", reported_keys(errors, "motor"))
     fields = dict(
         R=_collect(errors, t.number, "R", positive=True, unit="ohm"),
@@ -275,8 +282,48 @@ def _motor_logged(value: Any) -> tuple[Motor, dict, list]:
     )
     if errors.failed:
         errors.raise_if_any()
-    motor = Motor(**fields, catalog=t.raw("catalog"))
+    motor = Motor(**fields, catalog=t.raw("catalog"), magnetics=magnetics)
     return motor, {k: v for k, v in raw.items() if v is not None}, log
+
+
+def _magnetics(value: Any, base: Path | None, errors: Collector) -> tuple[Any, Any]:
+    """A saturated motor's magnetic model (``flux_map`` or ``saturation``,
+    :mod:`toolbox.spec._flux_map`) and the ``[motor]`` table with its nominal
+    ``Ld``, ``Lq``, ``flux`` filled in from the model (the incremental
+    inductances and d flux at ``i = 0``, ``MagneticModel.nominal``); the
+    flux-map path is made absolute, so that controller.json's spec reloads
+    from anywhere. Unchanged when neither key is given."""
+    if not isinstance(value, Mapping) or not ("flux_map" in value or "saturation" in value):
+        return None, value
+    from ._flux_map import read_flux_map, read_saturation
+    if "flux_map" in value and "saturation" in value:
+        errors.add(SpecError("motor.saturation", "flux_map or saturation, not both",
+                             "both given"))
+        return None, value
+    given = [k for k in ("Ld", "Lq", "flux", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak",
+                         "kt_rms", "catalog") if k in value]
+    if given:
+        errors.add(SpecError(f"motor.{given[0]}", "no value: a saturated motor's Ld, Lq and "
+                             "flux come from its flux map or saturation model", value[given[0]]))
+        return None, value
+    try:
+        if "flux_map" in value:
+            model = read_flux_map(value["flux_map"], base)
+        else:
+            model = read_saturation(value["saturation"])
+        Ld, Lq, flux = model.nominal()
+    except SpecError as err:
+        errors.add(err)
+        return None, value
+    except ValueError as err:
+        errors.add(SpecError("motor.flux_map" if "flux_map" in value else "motor.saturation",
+                             "an invertible magnetic model", str(err)))
+        return None, value
+    table = dict(value)
+    if "flux_map" in value:
+        table["flux_map"] = model.data.source
+    table.update(Ld=Ld, Lq=Lq, flux=flux)
+    return model, table
 
 
 def _drive(value: Any) -> Drive:
