@@ -26,7 +26,8 @@ def _write(path, rows, header="i_d,i_q,psi_d,psi_q"):
 
 
 def _spec(tmp_path, motor_extra):
-    text = ('title = "m"\n[motor]\nR = 0.1\npole_pairs = 4\nJ = 0.01\n' + motor_extra
+    text = ('title = "m"\n[motor]\nR = 0.1\npole_pairs = 4\nJ = 0.01\nmax_current = 20\n'
+            + motor_extra
             + '\n[drive]\nvdc = 300\nsample_time = 1e-4\n[controller]\nmethod = "pi"\n')
     (tmp_path / "s.toml").write_text(text)
     return toolbox.load_spec(tmp_path / "s.toml")
@@ -86,6 +87,17 @@ def test_map_excludes_constant_parameters(tmp_path):
     _write(tmp_path / "m.csv", _rows())
     with pytest.raises(SpecError, match="motor.Ld.*come from its flux map"):
         _spec(tmp_path, 'flux_map = "m.csv"\nLd = 1e-3')
+
+
+def test_nominal_point_needs_a_current(tmp_path):
+    """The nominal inductances are taken at the MTPA point of the rated (else
+    maximum) current: a saturated motor without either is refused."""
+    _write(tmp_path / "m.csv", _rows())
+    (tmp_path / "s.toml").write_text(
+        'title = "m"\n[motor]\nR = 0.1\npole_pairs = 4\nJ = 0.01\nflux_map = "m.csv"\n'
+        '[drive]\nvdc = 300\nsample_time = 1e-4\n[controller]\nmethod = "pi"\n')
+    with pytest.raises(SpecError, match="motor.rated_current.*MTPA point"):
+        toolbox.load_spec(tmp_path / "s.toml")
 
 
 def test_saturation_table_errors(tmp_path):

@@ -168,10 +168,14 @@ class MagneticModel:
     ----------
     kind : {"map", "algebraic"}
     data : FluxMapData or AlgebraicSaturation
+    nominal_current : float
+        Current amplitude (A) of the nominal point (:meth:`nominal`); the
+        spec sets the motor's rated current, else its maximum current.
     """
 
     kind: str
     data: Any
+    nominal_current: float = 0.0
 
     # ---------------------------------------------------------- maps both ways
     def flux(self, i_d, i_q):
@@ -230,10 +234,36 @@ class MagneticModel:
         psd, psq = self.flux(i_d, i_q)
         return torque_factor * pole_pairs * (psd * np.asarray(i_q) - psq * np.asarray(i_d))
 
-    def nominal(self) -> tuple[float, float, float]:
-        """``(Ld, Lq, flux)``: the diagonal incremental inductances and the d flux
-        at ``i = 0``, the nominal parameters a design uses (the one route)."""
-        L = self.incremental_inductance(0.0, 0.0)
+    def mtpa(self, current: float, pole_pairs: int = 1,
+             torque_factor: float = 1.5) -> tuple[float, float]:
+        """Maximum torque per ampere at the current amplitude ``current`` (A):
+        ``(i_d, i_q)`` maximising :meth:`torque` on the circle, ``i_q > 0``
+        (a 181-angle grid over ``i_d = -I sin b, i_q = I cos b``, ``b`` in
+        [-90, 90] deg, refined by a bounded scalar search around the best)."""
+        from scipy.optimize import minimize_scalar
+        b = np.linspace(-0.5 * np.pi, 0.5 * np.pi, 181)
+        tq = self.torque(-current * np.sin(b), current * np.cos(b), pole_pairs, torque_factor)
+        j = int(np.argmax(tq))
+        lo, hi = b[max(j - 1, 0)], b[min(j + 1, len(b) - 1)]
+        res = minimize_scalar(
+            lambda x: -float(self.torque(-current * np.sin(x), current * np.cos(x),
+                                         pole_pairs, torque_factor)),
+            bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
+        return float(-current * np.sin(res.x)), float(current * np.cos(res.x))
+
+    def nominal(self, current: float | None = None) -> tuple[float, float, float]:
+        """``(Ld, Lq, flux)`` a design uses (the one route): the diagonal
+        incremental inductances at the MTPA point of the current amplitude
+        ``current`` (A; default :attr:`nominal_current`: the motor's rated
+        current, else its maximum current) and the d flux at ``i = 0``
+        (the no-load PM flux, which sets the back-EMF). Why that point: the
+        incremental inductances fall with current (a q axis to a fifth at
+        rated current in the PM-SyRM of tests/plant), so a gain designed at
+        ``i = 0`` is too high by that factor at load and the loop goes
+        unstable; designed at rated current it is lower than designed at
+        light load, which a current loop tolerates."""
+        i_d, i_q = self.mtpa(self.nominal_current if current is None else current)
+        L = self.incremental_inductance(i_d, i_q)
         return float(L[0, 0]), float(L[1, 1]), float(self._psi0()[0])
 
     # ------------------------------------------------------------- kernel table

@@ -259,8 +259,10 @@ def _motor_logged(value: Any, base: Path | None = None) -> tuple[Motor, dict, li
     # datasheet keys -> model keys; the raw table keeps what was written, so
     # reloading it (controller.json's spec) converts the same way again
     merged, log = resolve_motor(t.data, catalog, errors)
+    if magnetics is not None:
+        magnetics = _nominal(magnetics, merged, errors)
     raw = {**catalog_kept(catalog, t.data), **dict(t.data)}
-    if magnetics is not None:  # derived from the model, not given: not in the raw spec
+    if "flux_map" in raw or "saturation" in raw:  # Ld, Lq, flux derived, not given
         raw = {k: v for k, v in raw.items() if k not in ("Ld", "Lq", "flux")}
     t = _Unreported(merged, "motor", reported_keys(errors, "motor"))
     fields = dict(
@@ -288,11 +290,10 @@ def _motor_logged(value: Any, base: Path | None = None) -> tuple[Motor, dict, li
 
 def _magnetics(value: Any, base: Path | None, errors: Collector) -> tuple[Any, Any]:
     """A saturated motor's magnetic model (``flux_map`` or ``saturation``,
-    :mod:`toolbox.spec._flux_map`) and the ``[motor]`` table with its nominal
-    ``Ld``, ``Lq``, ``flux`` filled in from the model (the incremental
-    inductances and d flux at ``i = 0``, ``MagneticModel.nominal``); the
-    flux-map path is made absolute, so that controller.json's spec reloads
-    from anywhere. Unchanged when neither key is given."""
+    :mod:`toolbox.spec._flux_map`) and the ``[motor]`` table with the
+    flux-map path made absolute, so that controller.json's spec reloads
+    from anywhere (its nominal ``Ld``, ``Lq``, ``flux``: :func:`_nominal`).
+    Unchanged when neither key is given."""
     if not isinstance(value, Mapping) or not ("flux_map" in value or "saturation" in value):
         return None, value
     from ._flux_map import read_flux_map, read_saturation
@@ -311,19 +312,38 @@ def _magnetics(value: Any, base: Path | None, errors: Collector) -> tuple[Any, A
             model = read_flux_map(value["flux_map"], base)
         else:
             model = read_saturation(value["saturation"])
-        Ld, Lq, flux = model.nominal()
     except SpecError as err:
         errors.add(err)
-        return None, value
-    except ValueError as err:
-        errors.add(SpecError("motor.flux_map" if "flux_map" in value else "motor.saturation",
-                             "an invertible magnetic model", str(err)))
         return None, value
     table = dict(value)
     if "flux_map" in value:
         table["flux_map"] = model.data.source
-    table.update(Ld=Ld, Lq=Lq, flux=flux)
     return model, table
+
+
+def _nominal(model: Any, merged: dict, errors: Collector) -> Any:
+    """Fill ``merged`` (the converted ``[motor]`` table) with a saturated
+    motor's nominal ``Ld``, ``Lq``, ``flux``: ``MagneticModel.nominal`` at
+    the MTPA point of the rated current (else the maximum current; one of them
+    is required). Returns the model with that nominal current, or None after
+    an error."""
+    from dataclasses import replace
+    current = merged.get("rated_current", merged.get("max_current"))
+    if isinstance(current, bool) or not isinstance(current, (int, float)) or not current > 0:
+        if current is None:
+            errors.add(SpecError("motor.rated_current", "a number (A): a saturated motor's "
+                                 "nominal Ld, Lq are taken at the MTPA point of its rated "
+                                 "current (or max_current)", "missing"))
+        return None
+    model = replace(model, nominal_current=float(current))
+    try:
+        Ld, Lq, flux = model.nominal()
+    except ValueError as err:
+        errors.add(SpecError("motor.flux_map" if model.kind == "map" else "motor.saturation",
+                             "an invertible magnetic model", str(err)))
+        return None
+    merged.update(Ld=Ld, Lq=Lq, flux=flux)
+    return model
 
 
 def _drive(value: Any) -> Drive:
