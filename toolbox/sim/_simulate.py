@@ -532,9 +532,10 @@ def _motors_from_columns(plants: Mapping[str, Sequence[float]]) -> list[Motor]:
     """N motors from parameter arrays (``simulate_batch``'s mapping form).
 
     Keys are the kernel's plant slots (``R`` ... ``friction``, and
-    ``torque_factor`` 1.5 or 1, which selects the dq convention; default 1.5).
+    ``torque_factor`` 1.5 or 1, which selects the dq convention; default 1.5),
+    not ``magnetic``: these are constant-parameter motors.
     """
-    names = _kernel.LAYOUTS["P"]
+    names = tuple(n for n in _kernel.LAYOUTS["P"] if n != "magnetic")
     unknown = set(plants) - set(names)
     if unknown:
         raise SpecError("plants", "parameter arrays named " + ", ".join(names),
