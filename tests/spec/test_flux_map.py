@@ -109,3 +109,19 @@ def test_saturation_table_errors(tmp_path):
         _spec(tmp_path, base + "current_range = 20\na_x = 1\n")
     with pytest.raises(SpecError, match="motor.saturation.a_dd.*>= 0"):
         _spec(tmp_path, base.replace("a_dd = 28.46", "a_dd = -1") + "current_range = 20\n")
+
+
+def test_resolved_spec_of_a_saturated_motor_reloads(tmp_path):
+    """``cct check``'s resolved TOML keeps the magnetics (the absolute map
+    path, the saturation table) and gives the derived Ld, Lq, flux as
+    comments: it reloads to the same motor."""
+    from toolbox.spec import spec_to_toml
+    _write(tmp_path / "m.csv", _rows())
+    spec = _spec(tmp_path, 'flux_map = "m.csv"')
+    text = spec_to_toml(spec)
+    assert "# Lq = 0.005" in text and "\nLq =" not in text
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "elsewhere" / "r.toml").write_text(text)
+    again = toolbox.load_spec(tmp_path / "elsewhere" / "r.toml")
+    assert (again.motor.Ld, again.motor.Lq, again.motor.flux) == (spec.motor.Ld, spec.motor.Lq,
+                                                                  spec.motor.flux)
