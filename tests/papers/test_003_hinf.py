@@ -57,7 +57,7 @@ PAPER_LOOP = {
 
 
 def ctl(sys):
-    """python-control's view of a system (ours are toolbox._lti.StateSpace)."""
+    """python-control's view of a system (ours are toolbox.lti.StateSpace)."""
     return sys.to_control() if hasattr(sys, "to_control") else sys
 
 

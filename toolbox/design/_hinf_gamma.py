@@ -4,7 +4,7 @@ The smallest feasible gamma by plain bisection on Theorem 1
 (:mod:`._hinf_riccati`), the back-off that keeps the controller realisable
 at the sample time (at the exact optimum 003's q-axis controller has a pole
 near -2e10 rad/s, toolbox/ARCHITECTURE.md "H-infinity numerics"), and the
-recomputed closed-loop norm (SLICOT ab13dd through :func:`toolbox._lti.linf_norm`).
+recomputed closed-loop norm (SLICOT ab13dd through :func:`toolbox.lti.linf_norm`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .._lti import StateSpace, linf_peak
+from ..lti import StateSpace, linf_peak
 from ..errors import DesignInfeasible, SpecError
 from ._hinf_plant import PartitionedPlant, _lft, _poles_zeros
 from ._hinf_riccati import (GAMMA_KEY, _check_gamma, _controller_from, _prepare, _Prepared,
@@ -146,7 +146,7 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         SISO controller.
     cancel_tol : float
         Relative distance below which a pole-zero pair is a cancellation.
@@ -194,7 +194,7 @@ class HinfResult:
 
     Attributes
     ----------
-    K : toolbox._lti.StateSpace
+    K : toolbox.lti.StateSpace
         Central controller, error (A) -> voltage (V).
     gamma : float
         Level the controller was designed for.
@@ -205,7 +205,7 @@ class HinfResult:
     X, Y : ndarray
         Riccati solutions of eq (18)-(19) at ``gamma``.
     closed_loop_norm : float
-        ||F_l(P, K)||_inf recomputed (LFT + :func:`toolbox._lti.linf_norm`).
+        ||F_l(P, K)||_inf recomputed (LFT + :func:`toolbox.lti.linf_norm`).
     fastest_pole : float
         Largest |pole| of K that is not nearly cancelled (rad/s).
     pole_limit : float or None
@@ -229,7 +229,7 @@ class HinfResult:
 
 def hinf_norm(sys: Any) -> float:
     """H-infinity norm: the L-infinity norm (SLICOT ab13dd,
-    :func:`toolbox._lti.linf_norm`), inf when a pole has ``Re >= -1e-8``
+    :func:`toolbox.lti.linf_norm`), inf when a pole has ``Re >= -1e-8``
     (unstable, or on the imaginary axis within np.isclose's tolerance)."""
     A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
     return _hinf_norm(A, B, C, D)

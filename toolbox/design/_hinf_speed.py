@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import TransferFunction, feedback
+from ..lti import TransferFunction, feedback
 
 from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES
 from ..errors import SpecError

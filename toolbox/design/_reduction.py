@@ -22,8 +22,8 @@ from typing import Any, Literal
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import (StateSpace, as_statespace, balanced_blocks, balanced_companion, linf_peak,
-                    parallel, pencil_eigvals, state_scaling)
+from ..lti import (StateSpace, as_statespace, balanced, balanced_companion, evaluate, linf_peak,
+                    parallel, pencil_eigvals, series, state_scaling)
 from ._hinf_plant import _ss_blocks, _zpk
 
 __all__ = [
@@ -43,10 +43,10 @@ def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
 
 def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray, ...]:
     """A, B, C, D of k prod(s - z)/prod(s - p): scipy.signal's ``zpk2ss``
-    (the controllable canonical form of :func:`toolbox._lti.tf2ss`) without its
+    (the controllable canonical form of :func:`toolbox.lti.tf2ss`) without its
     argument handling (~0.3 ms a call), then the diagonal balancing
-    of :func:`toolbox._lti.balanced`: the same numbers, from the polynomials'
-    coefficients as Python floats (:func:`toolbox._lti.balanced_companion`,
+    of :func:`toolbox.lti.balanced`: the same numbers, from the polynomials'
+    coefficients as Python floats (:func:`toolbox.lti.balanced_companion`,
     ~10 array calls instead of ~30)."""
     if p.size == 0:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(k)]])
@@ -64,7 +64,7 @@ def _poly_from_roots(r: list[complex]) -> list[float]:
     conjugate-closed set (those of a real system, as :func:`_real_conj`
     leaves them): a linear factor per real root and the real quadratic
     ``s^2 - Re(x + y) s + Re(x y)`` per pair ``x, y`` (``y = conj(x)`` up to
-    rounding: the zeros from a QZ pencil, :func:`toolbox._lti.invariant_zeros`, differ
+    rounding: the zeros from a QZ pencil, :func:`toolbox.lti.invariant_zeros`, differ
     in the last bits; exact conjugates give ``-2 Re(x)`` and ``|x|^2``), in
     Python floats (a few roots: ~1 us where ``np.poly``'s ``np.convolve`` per
     root took ~4-8). As accurate as ``np.poly``'s complex products, whose
@@ -127,7 +127,7 @@ def remove_cancellations(K: Any, tol: float = 1e-2,
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         SISO controller.
     tol : float
         Relative distance defining a cancellation.
@@ -136,7 +136,7 @@ def remove_cancellations(K: Any, tol: float = 1e-2,
 
     Returns
     -------
-    Kr : toolbox._lti.StateSpace
+    Kr : toolbox.lti.StateSpace
     actions : list of str
         One line per removed pair.
     """
@@ -171,14 +171,14 @@ def replace_integrators(K: Any, tol: float) -> tuple[StateSpace, list[str]]:
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         SISO controller.
     tol : float
         Magnitude below which a pole is taken as an integrator (rad/s).
 
     Returns
     -------
-    Kr : toolbox._lti.StateSpace
+    Kr : toolbox.lti.StateSpace
     actions : list of str
     """
     Kz, actions = _integrators(_zpk(K), tol)
@@ -202,13 +202,13 @@ def stable_split(K: Any, tol: float = 1e-12) -> tuple[StateSpace, StateSpace]:
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
     tol : float
         Relative margin defining "stable".
 
     Returns
     -------
-    Ks, Ku : toolbox._lti.StateSpace
+    Ks, Ku : toolbox.lti.StateSpace
     """
     Kss = as_statespace(K)
     A, B, C, D = (np.asarray(x, float) for x in (Kss.A, Kss.B, Kss.C, Kss.D))
@@ -244,14 +244,14 @@ def balanced_truncation(K: Any, order: int) -> tuple[StateSpace, np.ndarray, flo
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         Stable system.
     order : int
         States kept.
 
     Returns
     -------
-    Kr : toolbox._lti.StateSpace
+    Kr : toolbox.lti.StateSpace
     hsv : ndarray
         Hankel singular values, decreasing.
     bound : float
@@ -283,13 +283,13 @@ def residualise(K: Any, fast: float) -> tuple[StateSpace, list[str]]:
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
     fast : float
         Threshold (rad/s).
 
     Returns
     -------
-    Kr : toolbox._lti.StateSpace
+    Kr : toolbox.lti.StateSpace
     actions : list of str
     """
     Kss = as_statespace(K)
@@ -319,7 +319,7 @@ class ReductionResult:
 
     Attributes
     ----------
-    K : toolbox._lti.StateSpace
+    K : toolbox.lti.StateSpace
         Reduced controller (V/A).
     order_before, order_after : int
         Number of states before and after.
@@ -354,7 +354,7 @@ def reduce_controller(K: Any, order: int | None = None,
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         SISO controller.
     order : int, optional
         Target number of states.
@@ -456,17 +456,12 @@ _IMAG_TOL = 1e-6
 def _balanced_series(first: tuple,
                      second: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """A, B, C, d of ``second * first`` (SISO; the signal passes ``first``
-    first), with A, B, C in the coordinates of :func:`toolbox._lti.balanced`
-    (the same powers of two, so the same numbers): the system matrix
-    ``[[A, B], [C, 0]]`` is written once (:func:`toolbox._lti.balanced_blocks`)."""
-    A1, B1, C1, D1 = first
-    A2, B2, C2, D2 = second
-    n1, n = A1.shape[0], A1.shape[0] + A2.shape[0]
-    d1, d2 = float(D1[0, 0]), float(D2[0, 0])
-    M = np.zeros((n + 1, n + 1))
-    M[:n1, :n1], M[n1:n, n1:n], M[n1:n, :n1] = A1, A2, B2 * C1
-    M[:n1, n:], M[n1:n, n:], M[n:, :n1], M[n:, n1:n] = B1, B2 * d1, d2 * C1, C2
-    return (*balanced_blocks(M), d2 * d1)
+    first): :func:`toolbox.lti.series`, in the coordinates of
+    :func:`toolbox.lti.balanced` (powers of two: exact)."""
+    L = series(StateSpace(*first), StateSpace(*second))
+    if L.nstates == 0:
+        return L.A, L.B, L.C, float(L.D[0, 0])
+    return (*balanced(L.A, L.B, L.C), float(L.D[0, 0]))
 
 
 def _imag_axis_zeros(lam: list[complex]) -> list[float]:
@@ -509,18 +504,12 @@ def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
 
 def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
               w: list[float]) -> list[complex]:
-    """``L(jw)`` at a few frequencies (one LU solve each)."""
+    """``L(jw)`` at a few frequencies (:func:`toolbox.lti.evaluate`, one LU
+    solve each)."""
     if not w:
         return []
-    n = A.shape[0]
-    # C made complex once: numpy would cast it at every product
-    Bc, c, minus_A = B.astype(complex), C[0].astype(complex), -A.astype(complex)
-    out = []
-    for wi in w:
-        M = minus_A.copy()
-        M.reshape(-1)[::n + 1] += 1j * wi               # the diagonal (a view: M is contiguous)
-        out.append(complex(c @ np.linalg.solve(M, Bc)[:, 0]) + d)
-    return out
+    return evaluate(A, B, C, np.array([[d]]), 1j * np.asarray(w, float),
+                    solve=True)[0, 0].tolist()
 
 
 def loop_margins(G: Any, K: Any) -> LoopMargins:
@@ -532,14 +521,14 @@ def loop_margins(G: Any, K: Any) -> LoopMargins:
     the rule of :func:`toolbox.analysis.frequency_margins` (python-control's:
     the crossing closest to instability), and
     ``M_m = 1/||S||_inf`` is the L-infinity norm of ``S = 1/(1 + L)``
-    (:func:`toolbox._lti.linf_norm`: SLICOT ab13dd, relative tolerance
+    (:func:`toolbox.lti.linf_norm`: SLICOT ab13dd, relative tolerance
     1e-10). The tests check the numbers against
     :func:`toolbox.analysis.lti_loop_margins` (the toolbox's grid route,
     20000 points and refinement, ~20 times slower) and python-control.
 
     Parameters
     ----------
-    G, K : LTI system (python-control or toolbox._lti) or float
+    G, K : LTI system (python-control or toolbox.lti) or float
         Plant (A/V) and controller (V/A), SISO.
 
     Returns
@@ -625,7 +614,7 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
 
     Parameters
     ----------
-    G, K, Kr : LTI system (python-control or toolbox._lti)
+    G, K, Kr : LTI system (python-control or toolbox.lti)
         Plant, full and reduced controllers.
     max_loss : float
         Allowed relative loss, default 0.1 (10 %).

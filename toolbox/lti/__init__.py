@@ -20,28 +20,28 @@ Conventions follow python-control so that ported code reads the same:
   that discretised laws are the same floating-point numbers as before.
 * Polynomials are coefficient sequences, highest power first.
 
-This module is the face: the implementation lives in its parts, whose names
-it re-exports (``__all__``, and the private helpers the tests call):
-``_lti_linalg`` (matrix kernels: balancing, modal form, LAPACK calls,
-invariant zeros), ``_lti_poly`` (polynomial coefficients), ``_lti_systems``
-(:class:`StateSpace`, :class:`TransferFunction`, interconnections and
-conversions), ``_lti_c2d`` (discretisation, Pade, Ackermann),
-``_lti_minreal`` (minimal realisation) and ``_lti_norms`` (norms).
+This package is the face (``__all__``); every other package imports only
+these names. The implementation lives in private modules: ``_linalg``
+(matrix kernels: balancing, modal form, LAPACK calls, invariant zeros),
+``_poly`` (polynomial coefficients), ``_systems`` (:class:`StateSpace`,
+:class:`TransferFunction`, interconnections, conversions, frequency
+response), ``_c2d`` (discretisation, Pade, Ackermann), ``_minreal`` (minimal
+realisation) and ``_norms`` (L-infinity norm by SLICOT ab13dd, H2 norm by a
+Lyapunov equation). See ``toolbox/ARCHITECTURE.md`` "The linear-system layer".
 """
 
 from __future__ import annotations
 
-from ._lti_linalg import (balanced, balanced_blocks, balanced_companion, diagonal_scaling,
-                          invariant_zeros, modal_form, pencil_eigvals, state_scaling, _eig,
-                          _leading_identity)
-from ._lti_poly import minreal_coeffs, poly_roots, trimmed_coeffs, _poly, _tf2ss_arrays
-from ._lti_systems import (append, as_statespace, feedback, parallel, series, ss2tf, ss2zpk,
-                           StateSpace, static_gain, tf2ss, TransferFunction)
-from ._lti_c2d import acker, c2d, C2D_METHODS, pade
-from ._lti_minreal import minreal
-from ._lti_norms import linf_norm, linf_peak, spectral_norm
+from ._linalg import (balanced, balanced_blocks, balanced_companion, diagonal_scaling,
+                      invariant_zeros, modal_form, pencil_eigvals, state_scaling)
+from ._poly import minreal_coeffs, poly_roots, trimmed_coeffs
+from ._systems import (append, as_statespace, evaluate, feedback, parallel, series, ss2tf, ss2zpk,
+                       StateSpace, static_gain, tf2ss, TransferFunction)
+from ._c2d import acker, c2d, C2D_METHODS, pade
+from ._minreal import minreal
+from ._norms import h2_norm, linf_norm, linf_peak, spectral_norm
 
-__all__ = ["StateSpace", "TransferFunction", "as_statespace", "tf2ss", "ss2tf", "ss2zpk", "c2d",
+__all__ = ["StateSpace", "TransferFunction", "as_statespace", "evaluate", "h2_norm", "tf2ss", "ss2tf", "ss2zpk", "c2d",
            "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
            "linf_norm", "linf_peak", "invariant_zeros", "pencil_eigvals", "balanced",
            "balanced_blocks", "balanced_companion", "state_scaling", "diagonal_scaling",
