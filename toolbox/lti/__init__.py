@@ -26,8 +26,9 @@ these names. The implementation lives in private modules: ``_linalg``
 ``_poly`` (polynomial coefficients), ``_systems`` (:class:`StateSpace`,
 :class:`TransferFunction`, interconnections, conversions, frequency
 response), ``_c2d`` (discretisation, Pade, Ackermann), ``_minreal`` (minimal
-realisation) and ``_norms`` (L-infinity norm by SLICOT ab13dd, H2 norm by a
-Lyapunov equation). See ``toolbox/ARCHITECTURE.md`` "The linear-system layer".
+realisation), ``_norms`` (L-infinity norm by SLICOT ab13dd, H2 norm by a
+Lyapunov equation) and ``_reduction`` (stable/unstable split, balanced
+truncation, residualisation). See ``toolbox/ARCHITECTURE.md`` "The linear-system layer".
 """
 
 from __future__ import annotations
@@ -39,11 +40,12 @@ from ._systems import (append, as_statespace, evaluate, feedback, parallel, seri
                        StateSpace, static_gain, tf2ss, TransferFunction)
 from ._c2d import acker, c2d, C2D_METHODS, pade
 from ._minreal import minreal
-from ._norms import h2_norm, linf_norm, linf_peak, spectral_norm
+from ._reduction import balanced_truncation, residualise, stable_split
+from ._norms import h2_norm, hinf_norm, linf_norm, linf_peak, spectral_norm
 
-__all__ = ["StateSpace", "TransferFunction", "as_statespace", "evaluate", "h2_norm", "tf2ss", "ss2tf", "ss2zpk", "c2d",
+__all__ = ["StateSpace", "TransferFunction", "as_statespace", "evaluate", "h2_norm", "hinf_norm", "tf2ss", "ss2tf", "ss2zpk", "c2d",
            "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
            "linf_norm", "linf_peak", "invariant_zeros", "pencil_eigvals", "balanced",
            "balanced_blocks", "balanced_companion", "state_scaling", "diagonal_scaling",
            "modal_form", "minreal_coeffs", "trimmed_coeffs", "poly_roots", "spectral_norm",
-           "C2D_METHODS"]
+           "C2D_METHODS", "stable_split", "balanced_truncation", "residualise"]

@@ -1,4 +1,5 @@
-"""Norms of :mod:`toolbox.lti`: the L-infinity norm (SLICOT ab13dd), the H2
+"""Norms of :mod:`toolbox.lti`: the L-infinity and H-infinity norms (SLICOT
+ab13dd), the H2
 norm (a Lyapunov equation, scipy.linalg) and the spectral norm of a matrix.
 """
 
@@ -24,6 +25,16 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
     """
     g = as_statespace(sys)
     return linf_peak(g.A, g.B, g.C, g.D, tol)[0]
+
+
+def hinf_norm(sys: Any, stability_tol: float = 1e-8) -> float:
+    """H-infinity norm of a continuous system: :func:`linf_norm` (SLICOT
+    ab13dd) when every pole has ``Re < -stability_tol``, else ``inf``
+    (unstable, or a pole on the imaginary axis within ``stability_tol``)."""
+    g = as_statespace(sys)
+    if g.nstates and np.linalg.eigvals(g.A).real.max() >= -stability_tol:
+        return inf
+    return linf_peak(g.A, g.B, g.C, g.D)[0]
 
 
 def linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
