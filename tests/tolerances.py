@@ -61,3 +61,12 @@ H2_RTOL = 1e-10
 #: Pade coefficients: the same recurrence of exact integer ratios as
 #: python-control, one rounding per product.
 PADE_RTOL = 1e-13
+
+#: Second-order-section coefficients (products of at most two roots of
+#: modulus <= 1.2) of the export's zpk2sos port against scipy.signal: a few
+#: ulps of numbers <= ~3, absolute.
+SOS_ATOL = 1e-13
+
+#: FFT convolution against scipy.signal.fftconvolve: an FFT's error is
+#: ~eps log2(n) relative to the output's norm (n <= 6000 here).
+FFT_RTOL = 1e-12

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import control as ct
 
-from tests.tolerances import FRESP_RTOL, REORDERED_RTOL
+from tests.tolerances import REORDERED_RTOL
 from toolbox import lti
 from toolbox.design import _reduction as R
 
@@ -222,18 +222,3 @@ def test_zpk_realisation_is_tf2ss_then_balanced():
     for ours, want in zip((A, B, C, D), (*balanced(ref.A, ref.B, ref.C), ref.D)):
         assert ours.flags.c_contiguous and ours.shape == want.shape
         assert np.allclose(ours, want, rtol=0.0, atol=REORDERED_RTOL * np.abs(want).max())
-
-
-def test_balanced_series_is_the_loop_of_python_control():
-    """The loop K then G that the margins start from (toolbox.lti.series in
-    balanced coordinates) has python-control's ``G * K`` response within
-    ``FRESP_RTOL`` (a similarity transform and another evaluation)."""
-    from toolbox.design._hinf_plant import _ss_blocks
-    from toolbox.lti import StateSpace
-    G = ct.tf([1.0], [2.8e-3, 0.6])
-    K = 49.7 * (s + 214.3) * (s + 5e4) / (s * (s**2 + 4814 * s + 6.17e6))
-    A, B, C, d = R._balanced_series(_ss_blocks(K), _ss_blocks(G))
-    w = np.logspace(-1, 7, 200)
-    ours = StateSpace(A, B, C, [[d]]).freqresp(w)[0, 0]
-    ref = np.asarray(ct.frequency_response(G * K, w).complex).ravel()
-    assert np.allclose(ours, ref, rtol=FRESP_RTOL, atol=0.0)

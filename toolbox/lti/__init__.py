@@ -17,7 +17,7 @@ Conventions follow python-control so that ported code reads the same:
   ``u = r + sign * h y`` around ``g``.
 * :func:`c2d` reproduces ``scipy.signal.cont2discrete`` operation by
   operation (the route of ``control.sample_system`` without pre-warping), so
-  that discretised laws are the same floating-point numbers as before.
+  that discretised laws are the same numbers within rounding.
 * Polynomials are coefficient sequences, highest power first.
 
 This package is the face (``__all__``); every other package imports only
@@ -27,8 +27,9 @@ these names. The implementation lives in private modules: ``_linalg``
 :class:`TransferFunction`, interconnections, conversions, frequency
 response), ``_c2d`` (discretisation, Pade, Ackermann), ``_minreal`` (minimal
 realisation), ``_norms`` (L-infinity norm by SLICOT ab13dd, H2 norm by a
-Lyapunov equation) and ``_reduction`` (stable/unstable split, balanced
-truncation, residualisation). See ``toolbox/ARCHITECTURE.md`` "The linear-system layer".
+Lyapunov equation), ``_reduction`` (stable/unstable split, balanced
+truncation, residualisation) and ``_margins`` (exact margins of a continuous
+SISO loop). See ``toolbox/ARCHITECTURE.md`` "The linear-system layer".
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from ._systems import (append, as_statespace, evaluate, feedback, parallel, seri
                        StateSpace, static_gain, tf2ss, TransferFunction)
 from ._c2d import acker, c2d, C2D_METHODS, pade
 from ._minreal import minreal
+from ._margins import LoopMargins, loop_margins, loop_margins_and_poles, MARGIN_BAND
 from ._reduction import balanced_truncation, residualise, stable_split
 from ._norms import h2_norm, hinf_norm, linf_norm, linf_peak, spectral_norm
 
@@ -48,4 +50,5 @@ __all__ = ["StateSpace", "TransferFunction", "as_statespace", "evaluate", "h2_no
            "linf_norm", "linf_peak", "invariant_zeros", "pencil_eigvals", "balanced",
            "balanced_blocks", "balanced_companion", "state_scaling", "diagonal_scaling",
            "modal_form", "minreal_coeffs", "trimmed_coeffs", "poly_roots", "spectral_norm",
-           "C2D_METHODS", "stable_split", "balanced_truncation", "residualise"]
+           "C2D_METHODS", "stable_split", "balanced_truncation", "residualise", "LoopMargins", "loop_margins",
+           "loop_margins_and_poles", "MARGIN_BAND"]
