@@ -34,8 +34,8 @@ SISO loop). See ``toolbox/ARCHITECTURE.md`` "The linear-system layer".
 
 from __future__ import annotations
 
-from ._linalg import (balanced, balanced_blocks, balanced_companion, diagonal_scaling,
-                      invariant_zeros, modal_form, pencil_eigvals, state_scaling)
+from ._linalg import (balanced, balanced_companion, diagonal_scaling, invariant_zeros,
+                      pencil_eigvals)
 from ._poly import minreal_coeffs, poly_roots, trimmed_coeffs
 from ._systems import (append, as_statespace, evaluate, feedback, parallel, series, ss2tf, ss2zpk,
                        StateSpace, static_gain, tf2ss, TransferFunction)
@@ -45,10 +45,19 @@ from ._margins import LoopMargins, loop_margins, loop_margins_and_poles, MARGIN_
 from ._reduction import balanced_truncation, residualise, stable_split
 from ._norms import h2_norm, hinf_norm, linf_norm, linf_peak, spectral_norm
 
-__all__ = ["StateSpace", "TransferFunction", "as_statespace", "evaluate", "h2_norm", "hinf_norm", "tf2ss", "ss2tf", "ss2zpk", "c2d",
-           "pade", "acker", "minreal", "series", "parallel", "feedback", "append", "static_gain",
-           "linf_norm", "linf_peak", "invariant_zeros", "pencil_eigvals", "balanced",
-           "balanced_blocks", "balanced_companion", "state_scaling", "diagonal_scaling",
-           "modal_form", "minreal_coeffs", "trimmed_coeffs", "poly_roots", "spectral_norm",
-           "C2D_METHODS", "stable_split", "balanced_truncation", "residualise", "LoopMargins", "loop_margins",
-           "loop_margins_and_poles", "MARGIN_BAND"]
+__all__ = [
+    # systems and interconnections
+    "StateSpace", "TransferFunction", "as_statespace", "static_gain", "series", "parallel",
+    "feedback", "append",
+    # frequency response and norms
+    "evaluate", "linf_norm", "linf_peak", "hinf_norm", "h2_norm", "spectral_norm",
+    # margins of a continuous SISO loop
+    "LoopMargins", "loop_margins", "loop_margins_and_poles", "MARGIN_BAND",
+    # realisation and discretisation
+    "tf2ss", "ss2tf", "ss2zpk", "minreal", "c2d", "C2D_METHODS", "pade", "acker",
+    # model reduction
+    "stable_split", "balanced_truncation", "residualise",
+    # balancing, zeros, polynomial coefficients
+    "balanced", "balanced_companion", "diagonal_scaling", "invariant_zeros", "pencil_eigvals",
+    "minreal_coeffs", "trimmed_coeffs", "poly_roots",
+]
