@@ -26,9 +26,8 @@ from ..lti import (LoopMargins, StateSpace, as_statespace, balanced_companion,
 from ._hinf_plant import _ss_blocks, _zpk
 
 __all__ = [
-    "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
-    "replace_integrators", "remove_cancellations", "stable_split",
-    "LoopMargins", "loop_margins", "MarginComparison", "compare_margins",
+    "ReductionResult", "reduce_controller", "replace_integrators", "remove_cancellations",
+    "loop_margins", "MarginComparison", "compare_margins",
 ]
 
 
