@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ..lti import TransferFunction, feedback
 
 from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES
 from ..errors import SpecError
