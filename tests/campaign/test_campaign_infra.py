@@ -218,7 +218,7 @@ def test_disk_full_or_read_only_exit_4(designed, small_spec, tmp_path, monkeypat
     real = _run.write_atomic
 
     def failing(path, data):
-        if "chunk-" in str(path):
+        if "rows-" in str(path):
             raise OSError(code, os.strerror(code), str(path))
         return real(path, data)
 

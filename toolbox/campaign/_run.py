@@ -45,6 +45,7 @@ import json
 import os
 import re
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,8 +56,8 @@ import numpy as np
 from .._io import remove_stale, write_atomic
 from .._version import source_hash, toolbox_version
 from ..errors import InfrastructureError, SpecError
-from ._cluster import (BuildMismatch, check_workers, connect, disk_errors, parse_address,
-                       probe_scheduler, worker_build)
+from ._cluster import (BuildMismatch, check_workers, connect, dask_log, disk_errors, one_line,
+                       parse_address, probe_scheduler, worker_build)
 from ._evaluate import (JUDGE_COLUMNS, Plan, evaluate_chunk, judge_error_rows, judge_rows,
                         make_plan, warm_up)
 
@@ -66,7 +67,7 @@ __all__ = ["CAMPAIGN_SCHEMA", "CampaignRun", "run_campaign", "campaign_hash", "r
 CAMPAIGN_SCHEMA = "cct.campaign/3"
 #: Files of a campaign directory besides ``chunks/``.
 OUTPUT_NAMES = ("campaign.json", "controller.json", "results.parquet", "summary.json",
-                "report.html")
+                "report.html", "dask.log")
 #: Times a chunk is submitted in one run before its rows are written as
 #: error rows (a task that raised, or a ``KilledWorker`` after Dask's own
 #: ``distributed.scheduler.allowed-failures`` worker deaths). The next run
@@ -365,7 +366,7 @@ def evaluate_serial(plan: Plan, ranges, on_chunk: Callable[[int, int, dict], Non
                 if on_error is None:
                     raise
                 if attempt == CHUNK_ATTEMPTS:
-                    on_error(start, stop, f"{type(err).__name__}: {err}")
+                    on_error(start, stop, one_line(err)[:500])
             else:
                 on_chunk(start, stop, rows)
                 break
@@ -373,10 +374,10 @@ def evaluate_serial(plan: Plan, ranges, on_chunk: Callable[[int, int, dict], Non
 
 
 def _lost(address: str, err: BaseException | None = None) -> InfrastructureError:
-    why = f": {type(err).__name__}: {err}" if err is not None else ""
+    why = f" ({one_line(err)[:300]})" if err is not None else ""
     return InfrastructureError(f"lost the Dask scheduler at {address} during the campaign{why}",
-                               hint="the chunks written are kept: rerun the same command to "
-                                    "resume (on a working scheduler)")
+                               hint="the chunks written are kept; rerun the same command on "
+                                    "a working scheduler to resume (dask's log: OUT/dask.log)")
 
 
 #: Seconds between checks that the scheduler connection is alive while no
@@ -399,7 +400,7 @@ def _evaluate_dask(plan: Plan, split: Callable[[int], list], on_chunk, on_error,
     (its connection closed, the client no longer running) ends the run with
     :class:`InfrastructureError`; the chunks written are kept.
     """
-    from dask.distributed import Client, LocalCluster, wait
+    from dask.distributed import Client, LocalCluster
 
     t0 = time.perf_counter()
     cluster = None
@@ -430,6 +431,7 @@ def _evaluate_dask(plan: Plan, split: Callable[[int], list], on_chunk, on_error,
         pending = list(ranges)[::-1]
         attempts: dict[tuple, int] = {}
         futures = {}
+        arrived = threading.Event()  # set when a future finishes
 
         def submit():
             r = pending.pop()
@@ -439,18 +441,18 @@ def _evaluate_dask(plan: Plan, split: Callable[[int], list], on_chunk, on_error,
             fut = client.submit(evaluate_chunk, plan_f[0], r[0], r[1], retries=0, pure=False,
                                 key=f"cct-rows-{digest[:12]}-{r[0]}-{r[1]}-{attempts[r]}")
             futures[fut] = r
+            fut.add_done_callback(lambda _f: arrived.set())
 
         try:
             while pending and len(futures) < window:
                 submit()
             while futures:
-                try:
-                    done, _ = wait(list(futures), timeout=LOST_CHECK,
-                                   return_when="FIRST_COMPLETED")
-                except TimeoutError:
-                    done = ()
-                if not done and client.status != "running":
-                    raise _lost(address)
+                done = [f for f in futures if f.done()]
+                if not done:
+                    if not arrived.wait(LOST_CHECK) and client.status != "running":
+                        raise _lost(address)
+                    arrived.clear()
+                    continue
                 for fut in done:
                     r = futures.pop(fut)
                     try:
@@ -466,7 +468,7 @@ def _evaluate_dask(plan: Plan, split: Callable[[int], list], on_chunk, on_error,
                         if attempts[r] < CHUNK_ATTEMPTS:
                             pending.append(r)
                         else:
-                            on_error(r[0], r[1], f"{type(err).__name__}: {err}")
+                            on_error(r[0], r[1], one_line(err)[:500])
                     else:
                         fut.release()
                         on_chunk(r[0], r[1], rows)
@@ -601,8 +603,9 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
                                       on_error)
         else:  # one simulation thread per Dask thread (the worker's --nthreads)
             plan = make_plan(spec, artifact, threads=1, build=worker_build())
-            startup, size = _evaluate_dask(plan, lambda t: _split(gaps, chunk_size(spec, t)),
-                                           on_chunk, on_error, scheduler, workers, digest)
+            with dask_log(out_dir):
+                startup, size = _evaluate_dask(plan, lambda t: _split(gaps, chunk_size(spec, t)),
+                                               on_chunk, on_error, scheduler, workers, digest)
     seconds = time.perf_counter() - t0
     n_run = sum(b - a for a, b in ran)
     pieces = _covering(_stored(out_dir, digest), cfg.samples)
