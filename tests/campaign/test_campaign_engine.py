@@ -456,7 +456,7 @@ def test_provenance_pinned(serial_run, designed, tmp_path, monkeypatch):
     import shutil
 
     from toolbox._version import source_hash, toolbox_version
-    from toolbox.campaign import _run
+    from toolbox.campaign import _store
 
     meta = json.loads(pq.read_schema(serial_run.out_dir / "results.parquet").metadata[b"cct"])
     assert meta["toolbox"] == toolbox_version() and meta["source"] == source_hash()
@@ -465,7 +465,7 @@ def test_provenance_pinned(serial_run, designed, tmp_path, monkeypatch):
     assert (chunk["toolbox"], chunk["source"], chunk["start"]) == (toolbox_version(),
                                                                    source_hash(), 200)
     out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
-    monkeypatch.setattr(_run, "source_hash", lambda: "f" * 64)
+    monkeypatch.setattr(_store, "source_hash", lambda: "f" * 64)
     spec, artifact = designed
     with pytest.raises(SpecError) as info:
         run_campaign(spec, out, scheduler="serial", artifact=artifact)

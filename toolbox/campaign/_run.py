@@ -40,26 +40,23 @@ number of rows (one byte per motor aside).
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import os
 import re
-import tempfile
 import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
 
 from .._io import remove_stale, write_atomic
-from .._version import source_hash, toolbox_version
 from ..errors import InfrastructureError, SpecError
 from ._cluster import (BuildMismatch, check_workers, connect, dask_log, disk_errors, one_line,
                        parse_address, probe_scheduler, worker_build)
-from ._evaluate import (JUDGE_COLUMNS, Plan, evaluate_chunk, judge_error_rows, judge_rows,
-                        make_plan, warm_up)
+from ._evaluate import Plan, evaluate_chunk, make_plan, warm_up
+from ._store import (assemble, build, chunk_path, covering, gaps, spec_hash, split, stored,
+                     write_chunk)
 
 __all__ = ["CAMPAIGN_SCHEMA", "CampaignRun", "run_campaign", "campaign_hash", "read_results",
            "valid_chunks", "chunk_path", "chunk_size", "evaluate_serial", "CHUNK_ATTEMPTS"]
@@ -79,19 +76,6 @@ TASKS_PER_THREAD = 4
 #: one batch per operating point, a Parquet file) dominates; above, a lost
 #: task loses too much and the client holds too large a chunk.
 MIN_CHUNK, MAX_CHUNK = 250, 10_000
-_CHUNK_NAME = re.compile(r"rows-(\d{12})-(\d{12})\.parquet")
-
-
-def build() -> dict:
-    """The toolbox build that computes the rows: ``{"toolbox": version,
-    "source": source hash}`` (:func:`toolbox._version.source_hash`)."""
-    return {"toolbox": toolbox_version(), "source": source_hash()}
-
-
-def spec_hash(spec) -> str:
-    """SHA-256 of the resolved spec as given (title and campaign table included)."""
-    return hashlib.sha256(json.dumps(spec.raw, sort_keys=True, default=str)
-                          .encode()).hexdigest()
 
 
 @dataclass
@@ -194,124 +178,11 @@ def chunk_size(spec, threads: int) -> int:
     return max(1, min(cfg.samples, max(MIN_CHUNK, min(MAX_CHUNK, auto))))
 
 
-def chunk_path(out_dir: Path, start: int, stop: int) -> Path:
-    """The Parquet file of rows ``start .. stop - 1``."""
-    return Path(out_dir) / "chunks" / f"rows-{start:012d}-{stop:012d}.parquet"
-
-
-def _to_arrow(rows: dict[str, np.ndarray], meta: dict | None = None, schema=None):
-    import pyarrow as pa
-
-    arrays = {}
-    for name, v in rows.items():
-        v = np.asarray(v)
-        arrays[name] = pa.array(v.tolist() if v.dtype == object else v,
-                                type=pa.string() if v.dtype == object else None)
-    table = pa.table(arrays)
-    if schema is not None:  # a chunk of error rows: null measurements
-        n = table.num_rows
-        table = pa.table({f.name: (table.column(f.name).cast(f.type)
-                                   if f.name in arrays else pa.nulls(n, f.type))
-                          for f in schema}, schema=schema)
-    if meta is not None:
-        table = table.replace_schema_metadata({b"cct": json.dumps(meta).encode()})
-    return table
-
-
-def _chunk_meta(digest: str, start: int, stop: int, error: str | None = None) -> dict:
-    return {"campaign": digest, "start": start, "stop": stop, "error": error, **build()}
-
-
-def _write_chunk(out_dir: Path, start: int, stop: int, rows: dict, digest: str,
-                 error: str | None = None) -> None:
-    import pyarrow.parquet as pq
-
-    table = _to_arrow(rows, _chunk_meta(digest, start, stop, error))
-    buf = io.BytesIO()
-    pq.write_table(table, buf)
-    write_atomic(chunk_path(out_dir, start, stop), buf.getvalue())
-
-
-@dataclass(frozen=True)
-class _Stored:
-    start: int
-    stop: int
-    path: Path
-    error: str | None
-
-
-def _stored(out_dir: Path, digest: str) -> list[_Stored]:
-    """The valid chunk files of campaign ``digest`` (readable, of this hash,
-    as many rows as their range), by start."""
-    import pyarrow.parquet as pq
-
-    found = []
-    folder = Path(out_dir) / "chunks"
-    if not folder.is_dir():
-        return found
-    for path in sorted(folder.iterdir()):
-        m = _CHUNK_NAME.fullmatch(path.name)
-        if m is None:
-            continue
-        start, stop = int(m.group(1)), int(m.group(2))
-        try:
-            meta = json.loads(pq.read_schema(path).metadata[b"cct"])
-            ok = (meta == _chunk_meta(digest, start, stop, meta.get("error"))
-                  and pq.read_metadata(path).num_rows == stop - start)
-        except Exception:  # unreadable, truncated or foreign: run the rows again
-            ok = False
-        if ok:
-            found.append(_Stored(start, stop, path, meta.get("error")))
-    return found
-
-
 def valid_chunks(out_dir: str | Path, spec, artifact=None) -> set[tuple[int, int]]:
     """Row ranges ``(start, stop)`` of ``spec``'s campaign (for ``artifact``)
     already evaluated in ``out_dir`` (error rows not included)."""
-    return {(c.start, c.stop) for c in _stored(Path(out_dir), campaign_hash(spec, artifact))
+    return {(c.start, c.stop) for c in stored(Path(out_dir), campaign_hash(spec, artifact))
             if c.error is None}
-
-
-def _gaps(ranges, samples: int) -> list[tuple[int, int]]:
-    """``[0, samples)`` less the union of ``ranges``."""
-    out, cursor = [], 0
-    for start, stop in sorted(ranges):
-        if start > cursor:
-            out.append((cursor, min(start, samples)))
-        cursor = max(cursor, stop)
-        if cursor >= samples:
-            break
-    if cursor < samples:
-        out.append((cursor, samples))
-    return [(a, b) for a, b in out if b > a]
-
-
-def _split(gaps, size: int) -> list[tuple[int, int]]:
-    return [(a, min(hi, a + size)) for lo, hi in gaps for a in range(lo, hi, size)]
-
-
-def _covering(stored: list[_Stored], samples: int) -> list[tuple[_Stored, int, int]]:
-    """``(file, lo, hi)`` pieces covering ``[0, samples)`` in order: a valid
-    chunk file wherever one covers a row (the one reaching furthest), error
-    rows only where none does."""
-    good = [c for c in stored if c.error is None]
-    bad = [c for c in stored if c.error is not None]
-    out, cursor = [], 0
-    while cursor < samples:
-        here = [c for c in good if c.start <= cursor < c.stop]
-        if here:
-            c = max(here, key=lambda c: c.stop)
-            hi = min(c.stop, samples)
-        else:
-            here = [c for c in bad if c.start <= cursor < c.stop]
-            if not here:  # pragma: no cover - a bug if reached
-                raise RuntimeError(f"campaign: row {cursor} missing after the run")
-            c = max(here, key=lambda c: c.stop)
-            nxt = min([g.start for g in good if g.start > cursor], default=samples)
-            hi = min(c.stop, samples, nxt)
-        out.append((c, cursor, hi))
-        cursor = hi
-    return out
 
 
 def read_results(out_dir: str | Path):
@@ -345,7 +216,7 @@ def _manifest(out_dir: Path, spec, digest: str) -> None:
     cfg = spec.campaign
     write_atomic(path, json.dumps({
         "schema": CAMPAIGN_SCHEMA, "campaign": digest, "samples": cfg.samples,
-        "seed": cfg.seed, "version": toolbox_version(), "source": source_hash(),
+        "seed": cfg.seed, "version": build()["toolbox"], "source": build()["source"],
         "spec_sha256": spec_hash(spec), "spec": spec.raw}, indent=1, sort_keys=True,
         default=str) + "\n")
 
@@ -385,9 +256,9 @@ def _lost(address: str, err: BaseException | None = None) -> InfrastructureError
 LOST_CHECK = 1.0
 
 
-def _evaluate_dask(plan: Plan, split: Callable[[int], list], on_chunk, on_error,
+def _evaluate_dask(plan: Plan, ranges_for: Callable[[int], list], on_chunk, on_error,
                    scheduler: str | None, workers: int | None, digest: str) -> tuple[float, int]:
-    """Evaluate on Dask the ranges ``split(worker threads)`` returns; returns
+    """Evaluate on Dask the ranges ``ranges_for(worker threads)`` returns; returns
     ``(start-up time (s), rows per chunk)``.
 
     An existing scheduler is probed and connected with deadlines and its
@@ -419,7 +290,7 @@ def _evaluate_dask(plan: Plan, split: Callable[[int], list], on_chunk, on_error,
             check_workers(client, address, workers)
         threads = sum(w.get("nthreads", 1) for w in
                       client.scheduler_info()["workers"].values()) or 1
-        ranges = split(threads)
+        ranges = ranges_for(threads)
         size = max((b - a for a, b in ranges), default=0)
         window = max(4, 2 * threads)
         try:
@@ -553,20 +424,20 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     with disk_errors(out_dir, "creating"):
         out_dir.mkdir(parents=True, exist_ok=True)
         _manifest(out_dir, spec, digest)
-        # temporaries of a run killed while writing (write_atomic, _assemble)
+        # temporaries of a run killed while writing (write_atomic, assemble)
         remove_stale(out_dir, OUTPUT_NAMES)
         chunks = out_dir / "chunks"
         if chunks.is_dir():
             names = {m.group(1) for e in chunks.iterdir()
                      if (m := re.fullmatch(r"\.(rows-\d{12}-\d{12}\.parquet)\.\w{8}", e.name))}
             remove_stale(chunks, names)
-    stored = _stored(out_dir, digest)
-    for old in [c for c in stored if c.error is not None]:  # error rows: evaluated again
+    found = stored(out_dir, digest)
+    for old in [c for c in found if c.error is not None]:  # error rows: evaluated again
         with disk_errors(out_dir, "removing"):
             old.path.unlink(missing_ok=True)
-    kept = [c for c in stored if c.error is None]
-    gaps = _gaps([(c.start, c.stop) for c in kept], cfg.samples)
-    samples_done = cfg.samples - sum(b - a for a, b in gaps)
+    kept = [c for c in found if c.error is None]
+    todo = gaps([(c.start, c.stop) for c in kept], cfg.samples)
+    samples_done = cfg.samples - sum(b - a for a, b in todo)
     if progress:
         progress(int(samples_done), cfg.samples)
     ran: list[tuple[int, int]] = []
@@ -575,7 +446,7 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     def on_chunk(start: int, stop: int, rows: dict) -> None:
         nonlocal samples_done
         with disk_errors(out_dir, "writing chunk"):
-            _write_chunk(out_dir, start, stop, rows, digest)
+            write_chunk(out_dir, start, stop, rows, digest)
         ran.append((start, stop))
         samples_done += stop - start
         if progress:
@@ -586,7 +457,7 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
         from ._sampling import draw_samples
 
         with disk_errors(out_dir, "writing chunk"):
-            _write_chunk(out_dir, start, stop, draw_samples(cfg, spec.motor, start, stop),
+            write_chunk(out_dir, start, stop, draw_samples(cfg, spec.motor, start, stop),
                          digest, error=message)
         ran.append((start, stop))
         errors.append((start, stop, message))
@@ -596,19 +467,19 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
 
     t0 = time.perf_counter()
     startup, size = 0.0, None
-    if gaps:
+    if todo:
         if scheduler == "serial":
             size = chunk_size(spec, 1)
-            startup = evaluate_serial(make_plan(spec, artifact), _split(gaps, size), on_chunk,
+            startup = evaluate_serial(make_plan(spec, artifact), split(todo, size), on_chunk,
                                       on_error)
         else:  # one simulation thread per Dask thread (the worker's --nthreads)
             plan = make_plan(spec, artifact, threads=1, build=worker_build())
             with dask_log(out_dir):
-                startup, size = _evaluate_dask(plan, lambda t: _split(gaps, chunk_size(spec, t)),
+                startup, size = _evaluate_dask(plan, lambda t: split(todo, chunk_size(spec, t)),
                                                on_chunk, on_error, scheduler, workers, digest)
     seconds = time.perf_counter() - t0
     n_run = sum(b - a for a, b in ran)
-    pieces = _covering(_stored(out_dir, digest), cfg.samples)
+    pieces = covering(stored(out_dir, digest), cfg.samples)
     if all(c.error is not None for c, _lo, _hi in pieces):
         first = min(errors) if errors else (0, 0, "?")
         raise InfrastructureError(
@@ -618,7 +489,7 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
                  "command")
     t1 = time.perf_counter()
     with disk_errors(out_dir, "writing"):
-        results, acc = _assemble(out_dir, spec, artifact, digest, pieces)
+        results, acc = assemble(out_dir, spec, artifact, digest, pieces)
     from ._summary import write_outputs
 
     sub = acc.subsample(results)
@@ -635,58 +506,3 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
                        startup_seconds=startup, chunk_size=size,
                        error_rows=int(summary["error_rows"]),
                        end_seconds=time.perf_counter() - t1, files=files)
-
-
-def _assemble(out_dir: Path, spec, artifact, digest: str, pieces):
-    """Stream the chunk files' rows, in sample order, judged against the
-    spec's requirements, into ``results.parquet`` (temporary name, fsync,
-    rename: readers never see half a file), one row group per piece, feeding
-    an :class:`~toolbox.campaign._summary.Accumulator`; memory holds one
-    chunk at a time. Returns ``(path, accumulator)``."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    from ._summary import Accumulator
-
-    cfg = spec.campaign
-    plan = make_plan(spec, artifact)
-    slugs = [slug for slug, *_ in plan.runs]
-    final = out_dir / "results.parquet"
-    meta = {b"cct": json.dumps({"campaign": digest, "spec_sha256": spec_hash(spec),
-                                "seed": cfg.seed, "samples": cfg.samples,
-                                **build()}).encode()}
-    good = next(c for c, _lo, _hi in pieces if c.error is None)
-    measured = pq.read_schema(good.path)
-    schema = pa.schema(list(measured.remove_metadata()) + [
-        pa.field("passed", pa.bool_()), pa.field("failure", pa.string()),
-        pa.field("worst_check", pa.string()), pa.field("worst_ratio", pa.float64())],
-        metadata=meta)
-    acc = Accumulator(spec, artifact)
-    fd, tmp = tempfile.mkstemp(prefix=".results.parquet.", dir=out_dir)
-    os.close(fd)
-    writer = None
-    try:
-        writer = pq.ParquetWriter(tmp, schema)
-        for c, lo, hi in pieces:
-            table = pq.read_table(c.path).slice(lo - c.start, hi - lo)
-            cols = {name: table.column(name).to_numpy(zero_copy_only=False)
-                    for name in table.column_names}
-            judged = (judge_rows(cols, slugs, plan.bounds) if c.error is None
-                      else judge_error_rows(hi - lo, c.error))
-            piece = _to_arrow({**cols, **judged}, schema=schema.remove_metadata())
-            writer.write_table(piece.replace_schema_metadata(meta))
-            acc.add(piece, error=c.error is not None)
-        writer.close()
-        writer = None
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, final)
-    except BaseException:
-        if writer is not None:
-            writer.close()
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return final, acc
