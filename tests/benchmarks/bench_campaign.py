@@ -15,16 +15,29 @@ directory, the design made once beforehand:
    numba batch runs on one thread per task there: the cluster's parallelism
    is its workers); the rate excludes the start-up (cluster start, plan
    broadcast, workers' warm-up), printed beside it;
-4. scaling: the serial campaign at 500, 1000, 2000, 4000 samples.
+4. scaling: the serial campaign at 500, 1000, 2000, 4000 samples;
+5. the client's memory: the campaign of N samples on a LocalCluster of 2
+   workers (chunk size automatic), each N in a fresh client process that
+   reads its own peak resident set (``getrusage(RUSAGE_SELF)``: the workers
+   are other processes; the LocalCluster's scheduler runs in the client and
+   is counted) after the run, and its resident set after the design and the
+   cluster start-up (the baseline); peak minus baseline is what the rows
+   cost. The end phase streams (one chunk at a time, exact counters, a
+   subsample of at most 10^5 rows for the rank correlations and figures), so
+   the growth must not follow N. Default N: 10^4 and 10^5 (about 2 min on 2
+   shared cores); ``--memory 1000000`` runs 10^6.
 
-Run: ``python tests/benchmarks/bench_campaign.py [samples]`` from the
-repository root (default 2000 samples). The machine is shared: repeat a
-route when a number looks off.
+Run: ``python tests/benchmarks/bench_campaign.py [samples] [--memory N ...]``
+from the repository root (default 2000 samples). The machine is shared:
+repeat a route when a number looks off.
 """
 
 from __future__ import annotations
 
+import json
 import os
+import resource
+import subprocess
 import sys
 import tempfile
 import time
@@ -40,7 +53,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "campaign"))
 
 
-def main(samples: int = 2000) -> None:
+def main(samples: int = 2000, memory=(10**4, 10**5)) -> None:
     from campaign_helpers import write_spec
     from toolbox.campaign import draw_samples, make_plan, run_campaign
     from toolbox.pipeline import design_spec
@@ -89,7 +102,90 @@ def main(samples: int = 2000) -> None:
         rate, _ = campaign(n, 250, "serial")
         print(f"  {n:>6} samples: {rate:7.0f} samples/s, {time.perf_counter() - t0:6.2f} s "
               "total (with Parquet assembly and summary)")
+    if memory:
+        client_memory(memory)
+
+
+def _rss_mb() -> float:
+    """Resident set of this process now (MB), from /proc (Linux) or the peak."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def _one_client(samples: int, out: str) -> None:
+    """Child process: the LocalCluster campaign of ``samples`` rows; prints JSON."""
+    from campaign_helpers import write_spec
+    from toolbox.campaign import run_campaign
+    from toolbox.pipeline import design_spec
+    from toolbox.spec import load_spec
+
+    d = Path(out) / "spec"
+    d.mkdir(parents=True, exist_ok=True)
+    path = write_spec(d, samples=samples, chunk_size=1)
+    path.write_text(path.read_text().replace("chunk_size = 1\n", ""))  # automatic
+    spec = load_spec(path)
+    artifact = design_spec(spec)
+    baseline = {}
+
+    def progress(done, total):
+        if "mb" not in baseline and done > 0:
+            baseline["mb"] = _rss_mb()  # after start-up and the first chunk
+
+    t0 = time.perf_counter()
+    run = run_campaign(spec, Path(out) / "run", workers=2, artifact=artifact, report=True,
+                       progress=progress)
+    total = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(json.dumps({"samples": samples, "peak_mb": peak, "baseline_mb": baseline.get("mb"),
+                      "seconds": total, "sim_seconds": run.seconds - run.startup_seconds,
+                      "end_seconds": run.end_seconds, "chunk_size": run.chunk_size,
+                      "chunks": run.chunks_run, "yield": run.summary["yield"]}))
+
+
+def client_memory(sizes) -> None:
+    """Item 5 of the module docstring: one fresh client process per size."""
+    print("client memory, LocalCluster with 2 workers, automatic chunk size "
+          "(peak resident set of the client process; baseline: after start-up and the "
+          "first chunk):")
+    rows = []
+    for n in sizes:
+        out = tempfile.mkdtemp(prefix=f"bench-campaign-mem-{n}-")
+        res = subprocess.run([sys.executable, __file__, "--one-client", str(n), out],
+                             capture_output=True, text=True, env={**os.environ,
+                             "PYTHONPATH": str(ROOT)})
+        if res.returncode != 0:
+            print(f"  {n:>8} samples: failed\n{res.stderr[-2000:]}")
+            continue
+        r = json.loads(res.stdout.strip().splitlines()[-1])
+        rows.append(r)
+        print(f"  {n:>8} samples: client peak {r['peak_mb']:6.0f} MB (baseline "
+              f"{r['baseline_mb']:5.0f} MB, growth {r['peak_mb'] - r['baseline_mb']:5.0f} MB); "
+              f"{r['chunks']} chunks of {r['chunk_size']}; simulation "
+              f"{r['sim_seconds']:7.1f} s ({1e3 * r['sim_seconds'] / n:.2f} ms/sample, "
+              f"{n / r['sim_seconds']:.0f} samples/s), end phase {r['end_seconds']:5.1f} s")
+    if len(rows) >= 2:
+        a, b = rows[0], rows[-1]
+        slope = ((b["peak_mb"] - a["peak_mb"]) / (b["samples"] - a["samples"]))
+        big = 10**6
+        est = b["peak_mb"] + slope * (big - b["samples"])
+        per = b["sim_seconds"] / b["samples"]
+        print(f"  growth between {a['samples']} and {b['samples']} samples: "
+              f"{1e6 * slope:.2f} MB per 10^6 samples; a 10^6-sample campaign: client "
+              f"about {est:.0f} MB (limit 500 MB), simulation about {per * big / 60:.0f} min "
+              "on these 2 workers")
+
 
 
 if __name__ == "__main__":  # the LocalCluster spawns processes: guard needed
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 2000)
+    if len(sys.argv) > 1 and sys.argv[1] == "--one-client":
+        _one_client(int(sys.argv[2]), sys.argv[3])
+    elif "--memory" in sys.argv:
+        k = sys.argv.index("--memory")
+        client_memory([int(v) for v in sys.argv[k + 1:]])
+    else:
+        main(int(sys.argv[1]) if len(sys.argv) > 1 else 2000)
