@@ -24,8 +24,10 @@ directory, the design made once beforehand:
    cluster start-up (the baseline); peak minus baseline is what the rows
    cost. The end phase streams (one chunk at a time, exact counters, a
    subsample of at most 10^5 rows for the rank correlations and figures), so
-   the growth must not follow N. Default N: 10^4 and 10^5 (about 2 min on 2
-   shared cores); ``--memory 1000000`` runs 10^6.
+   the growth must not follow N once the chunk size and the subsample reach
+   their caps (10,000 and 10^5 rows: from 10^5 samples on 2 workers).
+   Default N: 10^4, 10^5 and 2 x 10^5 (about 10 min on 2 idle cores, 35 on
+   a loaded machine); ``--memory 1000000`` runs 10^6.
 
 Run: ``python tests/benchmarks/bench_campaign.py [samples] [--memory N ...]``
 from the repository root (default 2000 samples). The machine is shared:
@@ -53,7 +55,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests" / "campaign"))
 
 
-def main(samples: int = 2000, memory=(10**4, 10**5)) -> None:
+def main(samples: int = 2000, memory=(10**4, 10**5, 2 * 10**5)) -> None:
     from campaign_helpers import write_spec
     from toolbox.campaign import draw_samples, make_plan, run_campaign
     from toolbox.pipeline import design_spec
@@ -135,6 +137,8 @@ def _one_client(samples: int, out: str) -> None:
     def progress(done, total):
         if "mb" not in baseline and done > 0:
             baseline["mb"] = _rss_mb()  # after start-up and the first chunk
+        if done == total:
+            baseline["sim_end_mb"] = _rss_mb()  # the last chunk written
 
     t0 = time.perf_counter()
     run = run_campaign(spec, Path(out) / "run", workers=2, artifact=artifact, report=True,
@@ -142,6 +146,7 @@ def _one_client(samples: int, out: str) -> None:
     total = time.perf_counter() - t0
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(json.dumps({"samples": samples, "peak_mb": peak, "baseline_mb": baseline.get("mb"),
+                      "sim_end_mb": baseline.get("sim_end_mb"),
                       "seconds": total, "sim_seconds": run.seconds - run.startup_seconds,
                       "end_seconds": run.end_seconds, "chunk_size": run.chunk_size,
                       "chunks": run.chunks_run, "yield": run.summary["yield"]}))
@@ -168,18 +173,27 @@ def client_memory(sizes) -> None:
               f"{r['chunks']} chunks of {r['chunk_size']}; simulation "
               f"{r['sim_seconds']:7.1f} s ({1e3 * r['sim_seconds'] / n:.2f} ms/sample, "
               f"{n / r['sim_seconds']:.0f} samples/s), end phase {r['end_seconds']:5.1f} s")
-    if len(rows) >= 2:
-        a, b = rows[0], rows[-1]
-        slope = ((b["peak_mb"] - a["peak_mb"]) / (b["samples"] - a["samples"]))
-        big = 10**6
-        est = b["peak_mb"] + slope * (big - b["samples"])
-        per = b["sim_seconds"] / b["samples"]
-        print(f"  growth between {a['samples']} and {b['samples']} samples: "
-              f"{1e6 * slope:.2f} MB per 10^6 samples; a 10^6-sample campaign: client "
-              f"about {est:.0f} MB (limit 500 MB), simulation about {per * big / 60:.0f} min "
-              "on these 2 workers")
+    from toolbox.campaign._run import MAX_CHUNK, TASKS_PER_THREAD
+    from toolbox.campaign._summary import SUBSAMPLE
 
-
+    # from this size on the client holds the same bounded amounts whatever N:
+    # one chunk of MAX_CHUNK rows and a subsample of SUBSAMPLE rows
+    capped = max(SUBSAMPLE, TASKS_PER_THREAD * 2 * MAX_CHUNK)
+    big = 10**6
+    at_caps = [r for r in rows if r["samples"] >= capped]
+    if rows:
+        per = rows[-1]["sim_seconds"] / rows[-1]["samples"]
+        print(f"  the client's rows are bounded from {capped} samples on (chunks of "
+              f"{MAX_CHUNK} rows, a subsample of {SUBSAMPLE} rows; 1 byte per motor aside); "
+              f"a 10^6-sample simulation takes about {per * big / 60:.0f} min on these 2 "
+              f"workers ({1e3 * per:.2f} ms/sample)")
+    if len(at_caps) >= 2:
+        a, b = at_caps[0], at_caps[-1]
+        slope = (b["peak_mb"] - a["peak_mb"]) / (b["samples"] - a["samples"])
+        est = b["peak_mb"] + max(slope, 0.0) * (big - b["samples"])
+        print(f"  peak growth between {a['samples']} and {b['samples']} samples: "
+              f"{1e6 * slope:+.1f} MB per 10^6 samples; extrapolated client peak at 10^6 "
+              f"samples: {est:.0f} MB (limit 500 MB)")
 
 if __name__ == "__main__":  # the LocalCluster spawns processes: guard needed
     if len(sys.argv) > 1 and sys.argv[1] == "--one-client":

@@ -20,6 +20,6 @@ from ._sampling import draw_samples
 from ._summary import parameter_columns, summarize, wilson_interval
 
 __all__ = ["DIVERGED", "Plan", "evaluate_chunk", "judge_rows", "make_plan", "scenario_slug",
-           "CAMPAIGN_SCHEMA", "CHUNK_ATTEMPTS", "chunk_size", "CampaignRun", "campaign_hash", "chunk_path", "read_results",
-           "run_campaign", "valid_chunks", "draw_samples", "parameter_columns", "summarize",
-           "wilson_interval", "parse_address"]
+           "CAMPAIGN_SCHEMA", "CHUNK_ATTEMPTS", "chunk_size", "CampaignRun", "campaign_hash",
+           "chunk_path", "read_results", "run_campaign", "valid_chunks", "draw_samples",
+           "parameter_columns", "summarize", "wilson_interval", "parse_address"]

@@ -44,7 +44,8 @@ from .._version import source_hash, toolbox_version
 from ..errors import InfrastructureError, SpecError
 
 __all__ = ["parse_address", "probe_scheduler", "connect", "check_workers", "worker_build",
-           "disk_errors", "dask_log", "one_line", "BuildMismatch", "PROBE_TIMEOUT", "CONNECT_TIMEOUT",
+           "disk_errors", "dask_log", "one_line",
+           "BuildMismatch", "PROBE_TIMEOUT", "CONNECT_TIMEOUT",
            "WORKER_TIMEOUT"]
 
 #: Seconds to wait for the scheduler's handshake on a raw socket.
