@@ -35,6 +35,8 @@ PASS_COLOR, FAIL_COLOR = "#9aa3ad", "#b3261e"
 #: Points drawn per figure at most (a random but seeded subset beyond).
 MAX_POINTS = 4000
 MAX_LINES = 300
+#: Failure modes drawn in the drivers figure (the most frequent).
+MAX_MODES = 3
 
 
 def _col(table, name: str) -> np.ndarray:
@@ -103,8 +105,10 @@ def _region_figures(table, summary) -> list[dict]:
                  f"{100 * failed[shared].mean():.1f} % failing as in the table, "
                  f"{100 * summary['failed'] / total:.1f} %)" if shared.size < total else "")
         figs.append({"id": "scatter", "svg": _svg(fig, "cs"),
-                     "caption": f"Failing samples (red) over {a} and {b}, the parameters most "
-                                f"rank-correlated with a failure mode{shown}."})
+                     "caption": f"Failing samples (red) over {a} and {b}, the strongest "
+                                f"drivers of the failure modes (rank correlation with each "
+                                f"mode, weighted by its failures); grid axes jittered within "
+                                f"their spacing{shown}."})
     if len(params) >= 2 and failed.any():
         X = np.column_stack([_col(table, p).astype(float) for p in params])
         lo, hi = X.min(axis=0), X.max(axis=0)
@@ -123,17 +127,32 @@ def _region_figures(table, summary) -> list[dict]:
         figs.append({"id": "parallel", "svg": _svg(fig, "cp"),
                      "caption": "Each line is a sample; each parameter is scaled from its "
                                 "smallest (0) to its largest (1) drawn value."})
+    modes = [m for m, e in summary["sensitivity_by_mode"].items()
+             if any(x["rank_correlation"] is not None for x in e)][:MAX_MODES]
     if summary["sensitivity"]:
-        fig, ax = plt.subplots(figsize=(6.4, 0.5 + 0.35 * len(summary["sensitivity"])))
-        names = [s["parameter"] for s in summary["sensitivity"]][::-1]
-        vals = [s["rank_correlation"] or 0.0 for s in summary["sensitivity"]][::-1]
-        ax.barh(names, vals, color=[FAIL_COLOR if v > 0 else "#1f5fa8" for v in vals])
-        ax.set_xlabel("rank correlation with failure (> 0: larger values fail more)")
+        names = ranked[::-1]  # the strongest driver on top
+        series = [(m, {e["parameter"]: e["rank_correlation"] or 0.0
+                       for e in summary["sensitivity_by_mode"][m]}) for m in modes] or [
+            ("any failure (pooled)", {e["parameter"]: e["rank_correlation"] or 0.0
+                                      for e in summary["sensitivity"]})]
+        fig, ax = plt.subplots(figsize=(6.4, 0.8 + 0.3 * len(names) * len(series)))
+        h = 0.8 / len(series)
+        colors = (FAIL_COLOR, "#1f5fa8", "#e08a00")
+        for k, (mode, rho) in enumerate(series):
+            ax.barh(np.arange(len(names)) + (k - (len(series) - 1) / 2) * h,
+                    [rho.get(n, 0.0) for n in names], height=h, color=colors[k % 3],
+                    label=mode)
+        ax.set_yticks(np.arange(len(names)), names)
+        ax.axvline(0.0, color="#444444", linewidth=0.6)
+        ax.set_xlabel("rank correlation with the mode failing (> 0: larger values fail more)")
         ax.set_xlim(-1, 1)
+        ax.legend(loc="lower right", fontsize=7)
         fig.tight_layout()
         figs.append({"id": "sensitivity", "svg": _svg(fig, "cr"),
-                     "caption": "Sensitivity ranking: Spearman correlation of each parameter "
-                                "with the failure indicator."})
+                     "caption": "Drivers of each failure mode: Spearman correlation of each "
+                                "parameter with that mode failing (not the pooled pass/fail, "
+                                "where modes driven in opposite directions cancel); "
+                                "parameters ordered by their weight over the modes."})
     return figs
 
 
