@@ -19,7 +19,7 @@ from typing import Callable, Mapping, Sequence
 import numba
 import numpy as np
 
-from toolbox.artifact import Decoupling, FcsWeights  # typed in the artifact; FcsWeights re-exported
+from toolbox.artifact import CvLaw, Decoupling, FcsWeights  # typed in the artifact; FcsWeights re-exported
 from toolbox.errors import SpecError
 from toolbox.spec import Motor, inverter_radii
 
@@ -195,6 +195,12 @@ class ControlLaw:
         Outer loop for ``speed_step`` and ``load_step`` scenarios.
     fcs : FcsWeights, optional
         Weights for the ``"fcs_mpc"`` inverter.
+    cv : CvLaw, optional
+        The complex-vector law of method ``cv``: executed instead of ``d``
+        and ``q`` (which then give the size of its state: the integrator and
+        ``delay_samples`` delayed voltages, the coordinates of the artifact's
+        standstill axes), its gains recomputed each period at the measured
+        speed (``_kernel_cv``); ``decoupling.cross`` must be off.
     """
 
     d: AxisLaw
@@ -203,6 +209,7 @@ class ControlLaw:
     decoupling: Decoupling
     speed_loop: SpeedLoop | None = None
     fcs: FcsWeights | None = None
+    cv: CvLaw | None = None
 
 
 @dataclass
@@ -313,9 +320,14 @@ def _pack_law(law: ControlLaw):
         raise SpecError("law", "finite controller matrices", "NaN or inf")
     f = law.fcs or FcsWeights()
     dec = law.decoupling
+    cv = law.cv
+    if cv is not None and dec.cross:
+        raise SpecError("law.decoupling.cross", "false with a cv law (its gains hold the "
+                        "dq coupling)", True)
+    pc, pi, pd = (0.0, 0.0, 0.0) if cv is None else cv.poles(law.sample_time, 1)
     LP = _packed("LP", R_c=dec.R_c, Ld_c=dec.Ld_c, Lq_c=dec.Lq_c, flux_c=dec.flux_c,
                  cross=float(dec.cross), emf=float(dec.emf), alpha=f.alpha, beta=f.beta,
-                 gamma=f.gamma)
+                 gamma=f.gamma, cv=float(cv is not None), cv_pc=pc, cv_pi=pi, cv_pd=pd)
     return A, B, C, D, W, LP
 
 
@@ -356,6 +368,13 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams,
                         f"({law.sample_time} s)", Ts)
     if not (isinstance(drive.delay_samples, (int, np.integer)) and drive.delay_samples >= 0):
         raise SpecError("drive.delay_samples", "an integer >= 0", drive.delay_samples)
+    if law.cv is not None:
+        # the cv law keeps the integrator and d delayed voltages in the axes' state arrays
+        n = max(np.atleast_2d(np.asarray(ax.A, float)).shape[0] if np.size(ax.A) else 0
+                for ax in (law.d, law.q))
+        if n < drive.delay_samples + 1:
+            raise SpecError("drive.delay_samples", f"at most {n - 1} (the cv law's state "
+                            f"holds {n - 1} delayed voltages)", drive.delay_samples)
     scenario.check_plant_step(Ts)  # the rest was validated when the frozen scenario was built
     inverter = scenario.inverter or drive.inverter
     inv_code = {"average": 0, "svm": 1, "fcs_mpc": 2}.get(inverter)
