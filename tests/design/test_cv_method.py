@@ -84,7 +84,7 @@ def test_kernel_law_is_the_placed_law(d, pd, t_c):
     lp, dp = _kernel.pack_indices("LP"), _kernel.pack_indices("DP")
     pc, pi, _ = law.poles(TS, 1)
     for k, v in dict(R_c=IPM["R"], Ld_c=IPM["Ld"], Lq_c=IPM["Lq"], flux_c=flux, emf=1.0,
-                     cv=1.0, cv_pc=pc, cv_pi=pi, cv_pd=pd).items():
+                     cv=1.0, cv_pc=pc, cv_pi=pi, cv_pd=pd, cv_d=d).items():
         LP[lp[k]] = v
     for k, v in dict(Ts=TS, delay=d, vlim=1, v_max=limit, t_comp=t_c).items():
         DP[dp[k]] = v
@@ -100,6 +100,25 @@ def test_kernel_law_is_the_placed_law(d, pd, t_c):
         assert np.allclose([vd, vq], v_ref, rtol=1e-12, atol=1e-11), k
         assert np.allclose([xd[0], xq[0]], ref.x, rtol=1e-11, atol=1e-10), k
     assert 0.1 < n_sat / 400 < 0.9            # the limit acted, and not always
+
+
+@pytest.mark.parametrize("d,t_c", [(0, 0.5e-4), (1, 1.5e-4), (1, 0.0), (2, 2.5e-4)])
+def test_executed_gains_are_the_placed_gains(d, t_c):
+    """The Python route of the executed gains (:meth:`CvLaw.gains`, closed-form
+    ZOH, vectorised) equals :func:`place_gains` on :func:`dq_zoh` (scipy expm,
+    the matrix recursion) with the placement error ``(t_c - (d + 1/2) Ts) w``."""
+    law = CvLaw(2500.0, 900.0, 0.15)
+    for motor in (IPM, SPM):
+        stacked = law.gains(motor["R"], motor["Ld"], motor["Lq"], np.array(SPEEDS), TS, d, t_c)
+        for k, w in enumerate(SPEEDS):
+            Phi, Gam = cvd.dq_zoh(**motor, omega=w, sample_time=TS,
+                                  eps=(t_c - (d + 0.5) * TS) * w)
+            g = cvd.place_gains(Phi, Gam, law.poles(TS, d))
+            for got, want in ((stacked.Kt[k], g.Kt), (stacked.K1[k], g.K1),
+                              (stacked.Ki[k], g.Ki)) + tuple(
+                                  (stacked.K2[k, j], g.K2[j]) for j in range(d)):
+                assert np.allclose(got, want, rtol=1e-10, atol=1e-10 * np.abs(want).max()), w
+            assert np.allclose(stacked.aw * np.eye(2), g.Aw, rtol=1e-10, atol=1e-14)
 
 
 def test_integrator_gains_are_scalar_multiples():

@@ -36,7 +36,8 @@ from ..errors import ArtifactError
 # _antiwindup_gain: re-exported for the tests (tests/sim/test_saturation.py)
 from ._axis import AxisController, StateSpaceData, Zpk, _antiwindup_gain  # noqa: F401
 from ._decoupling import Decoupling
-from ._fields import (AxisWeights, CvLaw, FcsWeights, TransferFunctionData, _no_unknown,
+from ._cv import CvLaw
+from ._fields import (AxisWeights, FcsWeights, TransferFunctionData, _no_unknown,
                       finite_number)
 
 __all__ = [

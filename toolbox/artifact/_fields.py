@@ -7,9 +7,10 @@ now has a typed, validated home:
 
 * :class:`FcsWeights` - the weights of paper 002's criterion (23) that the
   predictive switching law executes (method ``fcs_mpc`` only);
-* :class:`CvLaw` - the poles of the direct discrete-time complex-vector law
-  (Hinkkanen et al. 2016; method ``cv`` only), whose speed-dependent gains
-  the simulator and the header compute from them each period;
+* :class:`toolbox.artifact.CvLaw` (module ``_cv``) - the poles of the
+  direct discrete-time complex-vector law (Hinkkanen et al. 2016; method
+  ``cv`` only), whose speed-dependent gains every executor computes from
+  them each period;
 * :class:`AxisWeights` - the validated H-infinity weights ``W1``, ``W2``,
   ``W3`` and the level ``gamma`` of one axis (paper 003 eq (41)-(43):
   ``|W1 S|, |W2 K S|, |W3 T| < gamma``), from which analysis draws the
@@ -32,7 +33,7 @@ import numpy as np
 
 from ..errors import ArtifactError
 
-__all__ = ["FcsWeights", "CvLaw", "TransferFunctionData", "AxisWeights", "WEIGHT_NAMES",
+__all__ = ["FcsWeights", "TransferFunctionData", "AxisWeights", "WEIGHT_NAMES",
            "finite_number"]
 
 #: H-infinity weight names of one axis: w1 on S, w2 on K S, w3 on T (003 eq (41)-(43)).
@@ -113,71 +114,6 @@ class FcsWeights:
             # criterion (23) would ignore the currents entirely
             raise ArtifactError(f"{key}.alpha", "alpha + beta > 0",
                                 [values["alpha"], values["beta"]])
-        return cls(**values)
-
-
-@dataclass(frozen=True)
-class CvLaw:
-    """The direct discrete-time complex-vector current law (method ``cv``).
-
-    Executed, not informational: every period, at the measured electrical
-    speed ``w = pole_pairs Omega_m``, the executor (simulator kernel
-    ``sim._kernel_cv``, header ``export/templates/cv.c.j2``, reference
-    :func:`toolbox.design.cv_discrete.executed_gains`) discretises the
-    controller's model (the artifact's ``decoupling``: ``R_c``, ``Ld_c``,
-    ``Lq_c``) exactly with the voltage held in the rotor frame, rotates
-    ``Gamma`` by the placement error it expects, ``(t_c - (d + 1/2) Ts) w``
-    (``t_c`` the decoupling's ``delay_compensation_time``), places the poles
-    below by the formulas (P)-(T) of :mod:`toolbox.design.cv_discrete` and
-    runs law (L) there (toolbox/ARCHITECTURE.md "Direct discrete-time
-    complex-vector control").
-
-    Attributes
-    ----------
-    bandwidth : float
-        ``alpha_c`` (rad/s, > 0): the reference-tracking pole
-        ``p_c = exp(-alpha_c Ts)``.
-    integral_bandwidth : float
-        ``alpha_i`` (rad/s, > 0): the integral pole ``p_i = exp(-alpha_i Ts)``
-        (cancelled in the reference response by the feedforward).
-    delay_pole : float
-        z-plane pole of each of the ``d`` delay states, in [0, 1).
-    """
-
-    bandwidth: float
-    integral_bandwidth: float
-    delay_pole: float = 0.0
-
-    def poles(self, sample_time: float, delay_samples: int) -> tuple[float, ...]:
-        """``(p_c, p_i, delay_pole x d)`` in z at the sample time."""
-        return ((math.exp(-self.bandwidth * sample_time),
-                 math.exp(-self.integral_bandwidth * sample_time))
-                + (self.delay_pole,) * int(delay_samples))
-
-    def to_json(self) -> dict:
-        return {"bandwidth": self.bandwidth, "integral_bandwidth": self.integral_bandwidth,
-                "delay_pole": self.delay_pole}
-
-    @classmethod
-    def from_json(cls, data: Any, key: str = "cv") -> "CvLaw":
-        """Validate ``{"bandwidth", "integral_bandwidth", "delay_pole"}``."""
-        if not isinstance(data, Mapping):
-            raise ArtifactError(key, "an object with bandwidth, integral_bandwidth, "
-                                "delay_pole", data)
-        names = ("bandwidth", "integral_bandwidth", "delay_pole")
-        _only(data, names, key)
-        values = {}
-        for name in names:
-            if name not in data:
-                raise ArtifactError(f"{key}.{name}", "a finite number (the cv law reads it)",
-                                    "nothing (missing)")
-            if name == "delay_pole":
-                values[name] = _number(data[name], f"{key}.{name}", "a number in [0, 1)", 0.0)
-                if not values[name] < 1.0:
-                    raise ArtifactError(f"{key}.{name}", "a number in [0, 1)", data[name])
-            else:
-                values[name] = _number(data[name], f"{key}.{name}", "a finite number > 0 "
-                                       "(rad/s)", 0.0, strict=True)
         return cls(**values)
 
 

@@ -462,7 +462,12 @@ def step_figures(gains: CvDiscreteGains, R: float, Ld: float, Lq: float, omega: 
 def executed_gains(law: CvLaw, R: float, Ld: float, Lq: float, omega_meas: float,
                    sample_time: float, delay_samples: int,
                    delay_compensation_time: float) -> CvDiscreteGains:
-    """The gains the executors of method ``cv`` compute at the measured speed.
+    """The gains the executors of method ``cv`` compute at one measured speed.
+
+    :meth:`toolbox.artifact.CvLaw.gains` (the one Python route, closed-form
+    ZOH) at one speed, as :class:`CvDiscreteGains`; the tests check it
+    against :func:`place_gains` on :func:`dq_zoh` (scipy ``expm``) with
+    ``eps = (t_c - (d + 1/2) Ts) w``.
 
     Parameters
     ----------
@@ -475,12 +480,11 @@ def executed_gains(law: CvLaw, R: float, Ld: float, Lq: float, omega_meas: float
     sample_time, delay_samples : float, int
         ``Ts`` and ``d``.
     delay_compensation_time : float
-        ``t_c`` of the voltage placement: ``Gamma`` is rotated by the error
-        ``(t_c - (d + 1/2) Ts) w`` it leaves with an exact speed.
+        ``t_c`` of the voltage placement.
     """
-    eps = (delay_compensation_time - (delay_samples + 0.5) * sample_time) * omega_meas
-    Phi, Gam = dq_zoh(R, Ld, Lq, omega_meas, sample_time, hold="rotor", eps=eps)
-    return place_gains(Phi, Gam, law.poles(sample_time, delay_samples))
+    g = law.gains(R, Ld, Lq, omega_meas, sample_time, delay_samples, delay_compensation_time)
+    return CvDiscreteGains(Kt=g.Kt[0], K1=g.K1[0], K2=tuple(g.K2[0]), Ki=g.Ki[0],
+                           Aw=g.aw * np.eye(2), poles=law.poles(sample_time, delay_samples))
 
 
 def standstill_axes(gains: CvDiscreteGains, sample_time: float) -> dict[str, AxisController]:

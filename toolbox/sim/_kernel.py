@@ -321,7 +321,7 @@ def _cv_law_step(xd, xq, idr, iqr, i_d_m, i_q_m, w_m, th_m, LP, DP):
     measured speed ``w_m``), the EMF feedforward, the voltage limit and the
     realised-voltage integrator; updates the states ``xd``, ``xq`` (integrator,
     then the delayed voltages); returns (vd, vq saturated, saturated?)."""
-    d = int(DP[DP_DELAY])
+    d = int(LP[LP_CV_D])  # the design's delay (the drive's may differ: a robustness case)
     pi = LP[LP_CV_PI]
     vd, vq, delta1, gi00, gi01, gi10, gi11 = _cv_linear(
         xd, xq, idr, iqr, i_d_m, i_q_m, w_m, DP[DP_TS], d, DP[DP_T_COMP], LP[LP_R_C],
@@ -396,10 +396,10 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     A, B, C, D, Baw : (2, n, n), (2, n, 2), (2, n), (2, 2), (2, n)
         Discrete d and q controllers (inputs [i_ref, i_meas], output V),
         back-calculation anti-windup gains.
-    LP : (13,)
+    LP : (14,)
         Controller model R, Ld, Lq, flux; cross, emf flags; alpha, beta, gamma;
-        cv flag and poles (``_kernel_cv``; the states ``xd``, ``xq`` then hold the
-        integrator and the delayed voltages, ``A`` sized for them).
+        cv flag, poles and design delay (``_kernel_cv``; the states ``xd``, ``xq``
+        then hold the integrator and the delayed voltages, ``A`` sized for them).
     SP : (6,)
         Speed loop: enabled, kp, ki, kd, period in current periods, iq limit.
     DP : (8,)

@@ -321,13 +321,20 @@ def _pack_law(law: ControlLaw):
     f = law.fcs or FcsWeights()
     dec = law.decoupling
     cv = law.cv
+    if cv is not None and (np.shape(law.d.A) != np.shape(law.q.A) or not np.size(law.d.A)):
+        raise SpecError("law.cv", "standstill axes of equal order >= 1 (the integrator and "
+                        "the design's delayed voltages)", [np.shape(law.d.A), np.shape(law.q.A)])
     if cv is not None and dec.cross:
         raise SpecError("law.decoupling.cross", "false with a cv law (its gains hold the "
                         "dq coupling)", True)
     pc, pi, pd = (0.0, 0.0, 0.0) if cv is None else cv.poles(law.sample_time, 1)
+    # the cv law's design delay: its standstill axes hold the integrator and that
+    # many delayed voltages (toolbox.design.cv_discrete.standstill_axes)
+    cv_d = n - 1 if cv is not None else 0
     LP = _packed("LP", R_c=dec.R_c, Ld_c=dec.Ld_c, Lq_c=dec.Lq_c, flux_c=dec.flux_c,
                  cross=float(dec.cross), emf=float(dec.emf), alpha=f.alpha, beta=f.beta,
-                 gamma=f.gamma, cv=float(cv is not None), cv_pc=pc, cv_pi=pi, cv_pd=pd)
+                 gamma=f.gamma, cv=float(cv is not None), cv_pc=pc, cv_pi=pi, cv_pd=pd,
+                 cv_d=cv_d)
     return A, B, C, D, W, LP
 
 
@@ -368,13 +375,6 @@ def _pack(law: ControlLaw, plant: Motor, scenario: Scenario, drive: DriveParams,
                         f"({law.sample_time} s)", Ts)
     if not (isinstance(drive.delay_samples, (int, np.integer)) and drive.delay_samples >= 0):
         raise SpecError("drive.delay_samples", "an integer >= 0", drive.delay_samples)
-    if law.cv is not None:
-        # the cv law keeps the integrator and d delayed voltages in the axes' state arrays
-        n = max(np.atleast_2d(np.asarray(ax.A, float)).shape[0] if np.size(ax.A) else 0
-                for ax in (law.d, law.q))
-        if n < drive.delay_samples + 1:
-            raise SpecError("drive.delay_samples", f"at most {n - 1} (the cv law's state "
-                            f"holds {n - 1} delayed voltages)", drive.delay_samples)
     scenario.check_plant_step(Ts)  # the rest was validated when the frozen scenario was built
     inverter = scenario.inverter or drive.inverter
     inv_code = {"average": 0, "svm": 1, "fcs_mpc": 2}.get(inverter)
