@@ -322,7 +322,8 @@ def motulator_gains(Ld: float, Lq: float, sample_time: float, omega: float,
 
 
 class CvDiscreteLaw:
-    """Law (L) executed sample by sample (the reference a kernel or header would follow).
+    """Law (L) executed sample by sample (the Python reference of the simulator's
+    ``_kernel_cv`` and of the header, tested equal to them).
 
     Parameters
     ----------
