@@ -249,3 +249,20 @@ def test_default_integral_pole_misses_the_goal(designed):
     t0, _ = _step_figures(control_law(art), motor, dr, 0.0)
     t1, _ = _step_figures(control_law(art), motor, dr, 230.0)
     assert abs(t1 - t0) > 0.2 * t0
+
+
+@pytest.mark.parametrize("table,key", [({"bandwith": 3000.0}, "controller.cv.bandwith"),
+                                       ({"delay_pole": 1.0}, "controller.cv.delay_pole"),
+                                       ({"bandwidth": 1e12}, "controller.cv.bandwidth"),
+                                       ({"integral_bandwidth": -5.0},
+                                        "controller.cv.integral_bandwidth")])
+def test_bad_parameters_are_refused_by_key(table, key):
+    """``[controller.cv]``: unknown keys (did-you-mean), a delay pole outside
+    [0, 0.95], rates outside the design range and non-positive rates are
+    SpecErrors naming the key."""
+    from toolbox.errors import SpecError
+    data = {"motor": {"catalog": "azaiz2007"}, "drive": {"vdc": 150.0, "sample_time": 1e-4},
+            "controller": {"method": "cv", "cv": table}}
+    with pytest.raises(SpecError) as info:
+        toolbox.spec_from_dict(data)
+    assert key in str(info.value)

@@ -545,6 +545,12 @@ class CvCfg:
     delay_pole: float
     details: dict
 
+    def to_spec(self, spec=None) -> dict:
+        """``[controller.cv]`` keys that read back to this configuration (defaults
+        filled in; ``spec`` unused, the signature of the other methods')."""
+        return {"bandwidth": self.bandwidth, "integral_bandwidth": self.integral_bandwidth,
+                "delay_pole": self.delay_pole}
+
 
 _KEYS = ("bandwidth", "integral_bandwidth", "delay_pole")
 
