@@ -3,12 +3,13 @@ usage example says, behaves like the toolbox's simulator in closed loop.
 
 DESIGN.md "The digital loop" and toolbox/ARCHITECTURE.md "controller.h",
 "Inverter models". For every design of the gallery (``designs/*.toml``,
-designed here) and five variations of one key (:data:`VARIATIONS`: 003's PI
+designed here) and seven variations of one key (:data:`VARIATIONS`: 003's PI
 with ``rule = "complex_vector"``, which no gallery spec uses; 003's PI and
 000's total compensation with its hexagon limit, both with
 ``drive.angle_compensation = "none"``; the complex-vector law of method
 ``cv`` with ``angle_compensation = "none"``, whose gains then compensate
-the placement error, and with ``voltage_priority = "d_axis"``), the header
+the placement error, with ``voltage_priority = "d_axis"`` and with 0 and 2
+periods of delay), the header
 is compiled
 (gcc -std=c99 -Wall -Wextra -Werror -pedantic -Wconversion -O2) with
 
@@ -98,6 +99,12 @@ def _d_axis_priority(data):
     data["drive"]["voltage_priority"] = "d_axis"
 
 
+def _delay(n):
+    def change(data):
+        data["drive"]["delay_samples"] = n
+    return change
+
+
 #: gallery specs changed in one key: the complex-vector PI rule (no gallery
 #: spec uses it), and no angle compensation (DELAY_COMP_TIME 0, the voltage
 #: placed at the sampled angle; with a hexagon limit for 000_tc)
@@ -106,7 +113,9 @@ VARIATIONS = {"003_azaiz2007_pi+complex_vector": ("003_azaiz2007_pi", _complex_v
               "000_lepioufle1992_tc+angle_none": ("000_lepioufle1992_tc",
                                                   _no_angle_compensation),
               "003_azaiz2007_cv+angle_none": ("003_azaiz2007_cv", _no_angle_compensation),
-              "003_azaiz2007_cv+d_axis": ("003_azaiz2007_cv", _d_axis_priority)}
+              "003_azaiz2007_cv+d_axis": ("003_azaiz2007_cv", _d_axis_priority),
+              "003_azaiz2007_cv+delay0": ("003_azaiz2007_cv", _delay(0)),
+              "003_azaiz2007_cv+delay2": ("003_azaiz2007_cv", _delay(2))}
 NAMES = DESIGNS + list(VARIATIONS)
 VARIANTS = {"float": None, "q31": "CCT_FIXED_POINT", "mcsdk": "CCT_MCSDK",
             "iqmath": "CCT_IQMATH"}
