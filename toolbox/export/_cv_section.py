@@ -8,7 +8,10 @@ discrete-time complex-vector control"): templates ``cv_top.c.j2`` and
 ``<P>MCSDK``, ``<P>IQMATH``) are ``#error``s naming why; the SVM hexagon
 limit is refused (the law is exported with the circle limit, radial or
 d-axis priority). The usage example is the linear law's
-(``templates/example.c.j2``): same input, output and status contract.
+(``templates/example.c.j2``): same input, output and status contract, and
+the same restart and handover functions (``<p>reset``, ``<p>preset_at``,
+``<p>preset``); the state holds per axis the law's integrator and delayed
+voltages (``d[]``, ``q[]``, the coordinates of the standstill axes).
 """
 
 from __future__ import annotations
@@ -91,7 +94,7 @@ def write_cv_header(artifact, motor, drive, name: str, title: str, *, render,
     t.lines.extend(render("cv_top.c.j2", prov=provenance, N=N, P=P, U=N.upper(), guard=guard,
                           delay=nd, d_priority=priority == "d_axis", d=d))
     t("")
-    t.lines.extend(render("cv.c.j2", N=N, P=P, U=N.upper(), nd=nd, nh=max(nd, 1), coef=coef,
+    t.lines.extend(render("cv.c.j2", N=N, P=P, U=N.upper(), nd=nd, coef=coef,
                           convention=sanitise_comment(conv), d_priority=priority == "d_axis",
                           plausible=_plausible_context(artifact, motor, drive, v_max)))
     if example is not None:
