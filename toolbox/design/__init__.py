@@ -1,8 +1,9 @@
 """Design methods: each turns a validated spec into a ControllerArtifact.
 
 One module per method (``pi``, ``total_comp``, ``ilq``, ``lq``, ``hinf``,
-``fcs_mpc``, ``robust_pi``, ``tune``, ``cv_discrete``), each with ``read_cfg`` (validates ``[controller.<method>]``),
-``design(spec)`` and a plain API on toolbox._lti or python-control plants and numbers,
+``fcs_mpc``, ``robust_pi``, ``tune``, ``cv_discrete``), each with ``read_cfg`` (validates
+``[controller.<method>]``), ``design(spec)`` and a plain API on toolbox.lti or python-control
+plants and numbers,
 re-exported here. ``steady_state`` holds the symbolic steady-state analysis
 of paper 000. ``_defaults`` derives the parameters a spec leaves out from
 the sample time and the delay (``default_bandwidth``, ``current_scale``,

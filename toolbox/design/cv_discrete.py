@@ -120,7 +120,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
-from .._lti import StateSpace
+from ..lti import StateSpace
 from ..artifact import AxisController, CvLaw
 from ..plant import dq_matrices, max_electrical_speed
 from ..spec import Table, check_rate
