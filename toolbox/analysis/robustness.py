@@ -31,6 +31,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ..plant import max_electrical_speed
+from ._laws import executed_laws
 from ._sampling import DEFAULT_BOX, DEFAULT_RANGES, sample_parameters
 from ._statespace import FreqResponse
 from .margins import (AXES, axis_law, axis_margins, coupled_closed_loop,
@@ -276,7 +277,7 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
     # coupled closed loops at speed (vectorised per delay value)
     wmax = max_electrical_speed(motor, drive)
     speeds = np.linspace(-wmax, wmax, n_speeds) if (wmax > 0 and n_speeds > 1) else np.zeros(1)
-    laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
+    laws = executed_laws(artifact)
     rho = np.zeros(N)
     rho_speed = np.zeros(N)  # the speed of each set's largest pole modulus
     i_ref = i_ref or (0.0, motor.rated_current or 10.0)

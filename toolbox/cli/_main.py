@@ -168,7 +168,7 @@ def derive(spec: str, fmt: str | None) -> None:
                    "speeds (up to about a second more per design).")
 @click.option("--method", "method", default=None, metavar="M",
               help="Design with method M instead of the spec's controller.method "
-                   "(pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi, tune).")
+                   "(pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi, tune, cv).")
 @click.option("--set", "sets", multiple=True, metavar="KEY.PATH=VALUE",
               help="Override one spec value before validation (repeatable); VALUE is a "
                    "TOML scalar or array, e.g. --set controller.pi.bandwidth=1500 "

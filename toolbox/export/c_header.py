@@ -51,7 +51,10 @@ variants of a one-degree-of-freedom PI law: :mod:`toolbox.export._vendor`
 Method ``fcs_mpc`` exports its predictive switching law instead (paper 002
 criterion (23) over the 8 inverter states with the switching penalty, one
 forward-Euler prediction, the one-period delay handled as the simulator's
-``_fcs_choice``; templates/fcs.c.j2), float only.
+``_fcs_choice``; templates/fcs.c.j2), float only. Method ``cv`` exports its
+complex-vector law, gains computed each period at the measured speed as the
+simulator's ``_kernel_cv`` (:mod:`toolbox.export._cv_section`,
+templates/cv_top.c.j2, cv.c.j2), float only.
 
 Exportability rules (:func:`check_exportable`) -- a controller is refused with
 :class:`toolbox.errors.ExportRefused` (key ``controller.<method>``, the
@@ -113,6 +116,7 @@ from ._plausible import (PLAUSIBLE_MARGIN, VDC_MAX_PER_NOMINAL,  # noqa: F401
                          VDC_MIN_PER_NOMINAL, _plausible_context, plausibility_limits)
 from ._reference import ReferenceLaw, d_priority_limit, reference_law  # noqa: F401
 from ._vendor_section import _vendor_section, vendor_plan  # noqa: F401
+from ._cv_section import write_cv_header
 
 __all__ = ["write_header", "check_exportable", "ExportCheck", "sanitise_comment",
            "realisations", "reference_law", "ReferenceLaw", "check_fixed", "INTEGRATOR_TOL", "RING_RADIUS",
@@ -387,6 +391,12 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     motor, drive = _motor_drive(artifact, motor, drive)
     if artifact.method == "fcs_mpc":
         return _write_fcs_header(artifact, motor, drive, name, title, example)
+    if artifact.cv is not None:
+        if title is None:
+            title = (artifact.spec or {}).get("title", "")
+        return write_cv_header(artifact, motor, drive, name, title, render=_render,
+                               provenance=_provenance(artifact, title),
+                               example=_example if example else None)
     check = check_exportable(artifact, motor, drive)
     N = name.lower()
     P = name.upper() + "_"

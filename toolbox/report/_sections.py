@@ -24,6 +24,7 @@ METHOD_NAMES = {
     "fcs_mpc": "Finite-control-set predictive control",
     "robust_pi": "Robust PI (multi-model disk-margin tuning at speed)",
     "tune": "Structured robust tuning of the PI (hard disk-margin goals, fastest response)",
+    "cv": "Direct discrete-time complex-vector control (poles placed in z at the measured speed)",
 }
 
 

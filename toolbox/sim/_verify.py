@@ -54,7 +54,8 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
     """The simulator's :class:`ControlLaw` executing ``artifact``.
 
     The executed law of each axis is the artifact's ``axes.<axis>.law``; the
-    predictive law of ``fcs_mpc`` reads the typed ``artifact.fcs`` weights.
+    predictive law of ``fcs_mpc`` reads the typed ``artifact.fcs`` weights, and
+    method ``cv`` executes its complex-vector law ``artifact.cv``.
 
     Parameters
     ----------
@@ -65,7 +66,7 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
     """
     return ControlLaw(d=_axis_law(artifact.axes["d"]), q=_axis_law(artifact.axes["q"]),
                       sample_time=artifact.sample_time, decoupling=artifact.decoupling,
-                      speed_loop=speed_loop, fcs=artifact.fcs)
+                      speed_loop=speed_loop, fcs=artifact.fcs, cv=artifact.cv)
 
 
 def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
