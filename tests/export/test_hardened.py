@@ -237,3 +237,114 @@ def test_glitches_in_closed_loop(name, tmp_path_factory):
             over.append(f"{label}: {dev:.3g} A > {bound:.3g} A ({how})")
     assert not over, f"{name}: " + "; ".join(over)
 
+
+
+# ---------------------------------------------------------------- integer variants
+INT_DRIVER = r"""
+#include <stdio.h>
+#include <stdint.h>
+#include "controller.h"
+#ifndef CCT_FIXED_POINT
+static int32_t word(float x, float base, int *flag)   /* IQ24 p.u. / s16 digits, NaN -> 0 */
+{
+    const float w = x / base * SCALE;
+    if (cct_isnan(x)) { *flag = 1; return 0; }
+    if (!(w < LIM)) { *flag = 1; return (int32_t)LIM; }
+    if (!(w > -LIM)) { *flag = 1; return -(int32_t)LIM; }
+    return (int32_t)w;
+}
+#endif
+int main(void)
+{
+    float r[5];
+#if defined(CCT_FIXED_POINT)
+    cct_state_q31_t s; cct_input_q31_t in; cct_output_q31_t out; cct_init_q31(&s);
+#elif defined(CCT_MCSDK)
+    cct_state_s16_t s; cct_input_s16_t in; cct_output_s16_t out; cct_init_s16(&s);
+#else
+    cct_state_iq_t s; cct_input_iq_t in; cct_output_iq_t out; cct_init_iq(&s);
+#endif
+    while (scanf("%f %f %f %f %f", &r[0], &r[1], &r[2], &r[3], &r[4]) == 5) {
+        int f = 0;
+#if defined(CCT_FIXED_POINT)
+        in.i_d_ref = cct_to_q31(r[0], CCT_Q31_I_PLAUSIBLE, CCT_Q31_I_BASE, &f);
+        in.i_q_ref = cct_to_q31(r[1], CCT_Q31_I_PLAUSIBLE, CCT_Q31_I_BASE, &f);
+        in.i_d = cct_to_q31(r[2], CCT_Q31_I_PLAUSIBLE, CCT_Q31_I_BASE, &f);
+        in.i_q = cct_to_q31(r[3], CCT_Q31_I_PLAUSIBLE, CCT_Q31_I_BASE, &f);
+        in.omega_m = cct_to_q31(r[4], CCT_Q31_W_PLAUSIBLE, CCT_Q31_W_BASE, &f);
+        cct_step_q31(&s, &in, &out);
+#elif defined(CCT_MCSDK)
+        in.i_d_ref = cct_to_s16a(r[0], &f);
+        in.i_q_ref = cct_to_s16a(r[1], &f);
+        in.i_d = cct_to_s16a(r[2], &f);
+        in.i_q = cct_to_s16a(r[3], &f);
+        in.omega_m = (int16_t)word(r[4], CCT_MCSDK_W_FS, &f);
+        cct_step_s16(&s, &in, &out);
+#else
+        in.i_d_ref = word(r[0], CCT_IQ_I_BASE, &f);
+        in.i_q_ref = word(r[1], CCT_IQ_I_BASE, &f);
+        in.i_d = word(r[2], CCT_IQ_I_BASE, &f);
+        in.i_q = word(r[3], CCT_IQ_I_BASE, &f);
+        in.omega_m = word(r[4], CCT_IQ_W_BASE, &f);
+        cct_step_iq(&s, &in, &out);
+#endif
+        printf("%ld %ld %ld %ld %d %d %d\n", (long)out.v_d, (long)out.v_q, (long)out.v_d_comp,
+               (long)out.v_q_comp, out.saturated, out.status, f);
+    }
+    return 0;
+}
+"""
+CLAMPED = 3
+#: (row, status, converter flag) with I range 20 A (plausible 40 A), W range
+#: 400 rad/s (plausible 800 rad/s); a NaN converts to 0 with the flag set
+INT_STEPS = [(GOOD, OK, 0), ("0 5 0 nan 50", OK, 1), (GOOD, OK, 0), ("0 30 0 4.5 50", CLAMPED, 0),
+             ("0 5 0 30 50", CLAMPED, 0), ("0 5 0 4.5 500", CLAMPED, 0), ("0 5 0 1e6 50", IMPLAUSIBLE, 1),
+             ("0 5 -1e6 4.5 50", IMPLAUSIBLE, 1), ("0 5 0 4.5 -1e5", IMPLAUSIBLE, 1),
+             ("0 5 0 inf 50", IMPLAUSIBLE, 1), ("0 5 0 39 50", CLAMPED, 0), (GOOD, OK, 0)]
+_VARIANT_MACROS = {"q31": ["-DCCT_FIXED_POINT", "-DSCALE=1.0f", "-DLIM=1.0f"],
+                   "mcsdk": ["-DCCT_MCSDK", "-DSCALE=32768.0f", "-DLIM=32767.0f"],
+                   "iqmath": ["-DCCT_IQMATH", "-DSCALE=16777216.0f", "-DLIM=2147483520.0f"]}
+
+
+@pytest.mark.parametrize("variant", ["q31", "mcsdk", "iqmath"])
+@pytest.mark.parametrize("cc", ["gcc", "clang"])
+def test_integer_variants_clamp_and_refuse(cc, variant, tmp_path):
+    """-O2 -ffast-math: each integer variant of the PI header reports CLAMPED
+    whenever an input was clamped to its range (I 20 A, W 400 rad/s), and
+    IMPLAUSIBLE for a measurement beyond twice it (40 A, 800 rad/s; a 1e6 A
+    or inf sample), with no state update: the periods that follow equal a run
+    in which the refused rows never happened. A NaN converts to 0 with the
+    converter's flag (to_q31, to_s16a). The output struct has v_*_comp and
+    status in every variant."""
+    h = write_header(A.pi_artifact(), A.MOTOR, A.DRIVE)
+    (tmp_path / "controller.h").write_text(h)
+    (tmp_path / "driver.c").write_text(INT_DRIVER)
+    exe = tmp_path / "drv"
+    flags = [f for f in C.CFLAGS if f != "-O2"] + ["-O2", "-ffast-math"]
+    res = subprocess.run([_compiler(cc), *flags, *_VARIANT_MACROS[variant], "-I", str(tmp_path),
+                          str(tmp_path / "driver.c"), "-o", str(exe), "-lm"],
+                         capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+
+    def run(rows):
+        out = subprocess.run([str(exe)], input="".join(r + "\n" for r in rows),
+                             capture_output=True, text=True, timeout=60, check=True).stdout
+        return np.array([[int(x) for x in ln.split()] for ln in out.strip().splitlines()])
+
+    rows = run([r for r, _, _ in INT_STEPS])
+    assert list(rows[:, 5]) == [st for _, st, _ in INT_STEPS], f"{cc} {variant}: {rows[:, 5]}"
+    if variant != "iqmath":                          # the header's own converters
+        assert list(rows[:, 6]) == [f for _, _, f in INT_STEPS], f"{cc} {variant}: {rows[:, 6]}"
+    kept = [k for k, (_, st, _) in enumerate(INT_STEPS) if st != IMPLAUSIBLE]
+    alone = run([INT_STEPS[k][0] for k in kept])
+    np.testing.assert_array_equal(rows[kept, :6], alone[:, :6])
+    # a refused period runs the law on the last plausible sample (the row before it)
+    for k, (_, st, _) in enumerate(INT_STEPS):
+        if st == IMPLAUSIBLE:
+            last = max(j for j in kept if j < k)
+            f = INT_STEPS[k][0].split()
+            g = INT_STEPS[last][0].split()
+            sub = f[:2] + (g[2:4] if abs(float(f[2])) > 40 or abs(float(f[3])) > 40 else f[2:4]) \
+                + ([g[4]] if abs(float(f[4])) > 800 else [f[4]])
+            ref = run([INT_STEPS[j][0] for j in kept if j < k] + [" ".join(sub)])
+            np.testing.assert_array_equal(rows[k, :5], ref[-1, :5])
