@@ -37,7 +37,7 @@ import tempfile
 from pathlib import Path
 
 __all__ = ["FIRMWARE_JSON", "SCHEMA", "measure_firmware", "firmware_json", "firmware_table_row",
-           "load_firmware", "F_CPU", "F_PWM", "CPI"]
+           "load_firmware", "firmware_table", "F_CPU", "F_PWM", "CPI"]
 
 FIRMWARE_JSON = "firmware.json"
 SCHEMA = "cct.firmware/1"
@@ -172,3 +172,26 @@ def load_firmware(out_dir: str | Path) -> dict | None:
     if not isinstance(data.get("measured"), bool):
         raise ArtifactError("measured", "true or false", data.get("measured"), file=str(path))
     return data
+
+
+TABLE_HEAD = ("| design | method | code B | data B | step code B | libm B | instr typ | "
+              "instr worst | div/sqrt | stack B | % of 50 us |\n"
+              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+
+
+def firmware_table(reports_dir: str | Path) -> str:
+    """The README's firmware table: one row per ``<reports_dir>/<name>/firmware.json``
+    (name order), the method read from the directory's ``controller.json``
+    (with "(hexagon)" for ``drive.voltage_limit = "hexagon"``)."""
+    rows = [TABLE_HEAD]
+    for d in sorted(p for p in Path(reports_dir).iterdir() if p.is_dir()):
+        data = load_firmware(d)
+        if data is None:
+            continue
+        art = json.loads((d / "controller.json").read_text())
+        method = art.get("method", "?")
+        if (art.get("spec") or {}).get("drive", {}).get("voltage_limit") == "hexagon" \
+                and method != "fcs_mpc":
+            method += " (hexagon)"
+        rows.append(firmware_table_row(d.name, method, data))
+    return "\n".join(rows)
