@@ -2,8 +2,8 @@
 header as data, the report's firmware card and the README's table.
 
 * Without the cross toolchain (simulated by making ``_m4.available`` report
-  it missing) the data says ``measured: false`` with the reason, and the
-  report's firmware card says "not measured" and why.
+  it missing) the data says ``measured: false`` with the reason (the
+  report's card: ``tests/report/test_firmware_card.py``).
 * With it, the figures of a gallery header equal ``reports/<name>/firmware.json``
   (deterministic, and the gallery's file is fresh), the share of the PWM
   period is the stated formula of the worst path, and the README's table is
@@ -23,7 +23,6 @@ import pytest
 from toolbox.export import _m4
 from toolbox.export.firmware import (CPI, SLOW_EXTRA, firmware_table, load_firmware,
                                      measure_firmware)
-from toolbox.report._firmware import _firmware_card
 
 import target_m4 as T
 
@@ -36,9 +35,6 @@ def test_not_measured_without_toolchain(monkeypatch):
     data = measure_firmware(header)
     assert data["measured"] is False
     assert data["reason"] == "not measured: toolchain absent (arm-none-eabi-gcc, unicorn (PyPI))"
-    card = _firmware_card(data)
-    assert card["value"] == "not measured" and "toolchain absent" in card["detail"]
-    assert _firmware_card(None)["value"] == "not measured"
 
 
 def test_gallery_figures_are_fresh_and_consistent():
@@ -54,8 +50,6 @@ def test_gallery_figures_are_fresh_and_consistent():
     for key, cpi in (("low", CPI[0]), ("high", CPI[1])):
         assert data["period_share"][key] == pytest.approx(
             (ins["worst"] * cpi + SLOW_EXTRA * data["div_sqrt"]) / (170e6 / 20e3), rel=1e-12)
-    card = _firmware_card(data)
-    assert f"{ins['typical']}-{ins['worst']} instructions" in card["value"]
 
 
 def test_readme_table_is_the_gallery_data():
