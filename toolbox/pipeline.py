@@ -28,7 +28,7 @@ __all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_d
            "OUTPUT_FILES", "check_integrity", "saturated_spectral_radius"]
 
 OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h",
-                "report.html", "report.pdf")
+                "firmware.json", "report.html", "report.pdf")
 
 Progress = Callable[[str], None]
 
@@ -215,6 +215,7 @@ class DesignOutputs:
     analysis: dict | None = None
     verification: object | None = None
     header: str | None = None
+    firmware: dict | None = None      # firmware.json: target figures of the header
     html: str | None = None
     pdf: bytes | None = None
     files: dict[str, str | bytes] = field(default_factory=dict)
@@ -299,6 +300,8 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
         else:
             out.header = write_header(out.artifact, spec.motor, spec.drive,
                                       prefix=spec.export_prefix)
+            from .export.firmware import measure_firmware
+            out.firmware = measure_firmware(out.header, spec.export_prefix)
     if report:
         progress("report")
         from .report import build_context, write_html, write_pdf
@@ -333,7 +336,7 @@ def report_data(out: DesignOutputs):
     return ReportData(title=out.spec.title or (out.spec.source or "untitled"), spec=out.spec,
                       artifact=out.artifact, analysis=out.analysis,
                       verification=verification, traces=traces,
-                      notice=out.notice, warnings=warnings)
+                      notice=out.notice, warnings=warnings, firmware=out.firmware)
 
 
 def _files(out: DesignOutputs) -> dict[str, str | bytes]:
@@ -345,6 +348,9 @@ def _files(out: DesignOutputs) -> dict[str, str | bytes]:
                                           allow_nan=False) + "\n"
     if out.header is not None:
         files["controller.h"] = out.header
+    if out.firmware is not None:
+        from .export.firmware import FIRMWARE_JSON, firmware_json
+        files[FIRMWARE_JSON] = firmware_json(out.firmware)
     if out.html is not None:
         files["report.html"] = out.html
     if out.pdf is not None:

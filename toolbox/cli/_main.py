@@ -351,8 +351,9 @@ def report(out_dir: str, quiet: bool) -> None:
                     "stability": loop_stability(artifact, spec.motor),
                     "requirements": {k: c for k, c in verification.margin_checks.items()
                                      if not k.startswith("default.")}}
+        from ..export.firmware import load_firmware
         out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
-                            verification=verification)
+                            verification=verification, firmware=load_firmware(out_dir))
         bar("report")
         context = build_context(report_data(out))  # figures drawn once for both
         files.update({"report.html": write_html(context), "report.pdf": write_pdf(context)})
@@ -410,6 +411,10 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
     text = write_header(artifact, spec.motor, spec.drive, source=file,
                         prefix=prefix if prefix is not None else spec.export_prefix)
     _write_file(output or Path(out_dir) / "controller.h", text, "--output")
+    if not output:  # the target figures of the header (or why not measured) next to it
+        from ..export.firmware import FIRMWARE_JSON, firmware_json, measure_firmware
+        _write_file(Path(out_dir) / FIRMWARE_JSON, firmware_json(measure_firmware(
+            text, prefix if prefix is not None else spec.export_prefix)), "--output")
 
 
 @main.command()

@@ -22,6 +22,7 @@ from ..lti import invariant_zeros as _zeros
 from ..errors import ExportRefused, SpecError
 from . import _fixed
 from ._minimal import MinimalLaw, minimal_law
+from ._plausible import speed_range
 from ._sos import Realisation, realise_axis
 
 
@@ -244,15 +245,9 @@ def _ranges(artifact, motor, drive, v_max: float) -> tuple[float, float]:
     if i_max is None:
         dec = artifact.decoupling
         i_max = v_max / max(dec.R_c, 1e-3)         # the voltage-limited current
-    w_max = None
-    if drive is not None and getattr(drive, "max_speed", None):
-        w_max = drive.max_speed
-    elif motor is not None and motor.rated_speed:
-        w_max = motor.rated_speed
-    else:
-        dec = artifact.decoupling
-        w_max = 2.0 * v_max / max(dec.pole_pairs * dec.flux_c, 1e-9)
-    return float(i_max), float(w_max)
+    # the speed range is the float path's (plausibility_limits'): drive.max_speed, else
+    # the larger of the rated speed and twice the back-EMF speed of the voltage limit
+    return float(i_max), speed_range(artifact, motor, drive, v_max)
 
 
 def _dec_coeffs(dec) -> dict[str, float]:

@@ -190,6 +190,12 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
             "Lq": _f(dec.Lq_c, 'motor.Lq', 'decoupling DEC_LQ'),
             "flux": _f(dec.flux_c, 'motor.flux', 'decoupling DEC_FLUX'),
             "pole_pairs": _int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)}
+    # the dq model that predicts a replaced current sample: the motor's data, else the law's
+    src = motor
+    pred = {k: _f(v, f"motor.{k}", f"PRED_{k.upper()}") for k, v in (
+        ("R", src.R if src else dec.R_c), ("Ld", src.Ld if src else dec.Ld_c),
+        ("Lq", src.Lq if src else dec.Lq_c), ("flux", src.flux if src else dec.flux_c))}
+    pred["what"] = "motor data" if src else "the law's decoupling model"
     t_comp = artifact.decoupling.delay_compensation_time
     comp = {"time": _f(t_comp, 'drive.angle_compensation', 'DELAY_COMP_TIME'),
             "periods": f"{t_comp / artifact.sample_time:g}",
@@ -200,7 +206,7 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
           for ax, kp, ki in _informational_pi_gains(artifact)]
     lines = _render("defines.c.j2", P=P, p=P.lower(), ts=ts_, nd=nd_, vmax=vmax_,
                     what="hexagon apothem" if check.limit == "hexagon" else "circle radius",
-                    vmax_per_vdc=per_vdc, motor=mot, drive=drv, dec=dec_, comp=comp,
+                    vmax_per_vdc=per_vdc, motor=mot, drive=drv, dec=dec_, comp=comp, pred=pred,
                     method=artifact.method, pi=pi)
     t.lines.extend(lines[:-1] if lines and lines[-1] == "" else lines)
 

@@ -40,6 +40,7 @@ from pathlib import Path
 
 from . import plots
 from ._certificate import _certificate_of, _sampled_certificate_of  # noqa: F401
+from ._firmware import _firmware_card
 from ._checks import (BASELINE_LABEL, MARGIN_ROWS, _banner, _check_rows, _checks_of,
                       _margin_table, _margins_of, _verdict_card)
 from ._data import ReportData
@@ -146,7 +147,8 @@ def build_context(data: ReportData) -> dict:
     dict
         Keys ``title, motor, drive, requirements, equations, controller,
         margins, checks, figures, step, robustness, verdict_card (the
-        robustness card: drift-box verdict), banner (the verdict banner:
+        robustness card: drift-box verdict), firmware (the firmware card:
+        firmware.json's target figures or why not measured), banner (the verdict banner:
         ``status`` pass/fail/none, ``headline``, ``count``, ``reason``),
         baseline (the label of informational margins, or None), certificate,
         scenarios, provenance, margins_given, resolution_note``; the HTML and typst templates render it.
@@ -189,6 +191,7 @@ def build_context(data: ReportData) -> dict:
         "step": _step_of(data.analysis),
         "robustness": _robustness(_robustness_of(data.analysis)),
         "verdict_card": _verdict_card(data.verification, baseline),
+        "firmware": _firmware_card(data.firmware),
         "banner": _banner(data, checks),
         "baseline": BASELINE_LABEL if baseline else None,
         "resolution_note": RESOLUTION_NOTE,
