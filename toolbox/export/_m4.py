@@ -32,6 +32,7 @@ after it).
 
 from __future__ import annotations
 
+import functools
 import shutil
 import struct
 import subprocess
@@ -115,6 +116,12 @@ def available() -> str | None:
 
 class BuildError(RuntimeError):
     """A cross or host compilation step failed (the command and its messages)."""
+
+
+@functools.lru_cache(maxsize=1)
+def toolchain_version() -> str:
+    """First line of ``arm-none-eabi-gcc --version`` (keys the firmware figures)."""
+    return _run([ARM_GCC, "--version"]).stdout.splitlines()[0]
 
 
 def _run(cmd, **kw) -> subprocess.CompletedProcess:
