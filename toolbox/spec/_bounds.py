@@ -195,8 +195,8 @@ def check_inertia(motor, key: str = "motor.J") -> None:
             break
     raise SpecError(key, f"a rotor inertia plausible for this motor: between {j_low:.3g} and "
                     f"{j_high:.3g} kg m^2 (its characteristic torque 1.5 p flux^2 / L = "
-                    f"{t_char:.3g} N m over {low:g} .. {high:g} rad/s^2, the range of every "
-                    "corpus motor with a decade of margin)", motor.J,
+                    f"{t_char:.3g} N m over {low:g} .. {high:g} rad/s^2, the torque-to-inertia "
+                    "range of real motors, widened)", motor.J,
                     hint=hint or "check the unit of J (a datasheet prints kg cm^2 or g cm^2: "
                     'write it with its unit, e.g. J = "1.2 kg cm^2")')
 

@@ -147,7 +147,9 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
         with errors.check():
             controller = _controller(top.raw("controller"), motor, drive)
     else:  # the method's table is still checked, so that one run reports it too
-        for err in _controller_alone(top.raw("controller"), drive):
+        drive_ok = drive is not None and not any(
+            e.key.startswith("drive.") for e in errors.errors)
+        for err in _controller_alone(top.raw("controller"), drive if drive_ok else None):
             errors.add(err)
     requirements = None
     with errors.check():
@@ -375,7 +377,10 @@ def _controller_alone(value: Any, drive: Drive | None) -> list[SpecError]:
     different stand-in motors (:data:`_STAND_INS`) and only the errors both
     readings give, word for word, are kept (an unknown key, a unit that
     does not parse, a negative bandwidth; never a range computed from the
-    stand-in's numbers)."""
+    stand-in's numbers). A missing table is reported only once the motor
+    and drive are valid (as before: the file is likely a fragment)."""
+    if value is None:
+        return []
     found = []
     for motor_table, drive_table in _STAND_INS:
         try:
