@@ -29,7 +29,7 @@ import pytest
 from toolbox.errors import SpecError
 from toolbox.pipeline import design_spec
 from toolbox.spec import load_spec
-from toolbox.spec._model import METHODS
+from toolbox.spec import METHODS
 
 DIR = Path(__file__).parent / "datasheets"
 FILES = sorted(DIR.glob("*.toml"))

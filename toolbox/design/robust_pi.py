@@ -540,7 +540,11 @@ def _what_passes(M: np.ndarray, models: ModelSet, alpha: float, wc: float, pole_
         parts.append(f"at {speeds.min():.4g} rad/s electrical the worst margin is already "
                      f"{float(M[:, low].min()):.3g} < {alpha:g}: a lower max_speed cannot "
                      "pass; narrow parameter_box or lower disk_margin")
-    return "; ".join(parts) or "no disk_margin tried passes; narrow parameter_box"
+    if not parts and best <= 0:
+        parts.append("the best design found has unstable (model, speed) pairs (worst margin "
+                     "0): no disk_margin passes with this parameter_box; narrow it")
+    return "; ".join(parts) or (f"no disk_margin from {best:.3g} down by "
+                                f"{ADVICE_TRIES} steps of 10 % passes; narrow parameter_box")
 
 
 def _zero_name(ratio) -> str:
