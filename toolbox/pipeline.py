@@ -44,6 +44,11 @@ def design_spec(spec: Spec | str | Path | dict) -> ControllerArtifact:
     ----------
     spec : Spec, str, Path or dict
         A validated spec, a spec file or the spec as plain data.
+
+    Raises
+    ------
+    SpecError
+        (``DesignInfeasible`` included) naming the spec file when it has one.
     """
     from .design import design
 
@@ -51,7 +56,12 @@ def design_spec(spec: Spec | str | Path | dict) -> ControllerArtifact:
         spec = load_spec(spec)
     elif isinstance(spec, dict):
         spec = spec_from_dict(spec)
-    return design(spec)
+    try:
+        return design(spec)
+    except SpecError as err:  # a refusal names the spec file, as load_spec's errors do
+        if err.file is None and spec.source:
+            raise err.with_file(spec.source) from None
+        raise
 
 
 def analyse(artifact: ControllerArtifact, spec: Spec, *,

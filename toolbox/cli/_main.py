@@ -22,7 +22,7 @@ from ._campaign import campaign
 from ._compare import compare
 from ._conventions import (_QUIET, EXIT_OK, EXIT_REQUIREMENT, _spec_errors,
                            _write_file)
-from ._echo import _fmt, _notices, _robustness_line
+from ._echo import _echo_wrapped, _fmt, _notices, _robustness_line
 from ._failsafe import (EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated,
                         internal_error_message, signal_handlers, where)
 from ._progress import StepBar, design_stages
@@ -237,7 +237,19 @@ def _summary(out) -> None:
     failed = list(dict.fromkeys(failed))
     if out.header_refused:
         failed.append("controller.h refused")
-    click.echo("requirements: " + ("all pass" if not failed else "FAILED " + ", ".join(failed)))
+    _echo_failed(failed)
+
+
+def _echo_failed(failed: list[str]) -> None:
+    """``requirements: all pass``, or ``requirements: FAILED n checks:`` and
+    one wrapped line per failed check (a reason may run to hundreds of
+    characters: no line beyond 100 columns)."""
+    if not failed:
+        click.echo("requirements: all pass")
+        return
+    click.echo(f"requirements: FAILED {len(failed)} check{'s' if len(failed) > 1 else ''}:")
+    for item in failed:
+        _echo_wrapped("  - ", item)
 
 
 @main.command()

@@ -69,7 +69,7 @@ def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
                       speed_loop=speed_loop, fcs=artifact.fcs, cv=artifact.cv)
 
 
-def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
+def default_scenarios(motor, drive=None, horizon: float | None = None) -> tuple[Scenario, ...]:
     """Scenarios used when a spec has no ``[[scenario]]``, scaled to the motor.
 
     A q-current step to half the current scale at standstill, the same step
@@ -83,7 +83,11 @@ def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
 
     Durations: at least 20 ms and 30 time constants of the slowest default
     crossover (``3/wc`` is the 5 % time of a first-order loop: ten of them
-    leave room for the slower second-order defaults). The unloaded start
+    leave room for the slower second-order defaults), and at least
+    ``horizon`` when given: :func:`toolbox.analysis.executed.settling_horizon`,
+    10 time constants of the executed loop's slowest closed-loop pole that
+    shows in the step (so that the settling time the checks require is
+    reached within the span). The unloaded start
     must not pass the speed scale nor 80 % of the voltage-limited speed
     (beyond, the back-EMF would saturate the voltage: a field-weakening
     question, not the loop's): a rotor light enough to pass that sooner gets
@@ -96,6 +100,8 @@ def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
     drive : Drive, optional
         Sample time, delay and voltage; without it the step is half the
         rated current (10 A when unknown) and the speed scenario is left out.
+    horizon : float, optional
+        Shortest span after the step (s), from the designed loop.
     """
     if drive is None:
         i_step = 0.5 * (motor.rated_current or motor.max_current or 10.0)
@@ -112,7 +118,7 @@ def default_scenarios(motor, drive=None) -> tuple[Scenario, ...]:
     w_held = 0.5 * min(w_scale, w_reach)
     wc = default_bandwidth(drive, zero=True).value
     step_time = 0.001
-    span = max(0.02, 30.0 / wc)
+    span = max(0.02, 30.0 / wc, horizon or 0.0)
     # free acceleration may end at the speed scale or at 80 % of the voltage-limited speed
     # (20 % of the voltage left for the loop); a rotor light enough to pass that within the
     # span steps less current, sized to arrive there at the end (the same span as the
@@ -313,6 +319,13 @@ def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict,
     return checks, stability, linear, warnings, informational
 
 
+def _horizon(artifact, motor) -> float | None:
+    """The default scenarios' shortest span (toolbox.analysis.executed.settling_horizon)."""
+    from ..analysis.executed import settling_horizon
+
+    return settling_horizon(artifact, motor)
+
+
 def _drift_check(artifact, spec) -> dict:
     """The robustness verdict: the executed coupled sampled loop (delay,
     decoupling with the controller's own parameters, speed-sensor errors)
@@ -409,7 +422,8 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     -------
     VerifyResult
     """
-    scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
+    scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive,
+                                                    _horizon(artifact, spec.motor))
     plant = spec.motor  # the true plant is the spec's Motor (one parameter type)
     margin_checks, stability, linear, warnings, info = _margin_verdict(artifact, spec, file)
     if artifact.fcs is not None:
