@@ -188,7 +188,7 @@ def check_integrity(artifact: ControllerArtifact, spec: Spec, file: str | None =
 def run_verification(artifact: ControllerArtifact, spec: Spec,
                      progress: Callable[[int, int], None] | None = None,
                      file: str | None = None):
-    """Closed-loop simulation of every scenario (see :func:`toolbox.sim.verify`).
+    """Closed-loop simulation of every scenario (see :func:`toolbox.verify.verify`).
 
     Parameters
     ----------
@@ -201,7 +201,7 @@ def run_verification(artifact: ControllerArtifact, spec: Spec,
     file : str, optional
         The controller.json the artifact came from (named in warnings).
     """
-    from .sim import verify
+    from .verify import verify
 
     return verify(artifact, spec, progress=progress, file=file)
 
@@ -223,8 +223,8 @@ class DesignOutputs:
 
     @property
     def notice(self) -> str | None:
-        """:data:`toolbox.sim.NO_REQUIREMENTS` when the spec has no requirements."""
-        from .sim import NO_REQUIREMENTS
+        """:data:`toolbox.verify.NO_REQUIREMENTS` when the spec has no requirements."""
+        from .verify import NO_REQUIREMENTS
 
         return None if self.spec.requirements.given else NO_REQUIREMENTS
 

@@ -86,9 +86,10 @@ def make_plan(spec, artifact, threads: int | None = None, build: tuple = ()) -> 
     """The :class:`Plan` of ``spec``'s campaign for the designed ``artifact``.
 
     Scenarios: those named in ``campaign.scenarios``, else every
-    ``[[scenario]]``, else :func:`toolbox.sim.default_scenarios`.
+    ``[[scenario]]``, else :func:`toolbox.verify.default_scenarios`.
     """
-    from ..sim import default_scenarios, scenario_setup
+    from ..sim import scenario_setup
+    from ..verify import default_scenarios
 
     cfg = spec.campaign
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)

@@ -226,7 +226,7 @@ def _summary(out) -> None:
     if out.analysis is not None:
         failed += [k for k, c in out.analysis.get("requirements", {}).items() if not c["pass"]]
     if out.verification is not None:
-        from ..sim import ROBUSTNESS_CHECKS
+        from ..verify import ROBUSTNESS_CHECKS
 
         # the drift-box verdict names its first failing set (factors and speed)
         failed += [k if k not in ROBUSTNESS_CHECKS else f"{k} ({c.get('reason')})"

@@ -25,6 +25,7 @@ from ._bounds import (check_drive, check_motor, check_motor_drive, check_plant_v
                       check_scenario_count, check_speed, check_work)
 from ._fields import Collector, Table, check_keys
 from ._methods import read_method_cfg
+from ._scenario import Scenario
 from ._model import (DRIFT_FACTOR_RANGE, DRIFT_PARAMETERS, METHODS, REQUIREMENT_KEYS,
                      ControllerChoice, Drive, Motor, Requirements, Spec)
 
@@ -423,8 +424,6 @@ def _scenarios(value: Any, drive: Drive, method: str | None) -> tuple:
     if not isinstance(value, list):
         raise SpecError("scenario", "an array of tables [[scenario]]", value)
     check_scenario_count(len(value))  # before reading 10,000 tables
-    from ..sim import Scenario  # the simulation package owns scenario semantics
-
     out = []
     for k, item in enumerate(value):
         key = f"scenario[{k}]"
