@@ -26,6 +26,7 @@ import os
 import pickle
 from pathlib import Path
 from typing import Any, Callable, Sequence, Union
+from ._io import write_atomic
 
 __all__ = ["cache_dir", "cache_key", "cached", "template_bytecode_cache"]
 
@@ -85,8 +86,6 @@ def _read(path: Path, key: str) -> Any | None:
 
 def _write(path: Path, key: str, value: Any) -> None:
     """Write atomically; a cache that cannot be written is not an error."""
-    from ._io import write_atomic
-
     payload = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
     data = b"\n".join((_MAGIC + b" " + key.encode(),
                        hashlib.sha256(payload).hexdigest().encode(), payload))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+from pathlib import Path
 
 __all__ = ["toolbox_version", "source_hash"]
 
@@ -34,7 +35,6 @@ def source_hash() -> str:
     so that no chunk computed by another build is mixed into a table.
     """
     import hashlib
-    from pathlib import Path
 
     root = Path(__file__).resolve().parent
     h = hashlib.sha256()

@@ -18,9 +18,11 @@ from typing import Any, Callable
 import numpy as np
 
 from ._io import check_text_depth, read_limited, write_set
-from .artifact import ControllerArtifact
+from .artifact import ControllerArtifact, spec_sha256
 from .errors import ArtifactError, CctError, ExportRefused, SpecError
-from .spec import Spec, load_spec, spec_from_dict
+from .spec import Spec, load_spec, spec_from_dict, SpecErrors
+from .design import design
+from .export import write_header
 
 __all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_data",
            "design_spec", "analyse", "run_verification", "build_outputs", "write_outputs",
@@ -45,8 +47,6 @@ def design_spec(spec: Spec | str | Path | dict) -> ControllerArtifact:
     spec : Spec, str, Path or dict
         A validated spec, a spec file or the spec as plain data.
     """
-    from .design import design
-
     if isinstance(spec, (str, Path)):
         spec = load_spec(spec)
     elif isinstance(spec, dict):
@@ -164,8 +164,6 @@ def check_integrity(artifact: ControllerArtifact, spec: Spec, file: str | None =
     ArtifactError
         Naming the key that disagrees, the value expected and the one found.
     """
-    from .artifact import spec_sha256
-
     stored = artifact.provenance.get("spec_sha256")
     digest = spec_sha256(artifact.spec)
     if stored != digest:
@@ -286,7 +284,6 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
         out.verification = run_verification(out.artifact, spec)
     if header:
         progress("firmware header")
-        from .export import write_header
 
         try:
             refuse_unstable_export(out.artifact, spec.motor)
@@ -423,8 +420,6 @@ def header_agreement(out_dir: str | Path, artifact: ControllerArtifact,
 def _header_difference(raw: bytes, artifact: ControllerArtifact, spec: Spec) -> int | None:
     """First line (1-based) where ``raw`` differs from the header regenerated
     from ``artifact`` with the prefix the header uses; None when equal."""
-    from .export import write_header
-
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -581,8 +576,6 @@ def spec_of_artifact(artifact: ControllerArtifact, file: str | None = None) -> S
 
 
 def _as_artifact_error(err: SpecError, file: str | None) -> ArtifactError:
-    from .spec import SpecErrors
-
     if isinstance(err, SpecErrors):
         first = err.errors[0]
         hint = f"and {len(err.errors) - 1} more error(s) in the stored spec"

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..artifact import AxisController
+from scipy.linalg import logm
 
 __all__ = ["AXES", "Law", "axis_law", "law_to_continuous"]
 
@@ -94,8 +95,6 @@ def law_to_continuous(law: Law, method: str | None) -> Law:
     ``[[A_d, B_d], [0, I]]`` (integrators allowed; needs no pole on the
     negative real axis).
     """
-    from scipy.linalg import logm
-
     T = float(law.dt)
     n, m = law.B.shape
     if n == 0:

@@ -38,6 +38,7 @@ from ._axis import AxisController, StateSpaceData, Zpk, _antiwindup_gain  # noqa
 from ._decoupling import Decoupling
 from ._fields import (AxisWeights, FcsWeights, TransferFunctionData, _no_unknown,
                       finite_number)
+from ..spec import METHODS
 
 __all__ = [
     "SCHEMA",
@@ -303,7 +304,6 @@ class ControllerArtifact:
                 raise ArtifactError(name, "a value (missing)")
         if not isinstance(data["method"], str):
             raise ArtifactError("method", "a method name", data["method"])
-        from ..spec import METHODS  # lazy: the spec package imports the design registry
 
         if data["method"] not in METHODS:
             raise ArtifactError("method", "one of " + ", ".join(METHODS), data["method"])

@@ -27,11 +27,14 @@ import dataclasses
 import re
 from dataclasses import dataclass
 from typing import Any
+import os
+import socket
 
 import numpy as np
 
 from ..spec import OPERATING_POINT_KEYS, REQUIREMENT_KEYS
 from ._sampling import draw_samples
+from ._cluster import BuildMismatch, mismatch_message, worker_build
 
 __all__ = ["Plan", "make_plan", "evaluate_chunk", "scenario_slug", "warm_up", "DIVERGED"]
 
@@ -190,12 +193,7 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
     from ..sim import METRIC_NAMES, simulate_batch
 
     if plan.build:
-        from ._cluster import BuildMismatch, mismatch_message, worker_build
-
         if worker_build() != tuple(plan.build):
-            import os
-            import socket
-
             raise BuildMismatch(mismatch_message(f"on {socket.gethostname()} (pid "
                                                  f"{os.getpid()})", worker_build(), plan.build))
     cfg, motor = plan.cfg, plan.motor

@@ -28,6 +28,7 @@ import numpy as np
 from .._version import toolbox_version
 from ..spec import REQUIREMENT_KEYS
 from ._summary import parameter_columns
+from ._evaluate import make_plan
 
 __all__ = ["campaign_html", "report_columns"]
 
@@ -170,8 +171,6 @@ def _shown(names, spec, slug: str) -> list[tuple]:
 def report_columns(names, spec, artifact) -> list[str]:
     """The columns of results.parquet the summary and the report read: all but
     the scenario metrics that are not shown."""
-    from ._evaluate import make_plan
-
     slugs = [slug for slug, *_ in make_plan(spec, artifact).runs]
     keep = {f"{slug}.{q}" for slug in slugs for _k, q, _u in _shown(names, spec, slug)}
     return [c for c in names
@@ -219,8 +218,6 @@ def _dist_figures(table, spec, runs: list[str]) -> list[dict]:
 def campaign_html(table, summary: dict, spec, artifact) -> str:
     """The campaign report of a results table and its summary."""
     import jinja2
-
-    from ._evaluate import make_plan
 
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(resources.files("toolbox.campaign") / "templates")),

@@ -40,6 +40,8 @@ from ..errors import InfrastructureError, SpecError
 from ._cluster import (BuildMismatch, check_workers, connect, disk_errors, parse_address,
                        probe_scheduler, worker_build)
 from ._evaluate import Plan, chunk_range, evaluate_chunk, make_plan, warm_up
+from ._summary import summarize, write_outputs
+from ._report import report_columns
 
 __all__ = ["CAMPAIGN_SCHEMA", "CampaignRun", "run_campaign", "campaign_hash", "read_results",
            "valid_chunks", "chunk_path", "evaluate_serial"]
@@ -363,8 +365,6 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
         No ``[campaign]`` table, ``out_dir`` holds another campaign (other
         spec or controller), or ``artifact`` has another sample time.
     """
-    from ._summary import summarize, write_outputs
-
     if spec.campaign is None:
         raise SpecError("campaign", "a [campaign] table (missing)", file=spec.source)
     cfg = spec.campaign
@@ -472,8 +472,6 @@ def _assemble(out_dir: Path, spec, digest: str) -> Path:
 def _read_for_summary(results: Path, spec, artifact):
     """The columns the summary and the report use (not every metric)."""
     import pyarrow.parquet as pq
-
-    from ._report import report_columns
 
     names = pq.read_schema(results).names
     return pq.read_table(results, columns=report_columns(names, spec, artifact))

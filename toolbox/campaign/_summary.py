@@ -21,10 +21,14 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+import dataclasses
 
 import numpy as np
 
 from .._io import write_atomic
+from ._sampling import point_values
+from ..spec import spec_to_toml
+from ._evaluate import _NOT_MOTOR
 
 __all__ = ["summarize", "write_outputs", "parameter_columns", "wilson_interval"]
 
@@ -102,8 +106,6 @@ def _yield(k: int, n: int) -> dict:
 
 def yields(table, cfg, passed: np.ndarray, modes: dict) -> dict:
     """``per_sample``, ``per_motor`` and ``per_point`` yields (module docstring)."""
-    from ._sampling import point_values
-
     n = len(passed)
     motor = np.asarray(table.column("motor").to_numpy(), np.int64)
     point = np.asarray(table.column("point").to_numpy(), np.int64)
@@ -205,11 +207,7 @@ def worst_spec(spec, row: dict, source: str = "campaign") -> str:
     designs the same controller (the nominal motor is kept) and simulates the
     sample. A computation delay other than the design's cannot be expressed in
     a spec (the design would follow it): such a file says so in its header."""
-    import dataclasses
-
     from ..verify import default_scenarios
-    from ..spec import spec_to_toml
-    from ._evaluate import _NOT_MOTOR
 
     cfg = spec.campaign
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)

@@ -7,10 +7,11 @@ import sys
 
 import click
 
-from ..errors import SpecError
+from ..errors import SpecError, InfrastructureError
 from ._conventions import _QUIET, EXIT_OK, EXIT_REQUIREMENT, _spec_errors
 from ._failsafe import EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated
 from ._progress import CountBar
+from ..spec import load_spec
 
 #: cct campaign: the cluster or the output disk is not usable (the input is
 #: sound; retry on a working cluster). README.md "Campaigns".
@@ -54,8 +55,6 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
       cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c_pi --controller out/003_pi
     """
     from ..campaign import parse_address, run_campaign
-    from ..errors import InfrastructureError
-    from ..spec import load_spec
 
     s = load_spec(spec)
     if s.campaign is None:

@@ -16,6 +16,7 @@ from ._conventions import (_QUIET, EXIT_OK, EXIT_REQUIREMENT, _spec_errors,
                            _write_file)
 from ._echo import _echo_wrapped, _fmt
 from ._progress import StepBar
+from ..spec import load_spec
 
 
 @click.command()
@@ -47,7 +48,6 @@ def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: 
     """
     from ..analysis import compare_designs
     from ..pipeline import design_spec, run_verification
-    from ..spec import load_spec
 
     refused: list[dict] = []
     loaded: list = []

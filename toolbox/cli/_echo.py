@@ -4,6 +4,7 @@ the drift-box verdict line, and long messages wrapped."""
 from __future__ import annotations
 
 import math
+import textwrap
 
 import click
 
@@ -34,8 +35,6 @@ def _echo_wrapped(head: str, text: str, width: int = 100, file_key: bool = False
     """``head`` + ``text`` wrapped at ``width`` columns, continuation lines indented
     (a failure summary may run to a thousand characters); with ``file_key`` the
     leading ``file: key:`` of an error message stays whole on its first line."""
-    import textwrap
-
     parts = text.split(": ", 2)
     if file_key and len(parts) == 3 and len(head) + len(parts[0]) + len(parts[1]) + 3 > width:
         click.echo(f"{head}{parts[0]}: {parts[1]}:")

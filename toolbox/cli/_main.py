@@ -14,6 +14,8 @@ import errno
 import json
 import sys
 from pathlib import Path
+from dataclasses import replace
+import re
 
 import click
 
@@ -26,6 +28,7 @@ from ._echo import _fmt, _notices, _robustness_line
 from ._failsafe import (EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated,
                         internal_error_message, signal_handlers, where)
 from ._progress import StepBar, design_stages
+from ..spec import load_spec, spec_to_toml, CATALOG, CATALOG_NOTES, Motor
 
 
 class _Cct(click.Group):
@@ -90,8 +93,6 @@ def check(spec: str, as_json: bool) -> None:
     Example:
       cct check designs/000_lepioufle1992_tc.toml
     """
-    from ..spec import load_spec, spec_to_toml
-
     s = load_spec(spec)
     if as_json:
         click.echo(json.dumps(s.raw, indent=1, sort_keys=True))
@@ -108,8 +109,6 @@ def motors(as_json: bool) -> None:
     Example:
       cct motors
     """
-    from ..spec import CATALOG, CATALOG_NOTES, Motor
-
     rows = []
     for name, values in CATALOG.items():
         m = Motor(**values)
@@ -152,7 +151,6 @@ def derive(spec: str, fmt: str | None) -> None:
       cct derive designs/000_lepioufle1992_tc.toml --markdown
     """
     from ..plant import describe_model
-    from ..spec import load_spec
 
     click.echo(describe_model(load_spec(spec).motor, fmt or "text"), nl=False)
 
@@ -189,7 +187,6 @@ def design(spec: str, out_dir: str, only_controller: bool, sampled_certificate: 
       cct design designs/003_azaiz2007_hinf.toml --method pi --set controller.pi.bandwidth=1500 --out out/003_pi
     """
     from ..pipeline import build_outputs, write_outputs
-    from ..spec import load_spec
 
     overrides = ([("--method", f"controller.method={json.dumps(method)}")] if method else [])
     overrides += [("--set", text) for text in sets]
@@ -253,8 +250,6 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
     Example:
       cct verify out/003
     """
-    from dataclasses import replace
-
     from ..pipeline import (check_integrity, header_agreement, load_artifact,
                             run_verification, spec_of_artifact, write_outputs)
 
@@ -432,7 +427,6 @@ def gallery(designs_dir: str, out_dir: str, sampled_certificate: bool, quiet: bo
       cct gallery
     """
     from ..pipeline import build_outputs, write_outputs
-    from ..spec import load_spec
 
     failed = []
     paths = sorted(Path(designs_dir).glob("*.toml"))
@@ -450,7 +444,5 @@ def gallery(designs_dir: str, out_dir: str, sampled_certificate: bool, quiet: bo
 
 def _figures(html: str) -> dict[str, str]:
     """The report's inline SVG figures as files ``fig-<name>.svg`` (for the README)."""
-    import re
-
     found = re.findall(r'<figure id="(fig-[a-z0-9-]+)">.*?(<svg.*?</svg>)', html, flags=re.S)
     return {f"{name}.svg": svg + "\n" for name, svg in found}

@@ -43,6 +43,7 @@ from .._lti import TransferFunction, feedback
 from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES
 from ..errors import SpecError
 from ..spec import Table
+from ..plant import max_electrical_speed
 
 __all__ = ["AtSpeedCfg", "read_at_speed", "coupling_gains", "coupled_weight",
            "small_gain_peak", "WEIGHT_GAINS"]
@@ -107,8 +108,6 @@ def read_at_speed(table: Table, motor, drive) -> AtSpeedCfg | None:
         Unknown key, a negative speed, a range that is not ``[lo, hi]`` around
         the nominal value; key path ``controller.hinf.at_speed.<key>``.
     """
-    from ..plant import max_electrical_speed
-
     if not table.has("at_speed"):
         return None
     t = table.table("at_speed", KEYS)

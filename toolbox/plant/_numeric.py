@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+import inspect
 
 import numpy as np
 
@@ -31,8 +32,6 @@ def _electrical_sources(convention: str) -> tuple[str, str, str]:
     Raises RuntimeError if the generated code names anything that is not a
     numpy attribute (it could not be re-created from its text alone).
     """
-    import inspect
-
     import sympy as sp
 
     from ._symbolic import SYMBOLS as S

@@ -25,6 +25,7 @@ import io
 import math
 import re
 from typing import Any, Mapping, Sequence
+import hashlib
 
 import numpy as np
 
@@ -385,8 +386,6 @@ def equation_svg(tex: str, prefix: str | None = None) -> str | None:
 
 def hash_text(text: str) -> int:
     """A stable (not salted per process) hash for element-id prefixes."""
-    import hashlib
-
     return int(hashlib.sha256(text.encode()).hexdigest()[:12], 16)
 
 

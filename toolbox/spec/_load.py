@@ -28,6 +28,7 @@ from ._methods import read_method_cfg
 from ._scenario import Scenario
 from ._model import (DRIFT_FACTOR_RANGE, DRIFT_PARAMETERS, METHODS, REQUIREMENT_KEYS,
                      ControllerChoice, Drive, Motor, Requirements, Spec)
+from ._overrides import apply_overrides, blame_overrides
 
 __all__ = ["load_spec", "spec_from_dict", "motor_from_dict", "drive_from_dict"]
 
@@ -83,7 +84,6 @@ def load_spec(path: str | Path, overrides: Sequence[tuple[str, str]] = ()) -> Sp
         raise SpecError("", "valid TOML", str(err), file=name) from None
     if not overrides:
         return spec_from_dict(data, file=name)
-    from ._overrides import apply_overrides, blame_overrides
 
     try:
         data = apply_overrides(data, overrides)
