@@ -52,6 +52,7 @@ def cache_key(sources: Sources, packages: Sequence[str] = ("sympy",)) -> str:
     The versions are read from the installed distributions' metadata, so that
     a cache hit imports none of the packages.
     """
+    # lazy: importlib.metadata, 42 modules
     from importlib.metadata import PackageNotFoundError, version
 
     files = [sources] if isinstance(sources, (str, Path)) else list(sources)
@@ -138,7 +139,7 @@ def template_bytecode_cache(owner: str | Path):
     ``None`` (compile every time) when the cache is disabled or its directory
     cannot be created.
     """
-    import jinja2
+    import jinja2  # lazy: jinja2 + markupsafe, 23 modules
 
     directory = cache_dir()
     if directory is None:

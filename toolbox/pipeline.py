@@ -75,8 +75,8 @@ def analyse(artifact: ControllerArtifact, spec: Spec, *,
     analysis : dict
         JSON-ready analysis (``analysis.json``), with requirement checks.
     """
-    from .analysis import analysis_report
-    from .analysis.executed import INFORMATIONAL_METHODS, loop_stability
+    from .analysis import analysis_report  # lazy: scipy.optimize, ~260 modules
+    from .analysis.executed import INFORMATIONAL_METHODS, loop_stability  # lazy: ~260 modules
 
     report = analysis_report(artifact, spec.motor, spec.drive,
                              sampled_certificate=sampled_certificate)
@@ -118,7 +118,7 @@ def refuse_unstable_export(artifact: ControllerArtifact, motor, file: str | None
     """
     if artifact.method == "fcs_mpc":
         return
-    from .analysis.executed import loop_stability
+    from .analysis.executed import loop_stability  # lazy: scipy.optimize, ~260 modules
 
     stability = loop_stability(artifact, motor)
     unstable = [ax for ax, s in sorted(stability.items()) if s["stable"] is False]
@@ -199,7 +199,7 @@ def run_verification(artifact: ControllerArtifact, spec: Spec,
     file : str, optional
         The controller.json the artifact came from (named in warnings).
     """
-    from .verify import verify
+    from .verify import verify  # lazy: numba + the kernel, ~500 modules
 
     return verify(artifact, spec, progress=progress, file=file)
 
@@ -222,7 +222,7 @@ class DesignOutputs:
     @property
     def notice(self) -> str | None:
         """:data:`toolbox.verify.NO_REQUIREMENTS` when the spec has no requirements."""
-        from .verify import NO_REQUIREMENTS
+        from .verify import NO_REQUIREMENTS  # lazy: numba + the kernel, ~500 modules
 
         return None if self.spec.requirements.given else NO_REQUIREMENTS
 
@@ -298,6 +298,7 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
                                       prefix=spec.export_prefix)
     if report:
         progress("report")
+        # lazy: jinja2 + report, 33 modules
         from .report import build_context, write_html, write_pdf
 
         context = build_context(report_data(out))  # figures drawn once for both
@@ -318,7 +319,7 @@ def report_data(out: DesignOutputs):
     out : DesignOutputs
         Artifact, spec and whatever analysis and verification produced.
     """
-    from .report import ReportData
+    from .report import ReportData  # lazy: jinja2 + report, 33 modules
 
     verification = traces = None
     if out.verification is not None:

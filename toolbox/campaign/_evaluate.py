@@ -91,8 +91,8 @@ def make_plan(spec, artifact, threads: int | None = None, build: tuple = ()) -> 
     Scenarios: those named in ``campaign.scenarios``, else every
     ``[[scenario]]``, else :func:`toolbox.verify.default_scenarios`.
     """
-    from ..sim import scenario_setup
-    from ..verify import default_scenarios
+    from ..sim import scenario_setup  # lazy: numba + the kernel, ~450 modules
+    from ..verify import default_scenarios  # lazy: numba, scipy.optimize, ~720 modules
 
     cfg = spec.campaign
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
@@ -131,6 +131,7 @@ def _physical(cols: dict, n: int) -> np.ndarray:
 
 def _margins(plan: Plan, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
              delay: np.ndarray | None = None) -> dict:
+    # lazy: scipy.optimize/signal, ~490 modules
     from ..analysis.robustness import batch_loop_margins
 
     art = plan.artifact
@@ -177,7 +178,7 @@ def _judge(checks: list, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
 def warm_up(plan: Plan) -> None:
     """Load the compiled kernel and the margin code in this process (one nominal
     sample per scenario), so that the first chunk's time is simulation time."""
-    from ..sim import simulate_batch
+    from ..sim import simulate_batch  # lazy: numba + the kernel, ~450 modules
 
     for _slug, scenario, law, drive in plan.runs:
         simulate_batch(law, [plan.motor], scenario, drive)
@@ -190,7 +191,7 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
 
     Deterministic: a sample's row depends on the plan and its index only.
     """
-    from ..sim import METRIC_NAMES, simulate_batch
+    from ..sim import METRIC_NAMES, simulate_batch  # lazy: numba + the kernel, ~450 modules
 
     if plan.build:
         if worker_build() != tuple(plan.build):

@@ -61,9 +61,9 @@ def _subset(n: int, k: int) -> np.ndarray:
 
 
 def _svg(fig, prefix: str) -> str:
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib.pyplot, 211 modules
 
-    from ..report.plots import svg_from_figure
+    from ..report.plots import svg_from_figure  # lazy: jinja2 + the report, 33 modules
 
     try:
         return svg_from_figure(fig, prefix)
@@ -86,10 +86,10 @@ def strongest_drivers(summary) -> list[str]:
 
 
 def _region_figures(table, summary) -> list[dict]:
-    import matplotlib
+    import matplotlib  # lazy: matplotlib, ~100 modules
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib.pyplot, 211 modules
 
     figs = []
     failed = ~_col(table, "passed").astype(bool)
@@ -178,10 +178,10 @@ def report_columns(names, spec, artifact) -> list[str]:
 
 
 def _dist_figures(table, spec, runs: list[str]) -> list[dict]:
-    import matplotlib
+    import matplotlib  # lazy: matplotlib, ~100 modules
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib.pyplot, 211 modules
 
     figs = []
     keys = [("gain_margin_db", "gain margin", "dB", "min_gain_margin_db"),
@@ -217,7 +217,7 @@ def _dist_figures(table, spec, runs: list[str]) -> list[dict]:
 
 def campaign_html(table, summary: dict, spec, artifact) -> str:
     """The campaign report of a results table and its summary."""
-    import jinja2
+    import jinja2  # lazy: jinja2 + markupsafe, 21 modules
 
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(resources.files("toolbox.campaign") / "templates")),

@@ -141,7 +141,7 @@ def chunk_path(out_dir: Path, chunk: int) -> Path:
 
 
 def _to_arrow(rows: dict[str, np.ndarray], meta: dict):
-    import pyarrow as pa
+    import pyarrow as pa  # lazy: pyarrow, 21 modules
 
     arrays = {}
     for name, v in rows.items():
@@ -158,7 +158,7 @@ def _chunk_meta(digest: str, cfg, chunk: int) -> dict:
 
 
 def _write_chunk(out_dir: Path, chunk: int, rows: dict, digest: str, cfg) -> None:
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # lazy: pyarrow.parquet, 34 modules
 
     table = _to_arrow(rows, _chunk_meta(digest, cfg, chunk))
     buf = io.BytesIO()
@@ -167,7 +167,7 @@ def _write_chunk(out_dir: Path, chunk: int, rows: dict, digest: str, cfg) -> Non
 
 
 def _chunk_valid(path: Path, chunk: int, digest: str, cfg) -> bool:
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # lazy: pyarrow.parquet, 34 modules
 
     try:
         meta = json.loads(pq.read_schema(path).metadata[b"cct"])
@@ -188,7 +188,7 @@ def valid_chunks(out_dir: str | Path, spec, artifact=None) -> set[int]:
 
 def read_results(out_dir: str | Path):
     """``results.parquet`` of a finished campaign, as a pyarrow Table."""
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # lazy: pyarrow.parquet, 34 modules
 
     return pq.read_table(Path(out_dir) / "results.parquet")
 
@@ -248,7 +248,7 @@ def _evaluate_dask(plan: Plan, chunks, on_chunk, scheduler: str | None, workers:
     others, and the campaign then ends with :class:`InfrastructureError`
     naming it (its rows are missing; a rerun resumes).
     """
-    from dask.distributed import Client, LocalCluster, as_completed
+    from dask.distributed import Client, LocalCluster, as_completed  # lazy: 439 modules
 
     t0 = time.perf_counter()
     cluster = None
@@ -373,7 +373,7 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     if remote:  # bad address: exit 2; nobody answering: exit 4, before the design
         probe_scheduler(parse_address(scheduler)[0])
     if artifact is None:
-        from ..pipeline import design_spec
+        from ..pipeline import design_spec  # lazy: scipy.linalg + design, ~225 modules
 
         artifact = design_spec(spec)
     elif abs(artifact.sample_time - spec.drive.sample_time) > 1e-12 * spec.drive.sample_time:
@@ -434,7 +434,7 @@ def _assemble(out_dir: Path, spec, digest: str) -> Path:
     """Stream the chunk files, in sample order, into ``results.parquet``
     (temporary name, fsync, rename: readers never see half a file), one row
     group per chunk; memory holds one chunk at a time."""
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # lazy: pyarrow.parquet, 34 modules
 
     cfg = spec.campaign
     final = out_dir / "results.parquet"
@@ -471,7 +471,7 @@ def _assemble(out_dir: Path, spec, digest: str) -> Path:
 
 def _read_for_summary(results: Path, spec, artifact):
     """The columns the summary and the report use (not every metric)."""
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # lazy: pyarrow.parquet, 34 modules
 
     names = pq.read_schema(results).names
     return pq.read_table(results, columns=report_columns(names, spec, artifact))

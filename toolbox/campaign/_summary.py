@@ -62,7 +62,7 @@ def wilson_interval(k: int, n: int, z: float = 1.959963984540054) -> tuple[float
 
 
 def _sensitivity(table, failed: np.ndarray) -> list[dict]:
-    from scipy.stats import rankdata
+    from scipy.stats import rankdata  # lazy: scipy.stats, 622 modules
 
     out = []
     for name in parameter_columns(table):
@@ -84,7 +84,7 @@ def _sensitivity(table, failed: np.ndarray) -> list[dict]:
 def failure_modes(failure) -> dict[str, np.ndarray]:
     """One boolean mask per failed check (failure mode), from the ``failure``
     column ("a = 1 (bound 2); b"): row ``i`` failed check ``a``."""
-    import pyarrow.compute as pc
+    import pyarrow.compute as pc  # lazy: pyarrow.compute, 30 modules
 
     split = pc.split_pattern(failure, "; ")
     parents = np.asarray(pc.list_parent_indices(split).to_numpy())
@@ -131,7 +131,7 @@ def yields(table, cfg, passed: np.ndarray, modes: dict) -> dict:
 
 def _reasons(failure) -> dict[str, int]:
     """Samples per failed check, from the ``failure`` column ("a = 1 (bound 2); b")."""
-    import pyarrow.compute as pc
+    import pyarrow.compute as pc  # lazy: pyarrow.compute, 30 modules
 
     parts = pc.list_flatten(pc.split_pattern(failure, "; "))
     names = pc.list_element(pc.split_pattern(parts, " = ", max_splits=1), 0)
@@ -207,7 +207,7 @@ def worst_spec(spec, row: dict, source: str = "campaign") -> str:
     designs the same controller (the nominal motor is kept) and simulates the
     sample. A computation delay other than the design's cannot be expressed in
     a spec (the design would follow it): such a file says so in its header."""
-    from ..verify import default_scenarios
+    from ..verify import default_scenarios  # lazy: numba, scipy.optimize, ~720 modules
 
     cfg = spec.campaign
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
@@ -265,7 +265,7 @@ def write_outputs(out_dir: Path, table, summary: dict, spec, artifact, *,
                           json.dumps(summary, indent=1, default=_finite) + "\n"),
              write_atomic(out_dir / "controller.json", artifact.dumps())]
     if report:
-        from ._report import campaign_html
+        from ._report import campaign_html  # cycle: _report imports _summary
 
         files.append(write_atomic(out_dir / "report.html",
                                   campaign_html(table, summary, spec, artifact)))

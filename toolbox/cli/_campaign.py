@@ -54,7 +54,7 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
       cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c --scheduler tcp://scheduler-host:8786
       cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c_pi --controller out/003_pi
     """
-    from ..campaign import parse_address, run_campaign
+    from ..campaign import parse_address, run_campaign  # lazy: 105 modules (`cct --help`)
 
     s = load_spec(spec)
     if s.campaign is None:
@@ -64,7 +64,7 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
         parse_address(scheduler)  # http://, no port: exit 2 before anything runs
     artifact = None
     if design_dir is not None:
-        from ..pipeline import load_artifact
+        from ..pipeline import load_artifact  # lazy: scipy.linalg, ~320 modules
 
         artifact = load_artifact(design_dir)
     try:

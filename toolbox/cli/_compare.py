@@ -46,8 +46,8 @@ def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: 
     Example:
       cct compare designs/000_*.toml designs/003_azaiz2007_hinf.toml
     """
-    from ..analysis import compare_designs
-    from ..pipeline import design_spec, run_verification
+    from ..analysis import compare_designs  # lazy: scipy, ~580 modules
+    from ..pipeline import design_spec, run_verification  # lazy: ~320 modules
 
     refused: list[dict] = []
     loaded: list = []

@@ -21,7 +21,7 @@ def _robustness_line(result) -> None:
     """The drift-box verdict in one line, next to the margins (``DriftVerdict.summary``)."""
     rob = result.robustness
     if rob:
-        from ..analysis import DriftVerdict
+        from ..analysis import DriftVerdict  # lazy: scipy, ~580 modules (`cct --help`)
 
         text = DriftVerdict(**{k: rob[k] for k in DriftVerdict.__dataclass_fields__}).summary()
         if any(k in result.informational for k in ("default.robustness", "parameter_drift")):

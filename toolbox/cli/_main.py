@@ -150,7 +150,7 @@ def derive(spec: str, fmt: str | None) -> None:
     Example:
       cct derive designs/000_lepioufle1992_tc.toml --markdown
     """
-    from ..plant import describe_model
+    from ..plant import describe_model  # lazy: scipy.linalg, ~320 modules
 
     click.echo(describe_model(load_spec(spec).motor, fmt or "text"), nl=False)
 
@@ -186,7 +186,7 @@ def design(spec: str, out_dir: str, only_controller: bool, sampled_certificate: 
       cct design designs/003_azaiz2007_hinf.toml --out out/003
       cct design designs/003_azaiz2007_hinf.toml --method pi --set controller.pi.bandwidth=1500 --out out/003_pi
     """
-    from ..pipeline import build_outputs, write_outputs
+    from ..pipeline import build_outputs, write_outputs  # lazy: scipy.linalg, ~320 modules
 
     overrides = ([("--method", f"controller.method={json.dumps(method)}")] if method else [])
     overrides += [("--set", text) for text in sets]
@@ -223,7 +223,7 @@ def _summary(out) -> None:
     if out.analysis is not None:
         failed += [k for k, c in out.analysis.get("requirements", {}).items() if not c["pass"]]
     if out.verification is not None:
-        from ..verify import ROBUSTNESS_CHECKS
+        from ..verify import ROBUSTNESS_CHECKS  # lazy: numba + scipy, ~810 modules
 
         # the drift-box verdict names its first failing set (factors and speed)
         failed += [k if k not in ROBUSTNESS_CHECKS else f"{k} ({c.get('reason')})"
@@ -250,7 +250,7 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
     Example:
       cct verify out/003
     """
-    from ..pipeline import (check_integrity, header_agreement, load_artifact,
+    from ..pipeline import (check_integrity, header_agreement, load_artifact,  # lazy: ~320 modules
                             run_verification, spec_of_artifact, write_outputs)
 
     file = str(Path(out_dir) / "controller.json")
@@ -315,13 +315,14 @@ def report(out_dir: str, quiet: bool) -> None:
     Example:
       cct report out/003
     """
+    # lazy: ~320 modules
     from ..pipeline import (DesignOutputs, analyse, check_integrity, load_analysis,
                             load_artifact, report_data, run_verification, spec_of_artifact,
                             write_outputs)
-    from ..report import build_context, write_html, write_pdf
+    from ..report import build_context, write_html, write_pdf  # lazy: jinja2 + report, 126 modules
 
-    from ..analysis import compute_margins
-    from ..analysis.executed import loop_stability
+    from ..analysis import compute_margins  # lazy: scipy, ~580 modules
+    from ..analysis.executed import loop_stability  # lazy: scipy, ~580 modules
 
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
@@ -377,7 +378,7 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
       cct export out/003 --format c -o firmware/current_loop.h
       cct export out/m1 --prefix motor1_ -o firmware/motor1.h
     """
-    from ..pipeline import load_artifact, spec_of_artifact
+    from ..pipeline import load_artifact, spec_of_artifact  # lazy: ~320 modules
 
     artifact = load_artifact(out_dir)
     if fmt == "json":
@@ -387,8 +388,8 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
         else:
             click.echo(text, nl=False)
         return
-    from ..export import write_header
-    from ..pipeline import check_integrity, refuse_unstable_export
+    from ..export import write_header  # lazy: scipy.linalg + export, ~330 modules
+    from ..pipeline import check_integrity, refuse_unstable_export  # lazy: ~320 modules
 
     file = str(Path(out_dir) / "controller.json")
     spec = spec_of_artifact(artifact, file=file)
@@ -396,7 +397,7 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
     refuse_unstable_export(artifact, spec.motor, file=file)
     # refusals name the design file the controller came from
     if prefix is not None:
-        from ..export import prefix_name
+        from ..export import prefix_name  # lazy: ~330 modules
         try:
             prefix_name(prefix, key="--prefix")  # a bad option is bad input (exit 2)
         except SpecError as err:
@@ -426,7 +427,7 @@ def gallery(designs_dir: str, out_dir: str, sampled_certificate: bool, quiet: bo
     Example:
       cct gallery
     """
-    from ..pipeline import build_outputs, write_outputs
+    from ..pipeline import build_outputs, write_outputs  # lazy: scipy.linalg, ~320 modules
 
     failed = []
     paths = sorted(Path(designs_dir).glob("*.toml"))

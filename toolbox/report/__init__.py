@@ -105,9 +105,9 @@ def _equations(spec, given: list | None = None) -> list[dict]:
 
 def _derived_equations(convention: str) -> list[dict]:
     """The rows of :func:`_equations` for a dq convention, derived and typeset."""
-    import sympy as sp
+    import sympy as sp  # lazy: sympy, ~490 modules (cold cache only)
 
-    from ..plant import derive_dq_model
+    from ..plant import derive_dq_model  # lazy: scipy.linalg + plant, ~230 modules
 
     model = derive_dq_model(convention)
     di_d, di_q = sp.symbols("di_d di_q", real=True)

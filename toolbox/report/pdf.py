@@ -146,7 +146,7 @@ def write_pdf(data, path: str | Path | None = None) -> bytes:
     bytes
         The PDF document.
     """
-    import typst
+    import typst  # lazy: the typst compiler, PDF only
 
     source, images = render_typst(data if isinstance(data, dict) else build_context(data))
     pdf = typst.compile(source.encode("utf-8"), format="pdf", sys_inputs=images)

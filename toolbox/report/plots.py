@@ -78,7 +78,7 @@ def svg_from_figure(fig, prefix: str, tight: bool = False) -> str:
     tight : bool
         Crop to the drawn content (used for equations).
     """
-    import matplotlib
+    import matplotlib  # lazy: matplotlib, ~100 modules
 
     buf = io.StringIO()
     with matplotlib.rc_context(RC):
@@ -101,8 +101,8 @@ def svg_from_figure(fig, prefix: str, tight: bool = False) -> str:
 
 def _mpl_figure(width_in: float, height_in: float):
     """A matplotlib figure with the report's style (equations only)."""
-    import matplotlib
-    from matplotlib.figure import Figure as MplFigure
+    import matplotlib  # lazy: matplotlib, ~100 modules
+    from matplotlib.figure import Figure as MplFigure  # lazy: ~220 modules
 
     with matplotlib.rc_context(RC):
         return MplFigure(figsize=(width_in, height_in))
