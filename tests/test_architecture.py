@@ -53,29 +53,16 @@ def _imports(path: Path, root: Path = PACKAGE) -> list[tuple[int, str]]:
     return out
 
 
-def _family(module: str, root: Path = PACKAGE) -> str:
-    """The root module a root module's part belongs to: ``toolbox._m_<part>``
-    (split out of ``toolbox._m``, which re-exports its names) is one module
-    with ``toolbox._m`` for the privacy rule; any other module is its own."""
-    pkg, _, name = module.partition(".")
-    if name.startswith("_") and "." not in name:
-        stem = name
-        while "_" in stem[1:]:
-            stem = stem[:stem.rindex("_")]
-            if root.joinpath(stem + ".py").is_file():
-                return f"{pkg}.{stem}"
-    return module
-
-
 def _owner_of_private(target: str, root: Path = PACKAGE) -> str | None:
     """Package owning the first private component of a ``toolbox.*`` target.
 
-    A private module ``toolbox.x._m`` belongs to ``toolbox.x``; a private name
-    ``_n`` of a module ``toolbox.x.m`` belongs to the module's package
-    ``toolbox.x`` too (siblings in one package may share helpers). The root
-    package's modules (``toolbox._lti``, ``toolbox._io``, ...) serve every
-    package through their public names: a private name of one of them
-    belongs to that module alone (otherwise every package would be its
+    A private module ``toolbox.x._m`` belongs to ``toolbox.x`` (so
+    ``toolbox.lti._systems`` and every name in it belong to ``toolbox.lti``);
+    a private name ``_n`` of a module ``toolbox.x.m`` belongs to the module's
+    package ``toolbox.x`` too (siblings in one package may share helpers).
+    The root package's modules (``toolbox._io``, ``toolbox._cache``, ...)
+    serve every package through their public names: a private name of one of
+    them belongs to that module alone (otherwise every package would be its
     sibling and no reach-in into them would ever be flagged).
     """
     parts = target.split(".")
@@ -87,8 +74,7 @@ def _owner_of_private(target: str, root: Path = PACKAGE) -> str | None:
             name_private = i == 2 or (len(parts) > 2 and parts[2].startswith("_")
                                       and not parts[2].startswith("__"))
             if root_module and name_private:
-                # toolbox._m._n, toolbox.m._n: the module's (its parts' too)
-                return _family(".".join(parts[:2]), root)
+                return ".".join(parts[:2])       # toolbox._m._n, toolbox.m._n: the module's
             prefix = parts[:i]
             is_package = root.parent.joinpath(*prefix).is_dir()
             return ".".join(prefix if is_package else prefix[:-1])
@@ -119,7 +105,7 @@ def test_no_private_reach_ins():
         me = _module_name(p)
         for line, target in _imports(p):
             owner = _owner_of_private(target)
-            if owner is not None and not (_family(me) == owner or me.startswith(owner + ".")):
+            if owner is not None and not (me == owner or me.startswith(owner + ".")):
                 bad.append(f"{me}:{line} imports {target} (private to {owner})")
     assert not bad, "\n".join(bad)
 
@@ -130,14 +116,20 @@ def test_no_private_reach_ins():
      "toolbox.analysis.margins._electrical_max_speed"),
     ("import toolbox.design._common\n", "toolbox.design._common"),
     ("from toolbox.design import _hinf_riccati as H\n", "toolbox.design._hinf_riccati"),
-    ("from .._lti import _zeros\n", "toolbox._lti._zeros"),
+    ("from ..lti._linalg import invariant_zeros\n", "toolbox.lti._linalg.invariant_zeros"),
+    ("from ..lti import _systems\n", "toolbox.lti._systems"),
+    ("from toolbox.lti import _eig\n", "toolbox.lti._eig"),
+    ("from .._io import _tmp\n", "toolbox._io._tmp"),
 ])
 def test_checker_catches_reach_ins(tmp_path, source, expected):
-    """The checker flags reach-ins into private modules and names (so it can fail)."""
+    """The checker flags reach-ins into another package's private modules and
+    names, toolbox.lti's included (so it can fail)."""
     root = tmp_path / "toolbox"
-    for sub in ("export", "spec", "analysis", "design"):
+    for sub in ("export", "spec", "analysis", "design", "lti"):
         (root / sub).mkdir(parents=True)
-    (root / "_lti.py").write_text("")
+    (root / "lti" / "__init__.py").write_text("")
+    (root / "lti" / "_linalg.py").write_text("")
+    (root / "_io.py").write_text("")
     f = root / "export" / "c_header.py"
     f.write_text(source)
     (line, target), = _imports(f, root)
@@ -146,14 +138,23 @@ def test_checker_catches_reach_ins(tmp_path, source, expected):
     assert owner is not None and not _module_name(f, root).startswith(owner + ".")
 
 
-def test_parts_of_a_root_module_share_its_private_names():
-    """``_lti_linalg`` (a part of ``_lti``) and ``_lti`` share private names;
-    other packages may not use them."""
-    assert _owner_of_private("toolbox._lti_linalg._eig") == "toolbox._lti"
-    assert _family("toolbox._lti_systems") == "toolbox._lti"
-    assert _family("toolbox._lti") == "toolbox._lti"
-    assert _family("toolbox.design._common") == "toolbox.design._common"
-    assert not "toolbox.design.hinf".startswith(_owner_of_private("toolbox._lti_poly._poly"))
+def test_lti_private_names_belong_to_lti():
+    """``toolbox.lti``'s private modules and names are its own: its modules
+    may share them, other packages may not (they import ``toolbox.lti``'s
+    public face)."""
+    assert _owner_of_private("toolbox.lti._linalg._eig") == "toolbox.lti"
+    assert _owner_of_private("toolbox.lti._systems") == "toolbox.lti"
+    assert _owner_of_private("toolbox.lti._poly") == "toolbox.lti"
+    assert _owner_of_private("toolbox.lti.StateSpace") is None
+    assert "toolbox.lti._norms".startswith(_owner_of_private("toolbox.lti._systems") + ".")
+    assert not "toolbox.design.hinf".startswith(_owner_of_private("toolbox.lti._poly._poly"))
+
+
+def test_no_root_level_lti_modules():
+    """The linear-system layer is the package ``toolbox.lti`` alone: no
+    ``toolbox/_lti*.py`` module (nor a shim of one) is left at the root."""
+    assert (PACKAGE / "lti" / "__init__.py").is_file()
+    assert not sorted(PACKAGE.glob("_lti*.py"))
 
 
 def test_method_readers_registered():
@@ -202,17 +203,15 @@ def _layers(doc: Path = DOC) -> list[tuple[str, ...]]:
 
 def _unit(module: str, root: Path = PACKAGE) -> str:
     """The package a module belongs to for the layer rule: ``toolbox.x.y`` ->
-    ``x`` (a subpackage), a root module and its parts -> its family's name
-    (``toolbox._lti_poly`` -> ``_lti``), ``toolbox`` itself (the public face
-    ``toolbox/__init__.py``, or a name imported from it) -> ``toolbox``."""
+    ``x`` (a subpackage, or a root module ``toolbox/x.py``), ``toolbox``
+    itself (the public face ``toolbox/__init__.py``, or a name imported from
+    it) -> ``toolbox``."""
     parts = module.split(".")
     if len(parts) == 1:
         return "toolbox"
     head = parts[1]
-    if root.joinpath(head).is_dir():
+    if root.joinpath(head).is_dir() or root.joinpath(head + ".py").is_file():
         return head
-    if root.joinpath(head + ".py").is_file():
-        return _family(f"toolbox.{head}", root).split(".")[1]
     return "toolbox"   # ``from toolbox import name``: a name of the public face
 
 

@@ -28,7 +28,7 @@ from ._laws import AXES, axis_law
 from ._sampling import DEFAULT_BOX, sample_parameters
 from ._siso import disk_variations, log_grid
 from ._statespace import FreqResponse, pade, zoh_2x2, zoh_coupled
-from .._lti import StateSpace, append, feedback, static_gain
+from ..lti import StateSpace, append, feedback, static_gain
 
 __all__ = ["MimoMarginsResult", "sigma_max_2x2", "mu_upper_2x2", "mimo_loop_response",
            "mimo_disk_margins", "multimodel_disk_margins", "MultiModelLoops",

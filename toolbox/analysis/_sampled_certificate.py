@@ -111,7 +111,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .._lti import diagonal_scaling
+from ..lti import diagonal_scaling
 from ..artifact import json_ready
 from ..plant import max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_state_matrix, rotation

@@ -54,7 +54,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .._lti import diagonal_scaling
+from ..lti import diagonal_scaling
 from ..plant import dq_matrices, max_electrical_speed
 from ._lmi import (above_identity, lmi_rows, problem_data, solve_by_constraint_generation,
                    solve_feasibility, symmetric_basis, symmetric_matrix)
@@ -410,7 +410,7 @@ def _unstable_vertex(As: np.ndarray, alpha: float) -> bool:
 def _balanced_vertices(artifact, box: ParameterBox, As: np.ndarray, delay: bool):
     """``(T^-1 A_i T, T, T^-1)``: the vertices ``As`` in the coordinates of the
     diagonal similarity ``T`` that balances the box-centre matrix
-    (:func:`toolbox._lti.diagonal_scaling`, LAPACK dgebal: conditioning of the
+    (:func:`toolbox.lti.diagonal_scaling`, LAPACK dgebal: conditioning of the
     LMIs; the certificate is ``T^-1 P T^-1`` back in the original ones)."""
     centre = point_matrices(artifact, np.mean(box.corners(), axis=0), delay)[0]
     scale_vec = diagonal_scaling(centre)

@@ -1,4 +1,4 @@
-"""Controller artifact (controller.json) and its state-space views (toolbox._lti)."""
+"""Controller artifact (controller.json) and its state-space views (toolbox.lti)."""
 
 from ._artifact import SCHEMA, ControllerArtifact, json_ready, spec_sha256
 from ._axis import AxisController, StateSpaceData, Zpk

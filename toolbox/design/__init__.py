@@ -2,7 +2,7 @@
 
 One module per method (``pi``, ``total_comp``, ``ilq``, ``lq``, ``hinf``,
 ``fcs_mpc``, ``robust_pi``), each with ``read_cfg`` (validates ``[controller.<method>]``),
-``design(spec)`` and a plain API on toolbox._lti or python-control plants and numbers,
+``design(spec)`` and a plain API on toolbox.lti or python-control plants and numbers,
 re-exported here. ``steady_state`` holds the symbolic steady-state analysis
 of paper 000. ``_defaults`` derives the parameters a spec leaves out from
 the sample time and the delay (``default_bandwidth``, ``current_scale``,

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import StateSpace, spectral_norm
+from ..lti import StateSpace, spectral_norm
 from ..errors import DesignInfeasible, SpecError
 from ._hinf_assumptions import _check_balanced
 from ._hinf_plant import PartitionedPlant, balance_plant
@@ -131,16 +131,26 @@ def _ric_h(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
     """
     X, wr, wi = _ric_schur_h(h, r)
     if X is None:
-        a, b, s = h.a, h.b, h.s
-        try:
-            X = sla.solve_continuous_are(a, b, h.q, r, s=s)
-        except (np.linalg.LinAlgError, ValueError):
-            return None, ("the Hamiltonian has eigenvalues on the imaginary axis "
-                          "or no stabilising solution exists")
-        F = np.linalg.solve(r, b.T @ X + s.T)
-        ev = np.linalg.eigvals(a - b @ F)
-        wr, wi = ev.real, ev.imag
-        X = _symmetric_part(X)
+        return _ric_pencil(h, r)
+    return _stabilising(X, wr, wi)
+
+
+def _ric_pencil(h: _Hamiltonian, r: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """:func:`_ric_h` by scipy's generalised Schur method on the extended
+    pencil (``solve_continuous_are``) alone."""
+    a, b, s = h.a, h.b, h.s
+    try:
+        X = sla.solve_continuous_are(a, b, h.q, r, s=s)
+    except (np.linalg.LinAlgError, ValueError):
+        return None, ("the Hamiltonian has eigenvalues on the imaginary axis "
+                      "or no stabilising solution exists")
+    F = np.linalg.solve(r, b.T @ X + s.T)
+    ev = np.linalg.eigvals(a - b @ F)
+    return _stabilising(_symmetric_part(X), ev.real, ev.imag)
+
+
+def _stabilising(X: np.ndarray, wr: Any, wi: Any) -> tuple[np.ndarray | None, str]:
+    """``(X, "")`` when the closed-loop poles ``wr + j wi`` are stable."""
     # a few poles: scalar code beats array calls (as in _imag_axis_modes)
     wr, wi = wr.tolist(), wi.tolist()
     if wr and max(wr) >= -1e-12 * max(1.0, *map(math.hypot, wr, wi)):
@@ -305,6 +315,10 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
                                f"the X Riccati equation (18) has no stabilising solution "
                                f"at gamma = {gamma:.6g}: {why}")
     if (low := _not_psd(X)) is not None:
+        X2 = _psd_by_pencil(w.Hx, Rnh)
+        if X2 is not None:
+            X, low = X2, None
+    if low is not None:
         return HinfFeasibility(gamma, False, "X_not_psd",
                                f"X of eq (18) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, min_eig=low)
@@ -317,6 +331,10 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
     # Y = 0 (see _ric_zero) is >= 0 with rho(XY) = 0: no eigenvalue problem for either
     nonzero_y = np.count_nonzero(Y)
     if nonzero_y and (low := _not_psd(Y)) is not None:
+        Y2 = _psd_by_pencil(w.Hy, Rnj)
+        if Y2 is not None:
+            Y, low = Y2, None
+    if nonzero_y and low is not None:
         return HinfFeasibility(gamma, False, "Y_not_psd",
                                f"Y of eq (19) is stabilising but not >= 0 at gamma = {gamma:.6g}",
                                X=X, Y=Y, min_eig=low)
@@ -327,6 +345,20 @@ def _feasibility_normalised(Pn: PartitionedPlant, gamma: float,
                                X=X, Y=Y, rho=rho)
     return HinfFeasibility(gamma, True, None, "conditions (a) and (b) of Theorem 1 hold",
                            X=X, Y=Y, rho=rho, _work=(w, Rnh, Rnj))
+
+
+def _psd_by_pencil(h: _Hamiltonian, r: np.ndarray) -> np.ndarray | None:
+    """The pencil route's solution when it is >= 0, else None.
+
+    ``X = Z21 Z11^-1`` from the Hamiltonian's Schur basis loses
+    ``cond(Z11)`` digits: on a block-diagonal 2x2 plant (the coupled dq loop
+    at standstill, toolbox.design._hinf_coupled) cond(Z11) reaches 1e9 and the
+    smallest eigenvalue of an X spanning 9 .. 8e9 comes out at -8e8, a false
+    "not >= 0" where SLICOT sb10ad finds the level feasible. A failed
+    semi-definiteness test is therefore repeated on the pencil route (which
+    does not invert Z11) before the level is declared infeasible."""
+    X2, _ = _ric_pencil(h, r)
+    return X2 if X2 is not None and _not_psd(X2) is None else None
 
 
 def _spectral_radius(M: np.ndarray) -> float:
@@ -475,7 +507,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> StateSpace:
 
     Returns
     -------
-    toolbox._lti.StateSpace
+    toolbox.lti.StateSpace
         The controller, of the order of P.
 
     Raises

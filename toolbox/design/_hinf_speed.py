@@ -1,59 +1,30 @@
-"""H-infinity synthesis against the coupled dq plant at speed.
+"""``[controller.hinf.at_speed]``: H-infinity against the coupled dq plant at speed.
 
-Paper 003 designs each axis on its decoupled plant ``G_x = 1/(R + s L_x)``
-(eq (33)-(34)); the cross-coupling is cancelled by the decoupling with the
-controller's parameters. With mismatched inductances or a speed-sensor error
-the cancellation leaves, at electrical speed ``w`` and measured speed
-``w_m = g w + o``, the residual coupling
-
-``v_d gets k_d i_q``, ``k_d = w Lq - w_m Lq_c``;
-``v_q gets -k_q i_d``, ``k_q = w Ld - w_m Ld_c``
-
-(paper 003 eq (3)-(4) minus the compensation). With each axis's loop closed
-(``u_x = -K_x i_x``), ``i_d = S_d G_d k_d i_q`` and ``i_q = -S_q G_q k_q i_d``:
-the coupled loop is the nominal axis loops closed through the SISO loop
-``k_d k_q S_d G_d S_q G_q``. By the small-gain theorem it is stable for every
-real ``k_d``, ``k_q`` of the box when
-
-``c_d c_q |S_d G_d(jv)| |S_q G_q(jv)| < 1`` at every frequency ``v``,
-
-with ``c_d = max |k_d|``, ``c_q = max |k_q|`` over the true inductances, the
-speed-sensor gain and offset and ``|w| <= w_max`` (:func:`coupling_gains`).
-
-Synthesis: the S weight of each axis becomes ``w1 + k sqrt(c_d c_q) G_x``
-(``|w1 S| < gamma`` and ``|k c G S| = |k c S G| < gamma`` together when the
-two weights' phases lie within 90 degrees of each other, as for 003's
-first-order lags); ``k`` is raised through :data:`WEIGHT_GAINS` until the
-executed controllers meet the small-gain condition on a frequency grid
-(:func:`small_gain_peak`). The guarantee is for the continuous loop without
-the sampling delay; the analysis stage's sweep and sampled certificate judge
-the executed loop.
+The synthesis itself is :mod:`._hinf_coupled` (2x2 generalised plant with the
+dq coupling, the delayed decoupling and the loop delay; R, Ld, Lq as a
+multi-model set; one structured controller for the polytope of speeds). This
+module reads the table and turns the result into the artifact's parts.
 """
 
 from __future__ import annotations
 
-import itertools
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .._lti import TransferFunction, feedback
+from ..lti import TransferFunction, feedback
 
 from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES
 from ..errors import SpecError
 from ..spec import Table
 from ..plant import max_electrical_speed
 
-__all__ = ["AtSpeedCfg", "read_at_speed", "coupling_gains", "coupled_weight",
-           "small_gain_peak", "WEIGHT_GAINS"]
+__all__ = ["AtSpeedCfg", "read_at_speed", "design_at_speed"]
 
-KEYS = ("max_speed", "inductance_box", "speed_gain", "speed_offset")
-#: gains ``k`` of the coupling weight tried in turn (the first that meets the
-#: small-gain condition is kept)
-WEIGHT_GAINS = (1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0)
-#: frequency grid of the small-gain check (rad/s), beyond both loops' dynamics
-_GRID = np.logspace(-2, 6, 4001)
+KEYS = ("max_speed", "inductance_box", "resistance_box", "speed_gain", "speed_offset",
+        "extra_delay")
 
 
 @dataclass(frozen=True)
@@ -70,16 +41,24 @@ class AtSpeedCfg:
         Speed-sensor gain range.
     speed_offset : tuple
         Speed-sensor offset range (mechanical rad/s).
+    resistance_box : tuple
+        Scale factors ``(lo, hi)`` of the true ``R``.
+    extra_delay : int
+        Periods of delay beyond the design's that the maximum speed's models
+        also carry (default 1, the robustness sweep's range).
     """
 
     max_speed: float
     inductance_box: tuple = DEFAULT_BOX["Ld"]
     speed_gain: tuple = DEFAULT_RANGES["speed_gain"][:2]
     speed_offset: tuple = DEFAULT_RANGES["speed_offset"][:2]
+    resistance_box: tuple = DEFAULT_BOX["R"]
+    extra_delay: int = 1
 
     def to_spec(self) -> dict[str, Any]:
         """The table that reads back to this configuration."""
         return {"max_speed": self.max_speed, "inductance_box": list(self.inductance_box),
+                "resistance_box": list(self.resistance_box), "extra_delay": self.extra_delay,
                 "speed_gain": list(self.speed_gain), "speed_offset": list(self.speed_offset)}
 
 
@@ -99,6 +78,9 @@ def read_at_speed(table: Table, motor, drive) -> AtSpeedCfg | None:
     Keys: ``max_speed`` (mechanical rad/s, default the drive's maximum speed,
     the motor's rated speed or the back-EMF limit), ``inductance_box``
     (scale factors of the true Ld and Lq, default the sweep's ``[0.5, 2]``),
+    ``resistance_box`` (of the true R, default the sweep's ``[0.5, 2]``),
+    ``extra_delay`` (periods of delay beyond the design's carried by the
+    models at the maximum speed, 0..4, default 1: the sweep's range),
     ``speed_gain`` (default ``[0.9, 1.1]``) and ``speed_offset`` (mechanical
     rad/s, default ``[-10, 10]``).
 
@@ -117,44 +99,84 @@ def read_at_speed(table: Table, motor, drive) -> AtSpeedCfg | None:
                       _range(t, "inductance_box", DEFAULT_BOX["Ld"], around=1.0),
                       _range(t, "speed_gain", DEFAULT_RANGES["speed_gain"][:2], around=1.0),
                       _range(t, "speed_offset", DEFAULT_RANGES["speed_offset"][:2],
-                             around=None))
+                             around=None),
+                      _range(t, "resistance_box", DEFAULT_BOX["R"], around=1.0),
+                      t.integer("extra_delay", 1, minimum=0, maximum=4))
 
 
-def coupling_gains(motor, decoupling, cfg: AtSpeedCfg) -> tuple[float, float]:
-    """``(c_d, c_q)`` (ohm): the largest residual coupling gains over the box.
+def design_at_speed(weights: dict, motor, drive, decoupling, cfg: AtSpeedCfg) -> dict:
+    """The structured controller of :mod:`._hinf_coupled` for this box.
 
-    ``|w Lq - (g w + o) Lq_c|`` is convex in each of ``(w, Lq, g, o)`` (it is
-    the modulus of a multi-affine function), so its maximum over the box is at
-    a corner; the decoupling off (``cross`` false) leaves ``|w Lq|``.
+    Parameters
+    ----------
+    weights : dict
+        ``{"d": {"w1", "w2", "w3"}, "q": ...}`` (validated, defaults filled).
+    motor, drive : Motor, Drive
+    decoupling : Decoupling
+        The executed decoupling (its ``Ld_c``, ``Lq_c``).
+    cfg : AtSpeedCfg
+
+    Returns
+    -------
+    dict
+        ``controllers`` (per axis the continuous ``K_x``), ``gamma`` (the worst
+        level over the model set) and ``record`` (for
+        ``design_parameters["at_speed"]``).
+
+    Raises
+    ------
+    DesignInfeasible
+        No structured controller stabilises every model (key
+        ``controller.hinf.at_speed``).
     """
+    from ..errors import DesignInfeasible
+    from ._defaults import default_bandwidth
+    from ._hinf_coupled import (PADE_ORDER, SPEED_FRACTIONS, axis_controller, coupled_plant,
+                                full_order_gamma, model_set, synthesise_structured)
+
     p = motor.pole_pairs
-    cross = 1.0 if decoupling.cross else 0.0
-    best = [0.0, 0.0]
-    for w, s, g, o in itertools.product((-cfg.max_speed * p, cfg.max_speed * p),
-                                        cfg.inductance_box, cfg.speed_gain, cfg.speed_offset):
-        wm = cross * (g * w + o * p)
-        best[0] = max(best[0], abs(w * s * motor.Lq - wm * decoupling.Lq_c))
-        best[1] = max(best[1], abs(w * s * motor.Ld - wm * decoupling.Ld_c))
-    return best[0], best[1]
-
-
-def coupled_weight(w1: Any, G: Any, gain: float) -> TransferFunction:
-    """The S weight ``w1 + gain G`` of the synthesis at speed (common poles
-    and zeros cancelled)."""
-    w = TransferFunction.from_system(w1) + gain * TransferFunction.from_system(G)
-    return w.minreal()
-
-
-def small_gain_peak(plants: dict, controllers: dict, c_d: float,
-                    c_q: float) -> tuple[float, float]:
-    """``max_v c_d c_q |S_d G_d S_q G_q|`` on the grid and its frequency (rad/s).
-
-    ``S_x G_x = G_x / (1 + G_x K_x)`` with the continuous controllers the laws
-    run; below 1 the coupled loop is stable over the box (module docstring).
-    """
-    def sg(ax):
-        return np.abs(feedback(plants[ax], controllers[ax]).freqresp(_GRID)[0, 0])
-
-    prod = c_d * c_q * sg("d") * sg("q")
-    i = int(np.argmax(prod))
-    return float(prod[i]), float(_GRID[i])
+    ts = drive.sample_time
+    delay = (drive.delay_samples + 0.5) * ts
+    wmax = cfg.max_speed * p
+    box = {"R": cfg.resistance_box, "Ld": cfg.inductance_box, "Lq": cfg.inductance_box,
+           "speed_gain": cfg.speed_gain,
+           "speed_offset": tuple(o * p for o in cfg.speed_offset)}
+    models = model_set(motor, decoupling.Ld_c, decoupling.Lq_c, wmax, box,
+                       cfg.extra_delay * ts)
+    plants = [coupled_plant(m, weights, decoupling.Ld_c, decoupling.Lq_c, delay) for m in models]
+    nominal = [i for i, m in enumerate(models)
+               if (m.R, m.Ld, m.Lq) == (motor.R, motor.Ld, motor.Lq) and m.w_m == m.w
+               and m.extra_delay == 0]
+    # start: the cancellation PI at the default crossover (integral zero counted)
+    wc = default_bandwidth(drive, zero=True).value
+    tau_min = ts / math.pi
+    start = np.array([motor.Ld * wc, motor.R * wc, 0.1 / wc, motor.Lq * wc, motor.R * wc,
+                      0.1 / wc])
+    slow = [i for i, m in enumerate(models) if m.extra_delay > 0]
+    res = synthesise_structured(plants, start, tau_min, nominal + slow[:1])
+    worst = float(res.gammas[res.worst])
+    if not math.isfinite(worst):
+        raise DesignInfeasible("controller.hinf.at_speed", "a box and speed range over which "
+                               "one structured controller stabilises every model",
+                               cfg.to_spec(), hint="narrow the boxes or lower max_speed")
+    lower = [full_order_gamma(plants[i]) for i in nominal]
+    kp_d, ki_d, tau_d, kp_q, ki_q, tau_q = (float(x) for x in res.params)
+    record = {
+        "max_speed_rad_s": cfg.max_speed, "max_electrical_speed_rad_s": wmax,
+        "box": cfg.to_spec(), "models": len(models),
+        "speeds_rad_s": [f * wmax for f in SPEED_FRACTIONS],
+        "structure": "per axis K(s) = (kp s + ki)/(s (tau s + 1)), tau >= Ts/pi, "
+                     "nominal decoupling",
+        "controller": {"d": {"kp": kp_d, "ki": ki_d, "tau": tau_d},
+                       "q": {"kp": kp_q, "ki": ki_q, "tau": tau_q}},
+        "worst_gamma": worst, "worst_model": models[res.worst].to_json(),
+        "nominal_gamma": [float(res.gammas[i]) for i in nominal],
+        "full_order_gamma_nominal": lower,
+        "rounds": res.rounds,
+        "basis": f"continuous 2x2 coupled loop, loop delay (d + 1/2) Ts by Pade order "
+                 f"{PADE_ORDER} (plus {cfg.extra_delay} period(s) on the maximum speed's "
+                 "models); H-infinity norms by SLICOT ab13dd; lower bound: full-order "
+                 "2x2 optimum (Theorem 1) of each nominal speed model",
+    }
+    return {"controllers": {ax: axis_controller(res.params, ax) for ax in ("d", "q")},
+            "gamma": worst, "record": record}

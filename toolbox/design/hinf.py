@@ -14,7 +14,10 @@ the result into a :class:`~toolbox.artifact.ControllerArtifact`.
 Per axis: ``G = axis_plant_models(motor)[axis]`` (eq (33)-(34)), weights from
 ``[controller.hinf.weights.<axis>]``, synthesis at ``gamma`` (or the optimum
 with back-off, realisable at ``drive.sample_time``), weight-bound checks (41)-(43),
-then optionally order reduction with a margin comparison.
+then optionally order reduction with a margin comparison. With
+``[controller.hinf.at_speed]`` the synthesis is instead the 2x2 coupled,
+multi-model one of :mod:`._hinf_coupled` (one structured controller per axis,
+no order reduction).
 
 Which controller runs: each axis holds one executed law (``law``, its
 continuous twin ``continuous``, the derived ``discrete`` and ``zpk`` views).
@@ -47,15 +50,14 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .._lti import StateSpace, TransferFunction
+from ..lti import StateSpace, TransferFunction
 from ..artifact import AxisController, AxisWeights, ControllerArtifact, TransferFunctionData
 from ..errors import DesignInfeasible, SpecError
 from ..plant import axis_plant_models
 from ..spec import Table
 from ._common import decoupling_from_motor, make_artifact
 from ._hinf_defaults import default_w2, w1_params, w2_params, w2_toml
-from ._hinf_speed import (WEIGHT_GAINS, AtSpeedCfg, coupled_weight, coupling_gains,
-                          read_at_speed, small_gain_peak)
+from ._hinf_speed import AtSpeedCfg, design_at_speed, read_at_speed
 from ._hinf_bounds import weight_bound_check
 from ._hinf_gamma import GammaBelowOptimum, fastest_pole_modulus, gamma_iteration, synthesize
 from ._hinf_plant import _ss_blocks, augment_mixed_sensitivity
@@ -203,7 +205,7 @@ def read_weight(value: Any, key: str) -> TransferFunction:
 
     Returns
     -------
-    toolbox._lti.TransferFunction
+    toolbox.lti.TransferFunction
 
     Raises
     ------
@@ -344,9 +346,9 @@ class HinfAxisResult:
     ----------
     G : LTI system
         Plant (A/V), as given (:func:`toolbox.plant.axis_plant_models` in a design).
-    K : toolbox._lti.StateSpace
+    K : toolbox.lti.StateSpace
         Central controller (V/A).
-    Kr : toolbox._lti.StateSpace or None
+    Kr : toolbox.lti.StateSpace or None
         Reduced controller.
     synthesis : HinfResult
     bounds : dict
@@ -373,7 +375,7 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
 
     Parameters
     ----------
-    G : LTI system (toolbox._lti or python-control)
+    G : LTI system (toolbox.lti or python-control)
         Plant, e.g. ``1/(R + s Lq)`` (A/V).
     w1, w2, w3 : TransferFunction, python-control system, number or None
         Weights on S, KS, T (eq 35-40).
@@ -496,11 +498,9 @@ def design(spec) -> ControllerArtifact:
     weights, stated = _fill_default_w1(cfg, spec)
     cfg = replace(cfg, weights=weights, stated=stated)
     decoupling = decoupling_from_motor(spec.motor)
-    at_speed = None
-    if cfg.at_speed is None:
-        results = _synthesise(cfg, plants, ts)
-    else:
-        cfg, results, at_speed = _synthesise_at_speed(cfg, plants, ts, spec.motor, decoupling)
+    if cfg.at_speed is not None:
+        return _design_at_speed(spec, cfg, plants, decoupling)
+    results = _synthesise(cfg, plants, ts)
     axes = {ax: _executed_axis(r, ts, cfg.executed) for ax, r in results.items()}
     weights = {ax: AxisWeights(gamma=float(r.synthesis.gamma),
                                **{k: _weight_data(W) for k, W in cfg.weights[ax].items()})
@@ -508,10 +508,6 @@ def design(spec) -> ControllerArtifact:
     eqs = ["003 eq (33)-(34)", "003 eq (35)-(40)", "003 eq (10)-(32)", "003 eq (65)-(67)",
            "003 eq (41)-(43)"] + (["003 eq (71)-(72)"] if cfg.reduce_order else [])
     params = _design_parameters(cfg, results)
-    if at_speed is not None:
-        params["at_speed"] = at_speed
-        eqs.append("coupled dq plant at speed, 003 eq (3)-(4): small-gain S weight "
-                   "w1 + k sqrt(c_d c_q) G")
     return make_artifact(spec, axes, decoupling, params, eqs, weights=weights)
 
 
@@ -538,55 +534,42 @@ def _synthesise(cfg: HinfCfg, plants: dict, ts: float) -> dict:
                         + f'; set gamma above {worst:.4g} or "optimal"') from None
 
 
-def _synthesise_at_speed(cfg: HinfCfg, plants: dict, ts: float, motor,
-                         decoupling) -> tuple[HinfCfg, dict, dict]:
-    """Synthesis against the coupled plant at speed (:mod:`._hinf_speed`).
-
-    The S weight of each axis gets the coupling term ``k sqrt(c_d c_q) G_x``;
-    ``k`` runs through :data:`WEIGHT_GAINS` until the executed controllers
-    meet the small-gain condition of the coupled loop over the box.
-
-    Returns
-    -------
-    (HinfCfg, dict, dict)
-        The configuration with the weights used, the axis results and the
-        record for ``design_parameters["at_speed"]``.
-
-    Raises
-    ------
-    DesignInfeasible
-        No gain meets the condition (key ``controller.hinf.at_speed``).
-    """
-    c_d, c_q = coupling_gains(motor, decoupling, cfg.at_speed)
-    scale = math.sqrt(c_d * c_q)
-    tries = []
-    for k in WEIGHT_GAINS:
-        weights = {ax: dict(cfg.weights[ax], w1=coupled_weight(cfg.weights[ax]["w1"],
-                                                                plants[ax], k * scale))
-                   for ax in AXES}
-        trial = replace(cfg, weights=weights)
-        results = _synthesise(trial, plants, ts)
-        run = {ax: (r.Kr if r.Kr is not None and cfg.executed == "reduced" else r.K)
-               for ax, r in results.items()}
-        peak, freq = small_gain_peak(plants, run, c_d, c_q)
-        tries.append({"weight_gain": k, "small_gain_peak": peak, "at_rad_s": freq,
-                      "gamma": {ax: float(r.synthesis.gamma) for ax, r in results.items()}})
-        if peak < 1.0:
-            record = {"max_speed_rad_s": cfg.at_speed.max_speed,
-                      "max_electrical_speed_rad_s": cfg.at_speed.max_speed * motor.pole_pairs,
-                      "box": cfg.at_speed.to_spec(), "coupling_gain_d_ohm": c_d,
-                      "coupling_gain_q_ohm": c_q, "weight_gain": k,
-                      "small_gain_peak": peak, "small_gain_peak_rad_s": freq, "tries": tries,
-                      "basis": "continuous coupled loop (no sampling delay): "
-                               "c_d c_q |S_d G_d S_q G_q| < 1 on a 4001-point grid "
-                               "1e-2..1e6 rad/s"}
-            return trial, results, record
-    raise DesignInfeasible(f"{_KEY}.at_speed", "a speed range and box whose residual "
-                           "coupling the H-infinity loops can tolerate (small-gain peak < 1)",
-                           cfg.at_speed.to_spec(),
-                           hint=f"smallest peak {min(t['small_gain_peak'] for t in tries):.3g} "
-                                f"with coupling gains c_d = {c_d:.3g}, c_q = {c_q:.3g} ohm; "
-                                "lower max_speed, narrow inductance_box or relax w2")
+def _design_at_speed(spec, cfg: HinfCfg, plants: dict, decoupling) -> ControllerArtifact:
+    """The artifact of the synthesis against the coupled plant at speed
+    (:mod:`._hinf_coupled`): one structured controller per axis (a PI with a
+    roll-off, no order reduction), the nominal decoupling, the weights' level
+    the worst closed-loop norm over the model set. ``gamma``, ``backoff`` and
+    ``reduce_order`` of the table do not apply (recorded in ``warnings``)."""
+    ts = spec.drive.sample_time
+    out = design_at_speed(cfg.weights, spec.motor, spec.drive, decoupling, cfg.at_speed)
+    axes = {ax: AxisController.from_error_controller(K, ts, method="tustin")
+            for ax, K in out["controllers"].items()}
+    weights = {ax: AxisWeights(gamma=float(out["gamma"]),
+                               **{k: _weight_data(W) for k, W in cfg.weights[ax].items()})
+               for ax in AXES}
+    ignored = [k for k, v in (("reduce_order", cfg.reduce_order),) if v is not None]
+    params: dict[str, Any] = {
+        "gamma": {ax: float(out["gamma"]) for ax in AXES},
+        "weight_bounds": {ax: {k: {"worst_ratio": v.worst_ratio,
+                                   "worst_freq_rad_s": v.worst_freq}
+                               for k, v in weight_bound_check(plants[ax], K,
+                                                              **cfg.weights[ax]).items()}
+                          for ax, K in out["controllers"].items()},
+        "design_margins_continuous": {ax: {"full": _margins_json(loop_margins(
+            StateSpace(*_ss_blocks(plants[ax])), K))} for ax, K in out["controllers"].items()},
+        "warnings": {ax: ([f"{', '.join(ignored)} not used by the structured synthesis at "
+                           "speed (second-order law per axis)"] if ignored else [])
+                     for ax in AXES},
+        "at_speed": out["record"],
+    }
+    if cfg.stated or cfg.defaults:
+        params["defaults"] = {"weights": cfg.stated, **(cfg.defaults or {}),
+                              "source": "toolbox.design._hinf_defaults (makeweight from "
+                                        "requirements, sample time and delay)"}
+    eqs = ["003 eq (3)-(4)", "003 eq (35)-(40)", "003 eq (10)-(19)", "003 eq (41)-(43)",
+           "coupled 2x2 generalised plant at speed with the loop delay; structured "
+           "multi-model H-infinity (toolbox.design._hinf_coupled)"]
+    return make_artifact(spec, axes, decoupling, params, eqs, weights=weights)
 
 
 def _executed_axis(r: Any, ts: float, executed: str) -> AxisController:

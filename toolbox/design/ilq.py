@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import StateSpace, as_statespace
+from ..lti import StateSpace, as_statespace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
@@ -320,7 +320,7 @@ def first_order_coefficients(G: Any) -> tuple[float, float]:
 
     Parameters
     ----------
-    G : toolbox._lti.StateSpace or python-control LTI
+    G : toolbox.lti.StateSpace or python-control LTI
         SISO, one state, no feedthrough (A/V).
 
     Returns
@@ -348,7 +348,7 @@ def ilq_axis_from_plant(G: Any, s_star: float, sigma: float, **options: Any) -> 
 
     Parameters
     ----------
-    G : toolbox._lti.StateSpace or python-control LTI
+    G : toolbox.lti.StateSpace or python-control LTI
         First-order plant (A/V), e.g. ``axis_plant_models(motor)["q"]``.
     s_star : float
         Assigned pole (rad/s), < 0.

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import StateSpace
+from ..lti import StateSpace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
@@ -319,7 +319,7 @@ def lqi_from_plant(G: Any, Q: tuple[float, float], R: float, *, domain: str = "d
 
     Parameters
     ----------
-    G : toolbox._lti.StateSpace or python-control LTI
+    G : toolbox.lti.StateSpace or python-control LTI
         First-order plant (A/V).
     Q : (float, float)
         ``(q_i, q_z)``.

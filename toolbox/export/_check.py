@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import invariant_zeros as _zeros
+from ..lti import invariant_zeros as _zeros
 from ..errors import ExportRefused, SpecError
 from . import _fixed
 from ._minimal import MinimalLaw, minimal_law
@@ -408,6 +408,6 @@ def check_fixed(plan, sample_time: float, key: str = "controller") -> dict:
 
 def _law_zeros(law) -> np.ndarray:
     """Invariant zeros of both channels of the law (``i_ref -> v`` and
-    ``i_meas -> v``), each from its system pencil (:func:`toolbox._lti._zeros`)."""
+    ``i_meas -> v``), each from its system pencil (:func:`toolbox.lti._zeros`)."""
     return np.concatenate([_zeros(law.A, law.B[:, j:j + 1], law.C, law.D[:, j:j + 1])
                            for j in range(law.B.shape[1])])

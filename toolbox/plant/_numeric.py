@@ -18,7 +18,7 @@ import numpy as np
 from toolbox.spec import Motor
 
 from .._cache import cached
-from .._lti import StateSpace
+from ..lti import StateSpace
 
 __all__ = ["ElectricalPlant", "numeric_plant", "axis_plant_models", "axis_plants", "linearise"]
 
@@ -119,7 +119,7 @@ class ElectricalPlant:
 
     def statespace(self, omega: float = 0.0) -> StateSpace:
         """Two-input two-output system v -> i at fixed electrical speed
-        (:class:`toolbox._lti.StateSpace`)."""
+        (:class:`toolbox.lti.StateSpace`)."""
         return StateSpace(self.A(omega), self.B(), np.eye(2), np.zeros((2, 2)))
 
 
@@ -149,7 +149,7 @@ def axis_plant_models(motor) -> dict[str, StateSpace]:
     Returns
     -------
     dict
-        ``{"d": StateSpace, "q": StateSpace}`` (:class:`toolbox._lti.StateSpace`).
+        ``{"d": StateSpace, "q": StateSpace}`` (:class:`toolbox.lti.StateSpace`).
     """
     plant = numeric_plant(motor)
     A, B = plant.A(0.0), plant.B()
@@ -220,7 +220,7 @@ def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[StateSpac
 
     Returns
     -------
-    sys : toolbox._lti.StateSpace
+    sys : toolbox.lti.StateSpace
         The small-signal model.
     u0 : ndarray
         Operating-point inputs ``[v_d0, v_q0, T_L0]``.

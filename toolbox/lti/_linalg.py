@@ -1,4 +1,4 @@
-"""Matrix kernels of :mod:`toolbox._lti`: diagonal scaling and balancing, the
+"""Matrix kernels of :mod:`toolbox.lti`: diagonal scaling and balancing, the
 modal form, LAPACK calls without numpy's dispatch (eigen-decomposition,
 solves, SVD), pencil eigenvalues and invariant zeros.
 """

@@ -1,4 +1,4 @@
-"""Polynomial coefficients of :mod:`toolbox._lti`'s transfer functions: trimming,
+"""Polynomial coefficients of :mod:`toolbox.lti`'s transfer functions: trimming,
 roots, pole-zero cancellation and the companion realisation's arrays.
 """
 

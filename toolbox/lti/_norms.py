@@ -1,5 +1,6 @@
-"""Norms of :mod:`toolbox._lti`: the L-infinity norm (SLICOT ab13dd) and the
-spectral norm of a matrix.
+"""Norms of :mod:`toolbox.lti`: the L-infinity and H-infinity norms (SLICOT
+ab13dd), the H2
+norm (a Lyapunov equation, scipy.linalg) and the spectral norm of a matrix.
 """
 
 from __future__ import annotations
@@ -8,8 +9,9 @@ from math import inf
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 
-from ._lti_systems import as_statespace
+from ._systems import as_statespace
 
 
 def linf_norm(sys: Any, tol: float = 1e-10) -> float:
@@ -23,6 +25,16 @@ def linf_norm(sys: Any, tol: float = 1e-10) -> float:
     """
     g = as_statespace(sys)
     return linf_peak(g.A, g.B, g.C, g.D, tol)[0]
+
+
+def hinf_norm(sys: Any, stability_tol: float = 1e-8) -> float:
+    """H-infinity norm of a continuous system: :func:`linf_norm` (SLICOT
+    ab13dd) when every pole has ``Re < -stability_tol``, else ``inf``
+    (unstable, or a pole on the imaginary axis within ``stability_tol``)."""
+    g = as_statespace(sys)
+    if g.nstates and np.linalg.eigvals(g.A).real.max() >= -stability_tol:
+        return inf
+    return linf_peak(g.A, g.B, g.C, g.D)[0]
 
 
 def linf_peak(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
@@ -50,3 +62,23 @@ def spectral_norm(M: np.ndarray) -> float:
         sq = M * M if M.dtype.kind == "f" else M.real * M.real + M.imag * M.imag
         return float(np.sqrt(sq.sum()))
     return float(np.linalg.norm(M, 2)) if M.size else 0.0
+
+
+def h2_norm(sys: Any) -> float:
+    """``||G||_2`` of a stable continuous system: ``sqrt(trace(C P C^T))``
+    with the controllability Gramian ``A P + P A^T + B B^T = 0``
+    (scipy.linalg.solve_continuous_lyapunov, Bartels-Stewart; Zhou, Doyle &
+    Glover, Lemma 4.4). ``inf`` when D is not zero or A is not Hurwitz (the
+    integral diverges); 0 without states and D = 0.
+    """
+    g = as_statespace(sys)
+    if g.discrete:
+        raise ValueError("h2_norm: a continuous system expected")
+    if np.any(g.D):
+        return inf
+    if g.nstates == 0:
+        return 0.0
+    if not np.all(np.linalg.eigvals(g.A).real < 0.0):
+        return inf
+    P = scipy.linalg.solve_continuous_lyapunov(g.A, -g.B @ g.B.T)
+    return float(np.sqrt(max(np.trace(g.C @ P @ g.C.T), 0.0)))

@@ -1,5 +1,5 @@
 """Discretisation (:func:`c2d`), Pade delay approximation and Ackermann pole
-placement of :mod:`toolbox._lti`.
+placement of :mod:`toolbox.lti`.
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.linalg
 
-from ._lti_systems import as_statespace, StateSpace
+from ._systems import as_statespace, StateSpace
 
 
 #: Discretisation methods of :func:`c2d` (python-control / scipy names); the

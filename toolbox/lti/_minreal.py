@@ -1,4 +1,4 @@
-"""Minimal realisation of :mod:`toolbox._lti`'s state-space systems (staircase
+"""Minimal realisation of :mod:`toolbox.lti`'s state-space systems (staircase
 reduction of the unreachable and unobservable parts).
 """
 
@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ._lti_systems import as_statespace, StateSpace
+from ._systems import as_statespace, StateSpace
 
 
 def _reachable(A: np.ndarray, B: np.ndarray, tol: float) -> tuple[int, np.ndarray]:
