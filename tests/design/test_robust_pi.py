@@ -41,7 +41,8 @@ from toolbox.artifact import ControllerArtifact
 from toolbox.design import design
 from toolbox.design import robust_pi as RP
 from toolbox.errors import DesignInfeasible, SpecError
-from toolbox.sim import Scenario, control_law, drive_params, simulate
+from toolbox.sim import control_law, drive_params, simulate
+from toolbox.spec import Scenario
 from toolbox.spec import spec_from_dict
 
 # vdc = 400 V: the back-EMF at 230 rad/s (110 V) plus the step stays inside the

@@ -302,7 +302,8 @@ def run_harness(exe: str, spec, hold: str, omega_m: float, vdc: float, refs: np.
 
 
 def run_simulator(spec, art, hold: str, omega_m: float, vdc: float, i_step: float):
-    from toolbox.sim import Scenario, control_law, drive_params, simulate
+    from toolbox.sim import control_law, drive_params, simulate
+    from toolbox.spec import Scenario
     fcs = art.method == "fcs_mpc"
     drive = replace(drive_params(spec.drive, "fcs_mpc" if fcs else "average"), hold_frame=hold,
                     vdc=vdc)

@@ -10,6 +10,7 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import logm
 
 from ..artifact import AxisController, CvLaw
 from ..errors import ArtifactError
@@ -161,8 +162,6 @@ def law_to_continuous(law: Law, method: str | None) -> Law:
     ``[[A_d, B_d], [0, I]]`` (integrators allowed; needs no pole on the
     negative real axis).
     """
-    from scipy.linalg import logm
-
     T = float(law.dt)
     n, m = law.B.shape
     if n == 0:

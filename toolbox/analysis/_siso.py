@@ -342,7 +342,7 @@ def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
     # quantity is made in one compiled pass (_grid_kernel, numpy's numbers bit for
     # bit), the complex divisions replaced by real arithmetic, and everything
     # else is evaluated only at the crossing cells
-    from ._grid_kernel import grid_pass
+    from ._grid_kernel import grid_pass  # lazy: numba + JIT kernel, 211 modules
 
     re, im = Lw.real, Lw.imag
     mag = np.abs(Lw)

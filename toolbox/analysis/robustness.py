@@ -99,7 +99,7 @@ def _loop_block(Kz: np.ndarray, zr: np.ndarray, qi: np.ndarray, a: np.ndarray,
     kernels make the order matter): the numbers of
     ``Kz * (qr - 1j qi) * (b/|q|^2)`` bit for bit.
     """
-    from ._grid_kernel import plant_factors
+    from ._grid_kernel import plant_factors  # lazy: numba + JIT kernel, 211 modules
 
     L, scale = plant_factors(zr, qi, a, b)
     np.multiply(Kz, L, out=L)

@@ -39,6 +39,7 @@ from ._decoupling import Decoupling
 from ._cv import CvLaw
 from ._fields import (AxisWeights, FcsWeights, TransferFunctionData, _no_unknown,
                       finite_number)
+from ..spec import METHODS
 
 __all__ = [
     "SCHEMA",
@@ -323,7 +324,6 @@ class ControllerArtifact:
                 raise ArtifactError(name, "a value (missing)")
         if not isinstance(data["method"], str):
             raise ArtifactError("method", "a method name", data["method"])
-        from ..spec import METHODS  # lazy: the spec package imports the design registry
 
         if data["method"] not in METHODS:
             raise ArtifactError("method", "one of " + ", ".join(METHODS), data["method"])

@@ -167,7 +167,7 @@ def connect(address: str, timeout: float | None = None):
     The probe runs first; the Client is then made in a daemon thread that is
     abandoned at the deadline (it cannot block the exit).
     """
-    from dask.distributed import Client
+    from dask.distributed import Client  # lazy: dask.distributed, 439 modules
 
     timeout = CONNECT_TIMEOUT if timeout is None else timeout
     probe_scheduler(address)

@@ -31,11 +31,14 @@ import dataclasses
 import re
 from dataclasses import dataclass
 from typing import Any
+import os
+import socket
 
 import numpy as np
 
 from ..spec import OPERATING_POINT_KEYS, REQUIREMENT_KEYS
 from ._sampling import draw_samples
+from ._cluster import BuildMismatch, mismatch_message, worker_build
 
 __all__ = ["Plan", "make_plan", "evaluate_chunk", "judge_rows", "judge_error_rows",
            "scenario_slug", "warm_up", "DIVERGED", "ERROR_CHECK", "JUDGE_COLUMNS"]
@@ -96,9 +99,10 @@ def make_plan(spec, artifact, threads: int | None = None, build: tuple = ()) -> 
     """The :class:`Plan` of ``spec``'s campaign for the designed ``artifact``.
 
     Scenarios: those named in ``campaign.scenarios``, else every
-    ``[[scenario]]``, else :func:`toolbox.sim.default_scenarios`.
+    ``[[scenario]]``, else :func:`toolbox.verify.default_scenarios`.
     """
-    from ..sim import default_scenarios, scenario_setup
+    from ..sim import scenario_setup  # lazy: numba + the kernel, ~450 modules
+    from ..verify import default_scenarios  # lazy: numba, scipy.optimize, ~720 modules
 
     cfg = spec.campaign
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
@@ -131,6 +135,7 @@ def _physical(cols: dict, n: int) -> np.ndarray:
 
 def _margins(plan: Plan, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
              delay: np.ndarray | None = None) -> dict:
+    # lazy: scipy.optimize/signal, ~490 modules
     from ..analysis.robustness import batch_loop_margins
 
     art = plan.artifact
@@ -177,7 +182,7 @@ def _judge(checks: list, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
 def warm_up(plan: Plan) -> None:
     """Load the compiled kernel and the margin code in this process (one nominal
     sample per scenario), so that the first chunk's time is simulation time."""
-    from ..sim import simulate_batch
+    from ..sim import simulate_batch  # lazy: numba + the kernel, ~450 modules
 
     for _slug, scenario, law, drive in plan.runs:
         simulate_batch(law, [plan.motor], scenario, drive)
@@ -191,15 +196,10 @@ def evaluate_chunk(plan: Plan, start: int, stop: int) -> dict[str, np.ndarray]:
 
     Deterministic: a sample's row depends on the plan and its index only.
     """
-    from ..sim import METRIC_NAMES, simulate_batch
+    from ..sim import METRIC_NAMES, simulate_batch  # lazy: numba + the kernel, ~450 modules
 
     if plan.build:
-        from ._cluster import BuildMismatch, mismatch_message, worker_build
-
         if worker_build() != tuple(plan.build):
-            import os
-            import socket
-
             raise BuildMismatch(mismatch_message(f"on {socket.gethostname()} (pid "
                                                  f"{os.getpid()})", worker_build(), plan.build))
     cfg, motor = plan.cfg, plan.motor

@@ -342,7 +342,7 @@ def worst_spec(spec, row: dict, source: str = "campaign") -> str:
     a spec (the design would follow it): such a file says so in its header."""
     import dataclasses
 
-    from ..sim import default_scenarios
+    from ..verify import default_scenarios  # lazy: numba, scipy.optimize, ~720 modules
     from ..spec import spec_to_toml
     from ._evaluate import _NOT_MOTOR
 

@@ -16,6 +16,7 @@ from ._conventions import (_QUIET, EXIT_OK, EXIT_REQUIREMENT, _spec_errors,
                            _write_file)
 from ._echo import _echo_wrapped, _fmt
 from ._progress import StepBar
+from ..spec import load_spec
 
 
 @click.command()
@@ -53,9 +54,8 @@ def compare(specs: tuple[str, ...], json_path: str | None, methods: tuple[str, .
       cct compare designs/000_*.toml designs/003_azaiz2007_hinf.toml
       cct compare designs/003_azaiz2007_pi.toml --method all
     """
-    from ..analysis import compare_designs
-    from ..pipeline import design_spec, run_verification
-    from ..spec import load_spec
+    from ..analysis import compare_designs  # lazy: scipy, ~580 modules
+    from ..pipeline import design_spec, run_verification  # lazy: ~320 modules
 
     from ..spec import METHODS
 

@@ -265,7 +265,7 @@ def synthesise_structured(plants: list, start: np.ndarray, tau_min: float,
     -------
     StructuredResult
     """
-    from scipy.optimize import minimize
+    from scipy.optimize import minimize  # lazy: scipy.optimize, 240 modules
 
     p0 = np.asarray(start, float).reshape(2, 3).copy()
     p0[:, 2] = np.maximum(p0[:, 2] - tau_min, 1e-3 * tau_min)

@@ -120,8 +120,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
-from ..lti import StateSpace
 from ..artifact import AxisController, CvLaw
+from ..lti import StateSpace
+from ..metrics import step_metrics
 from ..plant import dq_matrices, max_electrical_speed
 from ..spec import Table, check_rate
 from . import _defaults
@@ -445,11 +446,9 @@ def step_response(gains: CvDiscreteGains, R: float, Ld: float, Lq: float, omega:
 
 def step_figures(gains: CvDiscreteGains, R: float, Ld: float, Lq: float, omega: float,
                  sample_time: float, *, axis: str = "q", size: float = 1.0, **kw) -> dict:
-    """Step metrics (:func:`toolbox.sim.step_metrics`) of one axis' current for a
+    """Step metrics (:func:`toolbox.metrics.step_metrics`) of one axis' current for a
     reference step ``size`` (A) on that axis, plus the other axis' peak
     excursion ``cross_peak`` (A)."""
-    from ..sim import step_metrics          # the numba kernel loads only here
-
     k = "dq".index(axis)
     r = np.zeros(2)
     r[k] = size

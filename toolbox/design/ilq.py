@@ -201,7 +201,7 @@ def inverse_lq_sdp(a: float, b: float, K_F: float, K_I: float,
         Optimal margin (dimensionless).
     P, Q : ndarray
     """
-    import cvxpy as cp
+    import cvxpy as cp  # lazy: cvxpy, 819 modules (inverse_lq_sdp only)
 
     A, B = servo_matrices(a, b)
     K = np.array([[K_F, -K_I]])

@@ -42,6 +42,7 @@ from ..plant import axis_coefficients
 from ..spec import Table, check_rate, check_scale
 from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
+from .ilq import first_order_coefficients
 
 __all__ = ["LqCfg", "LqAxis", "bryson_weights", "lqi_continuous", "lqi_discrete",
            "lqi_from_plant", "discrete_model",
@@ -334,8 +335,6 @@ def lqi_from_plant(G: Any, Q: tuple[float, float], R: float, *, domain: str = "d
     -------
     LqAxis
     """
-    from .ilq import first_order_coefficients
-
     a, b = first_order_coefficients(G)
     _check_weights(Q, R, "plant")
     if domain == "continuous":

@@ -78,6 +78,9 @@ from ..errors import DesignInfeasible, SpecError
 from ..spec import Table
 from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
+from ..plant import max_electrical_speed
+from .pi import design_pi, closed_loop_poles
+from ..analysis.margins import MultiModelLoops, multimodel_disk_margins
 
 __all__ = ["RobustPiCfg", "ModelSet", "read_cfg", "design", "model_set", "tune"]
 
@@ -156,8 +159,6 @@ def read_cfg(method: str, table: Table, motor, drive) -> RobustPiCfg:
         lo > hi, a non-positive speed, a sensor range not containing the exact
         sensor; key path ``controller.robust_pi.<key>``.
     """
-    from ..plant import max_electrical_speed
-
     t = Table(table.data, table.prefix, _KEYS)
     details: dict[str, Any] = {}
     alpha = t.number("disk_margin", 0.5, positive=True)
@@ -233,8 +234,6 @@ class ModelSet:
 
     def loops(self, sample_time: float, delay_samples: int, n_grid: int):
         """:class:`toolbox.analysis.margins.MultiModelLoops` of the set."""
-        from ..analysis.margins import MultiModelLoops
-
         return MultiModelLoops(self.motors, self.speeds, sample_time, delay_samples, n_grid,
                                speed_gain=self.speed_gain, speed_offset=self.speed_offset)
 
@@ -292,8 +291,6 @@ def _gains(motor, wc: float, ratio: float | None) -> tuple[tuple, tuple]:
 
 
 def _candidate(spec, cfg: RobustPiCfg, Kp, Ki):
-    from .pi import design_pi
-
     axes = design_pi(Kp, Ki, spec.drive.sample_time, structure="pi", method="tustin")
     dec = decoupling_from_motor(spec.motor, cross=cfg.decoupling, emf=cfg.decoupling)
     return make_artifact(spec, axes, dec, {}, [])
@@ -469,7 +466,6 @@ def _limitation(spec, cfg: RobustPiCfg, models: ModelSet, wc: float, ratio, marg
                      f"unstable, at {speeds.min():.4g}..{speeds.max():.4g} rad/s electrical")
     art = _candidate(spec, cfg, *_gains(spec.motor, wc, ratio))
     if np.any(models.speed_gain != 1.0) or np.any(models.speed_offset != 0.0):
-        from ..analysis.margins import multimodel_disk_margins
         exact = multimodel_disk_margins(art, models.motors, models.speeds, n_grid=N_GRID)
         parts.append(f"without the speed-sensor errors the same design keeps "
                      f"{float(np.min(exact)):.3g}"
@@ -561,8 +557,6 @@ def design(spec):
         from the nominal motor) with ``method = "robust_pi"``; the tuning
         record is in ``design_parameters``.
     """
-    from .pi import closed_loop_poles, design_pi
-
     cfg: RobustPiCfg = spec.controller.cfg
     res = tune(spec, cfg)
     Kp, Ki = res["Kp"], res["Ki"]

@@ -24,6 +24,7 @@ from . import _fixed
 from ._minimal import MinimalLaw, minimal_law
 from ._plausible import speed_range
 from ._sos import Realisation, realise_axis
+from ..spec import drive_from_dict, motor_from_dict, spec_from_dict
 
 
 AXES = ("d", "q")
@@ -216,14 +217,12 @@ def _motor_drive(artifact, motor, drive):
         return motor, drive
     raw = artifact.spec or {}
     try:
-        from ..spec import spec_from_dict
         spec = spec_from_dict(raw)
         return motor or spec.motor, drive or spec.drive
     except SpecError:
         pass
     # the controller section may name a method this build cannot read: take
     # the motor and drive tables alone
-    from ..spec import drive_from_dict, motor_from_dict
     if motor is None and isinstance(raw.get("motor"), dict):
         try:
             motor = motor_from_dict(raw["motor"])

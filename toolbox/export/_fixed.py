@@ -283,7 +283,7 @@ def _fftconvolve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     every ``cct design``): the same scipy.fft transforms at the same
     length, so the same numbers (tests/export/test_propagate_bound.py).
     """
-    from scipy.fft import irfft, next_fast_len, rfft
+    from scipy.fft import irfft, next_fast_len, rfft  # lazy: scipy.fft, 43 modules
 
     if a.size == 1 or b.size == 1:          # scipy multiplies directly (no transform)
         return a * b

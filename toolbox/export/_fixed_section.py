@@ -46,7 +46,8 @@ def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive
 def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
     """The Q31 section (``templates/fixed.c.j2``); numbers formatted and
     range-checked here, in line order."""
-    from .c_header import _render  # the header's one template environment
+    # the header's one template environment; in-function: c_header imports this module
+    from .c_header import _render
     plan = check.fixed
     key = _law_key(artifact)
     head = {"I_MAX": f"{plan.I_MAX:.6g}", "W_MAX": f"{plan.W_MAX:.6g}",

@@ -59,7 +59,8 @@ def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str,
                  comp: dict | None) -> None:
     """The MCSDK/IQmath section (``templates/vendor.c.j2``); numbers formatted
     and range-checked here, in line order."""
-    from .c_header import _render  # the header's one template environment
+    # the header's one template environment; in-function: c_header imports this module
+    from .c_header import _render
     gains = [(ax, f"{plan.kp[ax]:.9g}", f"{plan.ki[ax]:.9g}", f"{plan.kaw[ax]:.9g}")
              for ax in AXES]
     d = {"MCSDK_I_FS": _f(plan.mc_I_FS, 'motor.max_current', 'MCSDK_I_FS'),

@@ -116,6 +116,8 @@ from ._plausible import (PLAUSIBLE_MARGIN, VDC_MAX_PER_NOMINAL,  # noqa: F401
                          VDC_MIN_PER_NOMINAL, _plausible_context, plausibility_limits)
 from ._reference import ReferenceLaw, d_priority_limit, reference_law  # noqa: F401
 from ._vendor_section import _vendor_section, vendor_plan  # noqa: F401
+from ..spec import inverter_radii
+from .._cache import template_bytecode_cache
 from ._cv_section import write_cv_header
 
 __all__ = ["write_header", "check_exportable", "ExportCheck", "sanitise_comment",
@@ -221,9 +223,8 @@ def _environment():
     every user string is sanitised by :func:`sanitise_comment` before)."""
     global _ENV
     if _ENV is None:
-        import jinja2
+        import jinja2  # lazy: jinja2 + markupsafe, 21 modules
 
-        from .._cache import template_bytecode_cache
         _ENV = jinja2.Environment(
             loader=jinja2.FileSystemLoader(str(TEMPLATES)), autoescape=False,
             bytecode_cache=template_bytecode_cache(__file__),
@@ -234,7 +235,6 @@ def _environment():
 def fcs_r_hex_per_vdc(convention: str) -> float:
     """Length of an active inverter vector per volt of bus (the hexagon's
     vertex radius, :func:`toolbox.spec.inverter_radii`)."""
-    from ..spec import inverter_radii
     return inverter_radii(1.0, convention)[0]
 
 

@@ -92,7 +92,6 @@ def _equations(spec, given: list | None = None) -> list[dict]:
         return [{"label": str(e["label"]), "latex": str(e["latex"]), "text": str(e["text"]),
                  "svg": plots.equation_svg(str(e["latex"]).replace(r"\frac", r"\dfrac"))}
                 for e in given]
-    from .._cache import cached
 
     convention = spec.motor.convention
     sources = (Path(__file__).parents[1] / "plant" / "_symbolic.py", Path(__file__),
@@ -107,9 +106,9 @@ def _equations(spec, given: list | None = None) -> list[dict]:
 
 def _derived_equations(convention: str) -> list[dict]:
     """The rows of :func:`_equations` for a dq convention, derived and typeset."""
-    import sympy as sp
+    import sympy as sp  # lazy: sympy, ~490 modules (cold cache only)
 
-    from ..plant import derive_dq_model
+    from ..plant import derive_dq_model  # lazy: scipy.linalg + plant, ~230 modules
 
     model = derive_dq_model(convention)
     di_d, di_q = sp.symbols("di_d di_q", real=True)
@@ -164,7 +163,6 @@ def build_context(data: ReportData) -> dict:
                   if getattr(spec.drive, f) is not None]
     drive_rows.append(("Max dq voltage (linear modulation)",
                        fmt(spec.drive.max_voltage(motor.convention)), "V"))
-    from ..spec import REQUIREMENT_KEYS
 
     req_rows = []
     for k, v in getattr(spec.requirements, "bounds", {}).items():
@@ -207,3 +205,5 @@ def build_context(data: ReportData) -> dict:
 
 from .html import write_html  # noqa: E402  (the renderers use the model above)
 from .pdf import write_pdf  # noqa: E402
+from .._cache import cached
+from ..spec import REQUIREMENT_KEYS

@@ -9,6 +9,7 @@ from typing import Mapping, Sequence
 from . import plots
 from ._data import ReportData
 from ._format import _as_float, _flatten, fmt, fmt_q, sim_metric_unit, zpk_text
+from .._version import toolbox_version
 
 
 #: Long names of the design methods (toolbox/ARCHITECTURE.md "Spec file").
@@ -111,8 +112,6 @@ def _scenarios(verification: Mapping | None, traces: Sequence) -> list[dict]:
 
 
 def _provenance(data: ReportData) -> list[tuple[str, str]]:
-    from .._version import toolbox_version
-
     prov = dict(data.artifact.provenance or {})
     rows = [(str(k), fmt(v)) for k, v in prov.items() if k != "equations"]
     rows.append(("spec source", str(getattr(data.spec, "source", None) or "(in memory)")))

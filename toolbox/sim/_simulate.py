@@ -21,11 +21,10 @@ import numpy as np
 
 from toolbox.artifact import CvLaw, Decoupling, FcsWeights  # typed in the artifact; FcsWeights re-exported
 from toolbox.errors import SpecError
-from toolbox.spec import Motor, inverter_radii
+from toolbox.spec import Motor, Scenario, inverter_radii
 
 from . import _kernel
 from ._metrics import METRIC_NAMES, metrics_dict
-from ._scenario import Scenario
 
 __all__ = ["DriveParams", "AxisLaw", "SpeedLoop", "FcsWeights",
            "ControlLaw", "SimResult", "BatchResult", "simulate", "simulate_batch",

@@ -56,7 +56,7 @@ __all__ = ["CampaignCfg", "ParameterDist", "read_campaign", "CAMPAIGN_PARAMETERS
 #: Motor parameters a campaign may draw (pole pairs are not a spread).
 CAMPAIGN_PARAMETERS = tuple(k for k in MOTOR_PARAMETER_KEYS if k != "pole_pairs")
 DISTRIBUTIONS = ("uniform", "normal", "truncnormal")
-#: Largest campaign (samples); 10^7 is the issue's upper end.
+#: Largest campaign (samples) a spec may ask for.
 MAX_SAMPLES = 100_000_000
 MAX_MEASURED_ROWS = 100_000
 #: Parameters that must stay > 0 (the others, flux and friction, >= 0).

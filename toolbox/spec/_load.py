@@ -26,8 +26,10 @@ from ._bounds import (check_drive, check_motor, check_motor_drive, check_plant_v
 from ._fields import Collector, Table, check_keys
 from ._method_units import convert_method_units
 from ._methods import read_method_cfg
+from ._scenario import Scenario
 from ._model import (DRIFT_FACTOR_RANGE, DRIFT_PARAMETERS, METHODS, REQUIREMENT_KEYS,
                      ControllerChoice, Drive, Motor, Requirements, Spec)
+from ._overrides import apply_overrides, blame_overrides
 
 __all__ = ["load_spec", "spec_from_dict", "motor_from_dict", "drive_from_dict"]
 
@@ -83,7 +85,6 @@ def load_spec(path: str | Path, overrides: Sequence[tuple[str, str]] = ()) -> Sp
         raise SpecError("", "valid TOML", str(err), file=name) from None
     if not overrides:
         return spec_from_dict(data, file=name)
-    from ._overrides import apply_overrides, blame_overrides
 
     try:
         data = apply_overrides(data, overrides)
@@ -492,8 +493,6 @@ def _scenarios(value: Any, drive: Drive, method: str | None, errors: Collector,
 
 def _scenario(item: Any, key: str, drive: Drive, method: str | None):
     """One ``[[scenario]]`` table (its unit strings already in SI)."""
-    from ..sim import Scenario  # the simulation package owns scenario semantics
-
     scenario = Scenario.from_dict(item, key=key, sample_time=drive.sample_time)
     if scenario.kind in ("load_step", "speed_step") and "kp" not in scenario.speed_loop:
         raise SpecError(f"{key}.speed_loop", "a table with at least kp (A s/rad) for kind "

@@ -325,7 +325,7 @@ class Spec:
     controller : ControllerChoice
     requirements : Requirements
     scenarios : tuple
-        Validated scenarios (see :mod:`toolbox.sim`).
+        Validated scenarios (:class:`toolbox.spec.Scenario`).
     raw : dict
         The resolved plain data (catalog defaults applied), for the artifact.
     source : str or None

@@ -10,8 +10,8 @@ import pytest
 from toolbox.analysis import compute_margins
 from toolbox.artifact import ControllerArtifact
 from toolbox.design import design
-from toolbox.sim import NO_REQUIREMENTS, verify
-from toolbox.sim._checks import LinearFigures, StepFacts, reach_time_bound
+from toolbox.verify import NO_REQUIREMENTS, verify
+from toolbox.verify._checks import LinearFigures, StepFacts, reach_time_bound
 from toolbox.spec import spec_from_dict
 
 BASE = {"motor": {"catalog": "azaiz2007"},
@@ -196,7 +196,7 @@ def test_fcs_mpc_baseline_margins_are_informational():
 
 def _synthetic(metrics, scenario=None):
     """default_checks on given metrics, no traces (the simulator's fallback)."""
-    from toolbox.sim._checks import default_checks
+    from toolbox.verify._checks import default_checks
 
     spec = _spec([scenario or STEP])
     plant = spec.motor
@@ -250,7 +250,7 @@ def test_fcs_mpc_reach_band_is_the_switching_penalty_dead_band():
     plain one again, so the allowance comes from gamma alone."""
     from pathlib import Path
 
-    from toolbox.sim._checks import fcs_ripple
+    from toolbox.verify._checks import fcs_ripple
     from toolbox.spec import load_spec
 
     from dataclasses import replace

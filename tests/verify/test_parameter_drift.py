@@ -20,7 +20,7 @@ from click.testing import CliRunner
 from toolbox.cli import main
 from toolbox.design import design
 from toolbox.errors import SpecError
-from toolbox.sim import verify
+from toolbox.verify import verify
 from toolbox.spec import Spec, spec_from_dict
 
 WIDE = {"R": [0.5, 2.0], "Ld": [0.5, 2.0], "Lq": [0.5, 2.0]}

@@ -1,13 +1,13 @@
 """Step metrics of the predictive switching inverter (paper 002's Boolean control).
 
-The 5 % response time and 2 % settling time of :mod:`toolbox.sim._metrics`
+The 5 % response time and 2 % settling time of :mod:`toolbox.metrics`
 ask the response to stay within ``0.05 |delta|`` (``0.02 |delta|``) of its
 final value. A linear loop behind an average or SVM inverter does that; the
 finite-control-set law of paper 002 (criterion (23)) cannot, by design: it
 holds one of eight voltage vectors for a whole period, so its current keeps
 an error up to the covering radius of the currents it can reach in one
 period plus the dead band of its switching penalty
-(:func:`toolbox.sim._checks.fcs_ripple`). When that ripple exceeds 2 % or
+(:func:`toolbox.verify._checks.fcs_ripple`). When that ripple exceeds 2 % or
 5 % of the step the metric is not "slow", it is *undefined* (NaN), and the
 ``default.finite`` check failed every such design whatever its quality.
 
@@ -30,23 +30,9 @@ import math
 
 import numpy as np
 
-__all__ = ["ripple_band_step_times", "STEP_BANDS"]
+from toolbox.metrics import STEP_BANDS, band_entry_time
 
-#: Metric name -> relative band of :mod:`toolbox.sim._metrics`.
-STEP_BANDS = {"response_time_5pct": 0.05, "settling_time_2pct": 0.02}
-
-
-def _last_exit(t: np.ndarray, err: np.ndarray, tol: float, t_step: float,
-               t_end: float) -> float:
-    """Time after ``t_step`` from which ``|err| <= tol`` holds until ``t_end``
-    (sample ``j`` held until ``t[j+1]``); NaN when still outside at the end."""
-    after = t >= t_step - 1e-12
-    outside = after & ~(np.abs(err) <= tol)  # NaN (diverged) counts as outside
-    if not outside.any():
-        return 0.0
-    t_next = np.append(t[1:], t_end)
-    last = t_next[np.nonzero(outside)[0][-1]]
-    return float(last - t_step) if last < t_end - 1e-12 else math.nan
+__all__ = ["ripple_band_step_times"]
 
 
 def ripple_band_step_times(t, y, y0: float, yf: float, t_step: float, t_end: float,
@@ -62,7 +48,7 @@ def ripple_band_step_times(t, y, y0: float, yf: float, t_step: float, t_end: flo
     t_step, t_end : float
         Step time and end of the run (s).
     ripple : float
-        The law's design ripple on this axis (A), :func:`toolbox.sim._checks.fcs_ripple`.
+        The law's design ripple on this axis (A), :func:`toolbox.verify._checks.fcs_ripple`.
 
     Returns
     -------
@@ -82,13 +68,13 @@ def ripple_band_step_times(t, y, y0: float, yf: float, t_step: float, t_end: flo
     (0.002, 1.0)
     """
     t = np.asarray(t, float)
-    err = np.asarray(y, float) - yf
+    y = np.asarray(y, float)
     delta = abs(yf - y0)
     times, bands = {}, {}
     for name, b in STEP_BANDS.items():
         tol = max(b * delta, ripple)
         bands[name] = tol
         # a band as wide as the step: the starting point already lies in it
-        times[name] = (_last_exit(t, err, tol, t_step, t_end) if tol < delta
+        times[name] = (band_entry_time(t, y, yf, tol, t_step, t_end) if tol < delta
                        else math.nan)
     return times, bands

@@ -6,7 +6,7 @@ import math
 import pytest
 
 from toolbox.errors import SpecError
-from toolbox.sim._scenario import Scenario
+from toolbox.spec import Scenario
 
 CASES = [
     ({"kind": "current_step", "duraton": 1},

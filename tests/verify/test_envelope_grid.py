@@ -1,4 +1,4 @@
-"""Torque-speed grid verification (toolbox/sim/_envelope_grid.py) on paper
+"""Torque-speed grid verification (toolbox/verify/_envelope_grid.py) on paper
 003's motor and designs: 0 / 50 / 100 % torque at 0 / 50 / 100 / 150 / 200 %
 base speed, the envelope's references (5 % voltage headroom), imposed speed.
 
@@ -22,7 +22,8 @@ from pathlib import Path
 import pytest
 
 import toolbox
-from toolbox.sim import DEFAULT_SPEEDS, DEFAULT_TORQUES, DriveParams, control_law, torque_speed_grid
+from toolbox.sim import DriveParams, control_law
+from toolbox.verify import DEFAULT_SPEEDS, DEFAULT_TORQUES, torque_speed_grid
 
 ROOT = Path(__file__).resolve().parents[2]
 

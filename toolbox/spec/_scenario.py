@@ -1,4 +1,8 @@
-"""Closed-loop verification scenarios (the ``[[scenario]]`` tables of a spec).
+"""Closed-loop scenarios: the ``[[scenario]]`` tables of a spec.
+
+Plain data read and validated here (the spec stage); the simulator
+(``toolbox.sim.simulate``) runs one and verification (``toolbox.verify``)
+runs the spec's list.
 
 A :class:`Scenario` says what happens to the drive during a simulation: which
 references step and when, how the speed evolves (imposed or following the
@@ -33,8 +37,9 @@ import difflib
 from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
-from toolbox.errors import SpecError
-from toolbox.spec import MOTOR_PARAMETER_KEYS, is_finite_number
+from ..errors import SpecError
+from ._fields import is_finite_number
+from ._model import MOTOR_PARAMETER_KEYS
 
 __all__ = ["Scenario", "SCENARIO_KINDS", "INVERTER_KINDS", "PLANT_KEYS"]
 

@@ -26,9 +26,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from toolbox.errors import SpecError
-
-from ._scenario import Scenario
-from ._simulate import ControlLaw, DriveParams, simulate
+from toolbox.plant import OperatingEnvelope
+from toolbox.sim import ControlLaw, DriveParams, simulate
+from toolbox.spec import Scenario
 
 __all__ = ["GridPoint", "torque_speed_grid", "DEFAULT_TORQUES", "DEFAULT_SPEEDS"]
 
@@ -97,8 +97,6 @@ def torque_speed_grid(law: ControlLaw, motor, drive: DriveParams, envelope=None,
     list of GridPoint
         Speeds outer, torques inner.
     """
-    from toolbox.plant import OperatingEnvelope
-
     if envelope is None:
         if not 0.0 <= headroom < 1.0:
             raise SpecError("headroom", "a fraction in [0, 1)", headroom)

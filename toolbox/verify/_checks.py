@@ -29,7 +29,7 @@ did. Every scenario now gets these checks, derived from the spec alone:
     better vector costs, at most 3): it tolerates, by design, a current error
     up to ``sqrt(3 gamma / w)`` before it switches, and :func:`fcs_ripple`
     adds that dead band. For that inverter the step metrics use the same band
-    (:mod:`toolbox.sim._fcs_metrics`).
+    (:mod:`toolbox.verify._fcs_metrics`).
 ``default.bounded_current``
     Nothing diverges: the peak current magnitude ``|i_dq|`` (with traces) or
     the RMS tracking error ``sqrt(mse_id + mse_iq)`` (without) stays under
@@ -61,12 +61,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..plant import steady_state_voltage
+from toolbox.metrics import STEP_METRICS, band_entry_time
+from toolbox.plant import steady_state_voltage
 
 __all__ = ["fcs_ripple", "CURRENT_FACTOR", "SPEED_FACTOR", "REACH_BAND", "SENSOR_ACCURACY",
            "LinearFigures",
-           "StepFacts", "step_facts", "reach_time_bound", "default_checks", "finalise_check",
-           "STEP_METRICS"]
+           "StepFacts", "step_facts", "reach_time_bound", "default_checks", "finalise_check"]
 
 #: Relative band of the reach check (paper 000's "5 % response time").
 REACH_BAND = 0.05
@@ -84,8 +84,6 @@ SPEED_FACTOR = 2.0
 BANDWIDTH_FACTOR = 3.0
 #: Slack on the linear closed-loop 5 % response time.
 LINEAR_FACTOR = 1.5
-#: Metrics that exist only when the scenario steps its response signal.
-STEP_METRICS = ("response_time_5pct", "rise_time_10_90", "settling_time_2pct", "overshoot_pct")
 #: Scenario kinds whose response signal is a current (the reach check applies).
 CURRENT_STEP_KINDS = ("current_step", "constant_acceleration", "unloaded_start")
 
@@ -257,19 +255,6 @@ def _current_scale(scenario, motor, facts: StepFacts, speed_loop_limit: float) -
     return max(abs(float(r)) for r in refs)
 
 
-def _reach_time_from_traces(result, axis: str, yf: float, tol: float, t_step: float,
-                            t_end: float) -> float:
-    """Seconds after ``t_step`` from which ``|y - yf| <= tol`` holds to the end."""
-    t = np.asarray(result.t, float)
-    y = np.asarray(result.iq if axis == "q" else result.id, float)
-    t_next = np.append(t[1:], t_end)
-    outside = (t >= t_step - 1e-12) & ~(np.abs(y - yf) <= tol)  # NaN counts as outside
-    if not outside.any():
-        return 0.0
-    last = t_next[np.nonzero(outside)[0][-1]]
-    return float(last - t_step) if last < t_end - 1e-12 else math.nan
-
-
 def finalise_check(check: dict) -> dict:
     """A check record ready for JSON: non-finite values as ``None``, and a
     ``reason`` on every failure (kept when the check states its own).
@@ -427,8 +412,9 @@ def _reach(facts, scenario, metrics, result, traces, plant, v_max, delay_samples
                                                sample_time, linear,
                                                metrics.get("final_speed", math.nan))
     if traces:
-        t_reach = _reach_time_from_traces(result, facts.axis, facts.yf, tol,
-                                          scenario.step_time, scenario.duration)
+        y = result.iq if facts.axis == "q" else result.id
+        t_reach = band_entry_time(result.t, y, facts.yf, tol, scenario.step_time,
+                                  scenario.duration)
         basis = "traces"
     else:
         # the simulator's 5 % time uses the band 0.05 |delta| <= tol: stricter, never laxer

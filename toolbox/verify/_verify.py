@@ -1,8 +1,12 @@
-"""Verification: run a controller artifact through the spec's scenarios.
+"""Verification: run a controller artifact through the spec's scenarios and judge it.
 
 Reads only the artifact (the executed discrete laws, decoupling and model
 parameters) and the spec's motor, drive, scenarios and requirements; nothing
-is re-designed here.
+is re-designed here. The stage (toolbox/ARCHITECTURE.md "Stages"): margins
+and stability recomputed from the executed law (``toolbox.analysis``), the
+drift-box verdict (:func:`toolbox.analysis.drift_verdict`), every scenario
+simulated (``toolbox.sim``) and checked (the spec's requirements and the
+default checks of :mod:`toolbox.verify._checks`), assembled as verify.json.
 """
 
 from __future__ import annotations
@@ -12,169 +16,21 @@ import math
 from dataclasses import dataclass, field
 from typing import Callable
 
-from toolbox.plant import voltage_limited_speed
-from toolbox.spec import Motor
+from toolbox.analysis import compute_margins, drift_verdict
+from toolbox.analysis.executed import (INFORMATIONAL_METHODS, loop_stability,
+                                       margin_disagreements, settling_horizon)
+from toolbox.design import default_bandwidth
+from toolbox.sim import DriveParams, SimResult, scenario_setup, simulate
+from toolbox.spec import Motor, Scenario
 
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
+from ._default_scenarios import default_scenarios
 from ._fcs_metrics import ripple_band_step_times
-from ._scenario import Scenario
-from ._simulate import (AxisLaw, ControlLaw, DriveParams, SimResult, SpeedLoop,
-                        simulate)
 
-__all__ = ["VERIFY_SCHEMA", "control_law", "drive_params",
-           "default_scenarios", "verify", "VerifyResult", "ScenarioOutcome", "NO_REQUIREMENTS"]
+__all__ = ["VERIFY_SCHEMA", "verify", "VerifyResult", "ScenarioOutcome", "NO_REQUIREMENTS",
+           "ROBUSTNESS_CHECKS", "MAX_CHECK_TRACE_ROWS"]
 
 VERIFY_SCHEMA = "cct.verify/1"
-
-
-def drive_params(drive, inverter: str = "average") -> DriveParams:
-    """Simulator drive settings.
-
-    Parameters
-    ----------
-    drive : Drive
-        Validated drive.
-    inverter : {"average", "svm", "fcs_mpc"}
-        Inverter model.
-    """
-    return DriveParams(vdc=drive.vdc, sample_time=drive.sample_time,
-                       delay_samples=drive.delay_samples, v_limit=drive.voltage_limit,
-                       inverter=inverter, switching_frequency=drive.switching_frequency,
-                       hold_frame=drive.hold_frame,
-                       voltage_priority=drive.voltage_priority)
-
-
-def _axis_law(axis) -> AxisLaw:
-    aw = None if axis.antiwindup is None else axis.antiwindup.reshape(-1)
-    law = axis.law
-    return AxisLaw(law.A, law.B, law.C, law.D, aw)
-
-
-def control_law(artifact, speed_loop: SpeedLoop | None = None) -> ControlLaw:
-    """The simulator's :class:`ControlLaw` executing ``artifact``.
-
-    The executed law of each axis is the artifact's ``axes.<axis>.law``; the
-    predictive law of ``fcs_mpc`` reads the typed ``artifact.fcs`` weights, and
-    method ``cv`` executes its complex-vector law ``artifact.cv``.
-
-    Parameters
-    ----------
-    artifact : ControllerArtifact
-        The design.
-    speed_loop : SpeedLoop, optional
-        Outer speed loop of the scenario.
-    """
-    return ControlLaw(d=_axis_law(artifact.axes["d"]), q=_axis_law(artifact.axes["q"]),
-                      sample_time=artifact.sample_time, decoupling=artifact.decoupling,
-                      speed_loop=speed_loop, fcs=artifact.fcs, cv=artifact.cv)
-
-
-def default_scenarios(motor, drive=None, horizon: float | None = None) -> tuple[Scenario, ...]:
-    """Scenarios used when a spec has no ``[[scenario]]``, scaled to the motor.
-
-    A q-current step to half the current scale at standstill, the same step
-    during free acceleration (unloaded start), and the same step at half the
-    speed scale (speed held), capped at half the speed the voltage allows at
-    that current (:func:`toolbox.plant.voltage_limited_speed`: the speed scale alone ignores
-    the ``R i`` and ``w L i`` drops). The scales
-    (:func:`toolbox.design._defaults.current_scale`, ``speed_scale``) are
-    the rated (else maximum) current and speed, else what the voltage
-    allows; each scenario's ``name`` states its numbers.
-
-    Durations: at least 20 ms and 30 time constants of the slowest default
-    crossover (``3/wc`` is the 5 % time of a first-order loop: ten of them
-    leave room for the slower second-order defaults), and at least
-    ``horizon`` when given: :func:`toolbox.analysis.executed.settling_horizon`,
-    10 time constants of the executed loop's slowest closed-loop pole that
-    shows in the step (so that the settling time the checks require is
-    reached within the span). The unloaded start
-    must not pass the speed scale nor 80 % of the voltage-limited speed
-    (beyond, the back-EMF would saturate the voltage: a field-weakening
-    question, not the loop's): a rotor light enough to pass that sooner gets
-    a smaller step, sized to arrive there at the end of the span.
-
-    Parameters
-    ----------
-    motor : Motor
-        Rated/max current and speed, torque constant and inertia.
-    drive : Drive, optional
-        Sample time, delay and voltage; without it the step is half the
-        rated current (10 A when unknown) and the speed scenario is left out.
-    horizon : float, optional
-        Shortest span after the step (s), from the designed loop.
-    """
-    if drive is None:
-        i_step = 0.5 * (motor.rated_current or motor.max_current or 10.0)
-        return (Scenario(name="q step at standstill", kind="current_step", duration=0.02,
-                         iq_ref=i_step, step_time=0.001, keep_traces=True),
-                Scenario(name="q step, unloaded start", kind="unloaded_start", duration=0.02,
-                         iq_ref=i_step, step_time=0.001, keep_traces=True))
-    # lazy: toolbox.design imports the spec and plant stages, not needed without a drive
-    from ..design import current_scale, default_bandwidth, speed_scale
-    i_scale, _ = current_scale(motor, drive)
-    w_scale, _ = speed_scale(motor, drive)
-    i_step = 0.5 * i_scale
-    w_reach = voltage_limited_speed(motor, drive.max_voltage(motor.convention), i_step)
-    w_held = 0.5 * min(w_scale, w_reach)
-    wc = default_bandwidth(drive, zero=True).value
-    step_time = 0.001
-    span = max(0.02, 30.0 / wc, horizon or 0.0)
-    # free acceleration may end at the speed scale or at 80 % of the voltage-limited speed
-    # (20 % of the voltage left for the loop); a rotor light enough to pass that within the
-    # span steps less current, sized to arrive there at the end (the same span as the
-    # other scenarios: the EMF ramp is a disturbance the slower 2-DOF laws reject over
-    # several integral time constants, and a shorter span cut them off: the corpus's
-    # gimbal motors with ip and lq)
-    w_end = min(w_scale, 0.8 * w_reach)
-    torque_per_amp = motor.torque_factor * motor.pole_pairs * motor.flux
-    i_start = i_step
-    if torque_per_amp > 0 and math.isfinite(w_end):
-        i_start = min(i_step, w_end * motor.J / (torque_per_amp * span))
-    start_txt = (f"{i_start:.4g} A, unloaded start" if i_start == i_step else
-                 f"{i_start:.4g} A, unloaded start (reaches {w_end:.4g} rad/s at the end)")
-    out = [Scenario(name=f"q step to {i_step:.4g} A (0.5 x current scale) at standstill",
-                    kind="current_step", duration=step_time + span, iq_ref=i_step,
-                    step_time=step_time, keep_traces=True),
-           Scenario(name=f"q step to {start_txt}",
-                    kind="unloaded_start", duration=step_time + span, iq_ref=i_start,
-                    step_time=step_time, keep_traces=True)]
-    if math.isfinite(w_held):
-        held_txt = ("0.5 x speed scale" if w_held == 0.5 * w_scale else
-                    "0.5 x the speed the voltage allows at this current")
-        out.append(Scenario(name=f"q step to {i_step:.4g} A at {w_held:.4g} rad/s ({held_txt})",
-                            kind="current_step", duration=step_time + span, iq_ref=i_step,
-                            initial_speed=w_held, step_time=step_time, keep_traces=True))
-    return tuple(out)
-
-
-def _speed_loop(scenario: Scenario, sample_time: float) -> SpeedLoop | None:
-    sl = dict(scenario.speed_loop)
-    if not sl:
-        return None
-    ts = sl.get("sample_time", sample_time)  # a whole multiple of Ts (checked at spec load)
-    return SpeedLoop(kp=sl["kp"], ki=sl.get("ki", 0.0), kd=sl.get("kd", 0.0),
-                     sample_time=ts, iq_limit=sl.get("iq_limit", math.inf))
-
-
-def scenario_setup(artifact, scenario: Scenario, drive) -> tuple[ControlLaw, DriveParams]:
-    """The simulator's law and drive for one scenario of ``artifact``.
-
-    The law executes the artifact (:func:`control_law`) under the scenario's
-    speed loop, if any; the inverter is the scenario's, else the predictive
-    switching law for ``fcs_mpc`` and the ideal average inverter otherwise.
-    Verification and the campaign (``toolbox.campaign``) both set up their
-    runs through it.
-
-    Parameters
-    ----------
-    artifact : ControllerArtifact
-    scenario : Scenario
-    drive : Drive
-        The spec's validated drive.
-    """
-    inverter = scenario.inverter or ("fcs_mpc" if artifact.method == "fcs_mpc" else "average")
-    return (control_law(artifact, _speed_loop(scenario, artifact.sample_time)),
-            drive_params(drive, inverter))
 
 
 @dataclass
@@ -286,9 +142,6 @@ def _finite_or_none(v: float) -> float | None:
 
 def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict, list, dict]:
     """Margin checks, stability, linear figures and warnings from the executed law."""
-    from ..analysis import compute_margins
-    from ..analysis.executed import INFORMATIONAL_METHODS, loop_stability, margin_disagreements
-
     margins = compute_margins(artifact, spec.motor)
     warnings = margin_disagreements(artifact.margins, margins, file)
     stability = loop_stability(artifact, spec.motor)
@@ -319,13 +172,6 @@ def _margin_verdict(artifact, spec, file: str | None) -> tuple[dict, dict, dict,
     return checks, stability, linear, warnings, informational
 
 
-def _horizon(artifact, motor) -> float | None:
-    """The default scenarios' shortest span (toolbox.analysis.executed.settling_horizon)."""
-    from ..analysis.executed import settling_horizon
-
-    return settling_horizon(artifact, motor)
-
-
 def _drift_check(artifact, spec) -> dict:
     """The robustness verdict: the executed coupled sampled loop (delay,
     decoupling with the controller's own parameters, speed-sensor errors)
@@ -335,8 +181,6 @@ def _drift_check(artifact, spec) -> dict:
     :data:`toolbox.analysis.DRIVE_DRIFT`). The record carries the worst
     multiloop disk margin over the box and the box itself (``robustness``).
     """
-    from ..analysis import drift_verdict
-
     v = drift_verdict(artifact, spec.motor, spec.drive, spec.requirements.parameter_drift)
     return finalise_check({
         "quantity": (f"unstable sets of {v.n_sets} ({v.box_text}; corners and samples, "
@@ -355,8 +199,6 @@ def _fcs_linear_figures(drive) -> dict[str, LinearFigures]:
     time the default linear design of this drive reaches its band in
     (bandwidth ``wc`` of :func:`toolbox.design.default_bandwidth`).
     """
-    from ..design import default_bandwidth  # lazy: the design stage is heavier
-
     wc = default_bandwidth(drive).value
     return {ax: LinearFigures(wc, math.nan) for ax in ("d", "q")}
 
@@ -366,7 +208,7 @@ def _fcs_ripple(artifact, drive: DriveParams, true_plant: Motor,
     """Per-axis design ripple of the predictive switching law, None for other inverters.
 
     One vector held for a whole period, and the switching penalty's dead band
-    (:func:`toolbox.sim._checks.fcs_ripple`).
+    (:func:`toolbox.verify._checks.fcs_ripple`).
     """
     if drive.inverter != "fcs_mpc" or artifact.fcs is None:
         return None
@@ -379,7 +221,7 @@ def _fcs_step_times(scenario: Scenario, res: SimResult, true_plant: Motor, artif
                     ripple: dict[str, float]) -> dict[str, float]:
     """5 % / 2 % times of a switching-law current step in the band max(b |delta|, ripple).
 
-    See :mod:`toolbox.sim._fcs_metrics`; empty (the kernel's metrics stand)
+    See :mod:`toolbox.verify._fcs_metrics`; empty (the kernel's metrics stand)
     without traces or without a current step.
     """
     facts = step_facts(scenario, true_plant, artifact.decoupling.flux_c)
@@ -398,7 +240,7 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     Margins and stability are recomputed from the executed law (the numbers
     stored in the artifact are only compared, see
     :mod:`toolbox.analysis.executed`); every scenario gets the default checks
-    of :mod:`toolbox.sim._checks` besides the spec's requirements. In
+    of :mod:`toolbox.verify._checks` besides the spec's requirements. In
     verify.json both sit under each scenario's ``requirements`` (the
     ``default.*`` keys), ``default.stable`` under ``margin_requirements``;
     every failing record has a ``reason`` and no value is NaN.
@@ -423,7 +265,7 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
     VerifyResult
     """
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive,
-                                                    _horizon(artifact, spec.motor))
+                                                    settling_horizon(artifact, spec.motor))
     plant = spec.motor  # the true plant is the spec's Motor (one parameter type)
     margin_checks, stability, linear, warnings, info = _margin_verdict(artifact, spec, file)
     if artifact.fcs is not None:

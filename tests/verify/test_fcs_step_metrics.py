@@ -1,7 +1,7 @@
 """Step metrics of the predictive switching law (issue 12: fcs_mpc on defaults).
 
 The 2 % / 5 % times of paper 002's Boolean law are measured in the band
-``max(b |delta|, fcs_ripple)`` (toolbox/sim/_fcs_metrics.py): the law holds one
+``max(b |delta|, fcs_ripple)`` (toolbox/verify/_fcs_metrics.py): the law holds one
 of eight vectors for a period, so it cannot stay within 2 % of a step smaller
 than 50 x its ripple, and the metric used to be NaN (``default.finite`` failed
 every such design). These tests check that the defaults now pass on the
@@ -19,9 +19,10 @@ import numpy as np
 import pytest
 
 from toolbox.pipeline import build_outputs
-from toolbox.sim import default_scenarios, drive_params
-from toolbox.sim._checks import fcs_ripple
-from toolbox.sim._fcs_metrics import ripple_band_step_times
+from toolbox.sim import drive_params
+from toolbox.verify import default_scenarios
+from toolbox.verify._checks import fcs_ripple
+from toolbox.verify._fcs_metrics import ripple_band_step_times
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "design"))
 from test_defaults import MOTORS, spec_for  # noqa: E402
