@@ -7,7 +7,8 @@ import inspect
 import pytest
 
 PACKAGES = ["toolbox", "toolbox.spec", "toolbox.plant", "toolbox.artifact", "toolbox.design",
-            "toolbox.analysis", "toolbox.sim", "toolbox.export", "toolbox.report"]
+            "toolbox.analysis", "toolbox.sim", "toolbox.verify", "toolbox.metrics",
+            "toolbox.export", "toolbox.report"]
 
 
 def public_objects():

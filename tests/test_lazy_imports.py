@@ -141,7 +141,7 @@ def _cct_design(spec: str, out_dir) -> str:
 
 def test_designs_headers_and_cct_design_need_no_python_control(tmp_path):
     """None of NOT_ON_DESIGN_PATH is imported (issue 13) by: every design of
-    designs/ and its C header (made with toolbox._lti), then ``cct design`` of
+    designs/ and its C header (made with toolbox.lti), then ``cct design`` of
     paper 003's PI and of its H-infinity design, every stage (analysis,
     verification, header, report). One interpreter runs the three steps in
     turn (a fresh one costs a second of imports); each step's modules are

@@ -1,10 +1,11 @@
-"""toolbox._lti against python-control (the independent route).
+"""toolbox.lti against independent routes (python-control, scipy, slycot,
+closed forms).
 
-Tolerances: c2d, pade and acker repeat python-control's / scipy's arithmetic
-operation by operation, so they are compared with ``==``. Frequency
-responses are a modal sum (relative error ~cond(V) eps <= ~1e-10) against
-SLICOT tb05ad: rtol 1e-8 of the largest entry. Interconnections reorder
-floating-point sums: rtol 1e-9 on matrices, 1e-8 on responses.
+Every comparison is within a named tolerance of ``tests/tolerances.py``
+(justified there): frequency responses ``FRESP_RTOL`` (modal sum against
+SLICOT tb05ad), interconnections ``INTERCONNECT_RTOL``, discretisation
+``C2D_RTOL``, norms ``LINF_RTOL`` / ``H2_RTOL``. No test asserts identical
+bits between two routes.
 """
 
 from __future__ import annotations
@@ -18,7 +19,10 @@ import scipy.linalg.lapack
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from toolbox import _lti as L
+from tests.tolerances import (C2D_RTOL, EIG_RTOL, FRESP_RTOL, FRESP_SOLVE_RTOL, H2_RTOL,
+                              INTERCONNECT_RTOL, LINF_RTOL, PADE_RTOL, POLY_RTOL)
+from toolbox import lti as L
+from toolbox.lti import _linalg
 
 W = np.logspace(-1, 4, 60)
 
@@ -27,7 +31,7 @@ def _fresp(sys, w=W) -> np.ndarray:
     return np.asarray(ct.frequency_response(sys, w).frdata)
 
 
-def _close(ours: np.ndarray, ref: np.ndarray, rtol: float = 1e-8) -> bool:
+def _close(ours: np.ndarray, ref: np.ndarray, rtol: float = FRESP_RTOL) -> bool:
     return bool(np.max(np.abs(ours - ref)) <= rtol * max(1.0, np.max(np.abs(ref))))
 
 
@@ -91,12 +95,12 @@ def test_eig_follows_numpys_conventions(n):
     rounding (1e-12), and ``A V = V diag(lam)``."""
     rng = np.random.default_rng(n)
     for A in (rng.standard_normal((n, n)), np.triu(rng.standard_normal((n, n)))):
-        lam, V = L._eig(A)
+        lam, V = _linalg._eig(A)
         ref_lam, ref_V = np.linalg.eig(A)
         assert lam.dtype == ref_lam.dtype and V.dtype == ref_V.dtype and V.flags.c_contiguous
-        assert np.allclose(lam, ref_lam, rtol=1e-12, atol=1e-12 * np.abs(ref_lam).max())
-        assert np.allclose(V, ref_V, rtol=1e-12, atol=1e-12)
-        assert np.allclose(A @ V, V * lam, atol=1e-12 * np.abs(A).sum())
+        assert np.allclose(lam, ref_lam, rtol=EIG_RTOL, atol=EIG_RTOL * np.abs(ref_lam).max())
+        assert np.allclose(V, ref_V, rtol=EIG_RTOL, atol=EIG_RTOL)
+        assert np.allclose(A @ V, V * lam, atol=EIG_RTOL * np.abs(A).sum())
 
 
 @pytest.mark.parametrize("method", ["zoh", "foh", "tustin", "euler", "backward_diff"])
@@ -114,7 +118,7 @@ def test_c2d_equals_sample_system(method, sys):
     for k in "ABCD":
         want = np.asarray(getattr(ref, k))
         scale = max(np.abs(want).max(initial=0.0), 1e-300)
-        assert np.allclose(getattr(ours, k), want, rtol=0.0, atol=1e-12 * scale), k
+        assert np.allclose(getattr(ours, k), want, rtol=0.0, atol=C2D_RTOL * scale), k
 
 
 def test_c2d_refuses_discrete_and_unknown_methods():
@@ -131,8 +135,8 @@ def test_pade_equals_control(n):
     integer ratios, so agreement to rounding (rtol 1e-13)."""
     num, den = ct.pade(2.5e-4, n)
     ours = L.pade(2.5e-4, n)
-    assert np.allclose(ours[0], num, rtol=1e-13, atol=0.0)
-    assert np.allclose(ours[1], den, rtol=1e-13, atol=0.0)
+    assert np.allclose(ours[0], num, rtol=PADE_RTOL, atol=0.0)
+    assert np.allclose(ours[1], den, rtol=PADE_RTOL, atol=0.0)
 
 
 def test_acker_equals_control_and_places_the_poles():
@@ -168,7 +172,8 @@ def test_interconnections_match_control(s1, s2):
             assert _close(ours.freqresp(W), _fresp(ref), 1e-6)
             for k in "ABCD":
                 assert np.allclose(getattr(ours, k), np.asarray(getattr(ref, k)),
-                                   rtol=1e-9, atol=1e-9 * max(1.0, np.abs(getattr(ref, k)).max()))
+                                   rtol=INTERCONNECT_RTOL,
+                                   atol=INTERCONNECT_RTOL * max(1.0, np.abs(getattr(ref, k)).max()))
     assert _close((-g1).freqresp(W), _fresp(-s1))
     assert _close(L.append(g1, g2).freqresp(W), _fresp(ct.append(s1, s2)))
 
@@ -203,9 +208,9 @@ def test_tf2ss_and_ss2tf_match_control(num, den_roots):
         expected = _fresp(ref)
     assert _close(g.freqresp(W), expected)
     n2, d2 = L.ss2tf(g)
-    assert np.allclose(d2, den, rtol=1e-9)
+    assert np.allclose(d2, den, rtol=POLY_RTOL)
     nref = np.concatenate([np.zeros(len(den) - len(num)), num])
-    assert np.allclose(n2, nref, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(nref).max()))
+    assert np.allclose(n2, nref, rtol=POLY_RTOL, atol=POLY_RTOL * max(1.0, np.abs(nref).max()))
 
 
 def test_ss2tf_equals_control_on_a_minimal_system():
@@ -265,7 +270,7 @@ def test_mimo_transfer_function_and_improper_refused():
 
 def test_control_transfer_functions_keep_python_controls_realisation():
     """A user's python-control TF gets python-control's states (td04ad), so
-    artifacts built from it are the numbers they were before toolbox._lti
+    artifacts built from it are the numbers they were before toolbox.lti
     (the same state coordinates: entries within rounding, rtol 1e-14)."""
     tf = ct.tf([2.0, 30.0], [1.0, 0.0])
     ref = ct.ss(tf)
@@ -437,7 +442,7 @@ def test_linf_norm_of_a_row_with_feedthrough():
     ours = L.linf_norm(g)
     assert ours >= _grid_peak(g) * (1 - 1e-12)
     assert _below_level(g, ours * (1 + 1e-9))
-    assert ours == pytest.approx(1.9137959740, rel=1e-9)
+    assert ours == pytest.approx(1.9137959740, rel=LINF_RTOL)
 
 
 def test_zeros_refuse_a_system_with_two_inputs():
@@ -454,10 +459,101 @@ def test_pencil_eigval_list_is_numpys_quotient():
     infinite ones are dropped."""
     rng = np.random.default_rng(3)
     M = rng.standard_normal((7, 7))
-    E = L._leading_identity(7, 7, 5)
+    E = _linalg._leading_identity(7, 7, 5)
     ar, ai, beta, *_ = scipy.linalg.lapack.dggev(M, E, compute_vl=0, compute_vr=0)
     alpha = ar + 1j * ai
     fin = np.abs(beta) > 1e-13 * np.abs(alpha)
     assert np.count_nonzero(fin) == 5
     assert np.allclose(np.array(L.pencil_eigvals(M, E)), alpha[fin] / beta[fin],
                        rtol=5e-16, atol=0.0)
+
+
+@settings(max_examples=20, deadline=None)
+@given(systems())
+def test_evaluate_modal_sum_and_lu_solves_agree(sys):
+    """The two evaluations of :func:`toolbox.lti.evaluate` (modal sum, per-point
+    LU solves) give the same response within ``FRESP_RTOL``, the LU one agrees
+    with python-control's tb05ad within ``FRESP_SOLVE_RTOL`` (both solve the same
+    linear systems), and the method and the function are one route."""
+    g = L.as_statespace(sys)
+    x = 1j * W
+    modal = L.evaluate(g.A, g.B, g.C, g.D, x)
+    lu = L.evaluate(g.A, g.B, g.C, g.D, x, solve=True)
+    assert _close(modal, lu)
+    assert _close(lu, _fresp(sys), FRESP_SOLVE_RTOL * 1e3)
+    assert _close(g.evaluate(x), modal, FRESP_SOLVE_RTOL)
+    assert _close(g.evaluate(x, solve=True), lu, FRESP_SOLVE_RTOL)
+
+
+def test_h2_norm_against_slycot_and_a_closed_form():
+    """``||1/(s + a)||_2 = 1/sqrt(2a)`` (closed form); random stable systems
+    against SLICOT ab13bd (slycot, an independent Lyapunov solver), within
+    ``H2_RTOL``; a feedthrough or an unstable pole gives inf."""
+    from slycot import ab13bd
+
+    assert L.h2_norm(ct.ss([[-4.0]], [[1.0]], [[1.0]], [[0.0]])) == pytest.approx(
+        1.0 / np.sqrt(8.0), rel=H2_RTOL)
+    for seed in range(5):
+        g = _rss(seed, 4, 2, 3)
+        A, B, C = (np.array(np.asarray(m, float), order="F") for m in (g.A, g.B, g.C))
+        D = np.zeros((2, 3), order="F")
+        ref = ab13bd("C", "H", 4, 3, 2, A, B, C, D)
+        assert L.h2_norm(ct.ss(g.A, g.B, g.C, D)) == pytest.approx(ref, rel=H2_RTOL)
+    assert L.h2_norm(ct.ss([[-1.0]], [[1.0]], [[1.0]], [[1.0]])) == np.inf
+    assert L.h2_norm(ct.ss([[1.0]], [[1.0]], [[1.0]], [[0.0]])) == np.inf
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_balanced_truncation_against_slycot_ab09ad(seed):
+    """Square-root balanced truncation against SLICOT ab09ad (slycot, its own
+    Lyapunov solver and square-root method): the Hankel singular values within
+    ``EIG_RTOL`` of the largest one, and the reduced responses within 1e-8 of
+    the response's peak (two bases of the same truncated balanced system,
+    differing by the conditioning of the kept singular values, >= 1e-3 here)."""
+    from slycot import ab09ad
+
+    g = _rss(seed, 6, 1, 1)
+    A, B, C, D = (np.array(np.asarray(m, float), order="F") for m in (g.A, g.B, g.C, g.D))
+    Kr, hsv, bound = L.balanced_truncation(g, 3)
+    nr, Ar, Br, Cr, ref_hsv = ab09ad("C", "B", "N", 6, 1, 1, A.copy(order="F"),
+                                     B.copy(order="F"), C.copy(order="F"), nr=3)
+    assert nr == 3 and Kr.nstates == 3
+    assert np.allclose(hsv, ref_hsv, rtol=0.0, atol=EIG_RTOL * ref_hsv[0] * 1e2)
+    assert bound == pytest.approx(2 * ref_hsv[3:].sum(), rel=1e-9)
+    ref = L.StateSpace(Ar, Br, Cr, D)
+    assert _close(Kr.freqresp(W), ref.freqresp(W), 1e-8)
+
+
+def test_balanced_series_is_the_loop_of_python_control():
+    """The loop K then G that the exact margins start from (series in balanced
+    coordinates) has python-control's ``G * K`` response within
+    ``FRESP_RTOL`` (a similarity transform and another evaluation)."""
+    from toolbox.lti import _margins
+
+    s = ct.tf("s")
+    G = ct.tf([1.0], [2.8e-3, 0.6])
+    K = 49.7 * (s + 214.3) * (s + 5e4) / (s * (s**2 + 4814 * s + 6.17e6))
+    A, B, C, d = _margins._balanced_series(_margins._siso(K), _margins._siso(G))
+    w = np.logspace(-1, 7, 200)
+    ours = L.StateSpace(A, B, C, [[d]]).freqresp(w)[0, 0]
+    ref = np.asarray(ct.frequency_response(G * K, w).complex).ravel()
+    assert np.allclose(ours, ref, rtol=FRESP_RTOL, atol=0.0)
+
+
+def test_loop_margins_against_python_control():
+    """Exact margins of a continuous loop against python-control's
+    ``stability_margins`` (a grid refined by root finding): GM and PM within
+    1e-6 relative (python-control's own refinement), M_m within 1e-6; a
+    discrete or MIMO system is refused."""
+    s = ct.tf("s")
+    G = 1 / (2.8e-3 * s + 0.6) * ct.tf([1.0], [1e-4, 1.0])
+    K = 3.0 * (s + 200) / s
+    m = L.loop_margins(G, K)
+    gm, pm, sm, wpc, wgc, wms = ct.stability_margins(G * K)
+    assert m.phase_margin_deg == pytest.approx(pm, rel=1e-6)
+    assert m.gain_crossover_rad_s == pytest.approx(wgc, rel=1e-6)
+    assert 10 ** (m.gain_margin_db / 20) == pytest.approx(gm, rel=1e-6)
+    assert m.stability_margin == pytest.approx(sm, rel=1e-6)
+    assert m.static_error == 0.0
+    with pytest.raises(ValueError, match="continuous SISO"):
+        L.loop_margins(L.c2d(L.as_statespace(G), 1e-4), K)

@@ -17,7 +17,7 @@ from .spec import Spec, load_spec, spec_from_dict
 from . import design as _design  # noqa: F401  registers the methods' parameter readers with spec
 
 #: public name -> defining module, imported on first access (PEP 562): the
-#: artifact and pipeline import scipy (its linear algebra, for toolbox._lti);
+#: artifact and pipeline import scipy (its linear algebra, for toolbox.lti);
 #: ``import toolbox`` and ``cct --help`` must not pay for it.
 _LAZY = {
     "ControllerArtifact": "artifact",

@@ -26,6 +26,7 @@ import os
 import pickle
 from pathlib import Path
 from typing import Any, Callable, Sequence, Union
+from ._io import write_atomic
 
 __all__ = ["cache_dir", "cache_key", "cached", "template_bytecode_cache"]
 
@@ -51,6 +52,7 @@ def cache_key(sources: Sources, packages: Sequence[str] = ("sympy",)) -> str:
     The versions are read from the installed distributions' metadata, so that
     a cache hit imports none of the packages.
     """
+    # lazy: importlib.metadata, 42 modules
     from importlib.metadata import PackageNotFoundError, version
 
     files = [sources] if isinstance(sources, (str, Path)) else list(sources)
@@ -85,8 +87,6 @@ def _read(path: Path, key: str) -> Any | None:
 
 def _write(path: Path, key: str, value: Any) -> None:
     """Write atomically; a cache that cannot be written is not an error."""
-    from ._io import write_atomic
-
     payload = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
     data = b"\n".join((_MAGIC + b" " + key.encode(),
                        hashlib.sha256(payload).hexdigest().encode(), payload))
@@ -139,7 +139,7 @@ def template_bytecode_cache(owner: str | Path):
     ``None`` (compile every time) when the cache is disabled or its directory
     cannot be created.
     """
-    import jinja2
+    import jinja2  # lazy: jinja2 + markupsafe, 23 modules
 
     directory = cache_dir()
     if directory is None:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import functools
+import hashlib
+from pathlib import Path
 
 __all__ = ["toolbox_version", "source_hash"]
 
@@ -12,9 +14,9 @@ def toolbox_version() -> str:
     """Installed distribution version, ``"0+unknown"`` in a bare source tree.
 
     Read once per process: ``importlib.metadata`` scans the installed
-    distributions on every call (~2 ms, a tenth of an H-infinity design, issue
-    13), and the version cannot change while the process runs.
+    distributions on every call (~2 ms, a tenth of an H-infinity design), and the version cannot change while the process runs.
     """
+    # lazy: importlib.metadata, 42 modules
     from importlib.metadata import PackageNotFoundError, version
 
     try:
@@ -33,9 +35,6 @@ def source_hash() -> str:
     version while its files change): campaigns pin it (``toolbox.campaign``)
     so that no chunk computed by another build is mixed into a table.
     """
-    import hashlib
-    from pathlib import Path
-
     root = Path(__file__).resolve().parent
     h = hashlib.sha256()
     for path in sorted(root.rglob("*.py"), key=lambda p: p.relative_to(root).as_posix()):

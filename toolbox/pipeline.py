@@ -18,9 +18,11 @@ from typing import Any, Callable
 import numpy as np
 
 from ._io import check_text_depth, read_limited, write_set
-from .artifact import ControllerArtifact
+from .artifact import ControllerArtifact, spec_sha256
 from .errors import ArtifactError, CctError, ExportRefused, SpecError
-from .spec import Spec, load_spec, spec_from_dict
+from .spec import Spec, load_spec, spec_from_dict, SpecErrors
+from .design import design
+from .export import write_header
 
 __all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_data",
            "design_spec", "analyse", "run_verification", "build_outputs", "write_outputs",
@@ -28,7 +30,7 @@ __all__ = ["unstable_axes", "refuse_unstable_export", "DesignOutputs", "report_d
            "OUTPUT_FILES", "check_integrity", "saturated_spectral_radius"]
 
 OUTPUT_FILES = ("controller.json", "analysis.json", "verify.json", "controller.h",
-                "report.html", "report.pdf")
+                "firmware.json", "report.html", "report.pdf")
 
 Progress = Callable[[str], None]
 
@@ -44,14 +46,22 @@ def design_spec(spec: Spec | str | Path | dict) -> ControllerArtifact:
     ----------
     spec : Spec, str, Path or dict
         A validated spec, a spec file or the spec as plain data.
-    """
-    from .design import design
 
+    Raises
+    ------
+    SpecError
+        (``DesignInfeasible`` included) naming the spec file when it has one.
+    """
     if isinstance(spec, (str, Path)):
         spec = load_spec(spec)
     elif isinstance(spec, dict):
         spec = spec_from_dict(spec)
-    return design(spec)
+    try:
+        return design(spec)
+    except SpecError as err:  # a refusal names the spec file, as load_spec's errors do
+        if err.file is None and spec.source:
+            raise err.with_file(spec.source) from None
+        raise
 
 
 def analyse(artifact: ControllerArtifact, spec: Spec, *,
@@ -75,8 +85,8 @@ def analyse(artifact: ControllerArtifact, spec: Spec, *,
     analysis : dict
         JSON-ready analysis (``analysis.json``), with requirement checks.
     """
-    from .analysis import analysis_report
-    from .analysis.executed import INFORMATIONAL_METHODS, loop_stability
+    from .analysis import analysis_report  # lazy: scipy.optimize, ~260 modules
+    from .analysis.executed import INFORMATIONAL_METHODS, loop_stability  # lazy: ~260 modules
 
     report = analysis_report(artifact, spec.motor, spec.drive,
                              sampled_certificate=sampled_certificate)
@@ -118,7 +128,7 @@ def refuse_unstable_export(artifact: ControllerArtifact, motor, file: str | None
     """
     if artifact.method == "fcs_mpc":
         return
-    from .analysis.executed import loop_stability
+    from .analysis.executed import loop_stability  # lazy: scipy.optimize, ~260 modules
 
     stability = loop_stability(artifact, motor)
     unstable = [ax for ax, s in sorted(stability.items()) if s["stable"] is False]
@@ -164,8 +174,6 @@ def check_integrity(artifact: ControllerArtifact, spec: Spec, file: str | None =
     ArtifactError
         Naming the key that disagrees, the value expected and the one found.
     """
-    from .artifact import spec_sha256
-
     stored = artifact.provenance.get("spec_sha256")
     digest = spec_sha256(artifact.spec)
     if stored != digest:
@@ -188,7 +196,7 @@ def check_integrity(artifact: ControllerArtifact, spec: Spec, file: str | None =
 def run_verification(artifact: ControllerArtifact, spec: Spec,
                      progress: Callable[[int, int], None] | None = None,
                      file: str | None = None):
-    """Closed-loop simulation of every scenario (see :func:`toolbox.sim.verify`).
+    """Closed-loop simulation of every scenario (see :func:`toolbox.verify.verify`).
 
     Parameters
     ----------
@@ -201,7 +209,7 @@ def run_verification(artifact: ControllerArtifact, spec: Spec,
     file : str, optional
         The controller.json the artifact came from (named in warnings).
     """
-    from .sim import verify
+    from .verify import verify  # lazy: numba + the kernel, ~500 modules
 
     return verify(artifact, spec, progress=progress, file=file)
 
@@ -215,6 +223,7 @@ class DesignOutputs:
     analysis: dict | None = None
     verification: object | None = None
     header: str | None = None
+    firmware: dict | None = None      # firmware.json: target figures of the header
     html: str | None = None
     pdf: bytes | None = None
     files: dict[str, str | bytes] = field(default_factory=dict)
@@ -223,8 +232,8 @@ class DesignOutputs:
 
     @property
     def notice(self) -> str | None:
-        """:data:`toolbox.sim.NO_REQUIREMENTS` when the spec has no requirements."""
-        from .sim import NO_REQUIREMENTS
+        """:data:`toolbox.verify.NO_REQUIREMENTS` when the spec has no requirements."""
+        from .verify import NO_REQUIREMENTS  # lazy: numba + the kernel, ~500 modules
 
         return None if self.spec.requirements.given else NO_REQUIREMENTS
 
@@ -286,7 +295,6 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
         out.verification = run_verification(out.artifact, spec)
     if header:
         progress("firmware header")
-        from .export import write_header
 
         try:
             refuse_unstable_export(out.artifact, spec.motor)
@@ -299,8 +307,11 @@ def _build(spec: Spec, analysis: bool, verification: bool, report: bool, header:
         else:
             out.header = write_header(out.artifact, spec.motor, spec.drive,
                                       prefix=spec.export_prefix)
+            from .export.firmware import measure_firmware
+            out.firmware = measure_firmware(out.header, spec.export_prefix)
     if report:
         progress("report")
+        # lazy: jinja2 + report, 33 modules
         from .report import build_context, write_html, write_pdf
 
         context = build_context(report_data(out))  # figures drawn once for both
@@ -321,7 +332,7 @@ def report_data(out: DesignOutputs):
     out : DesignOutputs
         Artifact, spec and whatever analysis and verification produced.
     """
-    from .report import ReportData
+    from .report import ReportData  # lazy: jinja2 + report, 33 modules
 
     verification = traces = None
     if out.verification is not None:
@@ -333,7 +344,7 @@ def report_data(out: DesignOutputs):
     return ReportData(title=out.spec.title or (out.spec.source or "untitled"), spec=out.spec,
                       artifact=out.artifact, analysis=out.analysis,
                       verification=verification, traces=traces,
-                      notice=out.notice, warnings=warnings)
+                      notice=out.notice, warnings=warnings, firmware=out.firmware)
 
 
 def _files(out: DesignOutputs) -> dict[str, str | bytes]:
@@ -345,6 +356,9 @@ def _files(out: DesignOutputs) -> dict[str, str | bytes]:
                                           allow_nan=False) + "\n"
     if out.header is not None:
         files["controller.h"] = out.header
+    if out.firmware is not None:
+        from .export.firmware import FIRMWARE_JSON, firmware_json
+        files[FIRMWARE_JSON] = firmware_json(out.firmware)
     if out.html is not None:
         files["report.html"] = out.html
     if out.pdf is not None:
@@ -423,8 +437,6 @@ def header_agreement(out_dir: str | Path, artifact: ControllerArtifact,
 def _header_difference(raw: bytes, artifact: ControllerArtifact, spec: Spec) -> int | None:
     """First line (1-based) where ``raw`` differs from the header regenerated
     from ``artifact`` with the prefix the header uses; None when equal."""
-    from .export import write_header
-
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
@@ -581,8 +593,6 @@ def spec_of_artifact(artifact: ControllerArtifact, file: str | None = None) -> S
 
 
 def _as_artifact_error(err: SpecError, file: str | None) -> ArtifactError:
-    from .spec import SpecErrors
-
     if isinstance(err, SpecErrors):
         first = err.errors[0]
         hint = f"and {len(err.errors) - 1} more error(s) in the stored spec"

@@ -35,9 +35,14 @@
  *   CCT_STATUS_BAD_STATE (2)   the result overflowed (inf/nan in v or the state);
  *   CCT_STATUS_IMPLAUSIBLE (4) a measured current beyond I_PLAUSIBLE or the
  *                                  speed beyond W_PLAUSIBLE (a sensor fault).
- * On 1, 2 and 4 the last good output is repeated (0 V before the first good
- * period), saturated = 0, and the state is left exactly as it was: the next
- * valid period continues as if the bad one had not happened. Finiteness is
+ * On 1 and 2 the last good output is repeated (0 V before the first good
+ * period) with saturated = 0; on 4 implausible currents are replaced by the
+ * law's prediction of them (one period of the PRED_* dq model from the last good
+ * sample), an implausible speed by the last plausible one, and the output computed
+ * from the state, the references and this period's angle and bus (the voltage
+ * limit where the voltage is placed now). In all three cases the state is left
+ * exactly as it was (no integrator update): the next valid period continues as
+ * if the bad one had not happened. Finiteness is
  * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
  * cct_set_vdc refuses a bus reading that is not finite and > 0 (1) or lies
  * outside [VDC_MIN, VDC_PLAUSIBLE] (4), keeping the limit in use.
@@ -81,6 +86,11 @@
 #define CCT_DEC_LQ 2.799999900e-03f /* H */
 #define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
+/* dq model (motor data) that predicts an implausible current sample's replacement */
+#define CCT_PRED_R 6.000000238e-01f /* ohm */
+#define CCT_PRED_LD 1.399999950e-03f /* H */
+#define CCT_PRED_LQ 2.799999900e-03f /* H */
+#define CCT_PRED_FLUX 1.199999973e-01f /* Wb */
 #define CCT_DELAY_COMP_TIME 1.500000071e-04f /* s (1.5 Ts, drive.angle_compensation = "mid_period"): v_dq is placed at theta_e + CCT_DELAY_COMP_TIME * w_e (rad); applied inside cct_step, outputs v_d_comp, v_q_comp */
 /* d axis PI gains (method pi), FOR INFORMATION ONLY: the code
  *   runs the coefficients of the law below, derived from these gains at export;
@@ -122,7 +132,9 @@ typedef struct {
 #define CCT_STATUS_OK 0         /* the law ran */
 #define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
 #define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
-#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: output held, state kept */
+#define CCT_STATUS_CLAMPED 3     /* integer variants: an input beyond its range was clamped (the law ran) */
+#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: replaced by the last
+                                     * plausible one for this period's output, state kept */
 
 /* plausible ranges (a sample beyond them is a sensor or ADC fault, not a
  * current or speed the drive can have): cct_step refuses measured currents
@@ -153,6 +165,9 @@ typedef struct {
     float v_d_comp_hold; /* V */
     float v_q_comp_hold; /* V */
     float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
+    float i_d_pred; /* A, the currents predicted for the next sampling instant (0 after */
+    float i_q_pred; /* reset), used in place of an implausible current sample */
+    float omega_m_good; /* rad/s, last plausible speed, used in place of an implausible one */
 } cct_state_t;
 
 /* zero states and held outputs (0 V), keeping the voltage limit in use:
@@ -166,6 +181,9 @@ static inline void cct_reset(cct_state_t *s)
     s->v_q_hold = 0.0f;
     s->v_d_comp_hold = 0.0f;
     s->v_q_comp_hold = 0.0f;
+    s->i_d_pred = 0.0f;
+    s->i_q_pred = 0.0f;
+    s->omega_m_good = 0.0f;
 }
 
 /* cct_reset and the voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
@@ -182,6 +200,14 @@ static inline int cct_finite(float v)
     union { float f; uint32_t u; } b;
     b.f = v;
     return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+/* 1 when v is a NaN (IEEE-754 bits, immune to -ffast-math) */
+static inline int cct_isnan(float v)
+{
+    union { float f; uint32_t u; } b;
+    b.f = v;
+    return (b.u & 0x7f800000u) == 0x7f800000u && (b.u & 0x007fffffu) != 0u;
 }
 
 /* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
@@ -201,12 +227,18 @@ static inline int cct_set_vdc(cct_state_t *s, float vdc)
     return CCT_STATUS_OK;
 }
 
-/* 1 when the measured currents and speed lie within their plausible ranges
+/* 1 when both measured currents lie within their plausible range
  * (finite inputs: cct_step tests finiteness first) */
-static inline int cct_plausible(const cct_input_t *in)
+static inline int cct_currents_plausible(const cct_input_t *in)
 {
     return in->i_d <= CCT_I_PLAUSIBLE && in->i_d >= -CCT_I_PLAUSIBLE
-        && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE
+        && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE;
+}
+
+/* 1 when the measured currents and speed lie within their plausible ranges */
+static inline int cct_plausible(const cct_input_t *in)
+{
+    return cct_currents_plausible(in)
         && in->omega_m <= CCT_W_PLAUSIBLE && in->omega_m >= -CCT_W_PLAUSIBLE;
 }
 
@@ -324,6 +356,9 @@ static inline int cct_preset_at(cct_state_t *s, const cct_input_t *in, float v_d
                        - (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
     cct_d_preset(s->d, vd_lin, in->i_d_ref, in->i_d);
     cct_q_preset(s->q, vq_lin, in->i_q_ref, in->i_q);
+    s->i_d_pred = in->i_d;
+    s->i_q_pred = in->i_q;
+    s->omega_m_good = in->omega_m;
     s->v_d_hold = v_d;
     s->v_q_hold = v_q;
     {
@@ -352,8 +387,14 @@ static inline void cct_preset(cct_state_t *s, float v_d, float v_q)
 }
 
 /* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
- * out->status: CCT_STATUS_OK, or _BAD_INPUT / _IMPLAUSIBLE / _BAD_STATE with
- * the last good output repeated and the state left as it was (see the top of this file). */
+ * out->status: CCT_STATUS_OK; _BAD_INPUT / _BAD_STATE with the last good
+ * output repeated and the state left as it was; _IMPLAUSIBLE: implausible
+ * currents replaced by the prediction the last good period made of them
+ * (forward Euler of the PRED_* dq model, DELAY_SAMPLES <= 1 exactly; beyond, the
+ * previous output stands for the voltage applied), an implausible speed by
+ * the last plausible one, the output computed from the state, the references and the angle of
+ * this period (so the voltage limit is the one at this angle), the state left
+ * as it was (no integrator update; see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
     cct_state_t nx;
@@ -363,16 +404,26 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         cct_hold(s, out, CCT_STATUS_BAD_INPUT);
         return;
     }
+    float i_d = in->i_d;
+    float i_q = in->i_q;
+    float omega_m = in->omega_m;
+    int status = CCT_STATUS_OK;
     if (!cct_plausible(in)) {
-        cct_hold(s, out, CCT_STATUS_IMPLAUSIBLE);
-        return;
+        status = CCT_STATUS_IMPLAUSIBLE;
+        if (!cct_currents_plausible(in)) {
+            i_d = s->i_d_pred;
+            i_q = s->i_q_pred;
+        }
+        if (!(omega_m <= CCT_W_PLAUSIBLE && omega_m >= -CCT_W_PLAUSIBLE)) {
+            omega_m = s->omega_m_good;
+        }
     }
     nx = *s;
-    const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
-    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, in->i_d);
-    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, in->i_q);
-    const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
-    const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
+    const float w = (float)CCT_POLE_PAIRS * omega_m; /* electrical speed, rad/s */
+    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, i_d);
+    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, i_q);
+    const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * i_q;
+    const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * i_d
                    + (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
     float vds = vd;
     float vqs = vq;
@@ -398,11 +449,31 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     const float sc = sinf(thc);
     const float vdr = vds * cc - vqs * sc;
     const float vqr = vds * sc + vqs * cc;
-    nx.v_d_hold = vds;
-    nx.v_q_hold = vqs;
-    nx.v_d_comp_hold = vdr;
-    nx.v_q_comp_hold = vqr;
-    *s = nx;
+    if (status == CCT_STATUS_OK) { /* an implausible period leaves the state as it was */
+        nx.v_d_hold = vds;
+        nx.v_q_hold = vqs;
+        nx.v_d_comp_hold = vdr;
+        nx.v_q_comp_hold = vqr;
+        {
+            /* the currents at the next sampling instant: one forward-Euler period of
+             * the controller's dq model under the voltage applied meanwhile (this
+             * output without computation delay, else the previous one; the placement
+             * makes its rotor-frame mean v_dq) */
+#if CCT_DELAY_SAMPLES == 0
+            const float ud = vds;
+            const float uq = vqs;
+#else
+            const float ud = s->v_d_hold;
+            const float uq = s->v_q_hold;
+#endif
+            nx.i_d_pred = i_d + CCT_SAMPLE_TIME / CCT_PRED_LD
+                        * (ud - CCT_PRED_R * i_d + w * CCT_PRED_LQ * i_q);
+            nx.i_q_pred = i_q + CCT_SAMPLE_TIME / CCT_PRED_LQ
+                        * (uq - CCT_PRED_R * i_q - w * CCT_PRED_LD * i_d - w * CCT_PRED_FLUX);
+        }
+        nx.omega_m_good = omega_m;
+        *s = nx;
+    }
     out->v_d = vds;
     out->v_q = vqs;
     out->v_d_comp = vdr;
@@ -410,7 +481,7 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     out->saturated = saturated;
     out->sat_d = vds != vd;
     out->sat_q = vqs != vq;
-    out->status = CCT_STATUS_OK;
+    out->status = status;
 }
 #if defined(CCT_FIXED_POINT) || defined(CCT_MCSDK) || defined(CCT_IQMATH)
 #include <stdint.h>
@@ -439,16 +510,27 @@ static inline void cct_place_q30(int64_t vd, int64_t vq, int64_t x, int64_t *pd,
  * c = m / 2^F (integer gains with power-of-two divisors, as STM32 MCSDK).
  * Inputs up to I_MAX = 30 A and W_MAX = 230 rad/s (mechanical),
  * voltage limit 106.066 V: bases below are powers of two above rigorous
- * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000104 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000104 V over 20 ms from equal states.
+ * bounds of every signal and state, so no accumulator or word overflows. The
+ * input words reach twice these ranges (the plausible ranges): cct_step_q31
+ * clamps references and measurements beyond I_MAX / W_MAX (status CLAMPED)
+ * and refuses measurements at or beyond the plausible ranges (status
+ * IMPLAUSIBLE: the last plausible sample used, the state not updated).
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000105 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000105 V over 20 ms from equal states.
  */
 #include <stdint.h>
-#define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
+#define CCT_Q31_I_BASE 6.400000000e+01f /* A at full scale */
 #define CCT_Q31_V_BASE 1.024000000e+03f /* V at full scale */
-#define CCT_Q31_W_BASE 2.560000000e+02f /* mechanical rad/s at full scale */
-#define CCT_Q31_I_MAX 3.000000000e+01f /* A, current range (cct_to_q31 clamps beyond) */
-#define CCT_Q31_W_MAX 2.300000000e+02f /* rad/s, speed range (cct_to_q31 clamps beyond) */
+#define CCT_Q31_W_BASE 5.120000000e+02f /* mechanical rad/s at full scale */
+#define CCT_Q31_I_MAX 3.000000000e+01f /* A, current range (cct_step_q31 clamps beyond) */
+#define CCT_Q31_W_MAX 2.300000000e+02f /* rad/s, speed range (cct_step_q31 clamps beyond) */
+#define CCT_Q31_I_PLAUSIBLE 6.000000000e+01f /* A, 2 x Q31_I_MAX: measured currents at or beyond are refused */
+#define CCT_Q31_W_PLAUSIBLE 4.600000000e+02f /* rad/s, 2 x Q31_W_MAX: a measured speed at or beyond is refused */
+/* the same as Q31 words */
+#define CCT_Q31_I_MAX_W 1006632960L
+#define CCT_Q31_W_MAX_W 964689920L
+#define CCT_Q31_I_PLAUSIBLE_W 2013265920L
+#define CCT_Q31_W_PLAUSIBLE_W 1929379840L
 #define CCT_Q31_V_MAX 222436560L /* V_MAX / V_BASE in Q31: the largest limit */
 #define CCT_Q31_VDC_BASE 1.448154663e+03f /* V of bus at full scale (cct_set_vdc_q31) */
 #define CCT_Q31_D_X0_BASE 1.600000000e+01f /* state 0 full scale */
@@ -463,13 +545,13 @@ static inline void cct_place_q30(int64_t vd, int64_t vq, int64_t x, int64_t *pd,
 #define CCT_Q31_DEC_DE_SHIFT 31u
 /* d axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY
  * (the Q31 law below runs its own quantised coefficients):
- *   Kp = 704643072L / 2^31 (0.328125 p.u.)
- *   Ki Ts = 850403525L / 2^37 (0.0061875 p.u.)
+ *   Kp = 704643072L / 2^30 (0.65625 p.u.)
+ *   Ki Ts = 850403525L / 2^36 (0.012375 p.u.)
  */
 /* q axis per-unit PI gains as integer / 2^shift, FOR INFORMATION ONLY
  * (the Q31 law below runs its own quantised coefficients):
- *   Kp = 704643072L / 2^31 (0.328125 p.u.)
- *   Ki Ts = 850403525L / 2^37 (0.0061875 p.u.)
+ *   Kp = 704643072L / 2^30 (0.65625 p.u.)
+ *   Ki Ts = 850403525L / 2^36 (0.012375 p.u.)
  */
 
 typedef struct {
@@ -481,8 +563,8 @@ typedef struct {
 } cct_input_q31_t;
 
 /* voltage placement: rotation angle at full-scale speed, Q30 rad
- * (0.1536 rad = DELAY_COMP_TIME x POLE_PAIRS x Q31_W_BASE) */
-#define CCT_Q31_COMP_K 164926744
+ * (0.3072 rad = DELAY_COMP_TIME x POLE_PAIRS x Q31_W_BASE) */
+#define CCT_Q31_COMP_K 329853488
 
 typedef struct {
     int32_t v_d; /* Q31 of Q31_V_BASE, the law's output (limited) */
@@ -490,12 +572,17 @@ typedef struct {
     int32_t v_d_comp; /* Q31 of Q31_V_BASE, v_dq placed as the float path does: feed */
     int32_t v_q_comp; /* these to the inverse Park transform at the SAMPLED theta_e */
     int saturated;
+    int status;    /* CCT_STATUS_OK, _CLAMPED (an input beyond its range was clamped)
+                    * or _IMPLAUSIBLE (a measurement replaced by the last plausible one) */
 } cct_output_q31_t;
 
 typedef struct {
     int32_t d[2];
     int32_t q[2];
     int32_t v_max; /* voltage limit in use, Q31 of Q31_V_BASE (cct_set_vdc_q31) */
+    int32_t i_d_good; /* last plausible measurements (0 after init), used in place */
+    int32_t i_q_good; /* of an implausible one */
+    int32_t omega_m_good;
 } cct_state_q31_t;
 
 static inline void cct_init_q31(cct_state_q31_t *s)
@@ -504,16 +591,20 @@ static inline void cct_init_q31(cct_state_q31_t *s)
     for (i = 0u; i < 2u; ++i) { s->d[i] = 0; }
     for (i = 0u; i < 2u; ++i) { s->q[i] = 0; }
     s->v_max = CCT_Q31_V_MAX;
+    s->i_d_good = 0;
+    s->i_q_good = 0;
+    s->omega_m_good = 0;
 }
 
 /* measured DC-link voltage as Q31 of CCT_Q31_VDC_BASE (chosen so that the
  * word IS the voltage limit in Q31 of Q31_V_BASE). The scaling and the state
  * bounds were derived for the nominal bus: above it the limit is clamped to
  * CCT_Q31_V_MAX and 1 is returned; a negative word is refused (-1, limit
- * unchanged); 0 otherwise. */
+ * unchanged, as for a word at or below 1e-3 of the nominal limit, e.g. the 0 of
+ * a non-finite reading converted by cct_to_q31); 0 otherwise. */
 static inline int cct_set_vdc_q31(cct_state_q31_t *s, int32_t vdc)
 {
-    if (vdc < 0) { return -1; }
+    if (vdc <= CCT_Q31_V_MAX / 1000) { return -1; } /* below 1e-3 x nominal (0: a lost reading) */
     if (vdc > CCT_Q31_V_MAX) {
         s->v_max = CCT_Q31_V_MAX;
         return 1;
@@ -522,14 +613,16 @@ static inline int cct_set_vdc_q31(cct_state_q31_t *s, int32_t vdc)
     return 0;
 }
 
-/* physical value -> Q31 word of base, clamped to +-range (the range the
- * scaling and state bounds were derived for) with *clamped = 1 beyond it or
- * for a non-finite value (then 0). E.g. currents: range CCT_Q31_I_MAX, base
- * CCT_Q31_I_BASE; speed: CCT_Q31_W_MAX, CCT_Q31_W_BASE. */
+/* physical value -> Q31 word of base, clamped to +-range with *clamped = 1
+ * beyond it; a NaN gives 0 with *clamped = 1. Pass the plausible ranges
+ * (CCT_Q31_I_PLAUSIBLE, base CCT_Q31_I_BASE; CCT_Q31_W_PLAUSIBLE,
+ * CCT_Q31_W_BASE) so that cct_step_q31 sees an implausible sample (a
+ * value clamped here lands on the plausible limit, which it refuses) and
+ * clamps to the ranges itself. */
 static inline int32_t cct_to_q31(float value, float range, float base, int *clamped)
 {
     float v = value;
-    if (!(v == v)) { *clamped = 1; return 0; }
+    if (cct_isnan(v)) { *clamped = 1; return 0; } /* bits: -ffast-math proof */
     if (v > range) { v = range; *clamped = 1; }
     if (v < -range) { v = -range; *clamped = 1; }
     {
@@ -538,6 +631,20 @@ static inline int32_t cct_to_q31(float value, float range, float base, int *clam
         if (q <= -2147483648.0f) { return -INT32_MAX; }
         return (int32_t)q;
     }
+}
+
+/* v clamped to [-lim, lim]; *flag = 1 when it acts */
+static inline int32_t cct_clamp_q31(int32_t v, int32_t lim, int *flag)
+{
+    if (v > lim) { *flag = 1; return lim; }
+    if (v < -lim) { *flag = 1; return -lim; }
+    return v;
+}
+
+/* 1 when |v| < lim (the plausible side of a plausible limit) */
+static inline int cct_below_q31(int32_t v, int32_t lim)
+{
+    return (int64_t)v < (int64_t)lim && (int64_t)v > -(int64_t)lim;
 }
 
 static inline int32_t cct_sat32(int64_t v)
@@ -566,9 +673,9 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[4] = { 88910856L, 0L, 177821712L, -177821712L };
+    static const int32_t co[4] = { 44455428L, 0L, 177821712L, -177821712L };
     static const int32_t ca[10] = {
-        134217728L, 8388608L, 5014645L, -5014645L, 15139979L,
+        134217728L, 8388608L, 10029290L, -10029290L, 15139979L,
         0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[2] = { 27u, 31u };
@@ -576,7 +683,7 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
     unsigned i, j;
     int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
     for (j = 0u; j < 2u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 29u);
+    acc = cct_shr(acc, 28u);
     for (i = 0u; i < 2u; ++i) {
         const int32_t *m = &ca[5u * i];
         int64_t a = (int64_t)m[2] * r + (int64_t)m[3] * y;
@@ -600,9 +707,9 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[4] = { 88910856L, 0L, 177821712L, -177821712L };
+    static const int32_t co[4] = { 44455428L, 0L, 177821712L, -177821712L };
     static const int32_t ca[10] = {
-        134217728L, 8388608L, 5014645L, -5014645L, 15139979L,
+        134217728L, 8388608L, 10029290L, -10029290L, 15139979L,
         0L, 0L, 0L, 0L, 0L,
     };
     static const unsigned fa[2] = { 27u, 31u };
@@ -610,7 +717,7 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
     unsigned i, j;
     int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
     for (j = 0u; j < 2u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 29u);
+    acc = cct_shr(acc, 28u);
     for (i = 0u; i < 2u; ++i) {
         const int32_t *m = &ca[5u * i];
         int64_t a = (int64_t)m[2] * r + (int64_t)m[3] * y;
@@ -631,15 +738,41 @@ static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
     }
 }
 
+/* one controller period. Measured currents at or beyond Q31_I_PLAUSIBLE_W
+ * (both replaced) or a speed at or beyond Q31_W_PLAUSIBLE_W: the last plausible
+ * sample is used, the state is not updated, status IMPLAUSIBLE; references and
+ * measurements beyond the ranges Q31_I_MAX_W / Q31_W_MAX_W are clamped to
+ * them, status CLAMPED (the law ran); else status OK. */
 static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, cct_output_q31_t *out)
 {
-    const int64_t vd_lin = cct_d_linear_q31(s->d, in->i_d_ref, in->i_d);
-    const int64_t vq_lin = cct_q_linear_q31(s->q, in->i_q_ref, in->i_q);
-    const int64_t wiq = cct_shr((int64_t)in->omega_m * in->i_q, 31u);
-    const int64_t wid = cct_shr((int64_t)in->omega_m * in->i_d, 31u);
+    cct_state_q31_t nx = *s;
+    int status = CCT_STATUS_OK;
+    int clamped = 0;
+    int32_t i_d = in->i_d;
+    int32_t i_q = in->i_q;
+    int32_t w_m = in->omega_m;
+    if (!(cct_below_q31(i_d, CCT_Q31_I_PLAUSIBLE_W) && cct_below_q31(i_q, CCT_Q31_I_PLAUSIBLE_W))) {
+        i_d = s->i_d_good;
+        i_q = s->i_q_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
+    if (!cct_below_q31(w_m, CCT_Q31_W_PLAUSIBLE_W)) {
+        w_m = s->omega_m_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
+    i_d = cct_clamp_q31(i_d, CCT_Q31_I_MAX_W, &clamped);
+    i_q = cct_clamp_q31(i_q, CCT_Q31_I_MAX_W, &clamped);
+    w_m = cct_clamp_q31(w_m, CCT_Q31_W_MAX_W, &clamped);
+    const int32_t r_d = cct_clamp_q31(in->i_d_ref, CCT_Q31_I_MAX_W, &clamped);
+    const int32_t r_q = cct_clamp_q31(in->i_q_ref, CCT_Q31_I_MAX_W, &clamped);
+    if (clamped && status == CCT_STATUS_OK) { status = CCT_STATUS_CLAMPED; }
+    const int64_t vd_lin = cct_d_linear_q31(nx.d, r_d, i_d);
+    const int64_t vq_lin = cct_q_linear_q31(nx.q, r_q, i_q);
+    const int64_t wiq = cct_shr((int64_t)w_m * i_q, 31u);
+    const int64_t wid = cct_shr((int64_t)w_m * i_d, 31u);
     const int64_t vd = vd_lin + cct_shr((int64_t)CCT_Q31_DEC_DD * wiq, CCT_Q31_DEC_DD_SHIFT);
     const int64_t vq = vq_lin + cct_shr((int64_t)CCT_Q31_DEC_DQ * wid, CCT_Q31_DEC_DQ_SHIFT)
-                     + cct_shr((int64_t)CCT_Q31_DEC_DE * in->omega_m, CCT_Q31_DEC_DE_SHIFT);
+                     + cct_shr((int64_t)CCT_Q31_DEC_DE * w_m, CCT_Q31_DEC_DE_SHIFT);
     const int64_t vdc = cct_sat32(vd);
     const int64_t vqc = cct_sat32(vq);
     const uint64_t mag2 = (uint64_t)(vdc * vdc) + (uint64_t)(vqc * vqc);
@@ -652,14 +785,21 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
         vqs = (vqc * s->v_max) / mag;
         out->saturated = 1;
     }
-    cct_d_antiwindup_q31(s->d, vds - vd);
-    cct_q_antiwindup_q31(s->q, vqs - vq);
+    cct_d_antiwindup_q31(nx.d, vds - vd);
+    cct_q_antiwindup_q31(nx.q, vqs - vq);
+    if (status != CCT_STATUS_IMPLAUSIBLE) {
+        nx.i_d_good = i_d;
+        nx.i_q_good = i_q;
+        nx.omega_m_good = w_m;
+        *s = nx;
+    }
+    out->status = status;
     out->v_d = (int32_t)vds;
     out->v_q = (int32_t)vqs;
     {
         /* voltage placement: v_dq rotated by DELAY_COMP_TIME w_e */
         int64_t pd, pq;
-        cct_place_q30(vds, vqs, ((int64_t)in->omega_m * CCT_Q31_COMP_K) >> 31, &pd, &pq);
+        cct_place_q30(vds, vqs, ((int64_t)w_m * CCT_Q31_COMP_K) >> 31, &pd, &pq);
         out->v_d_comp = (int32_t)cct_sat32(pd);
         out->v_q_comp = (int32_t)cct_sat32(pq);
     }
@@ -670,10 +810,14 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
 /* integer variants: PI law v = Kp e + I, I += Ki e + Kaw (v_sat - v) per axis;
  *   d: Kp = 10.599 V/A, Ki = 0.198 V/A per sample, Kaw = 0.0186810076
  *   q: Kp = 10.599 V/A, Ki = 0.198 V/A per sample, Kaw = 0.0186810076
- * ranges: currents and speed beyond these are clamped (status CLAMPED) */
-#define CCT_MCSDK_I_FS 3.000000000e+01f /* A = 32768 digits (s16A) */
+ * ranges: references and measurements beyond the current range and a speed
+ * beyond the speed range are clamped (status CLAMPED); measurements beyond
+ * twice the ranges (the plausible ranges; for the MCSDK the int16 rail) are
+ * refused (status IMPLAUSIBLE: the last plausible sample used, no integral update) */
+#define CCT_MCSDK_I_FS 6.000000000e+01f /* A = 32768 digits (s16A): twice the current range */
 #define CCT_MCSDK_V_FS 2.121320343e+02f /* V = 32768 digits (s16V) */
-#define CCT_MCSDK_W_FS 2.300000000e+02f /* mechanical rad/s = 32768 digits */
+#define CCT_MCSDK_W_FS 4.600000000e+02f /* mechanical rad/s = 32768 digits: twice the speed range */
+#define CCT_MCSDK_RANGE 16384 /* digits of the current and speed ranges (half the full scale) */
 #define CCT_MCSDK_V_MAX 16384 /* nominal voltage limit, s16V */
 #define CCT_IQ_I_BASE 3.000000000e+01f /* A = 1.0 p.u. */
 #define CCT_IQ_V_BASE 1.060660172e+02f /* V = 1.0 p.u. (nominal limit) */
@@ -681,7 +825,6 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
 #endif
 #if defined(CCT_MCSDK) || defined(CCT_IQMATH)
 #include <stdint.h>
-#define CCT_STATUS_CLAMPED 3 /* integer variants: an input beyond its range was clamped */
 
 static inline uint64_t cct_isqrt_u64(uint64_t v)
 {
@@ -726,14 +869,14 @@ static inline int cct_limit64(int64_t *vd, int64_t *vq, int64_t vmax)
  * integral += KI e (int32, clamped to +-V_FS), back-calculation anti-windup.
  */
 #define CCT_MCSDK_D_KP_GAIN (24558) /* d_kp: gain / 2^DIV */
-#define CCT_MCSDK_D_KP_DIV 14
-#define CCT_MCSDK_D_KI_GAIN (918) /* d_ki: gain / 2^DIV */
+#define CCT_MCSDK_D_KP_DIV 13
+#define CCT_MCSDK_D_KI_GAIN (1835) /* d_ki: gain / 2^DIV */
 #define CCT_MCSDK_D_KI_DIV 15
 #define CCT_MCSDK_D_KAW_GAIN (612) /* d_kaw: gain / 2^DIV */
 #define CCT_MCSDK_D_KAW_DIV 15
 #define CCT_MCSDK_Q_KP_GAIN (24558) /* q_kp: gain / 2^DIV */
-#define CCT_MCSDK_Q_KP_DIV 14
-#define CCT_MCSDK_Q_KI_GAIN (918) /* q_ki: gain / 2^DIV */
+#define CCT_MCSDK_Q_KP_DIV 13
+#define CCT_MCSDK_Q_KI_GAIN (1835) /* q_ki: gain / 2^DIV */
 #define CCT_MCSDK_Q_KI_DIV 15
 #define CCT_MCSDK_Q_KAW_GAIN (612) /* q_kaw: gain / 2^DIV */
 #define CCT_MCSDK_Q_KAW_DIV 15
@@ -744,11 +887,9 @@ static inline int cct_limit64(int64_t *vd, int64_t *vq, int64_t vmax)
 #define CCT_MCSDK_DE_GAIN (0) /* de: gain / 2^DIV */
 #define CCT_MCSDK_DE_DIV 0
 
-/* voltage placement: rotation angle at MCSDK_W_FS (= IQ_W_BASE), Q30 rad
- * (0.138 rad = DELAY_COMP_TIME x POLE_PAIRS x speed base) */
-#ifndef CCT_VENDOR_COMP_K
-#define CCT_VENDOR_COMP_K 148176372
-#endif
+/* voltage placement: rotation angle at MCSDK_W_FS, Q30 rad
+ * (0.276 rad = DELAY_COMP_TIME x POLE_PAIRS x MCSDK_W_FS) */
+#define CCT_MCSDK_COMP_K 296352743
 
 typedef struct {
     int16_t i_d_ref; /* s16A */
@@ -765,7 +906,8 @@ typedef struct {
     int16_t v_d_comp; /* s16V, v_dq placed as the float path does: feed these to */
     int16_t v_q_comp; /* the inverse Park transform at the SAMPLED theta_e */
     int saturated;
-    int status;    /* CCT_STATUS_OK or CCT_STATUS_CLAMPED (an input was at the rail) */
+    int status;    /* CCT_STATUS_OK, _CLAMPED (an input beyond its range was clamped)
+                    * or _IMPLAUSIBLE (a measurement at the rail: the last plausible one used) */
 } cct_output_s16_t;
 
 /* run-time gains of one axis (as the SDK's PI handle): the step reads these,
@@ -786,6 +928,9 @@ typedef struct {
     int32_t v_max; /* voltage limit in use, s16V (cct_set_vdc_s16) */
     cct_gains_s16_t gd; /* d-axis gains, CCT_MCSDK_D_* after init */
     cct_gains_s16_t gq; /* q-axis gains */
+    int16_t i_d_good; /* last plausible measurements (0 after init) */
+    int16_t i_q_good;
+    int16_t omega_m_good;
 } cct_state_s16_t;
 
 static inline void cct_init_s16(cct_state_s16_t *s)
@@ -799,21 +944,28 @@ static inline void cct_init_s16(cct_state_s16_t *s)
     s->gq.kp_gain = CCT_MCSDK_Q_KP_GAIN; s->gq.kp_div = CCT_MCSDK_Q_KP_DIV;
     s->gq.ki_gain = CCT_MCSDK_Q_KI_GAIN; s->gq.ki_div = CCT_MCSDK_Q_KI_DIV;
     s->gq.kaw_gain = CCT_MCSDK_Q_KAW_GAIN; s->gq.kaw_div = CCT_MCSDK_Q_KAW_DIV;
+    s->i_d_good = 0;
+    s->i_q_good = 0;
+    s->omega_m_good = 0;
 }
 
-/* amps -> s16A digits, clamped to +-32767 with *clamped = 1 beyond range */
+/* amps -> s16A digits, rounded; clamped to the rail +-32767 (which
+ * cct_step_s16 refuses as implausible) with *clamped = 1 beyond it; a NaN
+ * gives 0 with *clamped = 1 */
 static inline int16_t cct_to_s16a(float amps, int *clamped)
 {
     const float d = amps * (32768.0f / CCT_MCSDK_I_FS);
+    if (cct_isnan(amps)) { *clamped = 1; return (int16_t)0; } /* bits: -ffast-math proof */
     if (!(d < 32767.0f)) { *clamped = 1; return (int16_t)32767; }
     if (!(d > -32767.0f)) { *clamped = 1; return (int16_t)-32767; }
     return (int16_t)(d >= 0.0f ? d + 0.5f : d - 0.5f);
 }
 
-/* bus voltage as s16V digits of MCSDK_V_FS / V_MAX_PER_VDC; clamped to the full scale */
+/* bus voltage as s16V digits of MCSDK_V_FS / V_MAX_PER_VDC; clamped to the full
+ * scale (1); a reading at or below 1e-3 of the nominal limit is refused (-1, limit kept) */
 static inline int cct_set_vdc_s16(cct_state_s16_t *s, int32_t vmax_digits)
 {
-    if (vmax_digits < 0) { return -1; }
+    if (vmax_digits <= CCT_MCSDK_V_MAX / 1000) { return -1; }
     s->v_max = vmax_digits > 32767 ? 32767 : vmax_digits;
     return vmax_digits > 32767 ? 1 : 0;
 }
@@ -836,16 +988,42 @@ static inline void cct_aw_s16(int32_t *integ, int64_t dv, const cct_gains_s16_t 
         (int64_t)32767 << g->ki_div, &flag);
 }
 
+/* 1 when an int16 measurement is off the rail (|v| < 32767: within twice its range) */
+static inline int cct_off_rail(int16_t v)
+{
+    return v < 32767 && v > -32767;
+}
+
+/* one period. Measured currents (both replaced) or speed on the int16 rail
+ * (+-32767 or -32768: twice the range, what cct_to_s16a returns beyond
+ * it): the last plausible sample used, integrals not updated, status
+ * IMPLAUSIBLE; inputs beyond MCSDK_RANGE clamped to it, status CLAMPED. */
 static inline void cct_step_s16(cct_state_s16_t *s, const cct_input_s16_t *in, cct_output_s16_t *out)
 {
     int clamped = 0;
-    const int64_t idr = cct_clamp64(in->i_d_ref, 32767, &clamped);
-    const int64_t iqr = cct_clamp64(in->i_q_ref, 32767, &clamped);
-    const int64_t idm = cct_clamp64(in->i_d, 32767, &clamped);
-    const int64_t iqm = cct_clamp64(in->i_q, 32767, &clamped);
-    const int64_t w = cct_clamp64(in->omega_m, 32767, &clamped);
-    int64_t vd = cct_pi_s16(&s->int_d, (int32_t)(idr - idm), &s->gd);
-    int64_t vq = cct_pi_s16(&s->int_q, (int32_t)(iqr - iqm), &s->gq);
+    int status = CCT_STATUS_OK;
+    int16_t i_d = in->i_d;
+    int16_t i_q = in->i_q;
+    int16_t w_m = in->omega_m;
+    int32_t int_d = s->int_d;
+    int32_t int_q = s->int_q;
+    if (!(cct_off_rail(i_d) && cct_off_rail(i_q))) {
+        i_d = s->i_d_good;
+        i_q = s->i_q_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
+    if (!cct_off_rail(w_m)) {
+        w_m = s->omega_m_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
+    const int64_t idr = cct_clamp64(in->i_d_ref, CCT_MCSDK_RANGE, &clamped);
+    const int64_t iqr = cct_clamp64(in->i_q_ref, CCT_MCSDK_RANGE, &clamped);
+    const int64_t idm = cct_clamp64(i_d, CCT_MCSDK_RANGE, &clamped);
+    const int64_t iqm = cct_clamp64(i_q, CCT_MCSDK_RANGE, &clamped);
+    const int64_t w = cct_clamp64(w_m, CCT_MCSDK_RANGE, &clamped);
+    if (clamped && status == CCT_STATUS_OK) { status = CCT_STATUS_CLAMPED; }
+    int64_t vd = cct_pi_s16(&int_d, (int32_t)(idr - idm), &s->gd);
+    int64_t vq = cct_pi_s16(&int_q, (int32_t)(iqr - iqm), &s->gq);
     vd += (CCT_MCSDK_DD_GAIN * ((w * iqm) >> 15)) >> CCT_MCSDK_DD_DIV;
     vq += (CCT_MCSDK_DQ_GAIN * ((w * idm) >> 15)) >> CCT_MCSDK_DQ_DIV;
     vq += (CCT_MCSDK_DE_GAIN * w) >> CCT_MCSDK_DE_DIV;
@@ -856,19 +1034,26 @@ static inline void cct_step_s16(cct_state_s16_t *s, const cct_input_s16_t *in, c
         vd = cct_clamp64(vd, (int64_t)1 << 40, &flag);
         vq = cct_clamp64(vq, (int64_t)1 << 40, &flag);
         out->saturated = cct_limit64(&vd, &vq, s->v_max) | flag;
-        cct_aw_s16(&s->int_d, vd - ud, &s->gd);
-        cct_aw_s16(&s->int_q, vq - uq, &s->gq);
+        cct_aw_s16(&int_d, vd - ud, &s->gd);
+        cct_aw_s16(&int_q, vq - uq, &s->gq);
+    }
+    if (status != CCT_STATUS_IMPLAUSIBLE) {
+        s->int_d = int_d;
+        s->int_q = int_q;
+        s->i_d_good = (int16_t)idm;
+        s->i_q_good = (int16_t)iqm;
+        s->omega_m_good = (int16_t)w;
     }
     out->v_d = (int16_t)vd;
     out->v_q = (int16_t)vq;
     {
         int64_t pd, pq;
         int flag = 0;
-        cct_place_q30(vd, vq, (w * CCT_VENDOR_COMP_K) >> 15, &pd, &pq);
+        cct_place_q30(vd, vq, (w * CCT_MCSDK_COMP_K) >> 15, &pd, &pq);
         out->v_d_comp = (int16_t)cct_clamp64(pd, 32767, &flag);
         out->v_q_comp = (int16_t)cct_clamp64(pq, 32767, &flag);
     }
-    out->status = clamped ? CCT_STATUS_CLAMPED : CCT_STATUS_OK;
+    out->status = status;
 }
 #endif /* CCT_MCSDK */
 
@@ -877,7 +1062,9 @@ static inline void cct_step_s16(cct_state_s16_t *s, const cct_input_s16_t *in, c
  * TI IQmath-style: _IQ24 per-unit int32 words (value x 2^24, +-128 p.u.),
  * bases CCT_IQ_I_BASE A, CCT_IQ_V_BASE V (the nominal limit),
  * CCT_IQ_W_BASE rad/s (mechanical); _IQmpy(a, b) = (a b) >> 24 in int64.
- * Currents and speed beyond +-1 p.u. are clamped (status CLAMPED).
+ * Inputs beyond +-1 p.u. are clamped (status CLAMPED); measurements beyond
+ * +-2 p.u. are refused (status IMPLAUSIBLE: the last plausible sample used,
+ * no integral update).
  */
 #define CCT_IQ_ONE ((int32_t)1 << 24)
 #define CCT_IQ_D_KP ((int32_t)50295575L)
@@ -892,11 +1079,9 @@ static inline void cct_step_s16(cct_state_s16_t *s, const cct_input_s16_t *in, c
 
 static inline int32_t cct_iqmpy(int64_t a, int64_t b) { return (int32_t)((a * b) >> 24); }
 
-/* voltage placement: rotation angle at MCSDK_W_FS (= IQ_W_BASE), Q30 rad
- * (0.138 rad = DELAY_COMP_TIME x POLE_PAIRS x speed base) */
-#ifndef CCT_VENDOR_COMP_K
-#define CCT_VENDOR_COMP_K 148176372
-#endif
+/* voltage placement: rotation angle at IQ_W_BASE, Q30 rad
+ * (0.138 rad = DELAY_COMP_TIME x POLE_PAIRS x IQ_W_BASE) */
+#define CCT_IQ_COMP_K 148176372
 
 typedef struct {
     int32_t i_d_ref; /* _IQ24 p.u. of IQ_I_BASE */
@@ -912,7 +1097,7 @@ typedef struct {
     int32_t v_d_comp; /* _IQ24 p.u., v_dq placed as the float path does: feed these */
     int32_t v_q_comp; /* to the inverse Park transform at the SAMPLED theta_e */
     int saturated;
-    int status;    /* CCT_STATUS_OK or CCT_STATUS_CLAMPED */
+    int status;    /* CCT_STATUS_OK, _CLAMPED or _IMPLAUSIBLE */
 } cct_output_iq_t;
 
 /* run-time gains of one axis (_IQ24 per unit): the step reads these */
@@ -928,6 +1113,9 @@ typedef struct {
     int32_t v_max; /* voltage limit in use, _IQ24 p.u. (cct_set_vdc_iq) */
     cct_gains_iq_t gd; /* d-axis gains, CCT_IQ_D_* after init */
     cct_gains_iq_t gq;
+    int32_t i_d_good; /* last plausible measurements (0 after init) */
+    int32_t i_q_good;
+    int32_t omega_m_good;
 } cct_state_iq_t;
 
 static inline void cct_init_iq(cct_state_iq_t *s)
@@ -937,25 +1125,52 @@ static inline void cct_init_iq(cct_state_iq_t *s)
     s->v_max = CCT_IQ_ONE;
     s->gd.kp = CCT_IQ_D_KP; s->gd.ki = CCT_IQ_D_KI; s->gd.kaw = CCT_IQ_D_KAW;
     s->gq.kp = CCT_IQ_Q_KP; s->gq.ki = CCT_IQ_Q_KI; s->gq.kaw = CCT_IQ_Q_KAW;
+    s->i_d_good = 0;
+    s->i_q_good = 0;
+    s->omega_m_good = 0;
 }
 
-/* bus voltage relative to nominal (_IQ24, 1.0 = DRIVE_VDC): limit = V_MAX x ratio, up to 2x */
+/* bus voltage relative to nominal (_IQ24, 1.0 = DRIVE_VDC): limit = V_MAX x ratio, up
+ * to 2x (1 beyond); a ratio at or below 1e-3 is refused (-1, limit kept) */
 static inline int cct_set_vdc_iq(cct_state_iq_t *s, int32_t ratio)
 {
-    if (ratio < 0) { return -1; }
+    if (ratio <= CCT_IQ_ONE / 1000) { return -1; }
     s->v_max = ratio > 2 * CCT_IQ_ONE ? 2 * CCT_IQ_ONE : ratio;
     return ratio > 2 * CCT_IQ_ONE ? 1 : 0;
 }
 
+/* 1 when |v| <= 2 p.u. (the plausible range) */
+static inline int cct_plausible_iq(int32_t v)
+{
+    return v <= 2 * CCT_IQ_ONE && v >= -2 * CCT_IQ_ONE;
+}
+
+/* one period. Measured currents (both replaced) or speed beyond 2 p.u.: the
+ * last plausible sample used, integrals not updated, status IMPLAUSIBLE;
+ * inputs beyond 1 p.u. clamped, status CLAMPED. */
 static inline void cct_step_iq(cct_state_iq_t *s, const cct_input_iq_t *in, cct_output_iq_t *out)
 {
     int clamped = 0;
     int flag = 0;
+    int status = CCT_STATUS_OK;
+    int32_t i_d = in->i_d;
+    int32_t i_q = in->i_q;
+    int32_t w_m = in->omega_m;
+    if (!(cct_plausible_iq(i_d) && cct_plausible_iq(i_q))) {
+        i_d = s->i_d_good;
+        i_q = s->i_q_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
+    if (!cct_plausible_iq(w_m)) {
+        w_m = s->omega_m_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
     const int64_t idr = cct_clamp64(in->i_d_ref, CCT_IQ_ONE, &clamped);
     const int64_t iqr = cct_clamp64(in->i_q_ref, CCT_IQ_ONE, &clamped);
-    const int64_t idm = cct_clamp64(in->i_d, CCT_IQ_ONE, &clamped);
-    const int64_t iqm = cct_clamp64(in->i_q, CCT_IQ_ONE, &clamped);
-    const int64_t w = cct_clamp64(in->omega_m, CCT_IQ_ONE, &clamped);
+    const int64_t idm = cct_clamp64(i_d, CCT_IQ_ONE, &clamped);
+    const int64_t iqm = cct_clamp64(i_q, CCT_IQ_ONE, &clamped);
+    const int64_t w = cct_clamp64(w_m, CCT_IQ_ONE, &clamped);
+    if (clamped && status == CCT_STATUS_OK) { status = CCT_STATUS_CLAMPED; }
     const int64_t ed = idr - idm;
     const int64_t eq = iqr - iqm;
     int64_t vd = (int64_t)cct_iqmpy(s->gd.kp, ed) + s->int_d;
@@ -966,19 +1181,24 @@ static inline void cct_step_iq(cct_state_iq_t *s, const cct_input_iq_t *in, cct_
     ud = vd;
     uq = vq;
     out->saturated = cct_limit64(&vd, &vq, s->v_max);
-    s->int_d = (int32_t)cct_clamp64((int64_t)s->int_d + cct_iqmpy(s->gd.ki, ed)
-                                      + cct_iqmpy(s->gd.kaw, vd - ud), 64 * (int64_t)CCT_IQ_ONE, &flag);
-    s->int_q = (int32_t)cct_clamp64((int64_t)s->int_q + cct_iqmpy(s->gq.ki, eq)
-                                      + cct_iqmpy(s->gq.kaw, vq - uq), 64 * (int64_t)CCT_IQ_ONE, &flag);
+    if (status != CCT_STATUS_IMPLAUSIBLE) {
+        s->int_d = (int32_t)cct_clamp64((int64_t)s->int_d + cct_iqmpy(s->gd.ki, ed)
+                                          + cct_iqmpy(s->gd.kaw, vd - ud), 64 * (int64_t)CCT_IQ_ONE, &flag);
+        s->int_q = (int32_t)cct_clamp64((int64_t)s->int_q + cct_iqmpy(s->gq.ki, eq)
+                                          + cct_iqmpy(s->gq.kaw, vq - uq), 64 * (int64_t)CCT_IQ_ONE, &flag);
+        s->i_d_good = (int32_t)idm;
+        s->i_q_good = (int32_t)iqm;
+        s->omega_m_good = (int32_t)w;
+    }
     out->v_d = (int32_t)vd;
     out->v_q = (int32_t)vq;
     {
         int64_t pd, pq;
-        cct_place_q30(vd, vq, (w * CCT_VENDOR_COMP_K) >> 24, &pd, &pq);
+        cct_place_q30(vd, vq, (w * CCT_IQ_COMP_K) >> 24, &pd, &pq);
         out->v_d_comp = (int32_t)pd;
         out->v_q_comp = (int32_t)pq;
     }
-    out->status = clamped ? CCT_STATUS_CLAMPED : CCT_STATUS_OK;
+    out->status = status;
 }
 #endif /* CCT_IQMATH */
 
@@ -1019,7 +1239,8 @@ static void control_isr(float i_d_ref, float i_q_ref)
 
     cct_step(&ctl, &in, &out);
     if (out.status != CCT_STATUS_OK) {
-        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
+        fault_report(out.status); /* state kept (output held, or from the last plausible
+                                   * measurement: 4): decide to trip or ride through */
     }
     /* inverse Park at the SAMPLED theta_e (wrapped to [-pi, pi)); the PWM applies
      * it DELAY_SAMPLES periods later (the next period for DELAY_SAMPLES = 1) */

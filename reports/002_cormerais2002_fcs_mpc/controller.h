@@ -8,7 +8,7 @@
  * created:     2026-11-27T19:06:28+00:00
  *
  * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no
- * fixed-point variant: CCT_FIXED_POINT is an error).
+ * fixed-point variant: CCT_FIXED_POINT, CCT_MCSDK and CCT_IQMATH are errors).
  * Boolean predictive control (Cormerais 2002, paper 002): every period
  * cct_step() predicts the currents one period ahead (forward Euler of the dq
  * model with the controller's R, Ld, Lq, flux) for each of the 8 inverter
@@ -19,10 +19,12 @@
  * No computation delay: the state returned is applied at once, for this period.
  * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
  * cct_step() once per period (example at the end of this file).
- * Faults: out->status CCT_STATUS_BAD_INPUT (an input is inf/nan),
+ * Faults: out->status CCT_STATUS_BAD_INPUT (an input is inf/nan) or
+ * CCT_STATUS_BAD_STATE (the cost overflowed): the previous state is held;
  * CCT_STATUS_IMPLAUSIBLE (a measured current or the speed beyond
- * CCT_I_PLAUSIBLE / CCT_W_PLAUSIBLE) or CCT_STATUS_BAD_STATE (the cost
- * overflowed): the previous state is held.
+ * CCT_I_PLAUSIBLE / CCT_W_PLAUSIBLE): the currents are replaced by the
+ * law's own prediction of them, the speed by the last plausible one, and the
+ * state is chosen as usual.
  */
 #ifndef CCT_CONTROLLER_H
 #define CCT_CONTROLLER_H
@@ -33,6 +35,9 @@
 #ifdef CCT_FIXED_POINT
 #error "fixed-point variant not available: the fcs_mpc law is exported in float only"
 #endif /* CCT_FIXED_POINT */
+#if defined(CCT_MCSDK) || defined(CCT_IQMATH)
+#error "MCSDK/IQmath variants not available: the fcs_mpc law is exported in float only"
+#endif
 
 #define CCT_SAMPLE_TIME 9.999999747e-05f /* controller period, s */
 #define CCT_DELAY_SAMPLES 0 /* computation delay, periods */
@@ -63,7 +68,8 @@ typedef struct {
 #define CCT_STATUS_OK 0         /* the law ran */
 #define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: switch state held */
 #define CCT_STATUS_BAD_STATE 2  /* non-finite cost (overflow): switch state held */
-#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: switch state held */
+#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: replaced by the
+                                     * law's prediction (currents) or the last plausible speed */
 
 /* plausible ranges (a sample beyond them is a sensor or ADC fault): cct_step
  * refuses measured currents or speed beyond them, cct_set_vdc bus readings
@@ -85,12 +91,18 @@ typedef struct {
 typedef struct {
     int conf;      /* last chosen inverter state (applied now) */
     float r_hex;   /* V, length of an active vector (cct_set_vdc) */
+    float i_d_pred; /* A, the law's prediction of the currents at the next sampling */
+    float i_q_pred; /* instant (used in place of an implausible current sample) */
+    float omega_m_good; /* rad/s, last plausible speed */
 } cct_state_t;
 
 static inline void cct_init(cct_state_t *s)
 {
     s->conf = 0;
     s->r_hex = CCT_R_HEX;
+    s->i_d_pred = 0.0f;
+    s->i_q_pred = 0.0f;
+    s->omega_m_good = 0.0f;
 }
 
 /* 1 when v is neither inf nor nan (IEEE-754 bits, immune to -ffast-math) */
@@ -158,29 +170,40 @@ static inline void cct_emit(cct_output_t *out, int st, int nch, int status)
 
 /* one controller period: the inverter state of least
  *   J = ALPHA (i_q - i_q_ref)^2 + BETA (i_d - i_d_ref)^2 + GAMMA commutations
- * over the 8 states (ties: fewest commutations, then the lower index). */
+ * over the 8 states (ties: fewest commutations, then the lower index).
+ * A current sample beyond I_PLAUSIBLE is replaced by the law's own prediction
+ * of it (made last period with the state applied since), a speed beyond
+ * W_PLAUSIBLE by the last plausible speed; the choice is made with them and
+ * status is CCT_STATUS_IMPLAUSIBLE. A non-finite input holds the state. */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
-    const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
+    float omega_m = in->omega_m;
     float idp = in->i_d;
     float iqp = in->i_q;
     float thp = in->theta_e;
+    int status = CCT_STATUS_OK;
     float best_j = 0.0f;
     int best = -1;
     int best_c = 99;
     int cand;
     float c, sn;
+    float best_id = 0.0f, best_iq = 0.0f;
     if (!(cct_finite(in->i_d_ref) && cct_finite(in->i_q_ref) && cct_finite(in->i_d)
           && cct_finite(in->i_q) && cct_finite(in->omega_m) && cct_finite(in->theta_e))) {
         cct_emit(out, s->conf, 0, CCT_STATUS_BAD_INPUT); /* state held */
         return;
     }
     if (!(in->i_d <= CCT_I_PLAUSIBLE && in->i_d >= -CCT_I_PLAUSIBLE
-          && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE
-          && in->omega_m <= CCT_W_PLAUSIBLE && in->omega_m >= -CCT_W_PLAUSIBLE)) {
-        cct_emit(out, s->conf, 0, CCT_STATUS_IMPLAUSIBLE); /* state held */
-        return;
+          && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE)) {
+        idp = s->i_d_pred;
+        iqp = s->i_q_pred;
+        status = CCT_STATUS_IMPLAUSIBLE;
     }
+    if (!(omega_m <= CCT_W_PLAUSIBLE && omega_m >= -CCT_W_PLAUSIBLE)) {
+        omega_m = s->omega_m_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
+    const float w = (float)CCT_POLE_PAIRS * omega_m; /* electrical speed, rad/s */
     c = cosf(thp);
     sn = sinf(thp);
     for (cand = 0; cand < 8; ++cand) {
@@ -195,6 +218,8 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
             best_j = j;
             best = cand;
             best_c = nch;
+            best_id = idn; /* the chosen state's currents at the next instant */
+            best_iq = iqn;
         }
     }
     if (!cct_finite(best_j)) {
@@ -202,7 +227,10 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         return;
     }
     s->conf = best;
-    cct_emit(out, best, best_c, CCT_STATUS_OK);
+    s->i_d_pred = best_id; /* the currents at the next sampling instant */
+    s->i_q_pred = best_iq;
+    s->omega_m_good = omega_m;
+    cct_emit(out, best, best_c, status);
 }
 
 #if 0 /* usage example: copy the lines between BEGIN and END into main.c */

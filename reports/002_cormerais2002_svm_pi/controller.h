@@ -39,9 +39,14 @@
  *   CCT_STATUS_BAD_STATE (2)   the result overflowed (inf/nan in v or the state);
  *   CCT_STATUS_IMPLAUSIBLE (4) a measured current beyond I_PLAUSIBLE or the
  *                                  speed beyond W_PLAUSIBLE (a sensor fault).
- * On 1, 2 and 4 the last good output is repeated (0 V before the first good
- * period), saturated = 0, and the state is left exactly as it was: the next
- * valid period continues as if the bad one had not happened. Finiteness is
+ * On 1 and 2 the last good output is repeated (0 V before the first good
+ * period) with saturated = 0; on 4 implausible currents are replaced by the
+ * law's prediction of them (one period of the PRED_* dq model from the last good
+ * sample), an implausible speed by the last plausible one, and the output computed
+ * from the state, the references and this period's angle and bus (the voltage
+ * limit where the voltage is placed now). In all three cases the state is left
+ * exactly as it was (no integrator update): the next valid period continues as
+ * if the bad one had not happened. Finiteness is
  * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
  * cct_set_vdc refuses a bus reading that is not finite and > 0 (1) or lies
  * outside [VDC_MIN, VDC_PLAUSIBLE] (4), keeping the limit in use.
@@ -84,6 +89,11 @@
 #define CCT_DEC_LQ 1.125999988e-04f /* H */
 #define CCT_DEC_FLUX 6.038999930e-02f /* Wb */
 #define CCT_POLE_PAIRS 6 /* w_e = POLE_PAIRS * Omega_m */
+/* dq model (motor data) that predicts an implausible current sample's replacement */
+#define CCT_PRED_R 1.999999955e-02f /* ohm */
+#define CCT_PRED_LD 1.125999988e-04f /* H */
+#define CCT_PRED_LQ 1.125999988e-04f /* H */
+#define CCT_PRED_FLUX 6.038999930e-02f /* Wb */
 #define CCT_DELAY_COMP_TIME 5.000000237e-04f /* s (0.5 Ts, drive.angle_compensation = "mid_period"): v_dq is placed at theta_e + CCT_DELAY_COMP_TIME * w_e (rad); applied inside cct_step, outputs v_d_comp, v_q_comp */
 /* d axis PI gains (method pi), FOR INFORMATION ONLY: the code
  *   runs the coefficients of the law below, derived from these gains at export;
@@ -126,7 +136,9 @@ typedef struct {
 #define CCT_STATUS_OK 0         /* the law ran */
 #define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
 #define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
-#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: output held, state kept */
+#define CCT_STATUS_CLAMPED 3     /* integer variants: an input beyond its range was clamped (the law ran) */
+#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: replaced by the last
+                                     * plausible one for this period's output, state kept */
 
 /* plausible ranges (a sample beyond them is a sensor or ADC fault, not a
  * current or speed the drive can have): cct_step refuses measured currents
@@ -157,6 +169,9 @@ typedef struct {
     float v_d_comp_hold; /* V */
     float v_q_comp_hold; /* V */
     float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
+    float i_d_pred; /* A, the currents predicted for the next sampling instant (0 after */
+    float i_q_pred; /* reset), used in place of an implausible current sample */
+    float omega_m_good; /* rad/s, last plausible speed, used in place of an implausible one */
 } cct_state_t;
 
 /* zero states and held outputs (0 V), keeping the voltage limit in use:
@@ -170,6 +185,9 @@ static inline void cct_reset(cct_state_t *s)
     s->v_q_hold = 0.0f;
     s->v_d_comp_hold = 0.0f;
     s->v_q_comp_hold = 0.0f;
+    s->i_d_pred = 0.0f;
+    s->i_q_pred = 0.0f;
+    s->omega_m_good = 0.0f;
 }
 
 /* cct_reset and the voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
@@ -186,6 +204,14 @@ static inline int cct_finite(float v)
     union { float f; uint32_t u; } b;
     b.f = v;
     return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+/* 1 when v is a NaN (IEEE-754 bits, immune to -ffast-math) */
+static inline int cct_isnan(float v)
+{
+    union { float f; uint32_t u; } b;
+    b.f = v;
+    return (b.u & 0x7f800000u) == 0x7f800000u && (b.u & 0x007fffffu) != 0u;
 }
 
 /* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
@@ -205,12 +231,18 @@ static inline int cct_set_vdc(cct_state_t *s, float vdc)
     return CCT_STATUS_OK;
 }
 
-/* 1 when the measured currents and speed lie within their plausible ranges
+/* 1 when both measured currents lie within their plausible range
  * (finite inputs: cct_step tests finiteness first) */
-static inline int cct_plausible(const cct_input_t *in)
+static inline int cct_currents_plausible(const cct_input_t *in)
 {
     return in->i_d <= CCT_I_PLAUSIBLE && in->i_d >= -CCT_I_PLAUSIBLE
-        && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE
+        && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE;
+}
+
+/* 1 when the measured currents and speed lie within their plausible ranges */
+static inline int cct_plausible(const cct_input_t *in)
+{
+    return cct_currents_plausible(in)
         && in->omega_m <= CCT_W_PLAUSIBLE && in->omega_m >= -CCT_W_PLAUSIBLE;
 }
 
@@ -328,6 +360,9 @@ static inline int cct_preset_at(cct_state_t *s, const cct_input_t *in, float v_d
                        - (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
     cct_d_preset(s->d, vd_lin, in->i_d_ref, in->i_d);
     cct_q_preset(s->q, vq_lin, in->i_q_ref, in->i_q);
+    s->i_d_pred = in->i_d;
+    s->i_q_pred = in->i_q;
+    s->omega_m_good = in->omega_m;
     s->v_d_hold = v_d;
     s->v_q_hold = v_q;
     {
@@ -356,8 +391,14 @@ static inline void cct_preset(cct_state_t *s, float v_d, float v_q)
 }
 
 /* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
- * out->status: CCT_STATUS_OK, or _BAD_INPUT / _IMPLAUSIBLE / _BAD_STATE with
- * the last good output repeated and the state left as it was (see the top of this file). */
+ * out->status: CCT_STATUS_OK; _BAD_INPUT / _BAD_STATE with the last good
+ * output repeated and the state left as it was; _IMPLAUSIBLE: implausible
+ * currents replaced by the prediction the last good period made of them
+ * (forward Euler of the PRED_* dq model, DELAY_SAMPLES <= 1 exactly; beyond, the
+ * previous output stands for the voltage applied), an implausible speed by
+ * the last plausible one, the output computed from the state, the references and the angle of
+ * this period (so the voltage limit is the one at this angle), the state left
+ * as it was (no integrator update; see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
     cct_state_t nx;
@@ -367,16 +408,26 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         cct_hold(s, out, CCT_STATUS_BAD_INPUT);
         return;
     }
+    float i_d = in->i_d;
+    float i_q = in->i_q;
+    float omega_m = in->omega_m;
+    int status = CCT_STATUS_OK;
     if (!cct_plausible(in)) {
-        cct_hold(s, out, CCT_STATUS_IMPLAUSIBLE);
-        return;
+        status = CCT_STATUS_IMPLAUSIBLE;
+        if (!cct_currents_plausible(in)) {
+            i_d = s->i_d_pred;
+            i_q = s->i_q_pred;
+        }
+        if (!(omega_m <= CCT_W_PLAUSIBLE && omega_m >= -CCT_W_PLAUSIBLE)) {
+            omega_m = s->omega_m_good;
+        }
     }
     nx = *s;
-    const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
-    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, in->i_d);
-    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, in->i_q);
-    const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
-    const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
+    const float w = (float)CCT_POLE_PAIRS * omega_m; /* electrical speed, rad/s */
+    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, i_d);
+    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, i_q);
+    const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * i_q;
+    const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * i_d
                    + (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
     float vds = vd;
     float vqs = vq;
@@ -417,11 +468,31 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     const float sc = sinf(thc);
     const float vdr = vds * cc - vqs * sc;
     const float vqr = vds * sc + vqs * cc;
-    nx.v_d_hold = vds;
-    nx.v_q_hold = vqs;
-    nx.v_d_comp_hold = vdr;
-    nx.v_q_comp_hold = vqr;
-    *s = nx;
+    if (status == CCT_STATUS_OK) { /* an implausible period leaves the state as it was */
+        nx.v_d_hold = vds;
+        nx.v_q_hold = vqs;
+        nx.v_d_comp_hold = vdr;
+        nx.v_q_comp_hold = vqr;
+        {
+            /* the currents at the next sampling instant: one forward-Euler period of
+             * the controller's dq model under the voltage applied meanwhile (this
+             * output without computation delay, else the previous one; the placement
+             * makes its rotor-frame mean v_dq) */
+#if CCT_DELAY_SAMPLES == 0
+            const float ud = vds;
+            const float uq = vqs;
+#else
+            const float ud = s->v_d_hold;
+            const float uq = s->v_q_hold;
+#endif
+            nx.i_d_pred = i_d + CCT_SAMPLE_TIME / CCT_PRED_LD
+                        * (ud - CCT_PRED_R * i_d + w * CCT_PRED_LQ * i_q);
+            nx.i_q_pred = i_q + CCT_SAMPLE_TIME / CCT_PRED_LQ
+                        * (uq - CCT_PRED_R * i_q - w * CCT_PRED_LD * i_d - w * CCT_PRED_FLUX);
+        }
+        nx.omega_m_good = omega_m;
+        *s = nx;
+    }
     out->v_d = vds;
     out->v_q = vqs;
     out->v_d_comp = vdr;
@@ -429,7 +500,7 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     out->saturated = saturated;
     out->sat_d = vds != vd;
     out->sat_q = vqs != vq;
-    out->status = CCT_STATUS_OK;
+    out->status = status;
 }
 #if defined(CCT_FIXED_POINT) || defined(CCT_MCSDK) || defined(CCT_IQMATH)
 #include <stdint.h>
@@ -495,7 +566,8 @@ static void control_isr(float i_d_ref, float i_q_ref)
     in.theta_e = theta_e;
     cct_step(&ctl, &in, &out);
     if (out.status != CCT_STATUS_OK) {
-        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
+        fault_report(out.status); /* state kept (output held, or from the last plausible
+                                   * measurement: 4): decide to trip or ride through */
     }
     /* inverse Park at the SAMPLED theta_e (wrapped to [-pi, pi)); the PWM applies
      * it DELAY_SAMPLES periods later (the next period for DELAY_SAMPLES = 1) */

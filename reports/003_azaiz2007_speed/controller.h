@@ -35,9 +35,14 @@
  *   CCT_STATUS_BAD_STATE (2)   the result overflowed (inf/nan in v or the state);
  *   CCT_STATUS_IMPLAUSIBLE (4) a measured current beyond I_PLAUSIBLE or the
  *                                  speed beyond W_PLAUSIBLE (a sensor fault).
- * On 1, 2 and 4 the last good output is repeated (0 V before the first good
- * period), saturated = 0, and the state is left exactly as it was: the next
- * valid period continues as if the bad one had not happened. Finiteness is
+ * On 1 and 2 the last good output is repeated (0 V before the first good
+ * period) with saturated = 0; on 4 implausible currents are replaced by the
+ * law's prediction of them (one period of the PRED_* dq model from the last good
+ * sample), an implausible speed by the last plausible one, and the output computed
+ * from the state, the references and this period's angle and bus (the voltage
+ * limit where the voltage is placed now). In all three cases the state is left
+ * exactly as it was (no integrator update): the next valid period continues as
+ * if the bad one had not happened. Finiteness is
  * tested on the IEEE-754 bits, so -ffast-math cannot remove the test.
  * cct_set_vdc refuses a bus reading that is not finite and > 0 (1) or lies
  * outside [VDC_MIN, VDC_PLAUSIBLE] (4), keeping the limit in use.
@@ -81,6 +86,11 @@
 #define CCT_DEC_LQ 2.799999900e-03f /* H */
 #define CCT_DEC_FLUX 1.199999973e-01f /* Wb */
 #define CCT_POLE_PAIRS 4 /* w_e = POLE_PAIRS * Omega_m */
+/* dq model (motor data) that predicts an implausible current sample's replacement */
+#define CCT_PRED_R 6.000000238e-01f /* ohm */
+#define CCT_PRED_LD 1.399999950e-03f /* H */
+#define CCT_PRED_LQ 2.799999900e-03f /* H */
+#define CCT_PRED_FLUX 1.199999973e-01f /* Wb */
 #define CCT_DELAY_COMP_TIME 1.500000071e-04f /* s (1.5 Ts, drive.angle_compensation = "mid_period"): v_dq is placed at theta_e + CCT_DELAY_COMP_TIME * w_e (rad); applied inside cct_step, outputs v_d_comp, v_q_comp */
 
 #define CCT_D_GAIN 4.345249326e-04f /* d axis SOS output gain, V/A */
@@ -106,7 +116,9 @@ typedef struct {
 #define CCT_STATUS_OK 0         /* the law ran */
 #define CCT_STATUS_BAD_INPUT 1  /* a non-finite input: output held, state kept */
 #define CCT_STATUS_BAD_STATE 2  /* non-finite result (overflow): output held, state kept */
-#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: output held, state kept */
+#define CCT_STATUS_CLAMPED 3     /* integer variants: an input beyond its range was clamped (the law ran) */
+#define CCT_STATUS_IMPLAUSIBLE 4 /* a measurement beyond its plausible range: replaced by the last
+                                     * plausible one for this period's output, state kept */
 
 /* plausible ranges (a sample beyond them is a sensor or ADC fault, not a
  * current or speed the drive can have): cct_step refuses measured currents
@@ -137,6 +149,9 @@ typedef struct {
     float v_d_comp_hold; /* V */
     float v_q_comp_hold; /* V */
     float v_max;    /* V, voltage limit in use (cct_set_vdc); CCT_V_MAX after init */
+    float i_d_pred; /* A, the currents predicted for the next sampling instant (0 after */
+    float i_q_pred; /* reset), used in place of an implausible current sample */
+    float omega_m_good; /* rad/s, last plausible speed, used in place of an implausible one */
 } cct_state_t;
 
 /* zero states and held outputs (0 V), keeping the voltage limit in use:
@@ -150,6 +165,9 @@ static inline void cct_reset(cct_state_t *s)
     s->v_q_hold = 0.0f;
     s->v_d_comp_hold = 0.0f;
     s->v_q_comp_hold = 0.0f;
+    s->i_d_pred = 0.0f;
+    s->i_q_pred = 0.0f;
+    s->omega_m_good = 0.0f;
 }
 
 /* cct_reset and the voltage limit CCT_V_MAX (nominal bus CCT_DRIVE_VDC) */
@@ -166,6 +184,14 @@ static inline int cct_finite(float v)
     union { float f; uint32_t u; } b;
     b.f = v;
     return (b.u & 0x7f800000u) != 0x7f800000u;
+}
+
+/* 1 when v is a NaN (IEEE-754 bits, immune to -ffast-math) */
+static inline int cct_isnan(float v)
+{
+    union { float f; uint32_t u; } b;
+    b.f = v;
+    return (b.u & 0x7f800000u) == 0x7f800000u && (b.u & 0x007fffffu) != 0u;
 }
 
 /* measured DC-link voltage (V) -> voltage limit CCT_V_MAX_PER_VDC * vdc (the
@@ -185,12 +211,18 @@ static inline int cct_set_vdc(cct_state_t *s, float vdc)
     return CCT_STATUS_OK;
 }
 
-/* 1 when the measured currents and speed lie within their plausible ranges
+/* 1 when both measured currents lie within their plausible range
  * (finite inputs: cct_step tests finiteness first) */
-static inline int cct_plausible(const cct_input_t *in)
+static inline int cct_currents_plausible(const cct_input_t *in)
 {
     return in->i_d <= CCT_I_PLAUSIBLE && in->i_d >= -CCT_I_PLAUSIBLE
-        && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE
+        && in->i_q <= CCT_I_PLAUSIBLE && in->i_q >= -CCT_I_PLAUSIBLE;
+}
+
+/* 1 when the measured currents and speed lie within their plausible ranges */
+static inline int cct_plausible(const cct_input_t *in)
+{
+    return cct_currents_plausible(in)
         && in->omega_m <= CCT_W_PLAUSIBLE && in->omega_m >= -CCT_W_PLAUSIBLE;
 }
 
@@ -310,6 +342,9 @@ static inline int cct_preset_at(cct_state_t *s, const cct_input_t *in, float v_d
                        - (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
     cct_d_preset(s->d, vd_lin, in->i_d_ref, in->i_d);
     cct_q_preset(s->q, vq_lin, in->i_q_ref, in->i_q);
+    s->i_d_pred = in->i_d;
+    s->i_q_pred = in->i_q;
+    s->omega_m_good = in->omega_m;
     s->v_d_hold = v_d;
     s->v_q_hold = v_q;
     {
@@ -338,8 +373,14 @@ static inline void cct_preset(cct_state_t *s, float v_d, float v_q)
 }
 
 /* one controller period: the whole law (linear laws, decoupling, limit, anti-windup).
- * out->status: CCT_STATUS_OK, or _BAD_INPUT / _IMPLAUSIBLE / _BAD_STATE with
- * the last good output repeated and the state left as it was (see the top of this file). */
+ * out->status: CCT_STATUS_OK; _BAD_INPUT / _BAD_STATE with the last good
+ * output repeated and the state left as it was; _IMPLAUSIBLE: implausible
+ * currents replaced by the prediction the last good period made of them
+ * (forward Euler of the PRED_* dq model, DELAY_SAMPLES <= 1 exactly; beyond, the
+ * previous output stands for the voltage applied), an implausible speed by
+ * the last plausible one, the output computed from the state, the references and the angle of
+ * this period (so the voltage limit is the one at this angle), the state left
+ * as it was (no integrator update; see the top of this file). */
 static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t *out)
 {
     cct_state_t nx;
@@ -349,16 +390,26 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         cct_hold(s, out, CCT_STATUS_BAD_INPUT);
         return;
     }
+    float i_d = in->i_d;
+    float i_q = in->i_q;
+    float omega_m = in->omega_m;
+    int status = CCT_STATUS_OK;
     if (!cct_plausible(in)) {
-        cct_hold(s, out, CCT_STATUS_IMPLAUSIBLE);
-        return;
+        status = CCT_STATUS_IMPLAUSIBLE;
+        if (!cct_currents_plausible(in)) {
+            i_d = s->i_d_pred;
+            i_q = s->i_q_pred;
+        }
+        if (!(omega_m <= CCT_W_PLAUSIBLE && omega_m >= -CCT_W_PLAUSIBLE)) {
+            omega_m = s->omega_m_good;
+        }
     }
     nx = *s;
-    const float w = (float)CCT_POLE_PAIRS * in->omega_m; /* electrical speed, rad/s */
-    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, in->i_d);
-    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, in->i_q);
-    const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * in->i_q;
-    const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * in->i_d
+    const float w = (float)CCT_POLE_PAIRS * omega_m; /* electrical speed, rad/s */
+    const float vd_lin = cct_d_linear(nx.d, in->i_d_ref, i_d);
+    const float vq_lin = cct_q_linear(nx.q, in->i_q_ref, i_q);
+    const float vd = vd_lin - (float)CCT_DEC_CROSS * w * CCT_DEC_LQ * i_q;
+    const float vq = vq_lin + (float)CCT_DEC_CROSS * w * CCT_DEC_LD * i_d
                    + (float)CCT_DEC_EMF * w * CCT_DEC_FLUX;
     float vds = vd;
     float vqs = vq;
@@ -388,11 +439,31 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     const float sc = sinf(thc);
     const float vdr = vds * cc - vqs * sc;
     const float vqr = vds * sc + vqs * cc;
-    nx.v_d_hold = vds;
-    nx.v_q_hold = vqs;
-    nx.v_d_comp_hold = vdr;
-    nx.v_q_comp_hold = vqr;
-    *s = nx;
+    if (status == CCT_STATUS_OK) { /* an implausible period leaves the state as it was */
+        nx.v_d_hold = vds;
+        nx.v_q_hold = vqs;
+        nx.v_d_comp_hold = vdr;
+        nx.v_q_comp_hold = vqr;
+        {
+            /* the currents at the next sampling instant: one forward-Euler period of
+             * the controller's dq model under the voltage applied meanwhile (this
+             * output without computation delay, else the previous one; the placement
+             * makes its rotor-frame mean v_dq) */
+#if CCT_DELAY_SAMPLES == 0
+            const float ud = vds;
+            const float uq = vqs;
+#else
+            const float ud = s->v_d_hold;
+            const float uq = s->v_q_hold;
+#endif
+            nx.i_d_pred = i_d + CCT_SAMPLE_TIME / CCT_PRED_LD
+                        * (ud - CCT_PRED_R * i_d + w * CCT_PRED_LQ * i_q);
+            nx.i_q_pred = i_q + CCT_SAMPLE_TIME / CCT_PRED_LQ
+                        * (uq - CCT_PRED_R * i_q - w * CCT_PRED_LD * i_d - w * CCT_PRED_FLUX);
+        }
+        nx.omega_m_good = omega_m;
+        *s = nx;
+    }
     out->v_d = vds;
     out->v_q = vqs;
     out->v_d_comp = vdr;
@@ -400,7 +471,7 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
     out->saturated = saturated;
     out->sat_d = vds != vd;
     out->sat_q = vqs != vq;
-    out->status = CCT_STATUS_OK;
+    out->status = status;
 }
 #if defined(CCT_FIXED_POINT) || defined(CCT_MCSDK) || defined(CCT_IQMATH)
 #include <stdint.h>
@@ -427,34 +498,45 @@ static inline void cct_place_q30(int64_t vd, int64_t vq, int64_t x, int64_t *pd,
  * right shifts (as gcc and arm-none-eabi implement >> on negative values).
  * Each coefficient set is an int32 mantissa vector m with one shift F:
  * c = m / 2^F (integer gains with power-of-two divisors, as STM32 MCSDK).
- * Inputs up to I_MAX = 20 A and W_MAX = 230 rad/s (mechanical),
+ * Inputs up to I_MAX = 20 A and W_MAX = 2405.63 rad/s (mechanical),
  * voltage limit 577.35 V: bases below are powers of two above rigorous
- * bounds of every signal and state, so no accumulator or word overflows.
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.015 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.00309 V over 20 ms from equal states.
+ * bounds of every signal and state, so no accumulator or word overflows. The
+ * input words reach twice these ranges (the plausible ranges): cct_step_q31
+ * clamps references and measurements beyond I_MAX / W_MAX (status CLAMPED)
+ * and refuses measurements at or beyond the plausible ranges (status
+ * IMPLAUSIBLE: the last plausible sample used, the state not updated).
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.0224 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.0114 V over 20 ms from equal states.
  */
 #include <stdint.h>
-#define CCT_Q31_I_BASE 3.200000000e+01f /* A at full scale */
-#define CCT_Q31_V_BASE 4.096000000e+03f /* V at full scale */
-#define CCT_Q31_W_BASE 2.560000000e+02f /* mechanical rad/s at full scale */
-#define CCT_Q31_I_MAX 2.000000000e+01f /* A, current range (cct_to_q31 clamps beyond) */
-#define CCT_Q31_W_MAX 2.300000000e+02f /* rad/s, speed range (cct_to_q31 clamps beyond) */
-#define CCT_Q31_V_MAX 302697817L /* V_MAX / V_BASE in Q31: the largest limit */
-#define CCT_Q31_VDC_BASE 7.094479980e+03f /* V of bus at full scale (cct_set_vdc_q31) */
-#define CCT_Q31_D_X0_BASE 8.388608000e+06f /* state 0 full scale */
+#define CCT_Q31_I_BASE 6.400000000e+01f /* A at full scale */
+#define CCT_Q31_V_BASE 1.638400000e+04f /* V at full scale */
+#define CCT_Q31_W_BASE 8.192000000e+03f /* mechanical rad/s at full scale */
+#define CCT_Q31_I_MAX 2.000000000e+01f /* A, current range (cct_step_q31 clamps beyond) */
+#define CCT_Q31_W_MAX 2.405626221e+03f /* rad/s, speed range (cct_step_q31 clamps beyond) */
+#define CCT_Q31_I_PLAUSIBLE 4.000000000e+01f /* A, 2 x Q31_I_MAX: measured currents at or beyond are refused */
+#define CCT_Q31_W_PLAUSIBLE 4.811252441e+03f /* rad/s, 2 x Q31_W_MAX: a measured speed at or beyond is refused */
+/* the same as Q31 words */
+#define CCT_Q31_I_MAX_W 671088640L
+#define CCT_Q31_W_MAX_W 630620454L
+#define CCT_Q31_I_PLAUSIBLE_W 1342177280L
+#define CCT_Q31_W_PLAUSIBLE_W 1261240908L
+#define CCT_Q31_V_MAX 75674454L /* V_MAX / V_BASE in Q31: the largest limit */
+#define CCT_Q31_VDC_BASE 2.837791992e+04f /* V of bus at full scale (cct_set_vdc_q31) */
+#define CCT_Q31_D_X0_BASE 1.677721600e+07f /* state 0 full scale */
 #define CCT_Q31_D_X1_BASE 4.194304000e+06f /* state 1 full scale */
-#define CCT_Q31_D_X2_BASE 2.097152000e+06f /* state 2 full scale */
+#define CCT_Q31_D_X2_BASE 4.194304000e+06f /* state 2 full scale */
 #define CCT_Q31_D_X3_BASE 1.000000000e+00f /* state 3 full scale */
-#define CCT_Q31_Q_X0_BASE 5.242880000e+05f /* state 0 full scale */
-#define CCT_Q31_Q_X1_BASE 1.310720000e+05f /* state 1 full scale */
-#define CCT_Q31_Q_X2_BASE 1.310720000e+05f /* state 2 full scale */
+#define CCT_Q31_Q_X0_BASE 1.048576000e+06f /* state 0 full scale */
+#define CCT_Q31_Q_X1_BASE 5.242880000e+05f /* state 1 full scale */
+#define CCT_Q31_Q_X2_BASE 5.242880000e+05f /* state 2 full scale */
 #define CCT_Q31_Q_X3_BASE 1.000000000e+00f /* state 3 full scale */
-#define CCT_Q31_DEC_DD -769658139L /* decoupling coefficient -0.0224 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DD_SHIFT 35u
-#define CCT_Q31_DEC_DQ 769658139L /* decoupling coefficient 0.0112 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DQ_SHIFT 36u
-#define CCT_Q31_DEC_DE 1030792151L /* decoupling coefficient 0.03 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DE_SHIFT 35u
+#define CCT_Q31_DEC_DD -769658139L /* decoupling coefficient -0.3584 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DD_SHIFT 31u
+#define CCT_Q31_DEC_DQ 769658139L /* decoupling coefficient 0.1792 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DQ_SHIFT 32u
+#define CCT_Q31_DEC_DE 1030792151L /* decoupling coefficient 0.24 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DE_SHIFT 32u
 
 typedef struct {
     int32_t i_d_ref; /* Q31 of Q31_I_BASE */
@@ -465,8 +547,8 @@ typedef struct {
 } cct_input_q31_t;
 
 /* voltage placement: rotation angle at full-scale speed, Q30 rad
- * (0.1536 rad = DELAY_COMP_TIME x POLE_PAIRS x Q31_W_BASE) */
-#define CCT_Q31_COMP_K 164926744
+ * (4.9152 rad = DELAY_COMP_TIME x POLE_PAIRS x Q31_W_BASE) */
+#define CCT_Q31_COMP_K 5277655813
 
 typedef struct {
     int32_t v_d; /* Q31 of Q31_V_BASE, the law's output (limited) */
@@ -474,12 +556,17 @@ typedef struct {
     int32_t v_d_comp; /* Q31 of Q31_V_BASE, v_dq placed as the float path does: feed */
     int32_t v_q_comp; /* these to the inverse Park transform at the SAMPLED theta_e */
     int saturated;
+    int status;    /* CCT_STATUS_OK, _CLAMPED (an input beyond its range was clamped)
+                    * or _IMPLAUSIBLE (a measurement replaced by the last plausible one) */
 } cct_output_q31_t;
 
 typedef struct {
     int32_t d[4];
     int32_t q[4];
     int32_t v_max; /* voltage limit in use, Q31 of Q31_V_BASE (cct_set_vdc_q31) */
+    int32_t i_d_good; /* last plausible measurements (0 after init), used in place */
+    int32_t i_q_good; /* of an implausible one */
+    int32_t omega_m_good;
 } cct_state_q31_t;
 
 static inline void cct_init_q31(cct_state_q31_t *s)
@@ -488,16 +575,20 @@ static inline void cct_init_q31(cct_state_q31_t *s)
     for (i = 0u; i < 4u; ++i) { s->d[i] = 0; }
     for (i = 0u; i < 4u; ++i) { s->q[i] = 0; }
     s->v_max = CCT_Q31_V_MAX;
+    s->i_d_good = 0;
+    s->i_q_good = 0;
+    s->omega_m_good = 0;
 }
 
 /* measured DC-link voltage as Q31 of CCT_Q31_VDC_BASE (chosen so that the
  * word IS the voltage limit in Q31 of Q31_V_BASE). The scaling and the state
  * bounds were derived for the nominal bus: above it the limit is clamped to
  * CCT_Q31_V_MAX and 1 is returned; a negative word is refused (-1, limit
- * unchanged); 0 otherwise. */
+ * unchanged, as for a word at or below 1e-3 of the nominal limit, e.g. the 0 of
+ * a non-finite reading converted by cct_to_q31); 0 otherwise. */
 static inline int cct_set_vdc_q31(cct_state_q31_t *s, int32_t vdc)
 {
-    if (vdc < 0) { return -1; }
+    if (vdc <= CCT_Q31_V_MAX / 1000) { return -1; } /* below 1e-3 x nominal (0: a lost reading) */
     if (vdc > CCT_Q31_V_MAX) {
         s->v_max = CCT_Q31_V_MAX;
         return 1;
@@ -506,14 +597,16 @@ static inline int cct_set_vdc_q31(cct_state_q31_t *s, int32_t vdc)
     return 0;
 }
 
-/* physical value -> Q31 word of base, clamped to +-range (the range the
- * scaling and state bounds were derived for) with *clamped = 1 beyond it or
- * for a non-finite value (then 0). E.g. currents: range CCT_Q31_I_MAX, base
- * CCT_Q31_I_BASE; speed: CCT_Q31_W_MAX, CCT_Q31_W_BASE. */
+/* physical value -> Q31 word of base, clamped to +-range with *clamped = 1
+ * beyond it; a NaN gives 0 with *clamped = 1. Pass the plausible ranges
+ * (CCT_Q31_I_PLAUSIBLE, base CCT_Q31_I_BASE; CCT_Q31_W_PLAUSIBLE,
+ * CCT_Q31_W_BASE) so that cct_step_q31 sees an implausible sample (a
+ * value clamped here lands on the plausible limit, which it refuses) and
+ * clamps to the ranges itself. */
 static inline int32_t cct_to_q31(float value, float range, float base, int *clamped)
 {
     float v = value;
-    if (!(v == v)) { *clamped = 1; return 0; }
+    if (cct_isnan(v)) { *clamped = 1; return 0; } /* bits: -ffast-math proof */
     if (v > range) { v = range; *clamped = 1; }
     if (v < -range) { v = -range; *clamped = 1; }
     {
@@ -522,6 +615,20 @@ static inline int32_t cct_to_q31(float value, float range, float base, int *clam
         if (q <= -2147483648.0f) { return -INT32_MAX; }
         return (int32_t)q;
     }
+}
+
+/* v clamped to [-lim, lim]; *flag = 1 when it acts */
+static inline int32_t cct_clamp_q31(int32_t v, int32_t lim, int *flag)
+{
+    if (v > lim) { *flag = 1; return lim; }
+    if (v < -lim) { *flag = 1; return -lim; }
+    return v;
+}
+
+/* 1 when |v| < lim (the plausible side of a plausible limit) */
+static inline int cct_below_q31(int32_t v, int32_t lim)
+{
+    return (int64_t)v < (int64_t)lim && (int64_t)v > -(int64_t)lim;
 }
 
 static inline int32_t cct_sat32(int64_t v)
@@ -552,17 +659,17 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
     static const int32_t co[6] = { 238882607L, 0L, 59720652L, 0L, 911L, -911L };
     static const int32_t ca[28] = {
-        237592026L, 67108864L, 0L, 0L, 1638L, -1638L, 265968982L,
-        -210526170L, 0L, 0L, 0L, -364L, 364L, -236570963L,
-        22526052L, 0L, 134217728L, 64L, 86L, -86L, 25312814L,
+        118796013L, 16777216L, 0L, 0L, 819L, -819L, 265968982L,
+        -105263085L, 0L, 0L, 0L, -182L, 182L, -236570963L,
+        22526052L, 0L, 134217728L, 32L, 86L, -86L, 50625629L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
-    static const unsigned fa[4] = { 27u, 27u, 27u, 31u };
+    static const unsigned fa[4] = { 26u, 25u, 27u, 31u };
     int32_t xn[4];
     unsigned i, j;
     int64_t acc = (int64_t)co[4] * r + (int64_t)co[5] * y;
     for (j = 0u; j < 4u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 28u);
+    acc = cct_shr(acc, 29u);
     for (i = 0u; i < 4u; ++i) {
         const int32_t *m = &ca[7u * i];
         int64_t a = (int64_t)m[4] * r + (int64_t)m[5] * y;
@@ -575,8 +682,8 @@ static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 265968982L, -236570963L, 25312814L, 0L };
-    static const unsigned fa[4] = { 27u, 27u, 27u, 31u };
+    static const int32_t aw[4] = { 265968982L, -236570963L, 50625629L, 0L };
+    static const unsigned fa[4] = { 26u, 25u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
         x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));
@@ -586,19 +693,19 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 240401718L, 0L, 60100429L, 0L, 14673L, -14673L };
+    static const int32_t co[6] = { 240401718L, 0L, 120200859L, 0L, 14673L, -14673L };
     static const int32_t ca[28] = {
-        210639487L, 33554432L, 0L, 0L, 24559L, -24559L, 234192780L,
-        -165901969L, 0L, 0L, 0L, -3104L, 3104L, -185248138L,
-        11382422L, 0L, 134217728L, 1024L, 695L, -695L, 12709750L,
+        105319744L, 33554432L, 0L, 0L, 12280L, -12280L, 234192780L,
+        -82950984L, 0L, 0L, 0L, -1552L, 1552L, -185248138L,
+        5691211L, 0L, 134217728L, 256L, 347L, -347L, 12709750L,
         0L, 0L, 0L, 0L, 0L, 0L, 0L,
     };
-    static const unsigned fa[4] = { 27u, 26u, 27u, 31u };
+    static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
     int32_t xn[4];
     unsigned i, j;
     int64_t acc = (int64_t)co[4] * r + (int64_t)co[5] * y;
     for (j = 0u; j < 4u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 28u);
+    acc = cct_shr(acc, 29u);
     for (i = 0u; i < 4u; ++i) {
         const int32_t *m = &ca[7u * i];
         int64_t a = (int64_t)m[4] * r + (int64_t)m[5] * y;
@@ -612,22 +719,48 @@ static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
     static const int32_t aw[4] = { 234192780L, -185248138L, 12709750L, 0L };
-    static const unsigned fa[4] = { 27u, 26u, 27u, 31u };
+    static const unsigned fa[4] = { 26u, 26u, 27u, 31u };
     unsigned i;
     for (i = 0u; i < 4u; ++i) {
         x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));
     }
 }
 
+/* one controller period. Measured currents at or beyond Q31_I_PLAUSIBLE_W
+ * (both replaced) or a speed at or beyond Q31_W_PLAUSIBLE_W: the last plausible
+ * sample is used, the state is not updated, status IMPLAUSIBLE; references and
+ * measurements beyond the ranges Q31_I_MAX_W / Q31_W_MAX_W are clamped to
+ * them, status CLAMPED (the law ran); else status OK. */
 static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, cct_output_q31_t *out)
 {
-    const int64_t vd_lin = cct_d_linear_q31(s->d, in->i_d_ref, in->i_d);
-    const int64_t vq_lin = cct_q_linear_q31(s->q, in->i_q_ref, in->i_q);
-    const int64_t wiq = cct_shr((int64_t)in->omega_m * in->i_q, 31u);
-    const int64_t wid = cct_shr((int64_t)in->omega_m * in->i_d, 31u);
+    cct_state_q31_t nx = *s;
+    int status = CCT_STATUS_OK;
+    int clamped = 0;
+    int32_t i_d = in->i_d;
+    int32_t i_q = in->i_q;
+    int32_t w_m = in->omega_m;
+    if (!(cct_below_q31(i_d, CCT_Q31_I_PLAUSIBLE_W) && cct_below_q31(i_q, CCT_Q31_I_PLAUSIBLE_W))) {
+        i_d = s->i_d_good;
+        i_q = s->i_q_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
+    if (!cct_below_q31(w_m, CCT_Q31_W_PLAUSIBLE_W)) {
+        w_m = s->omega_m_good;
+        status = CCT_STATUS_IMPLAUSIBLE;
+    }
+    i_d = cct_clamp_q31(i_d, CCT_Q31_I_MAX_W, &clamped);
+    i_q = cct_clamp_q31(i_q, CCT_Q31_I_MAX_W, &clamped);
+    w_m = cct_clamp_q31(w_m, CCT_Q31_W_MAX_W, &clamped);
+    const int32_t r_d = cct_clamp_q31(in->i_d_ref, CCT_Q31_I_MAX_W, &clamped);
+    const int32_t r_q = cct_clamp_q31(in->i_q_ref, CCT_Q31_I_MAX_W, &clamped);
+    if (clamped && status == CCT_STATUS_OK) { status = CCT_STATUS_CLAMPED; }
+    const int64_t vd_lin = cct_d_linear_q31(nx.d, r_d, i_d);
+    const int64_t vq_lin = cct_q_linear_q31(nx.q, r_q, i_q);
+    const int64_t wiq = cct_shr((int64_t)w_m * i_q, 31u);
+    const int64_t wid = cct_shr((int64_t)w_m * i_d, 31u);
     const int64_t vd = vd_lin + cct_shr((int64_t)CCT_Q31_DEC_DD * wiq, CCT_Q31_DEC_DD_SHIFT);
     const int64_t vq = vq_lin + cct_shr((int64_t)CCT_Q31_DEC_DQ * wid, CCT_Q31_DEC_DQ_SHIFT)
-                     + cct_shr((int64_t)CCT_Q31_DEC_DE * in->omega_m, CCT_Q31_DEC_DE_SHIFT);
+                     + cct_shr((int64_t)CCT_Q31_DEC_DE * w_m, CCT_Q31_DEC_DE_SHIFT);
     const int64_t vdc = cct_sat32(vd);
     const int64_t vqc = cct_sat32(vq);
     const uint64_t mag2 = (uint64_t)(vdc * vdc) + (uint64_t)(vqc * vqc);
@@ -640,14 +773,21 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
         vqs = (vqc * s->v_max) / mag;
         out->saturated = 1;
     }
-    cct_d_antiwindup_q31(s->d, vds - vd);
-    cct_q_antiwindup_q31(s->q, vqs - vq);
+    cct_d_antiwindup_q31(nx.d, vds - vd);
+    cct_q_antiwindup_q31(nx.q, vqs - vq);
+    if (status != CCT_STATUS_IMPLAUSIBLE) {
+        nx.i_d_good = i_d;
+        nx.i_q_good = i_q;
+        nx.omega_m_good = w_m;
+        *s = nx;
+    }
+    out->status = status;
     out->v_d = (int32_t)vds;
     out->v_q = (int32_t)vqs;
     {
         /* voltage placement: v_dq rotated by DELAY_COMP_TIME w_e */
         int64_t pd, pq;
-        cct_place_q30(vds, vqs, ((int64_t)in->omega_m * CCT_Q31_COMP_K) >> 31, &pd, &pq);
+        cct_place_q30(vds, vqs, ((int64_t)w_m * CCT_Q31_COMP_K) >> 31, &pd, &pq);
         out->v_d_comp = (int32_t)cct_sat32(pd);
         out->v_q_comp = (int32_t)cct_sat32(pq);
     }
@@ -695,7 +835,8 @@ static void control_isr(float i_d_ref, float i_q_ref)
 
     cct_step(&ctl, &in, &out);
     if (out.status != CCT_STATUS_OK) {
-        fault_report(out.status); /* output held, state kept: decide to trip or ride through */
+        fault_report(out.status); /* state kept (output held, or from the last plausible
+                                   * measurement: 4): decide to trip or ride through */
     }
     /* inverse Park at the SAMPLED theta_e (wrapped to [-pi, pi)); the PWM applies
      * it DELAY_SAMPLES periods later (the next period for DELAY_SAMPLES = 1) */

@@ -12,7 +12,7 @@ from toolbox.artifact import (AxisController, AxisWeights, ControllerArtifact, D
                               TransferFunctionData)
 from toolbox.spec import Motor, Drive
 from toolbox.design import _hinf_plant as HP, _hinf_riccati as HR
-from toolbox._lti import TransferFunction
+from toolbox.lti import TransferFunction
 from toolbox.design._weights import weight_from_tf
 
 AZAIZ = Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4, J=1.11e-3, friction=1.4e-3,
@@ -28,7 +28,7 @@ def art(method, axes, m=AZAIZ, Ts=1e-4, d=1, cross=True, weights=None):
 
 
 def _tf_data(w) -> TransferFunctionData:
-    tf = TransferFunction.from_system(w)      # the weights are toolbox._lti's
+    tf = TransferFunction.from_system(w)      # the weights are toolbox.lti's
     return TransferFunctionData(np.array(tf.num), np.array(tf.den))
 
 def pi_artifact(wc=1000.0, m=AZAIZ, Ts=1e-4, d=1):

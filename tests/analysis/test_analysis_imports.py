@@ -1,7 +1,7 @@
 """The analysis stage imports neither python-control nor scipy.signal nor
 scipy.stats (issue 13: together 1 to 2 s of every ``cct`` process).
 
-Its linear systems come from ``toolbox._lti``, its Latin hypercube from
+Its linear systems come from ``toolbox.lti``, its Latin hypercube from
 ``toolbox.analysis._sampling``; python-control stays the independent route of
 the tests. Checked on the source (function-level imports included), so the
 check does not depend on what other stages happen to import.

@@ -77,7 +77,7 @@ def test_python_control_conversion():
     (lambda d: d["decoupling"].update(Lq_c=-1),
      "decoupling.Lq_c: expected a finite number >= 0, got -1"),
     (lambda d: d.update(extra=1),
-     "extra: expected one of ['axes', 'decoupling', 'delay_samples', 'design_parameters', "
+     "extra: expected one of ['axes', 'cv', 'decoupling', 'delay_samples', 'design_parameters', "
      "'fcs', 'margins', 'method', 'provenance', 'sample_time', 'schema', 'spec', 'weights'], "
      "got \"unknown key\""),
 ])

@@ -20,7 +20,7 @@ median of the per-round ratios with its interquartile range:
    call at gamma = 1, each on its augmented plant built beforehand (the
    solvers alone: neither ``control.augw`` nor our augmentation is timed).
    Ours includes the A1-A4 checks, balancing and normalisation at every call
-   (as sb10fd does its own), and returns a ``toolbox._lti.StateSpace``.
+   (as sb10fd does its own), and returns a ``toolbox.lti.StateSpace``.
 
 Routes 1-4 are timed one call per route and round, so each call follows
 another route's work: that is how a design runs in ``cct`` (once, after

@@ -66,7 +66,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 
-from toolbox.sim._scenario import Scenario  # noqa: E402
+from toolbox.spec import Scenario  # noqa: E402
 from toolbox.spec import Motor  # noqa: E402
 from toolbox.artifact import Decoupling  # noqa: E402
 from toolbox.sim._simulate import (ControlLaw, DriveParams,  # noqa: E402

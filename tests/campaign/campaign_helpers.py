@@ -70,3 +70,22 @@ def write_spec(directory: Path, samples: int = 400, chunk_size: int = 100,
     path = Path(directory) / "campaign.toml"
     path.write_text(SPEC.format(samples=samples, chunk_size=chunk_size) + extra)
     return path
+
+
+def flaky_evaluate(log_dir: str, faults: dict, plan, start: int, stop: int):
+    """``toolbox.campaign.evaluate_chunk`` with injected faults: the chunk
+    starting at row ``start`` raises ``RuntimeError`` at its first
+    ``faults[start]`` attempts. Every attempt appends a line to
+    ``log_dir/<start>`` (counted across worker processes)."""
+    import os
+
+    from toolbox.campaign import evaluate_chunk
+
+    path = os.path.join(log_dir, str(start))
+    with open(path, "a") as fh:
+        fh.write("attempt\n")
+    with open(path) as fh:
+        attempt = len(fh.read().splitlines())
+    if attempt <= faults.get(start, 0):
+        raise RuntimeError(f"injected fault at rows {start}..{stop - 1}")
+    return evaluate_chunk(plan, start, stop)

@@ -96,7 +96,7 @@ def test_killed_worker_chunks_are_retried(designed, serial_run, cluster, tmp_pat
             # machine) is then known; before, it raised KeyError on its address
             info = monitor.scheduler_info()["workers"]
             for addr, keys in processing.items():
-                chunks = [k for k in keys if "cct-chunk" in str(k)]
+                chunks = [k for k in keys if "cct-rows" in str(k)]
                 if chunks and not killed and addr in info:
                     k = int(info[addr]["name"][1:])
                     workers[k].send_signal(signal.SIGKILL)

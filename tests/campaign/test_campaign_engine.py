@@ -146,12 +146,13 @@ def test_interrupted_campaign_resumes(designed, serial_run, tmp_path):
 
     with pytest.raises(KeyboardInterrupt):
         run_campaign(spec, out, scheduler="serial", artifact=artifact, progress=stop_after_two)
-    assert valid_chunks(out, spec, artifact) == {0, 1}
+    assert valid_chunks(out, spec, artifact) == {(0, 100), (100, 200)}
     assert not (out / "results.parquet").exists()
-    first = chunk_path(out, 1)
+    first = chunk_path(out, 100, 200)
     first.write_bytes(first.read_bytes()[:-100])  # a damaged file is redone
-    assert valid_chunks(out, spec, artifact) == {0}
-    stale = [out / "chunks" / ".chunk-000002.parquet.k9Xa01bc", out / ".results.parquet.zz12ab34"]
+    assert valid_chunks(out, spec, artifact) == {(0, 100)}
+    stale = [out / "chunks" / ".rows-000000000200-000000000300.parquet.k9Xa01bc",
+             out / ".results.parquet.zz12ab34"]
     for path in stale:  # temporaries of a write killed midway
         path.write_bytes(b"PAR1 half")
     run = run_campaign(spec, out, scheduler="serial", artifact=artifact, report=False)
@@ -164,14 +165,15 @@ def test_interrupted_campaign_resumes(designed, serial_run, tmp_path):
 
 
 def test_other_campaign_in_out_dir_refused(designed, serial_run, tmp_path):
-    """Rows of another campaign are never mixed in: another sample count (or any
+    """Rows of another campaign are never mixed in: another seed (or any
     row-changing key) is refused; min_yield and the title change no row."""
     import shutil
 
     out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
-    spec = load_spec(write_spec(tmp_path, samples=300))
+    path = write_spec(tmp_path)
+    path.write_text(path.read_text().replace("seed = 3", "seed = 4"))
     with pytest.raises(SpecError, match="another spec, campaign table or controller"):
-        run_campaign(spec, out, scheduler="serial", artifact=designed[1])
+        run_campaign(load_spec(path), out, scheduler="serial", artifact=designed[1])
     path = write_spec(tmp_path)
     path.write_text(path.read_text().replace("seed = 3", "seed = 3\nmin_yield = 0.5")
                     .replace('title = "campaign test', 'title = "renamed campaign test'))
@@ -179,6 +181,94 @@ def test_other_campaign_in_out_dir_refused(designed, serial_run, tmp_path):
                          artifact=designed[1], report=False)
     assert (again.chunks_resumed, again.chunks_run) == (4, 0)
     assert again.summary["min_yield"] == 0.5
+
+
+def test_extending_samples_reuses_rows(designed, serial_run, tmp_path):
+    """samples is no part of the hash: 400 -> 520 runs only rows 400 .. 519
+    (one chunk of 120, the explicit chunk_size of 100 split them 100 + 20)
+    and the table equals a fresh 520-row run's; 400 -> 300 runs nothing and
+    gives the first 300 rows."""
+    import shutil
+
+    spec, artifact = designed
+    out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
+    more = run_campaign(load_spec(write_spec(tmp_path, samples=520)),
+                        out, scheduler="serial", artifact=artifact, report=False)
+    assert (more.chunks_resumed, more.chunks_run) == (4, 2)
+    assert valid_chunks(out, load_spec(write_spec(tmp_path, samples=520)), artifact) == {
+        (0, 100), (100, 200), (200, 300), (300, 400), (400, 500), (500, 520)}
+    fresh = run_campaign(load_spec(write_spec(tmp_path, samples=520, chunk_size=520)),
+                         tmp_path / "fresh", scheduler="serial", artifact=artifact,
+                         report=False)
+    assert more.table.equals(fresh.table)
+    assert more.table.slice(0, 400).equals(serial_run.table)
+    less = run_campaign(load_spec(write_spec(tmp_path, samples=300)), out, scheduler="serial",
+                        artifact=artifact, report=False)
+    assert less.chunks_run == 0 and less.table.equals(serial_run.table.slice(0, 300))
+    assert less.summary["motors"] == 38  # 300 rows of 8 points: 37 complete motors
+    assert less.summary["yields"]["per_motor"]["n"] == 37
+
+
+def test_resume_rechunks(designed, serial_run, tmp_path):
+    """The chunk size is no part of the hash: a campaign interrupted after
+    two chunks of 100 resumes with chunks of 150 (rows 200 .. 349, 350 .. 399),
+    and the table is the uninterrupted one."""
+    spec, artifact = designed
+    out = tmp_path / "c"
+
+    def stop(done, total):
+        if done >= 200:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_campaign(spec, out, scheduler="serial", artifact=artifact, progress=stop)
+    spec150 = load_spec(write_spec(tmp_path, chunk_size=150))
+    run = run_campaign(spec150, out, scheduler="serial", artifact=artifact, report=False)
+    assert (run.chunks_resumed, run.chunks_run, run.chunk_size) == (2, 2, 150)
+    assert valid_chunks(out, spec150, artifact) == {(0, 100), (100, 200), (200, 350),
+                                                     (350, 400)}
+    assert run.table.equals(serial_run.table)
+
+
+@pytest.mark.parametrize("samples, threads, given, expected", [
+    (400, 1, None, 250),            # 400 / 4 = 100, raised to MIN_CHUNK
+    (1000, 2, None, 250),           # 1000 / (4 x 2)
+    (100, 4, None, 100),            # never more than the campaign
+    (40_000, 2, None, 5000),
+    (1_000_000, 2, None, 10_000),   # capped: 100 chunks
+    (10_000_000, 64, None, 10_000),
+    (1_000_000, 2, 777, 777),       # the spec's own chunk_size wins
+])
+def test_chunk_size_from_samples_and_workers(tmp_path, samples, threads, given, expected):
+    from toolbox.campaign import chunk_size
+
+    path = write_spec(tmp_path, samples=samples, chunk_size=given or 1)
+    if given is None:
+        path.write_text(path.read_text().replace("chunk_size = 1\n", ""))
+    assert chunk_size(load_spec(path), threads) == expected
+
+
+def test_new_requirements_rejudge_stored_rows(designed, serial_run, tmp_path):
+    """The requirements are no part of the hash: a tighter overshoot bound
+    runs no chunk, and passed is the stored metrics judged again (checked
+    here from the columns, independently of judge_rows)."""
+    import shutil
+
+    out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
+    path = write_spec(tmp_path)
+    path.write_text(path.read_text().replace("max_overshoot_pct = 5.0",
+                                             "max_overshoot_pct = 1.0"))
+    run = run_campaign(load_spec(path), out, scheduler="serial", artifact=designed[1],
+                       report=False)
+    assert run.chunks_run == 0
+    t = run.table
+    col = {c: t.column(c).to_numpy(zero_copy_only=False) for c in t.column_names}
+    ok = ((col["iq_step.overshoot_pct"] <= 1.0) & (col["iq_step.rise_time_10_90"] <= 0.006)
+          & (np.minimum(col["margin.d.phase_margin_deg"], col["margin.q.phase_margin_deg"]) >= 55)
+          & np.isfinite(col["iq_step.final_value"]))
+    np.testing.assert_array_equal(col["passed"], ok)
+    assert ok.sum() < serial_run.summary["passed"]  # the bound bites: rows re-judged
+    assert any("bound 1)" in f for f in col["failure"])
 
 
 def test_outputs_and_report(serial_run):
@@ -205,7 +295,7 @@ def test_cli_campaign_exit_codes(designed, tmp_path):
                                     "--scheduler", "serial"])
     assert res.exit_code == 0, res.output
     assert "13 motors x 8 operating points = 100 samples" in res.output
-    assert "2 chunks run, 0 resumed" in res.output
+    assert "2 chunks run (50 rows each), 0 resumed" in res.output
     assert "per-sample yield" in res.output and "per-motor yield (12 motors" in res.output
     # progress on stderr (no terminal here: one line per tenth), then the files
     assert "- campaign: 50/100 samples" in res.stderr and "- campaign: 100/100" in res.stderr
@@ -366,16 +456,16 @@ def test_provenance_pinned(serial_run, designed, tmp_path, monkeypatch):
     import shutil
 
     from toolbox._version import source_hash, toolbox_version
-    from toolbox.campaign import _run
+    from toolbox.campaign import _store
 
     meta = json.loads(pq.read_schema(serial_run.out_dir / "results.parquet").metadata[b"cct"])
     assert meta["toolbox"] == toolbox_version() and meta["source"] == source_hash()
     assert meta["seed"] == 3 and len(meta["spec_sha256"]) == 64
-    chunk = json.loads(pq.read_schema(chunk_path(serial_run.out_dir, 2)).metadata[b"cct"])
+    chunk = json.loads(pq.read_schema(chunk_path(serial_run.out_dir, 200, 300)).metadata[b"cct"])
     assert (chunk["toolbox"], chunk["source"], chunk["start"]) == (toolbox_version(),
                                                                    source_hash(), 200)
     out = shutil.copytree(serial_run.out_dir, tmp_path / "copy")
-    monkeypatch.setattr(_run, "source_hash", lambda: "f" * 64)
+    monkeypatch.setattr(_store, "source_hash", lambda: "f" * 64)
     spec, artifact = designed
     with pytest.raises(SpecError) as info:
         run_campaign(spec, out, scheduler="serial", artifact=artifact)

@@ -213,22 +213,22 @@ def test_cluster_without_usable_workers_exit_4(small_spec, tmp_path, monkeypatch
                                          (errno.EROFS, "the file system is read-only")])
 def test_disk_full_or_read_only_exit_4(designed, small_spec, tmp_path, monkeypatch, code, words):
     """The atomic writer of the chunk files fails: exit 4, one line; rerun resumes."""
-    from toolbox.campaign import _run
+    from toolbox.campaign import _store
 
-    real = _run.write_atomic
+    real = _store.write_atomic
 
     def failing(path, data):
-        if "chunk-" in str(path):
+        if "rows-" in str(path):
             raise OSError(code, os.strerror(code), str(path))
         return real(path, data)
 
-    monkeypatch.setattr(_run, "write_atomic", failing)
+    monkeypatch.setattr(_store, "write_atomic", failing)
     out = tmp_path / "out"
     res, _ = _campaign(small_spec, out, "--scheduler", "serial")
     assert res.exit_code == 4, res.output
     line = _one_line(res)
     assert f"cannot write the campaign to {out}: {words}" in line and "resumes" in line
-    monkeypatch.setattr(_run, "write_atomic", real)
+    monkeypatch.setattr(_store, "write_atomic", real)
     res, _ = _campaign(small_spec, out, "--scheduler", "serial")
     assert res.exit_code == 0, res.output
 

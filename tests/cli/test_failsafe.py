@@ -138,12 +138,12 @@ def test_internal_error_in_check_names_the_command(tmp_path):
 
 def test_internal_error_in_process_exits_3(tmp_path, monkeypatch):
     """Through click's runner too (notebooks, tests): exit 3, no exception escapes."""
-    import toolbox.spec
+    import toolbox.cli._main
 
     def boom(*args, **kwargs):
         raise RuntimeError("x" * 5000)
 
-    monkeypatch.setattr(toolbox.spec, "load_spec", boom)
+    monkeypatch.setattr(toolbox.cli._main, "load_spec", boom)  # the name `cct check` calls
     monkeypatch.setenv("TMPDIR", str(tmp_path))
     import tempfile
     monkeypatch.setattr(tempfile, "tempdir", None)  # re-read TMPDIR

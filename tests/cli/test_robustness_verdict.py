@@ -47,8 +47,12 @@ def test_design_unstable_on_the_default_box_exits_1_naming_the_set(tmp_path):
     res = run("design", spec, "--out", out, "-q")
     assert res.exit_code == 1, res.output
     assert LINE + "0.00, unstable " in res.stdout and res.stdout.count("FAILED") == 2
-    verdict = res.stdout.splitlines()[-1]
-    assert verdict.startswith("requirements: FAILED default.robustness (the coupled sampled "
+    lines = res.stdout.splitlines()
+    start = next(k for k, x in enumerate(lines) if x.startswith("requirements: "))
+    assert lines[start] == "requirements: FAILED 1 check:"
+    assert all(len(x) <= 100 for x in lines[start:])  # wrapped, one check per item
+    verdict = " ".join(x.strip() for x in lines[start + 1:])
+    assert verdict.startswith("- default.robustness (the coupled sampled "
                               "loop is unstable for ")
     assert "first: R x0.843, Ld x0.8, Lq x0.8, flux x0.844, speed_gain x0.98" in verdict
     assert "rad/s electrical (largest closed-loop pole" in verdict

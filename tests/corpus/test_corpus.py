@@ -48,8 +48,8 @@ import pytest
 
 import toolbox
 from toolbox.pipeline import build_outputs
-from toolbox.sim import default_scenarios
-from toolbox.sim._checks import fcs_ripple
+from toolbox.verify import default_scenarios
+from toolbox.verify import fcs_ripple
 from toolbox.sim._simulate import DriveParams
 
 MOTOR_DIR = Path(__file__).parent / "motors"

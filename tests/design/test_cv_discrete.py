@@ -147,9 +147,10 @@ def test_law_with_motulator_gains_gives_motulator_voltages(w, limit):
 
 
 def test_speed_terms_do_not_fit_the_artifact_decoupling():
-    """Why the design is not an artifact method: at speed the gains acting on
-    the integrator, the delayed voltage and the reference are coupled, which
-    per-axis laws plus ``W(w) i`` (W linear in w, on the current) cannot be."""
+    """Why the artifact carries the law itself (``CvLaw``), not axes plus
+    decoupling: at speed the gains acting on the integrator, the delayed
+    voltage and the reference are coupled, which per-axis laws plus ``W(w) i``
+    (W linear in w, on the current) cannot be."""
     w = 920.0
     g = cvd.design_cv_discrete(**IPM, sample_time=TS, delay_samples=1, omega=w)
     g0 = cvd.design_cv_discrete(**IPM, sample_time=TS, delay_samples=1, omega=0.0)

@@ -33,7 +33,7 @@ from toolbox.design import _defaults
 from toolbox.errors import SpecError
 from toolbox.pipeline import build_outputs
 from toolbox.plant import steady_state_voltage, voltage_limited_speed
-from toolbox.sim import default_scenarios
+from toolbox.verify import default_scenarios
 
 MIN_PM_DEG = 60.0
 MIN_GM_DB = 6.0

@@ -216,7 +216,7 @@ def test_spec_round_trip_and_refusals():
 
 def _weights(art) -> dict:
     """The artifact's weights as SISO python-control-free transfer functions."""
-    from toolbox._lti import TransferFunction
+    from toolbox.lti import TransferFunction
 
     out = {}
     for ax in "dq":

@@ -41,7 +41,8 @@ from toolbox.artifact import ControllerArtifact
 from toolbox.design import design
 from toolbox.design import robust_pi as RP
 from toolbox.errors import DesignInfeasible, SpecError
-from toolbox.sim import Scenario, control_law, drive_params, simulate
+from toolbox.sim import control_law, drive_params, simulate
+from toolbox.spec import Scenario
 from toolbox.spec import spec_from_dict
 
 # vdc = 400 V: the back-EMF at 230 rad/s (110 V) plus the step stays inside the
@@ -311,3 +312,27 @@ def test_infeasible_everywhere_unstable_says_where():
     msg = str(e.value)
     assert "best found 0 at wc" in msg and "of 164 (model, speed) pairs unstable" in msg
     assert "at standstill" in msg
+
+
+def test_refusal_advice_is_checked_by_rerunning():
+    """The disk margin a refusal offers passes when the spec is designed with
+    it (the advice is re-run before it is printed), and the max_speed it
+    offers does too (maxon EC 22 at 20 kHz, tests/corpus/datasheets)."""
+    import re
+    from pathlib import Path
+
+    from toolbox.pipeline import design_spec
+    from toolbox.spec import load_spec
+
+    path = Path(__file__).parents[1] / "corpus" / "datasheets" / "maxon_ec22_40w.toml"
+    method = [("--method", 'controller.method="robust_pi"')]
+    with pytest.raises(DesignInfeasible) as info:
+        design_spec(load_spec(path, overrides=method))
+    hint = info.value.hint
+    margin = re.search(r"disk_margin = ([0-9.]+) passes", hint)
+    speed = re.search(r"max_speed = ([0-9.]+) rad/s mechanical", hint)
+    assert margin and speed, hint
+    for key, value in (("disk_margin", margin.group(1)), ("max_speed", speed.group(1))):
+        spec = load_spec(path, overrides=method + [("--set",
+                                                    f"controller.robust_pi.{key}={value}")])
+        assert design_spec(spec).method == "robust_pi"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import control as ct
 
-from toolbox._lti import TransferFunction
+from toolbox.lti import TransferFunction
 from toolbox.design._weights import makeweight, validate_weight, weight_from_tf, weight_from_zpk
 from toolbox.errors import SpecError
 
@@ -17,7 +17,7 @@ def mag(w, freq):
 
 def test_from_tf_returns_transfer_function():
     w = weight_from_tf([1e4, 1.3568e6], [1, 2.7135e6], key=KEY)
-    assert isinstance(w, TransferFunction)      # toolbox._lti's: no python-control needed
+    assert isinstance(w, TransferFunction)      # toolbox.lti's: no python-control needed
     # DC gain 1e4 * 135.68 / 2.7135e6 = 0.5 (exact to the 5 digits given)
     assert mag(w, 0.0) == pytest.approx(0.5, rel=1e-4)
 

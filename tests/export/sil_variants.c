@@ -46,13 +46,14 @@ static void control_isr(float i_d_ref, float i_q_ref)
     if (cct_set_vdc_q31(&ctl, cct_to_q31(adc_vdc(), CCT_Q31_VDC_BASE, CCT_Q31_VDC_BASE, &bus)) < 0) {
         fault_report(1);
     }
-    in.i_d_ref = cct_to_q31(i_d_ref, CCT_Q31_I_MAX, CCT_Q31_I_BASE, &flag);
-    in.i_q_ref = cct_to_q31(i_q_ref, CCT_Q31_I_MAX, CCT_Q31_I_BASE, &flag);
-    in.i_d = cct_to_q31(adc_i_d(), CCT_Q31_I_MAX, CCT_Q31_I_BASE, &flag);
-    in.i_q = cct_to_q31(adc_i_q(), CCT_Q31_I_MAX, CCT_Q31_I_BASE, &flag);
-    in.omega_m = cct_to_q31(encoder_speed(), CCT_Q31_W_MAX, CCT_Q31_W_BASE, &flag);
+    in.i_d_ref = cct_to_q31(i_d_ref, CCT_Q31_I_PLAUSIBLE, CCT_Q31_I_BASE, &flag);
+    in.i_q_ref = cct_to_q31(i_q_ref, CCT_Q31_I_PLAUSIBLE, CCT_Q31_I_BASE, &flag);
+    in.i_d = cct_to_q31(adc_i_d(), CCT_Q31_I_PLAUSIBLE, CCT_Q31_I_BASE, &flag);
+    in.i_q = cct_to_q31(adc_i_q(), CCT_Q31_I_PLAUSIBLE, CCT_Q31_I_BASE, &flag);
+    in.omega_m = cct_to_q31(encoder_speed(), CCT_Q31_W_PLAUSIBLE, CCT_Q31_W_BASE, &flag);
     cct_step_q31(&ctl, &in, &out);
-    if (flag) { ++clamped_; }
+    if (flag || out.status == CCT_STATUS_CLAMPED) { ++clamped_; }
+    if (out.status == CCT_STATUS_IMPLAUSIBLE) { fault_report(out.status); }
 #ifdef SIL_NO_COMP
     vd = sil_q31_volts(out.v_d);
     vq = sil_q31_volts(out.v_q);

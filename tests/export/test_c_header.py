@@ -243,6 +243,9 @@ def test_fixed_point_saturation(tmp_path):
     inp = C.test_inputs(i_step=20.0, speed=300.0, seed=2)
     q = np.column_stack([C.to_q31(inp[:, :4], P.I_BASE), C.to_q31(inp[:, 4:], P.W_BASE)])
     inq = np.column_stack([q[:, :4] * P.I_BASE / 2 ** 31, q[:, 4] * P.W_BASE / 2 ** 31])
+    # the step clamps references and measurements to the ranges (status CLAMPED)
+    inq = np.column_stack([np.clip(inq[:, :4], -P.I_MAX, P.I_MAX),
+                           np.clip(inq[:, 4], -P.W_MAX, P.W_MAX)])
     v_ref, s_ref = reference_law(art, inq, chk.v_max)
     vq, sq = C.run_fixed(h, tmp_path, q)
     v = vq * P.V_BASE / 2 ** 31

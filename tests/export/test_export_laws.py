@@ -26,7 +26,8 @@ import pytest
 from toolbox.errors import ExportRefused
 from toolbox.export import check_exportable, write_header
 from toolbox.export.c_header import ReferenceLaw, reference_law
-from toolbox.sim import DriveParams, Scenario, control_law, simulate
+from toolbox.sim import DriveParams, control_law, simulate
+from toolbox.spec import Scenario
 
 import export_artifacts as A
 import export_c_helpers as C

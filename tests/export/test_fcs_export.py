@@ -33,7 +33,8 @@ import pytest
 
 from toolbox.export import example_source, write_header
 from toolbox.pipeline import design_spec
-from toolbox.sim import DriveParams, Scenario, control_law, simulate
+from toolbox.sim import DriveParams, control_law, simulate
+from toolbox.spec import Scenario
 from toolbox.spec import inverter_radii, load_spec
 
 import export_c_helpers as C

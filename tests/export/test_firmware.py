@@ -309,6 +309,9 @@ int main(void)
     arr = np.array([[int(x) for x in ln.split()] for ln in out.strip().splitlines()])
     assert arr[5, 3] == 1 and arr[6, 3] == -1 and not np.delete(arr[:, 3], [5, 6]).any()
     inq = np.column_stack([q[:, :4] * P.I_BASE / 2 ** 31, q[:, 4] * P.W_BASE / 2 ** 31])
+    # the step clamps references and measurements to the ranges (status CLAMPED)
+    inq = np.column_stack([np.clip(inq[:, :4], -P.I_MAX, P.I_MAX),
+                           np.clip(inq[:, 4], -P.W_MAX, P.W_MAX)])
     ref = ReferenceLaw(art, chk.v_max)
     v_ref = []
     for kk, row in enumerate(inq):

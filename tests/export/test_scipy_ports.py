@@ -4,10 +4,9 @@
 second-order sections (``zpk2sos``, nearest pairing) and the FFT
 convolution of the fixed-point bound are ported. scipy.signal is the
 independent route; the ports may round differently, so the numbers are
-compared within rounding: the sections' coefficients (products of at most
-two roots of modulus <= 1.2) within 1e-13 absolute, the convolution within
-1e-12 of its largest value (an FFT's error is ~eps log2(n) relative to the
-output's norm). The pairing itself (which roots share a section) is
+compared within the named tolerances of ``tests/tolerances.py``: the
+sections' coefficients within ``SOS_ATOL`` absolute, the convolution within
+``FFT_RTOL`` of its largest value. The pairing itself (which roots share a section) is
 structure, and shows as the coefficients.
 """
 
@@ -20,6 +19,7 @@ import scipy.signal
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.tolerances import FFT_RTOL, SOS_ATOL
 from toolbox.export._fixed import _fftconvolve
 from toolbox.export._sos import zpk2sos_nearest
 
@@ -45,14 +45,14 @@ def test_zpk2sos_nearest_equals_scipy(seed):
     ref = scipy.signal.zpk2sos(z, p, 1.0, pairing="nearest")
     got = zpk2sos_nearest(z, p)
     assert got.shape == ref.shape
-    assert np.allclose(got, ref, rtol=0.0, atol=1e-13)
+    assert np.allclose(got, ref, rtol=0.0, atol=SOS_ATOL)
 
 
 def test_zpk2sos_nearest_on_repeated_and_unit_circle_roots():
     z = np.array([-1.0, -1.0, 1.0, 0.5 + 0.5j, 0.5 - 0.5j])
     p = np.array([1.0, 0.9, 0.9, 0.3 + 0.6j, 0.3 - 0.6j])
     ref = scipy.signal.zpk2sos(z, p, 1.0, pairing="nearest")
-    assert np.allclose(zpk2sos_nearest(z, p), ref, rtol=0.0, atol=1e-13)
+    assert np.allclose(zpk2sos_nearest(z, p), ref, rtol=0.0, atol=SOS_ATOL)
 
 
 @settings(max_examples=40, deadline=None)
@@ -63,4 +63,4 @@ def test_fftconvolve_equals_scipy(na, nb, seed):
     ref = scipy.signal.fftconvolve(a, b)
     got = _fftconvolve(a, b)
     assert got.shape == ref.shape
-    assert np.allclose(got, ref, rtol=0.0, atol=1e-12 * np.abs(ref).max())
+    assert np.allclose(got, ref, rtol=0.0, atol=FFT_RTOL * np.abs(ref).max())

@@ -3,10 +3,14 @@ usage example says, behaves like the toolbox's simulator in closed loop.
 
 DESIGN.md "The digital loop" and toolbox/ARCHITECTURE.md "controller.h",
 "Inverter models". For every design of the gallery (``designs/*.toml``,
-designed here) and three variations of one key (:data:`VARIATIONS`: 003's PI
+designed here) and seven variations of one key (:data:`VARIATIONS`: 003's PI
 with ``rule = "complex_vector"``, which no gallery spec uses; 003's PI and
 000's total compensation with its hexagon limit, both with
-``drive.angle_compensation = "none"``), the header is compiled
+``drive.angle_compensation = "none"``; the complex-vector law of method
+``cv`` with ``angle_compensation = "none"``, whose gains then compensate
+the placement error, with ``voltage_priority = "d_axis"`` and with 0 and 2
+periods of delay), the header
+is compiled
 (gcc -std=c99 -Wall -Wextra -Werror -pedantic -Wconversion -O2) with
 
 * ``sil_plant.c``: a PMSM written for this test (salient dq model at an
@@ -51,6 +55,10 @@ Bounds (``I`` the step):
   amplitude by at most that much of the step, twice for the two axes'
   coupling). ``q_i``, ``q_v`` and ``e_g`` are read from the header's macros.
 
+``cv`` headers compute the complex-vector law's gains each period at the
+measured speed (float only; the integer variants are ``#error``s, skipped):
+the same harness, the same bound.
+
 ``fcs_mpc`` headers output the inverter state (gates): ``gates_apply``
 holds its vector ``r_hex (s_a + a s_b + a^2 s_c)`` over the period, as the
 simulator's ``fcs_mpc`` inverter does; no hold frame applies (one run).
@@ -87,13 +95,27 @@ def _no_angle_compensation(data):
     data["drive"]["angle_compensation"] = "none"
 
 
+def _d_axis_priority(data):
+    data["drive"]["voltage_priority"] = "d_axis"
+
+
+def _delay(n):
+    def change(data):
+        data["drive"]["delay_samples"] = n
+    return change
+
+
 #: gallery specs changed in one key: the complex-vector PI rule (no gallery
 #: spec uses it), and no angle compensation (DELAY_COMP_TIME 0, the voltage
 #: placed at the sampled angle; with a hexagon limit for 000_tc)
 VARIATIONS = {"003_azaiz2007_pi+complex_vector": ("003_azaiz2007_pi", _complex_vector),
               "003_azaiz2007_pi+angle_none": ("003_azaiz2007_pi", _no_angle_compensation),
               "000_lepioufle1992_tc+angle_none": ("000_lepioufle1992_tc",
-                                                  _no_angle_compensation)}
+                                                  _no_angle_compensation),
+              "003_azaiz2007_cv+angle_none": ("003_azaiz2007_cv", _no_angle_compensation),
+              "003_azaiz2007_cv+d_axis": ("003_azaiz2007_cv", _d_axis_priority),
+              "003_azaiz2007_cv+delay0": ("003_azaiz2007_cv", _delay(0)),
+              "003_azaiz2007_cv+delay2": ("003_azaiz2007_cv", _delay(2))}
 NAMES = DESIGNS + list(VARIATIONS)
 VARIANTS = {"float": None, "q31": "CCT_FIXED_POINT", "mcsdk": "CCT_MCSDK",
             "iqmath": "CCT_IQMATH"}
@@ -280,7 +302,8 @@ def run_harness(exe: str, spec, hold: str, omega_m: float, vdc: float, refs: np.
 
 
 def run_simulator(spec, art, hold: str, omega_m: float, vdc: float, i_step: float):
-    from toolbox.sim import Scenario, control_law, drive_params, simulate
+    from toolbox.sim import control_law, drive_params, simulate
+    from toolbox.spec import Scenario
     fcs = art.method == "fcs_mpc"
     drive = replace(drive_params(spec.drive, "fcs_mpc" if fcs else "average"), hold_frame=hold,
                     vdc=vdc)

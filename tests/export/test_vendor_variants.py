@@ -111,6 +111,12 @@ def _scales(h: str, variant: str):
     return _macro(h, "IQ_I_BASE"), _macro(h, "IQ_W_BASE"), _macro(h, "IQ_V_BASE"), 2.0 ** 24
 
 
+def _range(variant: str) -> float:
+    """The current and speed ranges as fractions of the scales of :func:`_scales`
+    (the MCSDK's full scales are twice the ranges, the plausible ranges)."""
+    return 0.5 if variant == "MCSDK" else 1.0
+
+
 def _gain(h: str, variant: str, name: str) -> float:
     """A coefficient of the header in output units per (input unit) (as executed)."""
     if variant == "MCSDK":
@@ -160,7 +166,9 @@ def test_vendor_variant_matches_float_law(variant, tmp_path):
     chk = check_exportable(art, A.MOTOR, A.DRIVE)
     h = write_header(art, A.MOTOR, A.DRIVE)
     I, W, V, full = _scales(h, variant)
-    assert I == A.MOTOR.max_current and W == A.DRIVE.max_speed     # the drive's ranges
+    # the drive's ranges: 1 p.u. for IQmath; MCSDK digits of twice them (the plausible ranges)
+    k = 2.0 if variant == "MCSDK" else 1.0
+    assert I == k * A.MOTOR.max_current and W == k * A.DRIVE.max_speed
     inp = C.test_inputs()
     q = _quantise(inp, I, W, full)
     deq = np.column_stack([q[:, :4] * I / full, q[:, 4] * W / full])
@@ -196,7 +204,8 @@ def test_vendor_variant_saturation(variant, tmp_path):
     h = write_header(art, A.MOTOR, A.DRIVE)
     I, W, V, full = _scales(h, variant)
     inp = C.test_inputs(i_step=20.0, speed=300.0, seed=2)
-    inp[:, :4] = np.clip(inp[:, :4], -0.999 * I, 0.999 * I)
+    rng_i = _range(variant) * I
+    inp[:, :4] = np.clip(inp[:, :4], -0.999 * rng_i, 0.999 * rng_i)
     q = _quantise(inp, I, W, full)
     deq = np.column_stack([q[:, :4] * I / full, q[:, 4] * W / full])
     ref = ReferenceLaw(art, chk.v_max)
@@ -217,28 +226,51 @@ def test_vendor_variant_saturation(variant, tmp_path):
 
 
 def test_inputs_beyond_range_are_clamped_and_flagged(tmp_path):
-    """A 100 A measurement with a 20 A range (motor.max_current): IQmath
+    """A 30 A measurement with a 20 A range (motor.max_current): IQmath
     clamps it to 1.0 p.u. and says so (status CLAMPED) and its output equals
-    the float law fed 20 A (within the linear bound's few LSBs); the MCSDK's
-    amps-to-s16A helper clamps to the rail with its flag set."""
+    the float law fed 20 A (within the linear bound's few LSBs). A 100 A
+    measurement (beyond the plausible 2 p.u.) is refused (status IMPLAUSIBLE):
+    the law runs on the last plausible sample without an integral update, so
+    the next period equals the float law that never saw it. The MCSDK's
+    amps-to-s16A helper maps the plausible range (40 A) to the rail and a NaN
+    to 0, each with its flag; its step clamps beyond the range (16384 digits)
+    and refuses the rail likewise."""
     art = A.pi_artifact()
     chk = check_exportable(art, A.MOTOR, A.DRIVE)
     h = write_header(art, A.MOTOR, A.DRIVE)
     I, W, V, full = _scales(h, "IQMATH")
-    rows = np.array([[0.0, 5.0, 0.0, 4.0, 50.0], [0.0, 5.0, 0.0, 100.0, 50.0],
-                     [0.0, 5.0, 0.0, 4.5, 50.0]])
+    assert I == 20.0
+    rows = np.array([[0.0, 5.0, 0.0, 4.0, 50.0], [0.0, 5.0, 0.0, 30.0, 50.0],
+                     [0.0, 5.0, 0.0, 4.5, 50.0], [0.0, 5.0, 0.0, 100.0, 50.0],
+                     [0.0, 5.0, 0.0, 4.2, 50.0]])
     q = np.column_stack([np.round(rows[:, :4] / I * full), np.round(rows[:, 4] / W * full)])
     out = _compile_run(h, tmp_path, "IQMATH", q.astype(np.int64))
-    assert list(out[:, 3]) == [0, 3, 0]
+    assert list(out[:, 3]) == [0, 3, 0, 4, 0]
     clipped = rows.copy()
     clipped[1, 3] = I
     ref = ReferenceLaw(art, chk.v_max)
-    v_ref = np.array([ref.step(*row)[:2] for row in clipped])
-    assert np.abs(out[:, :2] * V / full - v_ref).max() < 1e-5 * V
-    src = ('#include <stdio.h>\n#include "controller.h"\nint main(void)\n{\n    int f = 0, g = 0;\n'
+    v_ref = np.array([ref.step(*row)[:2] for row in np.delete(clipped, 3, axis=0)])
+    np.testing.assert_array_less(np.abs(np.delete(out[:, :2], 3, axis=0) * V / full - v_ref),
+                                 1e-5 * V)
+    # the refused period: the law on the last plausible sample (4.5 A), state unchanged
+    ref2 = ReferenceLaw(art, chk.v_max)
+    for row in clipped[:3]:
+        ref2.step(*row)
+    v_sub = ref2.step(*[0.0, 5.0, 0.0, 4.5, 50.0])[:2]
+    assert np.abs(out[3, :2] * V / full - v_sub).max() < 1e-5 * V
+    src = ('#include <stdio.h>\n#include "controller.h"\nint main(void)\n{\n'
+           '    int f = 0, g = 0, n = 0;\n'
            '    const int16_t a = cct_to_s16a(100.0f, &f);\n'
            '    const int16_t b = cct_to_s16a(10.0f, &g);\n'
-           '    printf("%d %d %d %d\\n", (int)a, f, (int)b, g);\n    return 0;\n}\n')
+           '    const volatile float z = 0.0f;\n'
+           '    const int16_t c = cct_to_s16a(z / z, &n);\n'
+           '    cct_state_s16_t s;\n    cct_input_s16_t in = {0, 1000, 0, 0, 100};\n'
+           '    cct_output_s16_t o1, o2, o3;\n    cct_init_s16(&s);\n'
+           '    in.i_q = 20000; cct_step_s16(&s, &in, &o1);\n'
+           '    in.i_q = a; cct_step_s16(&s, &in, &o2);\n'
+           '    in.i_q = -32768; cct_step_s16(&s, &in, &o3);\n'
+           '    printf("%d %d %d %d %d %d %d %d %d\\n", (int)a, f, (int)b, g, (int)c, n,'
+           ' o1.status, o2.status, o3.status);\n    return 0;\n}\n')
     (tmp_path / "c").mkdir()
     (tmp_path / "c" / "controller.h").write_text(h)
     (tmp_path / "c" / "m.c").write_text(src)
@@ -246,9 +278,10 @@ def test_inputs_beyond_range_are_clamped_and_flagged(tmp_path):
                           str(tmp_path / "c" / "m.c"), "-o", str(tmp_path / "c" / "m"), "-lm"],
                          capture_output=True, text=True, timeout=60)
     assert res.returncode == 0, res.stderr
-    a, f, b, g = map(int, subprocess.run([str(tmp_path / "c" / "m")], capture_output=True,
-                                         text=True, timeout=30).stdout.split())
-    assert (a, f, g) == (32767, 1, 0) and b == 16384
+    got = list(map(int, subprocess.run([str(tmp_path / "c" / "m")], capture_output=True,
+                                       text=True, timeout=30).stdout.split()))
+    # 10 A of a 40 A full scale (twice the 20 A range) = 8192 digits
+    assert got == [32767, 1, 8192, 0, 0, 1, 3, 4, 4], got
 
 
 def test_vendor_variants_refused_for_other_laws(tmp_path):
@@ -283,7 +316,7 @@ def test_reference_pi_designs(design, variant, tmp_path):
     chk = check_exportable(art, spec.motor, spec.drive)
     h = write_header(art, spec.motor, spec.drive)
     I, W, V, full = _scales(h, variant)
-    inp = C.test_inputs(i_step=0.3 * I, speed=0.2 * W)
+    inp = C.test_inputs(i_step=0.3 * _range(variant) * I, speed=0.2 * _range(variant) * W)
     q = _quantise(inp, I, W, full)
     deq = np.column_stack([q[:, :4] * I / full, q[:, 4] * W / full])
     ref = ReferenceLaw(art, chk.v_max)
@@ -312,7 +345,8 @@ def test_gains_retunable_at_run_time(variant, tmp_path):
     h1000 = write_header(A.pi_artifact(wc=1000.0), A.MOTOR, A.DRIVE)
     I, W, V, full = _scales(h500, variant)
     inp = C.test_inputs(i_step=20.0, speed=300.0, seed=2)
-    inp[:, :4] = np.clip(inp[:, :4], -0.999 * I, 0.999 * I)
+    rng_i = _range(variant) * I
+    inp[:, :4] = np.clip(inp[:, :4], -0.999 * rng_i, 0.999 * rng_i)
     q = _quantise(inp, I, W, full)
     defs = []
     for ax in "DQ":

@@ -29,7 +29,8 @@ import toolbox
 from toolbox.errors import ExportRefused, SpecError
 from toolbox.export import check_exportable, write_header
 from toolbox.export.c_header import ReferenceLaw, d_priority_limit, reference_law
-from toolbox.sim import DriveParams, Scenario, control_law, simulate
+from toolbox.sim import DriveParams, control_law, simulate
+from toolbox.spec import Scenario
 
 import export_artifacts as A
 import export_c_helpers as C

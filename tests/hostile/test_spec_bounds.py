@@ -53,7 +53,9 @@ CASES = [
      'times (1e-07 .. 1e+05 s), got "Ld/R = 1e-09 s" (check the units of R, L and '
      'drive.sample_time)'),
     # Lq/R = 10 / 1e-6 = 1e7 s = 1e11 sample times (Ld/R = 1.4e7 sample times is fine)
-    ("tau_above_1e9_samples", dict(motor={"R": 1e-6, "Lq": 10.0}),
+    # (J = 1e-5 kg m^2: plausible for the 10 H motor, toolbox/spec/_bounds.py
+    # check_inertia)
+    ("tau_above_1e9_samples", dict(motor={"R": 1e-6, "Lq": 10.0, "J": 1e-5}),
      'motor.Lq: expected an electrical time constant Lq/R between 0.001 and 1e+09 sample '
      'times (1e-07 .. 1e+05 s), got "Lq/R = 1e+07 s" (check the units of R, L and '
      'drive.sample_time)'),
@@ -85,8 +87,10 @@ def test_implausible_value_is_refused_by_name(name, sections, message):
 
 
 @pytest.mark.parametrize("sections", [
-    dict(motor={"flux": 1e-6}),                       # the bounds themselves are allowed
-    dict(motor={"R": 1e4, "Ld": 10.0, "Lq": 10.0}),
+    # the bounds themselves are allowed (with an inertia plausible for the
+    # motor's torque, toolbox/spec/_bounds.py check_inertia)
+    dict(motor={"flux": 1e-6, "R": 1e-6, "Ld": 1e-9, "Lq": 1e-9, "J": 1e-9}),
+    dict(motor={"R": 1e4, "Ld": 10.0, "Lq": 10.0, "J": 1e-5}),
     dict(drive={"vdc": 1e5}),
     dict(drive={"max_speed": 7800.0}),                # just below Nyquist (7854 rad/s)
     dict(scenario=[{**STEP, "duration": 0.5, "plant_step": 1e-9}]),  # 5e8 steps

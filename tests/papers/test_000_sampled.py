@@ -45,7 +45,8 @@ import numpy as np
 import pytest
 
 from toolbox.design import design
-from toolbox.sim import Scenario, control_law, drive_params, simulate
+from toolbox.sim import control_law, drive_params, simulate
+from toolbox.spec import Scenario
 from toolbox.spec import load_spec, spec_from_dict
 
 DESIGNS = Path(__file__).resolve().parents[2] / "designs"

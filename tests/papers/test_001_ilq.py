@@ -156,7 +156,8 @@ def test_simulator_agrees_with_linear_analysis():
     plant inductance at 0.5, 1 and 2 x nominal. Its 5 % response times agree with the
     sampled linear analysis above within one period, and the figure of merit computed
     from the simulated traces (20 ms window) within 5 % of the linear one."""
-    from toolbox.sim import Scenario, control_law, drive_params, simulate
+    from toolbox.sim import control_law, drive_params, simulate
+    from toolbox.spec import Scenario
 
     sp = ilq_spec()
     art = design(sp)

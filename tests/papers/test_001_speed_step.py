@@ -52,7 +52,8 @@ import numpy as np
 import pytest
 
 from toolbox.design import design
-from toolbox.sim import (Scenario, SpeedLoop, control_law, drive_params, simulate)
+from toolbox.sim import SpeedLoop, control_law, drive_params, simulate
+from toolbox.spec import Scenario
 from toolbox.spec import load_spec
 
 DESIGNS = Path(__file__).resolve().parents[2] / "designs"

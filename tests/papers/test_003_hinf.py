@@ -17,6 +17,7 @@ import pytest
 import control as ct
 import slycot
 
+from toolbox import lti
 from toolbox.design import _hinf_bounds as HB
 from toolbox.design import _hinf_gamma as HG
 from toolbox.design import _hinf_plant as HP
@@ -57,7 +58,7 @@ PAPER_LOOP = {
 
 
 def ctl(sys):
-    """python-control's view of a system (ours are toolbox._lti.StateSpace)."""
+    """python-control's view of a system (ours are toolbox.lti.StateSpace)."""
     return sys.to_control() if hasattr(sys, "to_control") else sys
 
 
@@ -192,7 +193,7 @@ def test_central_controller_meets_gamma_1(axis, K1):
     """||[w1 S; w2 KS; w3 T]||_inf < 1 (eq 40) recomputed by python-control, and
     each of (41)-(43) holds on a dense grid (Fig. 9-11)."""
     a = AXES[axis]
-    n = HG.hinf_norm(HP.closed_loop(plant(axis), K1[axis]))
+    n = lti.hinf_norm(HP.closed_loop(plant(axis), K1[axis]))
     b = HB.weight_bound_check(a["G"], K1[axis], a["w1"], a["w2"], a["w3"])
     print(f"\n{axis}: ||Tzw|| = {n:.5f}; worst |S w1|={b['S'].worst_ratio:.3f} "
           f"|KS w2|={b['KS'].worst_ratio:.3f} |T w3|={b['T'].worst_ratio:.3f}")

@@ -10,7 +10,8 @@ import pytest
 from toolbox.artifact import Decoupling
 from toolbox.design import design
 from toolbox.errors import SpecError
-from toolbox.sim import DriveParams, Scenario, control_law, simulate, simulate_batch
+from toolbox.sim import DriveParams, control_law, simulate, simulate_batch
+from toolbox.spec import Scenario
 from toolbox.spec import spec_from_dict
 
 from sim_helpers import PAPER000 as M, tc_law, tci_law

@@ -18,7 +18,7 @@ import pytest
 
 from toolbox.artifact import Decoupling
 from toolbox.errors import SpecError
-from toolbox.sim._scenario import Scenario
+from toolbox.spec import Scenario
 from toolbox.sim._simulate import AxisLaw, ControlLaw, DriveParams, simulate
 from toolbox.spec import Motor
 

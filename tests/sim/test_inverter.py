@@ -9,7 +9,7 @@ import pytest
 from toolbox.artifact import Decoupling
 from toolbox.sim._inverter import (bit_changes, hexagon_scale, state_vector,
                                    svm_times)
-from toolbox.sim._scenario import Scenario
+from toolbox.spec import Scenario
 from toolbox.sim._simulate import ControlLaw, DriveParams, discrete_pi, simulate
 
 from sim_helpers import PAPER000 as M

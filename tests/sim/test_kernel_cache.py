@@ -31,7 +31,7 @@ def test_kernel_sources_cover_what_it_compiles_in():
     compiled = {Path(inspect.getsourcefile(f.py_func)).name
                 for f in vars(_kernel).values() if isinstance(f, CPUDispatcher)}
     parts = {"_kernel_layout.py", "_kernel_plant.py", "_kernel_metrics.py",
-             "_kernel_steps.py", "_kernel_pwm.py"}
+             "_kernel_steps.py", "_kernel_pwm.py", "_kernel_cv.py"}
     assert imported == {"_inverter.py", "_metrics.py"} | parts
     assert compiled == {"_kernel.py", "_inverter.py"} | parts - {"_kernel_layout.py"}
     assert set(_kernel.KERNEL_SOURCES) == imported | compiled

@@ -5,7 +5,7 @@ the same arithmetic in double precision; only the operation order differs)."""
 import numpy as np
 import pytest
 
-from toolbox.sim._scenario import Scenario
+from toolbox.spec import Scenario
 from toolbox.sim._simulate import DriveParams, simulate
 
 from sim_helpers import PAPER000 as M, tc_law, tci_law

@@ -9,7 +9,7 @@ import control
 import numpy as np
 
 from toolbox.artifact import Decoupling
-from toolbox.sim._scenario import Scenario
+from toolbox.spec import Scenario
 from toolbox.sim._simulate import (ControlLaw, DriveParams, discrete_pi, simulate)
 
 from sim_helpers import PAPER000 as M
@@ -64,8 +64,8 @@ def test_pi_sampled_with_delay_matches_discrete_closed_loop():
 
 def test_metrics_match_offline_definitions():
     """Online (kernel) step metrics equal the trace-based definitions of
-    _metrics.step_metrics when evaluated on every plant step (Ts = h)."""
-    from toolbox.sim._metrics import step_metrics
+    toolbox.metrics.step_metrics when evaluated on every plant step (Ts = h)."""
+    from toolbox.metrics import step_metrics
     wc, Ts = 3000.0, 1e-6
     drive = DriveParams(vdc=150, sample_time=Ts, delay_samples=1, v_limit="none")
     sc = Scenario(kind="current_step", duration=4e-3, iq_ref=5.0, iq_ref0=1.0,

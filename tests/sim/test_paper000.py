@@ -21,8 +21,8 @@ import control
 import numpy as np
 import pytest
 
-from toolbox.sim._metrics import step_metrics
-from toolbox.sim._scenario import Scenario
+from toolbox.metrics import step_metrics
+from toolbox.spec import Scenario
 from toolbox.sim._simulate import (ControlLaw, DriveParams, discrete_pi,
                                    simulate)
 

@@ -18,7 +18,7 @@ our cell changes; both counts are reported.
 import pytest
 
 from toolbox.artifact import Decoupling
-from toolbox.sim._scenario import Scenario
+from toolbox.spec import Scenario
 from toolbox.sim._simulate import (ControlLaw, DriveParams, FcsWeights, discrete_pi,
                                    simulate)
 

@@ -16,7 +16,7 @@ from scipy.optimize import brentq
 
 from toolbox.artifact import Decoupling
 from toolbox.errors import SpecError
-from toolbox.sim._scenario import Scenario
+from toolbox.spec import Scenario
 from toolbox.sim._simulate import AxisLaw, ControlLaw, DriveParams, discrete_pi, simulate
 from toolbox.spec import Motor, spec_from_dict
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from toolbox.errors import SpecError
-from toolbox.sim._scenario import Scenario
+from toolbox.spec import Scenario
 from toolbox.artifact import Decoupling
 from toolbox.sim._simulate import (ControlLaw, DriveParams, SpeedLoop, discrete_pi, simulate,
                                    simulate_batch)

@@ -57,7 +57,7 @@ CASES = [
     ("unknown_catalog.toml",
      'motor.catalog: expected one of "azaiz2007", "cormerais2002", "lepioufle1992", "takami2004", got "azaiz2008" (did you mean "azaiz2007"?)'),
     ("unknown_method.toml",
-     'controller.method: expected one of "pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc", "robust_pi", "tune", got "hinfinity" (did you mean "hinf"?)'),
+     'controller.method: expected one of "pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc", "robust_pi", "tune", "cv", got "hinfinity" (did you mean "hinf"?)'),
     ("unknown_top.toml",
      'titel: expected a known top-level key (did you mean "title"?)'),
     ("zero_L.toml",

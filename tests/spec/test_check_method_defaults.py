@@ -51,7 +51,7 @@ def test_every_method_is_covered():
 
 
 @pytest.mark.parametrize("method", ["pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf",
-                                    "fcs_mpc"])
+                                    "fcs_mpc", "cv"])
 @pytest.mark.parametrize("motor", list(MOTORS))
 def test_printed_defaults_design_the_same_controller(motor, method):
     text = _spec_text(motor, method)
@@ -68,6 +68,7 @@ def test_printed_defaults_design_the_same_controller(motor, method):
             assert _close(getattr(l0, name), getattr(l1, name)), (method, ax, name)
     assert original.decoupling == again.decoupling
     assert original.fcs == again.fcs
+    assert original.cv == again.cv
 
 
 def test_printed_table_is_a_fixed_point():

@@ -122,10 +122,10 @@ def analysis_report(artifact, motor, drive=None, *, sweep_sets: int = SWEEP_SETS
                                   seed=seed).to_json(),
         "certificate": (largest_certified_scale(artifact, motor, drive,
                                                 delay=certificate_delay).to_json()
-                        if certificate else None),
+                        if certificate and artifact.cv is None else None),
         "sampled_certificate": (largest_certified_sampled_scale(
             artifact, motor, drive, tol=SAMPLED_CERTIFICATE_TOL).to_json()
-                                if sampled_certificate else None),
+                                if sampled_certificate and artifact.cv is None else None),
     }
     return out
 
@@ -166,9 +166,12 @@ def compare_designs(artifacts: list, motor, drive=None, *, sweep_sets: int = SWE
         sw = robustness_sweep(art, motor, n=sweep_sets, drive=drive).to_json()
         mimo = mimo_disk_margins(art, motor, drive)
         box = mimo_over_box(art, motor, drive)
-        cert = largest_certified_scale(art, motor, drive) if certificate else None
+        # the certificates' polytopes rest on a law affine in the measured speed: not
+        # the cv law's gains (null, as when not asked for)
+        cert = largest_certified_scale(art, motor, drive) if certificate and art.cv is None \
+            else None
         scert = (largest_certified_sampled_scale(art, motor, drive, tol=SAMPLED_CERTIFICATE_TOL)
-                 if sampled_certificate else None)
+                 if sampled_certificate and art.cv is None else None)
         rows.append(json_ready({
             "method": art.method,
             "margins": {ax: r.to_json(extras=False) for ax, r in m.items()},

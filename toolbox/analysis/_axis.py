@@ -248,8 +248,8 @@ class MarginsResult:
         Crossings ``[value (dB or deg), frequency (rad/s)]`` found, the
         eight lowest in frequency.
     response_time_5pct, rise_time_10_90, settling_time_2pct : float
-        Linear step response figures (s), same definitions as the simulator
-        (:mod:`toolbox.sim`): band around the reference.
+        Linear step response figures (s), the definitions of
+        :mod:`toolbox.metrics` (the simulator's and verification's).
     overshoot_pct : float
         Step overshoot (%).
     """

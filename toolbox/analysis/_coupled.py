@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..plant import dq_matrices
+from ._laws import CvExecuted
 from ._statespace import zoh_2x2
 
 __all__ = ["coupled_plant", "decoupling_matrix", "CoupledLoop", "coupled_closed_loop",
@@ -91,8 +92,10 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
 
     Parameters
     ----------
-    laws : dict
-        ``{"d": Law, "q": Law}`` discrete executed laws (:func:`axis_law`).
+    laws : dict or CvExecuted
+        ``{"d": Law, "q": Law}`` discrete executed laws (:func:`axis_law`), or
+        the complex-vector law of method ``cv`` (:func:`executed_laws`; its
+        states ``[x, p_1 .. p_d]``, gains at each model's measured speed).
     decoupling : Decoupling
         Compensation terms and the controller's model parameters.
     sample_time : float
@@ -126,7 +129,7 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
     Ac, Bc = coupled_plant(R, Ld, Lq, omega)
     Phi, Gam = zoh_2x2(Ac, Bc, Ts)
     Gam_v = Gam @ rotation(placement_error(decoupling, Ts, d, omega, omega_meas))
-    A, Kx, Kr = _state_matrix(laws, decoupling, d, Phi, Gam_v, omega_meas)
+    A, Kx, Kr, Bs = _state_matrix(laws, decoupling, d, Phi, Gam_v, omega_meas)
     n = A.shape[-1]
     nx = n - 2 * d
     k0 = np.zeros((N, 2))
@@ -137,9 +140,7 @@ def coupled_closed_loop(laws: dict, decoupling, sample_time: float, delay_sample
     B = np.zeros((N, n, 2))
     c = np.zeros((N, n))
     c[:, :2] = (Gam @ emf[..., None])[..., 0]
-    ld, lq = laws["d"], laws["q"]
-    B[:, 2:2 + ld.n, 0] = ld.B[:, 0]
-    B[:, 2 + ld.n:nx, 1] = lq.B[:, 0]
+    B[:, 2:nx, :] = Bs
     if d == 0:
         B[:, :2, :] += Gam_v @ Kr
         c[:, :2] += (Gam_v @ k0[..., None])[..., 0]
@@ -168,8 +169,11 @@ def coupled_state_matrix(laws: dict, decoupling, delay_samples: int, Phi: np.nda
 
 
 def _state_matrix(laws, decoupling, d, Phi, Gam, omega_meas):
-    """``(A, Kx, Kr)``: the closed loop's state matrix, the commanded voltage's
-    state gain ``v = Kx x + Kr r + k0`` (N, 2, n) and reference gain (2, 2)."""
+    """``(A, Kx, Kr, Bs)``: the closed loop's state matrix, the commanded voltage's
+    state gain ``v = Kx x + Kr r + k0`` (N, 2, n), reference gain (2, 2) or
+    (N, 2, 2), and the law states' reference input (N, n_law, 2)."""
+    if isinstance(laws, CvExecuted):
+        return _cv_state_matrix(laws, d, Phi, Gam, omega_meas)
     N = Phi.shape[0]
     W = decoupling_matrix(decoupling, omega_meas)
     ld, lq = laws["d"], laws["q"]
@@ -199,4 +203,45 @@ def _state_matrix(laws, decoupling, d, Phi, Gam, omega_meas):
             A[:, nx + 2 * j:nx + 2 * j + 2, nx + 2 * j + 2:nx + 2 * j + 4] = np.eye(2)
         last = slice(nx + 2 * (d - 1), nx + 2 * d)      # q_d+ = v
         A[:, last, :] = Kx
-    return A, Kx, Kr
+    Bs = np.zeros((N, nd + nq, 2))
+    Bs[:, :nd, 0] = ld.B[:, 0]
+    Bs[:, nd:, 1] = lq.B[:, 0]
+    return A, Kx, Kr, Bs
+
+
+def _cv_state_matrix(law: CvExecuted, d, Phi, Gam, omega_meas):
+    """:func:`_state_matrix` of the complex-vector law: law states ``[x, p_1 ..
+    p_dl]`` (``p_j`` its linear voltage of ``j`` periods ago, ``dl`` the
+    design's delay, which the loop's ``d`` may exceed), gains at each measured
+    speed; ``v = Kt r - K1 i - sum_j K2_j p_j + x`` (+ the EMF feed-forward
+    ``k0``), ``x+ = x + Ki (r - i)``, ``p_1+ = v - k0``."""
+    N = Phi.shape[0]
+    g = law.gains(np.broadcast_to(np.asarray(omega_meas, float), (N,)))
+    dl = int(law.delay_samples)
+    m = 2 + 2 * dl
+    nx = 2 + m
+    n = nx + 2 * d
+    Kx = np.zeros((N, 2, n))
+    Kx[:, :, :2] = -g.K1
+    Kx[:, :, 2:4] = np.eye(2)
+    for j in range(dl):
+        Kx[:, :, 4 + 2 * j:6 + 2 * j] = -g.K2[:, j]
+    A = np.zeros((N, n, n))
+    A[:, :2, :2] = Phi
+    A[:, 2:4, :2] = -g.Ki                               # x+ = x + Ki (r - i)
+    A[:, 2:4, 2:4] = np.eye(2)
+    Bs = np.zeros((N, m, 2))
+    Bs[:, :2] = g.Ki
+    if dl:
+        A[:, 4:6, :] = Kx                               # p_1+ = the linear voltage
+        Bs[:, 2:4] = g.Kt
+        for j in range(1, dl):                          # p_j+ = p_{j-1}
+            A[:, 4 + 2 * j:6 + 2 * j, 2 + 2 * j:4 + 2 * j] = np.eye(2)
+    if d == 0:
+        A[:, :2, :] += Gam @ Kx
+    else:
+        A[:, :2, nx:nx + 2] = Gam                       # q_1 applied
+        for j in range(d - 1):                          # q_j+ = q_{j+1}
+            A[:, nx + 2 * j:nx + 2 * j + 2, nx + 2 * j + 2:nx + 2 * j + 4] = np.eye(2)
+        A[:, nx + 2 * (d - 1):nx + 2 * d, :] = Kx       # q_d+ = v
+    return A, Kx, g.Kt, Bs

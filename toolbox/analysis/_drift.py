@@ -48,6 +48,9 @@ from dataclasses import asdict, dataclass
 
 from ..artifact import json_ready
 from ..plant import max_electrical_speed
+from ._sampling import DEFAULT_RANGES
+from ._mimo import mimo_over_box
+from .robustness import robustness_sweep
 
 __all__ = ["ALPHA_CU", "FLUX_TEMPERATURE_COEFF", "WINDING_TEMPERATURE_C", "DRIVE_DRIFT",
            "SPEED_OFFSET_FRACTION", "DEFAULT_DRIFT_SETS", "DRIFT_SETS", "DRIFT_SPEEDS",
@@ -107,8 +110,6 @@ def drift_ranges(motor, drive, parameter_drift: dict | None = None) -> tuple[str
     parameter_drift : dict, optional
         The spec's ``[requirements] parameter_drift``.
     """
-    from ._sampling import DEFAULT_RANGES
-
     if parameter_drift:
         return "parameter_drift", {name: (list(parameter_drift[name])
                                           if name in parameter_drift else None)
@@ -246,9 +247,6 @@ def drift_verdict(artifact, motor, drive, parameter_drift: dict | None = None, *
     -------
     DriftVerdict
     """
-    from ._mimo import mimo_over_box
-    from .robustness import robustness_sweep
-
     source, ranges = drift_ranges(motor, drive, parameter_drift)
     n = DEFAULT_DRIFT_SETS if source == "default" else DRIFT_SETS
     # the verdict reads stability only: a coarse grid for the sweep's per-axis margins

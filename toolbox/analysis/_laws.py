@@ -10,10 +10,13 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import logm
 
-from ..artifact import AxisController
+from ..artifact import AxisController, CvLaw
+from ..errors import ArtifactError
 
-__all__ = ["AXES", "Law", "axis_law", "law_to_continuous"]
+__all__ = ["AXES", "Law", "CvExecuted", "axis_law", "executed_laws", "law_to_continuous",
+           "require_per_axis_laws"]
 
 AXES = ("d", "q")
 
@@ -40,6 +43,71 @@ class Law:
     def error_controller(self) -> tuple[np.ndarray, ...]:
         """``(A, B, C, D)`` of the error controller ``K = -K_m`` (V/A)."""
         return self.A, -self.B[:, 1:2], self.C, -self.D[:, 1:2]
+
+
+@dataclass(frozen=True)
+class CvExecuted:
+    """The complex-vector law of method ``cv`` as the sampled analyses execute it.
+
+    Its gains depend on the measured speed (:meth:`gains`, the artifact's
+    :meth:`toolbox.artifact.CvLaw.gains` with the controller's model and the
+    voltage placement); :func:`toolbox.analysis._coupled.coupled_closed_loop`
+    and the MIMO loop responses close the loop with them
+    (toolbox/ARCHITECTURE.md "Direct discrete-time complex-vector control").
+    """
+
+    law: CvLaw
+    R_c: float
+    Ld_c: float
+    Lq_c: float
+    sample_time: float
+    delay_samples: int
+    delay_compensation_time: float
+
+    def gains(self, omega_meas):
+        """Stacked :class:`toolbox.artifact.CvGains` at the measured speeds."""
+        return self.law.gains(self.R_c, self.Ld_c, self.Lq_c, omega_meas, self.sample_time,
+                              self.delay_samples, self.delay_compensation_time)
+
+    def error_response(self, z: np.ndarray, omega_meas) -> np.ndarray:
+        """``K(z)`` (N, Nw, 2, 2) from the measured current to the voltage, sign
+        of an error controller (``v = -K i`` at zero reference), at the grid
+        points ``z`` for each measured speed: with ``p_j = z^-j v`` and
+        ``x = -Ki i / (z - 1)``, ``K = (I + sum_j K2_j z^-j)^-1 (K1 + Ki / (z - 1))``."""
+        g = self.gains(omega_meas)
+        z = np.asarray(z, complex)[None, :, None, None]
+        num = g.K1[:, None] + g.Ki[:, None] / (z - 1.0)
+        den = np.broadcast_to(np.eye(2, dtype=complex), num.shape).copy()
+        for j in range(g.K2.shape[1]):
+            den = den + g.K2[:, None, j] * z ** (-(j + 1))
+        return np.linalg.solve(den, num)
+
+
+def executed_laws(artifact) -> dict | CvExecuted:
+    """What the sampled coupled analyses close the loop with: the two axes'
+    discrete laws (``{"d": Law, "q": Law}``, with the artifact's decoupling),
+    or for method ``cv`` its complex-vector law (:class:`CvExecuted`)."""
+    if artifact.cv is not None:
+        dec = artifact.decoupling
+        return CvExecuted(artifact.cv, dec.R_c, dec.Ld_c, dec.Lq_c, artifact.sample_time,
+                          int(artifact.delay_samples), dec.delay_compensation_time)
+    return {k: axis_law(artifact.axes[k], True) for k in AXES}
+
+
+def require_per_axis_laws(artifact, what: str) -> None:
+    """Refuse method ``cv`` where an analysis rests on per-axis laws plus the
+    static decoupling (the certificates: their polytopes need a law affine in
+    the measured speed, which the cv law's gains are not).
+
+    Raises
+    ------
+    ArtifactError
+        Key ``method``, naming ``what``.
+    """
+    if artifact.cv is not None:
+        raise ArtifactError("method", f"a law of per-axis laws plus decoupling for {what} "
+                            "(the cv law's gains are not affine in the measured speed)",
+                            artifact.method)
 
 
 def axis_law(axis, discrete: bool) -> Law:
@@ -94,8 +162,6 @@ def law_to_continuous(law: Law, method: str | None) -> Law:
     ``[[A_d, B_d], [0, I]]`` (integrators allowed; needs no pole on the
     negative real axis).
     """
-    from scipy.linalg import logm
-
     T = float(law.dt)
     n, m = law.B.shape
     if n == 0:

@@ -92,7 +92,7 @@ def problem_data(blocks: Sequence[tuple[np.ndarray, np.ndarray]], n_x: int,
     """``(A, b, cones)`` of Clarabel for ``x_i >= 0`` (``i`` in ``nonneg``) and
     the PSD blocks ``(A_j (s_j, n_x), b_j (s_j,))`` of :func:`lmi_rows`, in
     that order."""
-    import clarabel
+    import clarabel  # lazy: the conic solver (compiled), only for certificates
 
     A = [-np.eye(n_x)[list(nonneg)]] if len(nonneg) else []
     b = [np.zeros(len(nonneg))] if len(nonneg) else []
@@ -109,8 +109,8 @@ def solve_feasibility(A: np.ndarray, b: np.ndarray, cones) -> tuple[np.ndarray |
     """Solve ``b - A x`` in ``cones`` with a zero objective, Clarabel's default
     settings (those cvxpy used). Returns ``(x, status)``; ``x`` is None
     unless the solver reports (almost) solved."""
-    import clarabel
-    from scipy import sparse
+    import clarabel  # lazy: the conic solver (compiled), only for certificates
+    from scipy import sparse  # lazy: scipy.sparse, only for certificates
 
     n_x = A.shape[1]
     settings = clarabel.DefaultSettings()

@@ -24,11 +24,12 @@ from ..plant import max_electrical_speed
 from ._coupled import (coupled_closed_loop, coupled_plant, decoupling_matrix,
                        placement_error, rotation)
 from ..artifact import json_ready
-from ._laws import AXES, axis_law
+from ..errors import ArtifactError
+from ._laws import AXES, axis_law, executed_laws
 from ._sampling import DEFAULT_BOX, sample_parameters
 from ._siso import disk_variations, log_grid
 from ._statespace import FreqResponse, pade, zoh_2x2, zoh_coupled
-from .._lti import StateSpace, append, feedback, static_gain
+from ..lti import StateSpace, append, feedback, static_gain
 
 __all__ = ["MimoMarginsResult", "sigma_max_2x2", "mu_upper_2x2", "mimo_loop_response",
            "mimo_disk_margins", "multimodel_disk_margins", "MultiModelLoops",
@@ -205,6 +206,13 @@ def _loop_response(artifact, motor, omega: float, w: np.ndarray, x: np.ndarray,
     else:
         P = inv_2x2(x[:, None, None] * np.eye(2) - Ac[0]) @ Bc[0]
         P = P * np.exp(-1j * w * (d + 0.5) * Ts)[:, None, None]
+    if artifact.cv is not None:
+        if not discrete:
+            raise ArtifactError("method", "a method with a continuous law for the continuous "
+                                "MIMO loop (method cv is designed and executed in discrete "
+                                "time)", artifact.method)
+        # the complex-vector law at the measured speed (no static decoupling: cross off)
+        return executed_laws(artifact).error_response(x, [om_meas])[0] @ P @ Rot
     W = decoupling_matrix(artifact.decoupling, om_meas)[0]
     return (C - W) @ P @ Rot
 
@@ -251,7 +259,7 @@ def mimo_disk_margins(artifact, motor, drive=None, *, n_speeds: int = 9,
     w = log_grid(1e-2, w_hi, n_grid, discrete)
     if discrete:
         w = w[:-1]  # z = -1 exactly can hit a Tustin controller's pole/zero
-    laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
+    laws = executed_laws(artifact)
     x = _grid_point(artifact, w, discrete)
     C = _controllers(artifact, x, discrete)
     dm, du, st = [], [], []
@@ -407,7 +415,7 @@ class MultiModelLoops:
         coupled closed loop (:func:`coupled_closed_loop`, spectral radius,
         with each model's measured speed) is unstable.
         """
-        laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
+        laws = executed_laws(artifact)
         stable = np.zeros(self.shape, bool)
         for j, om in enumerate(self.speeds[:, None] if self.paired else self.speeds):
             loop = coupled_closed_loop(laws, artifact.decoupling, self.Ts, self.d,
@@ -416,20 +424,26 @@ class MultiModelLoops:
             stable[:, j] = loop.spectral_radius() < 1 - 1e-9
             if self.paired:
                 break
-        kd, kq = (FreqResponse(*laws[name].error_controller())(self.z)[:, 0, 0] for name in AXES)
         # L_i = (K - W) P R(eps) with K = diag(K_d, K_q), the off-diagonal W and
-        # the placement rotation, entry by entry (W and eps from the measured speed)
+        # the placement rotation, entry by entry (W and eps from the measured speed);
+        # for method cv, K - W is its law's 2x2 response at the measured speed
         speeds = self.speeds if self.paired else np.tile(self.speeds, self.shape[0])
         meas = self.omega_meas.reshape(-1)
-        W = decoupling_matrix(artifact.decoupling, meas)
-        w01, w10 = W[:, 0, 1, None], W[:, 1, 0, None]
+        if isinstance(laws, dict):
+            kd, kq = (FreqResponse(*laws[name].error_controller())(self.z)[:, 0, 0]
+                      for name in AXES)
+            W = decoupling_matrix(artifact.decoupling, meas)
+            k00, k01, k10, k11 = kd, -W[:, 0, 1, None], -W[:, 1, 0, None], kq
+        else:
+            K = laws.error_response(self.z, meas)
+            k00, k01, k10, k11 = K[..., 0, 0], K[..., 0, 1], K[..., 1, 0], K[..., 1, 1]
         eps = placement_error(artifact.decoupling, self.Ts, self.d, speeds, meas)[:, None]
         c, s = np.cos(eps), np.sin(eps)
         q00, q01, q10, q11 = self.P
         p00, p01 = q00 * c + q01 * s, q01 * c - q00 * s
         p10, p11 = q10 * c + q11 * s, q11 * c - q10 * s
-        l00, l01 = kd * p00 - w01 * p10, kd * p01 - w01 * p11
-        l10, l11 = kq * p10 - w10 * p00, kq * p11 - w10 * p01
+        l00, l01 = k00 * p00 + k01 * p10, k00 * p01 + k01 * p11
+        l10, l11 = k10 * p00 + k11 * p10, k10 * p01 + k11 * p11
         # S_i - I/2 with S_i = (I + L_i)^-1 = adj(I + L_i)/det
         det = (1.0 + l00) * (1.0 + l11) - l01 * l10
         mu = mu_upper_entries((1.0 + l11) / det - 0.5, -l01 / det, -l10 / det,

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import invariant_zeros as _zeros
+from ..lti import invariant_zeros as _zeros
 from ..artifact import AxisWeights
 # step_response is the step helper whose figures the discrete margins report:
 # one step computation.

@@ -111,11 +111,11 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .._lti import diagonal_scaling
+from ..lti import diagonal_scaling
 from ..artifact import json_ready
 from ..plant import max_electrical_speed
 from ._coupled import coupled_closed_loop, coupled_state_matrix, rotation
-from ._laws import AXES, axis_law
+from ._laws import AXES, axis_law, require_per_axis_laws
 from ._lmi import (ACTIVE_STEP, above_identity, lmi_rows, problem_data,
                    solve_by_constraint_generation, solve_feasibility, symmetric_basis,
                    symmetric_matrix)
@@ -559,6 +559,7 @@ def certify_sampled(artifact, box: SampledBox, *, speed_cells: int = 2,
         Whether every cell is certified, and the outcome of each cell tried
         (fastest first; stops at the first refused cell).
     """
+    require_per_axis_laws(artifact, "the sampled certificate")
     laws = _laws(artifact)
     signs = _mirror_signs(laws, int(artifact.delay_samples))
     guesses = {} if guesses is None else guesses

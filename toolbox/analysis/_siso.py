@@ -8,7 +8,7 @@ Every margin the toolbox reports comes from here:
   the peaks); used by the per-axis analysis
   (:func:`toolbox.analysis.margins.axis_margins`);
 * :func:`lti_loop_margins` - the same for an LTI loop (a
-  :class:`toolbox._lti.StateSpace` or a python-control system; continuous or
+  :class:`toolbox.lti.StateSpace` or a python-control system; continuous or
   discrete); used by the H-infinity order-reduction guard;
 * :func:`grid_margins` - a response already sampled on a grid, possibly
   stacked (N loops x Nw points), with linear interpolation between grid
@@ -42,7 +42,7 @@ from typing import Any, Callable
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from .._lti import as_statespace
+from ..lti import as_statespace
 from ._statespace import FreqResponse
 
 __all__ = ["MARGIN_KEYS", "FrequencyMargins", "disk_variations", "log_grid",
@@ -257,8 +257,8 @@ def lti_loop_margins(L: Any, w: np.ndarray | None = None, *,
 
     Parameters
     ----------
-    L : toolbox._lti.StateSpace, python-control LTI, or anything
-        :func:`toolbox._lti.as_statespace` reads (without importing
+    L : toolbox.lti.StateSpace, python-control LTI, or anything
+        :func:`toolbox.lti.as_statespace` reads (without importing
         python-control; a transfer function is realised in controllable
         canonical form). The loop transfer (SISO), e.g. ``G * K``.
     w : ndarray, optional
@@ -342,7 +342,7 @@ def _grid_margins(Lw: np.ndarray, nyquist: bool) -> dict[str, np.ndarray]:
     # quantity is made in one compiled pass (_grid_kernel, numpy's numbers bit for
     # bit), the complex divisions replaced by real arithmetic, and everything
     # else is evaluated only at the crossing cells
-    from ._grid_kernel import grid_pass
+    from ._grid_kernel import grid_pass  # lazy: numba + JIT kernel, 211 modules
 
     re, im = Lw.real, Lw.imag
     mag = np.abs(Lw)

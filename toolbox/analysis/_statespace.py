@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import expm
 
-from .._lti import StateSpace, balanced, pade as lti_pade, tf2ss
+from ..lti import StateSpace, balanced, evaluate, pade as lti_pade, series as lti_series, tf2ss
 from ..plant import zoh_first_order
 
 if TYPE_CHECKING:
@@ -23,26 +23,19 @@ __all__ = ["freqresp", "FreqResponse", "zoh_axis", "plant_chain", "pade", "serie
 
 def freqresp(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
              x: np.ndarray) -> np.ndarray:
-    """``C (x I - A)^-1 B + D`` at the complex points ``x`` (s or z).
-
-    Returns an array of shape ``(len(x), p, m)``.
-    """
-    x = np.asarray(x, complex).reshape(-1)
-    n = A.shape[0]
-    p, m = D.shape
-    if n == 0:
-        return np.broadcast_to(D.astype(complex), (x.size, p, m)).copy()
-    M = x[:, None, None] * np.eye(n) - A
-    return C @ np.linalg.solve(M, np.broadcast_to(B.astype(complex), (x.size, n, m))) + D
+    """``C (x I - A)^-1 B + D`` at the complex points ``x`` (s or z), shape
+    ``(len(x), p, m)``: :func:`toolbox.lti.evaluate` with per-point LU solves
+    (the one frequency-response route), in the analysis stage's axis order."""
+    return np.moveaxis(evaluate(A, B, C, D, x, solve=True), -1, 0)
 
 
 class FreqResponse:
     """``C (x I - A)^-1 B + D`` of one system at many points, vectorised.
 
-    The modal sum of :attr:`toolbox._lti.StateSpace.modal` (A diagonalised
+    The modal sum of :attr:`toolbox.lti.StateSpace.modal` (A diagonalised
     once) for a grid while A's eigenvectors are well conditioned (then within
     ~1e-10 of an LU solve); a nearly defective A (integrator chains, repeated
-    poles) keeps per-point LU solves (:meth:`toolbox._lti.StateSpace.evaluate`).
+    poles) keeps per-point LU solves (:meth:`toolbox.lti.StateSpace.evaluate`).
     A SISO system is also evaluated at single points in plain Python
     (:meth:`at`), which the margin refinements call hundreds of times.
 
@@ -110,9 +103,9 @@ def plant_chain(a: float, b: float, d: int, Ts: float) -> tuple[np.ndarray, ...]
 def pade(tau: float, order: int) -> tuple[np.ndarray, ...]:
     """State space of the ``order`` Pade approximation of ``exp(-s tau)``.
 
-    The controllable canonical form of :func:`toolbox._lti.tf2ss` holds the
+    The controllable canonical form of :func:`toolbox.lti.tf2ss` holds the
     coefficients ``tau^-k`` (1e13 for a third-order 150 us delay), so its
-    states are scaled by :func:`toolbox._lti.balanced` (powers of two: exact),
+    states are scaled by :func:`toolbox.lti.balanced` (powers of two: exact),
     as python-control's slycot realisation was.
     """
     sys = tf2ss(*lti_pade(tau, order))
@@ -123,14 +116,10 @@ def pade(tau: float, order: int) -> tuple[np.ndarray, ...]:
 
 
 def series(first: tuple, second: tuple) -> tuple[np.ndarray, ...]:
-    """State space of ``second * first`` (signal passes ``first`` then ``second``)."""
-    A1, B1, C1, D1 = first
-    A2, B2, C2, D2 = second
-    n1, n2 = A1.shape[0], A2.shape[0]
-    A = np.block([[A1, np.zeros((n1, n2))], [B2 @ C1, A2]])
-    B = np.vstack([B1, B2 @ D1])
-    C = np.hstack([D2 @ C1, C2])
-    return A, B, C, D2 @ D1
+    """``(A, B, C, D)`` of ``second * first`` (signal passes ``first`` then
+    ``second``): :func:`toolbox.lti.series` on array tuples."""
+    g = lti_series(StateSpace(*first), StateSpace(*second))
+    return g.A, g.B, g.C, g.D
 
 
 def closed_loop(law: Law, plant: tuple) -> tuple[np.ndarray, ...]:

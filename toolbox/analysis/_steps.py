@@ -2,7 +2,8 @@
 
 The discrete loop is simulated at the sample instants and the plant's
 intersample current is reconstructed exactly (first-order ZOH plant), so
-the figures match the simulator's (:mod:`toolbox.sim`) definitions.
+the figures follow the one definition of :mod:`toolbox.metrics` (the
+simulator's and verification's).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import expm
 
+from ..metrics import step_metrics
 from ..plant import zoh_first_order
 
 if TYPE_CHECKING:
@@ -97,11 +99,7 @@ def _settled(y: np.ndarray) -> bool:
 
 def step_figures(loop: "AxisLoop", cl: tuple) -> dict:
     """Response time, rise time, settling time and overshoot of the reference
-    step of ``cl`` (the definitions of :func:`toolbox.sim.step_metrics`)."""
-    # imported here: toolbox.sim loads the numba kernel (~0.4 s), which the
-    # design methods that use the analysis (H-infinity, robust PI) do not need
-    from ..sim import step_metrics
-
+    step of ``cl`` (:func:`toolbox.metrics.step_metrics`)."""
     t, y = step_response(loop, *cl)
     with np.errstate(over="ignore", invalid="ignore"):  # a diverging response: see above
         figs = step_metrics(t, y, 0.0, 1.0, 0.0)

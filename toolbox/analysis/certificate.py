@@ -54,10 +54,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .._lti import diagonal_scaling
+from ..lti import diagonal_scaling
 from ..plant import dq_matrices, max_electrical_speed
 from ._lmi import (above_identity, lmi_rows, problem_data, solve_by_constraint_generation,
                    solve_feasibility, symmetric_basis, symmetric_matrix)
+from ._laws import require_per_axis_laws
 from .margins import AXES, axis_law, json_ready
 
 __all__ = ["CertificateResult", "ParameterBox", "closed_loop_matrix",
@@ -392,6 +393,7 @@ def certify(artifact, box: ParameterBox, *, alpha: float = 0.0,
     -------
     CertificateResult
     """
+    require_per_axis_laws(artifact, "the continuous certificate")
     return _certify(artifact, box, alpha, delay)[0]
 
 
@@ -410,7 +412,7 @@ def _unstable_vertex(As: np.ndarray, alpha: float) -> bool:
 def _balanced_vertices(artifact, box: ParameterBox, As: np.ndarray, delay: bool):
     """``(T^-1 A_i T, T, T^-1)``: the vertices ``As`` in the coordinates of the
     diagonal similarity ``T`` that balances the box-centre matrix
-    (:func:`toolbox._lti.diagonal_scaling`, LAPACK dgebal: conditioning of the
+    (:func:`toolbox.lti.diagonal_scaling`, LAPACK dgebal: conditioning of the
     LMIs; the certificate is ``T^-1 P T^-1`` back in the original ones)."""
     centre = point_matrices(artifact, np.mean(box.corners(), axis=0), delay)[0]
     scale_vec = diagonal_scaling(centre)
@@ -488,6 +490,7 @@ def largest_certified_scale(artifact, motor, drive=None, *, R=(0.5, 2.0), L=(0.5
     delay : bool
         Include a first-order Pade model of the computation delay.
     """
+    require_per_axis_laws(artifact, "the continuous certificate")
     wmax = max_electrical_speed(motor, drive) if omega_max is None else omega_max
 
     def at(k, guess=None, prescreen=True):

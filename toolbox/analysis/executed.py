@@ -23,7 +23,7 @@ import numpy as np
 
 from .margins import MARGIN_KEYS, make_axis_loop
 
-__all__ = ["INFORMATIONAL_METHODS", "loop_stability",
+__all__ = ["INFORMATIONAL_METHODS", "loop_stability", "settling_horizon", "HORIZON_TAUS",
            "margin_disagreements", "MARGIN_RTOL"]
 
 #: Methods whose stored axes are not what runs (their margins are informational).
@@ -125,3 +125,71 @@ def margin_disagreements(stored: dict, recomputed: dict, file: str | None = None
             out.append(f"{where}margins.{ax}.stable: stored {old.get('stable')} disagrees "
                        f"with {res.stable} recomputed from the executed law (axes.{ax}.law)")
     return out
+
+
+#: Default scenario horizon rule (toolbox/ARCHITECTURE.md "Default scenarios"):
+#: HORIZON_TAUS time constants of the slowest closed-loop mode that shows in
+#: the step response. A mode of step amplitude ``a`` (fraction of the final
+#: value) enters the 2 % settling band after ``tau ln(a / 0.02)``: 4.6 tau for
+#: a = 2 (twice the step), so 10 tau leaves the settling time measurable with
+#: room for the overlap of modes.
+HORIZON_TAUS = 10.0
+#: A mode smaller than the 2 % settling band never leaves it: it cannot delay
+#: any metric (response, rise or settling time) and sets no horizon.
+HORIZON_BAND = 0.02
+#: Horizon clamp (s): at least the previous default span, at most 1 s (a
+#: current loop slower than 0.1 s is judged by its margins; 1 s at the default
+#: 1 us plant step is 1e6 RK4 steps per scenario).
+HORIZON_RANGE = (0.02, 1.0)
+
+
+def settling_horizon(artifact, motor) -> float | None:
+    """Simulated span a default step scenario needs to measure the settling
+    of the executed sampled loop: :data:`HORIZON_TAUS` time constants of the
+    slowest closed-loop pole (over both axes) whose mode amplitude in the
+    reference step response is at least :data:`HORIZON_BAND` of the final
+    value, clamped to :data:`HORIZON_RANGE`.
+
+    Parameters
+    ----------
+    artifact : ControllerArtifact
+    motor : Motor
+        Nominal plant.
+
+    Returns
+    -------
+    float or None
+        Seconds; None for laws whose stored axes do not run (fcs_mpc) or an
+        unstable loop (no settling to measure: the default span stays).
+
+    Notes
+    -----
+    Modal decomposition of the reference -> current loop ``(A, B, C)``
+    (discrete, ``A = V diag(lambda) V^-1``): the step response is
+    ``sum_i r_i (1 - lambda_i^(k+1)) / (1 - lambda_i)`` with ``r_i = (C V)_i
+    (V^-1 B)_i``; mode ``i`` has amplitude ``|r_i / (1 - lambda_i)|`` and time
+    constant ``-Ts / ln |lambda_i|``. A pole almost cancelled by a zero (paper
+    003's near-integrator, eq 70) has a tiny amplitude and is ignored.
+    """
+    if artifact.method in INFORMATIONAL_METHODS:
+        return None
+    ts = artifact.sample_time
+    slowest = 0.0
+    for ax, L in (("d", motor.Ld), ("q", motor.Lq)):
+        A, B, C, D = make_axis_loop(artifact.axes[ax], motor.R, L, ts,
+                                    artifact.delay_samples).reference_loop()
+        if not A.size:
+            continue
+        with np.errstate(all="ignore"):
+            lam, V = np.linalg.eig(A)
+            if np.any(np.abs(lam) >= 1.0):
+                return None
+            r = (C @ V).ravel() * np.linalg.solve(V, B).ravel()
+            amp = np.abs(r / (1.0 - lam))
+            final = abs(float((C @ np.linalg.solve(np.eye(A.shape[0]) - A, B) + D)[0, 0]))
+            tau = -ts / np.log(np.maximum(np.abs(lam), 1e-300))
+        shown = np.isfinite(amp) & (amp >= HORIZON_BAND * max(final, 1e-12))
+        if np.any(shown):
+            slowest = max(slowest, float(np.max(tau[shown])))
+    low, high = HORIZON_RANGE
+    return min(max(HORIZON_TAUS * slowest, low), high)

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ..plant import max_electrical_speed
+from ._laws import executed_laws
 from ._sampling import DEFAULT_BOX, DEFAULT_RANGES, sample_parameters
 from ._statespace import FreqResponse
 from .margins import (AXES, axis_law, axis_margins, coupled_closed_loop,
@@ -98,7 +99,7 @@ def _loop_block(Kz: np.ndarray, zr: np.ndarray, qi: np.ndarray, a: np.ndarray,
     kernels make the order matter): the numbers of
     ``Kz * (qr - 1j qi) * (b/|q|^2)`` bit for bit.
     """
-    from ._grid_kernel import plant_factors
+    from ._grid_kernel import plant_factors  # lazy: numba + JIT kernel, 211 modules
 
     L, scale = plant_factors(zr, qi, a, b)
     np.multiply(Kz, L, out=L)
@@ -276,7 +277,7 @@ def robustness_sweep(artifact, motor, ranges: dict | None = None, n: int = 2000,
     # coupled closed loops at speed (vectorised per delay value)
     wmax = max_electrical_speed(motor, drive)
     speeds = np.linspace(-wmax, wmax, n_speeds) if (wmax > 0 and n_speeds > 1) else np.zeros(1)
-    laws = {k: axis_law(artifact.axes[k], True) for k in AXES}
+    laws = executed_laws(artifact)
     rho = np.zeros(N)
     rho_speed = np.zeros(N)  # the speed of each set's largest pole modulus
     i_ref = i_ref or (0.0, motor.rated_current or 10.0)

@@ -36,8 +36,10 @@ from ..errors import ArtifactError
 # _antiwindup_gain: re-exported for the tests (tests/sim/test_saturation.py)
 from ._axis import AxisController, StateSpaceData, Zpk, _antiwindup_gain  # noqa: F401
 from ._decoupling import Decoupling
+from ._cv import CvLaw
 from ._fields import (AxisWeights, FcsWeights, TransferFunctionData, _no_unknown,
                       finite_number)
+from ..spec import METHODS
 
 __all__ = [
     "SCHEMA",
@@ -46,6 +48,7 @@ __all__ = [
     "AxisController",
     "Decoupling",
     "FcsWeights",
+    "CvLaw",
     "AxisWeights",
     "TransferFunctionData",
     "ControllerArtifact",
@@ -189,6 +192,11 @@ class ControllerArtifact:
         back-EMF, delay-compensation rotation) and the controller-side model.
     fcs : FcsWeights or None
         Criterion (23) weights of the predictive law (``fcs_mpc`` only).
+    cv : CvLaw or None
+        The direct discrete-time complex-vector law (method ``cv`` only, then
+        required): the simulator and the header execute it instead of the
+        axes' laws, which hold its standstill law (exact at zero speed, where
+        it decouples) for the per-axis views.
     weights : dict or None
         ``{"d": AxisWeights, "q": AxisWeights}``: validated H-infinity
         weights and levels (required for ``hinf``; optional for other
@@ -214,6 +222,7 @@ class ControllerArtifact:
     design_parameters: dict = field(default_factory=dict)
     margins: dict = field(default_factory=dict)
     provenance: dict = field(default_factory=dict)
+    cv: CvLaw | None = None
 
     def __post_init__(self) -> None:
         if set(self.axes) != set(AXES):
@@ -231,6 +240,16 @@ class ControllerArtifact:
             # a linear law would silently ignore them
             raise ArtifactError("fcs", "null (only method fcs_mpc executes criterion (23) "
                                 "weights)", f"weights for method {self.method}")
+        if (self.method == "cv") != (self.cv is not None):
+            raise ArtifactError("cv", "an object {bandwidth, integral_bandwidth, delay_pole} "
+                                "for method cv, null for every other method (a linear law "
+                                "would silently ignore it)",
+                                "nothing (missing or null)" if self.cv is None
+                                else f"a cv law for method {self.method}")
+        if self.cv is not None and self.decoupling.cross:
+            # the cv law holds the cross-coupling in its gains: the static terms twice
+            raise ArtifactError("decoupling.cross", "false for method cv (its gains hold "
+                                "the dq coupling)", True)
         if self.method == "hinf" and self.weights is None:
             raise ArtifactError("weights", 'an object with the axes "d" and "q" (the '
                                 "H-infinity weights the bounds of 003 eq (41)-(43) are drawn "
@@ -255,7 +274,7 @@ class ControllerArtifact:
             "design_parameters": json_ready(self.design_parameters),
             "margins": json_ready(self.margins),
             "provenance": json_ready(self.provenance),
-        }
+        } | ({} if self.cv is None else {"cv": self.cv.to_json()})   # method cv only
 
     def law_sha256(self) -> str:
         """SHA-256 of what the executed law is made of (method, spec, sample time,
@@ -265,6 +284,8 @@ class ControllerArtifact:
         data = self.to_json()
         law = {k: data[k] for k in ("schema", "method", "spec", "sample_time",
                                     "delay_samples", "axes", "decoupling", "fcs")}
+        if self.cv is not None:      # only then: every other law's digest is unchanged
+            law["cv"] = data["cv"]
         text = json.dumps(law, sort_keys=True, separators=(",", ":"), allow_nan=False)
         return hashlib.sha256(text.encode()).hexdigest()
 
@@ -295,7 +316,7 @@ class ControllerArtifact:
             raise ArtifactError("", "a JSON object", type(data).__name__)
         _check_schema(data.get("schema"))
         allowed = {"schema", "method", "spec", "sample_time", "delay_samples", "axes",
-                   "decoupling", "fcs", "weights", "design_parameters", "margins",
+                   "decoupling", "fcs", "cv", "weights", "design_parameters", "margins",
                    "provenance"}
         _no_unknown(data, allowed, "")
         for name in ("method", "sample_time", "axes", "decoupling"):
@@ -303,7 +324,6 @@ class ControllerArtifact:
                 raise ArtifactError(name, "a value (missing)")
         if not isinstance(data["method"], str):
             raise ArtifactError("method", "a method name", data["method"])
-        from ..spec import METHODS  # lazy: the spec package imports the design registry
 
         if data["method"] not in METHODS:
             raise ArtifactError("method", "one of " + ", ".join(METHODS), data["method"])
@@ -325,10 +345,11 @@ class ControllerArtifact:
                 raise ArtifactError(name, "an object", data.get(name))
         _check_margins(data.get("margins", {}))
         fcs = None if data.get("fcs") is None else FcsWeights.from_json(data["fcs"], "fcs")
+        cv = None if data.get("cv") is None else CvLaw.from_json(data["cv"], "cv")
         return cls(method=data["method"], spec=dict(data.get("spec", {})),
                    sample_time=float(ts), delay_samples=delay, axes=axes,
                    decoupling=Decoupling.from_json(data["decoupling"]),
-                   fcs=fcs, weights=_weights_from_json(data.get("weights")),
+                   fcs=fcs, cv=cv, weights=_weights_from_json(data.get("weights")),
                    design_parameters=dict(data.get("design_parameters", {})),
                    margins=dict(data.get("margins", {})),
                    provenance=dict(data.get("provenance", {})))

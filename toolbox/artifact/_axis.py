@@ -16,7 +16,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .._lti import StateSpace, acker, as_statespace, c2d, ss2tf
+from ..lti import StateSpace, acker, as_statespace, c2d, ss2tf
 from ..errors import ArtifactError
 from ._fields import _no_unknown, finite_number
 
@@ -95,14 +95,14 @@ class StateSpaceData:
 
     @classmethod
     def from_statespace(cls, sys: Any, method: str | None = None) -> "StateSpaceData":
-        """Wrap a system: a :class:`toolbox._lti.StateSpace` or anything
-        :func:`toolbox._lti.as_statespace` reads (python-control systems:
+        """Wrap a system: a :class:`toolbox.lti.StateSpace` or anything
+        :func:`toolbox.lti.as_statespace` reads (python-control systems:
         ``dt`` 0 or None means continuous)."""
         g = as_statespace(sys)
         return cls(g.A, g.B, g.C, g.D, g.dt, method if g.dt else None)
 
     def to_statespace(self) -> StateSpace:
-        """The system as a :class:`toolbox._lti.StateSpace` (continuous when
+        """The system as a :class:`toolbox.lti.StateSpace` (continuous when
         ``dt`` is None; ``.to_control()`` gives the python-control one)."""
         return StateSpace(self.A, self.B, self.C, self.D, self.dt)
 
@@ -159,7 +159,7 @@ class Zpk:
 
     @classmethod
     def from_statespace(cls, sys: Any) -> "Zpk":
-        """Zeros, poles and gain of a SISO system (:func:`toolbox._lti.ss2tf`)."""
+        """Zeros, poles and gain of a SISO system (:func:`toolbox.lti.ss2tf`)."""
         num, den = ss2tf(sys)
         num = np.trim_zeros(num, "f")
         if num.size == 0:
@@ -447,7 +447,7 @@ class AxisController:
 
     def to_statespace(self, domain: str = "discrete", *,
                       discrete: bool | None = None) -> StateSpace:
-        """The error -> voltage controller (:class:`toolbox._lti.StateSpace`;
+        """The error -> voltage controller (:class:`toolbox.lti.StateSpace`;
         ``.to_control()`` gives the python-control one).
 
         Parameters

@@ -7,6 +7,10 @@ now has a typed, validated home:
 
 * :class:`FcsWeights` - the weights of paper 002's criterion (23) that the
   predictive switching law executes (method ``fcs_mpc`` only);
+* :class:`toolbox.artifact.CvLaw` (module ``_cv``) - the poles of the
+  direct discrete-time complex-vector law (Hinkkanen et al. 2016; method
+  ``cv`` only), whose speed-dependent gains every executor computes from
+  them each period;
 * :class:`AxisWeights` - the validated H-infinity weights ``W1``, ``W2``,
   ``W3`` and the level ``gamma`` of one axis (paper 003 eq (41)-(43):
   ``|W1 S|, |W2 K S|, |W3 T| < gamma``), from which analysis draws the
@@ -29,7 +33,8 @@ import numpy as np
 
 from ..errors import ArtifactError
 
-__all__ = ["FcsWeights", "TransferFunctionData", "AxisWeights", "WEIGHT_NAMES", "finite_number"]
+__all__ = ["FcsWeights", "TransferFunctionData", "AxisWeights", "WEIGHT_NAMES",
+           "finite_number"]
 
 #: H-infinity weight names of one axis: w1 on S, w2 on K S, w3 on T (003 eq (41)-(43)).
 WEIGHT_NAMES = ("w1", "w2", "w3")

@@ -13,13 +13,13 @@ Dask, pyarrow, scipy and matplotlib are imported only when a campaign runs
 """
 
 from ._cluster import parse_address
-from ._evaluate import DIVERGED, Plan, evaluate_chunk, make_plan, scenario_slug
-from ._run import (CAMPAIGN_SCHEMA, CampaignRun, campaign_hash, chunk_path, read_results,
-                   run_campaign, valid_chunks)
+from ._evaluate import DIVERGED, Plan, evaluate_chunk, judge_rows, make_plan, scenario_slug
+from ._run import (CAMPAIGN_SCHEMA, CHUNK_ATTEMPTS, CampaignRun, campaign_hash, chunk_path,
+                   chunk_size, read_results, run_campaign, valid_chunks)
 from ._sampling import draw_samples
 from ._summary import parameter_columns, summarize, wilson_interval
 
-__all__ = ["DIVERGED", "Plan", "evaluate_chunk", "make_plan", "scenario_slug",
-           "CAMPAIGN_SCHEMA", "CampaignRun", "campaign_hash", "chunk_path", "read_results",
-           "run_campaign", "valid_chunks", "draw_samples", "parameter_columns", "summarize",
-           "wilson_interval", "parse_address"]
+__all__ = ["DIVERGED", "Plan", "evaluate_chunk", "judge_rows", "make_plan", "scenario_slug",
+           "CAMPAIGN_SCHEMA", "CHUNK_ATTEMPTS", "chunk_size", "CampaignRun", "campaign_hash",
+           "chunk_path", "read_results", "run_campaign", "valid_chunks", "draw_samples",
+           "parameter_columns", "summarize", "wilson_interval", "parse_address"]

@@ -22,12 +22,17 @@ each bounded in time:
 5. :func:`disk_errors`: an ``OSError`` writing ``--out`` (full, read-only,
    quota, I/O error) becomes exit 4 naming the path; a path through a regular
    file stays bad input (exit 2).
+6. :func:`dask_log`: while a campaign runs, the ``distributed`` logger (its
+   reconnection attempts and tracebacks when the scheduler is lost) writes
+   to ``OUT/dask.log`` instead of stderr, so that a failure is the one line
+   of :class:`InfrastructureError`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import logging
 import re
 import socket
 import struct
@@ -39,7 +44,8 @@ from .._version import source_hash, toolbox_version
 from ..errors import InfrastructureError, SpecError
 
 __all__ = ["parse_address", "probe_scheduler", "connect", "check_workers", "worker_build",
-           "disk_errors", "BuildMismatch", "PROBE_TIMEOUT", "CONNECT_TIMEOUT",
+           "disk_errors", "dask_log", "one_line",
+           "BuildMismatch", "PROBE_TIMEOUT", "CONNECT_TIMEOUT",
            "WORKER_TIMEOUT"]
 
 #: Seconds to wait for the scheduler's handshake on a raw socket.
@@ -161,7 +167,7 @@ def connect(address: str, timeout: float | None = None):
     The probe runs first; the Client is then made in a daemon thread that is
     abandoned at the deadline (it cannot block the exit).
     """
-    from dask.distributed import Client
+    from dask.distributed import Client  # lazy: dask.distributed, 439 modules
 
     timeout = CONNECT_TIMEOUT if timeout is None else timeout
     probe_scheduler(address)
@@ -308,3 +314,41 @@ def disk_errors(out_dir: Path, what: str = "writing"):
                             hint=f"{blocking} is a file, not a directory"
                             if blocking is not None else err.strerror) from None
         raise
+
+
+def one_line(err: BaseException) -> str:
+    """``Type: message`` of ``err`` on one line (dask's messages span several)."""
+    return " ".join(f"{type(err).__name__}: {err}".split())
+
+
+class _QuietFileHandler(logging.FileHandler):
+    def handleError(self, record):  # noqa: N802 - logging's name
+        """A log that cannot be written (disk full) is dropped silently."""
+
+
+@contextlib.contextmanager
+def dask_log(out_dir: Path):
+    """Send the loggers of ``distributed`` and ``tornado`` that have handlers
+    (dask's logging configuration gives ``distributed``,
+    ``distributed.client``, ... their own stderr handler) to
+    ``out_dir/dask.log`` (opened at the first record); restore them when the
+    block succeeds (after an error the log stays in the file: the client's
+    background tasks may still report the failure)."""
+    import distributed  # noqa: F401 - applies dask's logging configuration first
+
+    handler = _QuietFileHandler(Path(out_dir) / "dask.log", delay=True)
+    handler.setFormatter(logging.Formatter("%(asctime)s - %(name)s - %(levelname)s - "
+                                           "%(message)s"))
+    saved = {}
+    for name in list(logging.root.manager.loggerDict):
+        if name.split(".")[0] in ("distributed", "tornado"):
+            logger = logging.getLogger(name)
+            if logger.handlers:
+                saved[name] = logger.handlers[:]
+                logger.handlers = [handler]
+    yield
+    # restored on success only: after a lost scheduler the client's
+    # reconnection task keeps logging until the process exits
+    for name, handlers in saved.items():
+        logging.getLogger(name).handlers = handlers
+    handler.close()

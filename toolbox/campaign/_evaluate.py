@@ -4,9 +4,12 @@ A :class:`Plan` is everything a worker needs, made once on the client from
 the spec and the designed artifact (the design is never re-run on a worker):
 the campaign table, the nominal motor, the executed control law and drive of
 each scenario, the requirement bounds, and the artifact for the per-sample
-loop margins. :func:`evaluate_chunk` turns ``(plan, chunk)`` into the chunk's
-rows as plain numpy columns; it has no side effect (the client writes the
-Parquet file), so a chunk lost with its worker is simply run again.
+loop margins. :func:`evaluate_chunk` turns ``(plan, start, stop)`` into the
+rows ``start .. stop - 1`` as plain numpy columns of measurements; it has no
+side effect (the client writes the Parquet file), so a chunk lost with its
+worker is simply run again. The rows are judged against the requirements
+by :func:`judge_rows`, on the client, from the stored measurements (the
+bounds are no part of a chunk: changing them re-judges without simulating).
 
 Columns of a row (one per sample): ``sample``; the drawn parameters (motor
 parameters in SI, ``measured_row``, the operating point: ``speed``,
@@ -16,9 +19,10 @@ every simulator metric (:data:`toolbox.sim.METRIC_NAMES`) and
 ``static_error_abs`` (A, or rad/s for speed scenarios: ``static_speed_error_abs``);
 per axis ``margin.<axis>.`` gain margin (dB), phase margin (deg), stability
 margin and disk margin of the sampled loop at zero speed with the drawn
-``R``, ``L`` and delay; then ``passed``, ``failure`` (the failed checks, ``""`` when
-passed), ``worst_check`` and ``worst_ratio`` (the most violated bound:
-value/bound for an upper bound, bound/value for a lower one; > 1 fails).
+``R``, ``L`` and delay. :func:`judge_rows` adds ``passed``, ``failure`` (the
+failed checks, ``""`` when passed), ``worst_check`` and ``worst_ratio`` (the
+most violated bound: value/bound for an upper bound, bound/value for a lower
+one; > 1 fails).
 """
 
 from __future__ import annotations
@@ -27,18 +31,27 @@ import dataclasses
 import re
 from dataclasses import dataclass
 from typing import Any
+import os
+import socket
 
 import numpy as np
 
 from ..spec import OPERATING_POINT_KEYS, REQUIREMENT_KEYS
 from ._sampling import draw_samples
+from ._cluster import BuildMismatch, mismatch_message, worker_build
 
-__all__ = ["Plan", "make_plan", "evaluate_chunk", "scenario_slug", "warm_up", "DIVERGED"]
+__all__ = ["Plan", "make_plan", "evaluate_chunk", "judge_rows", "judge_error_rows",
+           "scenario_slug", "warm_up", "DIVERGED", "ERROR_CHECK", "JUDGE_COLUMNS"]
 
 #: Reason of a sample whose simulation produced non-finite currents.
 DIVERGED = "diverged"
 #: Reason of a sample whose drawn parameters are not physical (a normal tail).
 NON_PHYSICAL = "non-physical draw"
+#: ``worst_check`` (and failure mode) of the rows of a chunk that could not
+#: be evaluated (its ``failure`` is ``"error = <the exception>"``).
+ERROR_CHECK = "error"
+#: Columns :func:`judge_rows` adds.
+JUDGE_COLUMNS = ("passed", "failure", "worst_check", "worst_ratio")
 _POSITIVE = ("R", "Ld", "Lq", "J")
 #: Frequency points of the per-sample margin grid (1 rad/s .. Nyquist).
 MARGIN_GRID = 600
@@ -86,9 +99,10 @@ def make_plan(spec, artifact, threads: int | None = None, build: tuple = ()) -> 
     """The :class:`Plan` of ``spec``'s campaign for the designed ``artifact``.
 
     Scenarios: those named in ``campaign.scenarios``, else every
-    ``[[scenario]]``, else :func:`toolbox.sim.default_scenarios`.
+    ``[[scenario]]``, else :func:`toolbox.verify.default_scenarios`.
     """
-    from ..sim import default_scenarios, scenario_setup
+    from ..sim import scenario_setup  # lazy: numba + the kernel, ~450 modules
+    from ..verify import default_scenarios  # lazy: numba, scipy.optimize, ~720 modules
 
     cfg = spec.campaign
     scenarios = spec.scenarios or default_scenarios(spec.motor, spec.drive)
@@ -107,12 +121,6 @@ def make_plan(spec, artifact, threads: int | None = None, build: tuple = ()) -> 
                 threads=threads, build=tuple(build))
 
 
-def chunk_range(cfg, chunk: int) -> tuple[int, int]:
-    """Sample indices ``[start, stop)`` of ``chunk``."""
-    start = chunk * cfg.chunk_size
-    return start, min(cfg.samples, start + cfg.chunk_size)
-
-
 _NOT_MOTOR = ("sample", "motor", "point", "measured_row") + OPERATING_POINT_KEYS
 
 
@@ -127,6 +135,7 @@ def _physical(cols: dict, n: int) -> np.ndarray:
 
 def _margins(plan: Plan, R: np.ndarray, Ld: np.ndarray, Lq: np.ndarray,
              delay: np.ndarray | None = None) -> dict:
+    # lazy: scipy.optimize/signal, ~490 modules
     from ..analysis.robustness import batch_loop_margins
 
     art = plan.artifact
@@ -173,7 +182,7 @@ def _judge(checks: list, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
 def warm_up(plan: Plan) -> None:
     """Load the compiled kernel and the margin code in this process (one nominal
     sample per scenario), so that the first chunk's time is simulation time."""
-    from ..sim import simulate_batch
+    from ..sim import simulate_batch  # lazy: numba + the kernel, ~450 modules
 
     for _slug, scenario, law, drive in plan.runs:
         simulate_batch(law, [plan.motor], scenario, drive)
@@ -181,24 +190,19 @@ def warm_up(plan: Plan) -> None:
     _margins(plan, np.array([m.R]), np.array([m.Ld]), np.array([m.Lq]))
 
 
-def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
-    """The rows of ``chunk`` (module docstring), as ``{column: array}``.
+def evaluate_chunk(plan: Plan, start: int, stop: int) -> dict[str, np.ndarray]:
+    """The measurements of rows ``start .. stop - 1`` (module docstring), as
+    ``{column: array}``; not judged (:func:`judge_rows`).
 
     Deterministic: a sample's row depends on the plan and its index only.
     """
-    from ..sim import METRIC_NAMES, simulate_batch
+    from ..sim import METRIC_NAMES, simulate_batch  # lazy: numba + the kernel, ~450 modules
 
     if plan.build:
-        from ._cluster import BuildMismatch, mismatch_message, worker_build
-
         if worker_build() != tuple(plan.build):
-            import os
-            import socket
-
             raise BuildMismatch(mismatch_message(f"on {socket.gethostname()} (pid "
                                                  f"{os.getpid()})", worker_build(), plan.build))
     cfg, motor = plan.cfg, plan.motor
-    start, stop = chunk_range(cfg, chunk)
     n = stop - start
     cols = draw_samples(cfg, motor, start, stop)
     varied = [k for k in cols if k not in _NOT_MOTOR]
@@ -214,7 +218,6 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
     else:
         groups = [({}, good)]
     out: dict[str, np.ndarray] = dict(cols)
-    checks: list = [(NON_PHYSICAL, ~ok)]
     for slug, scenario, law, drive in plan.runs:
         table = {m: np.full(n, np.nan) for m in METRIC_NAMES}
         for point, rows in groups:
@@ -236,14 +239,6 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
         table[err_key] = np.abs(table["static_error"])
         for m, v in table.items():
             out[f"{slug}.{m}"] = v
-        diverged = ok & ~(np.isfinite(table["final_value"]) & np.isfinite(table["mse_iq"]))
-        checks.append((f"{slug}: {DIVERGED}", diverged))
-        for key, bound in plan.bounds.items():
-            stage, direction, quantity, _unit = REQUIREMENT_KEYS[key]
-            if stage != "sim" or quantity not in table:
-                continue
-            value = np.where(ok, table[quantity], np.nan)
-            checks.append((f"{slug}: {key}", value, bound, direction))
     R = np.where(ok, cols.get("R", np.full(n, motor.R)), motor.R)
     Ld = np.where(ok, cols.get("Ld", np.full(n, motor.Ld)), motor.Ld)
     Lq = np.where(ok, cols.get("Lq", np.full(n, motor.Lq)), motor.Lq)
@@ -257,15 +252,51 @@ def evaluate_chunk(plan: Plan, chunk: int) -> dict[str, np.ndarray]:
                                                uniq[:, 3].astype(int)).items()}
     for k, v in margins.items():
         out[k] = np.where(ok, v, np.nan)
-    for key, bound in plan.bounds.items():
+    return out
+
+
+def judge_rows(cols, slugs, bounds: dict) -> dict[str, np.ndarray]:
+    """``passed``, ``failure``, ``worst_check`` and ``worst_ratio`` of measured
+    rows (``cols``: ``{column: array}`` as :func:`evaluate_chunk` returns or a
+    chunk file holds) against ``bounds`` (the ``[requirements]`` bounds), for
+    the scenarios ``slugs``. A row fails when its drawn parameters are not
+    physical, a scenario diverged (non-finite final value or MSE) or a bound
+    is violated (NaN never passes)."""
+    n = len(cols["sample"])
+    ok = _physical({k: np.asarray(v, float) for k, v in cols.items()
+                    if "." not in k and k not in _NOT_MOTOR and k not in JUDGE_COLUMNS}, n)
+    checks: list = [(NON_PHYSICAL, ~ok)]
+    for slug in slugs:
+        final = np.asarray(cols[f"{slug}.final_value"], float)
+        mse = np.asarray(cols[f"{slug}.mse_iq"], float)
+        checks.append((f"{slug}: {DIVERGED}", ok & ~(np.isfinite(final) & np.isfinite(mse))))
+        for key, bound in bounds.items():
+            stage, direction, quantity, _unit = REQUIREMENT_KEYS[key]
+            if stage != "sim" or f"{slug}.{quantity}" not in cols:
+                continue
+            value = np.where(ok, np.asarray(cols[f"{slug}.{quantity}"], float), np.nan)
+            checks.append((f"{slug}: {key}", value, bound, direction))
+    for key, bound in bounds.items():
         stage, direction, quantity, _unit = REQUIREMENT_KEYS[key]
-        if stage != "margins" or f"margin.d.{quantity}" not in margins:
+        if stage != "margins" or f"margin.d.{quantity}" not in cols:
             continue
         pick = np.minimum if direction == "min" else np.maximum
-        value = np.where(ok, pick(margins[f"margin.d.{quantity}"],
-                                  margins[f"margin.q.{quantity}"]), np.nan)
+        value = np.where(ok, pick(np.asarray(cols[f"margin.d.{quantity}"], float),
+                                  np.asarray(cols[f"margin.q.{quantity}"], float)), np.nan)
         checks.append((f"margins: {key}", value, bound, direction))
     passed, failure, worst_check, worst_ratio = _judge(checks, n)
-    out.update(passed=passed, failure=failure, worst_check=worst_check,
-               worst_ratio=worst_ratio)
-    return out
+    return {"passed": passed, "failure": failure, "worst_check": worst_check,
+            "worst_ratio": worst_ratio}
+
+
+def judge_error_rows(n: int, message: str) -> dict[str, np.ndarray]:
+    """The judgement of ``n`` rows whose chunk could not be evaluated: not
+    passed, ``failure`` ``"error = <message>"`` (failure mode ``error``),
+    ``worst_check``
+    :data:`ERROR_CHECK`, ``worst_ratio`` inf (a sample never shown to pass
+    counts as failing)."""
+    return {"passed": np.zeros(n, bool),
+            "failure": np.array([f"{ERROR_CHECK} = " + message.replace(";", ",")] * n,
+                                dtype=object),
+            "worst_check": np.array([ERROR_CHECK] * n, dtype=object),
+            "worst_ratio": np.full(n, np.inf)}

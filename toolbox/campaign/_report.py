@@ -27,7 +27,7 @@ import numpy as np
 
 from .._version import toolbox_version
 from ..spec import REQUIREMENT_KEYS
-from ._summary import parameter_columns
+from ._summary import parameter_columns, stratified_subset, strongest_drivers
 
 __all__ = ["campaign_html", "report_columns"]
 
@@ -35,6 +35,8 @@ PASS_COLOR, FAIL_COLOR = "#9aa3ad", "#b3261e"
 #: Points drawn per figure at most (a random but seeded subset beyond).
 MAX_POINTS = 4000
 MAX_LINES = 300
+#: Failure modes drawn in the drivers figure (the most frequent).
+MAX_MODES = 3
 
 
 def _col(table, name: str) -> np.ndarray:
@@ -53,12 +55,6 @@ def _fmt(v, digits: int = 4) -> str:
     return f"{v:.{digits}g}" if math.isfinite(v) else str(v)
 
 
-def _subset(n: int, k: int) -> np.ndarray:
-    if n <= k:
-        return np.arange(n)
-    return np.sort(np.random.default_rng(0).choice(n, k, replace=False))
-
-
 def _svg(fig, prefix: str) -> str:
     import matplotlib.pyplot as plt
 
@@ -70,18 +66,10 @@ def _svg(fig, prefix: str) -> str:
         plt.close(fig)
 
 
-def strongest_drivers(summary) -> list[str]:
-    """Parameters by their largest |rank correlation| with any failure mode
-    (the pooled ranking when no mode can be ranked)."""
-    best: dict[str, float] = {}
-    for entries in summary.get("sensitivity_by_mode", {}).values():
-        for e in entries:
-            if e["rank_correlation"] is not None:
-                best[e["parameter"]] = max(best.get(e["parameter"], 0.0),
-                                           abs(e["rank_correlation"]))
-    ranked = sorted(best, key=lambda k: -best[k])
-    return ranked + [s["parameter"] for s in summary["sensitivity"]
-                     if s["parameter"] not in best]
+def _step(v: np.ndarray) -> float:
+    """Smallest spacing of the distinct values of a grid axis."""
+    u = np.unique(v[np.isfinite(v)])
+    return float(np.diff(u).min()) if u.size > 1 else 0.0
 
 
 def _region_figures(table, summary) -> list[dict]:
@@ -94,32 +82,40 @@ def _region_figures(table, summary) -> list[dict]:
     failed = ~_col(table, "passed").astype(bool)
     ranked = strongest_drivers(summary)
     params = parameter_columns(table)
-    shared = _subset(len(failed), MAX_POINTS)  # one subset: proportions kept
+    shared = stratified_subset(failed, MAX_POINTS)  # one subset: the failing share kept
     if len(ranked) >= 2:
         a, b = ranked[0], ranked[1]
         x, y = _col(table, a).astype(float), _col(table, b).astype(float)
         fig, ax = plt.subplots(figsize=(6.4, 4.2))
+        counts = {"pass": summary["passed"], "fail": summary["failed"]}
+        rng = np.random.default_rng(1)  # jitter of grid axes (few distinct values)
+        jit = {v: (rng.uniform(-0.3, 0.3, len(x)) * _step(_col(table, v).astype(float))
+                   if v in summary.get("grid_axes", []) else 0.0) for v in (a, b)}
         for mask, color, label in ((~failed, PASS_COLOR, "pass"), (failed, FAIL_COLOR, "fail")):
             idx = shared[mask[shared]]
-            ax.scatter(x[idx], y[idx], s=6, c=color, label=f"{label} ({int(mask.sum())})",
-                       alpha=0.7, linewidths=0)
+            ax.scatter((x + jit[a])[idx], (y + jit[b])[idx], s=6, c=color,
+                       label=f"{label} ({counts[label]})", alpha=0.7, linewidths=0)
         ax.set_xlabel(a)
         ax.set_ylabel(b)
         ax.legend(loc="best")
         ax.set_title("Samples over the two strongest drivers of failure")
         fig.tight_layout()
-        shown = (f"; {shared.size} of {len(failed)} rows drawn (one seeded subset)"
-                 if shared.size < len(failed) else "")
+        total = summary["samples"]
+        shown = (f"; {shared.size} of {total} rows drawn (one seeded subset, "
+                 f"{100 * failed[shared].mean():.1f} % failing as in the table, "
+                 f"{100 * summary['failed'] / total:.1f} %)" if shared.size < total else "")
         figs.append({"id": "scatter", "svg": _svg(fig, "cs"),
-                     "caption": f"Failing samples (red) over {a} and {b}, the parameters most "
-                                f"rank-correlated with a failure mode{shown}."})
+                     "caption": f"Failing samples (red) over {a} and {b}, the strongest "
+                                f"drivers of the failure modes (rank correlation with each "
+                                f"mode, weighted by its failures); grid axes jittered within "
+                                f"their spacing{shown}."})
     if len(params) >= 2 and failed.any():
         X = np.column_stack([_col(table, p).astype(float) for p in params])
         lo, hi = X.min(axis=0), X.max(axis=0)
         Xn = (X - lo) / np.where(hi > lo, hi - lo, 1.0)
         fig, ax = plt.subplots(figsize=(6.4, 3.8))
         pos = np.arange(len(params))
-        lines = shared[_subset(shared.size, MAX_LINES)]
+        lines = shared[stratified_subset(failed[shared], MAX_LINES)]
         for mask, color, alpha in ((~failed, PASS_COLOR, 0.15), (failed, FAIL_COLOR, 0.35)):
             for i in lines[mask[lines]]:
                 ax.plot(pos, Xn[i], color=color, alpha=alpha, linewidth=0.7)
@@ -131,17 +127,32 @@ def _region_figures(table, summary) -> list[dict]:
         figs.append({"id": "parallel", "svg": _svg(fig, "cp"),
                      "caption": "Each line is a sample; each parameter is scaled from its "
                                 "smallest (0) to its largest (1) drawn value."})
+    modes = [m for m, e in summary["sensitivity_by_mode"].items()
+             if any(x["rank_correlation"] is not None for x in e)][:MAX_MODES]
     if summary["sensitivity"]:
-        fig, ax = plt.subplots(figsize=(6.4, 0.5 + 0.35 * len(summary["sensitivity"])))
-        names = [s["parameter"] for s in summary["sensitivity"]][::-1]
-        vals = [s["rank_correlation"] or 0.0 for s in summary["sensitivity"]][::-1]
-        ax.barh(names, vals, color=[FAIL_COLOR if v > 0 else "#1f5fa8" for v in vals])
-        ax.set_xlabel("rank correlation with failure (> 0: larger values fail more)")
+        names = ranked[::-1]  # the strongest driver on top
+        series = [(m, {e["parameter"]: e["rank_correlation"] or 0.0
+                       for e in summary["sensitivity_by_mode"][m]}) for m in modes] or [
+            ("any failure (pooled)", {e["parameter"]: e["rank_correlation"] or 0.0
+                                      for e in summary["sensitivity"]})]
+        fig, ax = plt.subplots(figsize=(6.4, 0.8 + 0.3 * len(names) * len(series)))
+        h = 0.8 / len(series)
+        colors = (FAIL_COLOR, "#1f5fa8", "#e08a00")
+        for k, (mode, rho) in enumerate(series):
+            ax.barh(np.arange(len(names)) + (k - (len(series) - 1) / 2) * h,
+                    [rho.get(n, 0.0) for n in names], height=h, color=colors[k % 3],
+                    label=mode)
+        ax.set_yticks(np.arange(len(names)), names)
+        ax.axvline(0.0, color="#444444", linewidth=0.6)
+        ax.set_xlabel("rank correlation with the mode failing (> 0: larger values fail more)")
         ax.set_xlim(-1, 1)
+        ax.legend(loc="lower right", fontsize=7)
         fig.tight_layout()
         figs.append({"id": "sensitivity", "svg": _svg(fig, "cr"),
-                     "caption": "Sensitivity ranking: Spearman correlation of each parameter "
-                                "with the failure indicator."})
+                     "caption": "Drivers of each failure mode: Spearman correlation of each "
+                                "parameter with that mode failing (not the pooled pass/fail, "
+                                "where modes driven in opposite directions cancel); "
+                                "parameters ordered by their weight over the modes."})
     return figs
 
 
@@ -216,6 +227,23 @@ def _dist_figures(table, spec, runs: list[str]) -> list[dict]:
     return figs
 
 
+def _attempts() -> int:
+    from ._run import CHUNK_ATTEMPTS
+
+    return CHUNK_ATTEMPTS
+
+
+def _cells(summary) -> dict | None:
+    c = summary.get("cells")
+    if not c:
+        return None
+    a, b = c["axes"]
+    return {"axes": [a, b], "rows": [
+        {"a": _fmt(r[a]), "b": _fmt(r[b]), "n": r["n"], "rate": f"{100 * r['fail_rate']:.1f} %",
+         "modes": "; ".join(f"{m}: {k}" for m, k in r["failures"].items()) or "-"}
+        for r in c["cells"]]}
+
+
 def campaign_html(table, summary: dict, spec, artifact) -> str:
     """The campaign report of a results table and its summary."""
     import jinja2
@@ -273,6 +301,12 @@ def campaign_html(table, summary: dict, spec, artifact) -> str:
         grid=grid, axes=axes, by_mode=by_mode, motors=summary["motors"],
         n_points=summary["operating_points"],
         worst_specs=summary.get("worst_specs", []),
+        error_rows=summary.get("error_rows", 0), attempts=_attempts(),
+        cells=_cells(summary),
+        sensitivity_note=(f"Rank correlations over a seeded subsample of "
+                          f"{summary['sensitivity_rows']} of the {n} rows, stratified so that "
+                          "its failing share is the table's (counts and yields are exact)."
+                          if summary.get("sensitivity_rows", n) < n else ""),
         correlation=(", ".join(cfg.correlation[0]) + " with matrix "
                      + str([list(r) for r in cfg.correlation[1]])) if cfg.correlation else "",
         measured=(f"{len(cfg.measured_rows)} rows of {', '.join(cfg.measured_columns)}"

@@ -2,67 +2,80 @@
 
 Layout of a campaign directory ``OUT``::
 
-    OUT/campaign.json        manifest: schema, campaign hash, samples, chunks
+    OUT/campaign.json        manifest: schema, campaign hash, samples, build
     OUT/controller.json      the design (made once, on the client)
-    OUT/chunks/chunk-000042.parquet   the rows of chunk 42 (atomic write)
+    OUT/chunks/rows-000000004000-000000004500.parquet
+                             the measurements of rows 4000 .. 4499 (atomic write)
     OUT/results.parquet      every row, ordered by sample (written at the end)
     OUT/summary.json         yield, failure reasons, sensitivity, worst cases
     OUT/report.html          the campaign report
 
 A chunk file is written by the client (workers return rows; they need no
 shared file system) through :func:`toolbox._io.write_atomic`: a temporary
-name, fsync, rename. A run first lists the valid chunk files (readable, of
-this campaign's hash, with the expected sample range) and submits only the
-missing chunks: an interrupted campaign resumes, and since a sample's row
-depends on ``(spec, seed, index)`` only, the final table is the one an
-uninterrupted run gives. A chunk lost with a killed worker is re-run by the
-scheduler (Dask reschedules the tasks of a lost worker; ``retries`` covers
-a task that raised).
+name, fsync, rename. A chunk is named by its row range, not by a chunk
+number: a run first lists the valid chunk files (readable, of this
+campaign's hash, with as many rows as their range) and evaluates only the
+rows no file covers, split into chunks of :func:`chunk_size` rows. The
+chunk size, the number of samples (or motors), the requirements, ``gate``
+and ``min_yield`` are no part of the hash: a resume may chunk differently,
+extending ``samples`` runs only the new rows, and new bounds re-judge the
+stored measurements (:func:`toolbox.campaign._evaluate.judge_rows`, at the
+end phase, never on a worker). Since a sample's row depends on
+``(spec, seed, index)`` only, the final table is the one an uninterrupted
+run gives. A chunk lost with a killed worker is re-run by the scheduler; a
+chunk whose task raised is submitted again, up to :data:`CHUNK_ATTEMPTS`
+times in a run, then written as error rows (:func:`judge_error_rows`), which
+the next run evaluates again.
+
+The end phase streams: the chunk files are read one at a time, judged and
+appended to ``results.parquet`` (one row group each) while exact counters
+take the yields, the failure counts per grid point and the worst cases
+(:class:`toolbox.campaign._summary.Accumulator`); the rank correlations and
+the report's figures use one seeded subsample of at most
+:data:`toolbox.campaign._summary.SUBSAMPLE` rows, stratified so that its
+failing share is the table's. The client's memory does not grow with the
+number of rows (one byte per motor aside).
 """
 
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import os
-import tempfile
+import re
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
 
 from .._io import remove_stale, write_atomic
-from .._version import source_hash, toolbox_version
 from ..errors import InfrastructureError, SpecError
-from ._cluster import (BuildMismatch, check_workers, connect, disk_errors, parse_address,
-                       probe_scheduler, worker_build)
-from ._evaluate import Plan, chunk_range, evaluate_chunk, make_plan, warm_up
+from ._cluster import (BuildMismatch, check_workers, connect, dask_log, disk_errors, one_line,
+                       parse_address, probe_scheduler, worker_build)
+from ._evaluate import Plan, evaluate_chunk, make_plan, warm_up
+from ._store import (assemble, build, chunk_path, covering, gaps, spec_hash, split, stored,
+                     write_chunk)
 
 __all__ = ["CAMPAIGN_SCHEMA", "CampaignRun", "run_campaign", "campaign_hash", "read_results",
-           "valid_chunks", "chunk_path", "evaluate_serial"]
+           "valid_chunks", "chunk_path", "chunk_size", "evaluate_serial", "CHUNK_ATTEMPTS"]
 
-CAMPAIGN_SCHEMA = "cct.campaign/2"
+CAMPAIGN_SCHEMA = "cct.campaign/3"
 #: Files of a campaign directory besides ``chunks/``.
 OUTPUT_NAMES = ("campaign.json", "controller.json", "results.parquet", "summary.json",
-                "report.html")
-#: Times a chunk whose task raised is submitted again before the campaign
-#: gives up on it (Dask's own ``retries`` come on top).
+                "report.html", "dask.log")
+#: Times a chunk is submitted in one run before its rows are written as
+#: error rows (a task that raised, or a ``KilledWorker`` after Dask's own
+#: ``distributed.scheduler.allowed-failures`` worker deaths). The next run
+#: evaluates error rows again.
 CHUNK_ATTEMPTS = 3
-
-
-def build() -> dict:
-    """The toolbox build that computes the rows: ``{"toolbox": version,
-    "source": source hash}`` (:func:`toolbox._version.source_hash`)."""
-    return {"toolbox": toolbox_version(), "source": source_hash()}
-
-
-def spec_hash(spec) -> str:
-    """SHA-256 of the resolved spec as given (title and campaign table included)."""
-    return hashlib.sha256(json.dumps(spec.raw, sort_keys=True, default=str)
-                          .encode()).hexdigest()
+#: Automatic chunk size: about this many tasks per worker thread ...
+TASKS_PER_THREAD = 4
+#: ... within these bounds (rows): below, the per-task cost (scheduling,
+#: one batch per operating point, a Parquet file) dominates; above, a lost
+#: task loses too much and the client holds too large a chunk.
+MIN_CHUNK, MAX_CHUNK = 250, 10_000
 
 
 @dataclass
@@ -78,12 +91,19 @@ class CampaignRun:
     summary : dict
         As written to ``summary.json``.
     chunks_total, chunks_run, chunks_resumed : int
-        Chunks of the campaign, run now, found valid on disk.
+        Chunk files the table is made of, chunks evaluated now (error chunks
+        included), valid chunk files found on disk and used.
     seconds : float
         Wall time of the simulation phase (start-up included).
     startup_seconds : float
         Of which: cluster start or connection, plan broadcast and the
         workers' warm-up (kernel loaded), before the first chunk is submitted.
+    chunk_size : int or None
+        Rows per chunk of this run (None: nothing to run).
+    error_rows : int
+        Rows of chunks that failed :data:`CHUNK_ATTEMPTS` times (judged failing).
+    end_seconds : float
+        Wall time of the end phase (results.parquet, summary, report).
     files : list of Path
     """
 
@@ -94,6 +114,9 @@ class CampaignRun:
     chunks_resumed: int
     seconds: float
     startup_seconds: float = 0.0
+    chunk_size: int | None = None
+    error_rows: int = 0
+    end_seconds: float = 0.0
     files: list = field(default_factory=list)
 
     @property
@@ -107,20 +130,25 @@ class CampaignRun:
         return bool(self.summary["meets_min_yield"])
 
 
-#: ``[campaign]`` keys that change no row (left out of the campaign hash).
-_NOT_ROWS = ("min_yield", "gate", "chunk_size")
+#: ``[campaign]`` keys that change no measured row (left out of the hash).
+_NOT_ROWS = ("min_yield", "gate", "chunk_size", "samples", "motors")
+#: Top-level spec tables that change no measured row: the title, and the
+#: requirements (the rows are judged at the end phase; a design that depends
+#: on them is covered by the executed controller).
+_NOT_ROWS_TOP = ("title", "requirements")
 
 
 def campaign_hash(spec, artifact=None) -> str:
-    """Hash of what determines the rows: the resolved spec (campaign table
-    included), the executed controller of ``artifact`` (method, sample time,
-    delay, axes, decoupling, fcs weights; not its provenance), the row
-    schema version and the toolbox build (version and source hash: rows of
-    another build are never mixed in). The title, ``campaign.min_yield``,
-    ``campaign.gate`` and ``campaign.chunk_size`` do not change a row and are
-    left out (changing them keeps the rows; another chunk size re-runs the
-    chunks, whose ranges differ)."""
-    raw = {k: v for k, v in spec.raw.items() if k != "title"}
+    """Hash of what determines the measured rows: the resolved spec, the
+    executed controller of ``artifact`` (method, sample time, delay, axes,
+    decoupling, fcs weights; not its provenance), the row schema version and
+    the toolbox build (version and source hash: rows of another build are
+    never mixed in). Left out, since they change no measured row: the title,
+    ``[requirements]`` (re-judged from the stored measurements), and
+    ``campaign.samples``/``motors`` (row ``i`` depends on ``(seed, i)``
+    only: extending a campaign keeps its rows), ``chunk_size``, ``gate`` and
+    ``min_yield``."""
+    raw = {k: v for k, v in spec.raw.items() if k not in _NOT_ROWS_TOP}
     if isinstance(raw.get("campaign"), dict):
         raw["campaign"] = {k: v for k, v in raw["campaign"].items() if k not in _NOT_ROWS}
     executed = None
@@ -133,55 +161,28 @@ def campaign_hash(spec, artifact=None) -> str:
     return hashlib.sha256(data.encode()).hexdigest()
 
 
-def chunk_path(out_dir: Path, chunk: int) -> Path:
-    """The Parquet file of ``chunk``."""
-    return Path(out_dir) / "chunks" / f"chunk-{chunk:06d}.parquet"
+def chunk_size(spec, threads: int) -> int:
+    """Rows per chunk: ``campaign.chunk_size`` when the spec gives it, else
+    ``ceil(samples / (TASKS_PER_THREAD x threads))`` within
+    ``[MIN_CHUNK, MAX_CHUNK]`` (and at most ``samples``): a few tasks per
+    worker thread for balance, whatever the campaign's size.
+
+    Examples: 1,000 samples on 2 threads: 250 rows (4 chunks); 10^6 on 2
+    threads: 10,000 (100 chunks); 10^7 on 64 threads: 10,000 (1,000 files).
+    """
+    cfg = spec.campaign
+    given = (spec.raw.get("campaign") or {}).get("chunk_size")
+    if given is not None:
+        return int(cfg.chunk_size)
+    auto = -(-cfg.samples // (TASKS_PER_THREAD * max(1, int(threads))))
+    return max(1, min(cfg.samples, max(MIN_CHUNK, min(MAX_CHUNK, auto))))
 
 
-def _to_arrow(rows: dict[str, np.ndarray], meta: dict):
-    import pyarrow as pa
-
-    arrays = {}
-    for name, v in rows.items():
-        v = np.asarray(v)
-        arrays[name] = pa.array(v.tolist() if v.dtype == object else v,
-                                type=pa.string() if v.dtype == object else None)
-    table = pa.table(arrays)
-    return table.replace_schema_metadata({b"cct": json.dumps(meta).encode()})
-
-
-def _chunk_meta(digest: str, cfg, chunk: int) -> dict:
-    start, stop = chunk_range(cfg, chunk)
-    return {"campaign": digest, "chunk": chunk, "start": start, "stop": stop, **build()}
-
-
-def _write_chunk(out_dir: Path, chunk: int, rows: dict, digest: str, cfg) -> None:
-    import pyarrow.parquet as pq
-
-    table = _to_arrow(rows, _chunk_meta(digest, cfg, chunk))
-    buf = io.BytesIO()
-    pq.write_table(table, buf)
-    write_atomic(chunk_path(out_dir, chunk), buf.getvalue())
-
-
-def _chunk_valid(path: Path, chunk: int, digest: str, cfg) -> bool:
-    import pyarrow.parquet as pq
-
-    try:
-        meta = json.loads(pq.read_schema(path).metadata[b"cct"])
-        start, stop = chunk_range(cfg, chunk)
-        return (meta == _chunk_meta(digest, cfg, chunk)
-                and pq.read_metadata(path).num_rows == stop - start)
-    except Exception:  # unreadable, truncated or foreign: run the chunk again
-        return False
-
-
-def valid_chunks(out_dir: str | Path, spec, artifact=None) -> set[int]:
-    """Chunks of ``spec``'s campaign (for ``artifact``) already complete in ``out_dir``."""
-    digest, cfg = campaign_hash(spec, artifact), spec.campaign
-    return {c for c in range(cfg.n_chunks)
-            if chunk_path(Path(out_dir), c).is_file()
-            and _chunk_valid(chunk_path(Path(out_dir), c), c, digest, cfg)}
+def valid_chunks(out_dir: str | Path, spec, artifact=None) -> set[tuple[int, int]]:
+    """Row ranges ``(start, stop)`` of ``spec``'s campaign (for ``artifact``)
+    already evaluated in ``out_dir`` (error rows not included)."""
+    return {(c.start, c.stop) for c in stored(Path(out_dir), campaign_hash(spec, artifact))
+            if c.error is None}
 
 
 def read_results(out_dir: str | Path):
@@ -212,41 +213,65 @@ def _manifest(out_dir: Path, spec, digest: str) -> None:
             raise SpecError("--out", "a new directory or one of the same campaign (resume)",
                             str(out_dir), hint="it holds the results of another spec, "
                             "campaign table or controller; choose another --out or delete it")
-        return
     cfg = spec.campaign
     write_atomic(path, json.dumps({
         "schema": CAMPAIGN_SCHEMA, "campaign": digest, "samples": cfg.samples,
-        "chunk_size": cfg.chunk_size, "chunks": cfg.n_chunks, "seed": cfg.seed,
-        "version": toolbox_version(), "source": source_hash(), "spec_sha256": spec_hash(spec),
-        "spec": spec.raw}, indent=1, sort_keys=True, default=str) + "\n")
+        "seed": cfg.seed, "version": build()["toolbox"], "source": build()["source"],
+        "spec_sha256": spec_hash(spec), "spec": spec.raw}, indent=1, sort_keys=True,
+        default=str) + "\n")
 
 
-def evaluate_serial(plan: Plan, chunks, on_chunk: Callable[[int, dict], None]) -> float:
-    """Evaluate ``chunks`` in this process (no Dask), in order; returns the
-    warm-up time (s)."""
+def evaluate_serial(plan: Plan, ranges, on_chunk: Callable[[int, int, dict], None],
+                    on_error: Callable[[int, int, str], None] | None = None) -> float:
+    """Evaluate the row ``ranges`` in this process (no Dask), in order; a
+    range that raises :data:`CHUNK_ATTEMPTS` times goes to ``on_error``
+    (re-raised without one). Returns the warm-up time (s)."""
     t0 = time.perf_counter()
     warm_up(plan)
     startup = time.perf_counter() - t0
-    for c in chunks:
-        on_chunk(c, evaluate_chunk(plan, c))
+    for start, stop in ranges:
+        for attempt in range(1, CHUNK_ATTEMPTS + 1):
+            try:
+                rows = evaluate_chunk(plan, start, stop)
+            except Exception as err:
+                if on_error is None:
+                    raise
+                if attempt == CHUNK_ATTEMPTS:
+                    on_error(start, stop, one_line(err)[:500])
+            else:
+                on_chunk(start, stop, rows)
+                break
     return startup
 
 
-def _evaluate_dask(plan: Plan, chunks, on_chunk, scheduler: str | None, workers: int | None,
-                   digest: str) -> float:
-    """Evaluate ``chunks`` on Dask; returns the start-up time (s).
+def _lost(address: str, err: BaseException | None = None) -> InfrastructureError:
+    why = f" ({one_line(err)[:300]})" if err is not None else ""
+    return InfrastructureError(f"lost the Dask scheduler at {address} during the campaign{why}",
+                               hint="the chunks written are kept; rerun the same command on "
+                                    "a working scheduler to resume (dask's log: OUT/dask.log)")
+
+
+#: Seconds between checks that the scheduler connection is alive while no
+#: chunk finishes.
+LOST_CHECK = 1.0
+
+
+def _evaluate_dask(plan: Plan, ranges_for: Callable[[int], list], on_chunk, on_error,
+                   scheduler: str | None, workers: int | None, digest: str) -> tuple[float, int]:
+    """Evaluate on Dask the ranges ``ranges_for(worker threads)`` returns; returns
+    ``(start-up time (s), rows per chunk)``.
 
     An existing scheduler is probed and connected with deadlines and its
     workers' toolbox build is checked before anything is sent
     (:mod:`._cluster`). At most a window of chunks (twice the worker threads,
     at least 4) is in flight: the scheduler never holds a million tasks, and
-    the client writes each chunk as it arrives. A chunk whose task raised
-    (after Dask's own retries) is submitted again up to
-    :data:`CHUNK_ATTEMPTS` times; a chunk that still fails does not stop the
-    others, and the campaign then ends with :class:`InfrastructureError`
-    naming it (its rows are missing; a rerun resumes).
+    the client writes each chunk as it arrives. A chunk whose task raised is
+    submitted again up to :data:`CHUNK_ATTEMPTS` times, then goes to
+    ``on_error`` (error rows; the others go on). A scheduler lost mid-run
+    (its connection closed, the client no longer running) ends the run with
+    :class:`InfrastructureError`; the chunks written are kept.
     """
-    from dask.distributed import Client, LocalCluster, as_completed
+    from dask.distributed import Client, LocalCluster
 
     t0 = time.perf_counter()
     cluster = None
@@ -265,78 +290,92 @@ def _evaluate_dask(plan: Plan, chunks, on_chunk, scheduler: str | None, workers:
             check_workers(client, address, workers)
         threads = sum(w.get("nthreads", 1) for w in
                       client.scheduler_info()["workers"].values()) or 1
+        ranges = ranges_for(threads)
+        size = max((b - a for a, b in ranges), default=0)
         window = max(4, 2 * threads)
-        plan_f = [client.scatter(plan, broadcast=True, hash=False)]
-        client.run(warm_up, plan)
+        try:
+            plan_f = [client.scatter(plan, broadcast=True, hash=False)]
+            client.run(warm_up, plan)
+        except (OSError, TimeoutError) as err:
+            raise _lost(address, err) from None
         startup = time.perf_counter() - t0
-        pending = list(chunks)[::-1]
-        attempts: dict[int, int] = {}
-        failed: dict[int, str] = {}
+        pending = list(ranges)[::-1]
+        attempts: dict[tuple, int] = {}
         futures = {}
+        arrived = threading.Event()  # set when a future finishes
 
-        def submit(seq):
-            c = pending.pop()
-            attempts[c] = attempts.get(c, 0) + 1
+        def submit():
+            r = pending.pop()
+            attempts[r] = attempts.get(r, 0) + 1
             if plan_f[0].status != "finished":  # its last holder died: send it again
                 plan_f[0] = client.scatter(plan, broadcast=True, hash=False)
-            fut = client.submit(evaluate_chunk, plan_f[0], c, retries=3, pure=False,
-                                key=f"cct-chunk-{digest[:12]}-{c}-{attempts[c]}")
-            futures[fut] = c
-            seq.add(fut)
+            fut = client.submit(evaluate_chunk, plan_f[0], r[0], r[1], retries=0, pure=False,
+                                key=f"cct-rows-{digest[:12]}-{r[0]}-{r[1]}-{attempts[r]}")
+            futures[fut] = r
+            fut.add_done_callback(lambda _f: arrived.set())
 
-        queue = as_completed()
-        while pending and len(futures) < window:
-            submit(queue)
-        for fut in queue:
-            c = futures.pop(fut)
-            try:
-                rows = fut.result()
-            except BuildMismatch as err:
-                raise InfrastructureError(str(err), hint="install the same build of the "
-                                          "toolbox on every worker and restart them") from None
-            except (OSError, TimeoutError) as err:
-                raise InfrastructureError(f"lost the Dask scheduler at {address}: "
-                                          f"{type(err).__name__}: {err}",
-                                          hint="the chunks written are kept: rerun the "
-                                          "same command to resume") from None
-            except Exception as err:  # the task raised (or its workers kept dying)
-                fut.release()
-                if attempts[c] < CHUNK_ATTEMPTS:
-                    pending.append(c)
-                else:
-                    failed[c] = f"{type(err).__name__}: {err}"
-            else:
-                fut.release()
-                on_chunk(c, rows)
+        try:
             while pending and len(futures) < window:
-                submit(queue)
-        if failed:
-            first = min(failed)
-            raise InfrastructureError(
-                f"{len(failed)} chunk(s) failed on the workers after {CHUNK_ATTEMPTS} "
-                f"attempts each (chunk {first}: {failed[first][:200]})",
-                hint="the other chunks are written; rerun the same command to retry the "
-                     "missing ones")
-        return startup
+                submit()
+            while futures:
+                done = [f for f in futures if f.done()]
+                if not done:
+                    if not arrived.wait(LOST_CHECK) and client.status != "running":
+                        raise _lost(address)
+                    arrived.clear()
+                    continue
+                for fut in done:
+                    r = futures.pop(fut)
+                    try:
+                        rows = fut.result()
+                    except BuildMismatch as err:
+                        raise InfrastructureError(
+                            str(err), hint="install the same build of the toolbox on every "
+                            "worker and restart them") from None
+                    except Exception as err:  # the task raised, its workers kept dying, ..
+                        fut.release()
+                        if client.status != "running":
+                            raise _lost(address, err) from None
+                        if attempts[r] < CHUNK_ATTEMPTS:
+                            pending.append(r)
+                        else:
+                            on_error(r[0], r[1], one_line(err)[:500])
+                    else:
+                        fut.release()
+                        on_chunk(r[0], r[1], rows)
+                while pending and len(futures) < window:
+                    submit()
+        except (OSError, TimeoutError) as err:  # the connection itself failed
+            raise _lost(address, err) from None
+        return startup, size
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        _close(client, cluster)
+
+
+def _close(client, cluster) -> None:
+    """Close the client (and the LocalCluster) without waiting on a dead
+    scheduler: bounded, and never raising over the error being reported."""
+    try:
+        client.close(timeout=5)
+    except Exception:  # a scheduler already gone: nothing to close cleanly
+        pass
+    if cluster is not None:
+        cluster.close()
 
 
 def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
                  workers: int | None = None, artifact=None,
                  progress: Callable[[int, int], None] | None = None,
                  report: bool = True) -> CampaignRun:
-    """Run (or resume) the ``[campaign]`` of ``spec`` into ``out_dir``.
+    """Run (or resume, or extend) the ``[campaign]`` of ``spec`` into ``out_dir``.
 
     Parameters
     ----------
     spec : toolbox.spec.Spec
         A spec with a ``[campaign]`` table.
     out_dir : str or Path
-        Campaign directory (module docstring); chunks already there for the
-        same campaign are kept and skipped.
+        Campaign directory (module docstring); rows already there for the
+        same campaign are kept and skipped, whatever their chunking.
     scheduler : str, optional
         ``None``/``"local"``: a Dask LocalCluster on this machine (127.0.0.1,
         one single-threaded worker process per core, or ``workers``);
@@ -362,9 +401,10 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     SpecError
         No ``[campaign]`` table, ``out_dir`` holds another campaign (other
         spec or controller), or ``artifact`` has another sample time.
+    InfrastructureError
+        The cluster or the output disk is not usable, the scheduler was lost
+        mid-run, or every chunk failed (nothing to judge).
     """
-    from ._summary import summarize, write_outputs
-
     if spec.campaign is None:
         raise SpecError("campaign", "a [campaign] table (missing)", file=spec.source)
     cfg = spec.campaign
@@ -384,96 +424,85 @@ def run_campaign(spec, out_dir: str | Path, *, scheduler: str | None = None,
     with disk_errors(out_dir, "creating"):
         out_dir.mkdir(parents=True, exist_ok=True)
         _manifest(out_dir, spec, digest)
-        # temporaries of a run killed while writing (write_atomic, _assemble)
+        # temporaries of a run killed while writing (write_atomic, assemble)
         remove_stale(out_dir, OUTPUT_NAMES)
-        if (out_dir / "chunks").is_dir():
-            remove_stale(out_dir / "chunks", {chunk_path(out_dir, c).name
-                                              for c in range(cfg.n_chunks)})
-    done = valid_chunks(out_dir, spec, artifact)
-    todo = [c for c in range(cfg.n_chunks) if c not in done]
-    samples_done = sum(chunk_range(cfg, c)[1] - chunk_range(cfg, c)[0] for c in done)
+        chunks = out_dir / "chunks"
+        if chunks.is_dir():
+            names = {m.group(1) for e in chunks.iterdir()
+                     if (m := re.fullmatch(r"\.(rows-\d{12}-\d{12}\.parquet)\.\w{8}", e.name))}
+            remove_stale(chunks, names)
+    found = stored(out_dir, digest)
+    for old in [c for c in found if c.error is not None]:  # error rows: evaluated again
+        with disk_errors(out_dir, "removing"):
+            old.path.unlink(missing_ok=True)
+    kept = [c for c in found if c.error is None]
+    todo = gaps([(c.start, c.stop) for c in kept], cfg.samples)
+    samples_done = cfg.samples - sum(b - a for a, b in todo)
     if progress:
         progress(int(samples_done), cfg.samples)
+    ran: list[tuple[int, int]] = []
+    errors: list[tuple[int, int, str]] = []
 
-    def on_chunk(c: int, rows: dict) -> None:
+    def on_chunk(start: int, stop: int, rows: dict) -> None:
         nonlocal samples_done
         with disk_errors(out_dir, "writing chunk"):
-            _write_chunk(out_dir, c, rows, digest, cfg)
-        samples_done += len(rows["sample"])
+            write_chunk(out_dir, start, stop, rows, digest)
+        ran.append((start, stop))
+        samples_done += stop - start
+        if progress:
+            progress(int(samples_done), cfg.samples)
+
+    def on_error(start: int, stop: int, message: str) -> None:
+        nonlocal samples_done
+        from ._sampling import draw_samples
+
+        with disk_errors(out_dir, "writing chunk"):
+            write_chunk(out_dir, start, stop, draw_samples(cfg, spec.motor, start, stop),
+                         digest, error=message)
+        ran.append((start, stop))
+        errors.append((start, stop, message))
+        samples_done += stop - start
         if progress:
             progress(int(samples_done), cfg.samples)
 
     t0 = time.perf_counter()
-    startup = 0.0
+    startup, size = 0.0, None
     if todo:
         if scheduler == "serial":
-            startup = evaluate_serial(make_plan(spec, artifact), todo, on_chunk)
+            size = chunk_size(spec, 1)
+            startup = evaluate_serial(make_plan(spec, artifact), split(todo, size), on_chunk,
+                                      on_error)
         else:  # one simulation thread per Dask thread (the worker's --nthreads)
             plan = make_plan(spec, artifact, threads=1, build=worker_build())
-            startup = _evaluate_dask(plan, todo, on_chunk, scheduler, workers, digest)
+            with dask_log(out_dir):
+                startup, size = _evaluate_dask(plan, lambda t: split(todo, chunk_size(spec, t)),
+                                               on_chunk, on_error, scheduler, workers, digest)
     seconds = time.perf_counter() - t0
-    n_run = sum(chunk_range(cfg, c)[1] - chunk_range(cfg, c)[0] for c in todo)
+    n_run = sum(b - a for a, b in ran)
+    pieces = covering(stored(out_dir, digest), cfg.samples)
+    if all(c.error is not None for c, _lo, _hi in pieces):
+        first = min(errors) if errors else (0, 0, "?")
+        raise InfrastructureError(
+            f"every chunk failed on the workers after {CHUNK_ATTEMPTS} attempts each (rows "
+            f"{first[0]}..{first[1] - 1}: {first[2][:300]})",
+            hint="nothing could be judged; check the workers' logs, then rerun the same "
+                 "command")
+    t1 = time.perf_counter()
     with disk_errors(out_dir, "writing"):
-        results = _assemble(out_dir, spec, digest)
-    table = _read_for_summary(results, spec, artifact)
-    summary = summarize(table, spec, artifact)
+        results, acc = assemble(out_dir, spec, artifact, digest, pieces)
+    from ._summary import write_outputs
+
+    sub = acc.subsample(results)
+    summary = acc.summarize(sub, spec, artifact)
     summary["timing"] = {"seconds": seconds, "startup_seconds": startup,
-                         "chunks_run": len(todo), "samples_run": n_run,
+                         "chunks_run": len(ran), "samples_run": n_run, "chunk_size": size,
                          "samples_per_s": (n_run / (seconds - startup)
-                                           if todo and seconds > startup else None)}
+                                           if ran and seconds > startup else None)}
     with disk_errors(out_dir, "writing"):
-        files = [results] + write_outputs(out_dir, table, summary, spec, artifact,
+        files = [results] + write_outputs(out_dir, sub, summary, spec, artifact,
                                           report=report)
-    return CampaignRun(out_dir=out_dir, summary=summary,
-                       chunks_total=cfg.n_chunks, chunks_run=len(todo),
-                       chunks_resumed=len(done), seconds=seconds, startup_seconds=startup,
-                       files=files)
-
-
-def _assemble(out_dir: Path, spec, digest: str) -> Path:
-    """Stream the chunk files, in sample order, into ``results.parquet``
-    (temporary name, fsync, rename: readers never see half a file), one row
-    group per chunk; memory holds one chunk at a time."""
-    import pyarrow.parquet as pq
-
-    cfg = spec.campaign
-    final = out_dir / "results.parquet"
-    meta = {b"cct": json.dumps({"campaign": digest, "spec_sha256": spec_hash(spec),
-                                "seed": cfg.seed, "samples": cfg.samples,
-                                **build()}).encode()}
-    fd, tmp = tempfile.mkstemp(prefix=".results.parquet.", dir=out_dir)
-    os.close(fd)
-    writer = None
-    try:
-        for c in range(cfg.n_chunks):
-            path = chunk_path(out_dir, c)
-            if not _chunk_valid(path, c, digest, cfg):  # pragma: no cover - a bug if reached
-                raise RuntimeError(f"campaign: chunk {c} missing after the run")
-            table = pq.read_table(path).replace_schema_metadata(meta)
-            if writer is None:
-                writer = pq.ParquetWriter(tmp, table.schema)
-            writer.write_table(table)
-        writer.close()
-        writer = None
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, final)
-    except BaseException:
-        if writer is not None:
-            writer.close()
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return final
-
-
-def _read_for_summary(results: Path, spec, artifact):
-    """The columns the summary and the report use (not every metric)."""
-    import pyarrow.parquet as pq
-
-    from ._report import report_columns
-
-    names = pq.read_schema(results).names
-    return pq.read_table(results, columns=report_columns(names, spec, artifact))
+    return CampaignRun(out_dir=out_dir, summary=summary, chunks_total=len(pieces),
+                       chunks_run=len(ran), chunks_resumed=len(kept), seconds=seconds,
+                       startup_seconds=startup, chunk_size=size,
+                       error_rows=int(summary["error_rows"]),
+                       end_seconds=time.perf_counter() - t1, files=files)

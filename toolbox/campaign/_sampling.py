@@ -54,8 +54,8 @@ def sample_streams(seed: int, motors: np.ndarray, k: int) -> tuple[np.ndarray, n
 
 
 def _marginal(p, z: np.ndarray) -> np.ndarray:
-    from scipy.special import ndtr
-    from scipy.stats import truncnorm
+    from scipy.special import ndtr  # lazy: scipy.special, 193 modules
+    from scipy.stats import truncnorm  # lazy: scipy.stats, 622 modules
 
     if p.distribution == "normal":
         return p.mean + p.std * z

@@ -11,9 +11,16 @@ The summary answers the questions of a qualification:
 * which checks fail and how often, overall and at each grid point;
 * which parameters drive the failures: the Spearman rank correlation of
   each drawn parameter with the failure indicator and the failure rate in
-  its lowest and highest quartile, pooled and for each failure mode (each
-  failed check on its own);
+  its lowest and highest quartile, for each failure mode (each failed check
+  on its own: pooled into one pass/fail indicator, modes driven in opposite
+  directions cancel) and pooled; and the failure rate by the cells of the
+  two grid axes that drive the modes most (:func:`cells`);
 * the worst samples with their parameters (largest ``worst_ratio``).
+
+Counts (yields, failures per point and mode, worst cases) are exact and
+streamed (:class:`Accumulator`); the rank correlations use every row up to
+:data:`SUBSAMPLE` rows, a seeded stratified subsample beyond
+(``sensitivity_rows`` says how many).
 """
 
 from __future__ import annotations
@@ -25,8 +32,10 @@ from pathlib import Path
 import numpy as np
 
 from .._io import write_atomic
+from ._sampling import point_values
 
-__all__ = ["summarize", "write_outputs", "parameter_columns", "wilson_interval"]
+__all__ = ["summarize", "write_outputs", "parameter_columns", "wilson_interval", "Accumulator",
+           "stratified_subset", "strongest_drivers", "cells", "SUBSAMPLE"]
 
 #: Worst cases listed in the summary and the report.
 N_WORST = 10
@@ -100,43 +109,6 @@ def _yield(k: int, n: int) -> dict:
             "yield_95": list(wilson_interval(k, n))}
 
 
-def yields(table, cfg, passed: np.ndarray, modes: dict) -> dict:
-    """``per_sample``, ``per_motor`` and ``per_point`` yields (module docstring)."""
-    from ._sampling import point_values
-
-    n = len(passed)
-    motor = np.asarray(table.column("motor").to_numpy(), np.int64)
-    point = np.asarray(table.column("point").to_numpy(), np.int64)
-    complete = cfg.complete_motors
-    fails = np.bincount(motor, weights=(~passed).astype(float), minlength=cfg.n_motors) > 0
-    per_motor = _yield(int(complete - fails[:complete].sum()), complete)
-    per_motor["incomplete_motors"] = cfg.n_motors - complete
-    P = cfg.n_operating_points
-    rows = np.bincount(point, minlength=P)
-    ok = np.bincount(point, weights=passed.astype(float), minlength=P).round().astype(int)
-    points = []
-    for p in range(P):
-        entry = {"point": p, **point_values(cfg, p), **_yield(int(ok[p]), int(rows[p]))}
-        entry["failures"] = {m: int(mask[point == p].sum()) for m, mask in modes.items()
-                             if mask[point == p].any()}
-        points.append(entry)
-    worst = min(points, key=lambda e: (e["yield_95"][0], e["point"]))
-    per_point = {"n": P, "worst_point": worst["point"], "yield": worst["yield"],
-                 "yield_95": worst["yield_95"], "points": points}
-    return {"per_sample": _yield(int(passed.sum()), n), "per_motor": per_motor,
-            "per_point": per_point}
-
-
-def _reasons(failure) -> dict[str, int]:
-    """Samples per failed check, from the ``failure`` column ("a = 1 (bound 2); b")."""
-    import pyarrow.compute as pc
-
-    parts = pc.list_flatten(pc.split_pattern(failure, "; "))
-    names = pc.list_element(pc.split_pattern(parts, " = ", max_splits=1), 0)
-    counts = pc.value_counts(names).to_pylist()
-    return {c["values"]: int(c["counts"]) for c in counts if c["values"]}
-
-
 def _finite(v):
     if isinstance(v, (float, np.floating)):
         return float(v) if math.isfinite(v) else str(float(v))
@@ -147,49 +119,212 @@ def _finite(v):
     return v
 
 
+def strongest_drivers(summary) -> list[str]:
+    """Parameters ranked as drivers of the failures: by the mean over the
+    failure modes of |rank correlation with that mode failing|, each mode
+    weighted by its failing samples (a parameter that drives the modes
+    holding most failures first; a mode's correlation is never pooled with
+    another's, whose sign may be opposite). Parameters no mode ranks follow
+    in the pooled order."""
+    score: dict[str, float] = {}
+    counts = summary.get("failure_reasons", {})
+    for mode, entries in summary.get("sensitivity_by_mode", {}).items():
+        w = counts.get(mode, 0)
+        for e in entries:
+            if e["rank_correlation"] is not None:
+                score[e["parameter"]] = score.get(e["parameter"], 0.0) + w * abs(
+                    e["rank_correlation"])
+    ranked = sorted(score, key=lambda k: -score[k])
+    return ranked + [s["parameter"] for s in summary["sensitivity"]
+                     if s["parameter"] not in score]
+
+
+def stratified_subset(failed: np.ndarray, k: int, seed: int = 0) -> np.ndarray:
+    """Sorted indices of at most ``k`` rows: ``round(k f)`` of the failing
+    rows and the rest passing ones (``f`` the failing share), each drawn
+    uniformly (seeded), so that the subset's failing share is the table's to
+    within ``1 / (2 k)``."""
+    n = len(failed)
+    if n <= k:
+        return np.arange(n)
+    fail_idx, pass_idx = np.nonzero(failed)[0], np.nonzero(~failed)[0]
+    kf = int(round(k * fail_idx.size / n))
+    rng = np.random.default_rng(seed)
+    pick = np.concatenate([fail_idx[rng.choice(fail_idx.size, kf, replace=False)],
+                           pass_idx[rng.choice(pass_idx.size, k - kf, replace=False)]])
+    return np.sort(pick)
+
+
+#: Rows of the seeded subsample the rank correlations and the report's
+#: figures use when a campaign is larger (the counts are exact): the
+#: standard error of a rank correlation is then about 1 / sqrt(SUBSAMPLE).
+SUBSAMPLE = 100_000
+
+
+class Accumulator:
+    """Exact streaming counts of a results table, fed one piece (a pyarrow
+    Table of judged rows, in sample order) at a time by :meth:`add`; memory
+    does not grow with the rows (one byte per motor aside). :meth:`subsample`
+    then draws the seeded stratified subsample from ``results.parquet`` and
+    :meth:`summarize` makes the summary (module docstring)."""
+
+    def __init__(self, spec, artifact):
+        cfg = spec.campaign
+        self.cfg, self.spec, self.artifact = cfg, spec, artifact
+        self.n = 0
+        self.passed = 0
+        self.error_rows = 0
+        self.motor_failed = np.zeros(cfg.n_motors, bool)
+        P = cfg.n_operating_points
+        self.point_rows = np.zeros(P, np.int64)
+        self.point_passed = np.zeros(P, np.int64)
+        self.mode_count: dict[str, int] = {}
+        self.mode_point: dict[str, np.ndarray] = {}
+        self.worst: list[dict] = []
+        self.params: list[str] | None = None
+
+    def add(self, piece, error: bool = False) -> None:
+        """Count the judged rows of ``piece`` (``error``: rows of a chunk
+        that could not be evaluated)."""
+        n = piece.num_rows
+        if self.params is None:
+            self.params = parameter_columns(piece)
+        passed = np.asarray(piece.column("passed").to_numpy(zero_copy_only=False), bool)
+        motor = np.asarray(piece.column("motor").to_numpy(), np.int64)
+        point = np.asarray(piece.column("point").to_numpy(), np.int64)
+        P = len(self.point_rows)
+        self.n += n
+        self.passed += int(passed.sum())
+        self.error_rows += n if error else 0
+        self.motor_failed[motor[~passed]] = True
+        self.point_rows += np.bincount(point, minlength=P)
+        self.point_passed += np.bincount(point[passed], minlength=P)
+        for mode, mask in failure_modes(piece.column("failure")).items():
+            self.mode_count[mode] = self.mode_count.get(mode, 0) + int(mask.sum())
+            self.mode_point.setdefault(mode, np.zeros(P, np.int64))
+            self.mode_point[mode] += np.bincount(point[mask], minlength=P)
+        ratio = np.asarray(piece.column("worst_ratio").to_numpy(), float)
+        key = -np.where(np.isnan(ratio), np.inf, ratio)
+        top = np.argpartition(key, N_WORST)[:N_WORST] if n > N_WORST else np.arange(n)
+        for i in top:
+            row = {c: _finite(piece.column(c)[int(i)].as_py()) for c in
+                   ["sample"] + self.params + ["worst_check", "worst_ratio", "failure",
+                                               "motor", "point"]}
+            row["_key"] = (float(key[i]), int(row["sample"]))
+            self.worst.append(row)
+        self.worst.sort(key=lambda r: r["_key"])  # largest ratio first, then by sample
+        del self.worst[N_WORST:]
+
+    def subsample(self, results: Path):
+        """The report columns of ``results.parquet`` for every row, or for
+        :func:`stratified_subset` of :data:`SUBSAMPLE` rows (read by row
+        group: one at a time in memory)."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        from ._report import report_columns
+
+        f = pq.ParquetFile(results)
+        cols = report_columns(f.schema_arrow.names, self.spec, self.artifact)
+        if self.n <= SUBSAMPLE:
+            return pq.read_table(results, columns=cols)
+        failed = np.zeros(self.n, bool)  # 1 byte per row, read one column at a time
+        at = 0
+        for batch in f.iter_batches(columns=["passed"]):
+            v = np.asarray(batch.column(0).to_numpy(zero_copy_only=False), bool)
+            failed[at:at + len(v)] = ~v
+            at += len(v)
+        pick = stratified_subset(failed, SUBSAMPLE)
+        del failed
+        parts, at = [], 0
+        for g in range(f.num_row_groups):
+            rows = f.metadata.row_group(g).num_rows
+            lo, hi = np.searchsorted(pick, [at, at + rows])
+            if hi > lo:
+                parts.append(f.read_row_group(g, columns=cols).take(pick[lo:hi] - at))
+            at += rows
+        return pa.concat_tables(parts)
+
+    def summarize(self, sub, spec, artifact) -> dict:
+        """The summary (module docstring) from the counts and ``sub`` (the
+        rows :meth:`subsample` returned: the rank correlations)."""
+        cfg = self.cfg
+        n, k = self.n, self.passed
+        complete = cfg.complete_motors
+        per_motor = _yield(int(complete - self.motor_failed[:complete].sum()), complete)
+        per_motor["incomplete_motors"] = cfg.n_motors - complete
+        points = []
+        for p in range(cfg.n_operating_points):
+            entry = {"point": p, **point_values(cfg, p),
+                     **_yield(int(self.point_passed[p]), int(self.point_rows[p]))}
+            entry["failures"] = {m: int(c[p]) for m, c in sorted(self.mode_point.items())
+                                 if c[p]}
+            points.append(entry)
+        worst_point = min(points, key=lambda e: (e["yield_95"][0], e["point"]))
+        ys = {"per_sample": _yield(k, n), "per_motor": per_motor,
+              "per_point": {"n": len(points), "worst_point": worst_point["point"],
+                            "yield": worst_point["yield"],
+                            "yield_95": worst_point["yield_95"], "points": points}}
+        gated = ys[cfg.gate]
+        lower = gated["yield_95"][0]
+        failed = ~np.asarray(sub.column("passed").to_numpy(zero_copy_only=False), bool)
+        modes = failure_modes(sub.column("failure"))
+        by_mode = {m: _sensitivity(sub, modes[m]) if m in modes else []
+                   for m in sorted(self.mode_count, key=lambda m: -self.mode_count[m])}
+        summary = {
+            "schema": "cct.campaign-summary/3",
+            "title": spec.title,
+            "method": artifact.method,
+            "samples": n, "passed": k, "failed": n - k, "error_rows": self.error_rows,
+            "motors": cfg.n_motors, "operating_points": cfg.n_operating_points,
+            "yield": k / n if n else 0.0, "yield_95": list(wilson_interval(k, n)),
+            "yields": ys,
+            "gate": cfg.gate, "gate_yield": gated["yield"], "gate_lower_95": lower,
+            "min_yield": cfg.min_yield,
+            "meets_min_yield": cfg.min_yield is None or lower >= cfg.min_yield,
+            "seed": cfg.seed,
+            "parameters": self.params or [],
+            "grid_axes": [a for a, values in cfg.operating_points if len(values) > 1],
+            "failure_reasons": dict(sorted(self.mode_count.items(), key=lambda kv: -kv[1])),
+            "sensitivity_rows": sub.num_rows,
+            "sensitivity": _sensitivity(sub, failed),
+            "sensitivity_by_mode": by_mode,
+            "worst_cases": [{k: v for k, v in w.items() if k != "_key"} for w in self.worst],
+        }
+        summary["drivers"] = strongest_drivers(summary)
+        summary["cells"] = cells(summary, cfg)
+        return summary
+
+
+def cells(summary: dict, cfg) -> dict | None:
+    """Failure rate (and failures per mode) by the cells of the two grid axes
+    that drive the failure modes most (:func:`strongest_drivers`), the other
+    axes pooled: exact, from the per-point counts. None with fewer than two
+    grid axes."""
+    axes = [k for k, values in cfg.operating_points if len(values) > 1]
+    if len(axes) < 2:
+        return None
+    ranked = [p for p in strongest_drivers(summary) if p in axes]
+    a, b = (ranked + [x for x in axes if x not in ranked])[:2]
+    table: dict[tuple, dict] = {}
+    for e in summary["yields"]["per_point"]["points"]:
+        cell = table.setdefault((e[a], e[b]), {a: e[a], b: e[b], "n": 0, "failed": 0,
+                                               "failures": {}})
+        cell["n"] += e["n"]
+        cell["failed"] += e["n"] - e["passed"]
+        for m, c in e["failures"].items():
+            cell["failures"][m] = cell["failures"].get(m, 0) + c
+    rows = [dict(v, fail_rate=v["failed"] / v["n"] if v["n"] else 0.0)
+            for _k, v in sorted(table.items())]
+    return {"axes": [a, b], "cells": rows}
+
+
 def summarize(table, spec, artifact) -> dict:
-    """The summary of a results table (module docstring); JSON-ready."""
-    cfg = spec.campaign
-    n = table.num_rows
-    passed = np.asarray(table.column("passed").to_numpy(zero_copy_only=False), bool)
-    failed = ~passed
-    k = int(passed.sum())
-    reasons = _reasons(table.column("failure"))
-    ratio = np.asarray(table.column("worst_ratio").to_numpy(), float)
-    key = -np.where(np.isnan(ratio), np.inf, ratio)
-    top = np.argpartition(key, N_WORST)[:N_WORST] if n > N_WORST else np.arange(n)
-    order = top[np.lexsort((top, key[top]))]  # largest ratio first, then by sample
-    params = parameter_columns(table)
-    worst = []
-    for i in order:
-        row = {c: _finite(table.column(c)[int(i)].as_py()) for c in
-               ["sample"] + params + ["worst_check", "worst_ratio", "failure"]}
-        worst.append(row)
-    yield_ = k / n if n else 0.0
-    modes = failure_modes(table.column("failure"))
-    ys = yields(table, cfg, passed, modes)
-    gated = ys[cfg.gate]
-    lower = gated["yield_95"][0]
-    by_mode = {m: _sensitivity(table, mask)
-               for m, mask in sorted(modes.items(), key=lambda kv: -kv[1].sum())}
-    return {
-        "schema": "cct.campaign-summary/2",
-        "title": spec.title,
-        "method": artifact.method,
-        "samples": n, "passed": k, "failed": n - k,
-        "motors": cfg.n_motors, "operating_points": cfg.n_operating_points,
-        "yield": yield_, "yield_95": list(wilson_interval(k, n)),
-        "yields": ys,
-        "gate": cfg.gate, "gate_yield": gated["yield"], "gate_lower_95": lower,
-        "min_yield": cfg.min_yield,
-        "meets_min_yield": cfg.min_yield is None or lower >= cfg.min_yield,
-        "seed": cfg.seed, "chunk_size": cfg.chunk_size, "chunks": cfg.n_chunks,
-        "parameters": params,
-        "failure_reasons": dict(sorted(reasons.items(), key=lambda kv: -kv[1])),
-        "sensitivity": _sensitivity(table, failed),
-        "sensitivity_by_mode": by_mode,
-        "worst_cases": worst,
-    }
+    """The summary of a judged results table held in memory (module
+    docstring; the campaign itself streams through :class:`Accumulator`)."""
+    acc = Accumulator(spec, artifact)
+    acc.add(table)
+    return acc.summarize(table, spec, artifact)
 
 
 #: Worst failing samples written as ready-to-run spec files.
@@ -207,7 +342,7 @@ def worst_spec(spec, row: dict, source: str = "campaign") -> str:
     a spec (the design would follow it): such a file says so in its header."""
     import dataclasses
 
-    from ..sim import default_scenarios
+    from ..verify import default_scenarios  # lazy: numba, scipy.optimize, ~720 modules
     from ..spec import spec_to_toml
     from ._evaluate import _NOT_MOTOR
 
@@ -250,14 +385,12 @@ def write_outputs(out_dir: Path, table, summary: dict, spec, artifact, *,
                   report: bool = True) -> list[Path]:
     """Write summary.json, controller.json, the worst failing samples as spec
     files (``worst/sample-NNNNNN.toml``) and report.html (atomically);
-    ``table`` holds the columns of :func:`toolbox.campaign._report.report_columns`."""
+    ``table`` holds the columns of :func:`toolbox.campaign._report.report_columns`
+    (every row, or the subsample the summary's rank correlations used)."""
     worst_files = []
     for row in [w for w in summary["worst_cases"] if w.get("failure")][:N_WORST_SPECS]:
         path = out_dir / "worst" / f"sample-{int(row['sample']):06d}.toml"
-        full = dict(row)
-        full["motor"] = int(table.column("motor")[int(row["sample"])].as_py())
-        full["point"] = int(table.column("point")[int(row["sample"])].as_py())
-        worst_files.append(write_atomic(path, worst_spec(spec, full, source=str(out_dir))))
+        worst_files.append(write_atomic(path, worst_spec(spec, row, source=str(out_dir))))
     summary["worst_specs"] = [str(p.relative_to(out_dir)) for p in worst_files]
     if (out_dir / "worst").is_dir():  # those of an earlier run of other rows
         for old in (out_dir / "worst").glob("sample-*.toml"):

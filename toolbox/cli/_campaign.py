@@ -42,10 +42,12 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
 
     Exit 0 when the gated yield's 95 % lower bound reaches
     campaign.min_yield (or none is given), 1 below it, 2 on bad input, 4 when
-    the cluster or the output disk is not usable (scheduler unreachable or
-    silent, no workers, workers without the toolbox or of another build, disk
-    full or read-only). Run the same command again after an interrupt or an
-    exit 4 to resume (chunks already written are skipped).
+    the cluster or the output disk is not usable (scheduler unreachable,
+    silent or lost mid-run, no workers, workers without the toolbox or of
+    another build, disk full or read-only), or when the gate is missed with
+    error rows (chunks that failed on the workers 3 times: they count as
+    failing). Run the same command again after an interrupt or an exit 4 to
+    resume (rows already written are skipped; error rows are run again).
 
     \b
     Example:
@@ -53,7 +55,7 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
       cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c --scheduler tcp://scheduler-host:8786
       cct campaign designs/campaigns/003_azaiz2007_hinf.toml --out out/c_pi --controller out/003_pi
     """
-    from ..campaign import parse_address, run_campaign
+    from ..campaign import CHUNK_ATTEMPTS, parse_address, run_campaign
     from ..errors import InfrastructureError
     from ..spec import load_spec
 
@@ -91,8 +93,9 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
                 f"{100 * y['yield_95'][1]:.2f} %)")
 
     click.echo(f"campaign: {sm['motors']} motors x {sm['operating_points']} operating points "
-               f"= {sm['samples']} samples, {sm['passed']} pass; {run.chunks_run} chunks run, "
-               f"{run.chunks_resumed} resumed")
+               f"= {sm['samples']} samples, {sm['passed']} pass; {run.chunks_run} chunks run"
+               + (f" ({run.chunk_size} rows each)" if run.chunk_size else "")
+               + f", {run.chunks_resumed} resumed")
     worst = ys["per_point"]["points"][ys["per_point"]["worst_point"]]
     where = ", ".join(f"{k} {v:g}" for k, v in worst.items()
                       if k not in ("point", "n", "passed", "yield", "yield_95", "failures"))
@@ -104,12 +107,28 @@ def campaign(spec: str, out_dir: str, scheduler: str | None, workers: int | None
         click.echo(f"  {label}: {pct(y)}" + ("  <- gate" if gate == sm["gate"] else ""))
     for name, count in list(sm["failure_reasons"].items())[:5]:
         click.echo(f"  fails {name}: {count}")
-    ranked = [e for e in sm["sensitivity"] if e["rank_correlation"] is not None][:3]
-    if ranked:
-        click.echo("  most sensitive: " + ", ".join(
-            f"{e['parameter']} ({e['rank_correlation']:+.2f})" for e in ranked))
+    for mode, entries in sm["sensitivity_by_mode"].items():
+        ranked = [e for e in entries if e["rank_correlation"] is not None][:3]
+        if ranked and mode != "error":
+            click.echo(f"  drivers of {mode}: " + ", ".join(
+                f"{e['parameter']} ({e['rank_correlation']:+.2f})" for e in ranked))
+    if sm.get("cells"):
+        a, b = sm["cells"]["axes"]
+        rates = [c["fail_rate"] for c in sm["cells"]["cells"]]
+        click.echo(f"  failure rate by {a} x {b}: {100 * min(rates):.1f} % to "
+                   f"{100 * max(rates):.1f} %")
     if sm["min_yield"] is not None:
         click.echo(f"  min_yield {sm['min_yield']:g} on the {sm['gate'].replace('_', '-')} "
                    f"yield's 95 % lower bound {100 * sm['gate_lower_95']:.2f} %: "
                    + ("pass" if run.passed else "FAIL"))
+    if run.error_rows:
+        first = next((w["failure"] for w in sm["worst_cases"] if w["worst_check"] == "error"),
+                     "")
+        message = (f"{run.error_rows} samples could not be evaluated (chunks failed on the "
+                   f"workers {CHUNK_ATTEMPTS} times; counted as failing): {first[:200]}")
+        if not run.passed:
+            click.echo(f"cct: infrastructure error: {message}; rerun the same command to "
+                       "evaluate them again", err=True)
+            sys.exit(EXIT_INFRASTRUCTURE)
+        click.echo(f"cct: warning: {message}", err=True)
     sys.exit(EXIT_OK if run.passed else EXIT_REQUIREMENT)

@@ -16,19 +16,23 @@ from ._conventions import (_QUIET, EXIT_OK, EXIT_REQUIREMENT, _spec_errors,
                            _write_file)
 from ._echo import _echo_wrapped, _fmt
 from ._progress import StepBar
+from ..spec import load_spec
 
 
 @click.command()
 @click.argument("specs", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option("--json", "json_path", type=click.Path(dir_okay=False),
               help="Also write the table as JSON to this file.")
+@click.option("--method", "methods", multiple=True, metavar="M",
+              help="Design each SPEC with method M instead of its own (repeatable; "
+                   "\"all\" = every method), as cct design --method.")
 @click.option("--sampled-certificate", is_flag=True,
               help="Also certify the sampled coupled dq loop over the parameter box and "
                    "speeds (up to about a second more per design).")
 @_QUIET
 @_spec_errors
-def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: bool,
-            quiet: bool) -> None:
+def compare(specs: tuple[str, ...], json_path: str | None, methods: tuple[str, ...],
+            sampled_certificate: bool, quiet: bool) -> None:
     """Design every SPEC and print bandwidth, 5 % time, margins and robustness
     side by side, ranked.
 
@@ -41,19 +45,32 @@ def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: 
     shorter 5 % response time (worst axis). Exit 1 when any design fails or
     is refused.
 
-    \b
-    Example:
-      cct compare designs/000_*.toml designs/003_azaiz2007_hinf.toml
-    """
-    from ..analysis import compare_designs
-    from ..pipeline import design_spec, run_verification
-    from ..spec import load_spec
+    With ``--method``, each SPEC is designed once per method given (its
+    other method tables dropped, as cct design --method): one motor, every
+    method side by side.
 
+    \b
+    Examples:
+      cct compare designs/000_*.toml designs/003_azaiz2007_hinf.toml
+      cct compare designs/003_azaiz2007_pi.toml --method all
+    """
+    from ..analysis import compare_designs  # lazy: scipy, ~580 modules
+    from ..pipeline import design_spec, run_verification  # lazy: ~320 modules
+
+    from ..spec import METHODS
+
+    chosen = list(dict.fromkeys(m for name in methods
+                                for m in (METHODS if name == "all" else (name,))))
+    for m in chosen:
+        if m not in METHODS:
+            raise SpecError("--method", "one of " + ", ".join(METHODS) + ' or "all"', m)
+    jobs = ([(f"{p} --method {m}", p, [("--method", f"controller.method={json.dumps(m)}")])
+             for p in specs for m in chosen] if chosen else [(p, p, []) for p in specs])
     refused: list[dict] = []
     loaded: list = []
-    for path in specs:
+    for path, file, overrides in jobs:
         try:
-            s = load_spec(path)
+            s = load_spec(file, overrides=overrides)
         except CctError as err:
             refused.append({"spec": path, "refused": str(err)})
             continue
@@ -65,7 +82,7 @@ def compare(specs: tuple[str, ...], json_path: str | None, sampled_certificate: 
                 "designs for one drive)", "a different one", file=s.source))})
             continue
         loaded.append((path, s))
-    names = [Path(p).name for p, _ in loaded]
+    names = [Path(p).name for p, _ in loaded]  # "x.toml --method pi" with --method
     steps = ([f"design {n}" for n in names] + ["analysis"]
              + [f"verification {n}" for n in names])
     designed = []
@@ -160,7 +177,8 @@ _COLUMNS = (
     ("PM deg", lambda r: _worst(r["margins"], "phase_margin_deg", min)),
     ("Mm", lambda r: _worst(r["margins"], "stability_margin", min)),
     ("t5% ms", lambda r: 1e3 * _worst(r["response_times"], "response_time_5pct", max)),
-    ("OS %", lambda r: _worst(r["response_times"], "overshoot_pct", max)),
+    # overshoot to 0.01 %: a simulated 6.7e-14 % is round-off, not an overshoot
+    ("OS %", lambda r: _hundredths(_worst(r["response_times"], "overshoot_pct", max))),
     ("worst GM dB", lambda r: _worst(r["worst_case"], "gain_margin_db", min)),
     ("unstable", lambda r: "{}/{}".format(*(
         (r["robustness"]["n_unstable"], r["robustness"]["n_sets"])
@@ -174,6 +192,11 @@ _COLUMNS = (
     ("sampled cert.", lambda r: (r.get("sampled_certificate") or {}).get("certified_scale")),
     ("verdict", lambda r: "pass" if r.get("passed", True) else "FAIL"),
 )
+
+
+def _hundredths(x: float) -> float:
+    """``x`` rounded to 0.01 (NaN kept: "not reached")."""
+    return round(x, 2) + 0.0 if math.isfinite(x) else x
 
 
 def _box_where(box: dict) -> str:

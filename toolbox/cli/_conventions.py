@@ -15,6 +15,7 @@ import click
 
 from ..errors import CctError, SpecError
 from ._failsafe import where
+from .._io import write_atomic
 
 #: -q/--quiet of the long-running commands: the bar goes, the summary stays.
 _QUIET = click.option("--quiet", "-q", is_flag=True,
@@ -44,8 +45,6 @@ def _spec_errors(func):
 
 def _write_file(path: str | Path, data: str | bytes, option: str) -> None:
     """Write one output file atomically; an unusable path is bad input (exit 2)."""
-    from .._io import write_atomic
-
     try:
         write_atomic(path, data)
     except OSError as err:

@@ -4,6 +4,7 @@ the drift-box verdict line, and long messages wrapped."""
 from __future__ import annotations
 
 import math
+import textwrap
 
 import click
 
@@ -20,7 +21,7 @@ def _robustness_line(result) -> None:
     """The drift-box verdict in one line, next to the margins (``DriftVerdict.summary``)."""
     rob = result.robustness
     if rob:
-        from ..analysis import DriftVerdict
+        from ..analysis import DriftVerdict  # lazy: scipy, ~580 modules (`cct --help`)
 
         text = DriftVerdict(**{k: rob[k] for k in DriftVerdict.__dataclass_fields__}).summary()
         if any(k in result.informational for k in ("default.robustness", "parameter_drift")):
@@ -34,8 +35,6 @@ def _echo_wrapped(head: str, text: str, width: int = 100, file_key: bool = False
     """``head`` + ``text`` wrapped at ``width`` columns, continuation lines indented
     (a failure summary may run to a thousand characters); with ``file_key`` the
     leading ``file: key:`` of an error message stays whole on its first line."""
-    import textwrap
-
     parts = text.split(": ", 2)
     if file_key and len(parts) == 3 and len(head) + len(parts[0]) + len(parts[1]) + 3 > width:
         click.echo(f"{head}{parts[0]}: {parts[1]}:")

@@ -27,6 +27,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
+from .._version import toolbox_version
 
 __all__ = ["EXIT_INTERNAL", "EXIT_INTERRUPTED", "EXIT_TERMINATED", "Terminated",
            "internal_error_message", "location", "signal_handlers", "where"]
@@ -111,8 +112,6 @@ def internal_error_message(err: BaseException) -> str:
     traceback is in <file>; please report``."""
     text = "".join(traceback.format_exception(type(err), err, err.__traceback__))
     try:
-        from .._version import toolbox_version
-
         version = toolbox_version()
     except Exception:  # the report must not fail on its own
         version = "unknown"

@@ -14,6 +14,8 @@ import errno
 import json
 import sys
 from pathlib import Path
+from dataclasses import replace
+import re
 
 import click
 
@@ -22,10 +24,11 @@ from ._campaign import campaign
 from ._compare import compare
 from ._conventions import (_QUIET, EXIT_OK, EXIT_REQUIREMENT, _spec_errors,
                            _write_file)
-from ._echo import _fmt, _notices, _robustness_line
+from ._echo import _echo_wrapped, _fmt, _notices, _robustness_line
 from ._failsafe import (EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated,
                         internal_error_message, signal_handlers, where)
 from ._progress import StepBar, design_stages
+from ..spec import load_spec, spec_to_toml, CATALOG, CATALOG_NOTES, Motor
 
 
 class _Cct(click.Group):
@@ -90,8 +93,6 @@ def check(spec: str, as_json: bool) -> None:
     Example:
       cct check designs/000_lepioufle1992_tc.toml
     """
-    from ..spec import load_spec, spec_to_toml
-
     s = load_spec(spec)
     if as_json:
         click.echo(json.dumps(s.raw, indent=1, sort_keys=True))
@@ -108,8 +109,6 @@ def motors(as_json: bool) -> None:
     Example:
       cct motors
     """
-    from ..spec import CATALOG, CATALOG_NOTES, Motor
-
     rows = []
     for name, values in CATALOG.items():
         m = Motor(**values)
@@ -151,8 +150,7 @@ def derive(spec: str, fmt: str | None) -> None:
     Example:
       cct derive designs/000_lepioufle1992_tc.toml --markdown
     """
-    from ..plant import describe_model
-    from ..spec import load_spec
+    from ..plant import describe_model  # lazy: scipy.linalg, ~320 modules
 
     click.echo(describe_model(load_spec(spec).motor, fmt or "text"), nl=False)
 
@@ -168,7 +166,7 @@ def derive(spec: str, fmt: str | None) -> None:
                    "speeds (up to about a second more per design).")
 @click.option("--method", "method", default=None, metavar="M",
               help="Design with method M instead of the spec's controller.method "
-                   "(pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi, tune).")
+                   "(pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi, tune, cv).")
 @click.option("--set", "sets", multiple=True, metavar="KEY.PATH=VALUE",
               help="Override one spec value before validation (repeatable); VALUE is a "
                    "TOML scalar or array, e.g. --set controller.pi.bandwidth=1500 "
@@ -188,8 +186,7 @@ def design(spec: str, out_dir: str, only_controller: bool, sampled_certificate: 
       cct design designs/003_azaiz2007_hinf.toml --out out/003
       cct design designs/003_azaiz2007_hinf.toml --method pi --set controller.pi.bandwidth=1500 --out out/003_pi
     """
-    from ..pipeline import build_outputs, write_outputs
-    from ..spec import load_spec
+    from ..pipeline import build_outputs, write_outputs  # lazy: scipy.linalg, ~320 modules
 
     overrides = ([("--method", f"controller.method={json.dumps(method)}")] if method else [])
     overrides += [("--set", text) for text in sets]
@@ -226,7 +223,7 @@ def _summary(out) -> None:
     if out.analysis is not None:
         failed += [k for k, c in out.analysis.get("requirements", {}).items() if not c["pass"]]
     if out.verification is not None:
-        from ..sim import ROBUSTNESS_CHECKS
+        from ..verify import ROBUSTNESS_CHECKS  # lazy: numba + scipy, ~810 modules
 
         # the drift-box verdict names its first failing set (factors and speed)
         failed += [k if k not in ROBUSTNESS_CHECKS else f"{k} ({c.get('reason')})"
@@ -237,7 +234,19 @@ def _summary(out) -> None:
     failed = list(dict.fromkeys(failed))
     if out.header_refused:
         failed.append("controller.h refused")
-    click.echo("requirements: " + ("all pass" if not failed else "FAILED " + ", ".join(failed)))
+    _echo_failed(failed)
+
+
+def _echo_failed(failed: list[str]) -> None:
+    """``requirements: all pass``, or ``requirements: FAILED n checks:`` and
+    one wrapped line per failed check (a reason may run to hundreds of
+    characters: no line beyond 100 columns)."""
+    if not failed:
+        click.echo("requirements: all pass")
+        return
+    click.echo(f"requirements: FAILED {len(failed)} check{'s' if len(failed) > 1 else ''}:")
+    for item in failed:
+        _echo_wrapped("  - ", item)
 
 
 @main.command()
@@ -253,9 +262,7 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
     Example:
       cct verify out/003
     """
-    from dataclasses import replace
-
-    from ..pipeline import (check_integrity, header_agreement, load_artifact,
+    from ..pipeline import (check_integrity, header_agreement, load_artifact,  # lazy: ~320 modules
                             run_verification, spec_of_artifact, write_outputs)
 
     file = str(Path(out_dir) / "controller.json")
@@ -320,13 +327,14 @@ def report(out_dir: str, quiet: bool) -> None:
     Example:
       cct report out/003
     """
+    # lazy: ~320 modules
     from ..pipeline import (DesignOutputs, analyse, check_integrity, load_analysis,
                             load_artifact, report_data, run_verification, spec_of_artifact,
                             write_outputs)
-    from ..report import build_context, write_html, write_pdf
+    from ..report import build_context, write_html, write_pdf  # lazy: jinja2 + report, 126 modules
 
-    from ..analysis import compute_margins
-    from ..analysis.executed import loop_stability
+    from ..analysis import compute_margins  # lazy: scipy, ~580 modules
+    from ..analysis.executed import loop_stability  # lazy: scipy, ~580 modules
 
     file = str(Path(out_dir) / "controller.json")
     artifact = load_artifact(out_dir)
@@ -351,8 +359,9 @@ def report(out_dir: str, quiet: bool) -> None:
                     "stability": loop_stability(artifact, spec.motor),
                     "requirements": {k: c for k, c in verification.margin_checks.items()
                                      if not k.startswith("default.")}}
+        from ..export.firmware import load_firmware
         out = DesignOutputs(artifact=artifact, spec=spec, analysis=analysis,
-                            verification=verification)
+                            verification=verification, firmware=load_firmware(out_dir))
         bar("report")
         context = build_context(report_data(out))  # figures drawn once for both
         files.update({"report.html": write_html(context), "report.pdf": write_pdf(context)})
@@ -382,7 +391,7 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
       cct export out/003 --format c -o firmware/current_loop.h
       cct export out/m1 --prefix motor1_ -o firmware/motor1.h
     """
-    from ..pipeline import load_artifact, spec_of_artifact
+    from ..pipeline import load_artifact, spec_of_artifact  # lazy: ~320 modules
 
     artifact = load_artifact(out_dir)
     if fmt == "json":
@@ -392,8 +401,8 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
         else:
             click.echo(text, nl=False)
         return
-    from ..export import write_header
-    from ..pipeline import check_integrity, refuse_unstable_export
+    from ..export import write_header  # lazy: scipy.linalg + export, ~330 modules
+    from ..pipeline import check_integrity, refuse_unstable_export  # lazy: ~320 modules
 
     file = str(Path(out_dir) / "controller.json")
     spec = spec_of_artifact(artifact, file=file)
@@ -401,7 +410,7 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
     refuse_unstable_export(artifact, spec.motor, file=file)
     # refusals name the design file the controller came from
     if prefix is not None:
-        from ..export import prefix_name
+        from ..export import prefix_name  # lazy: ~330 modules
         try:
             prefix_name(prefix, key="--prefix")  # a bad option is bad input (exit 2)
         except SpecError as err:
@@ -410,6 +419,10 @@ def export(out_dir: str, fmt: str, output: str | None, prefix: str | None) -> No
     text = write_header(artifact, spec.motor, spec.drive, source=file,
                         prefix=prefix if prefix is not None else spec.export_prefix)
     _write_file(output or Path(out_dir) / "controller.h", text, "--output")
+    if not output:  # the target figures of the header (or why not measured) next to it
+        from ..export.firmware import FIRMWARE_JSON, firmware_json, measure_firmware
+        _write_file(Path(out_dir) / FIRMWARE_JSON, firmware_json(measure_firmware(
+            text, prefix if prefix is not None else spec.export_prefix)), "--output")
 
 
 @main.command()
@@ -431,8 +444,7 @@ def gallery(designs_dir: str, out_dir: str, sampled_certificate: bool, quiet: bo
     Example:
       cct gallery
     """
-    from ..pipeline import build_outputs, write_outputs
-    from ..spec import load_spec
+    from ..pipeline import build_outputs, write_outputs  # lazy: scipy.linalg, ~320 modules
 
     failed = []
     paths = sorted(Path(designs_dir).glob("*.toml"))
@@ -450,7 +462,5 @@ def gallery(designs_dir: str, out_dir: str, sampled_certificate: bool, quiet: bo
 
 def _figures(html: str) -> dict[str, str]:
     """The report's inline SVG figures as files ``fig-<name>.svg`` (for the README)."""
-    import re
-
     found = re.findall(r'<figure id="(fig-[a-z0-9-]+)">.*?(<svg.*?</svg>)', html, flags=re.S)
     return {f"{name}.svg": svg + "\n" for name, svg in found}

@@ -1,16 +1,18 @@
 """Design methods: each turns a validated spec into a ControllerArtifact.
 
 One module per method (``pi``, ``total_comp``, ``ilq``, ``lq``, ``hinf``,
-``fcs_mpc``, ``robust_pi``), each with ``read_cfg`` (validates ``[controller.<method>]``),
-``design(spec)`` and a plain API on toolbox._lti or python-control plants and numbers,
+``fcs_mpc``, ``robust_pi``, ``tune``, ``cv_discrete``), each with ``read_cfg`` (validates
+``[controller.<method>]``), ``design(spec)`` and a plain API on toolbox.lti or python-control
+plants and numbers,
 re-exported here. ``steady_state`` holds the symbolic steady-state analysis
 of paper 000. ``_defaults`` derives the parameters a spec leaves out from
 the sample time and the delay (``default_bandwidth``, ``current_scale``,
-``speed_scale``, ``largest_stable_pi_bandwidth``). ``cv_discrete`` is the
-direct discrete-time complex-vector design (Hinkkanen et al. 2016) with its
-exact closed-loop analysis, stand-alone: not a registered method, as no
-artifact executes its speed-dependent gains (its module docstring says what
-one would need).
+``speed_scale``, ``largest_stable_pi_bandwidth``). ``cv_discrete`` is method
+``cv``, the direct discrete-time complex-vector design (Hinkkanen et al.
+2016) with its exact closed-loop analysis; its artifact carries the law
+(``toolbox.artifact.CvLaw``), whose speed-dependent gains every later stage
+computes at the measured speed (toolbox/ARCHITECTURE.md "Direct
+discrete-time complex-vector control").
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ from datetime import datetime, timezone
 from typing import Any
 
 from .._version import toolbox_version
-from ..artifact import (AxisController, AxisWeights, ControllerArtifact, Decoupling,
+from ..artifact import (AxisController, AxisWeights, ControllerArtifact, CvLaw, Decoupling,
                         FcsWeights, spec_sha256)
 
 __all__ = ["make_artifact", "decoupling_from_motor"]
@@ -22,12 +22,13 @@ def decoupling_from_motor(motor, *, cross: bool = True, emf: bool = True) -> Dec
 def make_artifact(spec, axes: dict[str, AxisController], decoupling: Decoupling,
                   design_parameters: dict[str, Any], equations: list[str], *,
                   fcs: FcsWeights | None = None,
-                  weights: dict[str, AxisWeights] | None = None) -> ControllerArtifact:
+                  weights: dict[str, AxisWeights] | None = None,
+                  cv: CvLaw | None = None) -> ControllerArtifact:
     """Assemble the artifact of a design made from ``spec``.
 
     ``design_parameters`` are informational (shown in the report, never
     branched on); what a later stage executes or draws goes in the typed
-    fields (``decoupling``, ``fcs``, ``weights``). ``equations`` lists the
+    fields (``decoupling``, ``fcs``, ``weights``, ``cv``). ``equations`` lists the
     source equations used (e.g. ``"000 eq (11)"``), recorded in the provenance.
 
     The decoupling's ``delay_compensation_time`` is the drive's voltage
@@ -46,6 +47,7 @@ def make_artifact(spec, axes: dict[str, AxisController], decoupling: Decoupling,
         decoupling=decoupling,
         fcs=fcs,
         weights=weights,
+        cv=cv,
         design_parameters=design_parameters,
         provenance={
             "version": toolbox_version(),

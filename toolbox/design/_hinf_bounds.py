@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import poly_roots, trimmed_coeffs
+from ..lti import poly_roots, trimmed_coeffs
 from ._hinf_plant import _tf_coeffs, _zpk
 
 __all__ = ["WeightBound", "weight_bound_check"]
@@ -50,7 +50,7 @@ class _Factor:
     division). Measured on paper 003's q-axis controller at 109 of the 4000
     grid points against a 40-digit evaluation of its realisation: relative
     error 5e-15 median, 3e-12 at worst, where the modal sum of
-    :meth:`toolbox._lti.StateSpace.evaluate` lost 2e-10 median."""
+    :meth:`toolbox.lti.StateSpace.evaluate` lost 2e-10 median."""
 
     gain: float
     roots: list[complex]
@@ -99,7 +99,7 @@ def weight_bound_check(G: Any, K: Any, w1: Any, w2: Any = None, w3: Any = None,
 
     Parameters
     ----------
-    G, K : LTI system (python-control or toolbox._lti)
+    G, K : LTI system (python-control or toolbox.lti)
         Plant (A/V) and controller (V/A).
     w1, w2, w3 : control.LTI or float or None
         Weights; ``None`` skips the function.

@@ -47,7 +47,7 @@ The full-order 2x2 optimum of each nominal speed model (no structure
 constraint, the Riccati route of Theorem 1, :func:`full_order_gamma`) is a
 lower bound of what any controller reaches on that model; the structured
 controller's level on it is at least that bound. Norms are SLICOT ab13dd
-(:func:`toolbox._lti.linf_norm`).
+(:func:`toolbox.lti.linf_norm`).
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._lti import StateSpace, TransferFunction, append, linf_norm, pade, series, tf2ss
+from ..lti import StateSpace, TransferFunction, append, linf_norm, pade, series, tf2ss
 from ._hinf_gamma import gamma_iteration
 from ._hinf_plant import PartitionedPlant, closed_loop
 
@@ -265,7 +265,7 @@ def synthesise_structured(plants: list, start: np.ndarray, tau_min: float,
     -------
     StructuredResult
     """
-    from scipy.optimize import minimize
+    from scipy.optimize import minimize  # lazy: scipy.optimize, 240 modules
 
     p0 = np.asarray(start, float).reshape(2, 3).copy()
     p0[:, 2] = np.maximum(p0[:, 2] - tau_min, 1e-3 * tau_min)

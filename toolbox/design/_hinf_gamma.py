@@ -4,7 +4,7 @@ The smallest feasible gamma by plain bisection on Theorem 1
 (:mod:`._hinf_riccati`), the back-off that keeps the controller realisable
 at the sample time (at the exact optimum 003's q-axis controller has a pole
 near -2e10 rad/s, toolbox/ARCHITECTURE.md "H-infinity numerics"), and the
-recomputed closed-loop norm (SLICOT ab13dd through :func:`toolbox._lti.linf_norm`).
+recomputed closed-loop norm (SLICOT ab13dd through :func:`toolbox.lti.hinf_norm`).
 """
 
 from __future__ import annotations
@@ -16,14 +16,14 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .._lti import StateSpace, linf_peak
+from ..lti import StateSpace, hinf_norm
 from ..errors import DesignInfeasible, SpecError
 from ._hinf_plant import PartitionedPlant, _lft, _poles_zeros
 from ._hinf_riccati import (GAMMA_KEY, _check_gamma, _controller_from, _prepare, _Prepared,
                             _unscale_xy)
 
 __all__ = ["GammaBelowOptimum", "gamma_iteration", "HinfResult", "synthesize", "pole_limit",
-           "effective_poles", "fastest_pole_modulus", "hinf_norm"]
+           "effective_poles", "fastest_pole_modulus"]
 
 
 class GammaBelowOptimum(DesignInfeasible):
@@ -146,7 +146,7 @@ def effective_poles(K: Any, cancel_tol: float = 1e-2) -> np.ndarray:
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         SISO controller.
     cancel_tol : float
         Relative distance below which a pole-zero pair is a cancellation.
@@ -194,7 +194,7 @@ class HinfResult:
 
     Attributes
     ----------
-    K : toolbox._lti.StateSpace
+    K : toolbox.lti.StateSpace
         Central controller, error (A) -> voltage (V).
     gamma : float
         Level the controller was designed for.
@@ -205,7 +205,7 @@ class HinfResult:
     X, Y : ndarray
         Riccati solutions of eq (18)-(19) at ``gamma``.
     closed_loop_norm : float
-        ||F_l(P, K)||_inf recomputed (LFT + :func:`toolbox._lti.linf_norm`).
+        ||F_l(P, K)||_inf recomputed (LFT + :func:`toolbox.lti.hinf_norm`).
     fastest_pole : float
         Largest |pole| of K that is not nearly cancelled (rad/s).
     pole_limit : float or None
@@ -225,20 +225,6 @@ class HinfResult:
     pole_limit: float | None
     warnings: list[str] = field(default_factory=list)
 
-
-
-def hinf_norm(sys: Any) -> float:
-    """H-infinity norm: the L-infinity norm (SLICOT ab13dd,
-    :func:`toolbox._lti.linf_norm`), inf when a pole has ``Re >= -1e-8``
-    (unstable, or on the imaginary axis within np.isclose's tolerance)."""
-    A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
-    return _hinf_norm(A, B, C, D)
-
-
-def _hinf_norm(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> float:
-    if A.shape[0] and np.linalg.eigvals(A).real.max() >= -1e-8:
-        return math.inf
-    return linf_peak(A, B, C, D)[0]
 
 
 def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal",
@@ -319,7 +305,7 @@ def synthesize(P: PartitionedPlant, gamma: float | Literal["optimal"] = "optimal
                      f"limit pi/Ts = {limit:.4g} rad/s"
                      + (f" even with back-off {b:g}" if gamma_opt is not None else "")
                      + ": raise gamma (back-off) or lower the high-frequency weights")
-    cl_norm = _hinf_norm(*_lft(P, (K.A, K.B, K.C, K.D)))
+    cl_norm = hinf_norm(StateSpace(*_lft(P, (K.A, K.B, K.C, K.D))))
     if not cl_norm <= res.gamma * (1 + 1e-6) + 1e-12:
         notes.append(f"recomputed closed-loop norm {cl_norm:.6g} exceeds the design "
                      f"gamma {res.gamma:.6g}: the Riccati solution is inaccurate")

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import (StateSpace, TransferFunction, balanced_companion, minreal_coeffs,
+from ..lti import (StateSpace, TransferFunction, balanced_companion, minreal_coeffs,
                     trimmed_coeffs, as_statespace, diagonal_scaling)
 
 __all__ = ["PartitionedPlant", "augment_mixed_sensitivity", "balance_plant", "closed_loop"]
@@ -113,7 +113,7 @@ class PartitionedPlant:
         return self.C2.shape[0]
 
     def to_statespace(self) -> StateSpace:
-        """Return P as a :class:`toolbox._lti.StateSpace`, inputs [w, u], outputs [z, y]."""
+        """Return P as a :class:`toolbox.lti.StateSpace`, inputs [w, u], outputs [z, y]."""
         B = np.hstack([self.B1, self.B2])
         C = np.vstack([self.C1, self.C2])
         D = np.block([[self.D11, self.D12], [self.D21, self.D22]])
@@ -197,8 +197,8 @@ def _tf_realisation(num: Any, den: Any) -> tuple[np.ndarray, ...]:
     """Minimal realisation (A, B, C, D) of the proper SISO ``num/den``.
 
     Common roots of num and den are cancelled first
-    (:func:`toolbox._lti.minreal_coeffs`, python-control's rule), then
-    :func:`toolbox._lti.balanced_companion` gives the controllable canonical
+    (:func:`toolbox.lti.minreal_coeffs`, python-control's rule), then
+    :func:`toolbox.lti.balanced_companion` gives the controllable canonical
     form, whose states are scaled by powers of two (exact) so that B and C
     have comparable entries (paper 003's w3 has C ~ -2.7e10 for B = 1
     otherwise).
@@ -243,7 +243,7 @@ def augment_mixed_sensitivity(G: Any, w1: Any, w2: Any = None,
 
     Parameters
     ----------
-    G : LTI system (python-control or toolbox._lti)
+    G : LTI system (python-control or toolbox.lti)
         SISO plant, e.g. eq (34) :math:`G_q = 1/(r_s + L_q s)` (A/V).
     w1, w2, w3 : control.LTI or float or None
         Weights on S, KS, T; ``w2``/``w3`` may be ``None``.

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import StateSpace, spectral_norm
+from ..lti import StateSpace, spectral_norm
 from ..errors import DesignInfeasible, SpecError
 from ._hinf_assumptions import _check_balanced
 from ._hinf_plant import PartitionedPlant, balance_plant
@@ -507,7 +507,7 @@ def central_controller(P: PartitionedPlant, gamma: float) -> StateSpace:
 
     Returns
     -------
-    toolbox._lti.StateSpace
+    toolbox.lti.StateSpace
         The controller, of the order of P.
 
     Raises

@@ -14,10 +14,15 @@ from typing import Any
 
 import numpy as np
 
+from ..lti import TransferFunction, feedback
 
 from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES
-from ..errors import SpecError
+from ..errors import SpecError, DesignInfeasible
 from ..spec import Table
+from ..plant import max_electrical_speed
+from ._defaults import default_bandwidth
+from ._hinf_coupled import (PADE_ORDER, SPEED_FRACTIONS, axis_controller, coupled_plant,
+                            full_order_gamma, model_set, synthesise_structured)
 
 __all__ = ["AtSpeedCfg", "read_at_speed", "design_at_speed"]
 
@@ -88,8 +93,6 @@ def read_at_speed(table: Table, motor, drive) -> AtSpeedCfg | None:
         Unknown key, a negative speed, a range that is not ``[lo, hi]`` around
         the nominal value; key path ``controller.hinf.at_speed.<key>``.
     """
-    from ..plant import max_electrical_speed
-
     if not table.has("at_speed"):
         return None
     t = table.table("at_speed", KEYS)
@@ -129,11 +132,6 @@ def design_at_speed(weights: dict, motor, drive, decoupling, cfg: AtSpeedCfg) ->
         No structured controller stabilises every model (key
         ``controller.hinf.at_speed``).
     """
-    from ..errors import DesignInfeasible
-    from ._defaults import default_bandwidth
-    from ._hinf_coupled import (PADE_ORDER, SPEED_FRACTIONS, axis_controller, coupled_plant,
-                                full_order_gamma, model_set, synthesise_structured)
-
     p = motor.pole_pairs
     ts = drive.sample_time
     delay = (drive.delay_samples + 0.5) * ts

@@ -13,23 +13,21 @@ perturbation (residualisation of fast modes, keeps the DC gain).
 
 from __future__ import annotations
 
-import cmath
 import math
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
-import scipy.linalg as sla
 
-from .._lti import (StateSpace, as_statespace, balanced_blocks, balanced_companion, linf_peak,
-                    parallel, pencil_eigvals, state_scaling)
+from ..lti import (LoopMargins, StateSpace, as_statespace, balanced_companion,
+                    balanced_truncation, loop_margins as lti_loop_margins,
+                    loop_margins_and_poles, parallel, residualise, stable_split)
 from ._hinf_plant import _ss_blocks, _zpk
 
 __all__ = [
-    "ReductionResult", "reduce_controller", "balanced_truncation", "residualise",
-    "replace_integrators", "remove_cancellations", "stable_split",
-    "LoopMargins", "loop_margins", "MarginComparison", "compare_margins",
+    "ReductionResult", "reduce_controller", "replace_integrators", "remove_cancellations",
+    "loop_margins", "MarginComparison", "compare_margins",
 ]
 
 
@@ -43,10 +41,10 @@ def _from_zpk(z: np.ndarray, p: np.ndarray, k: float) -> StateSpace:
 
 def _zpk_realisation(z: np.ndarray, p: np.ndarray, k: float) -> tuple[np.ndarray, ...]:
     """A, B, C, D of k prod(s - z)/prod(s - p): scipy.signal's ``zpk2ss``
-    (the controllable canonical form of :func:`toolbox._lti.tf2ss`) without its
+    (the controllable canonical form of :func:`toolbox.lti.tf2ss`) without its
     argument handling (~0.3 ms a call), then the diagonal balancing
-    of :func:`toolbox._lti.balanced`: the same numbers, from the polynomials'
-    coefficients as Python floats (:func:`toolbox._lti.balanced_companion`,
+    of :func:`toolbox.lti.balanced`: the same numbers, from the polynomials'
+    coefficients as Python floats (:func:`toolbox.lti.balanced_companion`,
     ~10 array calls instead of ~30)."""
     if p.size == 0:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[float(k)]])
@@ -64,7 +62,7 @@ def _poly_from_roots(r: list[complex]) -> list[float]:
     conjugate-closed set (those of a real system, as :func:`_real_conj`
     leaves them): a linear factor per real root and the real quadratic
     ``s^2 - Re(x + y) s + Re(x y)`` per pair ``x, y`` (``y = conj(x)`` up to
-    rounding: the zeros from a QZ pencil, :func:`toolbox._lti.invariant_zeros`, differ
+    rounding: the zeros from a QZ pencil, :func:`toolbox.lti.invariant_zeros`, differ
     in the last bits; exact conjugates give ``-2 Re(x)`` and ``|x|^2``), in
     Python floats (a few roots: ~1 us where ``np.poly``'s ``np.convolve`` per
     root took ~4-8). As accurate as ``np.poly``'s complex products, whose
@@ -127,7 +125,7 @@ def remove_cancellations(K: Any, tol: float = 1e-2,
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         SISO controller.
     tol : float
         Relative distance defining a cancellation.
@@ -136,7 +134,7 @@ def remove_cancellations(K: Any, tol: float = 1e-2,
 
     Returns
     -------
-    Kr : toolbox._lti.StateSpace
+    Kr : toolbox.lti.StateSpace
     actions : list of str
         One line per removed pair.
     """
@@ -171,14 +169,14 @@ def replace_integrators(K: Any, tol: float) -> tuple[StateSpace, list[str]]:
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         SISO controller.
     tol : float
         Magnitude below which a pole is taken as an integrator (rad/s).
 
     Returns
     -------
-    Kr : toolbox._lti.StateSpace
+    Kr : toolbox.lti.StateSpace
     actions : list of str
     """
     Kz, actions = _integrators(_zpk(K), tol)
@@ -193,123 +191,6 @@ def _integrators(Kz: tuple, tol: float) -> tuple[tuple, list[str]]:
     return (z, np.array([0j if abs(pi) < tol else pi for pi in pl], complex), k), actions
 
 
-def stable_split(K: Any, tol: float = 1e-12) -> tuple[StateSpace, StateSpace]:
-    """Additive split K = K_s + K_u into stable part and the rest.
-
-    Ordered real Schur form, then a Sylvester equation block-diagonalises A.
-    Poles with Re p >= -tol * max|p| go to K_u (integrators included); the
-    feedthrough stays in K_s.
-
-    Parameters
-    ----------
-    K : LTI system (python-control or toolbox._lti)
-    tol : float
-        Relative margin defining "stable".
-
-    Returns
-    -------
-    Ks, Ku : toolbox._lti.StateSpace
-    """
-    Kss = as_statespace(K)
-    A, B, C, D = (np.asarray(x, float) for x in (Kss.A, Kss.B, Kss.C, Kss.D))
-    n = A.shape[0]
-    if n == 0:
-        return Kss, StateSpace(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[0.0]])
-    lim = tol * max(1.0, float(np.max(np.abs(np.linalg.eigvals(A)))))
-    T, U, ns = sla.schur(A, output="real", sort=lambda x, y: x < -lim)
-    A11, A12, A22 = T[:ns, :ns], T[:ns, ns:], T[ns:, ns:]
-    X = sla.solve_sylvester(A11, -A22, -A12)         # A11 X - X A22 + A12 = 0
-    Bt, Ct = U.T @ B, C @ U
-    B1 = Bt[:ns] - X @ Bt[ns:]
-    C2 = Ct[:, ns:] + Ct[:, :ns] @ X
-    Ks = StateSpace(A11, B1, Ct[:, :ns], D)
-    Ku = StateSpace(A22, Bt[ns:], C2, np.zeros_like(D))
-    return Ks, Ku
-
-
-def _gramian_factor(M: np.ndarray) -> np.ndarray:
-    """L with L L^T = M for a symmetric positive semidefinite M."""
-    w, V = np.linalg.eigh(0.5 * (M + M.T))
-    return V * np.sqrt(np.clip(w, 0.0, None))[None, :]
-
-
-def balanced_truncation(K: Any, order: int) -> tuple[StateSpace, np.ndarray, float]:
-    r"""Square-root balanced truncation of a stable system.
-
-    Gramians :math:`AP + PA^T + BB^T = 0`, :math:`A^TQ + QA + C^TC = 0`
-    (scipy ``solve_continuous_lyapunov`` on diagonally balanced data),
-    :math:`L_Q^T L_P = U\Sigma V^T`, projections
-    :math:`T_r = L_P V_r \Sigma_r^{-1/2}`, :math:`W_r = L_Q U_r \Sigma_r^{-1/2}`.
-    Error bound :math:`\|K - K_r\|_\infty \le 2\sum_{i>r}\sigma_i`.
-
-    Parameters
-    ----------
-    K : LTI system (python-control or toolbox._lti)
-        Stable system.
-    order : int
-        States kept.
-
-    Returns
-    -------
-    Kr : toolbox._lti.StateSpace
-    hsv : ndarray
-        Hankel singular values, decreasing.
-    bound : float
-        2 * sum of the discarded Hankel singular values.
-    """
-    Kss = as_statespace(K)
-    A, B, C, D = (np.asarray(x, float) for x in (Kss.A, Kss.B, Kss.C, Kss.D))
-    if np.any(np.linalg.eigvals(A).real >= 0):
-        raise ValueError("balanced_truncation: K must be stable; split it with stable_split")
-    t = state_scaling(A, B[:, :1], C[:1, :])
-    A, B, C = A * t[None, :] / t[:, None], B / t[:, None], C * t[None, :]
-    Lp = _gramian_factor(sla.solve_continuous_lyapunov(A, -B @ B.T))
-    Lq = _gramian_factor(sla.solve_continuous_lyapunov(A.T, -C.T @ C))
-    U, hsv, Vt = np.linalg.svd(Lq.T @ Lp)
-    r = int(min(max(order, 0), np.count_nonzero(hsv > hsv[0] * 1e-14) if hsv.size else 0))
-    sr = 1.0 / np.sqrt(hsv[:r])
-    Tr = Lp @ Vt[:r].T * sr[None, :]
-    Wr = Lq @ U[:, :r] * sr[None, :]
-    Kr = StateSpace(Wr.T @ A @ Tr, Wr.T @ B, C @ Tr, D)
-    return Kr, hsv, float(2.0 * np.sum(hsv[r:]))
-
-
-def residualise(K: Any, fast: float) -> tuple[StateSpace, list[str]]:
-    """Singular-perturbation reduction of modes with |p| > fast (rad/s).
-
-    The fast block of the (block-diagonalised) modal form is set to its
-    steady state: Ar = A11 - A12 A22^-1 A21, ..., Dr = D - C2 A22^-1 B2, so
-    the DC gain is kept exactly.
-
-    Parameters
-    ----------
-    K : LTI system (python-control or toolbox._lti)
-    fast : float
-        Threshold (rad/s).
-
-    Returns
-    -------
-    Kr : toolbox._lti.StateSpace
-    actions : list of str
-    """
-    Kss = as_statespace(K)
-    A, B, C, D = (np.asarray(x, float) for x in (Kss.A, Kss.B, Kss.C, Kss.D))
-    if A.shape[0] == 0:
-        return Kss, []
-    ev = np.linalg.eigvals(A)
-    T, U, ns = sla.schur(A, output="real", sort=lambda x, y: abs(complex(x, y)) <= fast)
-    if ns == A.shape[0]:
-        return Kss, []
-    A11, A12, A22 = T[:ns, :ns], T[:ns, ns:], T[ns:, ns:]
-    X = sla.solve_sylvester(A11, -A22, -A12)
-    Bt, Ct = U.T @ B, C @ U
-    B1, B2 = Bt[:ns] - X @ Bt[ns:], Bt[ns:]
-    C1, C2 = Ct[:, :ns], Ct[:, ns:] + Ct[:, :ns] @ X
-    Dr = D - C2 @ np.linalg.solve(A22, B2)
-    gone = ev[np.abs(ev) > fast]
-    return StateSpace(A11, B1, C1, Dr), [f"residualised fast mode(s) {', '.join(f'{g:.4g}' for g in gone)}"]
-
-
 # --------------------------------------------------------------------------
 # driver
 # --------------------------------------------------------------------------
@@ -319,7 +200,7 @@ class ReductionResult:
 
     Attributes
     ----------
-    K : toolbox._lti.StateSpace
+    K : toolbox.lti.StateSpace
         Reduced controller (V/A).
     order_before, order_after : int
         Number of states before and after.
@@ -354,7 +235,7 @@ def reduce_controller(K: Any, order: int | None = None,
 
     Parameters
     ----------
-    K : LTI system (python-control or toolbox._lti)
+    K : LTI system (python-control or toolbox.lti)
         SISO controller.
     order : int, optional
         Target number of states.
@@ -418,176 +299,22 @@ def reduce_controller(K: Any, order: int | None = None,
 # --------------------------------------------------------------------------
 # margins before / after
 # --------------------------------------------------------------------------
-@dataclass
-class LoopMargins:
-    """Classical margins of the loop L = G K (paper 003 sect. 3.3, Fig. 7).
-
-    Attributes
-    ----------
-    gain_margin_db : float
-        Gain margin (dB), inf when the phase never crosses -180 deg.
-    phase_crossover_rad_s : float
-        Frequency of the gain margin (rad/s).
-    phase_margin_deg : float
-        Phase margin (deg).
-    gain_crossover_rad_s : float
-        Frequency of the phase margin (rad/s).
-    stability_margin : float
-        M_m = min |1 + L(jw)| = 1/||S||_inf (peak refined on the grid).
-    static_error : float
-        1/(1 + L(0)) (0 with an integrator).
-    """
-
-    gain_margin_db: float
-    phase_crossover_rad_s: float
-    phase_margin_deg: float
-    gain_crossover_rad_s: float
-    stability_margin: float
-    static_error: float
-
-
-#: band in which the crossings are sought (rad/s): that of the grid of
-#: :func:`toolbox.analysis.lti_loop_margins`, so both routes see the same crossings
-MARGIN_BAND = (1e-3, 1e8)
-#: a zero of the crossing function counts as imaginary when |Re| <= this * |zero|
-_IMAG_TOL = 1e-6
-
-
-def _balanced_series(first: tuple,
-                     second: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """A, B, C, d of ``second * first`` (SISO; the signal passes ``first``
-    first), with A, B, C in the coordinates of :func:`toolbox._lti.balanced`
-    (the same powers of two, so the same numbers): the system matrix
-    ``[[A, B], [C, 0]]`` is written once (:func:`toolbox._lti.balanced_blocks`)."""
-    A1, B1, C1, D1 = first
-    A2, B2, C2, D2 = second
-    n1, n = A1.shape[0], A1.shape[0] + A2.shape[0]
-    d1, d2 = float(D1[0, 0]), float(D2[0, 0])
-    M = np.zeros((n + 1, n + 1))
-    M[:n1, :n1], M[n1:n, n1:n], M[n1:n, :n1] = A1, A2, B2 * C1
-    M[:n1, n:], M[n1:n, n:], M[n:, :n1], M[n:, n1:n] = B1, B2 * d1, d2 * C1, C2
-    return (*balanced_blocks(M), d2 * d1)
-
-
-def _imag_axis_zeros(lam: list[complex]) -> list[float]:
-    """Frequencies w in :data:`MARGIN_BAND` of the zeros ``lam`` of a
-    crossing function on the imaginary axis. The crossing functions below
-    are para-Hermitian (even in s), so their zeros are symmetric about the
-    imaginary axis and a simple zero on it stays there up to rounding."""
-    lo, hi = MARGIN_BAND
-    # a few eigenvalues: scalar code beats masked array operations (libm's
-    # hypot for the moduli, which may differ from numpy's in the last bit:
-    # a zero on the axis is ~1e-12 off it, far from the 1e-6 threshold)
-    return sorted(z.imag for z in lam if lo <= z.imag <= hi and abs(z.real) <= _IMAG_TOL * abs(z))
-
-
-def _crossings(A: np.ndarray, B: np.ndarray, C: np.ndarray,
-               d: float) -> tuple[list[float], list[float]]:
-    """Gain crossovers (``|L(jw)| = 1``: zeros of ``L(s) L(-s) - 1``) and phase
-    crossover candidates (``Im L(jw) = 0``: zeros of ``L(s) - L(-s)``) of the
-    SISO loop ``L = (A, B, C, d)``; ``L(-s)`` is realised by ``(-A, -B, C, d)``.
-
-    The zeros are the finite eigenvalues of the QZ pencils ``(M, diag(I, 0))``
-    of the system matrices, written directly: ``L(s) L(-s) - 1`` is the series
-    connection ``[-A 0 -b; b c A b d; d c c d^2 - 1]``, ``L(s) - L(-s)`` the
-    parallel one ``[A 0 b; 0 -A -b; c -c 0]``. (For ``d^2 != 1`` the first
-    could be deflated to a standard eigenproblem of order 2n, ~5 us less per
-    loop; measured on paper 003's d axis it put a crossover 1.8e-11 from a
-    40-digit root where QZ is 1.5e-12 off, so QZ stays.)"""
-    n = A.shape[0]
-    b, c, minus_A, minus_b = B[:, 0], C[0], -A, -B[:, 0]
-    Mg, Mp = np.zeros((2, 2 * n + 1, 2 * n + 1))
-    Mg[:n, :n], Mg[:n, -1], Mg[-1, n:-1] = minus_A, minus_b, c
-    Mg[n:-1, :n], Mg[n:-1, n:-1], Mg[n:-1, -1] = B * C, A, b * d
-    Mg[-1, :n], Mg[-1, -1] = d * c, d * d - 1.0
-    Mp[:n, :n], Mp[:n, -1], Mp[-1, :n] = A, b, c
-    Mp[n:-1, n:-1], Mp[n:-1, -1], Mp[-1, n:-1] = minus_A, minus_b, -c
-    E = np.diag([1.0] * (2 * n) + [0.0])
-    return (_imag_axis_zeros(pencil_eigvals(Mg, E)),
-            _imag_axis_zeros(pencil_eigvals(Mp, E)))
-
-
-def _response(A: np.ndarray, B: np.ndarray, C: np.ndarray, d: float,
-              w: list[float]) -> list[complex]:
-    """``L(jw)`` at a few frequencies (one LU solve each)."""
-    if not w:
-        return []
-    n = A.shape[0]
-    # C made complex once: numpy would cast it at every product
-    Bc, c, minus_A = B.astype(complex), C[0].astype(complex), -A.astype(complex)
-    out = []
-    for wi in w:
-        M = minus_A.copy()
-        M.reshape(-1)[::n + 1] += 1j * wi               # the diagonal (a view: M is contiguous)
-        out.append(complex(c @ np.linalg.solve(M, Bc)[:, 0]) + d)
-    return out
-
-
 def loop_margins(G: Any, K: Any) -> LoopMargins:
-    """Margins of L = G K, computed exactly rather than on a grid.
-
-    The crossings are the imaginary-axis zeros of ``L(s) L(-s) - 1`` (gain
-    crossovers) and ``L(s) - L(-s)`` (phase crossovers, kept where
-    ``Re L < 0``), sought in :data:`MARGIN_BAND`; the headline margins follow
-    the rule of :func:`toolbox.analysis.frequency_margins` (python-control's:
-    the crossing closest to instability), and
-    ``M_m = 1/||S||_inf`` is the L-infinity norm of ``S = 1/(1 + L)``
-    (:func:`toolbox._lti.linf_norm`: SLICOT ab13dd, relative tolerance
-    1e-10). The tests check the numbers against
-    :func:`toolbox.analysis.lti_loop_margins` (the toolbox's grid route,
-    20000 points and refinement, ~20 times slower) and python-control.
+    """:func:`toolbox.lti.loop_margins` of ``L = G K`` (exact crossings,
+    ``M_m`` by SLICOT ab13dd), with transfer functions realised as the
+    H-infinity design realises them (cancellation, then the balanced companion
+    form: :func:`toolbox.design._hinf_plant._ss_blocks`).
 
     Parameters
     ----------
-    G, K : LTI system (python-control or toolbox._lti) or float
+    G, K : LTI system (python-control or toolbox.lti) or float
         Plant (A/V) and controller (V/A), SISO.
 
     Returns
     -------
     LoopMargins
     """
-    return _margins(_ss_blocks(G), _ss_blocks(K))[0]
-
-
-def _margins(g: tuple, k: tuple) -> tuple[LoopMargins, np.ndarray, float]:
-    """:func:`loop_margins` of the loop of the realisations ``g`` and ``k``,
-    the closed-loop poles (those of ``S``, whose norm gave ``M_m``) and the
-    frequency of the peak of ``|S|``."""
-    A, B, C, d = _balanced_series(k, g)
-    if A.shape[0] == 0:
-        gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
-        return (LoopMargins(gm_db, w_gm, pm, w_pm, abs(1.0 + d), abs(1.0 / (1.0 + d))),
-                np.zeros(0, complex), math.inf)
-    gm_db, w_gm, pm, w_pm = _gain_phase_margins(A, B, C, d)
-    f = 1.0 / (1.0 + d)                              # S = 1/(1 + L)
-    fB = f * B
-    Acl = A - fB @ C
-    peak, w_peak = linf_peak(Acl, fB, -f * C, np.array([[f]]))
-    poles = np.linalg.eigvals(Acl)
-    if any(abs(z) < 1e-12 for z in np.linalg.eigvals(A).tolist()):   # an integrator: no static error
-        ess = 0.0
-    else:
-        ess = float(abs(1.0 / (1.0 + d - float((C @ np.linalg.solve(A, B))[0, 0]))))
-    return LoopMargins(gm_db, w_gm, pm, w_pm, 1.0 / peak, ess), poles, w_peak
-
-
-def _gain_phase_margins(A: np.ndarray, B: np.ndarray, C: np.ndarray,
-                        d: float) -> tuple[float, float, float, float]:
-    """(GM dB, its phase crossover, PM deg, its gain crossover) of L = (A, B, C, d),
-    inf and nan without crossing."""
-    w_gc, w_pc = _crossings(A, B, C, d) if A.shape[0] else ([], [])
-    # one call for both sets of crossings (one setup of the complex data); the
-    # crossings are few: Python numbers (cmath's phase is libm's atan2, ~0.1 us
-    # against ~1.5 us for np.angle's array round trip; the two differ in the
-    # last bit on ~7 % of arguments)
-    L = _response(A, B, C, d, w_gc + w_pc)
-    Lgc, Lpc = L[:len(w_gc)], L[len(w_gc):]
-    pms = [(math.degrees(cmath.phase(-x)), w) for x, w in zip(Lgc, w_gc)]
-    gms = [(-20 * math.log10(abs(x)), w) for x, w in zip(Lpc, w_pc)
-           if x.real < 0 and abs(x.imag) <= 1e-6 * abs(x)]
-    gm_db, w_gm = min(gms, key=lambda g: abs(g[0])) if gms else (math.inf, math.nan)
-    pm, w_pm = min(pms, key=lambda p: abs(p[0])) if pms else (math.inf, math.nan)
-    return float(gm_db), float(w_gm), float(pm), float(w_pm)
+    return lti_loop_margins(StateSpace(*_ss_blocks(G)), StateSpace(*_ss_blocks(K)))
 
 
 @dataclass
@@ -625,7 +352,7 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
 
     Parameters
     ----------
-    G, K, Kr : LTI system (python-control or toolbox._lti)
+    G, K, Kr : LTI system (python-control or toolbox.lti)
         Plant, full and reduced controllers.
     max_loss : float
         Allowed relative loss, default 0.1 (10 %).
@@ -634,9 +361,9 @@ def compare_margins(G: Any, K: Any, Kr: Any, max_loss: float = 0.1) -> MarginCom
     -------
     MarginComparison
     """
-    g = _ss_blocks(G)
-    a = _margins(g, _ss_blocks(K))[0]
-    b, poles, _ = _margins(g, _ss_blocks(Kr))
+    g = StateSpace(*_ss_blocks(G))
+    a = lti_loop_margins(g, StateSpace(*_ss_blocks(K)))
+    b, poles, _ = loop_margins_and_poles(g, StateSpace(*_ss_blocks(Kr)))
     flags = []
     pairs = {"gain margin": (10 ** (a.gain_margin_db / 20), 10 ** (b.gain_margin_db / 20)),
              "phase margin": (a.phase_margin_deg, b.phase_margin_deg),

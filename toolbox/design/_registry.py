@@ -21,7 +21,7 @@ METHOD_MODULES = {
     "pi": "pi", "ip": "pi", "pi_lag": "pi",
     "tc": "total_comp", "tci": "total_comp",
     "ilq": "ilq", "lq": "lq", "hinf": "hinf", "fcs_mpc": "fcs_mpc",
-    "robust_pi": "robust_pi", "tune": "tune",
+    "robust_pi": "robust_pi", "tune": "tune", "cv": "cv_discrete",
 }
 
 

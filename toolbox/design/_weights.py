@@ -5,7 +5,7 @@ ensuring the regulation of currents ... applied to a PMS motor") are given as
 explicit rational functions, eq (44)-(49); others are most easily specified by
 their low-frequency gain, crossover and high-frequency gain, as MATLAB's
 ``makeweight`` does.  Every constructor here returns a
-:class:`toolbox._lti.TransferFunction` and checks that the weight is usable in
+:class:`toolbox.lti.TransferFunction` and checks that the weight is usable in
 the augmented plant of eq (50)-(64): finite coefficients, proper, stable.
 """
 
@@ -16,7 +16,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from toolbox._lti import TransferFunction
+from toolbox.lti import TransferFunction
 from toolbox.errors import SpecError
 
 #: Highest makeweight order (see :func:`makeweight`).
@@ -69,7 +69,7 @@ def validate_weight(w: Any, key: str = _DEFAULT_KEY,
     Returns
     -------
     TransferFunction
-        ``w`` as a :class:`toolbox._lti.TransferFunction` (the same object if
+        ``w`` as a :class:`toolbox.lti.TransferFunction` (the same object if
         it was one).
 
     Raises

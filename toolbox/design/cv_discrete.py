@@ -1,11 +1,16 @@
-"""Direct discrete-time complex-vector current control (design and exact analysis).
+"""Direct discrete-time complex-vector current control: method ``cv``.
 
-Stand-alone: NOT a registered design method. The law's gains are functions
-of the measured speed (matrix exponentials of ``omega Ts``), which the
-executed structure of a ``ControllerArtifact`` (per-axis LTI laws plus the
-static ``decoupling`` ``v += cross w_m [[0, -Lq_c], [Ld_c, 0]] i``,
-toolbox/ARCHITECTURE.md "controller.json") cannot represent; see
-"What an executable artifact would need" below.
+A registered design method (``controller.method = "cv"``, parameters in
+``[controller.cv]``: :func:`read_cfg`, :func:`design`). Its gains are
+functions of the measured speed (the exact discretisation at ``omega Ts``),
+so the artifact carries the law itself, the typed field
+:class:`toolbox.artifact.CvLaw` (the placed poles), and every executor
+computes the gains from it each period by the formulas below: the simulator
+kernel (``toolbox/sim/_kernel_cv.py``), the header
+(``toolbox/export/templates/cv.c.j2``) and, in Python, :func:`executed_gains`
+with :class:`CvDiscreteLaw`. The artifact's ``axes`` hold the law at
+standstill (exact there: at zero speed the plant and the gains decouple),
+from which the per-axis views (margins, Bode, step figures) are drawn.
 
 Source
 ------
@@ -84,31 +89,27 @@ complex-vector 2DOF PI, Briz, Degner, Lorenz 2000, complex integrator
 ``K1 = k_p L``, ``K2 = 0``, ``Ki = Ts (alpha_i I + w J) k_t L``,
 ``Aw = Ts (alpha_i I + w J)`` (:func:`motulator_gains`; equal outputs tested).
 
-Why today's artifact cannot execute it
---------------------------------------
-At a fixed speed the law is a 2x2 MIMO LTI law whose four gain matrices are
-full (off-diagonal terms in ``K1``, ``K2``, ``Ki``, ``Kt``; trigonometric and
-exponential in ``w Ts``). The artifact executes two SISO laws plus
-``W(w_m) i`` with ``W`` linear in ``w_m`` acting on the current only: the
-off-diagonal terms on the integrator, the delayed voltages and the
-reference, and the speed dependence of the diagonal terms, have no place.
+The executed law (method ``cv``)
+--------------------------------
+Each period, at the measured electrical speed ``w``: ``(Phi, Gamma)`` of
+(M2) with ``hold = "rotor"`` for the controller's model (the decoupling's
+``R_c``, ``Ld_c``, ``Lq_c``) and ``eps = (t_c - (d + 1/2) Ts) w``, the
+placement error the law expects with an exact speed (0 for the default
+``angle_compensation = "mid_period"``; ``-(d + 1/2) Ts w`` for ``"none"``,
+which the gains then compensate); gains (P)-(T) for the artifact's poles;
+law (L) with the EMF feedforward and the voltage limit of the drive. Two
+consequences of (P)-(T) the executors use: ``c_m`` are scalars
+(``c_m = (a_0 + .. + a_m) I``), hence ``Gamma Ki = delta(1) I`` and
+``Aw = Ki Kt^-1 = (1 - p_i) I``. The rotor hold is the model of every
+executor (the stationary hold of a PWM differs by ``O((w Ts)^2)``, covered
+by the robustness checks); :func:`executed_gains` is the Python route.
 
-What an executable artifact would need
----------------------------------------
-A typed field (e.g. ``discrete_cv``: ``alpha_c``, ``alpha_i``, ``delay_pole``,
-``hold``, the controller's ``R_c``, ``Ld_c``, ``Lq_c``, with ``axes`` holding
-the standstill law for display only, marked not executed) that
-
-* the simulator kernel executes per sample: ``Phi, Gamma`` of (M2) at
-  ``w_meas`` (closed-form 2x2 exponential, as ``analysis._statespace.zoh_2x2``;
-  the stationary hold needs the 4x4 one), the gains of (P)-(T), law (L)
-  with the realised-voltage integrator and delay states;
-* ``analysis._coupled`` builds as :func:`closed_loop_matrix` does (the law's
-  gains at ``w_meas``, the true plant at ``w``), so margins, sweeps and
-  certificates see it (the certificate's affine structure in ``w_meas`` is
-  lost: gains are not affine in it);
-* the header computes the same gains each period in C (``expf``,
-  ``cosf``, ``sinf`` and a 2x2 inverse: ~100 flops), float only.
+What is not yet executed: the coupled-loop analysis at speed
+(``analysis._coupled``, the MIMO margins, the sweep, the drift verdict and
+the certificates) still reads the artifact's ``axes`` and ``decoupling``,
+i.e. the standstill law; :func:`closed_loop_matrix` is the exact loop at
+speed (toolbox/ARCHITECTURE.md "Direct discrete-time complex-vector
+control").
 """
 
 from __future__ import annotations
@@ -119,12 +120,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
-from ..plant import dq_matrices
+from ..artifact import AxisController, CvLaw
+from ..lti import StateSpace
+from ..metrics import step_metrics
+from ..plant import dq_matrices, max_electrical_speed
+from ..spec import Table, check_rate
 from . import _defaults
+from ._common import decoupling_from_motor, make_artifact
 
 __all__ = ["HOLDS", "CvDiscreteGains", "CvDiscreteLaw", "dq_zoh", "cv_discrete_poles",
            "place_gains", "design_cv_discrete", "motulator_gains", "closed_loop_matrix",
-           "closed_loop_poles", "step_response", "step_figures"]
+           "closed_loop_poles", "step_response", "step_figures", "executed_gains",
+           "standstill_axes", "CvCfg", "read_cfg", "design"]
 
 HOLDS = ("rotor", "stationary")
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
@@ -316,7 +323,8 @@ def motulator_gains(Ld: float, Lq: float, sample_time: float, omega: float,
 
 
 class CvDiscreteLaw:
-    """Law (L) executed sample by sample (the reference a kernel or header would follow).
+    """Law (L) executed sample by sample (the Python reference of the simulator's
+    ``_kernel_cv`` and of the header, tested equal to them).
 
     Parameters
     ----------
@@ -438,11 +446,9 @@ def step_response(gains: CvDiscreteGains, R: float, Ld: float, Lq: float, omega:
 
 def step_figures(gains: CvDiscreteGains, R: float, Ld: float, Lq: float, omega: float,
                  sample_time: float, *, axis: str = "q", size: float = 1.0, **kw) -> dict:
-    """Step metrics (:func:`toolbox.sim.step_metrics`) of one axis' current for a
+    """Step metrics (:func:`toolbox.metrics.step_metrics`) of one axis' current for a
     reference step ``size`` (A) on that axis, plus the other axis' peak
     excursion ``cross_peak`` (A)."""
-    from ..sim import step_metrics          # the numba kernel loads only here
-
     k = "dq".index(axis)
     r = np.zeros(2)
     r[k] = size
@@ -450,3 +456,173 @@ def step_figures(gains: CvDiscreteGains, R: float, Ld: float, Lq: float, omega: 
     figs = {key: float(v) for key, v in step_metrics(t, i[:, k], 0.0, size, 0.0).items()}
     figs["cross_peak"] = float(np.max(np.abs(i[:, 1 - k])))
     return figs
+
+
+# ------------------------------------------------------------------ method cv
+def executed_gains(law: CvLaw, R: float, Ld: float, Lq: float, omega_meas: float,
+                   sample_time: float, delay_samples: int,
+                   delay_compensation_time: float) -> CvDiscreteGains:
+    """The gains the executors of method ``cv`` compute at one measured speed.
+
+    :meth:`toolbox.artifact.CvLaw.gains` (the one Python route, closed-form
+    ZOH) at one speed, as :class:`CvDiscreteGains`; the tests check it
+    against :func:`place_gains` on :func:`dq_zoh` (scipy ``expm``) with
+    ``eps = (t_c - (d + 1/2) Ts) w``.
+
+    Parameters
+    ----------
+    law : CvLaw
+        The artifact's poles.
+    R, Ld, Lq : float
+        The controller's model (the decoupling's ``R_c``, ``Ld_c``, ``Lq_c``).
+    omega_meas : float
+        Measured electrical speed (rad/s).
+    sample_time, delay_samples : float, int
+        ``Ts`` and ``d``.
+    delay_compensation_time : float
+        ``t_c`` of the voltage placement.
+    """
+    g = law.gains(R, Ld, Lq, omega_meas, sample_time, delay_samples, delay_compensation_time)
+    return CvDiscreteGains(Kt=g.Kt[0], K1=g.K1[0], K2=tuple(g.K2[0]), Ki=g.Ki[0],
+                           Aw=g.aw * np.eye(2), poles=law.poles(sample_time, delay_samples))
+
+
+def standstill_axes(gains: CvDiscreteGains, sample_time: float) -> dict[str, AxisController]:
+    """Law (L) at zero speed as two two-input axis laws ``[i_ref, i_meas] -> v``.
+
+    At standstill ``Phi`` and ``Gamma`` are diagonal and so are the gains:
+    the law is exactly two SISO laws, state ``[x, v_{k-1} .. v_{k-d}]``
+    (the realised linear voltages), back-calculation gain ``[1 - p_i, 1, 0 ..]``
+    (the integrator sees ``Aw (v_real - v)``, the newest delay state the
+    realised voltage). The simulator's ``cv`` path keeps its states in the
+    same coordinates.
+    """
+    d = gains.delay_samples
+    n = d + 1
+    axes = {}
+    for k, ax in enumerate("dq"):
+        A = np.zeros((n, n))
+        B = np.zeros((n, 2))
+        C = np.zeros((1, n))
+        A[0, 0] = 1.0
+        B[0] = [gains.Ki[k, k], -gains.Ki[k, k]]
+        C[0, 0] = 1.0
+        D = np.array([[gains.Kt[k, k], -gains.K1[k, k]]])
+        for j, K2 in enumerate(gains.K2, start=1):
+            C[0, j] = -K2[k, k]
+        if d:
+            A[1] = C[0]
+            B[1] = D[0]
+            for j in range(2, n):
+                A[j, j - 1] = 1.0
+        aw = np.zeros(n)
+        aw[0] = gains.Aw[k, k]
+        if d:
+            aw[1] = 1.0
+        axes[ax] = AxisController.from_law(StateSpace(A, B, C, D, sample_time),
+                                           sample_time=sample_time, method="native",
+                                           antiwindup=aw)
+    return axes
+
+
+@dataclass(frozen=True)
+class CvCfg:
+    """Validated ``[controller.cv]``.
+
+    Attributes
+    ----------
+    bandwidth, integral_bandwidth : float
+        ``alpha_c``, ``alpha_i`` (rad/s).
+    delay_pole : float
+        z-plane pole of the delay states.
+    details : dict
+        Defaults applied, for the report.
+    """
+
+    bandwidth: float
+    integral_bandwidth: float
+    delay_pole: float
+    details: dict
+
+    def to_spec(self, spec=None) -> dict:
+        """``[controller.cv]`` keys that read back to this configuration (defaults
+        filled in; ``spec`` unused, the signature of the other methods')."""
+        return {"bandwidth": self.bandwidth, "integral_bandwidth": self.integral_bandwidth,
+                "delay_pole": self.delay_pole}
+
+
+_KEYS = ("bandwidth", "integral_bandwidth", "delay_pole")
+
+
+def read_cfg(method: str, table, motor, drive) -> CvCfg:
+    """Validate ``[controller.cv]``: ``bandwidth`` (``alpha_c``, rad/s, default
+    :func:`toolbox.design.default_bandwidth`), ``integral_bandwidth``
+    (``alpha_i``, default ``alpha_c / 4``), ``delay_pole`` (z, [0, 1), default 0).
+
+    Raises
+    ------
+    SpecError
+        Unknown key (did-you-mean) or a value out of range; key path
+        ``controller.cv.<key>``.
+    """
+    t = Table(table.data, table.prefix, _KEYS)
+    details = {}
+    if t.has("bandwidth"):
+        bw = check_rate(t.key("bandwidth"), t.number("bandwidth", positive=True,
+                                                     unit="rad/s"), drive)
+    else:
+        bw = _defaults.default_bandwidth(drive).value
+        details["bandwidth"] = "default_bandwidth (phase-margin rule of the sampled loop)"
+    if t.has("integral_bandwidth"):
+        bi = check_rate(t.key("integral_bandwidth"),
+                        t.number("integral_bandwidth", positive=True, unit="rad/s"), drive)
+    else:
+        bi = bw / _defaults.ZERO_RATIO
+        details["integral_bandwidth"] = f"bandwidth / {_defaults.ZERO_RATIO:g}"
+    pd = t.number("delay_pole", 0.0, minimum=0.0, maximum=0.95)
+    return CvCfg(float(bw), float(bi), float(pd), details)
+
+
+def design(spec):
+    """Method ``cv``: the artifact of the direct discrete-time complex-vector law.
+
+    Returns
+    -------
+    ControllerArtifact
+        ``cv`` the poles (executed), ``axes`` the standstill law, decoupling
+        with the motor's model, cross-coupling off (in the gains), EMF
+        feedforward on; ``design_parameters``: poles, the gains at standstill
+        and at the largest speed, the closed-loop poles there.
+    """
+    cfg: CvCfg = spec.controller.cfg
+    m, dr = spec.motor, spec.drive
+    ts, d = dr.sample_time, dr.delay_samples
+    law = CvLaw(cfg.bandwidth, cfg.integral_bandwidth, cfg.delay_pole)
+    t_c = dr.angle_compensation_time
+    g0 = executed_gains(law, m.R, m.Ld, m.Lq, 0.0, ts, d, t_c)
+    w_max = float(max_electrical_speed(m, dr))
+
+    def gains_json(g):
+        return {"Kt": g.Kt, "K1": g.K1, "K2": list(g.K2), "Ki": g.Ki}
+
+    g_top = executed_gains(law, m.R, m.Ld, m.Lq, w_max, ts, d, t_c)
+    params = {
+        "structure": "v = Kt r - K1 i - sum_j K2_j v_(k-j) + x, x+ = x + Ki (r - i) "
+                     "+ (1 - p_i) (v_real - v); gains recomputed each period at the "
+                     "measured speed",
+        "bandwidth": cfg.bandwidth, "integral_bandwidth": cfg.integral_bandwidth,
+        "delay_pole": cfg.delay_pole,
+        "poles_z": list(law.poles(ts, d)),
+        "gains_standstill": gains_json(g0),
+        "max_speed_rad_s": w_max,
+        "gains_max_speed": gains_json(g_top),
+        "closed_loop_poles_max_speed": [complex(p) for p in closed_loop_poles(
+            g_top, m.R, m.Ld, m.Lq, w_max, ts)],
+    }
+    if cfg.details:
+        params["defaults"] = cfg.details
+    eqs = ["Hinkkanen et al. 2016 (direct discrete-time pole placement)",
+           "003 eq (3)-(4)"]
+    return make_artifact(spec, standstill_axes(g0, ts),
+                         decoupling_from_motor(m, cross=False, emf=True), params, eqs,
+                         cv=law)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .._lti import StateSpace
+from ..lti import StateSpace
 from ..artifact import AxisController, ControllerArtifact, FcsWeights
 from ..errors import SpecError
 from ..spec import Table

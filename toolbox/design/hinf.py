@@ -50,7 +50,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .._lti import StateSpace, TransferFunction
+from ..lti import StateSpace, TransferFunction
 from ..artifact import AxisController, AxisWeights, ControllerArtifact, TransferFunctionData
 from ..errors import DesignInfeasible, SpecError
 from ..plant import axis_plant_models
@@ -205,7 +205,7 @@ def read_weight(value: Any, key: str) -> TransferFunction:
 
     Returns
     -------
-    toolbox._lti.TransferFunction
+    toolbox.lti.TransferFunction
 
     Raises
     ------
@@ -346,9 +346,9 @@ class HinfAxisResult:
     ----------
     G : LTI system
         Plant (A/V), as given (:func:`toolbox.plant.axis_plant_models` in a design).
-    K : toolbox._lti.StateSpace
+    K : toolbox.lti.StateSpace
         Central controller (V/A).
-    Kr : toolbox._lti.StateSpace or None
+    Kr : toolbox.lti.StateSpace or None
         Reduced controller.
     synthesis : HinfResult
     bounds : dict
@@ -375,7 +375,7 @@ def design_hinf_axis(G: Any, w1: Any, w2: Any = None, w3: Any = None, *,
 
     Parameters
     ----------
-    G : LTI system (toolbox._lti or python-control)
+    G : LTI system (toolbox.lti or python-control)
         Plant, e.g. ``1/(R + s Lq)`` (A/V).
     w1, w2, w3 : TransferFunction, python-control system, number or None
         Weights on S, KS, T (eq 35-40).

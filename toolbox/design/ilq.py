@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import StateSpace, as_statespace
+from ..lti import StateSpace, as_statespace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
@@ -201,7 +201,7 @@ def inverse_lq_sdp(a: float, b: float, K_F: float, K_I: float,
         Optimal margin (dimensionless).
     P, Q : ndarray
     """
-    import cvxpy as cp
+    import cvxpy as cp  # lazy: cvxpy, 819 modules (inverse_lq_sdp only)
 
     A, B = servo_matrices(a, b)
     K = np.array([[K_F, -K_I]])
@@ -320,7 +320,7 @@ def first_order_coefficients(G: Any) -> tuple[float, float]:
 
     Parameters
     ----------
-    G : toolbox._lti.StateSpace or python-control LTI
+    G : toolbox.lti.StateSpace or python-control LTI
         SISO, one state, no feedthrough (A/V).
 
     Returns
@@ -348,7 +348,7 @@ def ilq_axis_from_plant(G: Any, s_star: float, sigma: float, **options: Any) -> 
 
     Parameters
     ----------
-    G : toolbox._lti.StateSpace or python-control LTI
+    G : toolbox.lti.StateSpace or python-control LTI
         First-order plant (A/V), e.g. ``axis_plant_models(motor)["q"]``.
     s_star : float
         Assigned pole (rad/s), < 0.

@@ -35,13 +35,14 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from .._lti import StateSpace
+from ..lti import StateSpace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..plant import axis_coefficients
 from ..spec import Table, check_rate, check_scale
 from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
+from .ilq import first_order_coefficients
 
 __all__ = ["LqCfg", "LqAxis", "bryson_weights", "lqi_continuous", "lqi_discrete",
            "lqi_from_plant", "discrete_model",
@@ -318,7 +319,7 @@ def lqi_from_plant(G: Any, Q: tuple[float, float], R: float, *, domain: str = "d
 
     Parameters
     ----------
-    G : toolbox._lti.StateSpace or python-control LTI
+    G : toolbox.lti.StateSpace or python-control LTI
         First-order plant (A/V).
     Q : (float, float)
         ``(q_i, q_z)``.
@@ -334,8 +335,6 @@ def lqi_from_plant(G: Any, Q: tuple[float, float], R: float, *, domain: str = "d
     -------
     LqAxis
     """
-    from .ilq import first_order_coefficients
-
     a, b = first_order_coefficients(G)
     _check_weights(Q, R, "plant")
     if domain == "continuous":

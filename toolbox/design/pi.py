@@ -99,7 +99,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import StateSpace, as_statespace
+from ..lti import StateSpace, as_statespace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
 from ..spec import Table, check_gain, check_rate, check_time_constant
@@ -282,7 +282,7 @@ def gains_from_normalised(Kp_n: float, Ki_n: float, voltage_gain: float,
 def plant_RL(plant: Any) -> tuple[float, float]:
     """``(R, L)`` of a first-order axis plant ``1/(R + L s)``.
 
-    ``plant`` is anything :func:`toolbox._lti.as_statespace` reads (e.g.
+    ``plant`` is anything :func:`toolbox.lti.as_statespace` reads (e.g.
     :func:`toolbox.plant.axis_plant_models`, or a python-control system): one state,
     no feedthrough, ``G = c b/(s - a)`` so ``L = 1/(c b)`` and ``R = -a L``.
     """
@@ -318,7 +318,7 @@ def pi_law(Kp: float, Ki: float, structure: str = "pi",
 
     Returns
     -------
-    toolbox._lti.StateSpace
+    toolbox.lti.StateSpace
         Continuous, states ``[x]`` or ``[x, y_f]``.
     """
     if structure == "pi":

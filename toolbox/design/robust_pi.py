@@ -78,6 +78,9 @@ from ..errors import DesignInfeasible, SpecError
 from ..spec import Table
 from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
+from ..plant import max_electrical_speed
+from .pi import design_pi, closed_loop_poles
+from ..analysis.margins import MultiModelLoops, multimodel_disk_margins
 
 __all__ = ["RobustPiCfg", "ModelSet", "read_cfg", "design", "model_set", "tune"]
 
@@ -156,8 +159,6 @@ def read_cfg(method: str, table: Table, motor, drive) -> RobustPiCfg:
         lo > hi, a non-positive speed, a sensor range not containing the exact
         sensor; key path ``controller.robust_pi.<key>``.
     """
-    from ..plant import max_electrical_speed
-
     t = Table(table.data, table.prefix, _KEYS)
     details: dict[str, Any] = {}
     alpha = t.number("disk_margin", 0.5, positive=True)
@@ -233,8 +234,6 @@ class ModelSet:
 
     def loops(self, sample_time: float, delay_samples: int, n_grid: int):
         """:class:`toolbox.analysis.margins.MultiModelLoops` of the set."""
-        from ..analysis.margins import MultiModelLoops
-
         return MultiModelLoops(self.motors, self.speeds, sample_time, delay_samples, n_grid,
                                speed_gain=self.speed_gain, speed_offset=self.speed_offset)
 
@@ -292,14 +291,12 @@ def _gains(motor, wc: float, ratio: float | None) -> tuple[tuple, tuple]:
 
 
 def _candidate(spec, cfg: RobustPiCfg, Kp, Ki):
-    from .pi import design_pi
-
     axes = design_pi(Kp, Ki, spec.drive.sample_time, structure="pi", method="tustin")
     dec = decoupling_from_motor(spec.motor, cross=cfg.decoupling, emf=cfg.decoupling)
     return make_artifact(spec, axes, dec, {}, [])
 
 
-def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
+def tune(spec, cfg: RobustPiCfg | None = None, advise: bool = True) -> dict[str, Any]:
     """Search the gains (module docstring); returns the winner and the search record.
 
     Returns
@@ -318,7 +315,9 @@ def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
         No bandwidth meets the disk margin on every model; the message gives
         the largest margin reached, its bandwidth, the model that limits it
         and the margins of the same design without the sensor errors, at
-        standstill and on the nominal motor (:func:`_limitation`).
+        standstill and on the nominal motor (:func:`_limitation`), and with
+        ``advise`` what would pass (:func:`_what_passes`: a disk margin the
+        search is re-run with and succeeds, or a smaller maximum speed).
     """
     cfg = cfg or spec.controller.cfg
     motor = spec.motor
@@ -383,7 +382,9 @@ def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
             "controller.robust_pi.disk_margin",
             f"a disk margin the model set allows (best found {m:.3g} at wc = {wc:.4g} rad/s, "
             f"zero {_zero_name(ratio)})", alpha,
-            hint=_limitation(spec, cfg, models, wc, ratio, margins))
+            hint=_what_passes(margins(wc, ratio, fine), models, alpha, wc, spec.motor.pole_pairs,
+                              _retry(spec, cfg) if advise else None)
+            + "; " + _limitation(spec, cfg, models, wc, ratio, margins))
     ratio = max(feasible, key=lambda r: feasible[r])
     wc = feasible[ratio]
     # re-check on a finer grid; back off until it passes
@@ -398,7 +399,9 @@ def tune(spec, cfg: RobustPiCfg | None = None) -> dict[str, Any]:
         raise DesignInfeasible("controller.robust_pi.disk_margin",
                                "a disk margin the fine-grid check confirms", alpha,
                                hint=f"{float(np.min(M)):.3g} after {backoffs} back-offs of 2 % "
-                               f"to wc = {wc:.4g} rad/s; lower disk_margin slightly")
+                               f"to wc = {wc:.4g} rad/s; "
+                               + _what_passes(M, models, alpha, wc, motor.pole_pairs,
+                                              _retry(spec, cfg) if advise else None))
     i, j = np.unravel_index(int(np.argmin(M)), M.shape)
     Kp, Ki = _gains(motor, wc, ratio)
     return {"Kp": Kp, "Ki": Ki, "bandwidth_rad_s": wc, "zero": _zero_name(ratio),
@@ -463,7 +466,6 @@ def _limitation(spec, cfg: RobustPiCfg, models: ModelSet, wc: float, ratio, marg
                      f"unstable, at {speeds.min():.4g}..{speeds.max():.4g} rad/s electrical")
     art = _candidate(spec, cfg, *_gains(spec.motor, wc, ratio))
     if np.any(models.speed_gain != 1.0) or np.any(models.speed_offset != 0.0):
-        from ..analysis.margins import multimodel_disk_margins
         exact = multimodel_disk_margins(art, models.motors, models.speeds, n_grid=N_GRID)
         parts.append(f"without the speed-sensor errors the same design keeps "
                      f"{float(np.min(exact)):.3g}"
@@ -477,6 +479,68 @@ def _limitation(spec, cfg: RobustPiCfg, models: ModelSet, wc: float, ratio, marg
     parts.append(f"either side of wc the worst margin falls: {lower:.3g} at 0.8 wc, "
                  f"{higher:.3g} at 1.25 wc")
     return "; ".join(parts)
+
+
+def _retry(spec, cfg: RobustPiCfg):
+    """``ok(alpha)``: does the search succeed with ``disk_margin = alpha``?"""
+    import dataclasses
+
+    def ok(alpha: float) -> bool:
+        try:
+            tune(spec, dataclasses.replace(cfg, disk_margin=alpha), advise=False)
+        except DesignInfeasible:
+            return False
+        return True
+    return ok
+
+
+#: Tries of a suggested disk margin, each 10 % below the last.
+ADVICE_TRIES = 3
+
+
+def _what_passes(M: np.ndarray, models: ModelSet, alpha: float, wc: float, pole_pairs: int,
+                 ok=None) -> str:
+    """Computed advice for a refusal: what would pass, never a guess.
+
+    ``M`` holds the disk margins (models x speeds) of the best design found,
+    on the fine frequency grid. The disk margin it keeps (rounded down) is
+    offered only when the search re-run with it succeeds (``ok``; up to
+    :data:`ADVICE_TRIES` values, each 10 % lower); otherwise, or without
+    ``ok``, the largest ``max_speed`` whose speeds all keep ``alpha`` on
+    every model at this bandwidth; when not even the lowest speed does, the
+    margin it keeps there (the box or the margin must change: lowering the
+    speed range cannot pass)."""
+    parts = []
+    best = float(M.min())
+    if best > 0 and ok is not None:
+        cand = math.floor(best * 1000) / 1000
+        for _ in range(ADVICE_TRIES):
+            if cand > 0 and ok(cand):
+                parts.append(f"disk_margin = {cand:.3g} passes (the search re-run with it "
+                             "succeeds)")
+                break
+            cand = math.floor(cand * 900) / 1000
+    speeds = np.abs(models.speeds)
+    good = M.min(axis=0) >= alpha
+    passing, found = 0.0, False
+    for j in np.argsort(speeds):
+        if not good[j]:
+            break
+        passing, found = float(speeds[j]), True
+    if found and 0 < passing < float(speeds.max()):
+        parts.append(f"max_speed = {passing / pole_pairs:.4g} rad/s mechanical "
+                     f"({passing:.4g} rad/s electrical) keeps disk_margin = {alpha:g} on "
+                     f"every model at wc = {wc:.4g} rad/s")
+    elif not found:
+        low = speeds == speeds.min()
+        parts.append(f"at {speeds.min():.4g} rad/s electrical the worst margin is already "
+                     f"{float(M[:, low].min()):.3g} < {alpha:g}: a lower max_speed cannot "
+                     "pass; narrow parameter_box or lower disk_margin")
+    if not parts and best <= 0:
+        parts.append("the best design found has unstable (model, speed) pairs (worst margin "
+                     "0): no disk_margin passes with this parameter_box; narrow it")
+    return "; ".join(parts) or (f"no disk_margin from {best:.3g} down by "
+                                f"{ADVICE_TRIES} steps of 10 % passes; narrow parameter_box")
 
 
 def _zero_name(ratio) -> str:
@@ -493,8 +557,6 @@ def design(spec):
         from the nominal motor) with ``method = "robust_pi"``; the tuning
         record is in ``design_parameters``.
     """
-    from .pi import closed_loop_poles, design_pi
-
     cfg: RobustPiCfg = spec.controller.cfg
     res = tune(spec, cfg)
     Kp, Ki = res["Kp"], res["Ki"]

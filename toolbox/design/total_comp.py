@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import StateSpace, static_gain
+from ..lti import StateSpace, static_gain
 from ..artifact import AxisController, ControllerArtifact, Decoupling
 from ..errors import SpecError
 from ..spec import Table, check_gain, check_time_constant

@@ -69,6 +69,10 @@ from ..spec import Table
 from . import _defaults
 from . import robust_pi as RP
 from ._common import decoupling_from_motor, make_artifact
+from .pi import design_pi, closed_loop_poles
+from ..analysis.margins import make_axis_loop, step_figures, compute_margins, MultiModelLoops
+from scipy.optimize import minimize
+from ..analysis.robustness import sample_parameters
 
 __all__ = ["TuneCfg", "read_cfg", "design", "tune", "dense_check", "nominal_response_times"]
 
@@ -161,8 +165,6 @@ def _unpack(x, tune_k: bool) -> tuple[tuple, tuple, float]:
 
 
 def _candidate(spec, cfg: TuneCfg, Kp, Ki, k: float, params=None, equations=()):
-    from .pi import design_pi
-
     axes = design_pi(tuple(Kp), tuple(Ki), spec.drive.sample_time, structure="pi",
                      method="tustin")
     on = cfg.models.decoupling
@@ -178,8 +180,6 @@ def nominal_response_times(artifact, motor) -> tuple[float, float]:
     reconstructed (:func:`toolbox.analysis.margins.step_figures`); ``inf`` for
     a loop that does not settle.
     """
-    from ..analysis.margins import make_axis_loop, step_figures
-
     out = []
     for name, L in (("d", motor.Ld), ("q", motor.Lq)):
         loop = make_axis_loop(artifact.axes[name], motor.R, L, artifact.sample_time,
@@ -212,8 +212,6 @@ class _Paired:
     """Margins of artifacts on paired (model, speed) points, per delay."""
 
     def __init__(self, spec, points: list[dict], delays, n_grid: int):
-        from ..analysis.margins import MultiModelLoops
-
         self.points = list(points)
         motor = spec.motor
         p = motor.pole_pairs
@@ -267,8 +265,6 @@ def worst_case_search(spec, cfg: TuneCfg, art, starts: list[dict], delay: int,
                       evaluations: int = 80) -> list[tuple[float, dict]]:
     """Minimise the margin of ``art`` over the continuous box from each start
     (bounded Nelder-Mead in unit coordinates); ``(margin, point)`` per start."""
-    from scipy.optimize import minimize
-
     ranges = _box_ranges(spec, cfg)
 
     def margin(u):
@@ -299,8 +295,6 @@ def _simplex(u0: np.ndarray, step: float) -> np.ndarray:
 def dense_points(spec, cfg: TuneCfg) -> list[dict]:
     """Nominal point, the corners and ``check_samples`` Latin-hypercube points of
     the box of ``(R, Ld, Lq, speed, speed_gain, speed_offset)``."""
-    from ..analysis.robustness import sample_parameters
-
     ranges = _box_ranges(spec, cfg)
     kept = {k: v for k, v in ranges.items() if v[1] > v[0]}
     P = sample_parameters(kept, cfg.check_samples, cfg.models.seed + 1)
@@ -380,8 +374,6 @@ def tune(spec, cfg: TuneCfg | None = None) -> dict[str, Any]:
         ``max_rounds`` rounds; the message gives the best margin reached and
         where.
     """
-    from scipy.optimize import minimize
-
     cfg = cfg or spec.controller.cfg
     motor = spec.motor
     alpha = cfg.disk_margin
@@ -547,9 +539,6 @@ def design(spec):
         the cross-coupling inductances scaled by the tuned ``k``) with
         ``method = "tune"``; the tuning record is in ``design_parameters``.
     """
-    from ..analysis.margins import compute_margins
-    from .pi import closed_loop_poles
-
     cfg: TuneCfg = spec.controller.cfg
     res = tune(spec, cfg)
     Kp, Ki, k = res["Kp"], res["Ki"], res["decoupling_scale"]

@@ -18,11 +18,13 @@ from typing import Any
 
 import numpy as np
 
-from .._lti import invariant_zeros as _zeros
+from ..lti import invariant_zeros as _zeros
 from ..errors import ExportRefused, SpecError
 from . import _fixed
 from ._minimal import MinimalLaw, minimal_law
+from ._plausible import speed_range
 from ._sos import Realisation, realise_axis
+from ..spec import drive_from_dict, motor_from_dict, spec_from_dict
 
 
 AXES = ("d", "q")
@@ -215,14 +217,12 @@ def _motor_drive(artifact, motor, drive):
         return motor, drive
     raw = artifact.spec or {}
     try:
-        from ..spec import spec_from_dict
         spec = spec_from_dict(raw)
         return motor or spec.motor, drive or spec.drive
     except SpecError:
         pass
     # the controller section may name a method this build cannot read: take
     # the motor and drive tables alone
-    from ..spec import drive_from_dict, motor_from_dict
     if motor is None and isinstance(raw.get("motor"), dict):
         try:
             motor = motor_from_dict(raw["motor"])
@@ -244,15 +244,9 @@ def _ranges(artifact, motor, drive, v_max: float) -> tuple[float, float]:
     if i_max is None:
         dec = artifact.decoupling
         i_max = v_max / max(dec.R_c, 1e-3)         # the voltage-limited current
-    w_max = None
-    if drive is not None and getattr(drive, "max_speed", None):
-        w_max = drive.max_speed
-    elif motor is not None and motor.rated_speed:
-        w_max = motor.rated_speed
-    else:
-        dec = artifact.decoupling
-        w_max = 2.0 * v_max / max(dec.pole_pairs * dec.flux_c, 1e-9)
-    return float(i_max), float(w_max)
+    # the speed range is the float path's (plausibility_limits'): drive.max_speed, else
+    # the larger of the rated speed and twice the back-EMF speed of the voltage limit
+    return float(i_max), speed_range(artifact, motor, drive, v_max)
 
 
 def _dec_coeffs(dec) -> dict[str, float]:
@@ -409,6 +403,6 @@ def check_fixed(plan, sample_time: float, key: str = "controller") -> dict:
 
 def _law_zeros(law) -> np.ndarray:
     """Invariant zeros of both channels of the law (``i_ref -> v`` and
-    ``i_meas -> v``), each from its system pencil (:func:`toolbox._lti._zeros`)."""
+    ``i_meas -> v``), each from its system pencil (:func:`toolbox.lti._zeros`)."""
     return np.concatenate([_zeros(law.A, law.B[:, j:j + 1], law.C, law.D[:, j:j + 1])
                            for j in range(law.B.shape[1])])

@@ -6,8 +6,10 @@ Scaling (all signals are Q31 words, i.e. value / 2**31 in [-1, 1)):
   ``x_i / S_i``. Every base is a power of two (A, rad/s, V, state units) at or
   above a rigorous bound of the signal, so nothing overflows:
   currents up to ``I_MAX`` (``motor.max_current``), speed up to ``W_MAX``
-  (``drive.max_speed``, else ``motor.rated_speed``, else twice the speed at
-  which the back-EMF reaches the voltage limit), the states from the
+  (``drive.max_speed``, else the larger of ``motor.rated_speed`` and twice
+  the speed at which the back-EMF reaches the voltage limit); the input bases
+  reach ``PLAUSIBLE_MARGIN`` x these ranges (the plausible ranges, so the
+  step tells an implausible sample from one it clamps); the states from the
   anti-windup recursion ``x+ = (A - aw C) x + (B - aw D) u + aw (v_sat - v_dec)``
   which holds in and out of saturation, with ``|v_sat| <= V_MAX`` and the
   decoupling voltage ``|v_dec| <= D_MAX``: ``|x| <= sum_k |F^k G| [U; V]``
@@ -27,6 +29,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from ._plausible import PLAUSIBLE_MARGIN
 
 __all__ = ["FixedAxis", "FixedPlan", "l1_state_bound", "plan_fixed", "horizon_bound",
            "propagate_bound", "float32_local_errors", "fixed_local_errors"]
@@ -170,8 +174,10 @@ def plan_fixed(reals: dict, *, I_MAX: float, W_MAX: float,
     (FixedPlan or None, str)
         The plan, or None and the reason it cannot be made.
     """
-    I_BASE = _pow2_at_least(I_MAX)
-    W_BASE = _pow2_at_least(W_MAX)
+    # the input words reach the plausible ranges (PLAUSIBLE_MARGIN x the
+    # ranges), so the step can tell an implausible sample from a clamped one
+    I_BASE = _pow2_at_least(PLAUSIBLE_MARGIN * I_MAX)
+    W_BASE = _pow2_at_least(PLAUSIBLE_MARGIN * W_MAX)
     D_MAX = {"d": abs(dec_coeffs["dd"]) * W_MAX * I_MAX,
              "q": abs(dec_coeffs["dq"]) * W_MAX * I_MAX + abs(dec_coeffs["de"]) * W_MAX}
     X = {}
@@ -277,7 +283,7 @@ def _fftconvolve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     every ``cct design``): the same scipy.fft transforms at the same
     length, so the same numbers (tests/export/test_propagate_bound.py).
     """
-    from scipy.fft import irfft, next_fast_len, rfft
+    from scipy.fft import irfft, next_fast_len, rfft  # lazy: scipy.fft, 43 modules
 
     if a.size == 1 or b.size == 1:          # scipy multiplies directly (no transform)
         return a * b

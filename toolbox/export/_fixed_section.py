@@ -12,6 +12,12 @@ from ._check import AXES, HORIZON, ExportCheck, _law_key
 from ._format import _c_error, _f, _int, _q31, _shift, _Text
 from ._informational import _informational_pi_gains
 from ._placement import _integer_placement
+from ._plausible import PLAUSIBLE_MARGIN
+
+
+def _word(value: float, base: float) -> int:
+    """``value`` as a Q31 word of ``base`` (truncated as ``to_q31``), at most INT32_MAX."""
+    return min(int(value / base * 2.0 ** 31), 2 ** 31 - 1)
 
 
 def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
@@ -40,7 +46,8 @@ def _fixed_section(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive
 def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -> None:
     """The Q31 section (``templates/fixed.c.j2``); numbers formatted and
     range-checked here, in line order."""
-    from .c_header import _render  # the header's one template environment
+    # the header's one template environment; in-function: c_header imports this module
+    from .c_header import _render
     plan = check.fixed
     key = _law_key(artifact)
     head = {"I_MAX": f"{plan.I_MAX:.6g}", "W_MAX": f"{plan.W_MAX:.6g}",
@@ -52,6 +59,14 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -
          "W_BASE": _f(plan.W_BASE, 'drive.max_speed', 'Q31_W_BASE'),
          "I_MAX": _f(plan.I_MAX, 'motor.max_current', 'Q31_I_MAX'),
          "W_MAX": _f(plan.W_MAX, 'drive.max_speed', 'Q31_W_MAX'),
+         "I_PL": _f(PLAUSIBLE_MARGIN * plan.I_MAX, 'motor.max_current', 'Q31_I_PLAUSIBLE'),
+         "W_PL": _f(PLAUSIBLE_MARGIN * plan.W_MAX, 'drive.max_speed', 'Q31_W_PLAUSIBLE'),
+         "I_MAX_W": _q31(_word(plan.I_MAX, plan.I_BASE), 'motor.max_current', 'Q31_I_MAX_W'),
+         "W_MAX_W": _q31(_word(plan.W_MAX, plan.W_BASE), 'drive.max_speed', 'Q31_W_MAX_W'),
+         "I_PL_W": _q31(_word(PLAUSIBLE_MARGIN * plan.I_MAX, plan.I_BASE), 'motor.max_current',
+                        'Q31_I_PLAUSIBLE_W'),
+         "W_PL_W": _q31(_word(PLAUSIBLE_MARGIN * plan.W_MAX, plan.W_BASE), 'drive.max_speed',
+                        'Q31_W_PLAUSIBLE_W'),
          "V_MAX": _q31(plan.vmax_q31, 'drive.vdc', 'Q31_V_MAX'),
          "VDC_BASE": (_f(plan.V_BASE * drive.vdc / check.v_max, 'drive.vdc', 'Q31_VDC_BASE')
                       if drive is not None and drive.vdc > 0 else None)}
@@ -85,7 +100,7 @@ def _fixed_body(t: _Text, check: ExportCheck, N: str, P: str, artifact, drive) -
                      for m, _ in fa.rows],
             "aw": ", ".join(_q31(m[n + 2], key, f"Q31 {ax}-axis anti-windup")
                             for m, _ in fa.rows) if has_aw else ""})
-    t.lines.extend(_render("fixed.c.j2", N=N, P=P, p=P.lower(), head=head, d=d,
+    t.lines.extend(_render("fixed.c.j2", N=N, P=P, U=N.upper(), p=P.lower(), head=head, d=d,
                            state_bases=state_bases, dec=dec, pi=pi, axes=axes,
-                           comp=_integer_placement(artifact, plan.W_BASE),
+                           comp=_integer_placement(artifact, plan.W_BASE, plan.W_MAX),
                            nd=max(plan.axes["d"].S.size, 1), nq=max(plan.axes["q"].S.size, 1)))

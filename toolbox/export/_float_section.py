@@ -88,7 +88,8 @@ def _float_section(t: _Text, reals: dict, N: str, P: str, key: str, hexagon: boo
                    comp: bool, plausible: dict | None = None, convention: str = "amplitude",
                    d_priority: bool = False) -> None:
     """The float path (templates/float.c.j2)."""
-    from .c_header import _render  # the header's one template environment
+    # the header's one template environment; in-function: c_header imports this module
+    from .c_header import _render
     inputs = ["i_d_ref", "i_q_ref", "i_d", "i_q", "omega_m"] + (["theta_e"] if hexagon else [])
     checks = [f"{N}_finite(in->{v})" for v in inputs]
     aw = _aw_lines(reals["d"], "d", "(vds - vd)", key) + \

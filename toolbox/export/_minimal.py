@@ -10,14 +10,14 @@ look like 1e14 and refuse a sound controller.
 :func:`minimal_law` therefore
 
 1. balances the law with an exact power-of-two diagonal similarity
-   (:func:`toolbox._lti.diagonal_scaling`, LAPACK ``gebal``) so that one
+   (:func:`toolbox.lti.diagonal_scaling`, LAPACK ``gebal``) so that one
    threshold fits every row;
 2. sets to zero every entry of ``A``, ``[B aw]``, ``C`` below
    ``ROUNDOFF_REL`` times the norm of its block (1e-10: four orders above the
    1e-14 round-off seen in practice, six below any coefficient that matters
    at float32 precision, 6e-8);
 3. removes unreachable/unobservable states of the system
-   ``(A, [B aw], C, [D 0])`` with :func:`toolbox._lti.minreal` (orthogonal
+   ``(A, [B aw], C, [D 0])`` with :func:`toolbox.lti.minreal` (orthogonal
    staircase, the reduction of SLICOT ``TB01PD``) at a tolerance relative to
    the system norm. The anti-windup vector is an
    input here, so the reduced law equals the executed law *including* the
@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._lti import StateSpace, diagonal_scaling, minreal
+from ..lti import StateSpace, diagonal_scaling, evaluate, minreal
 
 __all__ = ["MinimalLaw", "minimal_law", "ROUNDOFF_REL", "EQUIV_RTOL"]
 
@@ -69,13 +69,9 @@ class MinimalLaw:
 
 
 def _response(A, Bx, C, Dx, z: np.ndarray) -> np.ndarray:
-    """(len(z), m) frequency response of ``(A, Bx, C, Dx)`` at the points z (one
-    stacked solve: LAPACK gesv per point, as a loop of solves would call it)."""
-    n = A.shape[0]
-    if not n:
-        return np.broadcast_to(np.asarray(Dx[0], complex), (z.size, Bx.shape[1])).copy()
-    X = np.linalg.solve(z[:, None, None] * np.eye(n) - A, Bx)
-    return (C @ X)[:, 0] + Dx[0]
+    """(len(z), m) frequency response of the first output of ``(A, Bx, C, Dx)``
+    at the points z (:func:`toolbox.lti.evaluate`, one LU solve per point)."""
+    return evaluate(A, Bx, C[:1], Dx[:1], z, solve=True)[0].T
 
 
 def _equivalent(orig: tuple, new: tuple) -> bool:
@@ -126,7 +122,7 @@ def _balance(A, Bx, C):
 
 
 def _minreal(A, Bx, C, Dx, ts: float):
-    """:func:`toolbox._lti.minreal` on the law with unit-norm input and output
+    """:func:`toolbox.lti.minreal` on the law with unit-norm input and output
     maps, or None when no state goes.
 
     Reachability and observability do not depend on the scale of B and C (nor

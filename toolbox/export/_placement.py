@@ -36,20 +36,25 @@ def _placement_convention(artifact) -> str:
 Q31_MAX_PLACEMENT_ANGLE = 1.5
 
 
-def _integer_placement(artifact, w_base: float) -> dict | None:
+def _integer_placement(artifact, w_base: float, w_reach: float | None = None) -> dict | None:
     """An integer variant's voltage placement constant, or None when the
     placement time is 0: ``K`` is the rotation angle at the variant's
     full-scale mechanical speed ``w_base`` (``DELAY_COMP_TIME p w_base``) in
-    Q30 radians (``templates/placement.c.j2``)."""
+    Q30 radians (``templates/placement.c.j2``), below 2^33 (the int64 product
+    with a speed word of at most 2^30 cannot overflow). ``w_reach`` (default
+    ``w_base``): the largest speed the step rotates with (the range it clamps
+    the speed to), where the angle must stay within ``Q31_MAX_PLACEMENT_ANGLE``."""
     t_comp = _delay_comp_time(artifact)
     if t_comp is None:
         return None
+    w_reach = w_base if w_reach is None else w_reach
     angle = t_comp * artifact.decoupling.pole_pairs * w_base
-    if angle > Q31_MAX_PLACEMENT_ANGLE:
+    reach = t_comp * artifact.decoupling.pole_pairs * w_reach
+    if reach > Q31_MAX_PLACEMENT_ANGLE:
         raise ExportRefused("drive.angle_compensation",
                             f"a placement angle of at most {Q31_MAX_PLACEMENT_ANGLE} rad at "
-                            "the integer variants' speed base (DELAY_COMP_TIME x POLE_PAIRS "
-                            "x speed base)", f"{angle:.3g} rad")
+                            "the integer variants' speed range (DELAY_COMP_TIME x POLE_PAIRS "
+                            "x speed range)", f"{reach:.3g} rad")
     return {"K": _int(round(angle * 2.0 ** 30), 'drive.angle_compensation',
-                      'placement angle constant', 0, 2 ** 31 - 1),
+                      'placement angle constant', 0, 2 ** 33 - 1),
             "angle": f"{angle:.6g}"}

@@ -17,6 +17,19 @@ VDC_MIN_PER_NOMINAL = 1e-3
 VDC_MAX_PER_NOMINAL = 2.0
 
 
+def speed_range(artifact, motor, drive, v_max: float) -> float:
+    """The mechanical speed range (rad/s) of the header: ``drive.max_speed``,
+    else the larger of ``motor.rated_speed`` and the speed at which the
+    back-EMF is twice ``V_MAX`` (a speed the drive cannot exceed under its own
+    voltage, so the integer variants never clamp a reachable speed)."""
+    w_rng = getattr(drive, "max_speed", None) if drive is not None else None
+    if w_rng:
+        return float(w_rng)
+    dec = artifact.decoupling
+    w_emf = 2.0 * v_max / max(dec.pole_pairs * dec.flux_c, 1e-9)
+    return float(max(w_emf, (motor.rated_speed or 0.0) if motor is not None else 0.0))
+
+
 def plausibility_limits(artifact, motor, drive, v_max: float) -> dict[str, float]:
     """The plausible ranges the float header checks its measurements against.
 
@@ -50,10 +63,7 @@ def plausibility_limits(artifact, motor, drive, v_max: float) -> dict[str, float
         rated = 2.0 * motor.rated_current if motor is not None and motor.rated_current else 0.0
         i_rng = max(rated, v_max / max(dec.R_c, 1e-9),
                     dec.flux_c / max(min(dec.Ld_c, dec.Lq_c), 1e-12))
-    w_rng = getattr(drive, "max_speed", None) if drive is not None else None
-    if not w_rng:
-        w_emf = 2.0 * v_max / max(dec.pole_pairs * dec.flux_c, 1e-9)
-        w_rng = max(w_emf, (motor.rated_speed or 0.0) if motor is not None else 0.0)
+    w_rng = speed_range(artifact, motor, drive, v_max)
     vdc = drive.vdc if drive is not None else v_max * math.sqrt(3.0)
     return {"i": PLAUSIBLE_MARGIN * float(i_rng), "w": PLAUSIBLE_MARGIN * float(w_rng),
             "vdc_min": VDC_MIN_PER_NOMINAL * float(vdc), "vdc_max": VDC_MAX_PER_NOMINAL * float(vdc)}

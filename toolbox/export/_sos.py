@@ -9,7 +9,7 @@ discrete two-input system ``[i_ref, i_meas] -> v``):
   (``{b0, b1, b2, a1, a2}`` per stage, a1 and a2 NEGATED with respect to
   scipy's denominator ``[1, a1, a2]``) followed by an output gain;
 * ``"ss"`` for two-input laws: the state-space law itself after an exact
-  power-of-two diagonal balancing (:func:`toolbox._lti.diagonal_scaling`).
+  power-of-two diagonal balancing (:func:`toolbox.lti.diagonal_scaling`).
 
 Both come with their equivalent state-space matrices *in the coordinates
 the C code uses* (for the SOS form: the transposed-direct-form-II states
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._lti import StateSpace, diagonal_scaling, ss2zpk
+from ..lti import StateSpace, diagonal_scaling, ss2zpk
 
 __all__ = ["Realisation", "realise_axis", "is_one_dof"]
 

@@ -15,7 +15,8 @@ anti-windup of the float path. Scaling comes from the drive's ranges:
 bus may rise above nominal at run time).
 
 * **MCSDK** (STM32 Motor Control SDK ``PI_Controller``): int16 signals in
-  digits (``s16A``: ``I_FS`` is 32768 digits; ``s16V`` of ``V_FS``; speed of
+  digits (``s16A``: twice ``I_FS`` is 32768 digits, so a reading beyond the
+  plausible range is on the rail; ``s16V`` of ``V_FS``; speed: twice
   ``W_FS``), int16 gains with power-of-two divisors (``KP_GAIN / 2^KP_DIV``,
   divisors up to 2^15 as the SDK), an int32 integral term holding
   ``I x 2^KI_DIV``, arithmetic right shifts.
@@ -24,7 +25,9 @@ bus may rise above nominal at run time).
   ``_IQmpy(a, b) = (a b) >> 24`` in int64.
 
 Inputs beyond their range (|i| > I_FS, |Omega| > W_FS) are clamped and flagged
-(``status = <P>STATUS_CLAMPED``) instead of wrapping.
+(``status = <P>STATUS_CLAMPED``) instead of wrapping; measurements beyond twice
+it (the plausible range) are replaced by the last plausible ones, without an
+integral update (``<P>STATUS_IMPLAUSIBLE``).
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from ._plausible import PLAUSIBLE_MARGIN
 
 __all__ = ["VendorPlan", "plan_vendor", "quantise_pow2", "mcsdk_constants", "iq_constants"]
 
@@ -63,6 +68,17 @@ class VendorPlan:
     V_MAX: float
     V_FS: float
     dec: dict
+
+    @property
+    def mc_I_FS(self) -> float:
+        """The MCSDK's current full scale (A = 32768 digits): ``PLAUSIBLE_MARGIN``
+        x the range, so a measurement beyond the plausible range is on the rail."""
+        return PLAUSIBLE_MARGIN * self.I_FS
+
+    @property
+    def mc_W_FS(self) -> float:
+        """The MCSDK's speed full scale (rad/s = 32768 digits), likewise."""
+        return PLAUSIBLE_MARGIN * self.W_FS
 
 
 def quantise_pow2(value: float, bits: int = 15, max_shift: int = 15) -> tuple[int, int]:
@@ -113,17 +129,17 @@ def plan_vendor(mins: dict, I_FS: float, W_FS: float, V_MAX: float,
 
 def mcsdk_constants(plan: VendorPlan) -> dict:
     """Integer gains/divisors of the MCSDK variant (digits in, digits out)."""
-    g = plan.I_FS / plan.V_FS              # V digits per A digit, per V/A
+    g = plan.mc_I_FS / plan.V_FS           # V digits per A digit, per V/A
     out = {}
     for ax in ("d", "q"):
         out[f"{ax}_kp"] = quantise_pow2(plan.kp[ax] * g)
         out[f"{ax}_ki"] = quantise_pow2(plan.ki[ax] * g)
         out[f"{ax}_kaw"] = quantise_pow2(plan.kaw[ax])
     # decoupling: v digits = c * (w digits * i digits) / 32768, c below
-    wi = plan.W_FS * plan.I_FS / plan.V_FS    # times (w digits x i digits) >> 15
+    wi = plan.mc_W_FS * plan.mc_I_FS / plan.V_FS    # times (w digits x i digits) >> 15
     out["dd"] = quantise_pow2(plan.dec["dd"] * wi)
     out["dq"] = quantise_pow2(plan.dec["dq"] * wi)
-    out["de"] = quantise_pow2(plan.dec["de"] * plan.W_FS / plan.V_FS)
+    out["de"] = quantise_pow2(plan.dec["de"] * plan.mc_W_FS / plan.V_FS)
     return out
 
 

@@ -39,8 +39,12 @@ def _vendor_section(t: _Text, artifact, motor, drive, check: ExportCheck, N: str
     if plan is not None:
         body = _Text()
         try:
-            _vendor_body(body, plan, mc, iq, N, P, key,
-                         _integer_placement(artifact, plan.W_FS))
+            mc_comp = _integer_placement(artifact, plan.mc_W_FS, plan.W_FS)
+            iq_comp = _integer_placement(artifact, plan.W_FS)
+            comp = None if mc_comp is None else {
+                "mc_K": mc_comp["K"], "mc_angle": mc_comp["angle"],
+                "iq_K": iq_comp["K"], "iq_angle": iq_comp["angle"]}
+            _vendor_body(body, plan, mc, iq, N, P, key, comp)
         except ExportRefused as err:          # a constant out of range: no variant
             why = str(err)
         else:
@@ -55,12 +59,13 @@ def _vendor_body(t: _Text, plan, mc: dict, iq: dict, N: str, P: str, key: str,
                  comp: dict | None) -> None:
     """The MCSDK/IQmath section (``templates/vendor.c.j2``); numbers formatted
     and range-checked here, in line order."""
-    from .c_header import _render  # the header's one template environment
+    # the header's one template environment; in-function: c_header imports this module
+    from .c_header import _render
     gains = [(ax, f"{plan.kp[ax]:.9g}", f"{plan.ki[ax]:.9g}", f"{plan.kaw[ax]:.9g}")
              for ax in AXES]
-    d = {"MCSDK_I_FS": _f(plan.I_FS, 'motor.max_current', 'MCSDK_I_FS'),
+    d = {"MCSDK_I_FS": _f(plan.mc_I_FS, 'motor.max_current', 'MCSDK_I_FS'),
          "MCSDK_V_FS": _f(plan.V_FS, 'drive.vdc', 'MCSDK_V_FS'),
-         "MCSDK_W_FS": _f(plan.W_FS, 'drive.max_speed', 'MCSDK_W_FS'),
+         "MCSDK_W_FS": _f(plan.mc_W_FS, 'drive.max_speed', 'MCSDK_W_FS'),
          "MCSDK_V_MAX": _int(round(plan.V_MAX / plan.V_FS * 32768), 'drive.vdc', 'MCSDK_V_MAX',
                              0, 32767),
          "IQ_I_BASE": _f(plan.I_FS, 'motor.max_current', 'IQ_I_BASE'),

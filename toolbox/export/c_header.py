@@ -51,7 +51,10 @@ variants of a one-degree-of-freedom PI law: :mod:`toolbox.export._vendor`
 Method ``fcs_mpc`` exports its predictive switching law instead (paper 002
 criterion (23) over the 8 inverter states with the switching penalty, one
 forward-Euler prediction, the one-period delay handled as the simulator's
-``_fcs_choice``; templates/fcs.c.j2), float only.
+``_fcs_choice``; templates/fcs.c.j2), float only. Method ``cv`` exports its
+complex-vector law, gains computed each period at the measured speed as the
+simulator's ``_kernel_cv`` (:mod:`toolbox.export._cv_section`,
+templates/cv_top.c.j2, cv.c.j2), float only.
 
 Exportability rules (:func:`check_exportable`) -- a controller is refused with
 :class:`toolbox.errors.ExportRefused` (key ``controller.<method>``, the
@@ -113,6 +116,9 @@ from ._plausible import (PLAUSIBLE_MARGIN, VDC_MAX_PER_NOMINAL,  # noqa: F401
                          VDC_MIN_PER_NOMINAL, _plausible_context, plausibility_limits)
 from ._reference import ReferenceLaw, d_priority_limit, reference_law  # noqa: F401
 from ._vendor_section import _vendor_section, vendor_plan  # noqa: F401
+from ..spec import inverter_radii
+from .._cache import template_bytecode_cache
+from ._cv_section import write_cv_header
 
 __all__ = ["write_header", "check_exportable", "ExportCheck", "sanitise_comment",
            "realisations", "reference_law", "ReferenceLaw", "check_fixed", "INTEGRATOR_TOL", "RING_RADIUS",
@@ -186,6 +192,12 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
             "Lq": _f(dec.Lq_c, 'motor.Lq', 'decoupling DEC_LQ'),
             "flux": _f(dec.flux_c, 'motor.flux', 'decoupling DEC_FLUX'),
             "pole_pairs": _int(dec.pole_pairs, 'motor.pole_pairs', 'POLE_PAIRS', 1)}
+    # the dq model that predicts a replaced current sample: the motor's data, else the law's
+    src = motor
+    pred = {k: _f(v, f"motor.{k}", f"PRED_{k.upper()}") for k, v in (
+        ("R", src.R if src else dec.R_c), ("Ld", src.Ld if src else dec.Ld_c),
+        ("Lq", src.Lq if src else dec.Lq_c), ("flux", src.flux if src else dec.flux_c))}
+    pred["what"] = "motor data" if src else "the law's decoupling model"
     t_comp = artifact.decoupling.delay_compensation_time
     comp = {"time": _f(t_comp, 'drive.angle_compensation', 'DELAY_COMP_TIME'),
             "periods": f"{t_comp / artifact.sample_time:g}",
@@ -196,7 +208,7 @@ def _defines(t: _Text, artifact, motor, drive, P: str, check: ExportCheck) -> No
           for ax, kp, ki in _informational_pi_gains(artifact)]
     lines = _render("defines.c.j2", P=P, p=P.lower(), ts=ts_, nd=nd_, vmax=vmax_,
                     what="hexagon apothem" if check.limit == "hexagon" else "circle radius",
-                    vmax_per_vdc=per_vdc, motor=mot, drive=drv, dec=dec_, comp=comp,
+                    vmax_per_vdc=per_vdc, motor=mot, drive=drv, dec=dec_, comp=comp, pred=pred,
                     method=artifact.method, pi=pi)
     t.lines.extend(lines[:-1] if lines and lines[-1] == "" else lines)
 
@@ -211,9 +223,8 @@ def _environment():
     every user string is sanitised by :func:`sanitise_comment` before)."""
     global _ENV
     if _ENV is None:
-        import jinja2
+        import jinja2  # lazy: jinja2 + markupsafe, 21 modules
 
-        from .._cache import template_bytecode_cache
         _ENV = jinja2.Environment(
             loader=jinja2.FileSystemLoader(str(TEMPLATES)), autoescape=False,
             bytecode_cache=template_bytecode_cache(__file__),
@@ -224,7 +235,6 @@ def _environment():
 def fcs_r_hex_per_vdc(convention: str) -> float:
     """Length of an active inverter vector per volt of bus (the hexagon's
     vertex radius, :func:`toolbox.spec.inverter_radii`)."""
-    from ..spec import inverter_radii
     return inverter_radii(1.0, convention)[0]
 
 
@@ -387,6 +397,12 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     motor, drive = _motor_drive(artifact, motor, drive)
     if artifact.method == "fcs_mpc":
         return _write_fcs_header(artifact, motor, drive, name, title, example)
+    if artifact.cv is not None:
+        if title is None:
+            title = (artifact.spec or {}).get("title", "")
+        return write_cv_header(artifact, motor, drive, name, title, render=_render,
+                               provenance=_provenance(artifact, title),
+                               example=_example if example else None)
     check = check_exportable(artifact, motor, drive)
     N = name.lower()
     P = name.upper() + "_"

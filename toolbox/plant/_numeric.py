@@ -11,13 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+import inspect
 
 import numpy as np
 
 from toolbox.spec import Motor
 
 from .._cache import cached
-from .._lti import StateSpace
+from ..lti import StateSpace
 
 __all__ = ["ElectricalPlant", "numeric_plant", "axis_plant_models", "axis_plants", "linearise"]
 
@@ -31,12 +32,10 @@ def _electrical_sources(convention: str) -> tuple[str, str, str]:
     Raises RuntimeError if the generated code names anything that is not a
     numpy attribute (it could not be re-created from its text alone).
     """
-    import inspect
+    import sympy as sp  # lazy: sympy, ~480 modules (cold cache only)
 
-    import sympy as sp
-
-    from ._symbolic import SYMBOLS as S
-    from ._symbolic import derive_dq_model
+    from ._symbolic import SYMBOLS as S  # lazy: sympy, ~490 modules
+    from ._symbolic import derive_dq_model  # lazy: sympy, ~490 modules
 
     model = derive_dq_model(convention)
     x = sp.Matrix([S["i_d"], S["i_q"]])
@@ -120,7 +119,7 @@ class ElectricalPlant:
 
     def statespace(self, omega: float = 0.0) -> StateSpace:
         """Two-input two-output system v -> i at fixed electrical speed
-        (:class:`toolbox._lti.StateSpace`)."""
+        (:class:`toolbox.lti.StateSpace`)."""
         return StateSpace(self.A(omega), self.B(), np.eye(2), np.zeros((2, 2)))
 
 
@@ -150,7 +149,7 @@ def axis_plant_models(motor) -> dict[str, StateSpace]:
     Returns
     -------
     dict
-        ``{"d": StateSpace, "q": StateSpace}`` (:class:`toolbox._lti.StateSpace`).
+        ``{"d": StateSpace, "q": StateSpace}`` (:class:`toolbox.lti.StateSpace`).
     """
     plant = numeric_plant(motor)
     A, B = plant.A(0.0), plant.B()
@@ -179,7 +178,7 @@ def axis_plants(motor) -> dict:
     dict
         ``{"d": control.TransferFunction, "q": control.TransferFunction}``.
     """
-    import control
+    import control  # lazy: python-control, 687 modules
 
     sys = numeric_plant(motor).statespace(0.0).to_control()
     return {"d": control.ss2tf(sys[0, 0]), "q": control.ss2tf(sys[1, 1])}
@@ -187,10 +186,10 @@ def axis_plants(motor) -> dict:
 
 @lru_cache(maxsize=None)
 def _full_jacobians(convention: str):
-    import sympy as sp
+    import sympy as sp  # lazy: sympy, ~480 modules (cold cache only)
 
-    from ._symbolic import SYMBOLS as S
-    from ._symbolic import derive_dq_model
+    from ._symbolic import SYMBOLS as S  # lazy: sympy, ~490 modules
+    from ._symbolic import derive_dq_model  # lazy: sympy, ~490 modules
 
     model = derive_dq_model(convention)
     f = model.state_equations()
@@ -221,13 +220,13 @@ def linearise(motor, i_d0: float, i_q0: float, Omega0: float) -> tuple[StateSpac
 
     Returns
     -------
-    sys : toolbox._lti.StateSpace
+    sys : toolbox.lti.StateSpace
         The small-signal model.
     u0 : ndarray
         Operating-point inputs ``[v_d0, v_q0, T_L0]``.
     """
-    from ._symbolic import SYMBOLS as S
-    from ._symbolic import derive_dq_model
+    from ._symbolic import SYMBOLS as S  # lazy: sympy, ~490 modules
+    from ._symbolic import derive_dq_model  # lazy: sympy, ~490 modules
 
     jx, ju = _full_jacobians(motor.convention)
     model = derive_dq_model(motor.convention)

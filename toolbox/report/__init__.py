@@ -40,6 +40,7 @@ from pathlib import Path
 
 from . import plots
 from ._certificate import _certificate_of, _sampled_certificate_of  # noqa: F401
+from ._firmware import _firmware_card
 from ._checks import (BASELINE_LABEL, MARGIN_ROWS, _banner, _check_rows, _checks_of,
                       _margin_table, _margins_of, _verdict_card)
 from ._data import ReportData
@@ -91,7 +92,6 @@ def _equations(spec, given: list | None = None) -> list[dict]:
         return [{"label": str(e["label"]), "latex": str(e["latex"]), "text": str(e["text"]),
                  "svg": plots.equation_svg(str(e["latex"]).replace(r"\frac", r"\dfrac"))}
                 for e in given]
-    from .._cache import cached
 
     convention = spec.motor.convention
     sources = (Path(__file__).parents[1] / "plant" / "_symbolic.py", Path(__file__),
@@ -106,9 +106,9 @@ def _equations(spec, given: list | None = None) -> list[dict]:
 
 def _derived_equations(convention: str) -> list[dict]:
     """The rows of :func:`_equations` for a dq convention, derived and typeset."""
-    import sympy as sp
+    import sympy as sp  # lazy: sympy, ~490 modules (cold cache only)
 
-    from ..plant import derive_dq_model
+    from ..plant import derive_dq_model  # lazy: scipy.linalg + plant, ~230 modules
 
     model = derive_dq_model(convention)
     di_d, di_q = sp.symbols("di_d di_q", real=True)
@@ -146,7 +146,8 @@ def build_context(data: ReportData) -> dict:
     dict
         Keys ``title, motor, drive, requirements, equations, controller,
         margins, checks, figures, step, robustness, verdict_card (the
-        robustness card: drift-box verdict), banner (the verdict banner:
+        robustness card: drift-box verdict), firmware (the firmware card:
+        firmware.json's target figures or why not measured), banner (the verdict banner:
         ``status`` pass/fail/none, ``headline``, ``count``, ``reason``),
         baseline (the label of informational margins, or None), certificate,
         scenarios, provenance, margins_given, resolution_note``; the HTML and typst templates render it.
@@ -162,7 +163,6 @@ def build_context(data: ReportData) -> dict:
                   if getattr(spec.drive, f) is not None]
     drive_rows.append(("Max dq voltage (linear modulation)",
                        fmt(spec.drive.max_voltage(motor.convention)), "V"))
-    from ..spec import REQUIREMENT_KEYS
 
     req_rows = []
     for k, v in getattr(spec.requirements, "bounds", {}).items():
@@ -189,6 +189,7 @@ def build_context(data: ReportData) -> dict:
         "step": _step_of(data.analysis),
         "robustness": _robustness(_robustness_of(data.analysis)),
         "verdict_card": _verdict_card(data.verification, baseline),
+        "firmware": _firmware_card(data.firmware),
         "banner": _banner(data, checks),
         "baseline": BASELINE_LABEL if baseline else None,
         "resolution_note": RESOLUTION_NOTE,
@@ -204,3 +205,5 @@ def build_context(data: ReportData) -> dict:
 
 from .html import write_html  # noqa: E402  (the renderers use the model above)
 from .pdf import write_pdf  # noqa: E402
+from .._cache import cached
+from ..spec import REQUIREMENT_KEYS

@@ -51,6 +51,10 @@ class ReportData:
     warnings : list of str or None
         Lines shown with the notice (stored numbers that disagree with the
         recomputed ones, a refused header).
+    firmware : dict or None
+        ``firmware.json`` (:func:`toolbox.export.firmware.measure_firmware`):
+        the firmware card's figures, or why they were not measured; ``None``
+        when no header was written.
     """
 
     title: str
@@ -63,3 +67,4 @@ class ReportData:
     generated: str | None = None
     notice: str | None = None
     warnings: list | None = None
+    firmware: Mapping | None = None

@@ -9,6 +9,7 @@ from typing import Mapping, Sequence
 from . import plots
 from ._data import ReportData
 from ._format import _as_float, _flatten, fmt, fmt_q, sim_metric_unit, zpk_text
+from .._version import toolbox_version
 
 
 #: Long names of the design methods (toolbox/ARCHITECTURE.md "Spec file").
@@ -24,6 +25,7 @@ METHOD_NAMES = {
     "fcs_mpc": "Finite-control-set predictive control",
     "robust_pi": "Robust PI (multi-model disk-margin tuning at speed)",
     "tune": "Structured robust tuning of the PI (hard disk-margin goals, fastest response)",
+    "cv": "Direct discrete-time complex-vector control (poles placed in z at the measured speed)",
 }
 
 
@@ -110,8 +112,6 @@ def _scenarios(verification: Mapping | None, traces: Sequence) -> list[dict]:
 
 
 def _provenance(data: ReportData) -> list[tuple[str, str]]:
-    from .._version import toolbox_version
-
     prov = dict(data.artifact.provenance or {})
     rows = [(str(k), fmt(v)) for k, v in prov.items() if k != "equations"]
     rows.append(("spec source", str(getattr(data.spec, "source", None) or "(in memory)")))

@@ -14,6 +14,7 @@ from pathlib import Path
 import jinja2
 
 from .._cache import template_bytecode_cache
+from . import build_context
 
 __all__ = ["write_html", "render_html"]
 
@@ -54,6 +55,4 @@ def write_html(data) -> str:
         (the only time stamps are the artifact's provenance and
         ``data.generated``). Writing it to disk (atomically) is the caller's job.
     """
-    from . import build_context
-
     return render_html(data if isinstance(data, dict) else build_context(data))

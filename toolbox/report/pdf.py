@@ -23,10 +23,13 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+import os
+import tempfile
 
 import jinja2
 
 from .._cache import template_bytecode_cache
+from . import build_context
 
 __all__ = ["write_pdf", "render_typst", "typst_string", "escape_markup"]
 
@@ -143,12 +146,7 @@ def write_pdf(data, path: str | Path | None = None) -> bytes:
     bytes
         The PDF document.
     """
-    import os
-    import tempfile
-
-    import typst
-
-    from . import build_context
+    import typst  # lazy: the typst compiler, PDF only
 
     source, images = render_typst(data if isinstance(data, dict) else build_context(data))
     pdf = typst.compile(source.encode("utf-8"), format="pdf", sys_inputs=images)

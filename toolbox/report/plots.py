@@ -25,6 +25,7 @@ import io
 import math
 import re
 from typing import Any, Mapping, Sequence
+import hashlib
 
 import numpy as np
 
@@ -77,7 +78,7 @@ def svg_from_figure(fig, prefix: str, tight: bool = False) -> str:
     tight : bool
         Crop to the drawn content (used for equations).
     """
-    import matplotlib
+    import matplotlib  # lazy: matplotlib, ~100 modules
 
     buf = io.StringIO()
     with matplotlib.rc_context(RC):
@@ -100,8 +101,8 @@ def svg_from_figure(fig, prefix: str, tight: bool = False) -> str:
 
 def _mpl_figure(width_in: float, height_in: float):
     """A matplotlib figure with the report's style (equations only)."""
-    import matplotlib
-    from matplotlib.figure import Figure as MplFigure
+    import matplotlib  # lazy: matplotlib, ~100 modules
+    from matplotlib.figure import Figure as MplFigure  # lazy: ~220 modules
 
     with matplotlib.rc_context(RC):
         return MplFigure(figsize=(width_in, height_in))
@@ -385,8 +386,6 @@ def equation_svg(tex: str, prefix: str | None = None) -> str | None:
 
 def hash_text(text: str) -> int:
     """A stable (not salted per process) hash for element-id prefixes."""
-    import hashlib
-
     return int(hashlib.sha256(text.encode()).hexdigest()[:12], 16)
 
 

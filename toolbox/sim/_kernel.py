@@ -60,7 +60,8 @@ the measured timings, the cold compile and the experiments tried:
 ``docs/performance.md``.
 
 The plant (``_kernel_plant``), the online metrics (``_kernel_metrics``), the
-plant steps (``_kernel_steps``) and the switching inverters (``_kernel_pwm``)
+plant steps (``_kernel_steps``), the switching inverters (``_kernel_pwm``) and
+the complex-vector law of method ``cv`` (``_kernel_cv``)
 live in sibling modules compiled with the same decorators; the layouts, slot
 constants and decorators are declared in ``_kernel_layout``. All of them are
 in :data:`KERNEL_SOURCES`.
@@ -89,6 +90,7 @@ from ._kernel_plant import (_currents, _deriv, _initial_state, _plant, _to_ab,  
 from ._kernel_metrics import _finalise, _metric_setup, _overshoot  # noqa: F401 (tests)
 from ._kernel_steps import _advance_n, _split
 from ._kernel_pwm import _carrier_period, _svm_period
+from ._kernel_cv import _cv_linear, _cv_update
 from ._metrics import METRIC_NAMES
 
 __all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices",
@@ -314,6 +316,25 @@ def _law_step(A, B, C, D, Baw, xd, xq, xn, idr, iqr, i_d_m, i_q_m, w_m, th_m, LP
     return vd_s, vq_s, (vd_s != vd_u or vq_s != vq_u)
 
 
+@_jit_inline
+def _cv_law_step(xd, xq, idr, iqr, i_d_m, i_q_m, w_m, th_m, LP, DP):
+    """The complex-vector law of method ``cv`` (``_kernel_cv``: gains at the
+    measured speed ``w_m``), the EMF feedforward, the voltage limit and the
+    realised-voltage integrator; updates the states ``xd``, ``xq`` (integrator,
+    then the delayed voltages); returns (vd, vq saturated, saturated?)."""
+    d = int(LP[LP_CV_D])  # the design's delay (the drive's may differ: a robustness case)
+    pi = LP[LP_CV_PI]
+    vd, vq, delta1, gi00, gi01, gi10, gi11 = _cv_linear(
+        xd, xq, idr, iqr, i_d_m, i_q_m, w_m, DP[DP_TS], d, DP[DP_T_COMP], LP[LP_R_C],
+        LP[LP_LD_C], LP[LP_LQ_C], LP[LP_CV_PC], pi, LP[LP_CV_PD])
+    ff = LP[LP_EMF] * w_m * LP[LP_FLUX_C]
+    vq_u = vq + ff
+    vd_s, vq_s = _voltage_limit(vd, vq_u, th_m, w_m, DP)
+    _cv_update(xd, xq, idr, iqr, i_d_m, i_q_m, d, pi, delta1, gi00, gi01, gi10, gi11,
+               vd_s - vd, vq_s - vq_u, vd_s, vq_s - ff)
+    return vd_s, vq_s, (vd_s != vd or vq_s != vq_u)
+
+
 @_jit
 def _euler_predict(i_d, i_q, vd, vq, w, Ts, LP):
     """One forward-Euler step of the controller's dq model (paper 002 eq (23) predictor)."""
@@ -378,8 +399,10 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     A, B, C, D, Baw : (2, n, n), (2, n, 2), (2, n), (2, 2), (2, n)
         Discrete d and q controllers (inputs [i_ref, i_meas], output V),
         back-calculation anti-windup gains.
-    LP : (9,)
-        Controller model R, Ld, Lq, flux; cross, emf flags; alpha, beta, gamma.
+    LP : (14,)
+        Controller model R, Ld, Lq, flux; cross, emf flags; alpha, beta, gamma;
+        cv flag, poles and design delay (``_kernel_cv``; the states ``xd``, ``xq``
+        then hold the integrator and the delayed voltages, ``A`` sized for them).
     SP : (6,)
         Speed loop: enabled, kp, ki, kd, period in current periods, iq limit.
     DP : (8,)
@@ -465,6 +488,7 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     conf_next = np.int64(0)  # fcs with delay: state chosen last period, applied now
     conf_now = np.int64(0)
     t_comp = DP[DP_T_COMP]
+    cv = LP[LP_CV] > 0.5  # the complex-vector law of method cv instead of the axes' laws
     vd_app = 0.0
     vq_app = 0.0
     ph_app = 0.0
@@ -503,8 +527,12 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
             va, vb = state_vector(conf_now, r_hex)
             vd_app, vq_app = _to_dq(va, vb, math.cos(th_m), math.sin(th_m))
         else:
-            vd_s, vq_s, saturated = _law_step(A, B, C, D, Baw, xd, xq, xn, idr, iqr,
-                                              i_d_m, i_q_m, w_m, th_m, LP, DP)
+            if cv:
+                vd_s, vq_s, saturated = _cv_law_step(xd, xq, idr, iqr, i_d_m, i_q_m, w_m,
+                                                     th_m, LP, DP)
+            else:
+                vd_s, vq_s, saturated = _law_step(A, B, C, D, Baw, xd, xq, xn, idr, iqr,
+                                                  i_d_m, i_q_m, w_m, th_m, LP, DP)
             if saturated:
                 acc_m[_A_SAT] += Ts
             slot = k % nbuf
@@ -594,11 +622,11 @@ def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
 #: their cache indexes are dropped with this module's (:data:`_KERNEL_PARTS`).
 KERNEL_SOURCES = ("_kernel.py", "_inverter.py", "_metrics.py", "_kernel_layout.py",
                   "_kernel_plant.py", "_kernel_metrics.py", "_kernel_steps.py",
-                  "_kernel_pwm.py")
+                  "_kernel_pwm.py", "_kernel_cv.py")
 #: Modules whose numba cache indexes depend on :data:`KERNEL_SOURCES` beyond
 #: their own file (``_inverter`` is self-contained).
 _KERNEL_PARTS = ("_kernel", "_kernel_plant", "_kernel_metrics", "_kernel_steps",
-                 "_kernel_pwm")
+                 "_kernel_pwm", "_kernel_cv")
 
 
 def sources_digest() -> str:

@@ -14,7 +14,9 @@ from ._metrics import METRIC_NAMES
 # ---- packed-array layouts: the one declaration of every slot ----------------
 #: Slot names of each packed parameter array, in order, keyed by the array's
 #: prefix: plant ``P`` (true motor), law ``LP`` (controller model, decoupling
-#: flags, paper 002 criterion (23) weights), speed loop ``SP``, drive ``DP``
+#: flags, paper 002 criterion (23) weights; ``cv`` 1 for the complex-vector law
+#: of method ``cv`` with its poles ``cv_pc``, ``cv_pi``, ``cv_pd`` and its
+#: design delay ``cv_d``, ``_kernel_cv``), speed loop ``SP``, drive ``DP``
 #: (``vlim``: 0 none, 1 circle, 2 hexagon; ``inverter``: 0 average, 1 svm,
 #: 2 fcs_mpc; ``half_periods``: carrier half periods per sample of the svm
 #: inverter, 0 = one centred pattern per sample; ``hold``: frame in which the
@@ -29,7 +31,8 @@ from ._metrics import METRIC_NAMES
 LAYOUTS: dict[str, tuple[str, ...]] = {
     "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor",
           "magnetic"),
-    "LP": ("R_c", "Ld_c", "Lq_c", "flux_c", "cross", "emf", "alpha", "beta", "gamma"),
+    "LP": ("R_c", "Ld_c", "Lq_c", "flux_c", "cross", "emf", "alpha", "beta", "gamma",
+           "cv", "cv_pc", "cv_pi", "cv_pd", "cv_d"),
     "SP": ("enabled", "kp", "ki", "kd", "decim", "iq_limit"),
     "DP": ("Ts", "delay", "vlim", "v_max", "r_hex", "inverter", "half_periods", "hold",
            "t_comp", "vprio"),

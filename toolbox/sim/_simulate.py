@@ -19,13 +19,12 @@ from typing import Callable, Mapping, Sequence
 import numba
 import numpy as np
 
-from toolbox.artifact import Decoupling, FcsWeights  # typed in the artifact; FcsWeights re-exported
+from toolbox.artifact import CvLaw, Decoupling, FcsWeights  # typed in the artifact; FcsWeights re-exported
 from toolbox.errors import SpecError
-from toolbox.spec import Motor, inverter_radii
+from toolbox.spec import Motor, Scenario, inverter_radii
 
 from . import _kernel
 from ._metrics import METRIC_NAMES, metrics_dict
-from ._scenario import Scenario
 
 __all__ = ["DriveParams", "AxisLaw", "SpeedLoop", "FcsWeights",
            "ControlLaw", "SimResult", "BatchResult", "simulate", "simulate_batch",
@@ -195,6 +194,12 @@ class ControlLaw:
         Outer loop for ``speed_step`` and ``load_step`` scenarios.
     fcs : FcsWeights, optional
         Weights for the ``"fcs_mpc"`` inverter.
+    cv : CvLaw, optional
+        The complex-vector law of method ``cv``: executed instead of ``d``
+        and ``q`` (which then give the size of its state: the integrator and
+        ``delay_samples`` delayed voltages, the coordinates of the artifact's
+        standstill axes), its gains recomputed each period at the measured
+        speed (``_kernel_cv``); ``decoupling.cross`` must be off.
     """
 
     d: AxisLaw
@@ -203,6 +208,7 @@ class ControlLaw:
     decoupling: Decoupling
     speed_loop: SpeedLoop | None = None
     fcs: FcsWeights | None = None
+    cv: CvLaw | None = None
 
 
 @dataclass
@@ -313,9 +319,21 @@ def _pack_law(law: ControlLaw):
         raise SpecError("law", "finite controller matrices", "NaN or inf")
     f = law.fcs or FcsWeights()
     dec = law.decoupling
+    cv = law.cv
+    if cv is not None and (np.shape(law.d.A) != np.shape(law.q.A) or not np.size(law.d.A)):
+        raise SpecError("law.cv", "standstill axes of equal order >= 1 (the integrator and "
+                        "the design's delayed voltages)", [np.shape(law.d.A), np.shape(law.q.A)])
+    if cv is not None and dec.cross:
+        raise SpecError("law.decoupling.cross", "false with a cv law (its gains hold the "
+                        "dq coupling)", True)
+    pc, pi, pd = (0.0, 0.0, 0.0) if cv is None else cv.poles(law.sample_time, 1)
+    # the cv law's design delay: its standstill axes hold the integrator and that
+    # many delayed voltages (toolbox.design.cv_discrete.standstill_axes)
+    cv_d = n - 1 if cv is not None else 0
     LP = _packed("LP", R_c=dec.R_c, Ld_c=dec.Ld_c, Lq_c=dec.Lq_c, flux_c=dec.flux_c,
                  cross=float(dec.cross), emf=float(dec.emf), alpha=f.alpha, beta=f.beta,
-                 gamma=f.gamma)
+                 gamma=f.gamma, cv=float(cv is not None), cv_pc=pc, cv_pi=pi, cv_pd=pd,
+                 cv_d=cv_d)
     return A, B, C, D, W, LP
 
 

@@ -25,7 +25,8 @@ __all__ = ["MOTOR_RANGES", "DRIVE_RANGES", "MAX_SCENARIOS", "MAX_PLANT_STEPS",
            "MAX_TRACE_ROWS", "MIN_PLANT_STEP", "TAU_SAMPLES", "RATE_TS", "SCALE_RANGE",
            "MAX_POLE_PAIRS", "check_motor", "check_drive", "check_motor_drive",
            "check_scenario_count", "check_work", "check_rate", "check_time_constant",
-           "check_scale", "check_gain", "check_speed", "check_plant_variant"]
+           "check_scale", "check_gain", "check_speed", "check_plant_variant",
+           "INERTIA_ACCELERATION", "REQUIREMENT_RANGES", "check_inertia", "check_requirement"]
 
 #: key -> (low, high, what, unit) for the motor parameters.
 MOTOR_RANGES = {
@@ -35,12 +36,58 @@ MOTOR_RANGES = {
     # flux = 0 (a synchronous reluctance machine) is outside the PMSM models:
     # torque-to-current conversion and the analysis divide by it
     "flux": (1e-6, 100.0, "PM flux linkage", "Wb"),
+    # 1e-10 kg m^2 (0.001 g cm^2) is below the rotors of the smallest
+    # micro-motors (of order 0.01 g cm^2); 1e5 kg m^2 is above the rotor of a
+    # multi-MW direct-drive generator (of order 1e4 kg m^2). The
+    # motor-relative bound (:func:`check_inertia`) catches unit mistakes.
+    "J": (1e-10, 1e5, "rotor inertia", "kg m^2"),
+    # 0 (no friction) is the default; 1e3 N m s/rad loses 1e6 W at 1000 rad/s
+    "friction": (0.0, 1e3, "viscous friction", "N m s/rad"),
+    # 1 mA (a micro-motor's no-load current) .. 100 kA (beyond any traction
+    # inverter, ~1 kA): a current in kA or mA mistaken for A falls outside
+    "rated_current": (1e-3, 1e5, "rated current", "A"),
+    "max_current": (1e-3, 1e5, "largest current", "A"),
+    # 0.01 rad/s (0.1 rpm, a direct drive) .. 1e5 rad/s (~1e6 rpm, beyond the
+    # fastest spindle at 200,000 rpm); rpm written as rad/s is x 9.5 only, so
+    # this bound catches krpm/rpm slips only
+    "rated_speed": (1e-2, 1e5, "rated speed", "rad/s"),
+}
+
+#: Torque-to-inertia ratio of a motor (rad/s^2): ``T_char / J`` with the
+#: characteristic torque ``T_char = 1.5 p flux^2 / max(Ld, Lq)`` (the torque
+#: at the characteristic current flux / L, a current scale every PMSM has
+#: whether or not its rated current is given). Over the 36 corpus motors
+#: (tests/corpus/motors: a 10 W gimbal to 150 kW traction) and the four
+#: papers it spans 291 rad/s^2 (paper 002, J = 1 kg m^2) to 3.4e6 rad/s^2
+#: (the issue-12 gimbal motor). The low bound, 100 rad/s^2, is a factor 2.9
+#: under the slowest of them (a large industrial motor with a heavy load
+#: coupled belongs in ``J``, and still clears it when its rotor alone does
+#: by that factor); the high bound leaves a decade over the fastest. A
+#: datasheet inertia in kg cm^2 written as a bare number (read as kg m^2,
+#: 1e4 x too large) is refused for every motor whose ratio is below 1e6
+#: rad/s^2 (35 of the 36 corpus motors and all the papers':
+#: tests/spec/test_units_everywhere.py); in g cm^2 (1e7 x) for all of them.
+INERTIA_ACCELERATION = (100.0, 3e7)
+
+#: (low, high, unit) of each ``[requirements]`` bound with a physical range:
+#: a phase margin is an angle in 0 .. 180 deg; a gain margin above 60 dB (a
+#: factor 1000) is no current loop's; a disk margin is at most 2 (Seiler et
+#: al. 2020: alpha < 2 for the symmetric disk); an overshoot above 1000 %
+#: is no step response worth bounding.
+REQUIREMENT_RANGES = {
+    "min_phase_margin_deg": (0.0, 180.0, "deg"),
+    "min_gain_margin_db": (-60.0, 60.0, "dB"),
+    "min_disk_margin": (0.0, 2.0, ""),
+    "max_overshoot_pct": (0.0, 1000.0, "%"),
 }
 
 #: key -> (low, high, what, unit) for the drive parameters.
 DRIVE_RANGES = {
     "vdc": (0.0, 1e5, "DC-link voltage", "V"),
     "sample_time": (1e-7, 1.0, "controller sample time", "s"),
+    # 100 Hz (a large thyristor-era drive) .. 10 MHz (beyond GaN at ~1 MHz);
+    # kHz written as Hz (x 1e-3) falls below
+    "switching_frequency": (100.0, 1e7, "switching frequency", "Hz"),
 }
 
 #: Most pole pairs of a motor (large direct-drive machines have a few hundred).
@@ -104,6 +151,7 @@ def check_motor(motor, collector: Collector) -> None:
 def check_motor_values(motor, collector: Collector, key) -> None:
     """:data:`MOTOR_RANGES` and the pole pairs of ``motor``, each error under
     ``key(name)`` (the one rule of ``[motor]`` and of a scenario's plant)."""
+    before = len(collector.errors)
     for name, (low, high, what, unit) in MOTOR_RANGES.items():
         with collector.check():
             _range(key(name), getattr(motor, name), low, high, what, unit)
@@ -112,6 +160,53 @@ def check_motor_values(motor, collector: Collector, key) -> None:
         if isinstance(pp, bool) or not isinstance(pp, int) or not 1 <= pp <= MAX_POLE_PAIRS:
             raise SpecError(key("pole_pairs"), f"an integer from 1 to {MAX_POLE_PAIRS} "
                             "(pole pairs)", pp)
+    if len(collector.errors) == before:  # against plausible R, L, flux, p
+        with collector.check():
+            check_inertia(motor, key("J"))
+
+
+#: Likely unit slips of a bare inertia, tried in order: (factor that makes
+#: it plausible, what was probably meant).
+_INERTIA_SLIPS = ((1e-4, "kg cm^2"), (1e-7, "g cm^2"), (1e-3, "g m^2"))
+
+
+def check_inertia(motor, key: str = "motor.J") -> None:
+    """Refuse a rotor inertia implausible for the motor's torque
+    (:data:`INERTIA_ACCELERATION`), naming the likely unit mistake.
+
+    Raises
+    ------
+    SpecError
+        With the bound in kg m^2 for this motor and, when a power-of-ten
+        unit slip makes the value plausible, that slip (``kg·cm² written as
+        kg·m²?``) and the value to write.
+    """
+    L = max(motor.Ld, motor.Lq)
+    t_char = 1.5 * motor.pole_pairs * motor.flux ** 2 / L
+    low, high = INERTIA_ACCELERATION
+    j_low, j_high = t_char / high, t_char / low
+    if j_low <= motor.J <= j_high:
+        return
+    hint = None
+    for factor, unit in _INERTIA_SLIPS:
+        if j_low <= motor.J * factor <= j_high:
+            hint = (f"{unit.replace(' ', '·').replace('^2', '²')} written as kg·m²? "
+                    f"write J = \"{motor.J:g} {unit}\" (= {motor.J * factor:.3g} kg m^2)")
+            break
+    raise SpecError(key, f"a rotor inertia plausible for this motor: between {j_low:.3g} and "
+                    f"{j_high:.3g} kg m^2 (its characteristic torque 1.5 p flux^2 / L = "
+                    f"{t_char:.3g} N m over {low:g} .. {high:g} rad/s^2, the torque-to-inertia "
+                    "range of real motors, widened)", motor.J,
+                    hint=hint or "check the unit of J (a datasheet prints kg cm^2 or g cm^2: "
+                    'write it with its unit, e.g. J = "1.2 kg cm^2")')
+
+
+def check_requirement(key: str, value: float) -> None:
+    """A ``[requirements]`` bound within :data:`REQUIREMENT_RANGES`."""
+    if key in REQUIREMENT_RANGES:
+        low, high, unit = REQUIREMENT_RANGES[key]
+        _range(f"requirements.{key}", value, low, high, key.split("_")[1] + " margin"
+               if "margin" in key else "overshoot", unit)
 
 
 def check_drive(drive, collector: Collector) -> None:
@@ -120,6 +215,9 @@ def check_drive(drive, collector: Collector) -> None:
         _range("drive.vdc", drive.vdc, *DRIVE_RANGES["vdc"], low_open=True)
     with collector.check():
         _range("drive.sample_time", drive.sample_time, *DRIVE_RANGES["sample_time"])
+    with collector.check():
+        _range("drive.switching_frequency", drive.switching_frequency,
+               *DRIVE_RANGES["switching_frequency"])
 
 
 def check_motor_drive(motor, drive, collector: Collector) -> None:

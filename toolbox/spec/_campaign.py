@@ -47,6 +47,7 @@ from typing import Any
 
 from ..errors import SpecError
 from ._fields import Table
+from ._datasheet import MOTOR_KINDS
 from ._model import MOTOR_PARAMETER_KEYS
 
 __all__ = ["CampaignCfg", "ParameterDist", "read_campaign", "CAMPAIGN_PARAMETERS",
@@ -55,7 +56,7 @@ __all__ = ["CampaignCfg", "ParameterDist", "read_campaign", "CAMPAIGN_PARAMETERS
 #: Motor parameters a campaign may draw (pole pairs are not a spread).
 CAMPAIGN_PARAMETERS = tuple(k for k in MOTOR_PARAMETER_KEYS if k != "pole_pairs")
 DISTRIBUTIONS = ("uniform", "normal", "truncnormal")
-#: Largest campaign (samples); 10^7 is the issue's upper end.
+#: Largest campaign (samples) a spec may ask for.
 MAX_SAMPLES = 100_000_000
 MAX_MEASURED_ROWS = 100_000
 #: Parameters that must stay > 0 (the others, flux and friction, >= 0).
@@ -171,7 +172,9 @@ def _parameter(name: str, value: Any) -> ParameterDist:
     dist = t.string("distribution", choices=DISTRIBUTIONS)
     t = Table(value, key, ("distribution", "mode") + _DIST_KEYS[dist])
     mode = t.string("mode", "scale", choices=("scale", "value"))
-    nums = {k: t.number(k) for k in _DIST_KEYS[dist]}
+    # drawn values (mode "value") may carry the parameter's unit ("20 mohm")
+    kind = MOTOR_KINDS.get(name) if mode == "value" else None
+    nums = {k: t.number(k, kind=kind) for k in _DIST_KEYS[dist]}
     if "std" in nums and not nums["std"] > 0:
         raise SpecError(f"{key}.std", "a number > 0", nums["std"])
     if "low" in nums and not nums["high"] > nums["low"]:
@@ -265,8 +268,9 @@ def _operating_points(value: Any) -> tuple:
                 raise SpecError(t.key(key), "a non-empty list of integers in 0 .. 10", raw)
             values = tuple(int(v) for v in raw)
         else:
-            unit = {"speed": "rad/s", "speed_offset": "rad/s", "vdc": "V"}.get(key, "")
-            values = t.numbers(key, min_length=1, max_length=1000, unit=unit)
+            unit, kind = {"speed": ("rad/s", "speed"), "speed_offset": ("rad/s", "speed"),
+                          "vdc": ("V", None)}.get(key, ("", None))
+            values = t.numbers(key, min_length=1, max_length=1000, unit=unit, kind=kind)
             if key == "vdc" and min(values) <= 0:
                 raise SpecError(t.key(key), "DC-link voltages > 0 (V)", list(values))
             if key == "speed_gain_error" and min(values) <= -1:

@@ -47,6 +47,7 @@ from ._fields import Collector, is_finite_number
 from ._units import KINDS, _Shown, looks_like_quantity, parse_quantity
 
 __all__ = ["Conversion", "GROUPS", "MOTOR_KINDS", "DRIVE_KINDS", "CONVENTION_TEXT",
+           "SCENARIO_KINDS", "SPEED_LOOP_KINDS", "rms_rule", "convert_scenario",
            "resolve_motor", "resolve_drive", "convert_units", "catalog_kept",
            "reported_keys", "relocate"]
 
@@ -142,12 +143,42 @@ def _dq_current_per_rms(convention: str) -> tuple[float, str]:
     return math.sqrt(2.0), "sqrt(2) (amplitude-invariant dq: the peak phase current)"
 
 
+#: ``[[scenario]]`` keys holding a physical quantity (toolbox.sim.Scenario's
+#: units); ``plant_values`` takes the motor's kinds, ``speed_loop`` these.
+SCENARIO_KINDS = {
+    "duration": "time", "step_time": "time", "load_time": "time", "plant_step": "time",
+    "trace_step": "time",
+    "id_ref": "current", "iq_ref": "current", "id_ref0": "current", "iq_ref0": "current",
+    "current_noise": "current", "current_quantum": "current",
+    "torque_ref": "torque", "load_torque": "torque", "torque_amplitude": "torque",
+    "torque_frequency": "frequency",
+    "speed_ref": "speed", "speed_ref0": "speed", "initial_speed": "speed",
+    "speed_offset": "speed", "speed_noise": "speed", "acceleration": "acceleration",
+}
+SPEED_LOOP_KINDS = {"kp": "speed_gain", "ki": "speed_gain_integral",
+                    "sample_time": "time", "iq_limit": "current"}
+
+
+def rms_rule(key: str, kind: str, convention: str) -> str:
+    """What an rms marker means for ``key`` (:func:`toolbox.spec._units.normalise_unit`):
+    nothing for keys named rms, the dq magnitude of the convention for a
+    current, rms -> peak (x sqrt(2)) inside other units (``"N m/Arms"``)."""
+    if key.endswith("_rms"):
+        return "rms"
+    if kind == "current" and convention == "power":
+        return "power"
+    return "peak"
+
+
 def convert_units(table: Mapping[str, Any], kinds: Mapping[str, str], prefix: str,
-                  errors: Collector) -> tuple[dict, list[Conversion]]:
+                  errors: Collector, convention: str = "amplitude"
+                  ) -> tuple[dict, list[Conversion]]:
     """Replace ``"<number> <unit>"`` strings by SI floats, recording each.
 
     Other values are left as they are for the type checks (``"0.6"`` stays a
-    string and is refused there as "expected a number").
+    string and is refused there as "expected a number"). An rms current
+    (``"10 Arms"``) becomes the dq magnitude of ``convention``
+    (:func:`rms_rule`).
     """
     out = dict(table)
     log: list[Conversion] = []
@@ -156,7 +187,8 @@ def convert_units(table: Mapping[str, Any], kinds: Mapping[str, str], prefix: st
         if not looks_like_quantity(value):
             continue
         with errors.check():
-            out[key] = parse_quantity(value, f"{prefix}.{key}", kind)
+            out[key] = parse_quantity(value, f"{prefix}.{key}", kind,
+                                      rms_rule(key, kind, convention))
             log.append(Conversion(key, out[key], KINDS[kind].si.replace("*", " "),
                                   {key: value}, f"{value} in SI units"))
     return out, log
@@ -216,7 +248,8 @@ def resolve_motor(user: Mapping[str, Any], catalog: Mapping[str, Any],
     """
     _check_groups(user, errors)
     base = {**catalog_kept(catalog, user), **user}
-    merged, log = convert_units(base, MOTOR_KINDS, "motor", errors)
+    merged, log = convert_units(base, MOTOR_KINDS, "motor", errors,
+                                str(base.get("convention", "amplitude")))
     if "R_ll" in merged and "R" not in user:
         r_ll = _positive(merged.pop("R_ll"), user["R_ll"], "motor.R_ll", "ohm", errors)
         if r_ll is not None:
@@ -261,6 +294,20 @@ def resolve_motor(user: Mapping[str, Any], catalog: Mapping[str, Any],
     consumed = {"R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms",
                 *RMS_CURRENTS}
     return merged, [c for c in log if c.key not in consumed or c.formula.startswith(c.key)]
+
+
+def convert_scenario(item: Any, key: str, convention: str,
+                     errors: Collector) -> Any:
+    """A ``[[scenario]]`` table with its unit strings in SI (the scenario's
+    own keys, ``plant_values`` and ``speed_loop``); each failed conversion is
+    recorded in ``errors`` and its value left for the type check."""
+    if not isinstance(item, Mapping):
+        return item
+    out, _ = convert_units(item, SCENARIO_KINDS, key, errors, convention)
+    for sub, kinds in (("plant_values", MOTOR_KINDS), ("speed_loop", SPEED_LOOP_KINDS)):
+        if isinstance(item.get(sub), Mapping):
+            out[sub], _ = convert_units(item[sub], kinds, f"{key}.{sub}", errors, convention)
+    return out
 
 
 def reported_keys(errors: Collector, prefix: str) -> set[str]:

@@ -14,6 +14,7 @@ from contextlib import contextmanager
 from typing import Any, Iterable, Iterator, Mapping, Sequence
 
 from ..errors import SpecError
+from ._units import kind_for_unit, looks_like_quantity, parse_quantity
 
 __all__ = [
     "Table",
@@ -121,8 +122,15 @@ class Table:
     def number(self, name: str, default: Any = _MISSING, *, positive: bool = False,
                nonnegative: bool = False, minimum: float | None = None,
                maximum: float | None = None, negative: bool = False,
-               unit: str = "") -> Any:
-        """A finite real number with optional bounds."""
+               unit: str = "", kind: str | None = None) -> Any:
+        """A finite real number with optional bounds.
+
+        A string with a unit (``"12566 rad/s"``, ``"2 kHz"``, ``"45 deg"``)
+        is accepted when ``unit`` names a physical quantity
+        (:data:`toolbox.spec._units.UNIT_LABELS`; ``kind`` overrides the
+        label's kind, e.g. ``"speed"`` for a ``rad/s`` that is a speed) and
+        converted to ``unit`` before the bounds are checked.
+        """
         cond = []
         if positive:
             cond.append("> 0")
@@ -139,6 +147,7 @@ class Table:
         value = self._get(name, default, expected)
         if value is default and name not in self.data:
             return value
+        value = self._quantity(value, self.key(name), unit, kind)
         if not is_finite_number(value):
             raise SpecError(self.key(name), expected, value)
         bad = ((positive and not value > 0) or (nonnegative and value < 0)
@@ -148,6 +157,15 @@ class Table:
         if bad:
             raise SpecError(self.key(name), expected, value)
         return float(value)
+
+    @staticmethod
+    def _quantity(value: Any, key: str, unit: str, kind: str | None) -> Any:
+        """``value`` converted to ``unit`` when it is a string with a unit and
+        ``unit`` (or ``kind``) names a physical quantity; else as given."""
+        kind = kind or kind_for_unit(unit)
+        if kind is not None and looks_like_quantity(value):
+            return parse_quantity(value, key, kind)
+        return value
 
     def integer(self, name: str, default: Any = _MISSING, *, minimum: int | None = None,
                 maximum: int | None = None) -> Any:
@@ -187,8 +205,10 @@ class Table:
         return value
 
     def numbers(self, name: str, default: Any = _MISSING, *, length: int | None = None,
-                min_length: int = 0, max_length: int | None = None, unit: str = "") -> Any:
-        """A list of finite numbers (at most ``max_length`` of them)."""
+                min_length: int = 0, max_length: int | None = None, unit: str = "",
+                kind: str | None = None) -> Any:
+        """A list of finite numbers (at most ``max_length`` of them); entries
+        may carry units as in :meth:`number`."""
         expected = (f"a list of {length} numbers" if length is not None
                     else "a list of numbers") + (f" ({unit})" if unit else "")
         value = self._get(name, default, expected)
@@ -198,6 +218,9 @@ class Table:
                 and len(value) > max_length):  # before looking at each entry
             raise SpecError(self.key(name), f"a list of at most {max_length} numbers"
                             + (f" ({unit})" if unit else ""), f"{len(value)} numbers")
+        if isinstance(value, (list, tuple)):
+            value = [self._quantity(v, f"{self.key(name)}[{i}]", unit, kind)
+                     for i, v in enumerate(value)]
         if (not isinstance(value, (list, tuple))
                 or not all(is_finite_number(v) for v in value)
                 or (length is not None and len(value) != length)

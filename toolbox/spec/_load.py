@@ -19,14 +19,17 @@ from .._io import check_data_depth, check_text_depth, read_limited
 from ..errors import SpecError
 from ._campaign import read_campaign
 from ._catalog import CATALOG
-from ._datasheet import (catalog_kept, relocate, reported_keys, resolve_drive,
-                         resolve_motor)
+from ._datasheet import (catalog_kept, convert_scenario, relocate, reported_keys,
+                         resolve_drive, resolve_motor)
 from ._bounds import (check_drive, check_motor, check_motor_drive, check_plant_variant,
-                      check_scenario_count, check_speed, check_work)
+                      check_requirement, check_scenario_count, check_speed, check_work)
 from ._fields import Collector, Table, check_keys
+from ._method_units import convert_method_units
 from ._methods import read_method_cfg
+from ._scenario import Scenario
 from ._model import (DRIFT_FACTOR_RANGE, DRIFT_PARAMETERS, METHODS, REQUIREMENT_KEYS,
                      ControllerChoice, Drive, Motor, Requirements, Spec)
+from ._overrides import apply_overrides, blame_overrides
 
 __all__ = ["load_spec", "spec_from_dict", "motor_from_dict", "drive_from_dict"]
 
@@ -84,7 +87,6 @@ def load_spec(path: str | Path, overrides: Sequence[tuple[str, str]] = ()) -> Sp
         raise SpecError("", "valid TOML", str(err), file=name) from None
     if not overrides:
         return spec_from_dict(data, file=name)
-    from ._overrides import apply_overrides, blame_overrides
 
     try:
         data = apply_overrides(data, overrides)
@@ -148,9 +150,11 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     if not errors.failed:  # method parameters are read against a plausible motor
         with errors.check():
             controller = _controller(top.raw("controller"), motor, drive)
-    else:  # the method's name is still checked, so that one run reports it too
-        with errors.check():
-            _method_name(top.raw("controller"))
+    else:  # the method's table is still checked, so that one run reports it too
+        drive_ok = drive is not None and not any(
+            e.key.startswith("drive.") for e in errors.errors)
+        for err in _controller_alone(top.raw("controller"), drive if drive_ok else None):
+            errors.add(err)
     requirements = None
     with errors.check():
         requirements = _requirements(top.raw("requirements"))
@@ -162,7 +166,8 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
         method = controller.method if controller is not None else _known_method(
             top.raw("controller"))
         with errors.check():
-            scenarios = _scenarios(top.raw("scenario", []), drive, method)
+            scenarios = _scenarios(top.raw("scenario", []), drive, method, errors,
+                                   _convention(top.raw("motor")))
         check_work(scenarios, drive.sample_time, errors)
         if motor is not None and not errors.failed:  # against a plausible motor and drive
             _check_scenario_plants(scenarios, motor, drive, errors)
@@ -418,9 +423,42 @@ def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
     t = Table(value, "controller")
     method = t.string("method", choices=METHODS)
     check_keys(t.data, ("method", method), "controller")
+    # quantity strings ("2 kHz") -> SI before the method's reader sees them
+    errors = Collector()
+    table = convert_method_units(method, t.raw(method, {}), t.key(method), errors)
+    errors.raise_if_any()
     # the design methods register their readers (spec/_methods.py): spec stays data
-    cfg = read_method_cfg(method, t.table(method), motor=motor, drive=drive)
+    cfg = read_method_cfg(method, Table(table, t.key(method)), motor=motor, drive=drive)
     return ControllerChoice(method=method, cfg=cfg)
+
+
+#: Stand-in motors and drives for reading [controller] when the spec's own
+#: failed: paper 003's servo at 10 kHz and a traction IPM at 20 kHz.
+_STAND_INS = (({"catalog": "azaiz2007"}, {"vdc": 150, "sample_time": 1e-4}),
+              ({"R": 0.01, "Ld": 1.3e-4, "Lq": 3.5e-4, "flux": 0.06, "pole_pairs": 6,
+                "J": 0.04}, {"vdc": 360, "sample_time": 5e-5}))
+
+
+def _controller_alone(value: Any, drive: Drive | None) -> list[SpecError]:
+    """The errors of ``[controller]`` that do not depend on the motor (or on
+    the drive when that failed too): the table is read against two very
+    different stand-in motors (:data:`_STAND_INS`) and only the errors both
+    readings give, word for word, are kept (an unknown key, a unit that
+    does not parse, a negative bandwidth; never a range computed from the
+    stand-in's numbers). A missing table is reported only once the motor
+    and drive are valid (as before: the file is likely a fragment)."""
+    if value is None:
+        return []
+    found = []
+    for motor_table, drive_table in _STAND_INS:
+        try:
+            _controller(value, _motor(motor_table)[0],
+                        drive if drive is not None else _drive(drive_table))
+            found.append({})
+        except SpecError as err:
+            errs = err.errors if hasattr(err, "errors") else [err]
+            found.append({str(e): e for e in errs})
+    return [e for text, e in found[0].items() if text in found[1]]
 
 
 def _method_name(value: Any) -> str | None:
@@ -457,7 +495,9 @@ def _requirements(value: Any) -> Requirements:
             continue
         unit = REQUIREMENT_KEYS[key][3]
         with errors.check():
-            bounds[key] = t.number(key, unit=unit, nonnegative=key != "min_gain_margin_db")
+            bounds[key] = t.number(key, unit=unit, nonnegative=key != "min_gain_margin_db",
+                                   kind=REQUIREMENT_KINDS.get(key))
+            check_requirement(key, bounds[key])
     ranges = {}
     if t.has("parameter_drift"):
         drift = _lenient_table(t.raw("parameter_drift"), t.key("parameter_drift"),
@@ -482,38 +522,62 @@ def _drift_range(table: Table, name: str) -> tuple[float, float]:
     return (low, high)
 
 
+#: Requirements whose ``rad/s`` or ``1/s`` is not an angular rate: a speed
+#: error takes rpm (not Hz), a switching count per second takes kHz.
+REQUIREMENT_KINDS = {"max_static_speed_error": "speed",
+                     "max_commutations_per_s": "frequency"}
+
+
 #: Longest verification scenario (s): the plant is integrated at about 1 us.
 MAX_SCENARIO_DURATION = 60.0
 
 
-def _scenarios(value: Any, drive: Drive, method: str | None) -> tuple:
+def _convention(motor: Any) -> str:
+    """The dq convention a raw [motor] table names (for rms currents)."""
+    value = motor.get("convention") if isinstance(motor, Mapping) else None
+    return value if value in ("amplitude", "power") else "amplitude"
+
+
+def _scenarios(value: Any, drive: Drive, method: str | None, errors: Collector,
+               convention: str = "amplitude") -> tuple:
+    """Every ``[[scenario]]`` table, each error recorded in ``errors`` (all
+    scenarios are read: every error of the file in one run); the valid
+    scenarios are returned."""
     if not isinstance(value, list):
         raise SpecError("scenario", "an array of tables [[scenario]]", value)
     check_scenario_count(len(value))  # before reading 10,000 tables
-    from ..sim import Scenario  # the simulation package owns scenario semantics
-
     out = []
     for k, item in enumerate(value):
         key = f"scenario[{k}]"
-        scenario = Scenario.from_dict(item, key=key, sample_time=drive.sample_time)
-        if scenario.kind in ("load_step", "speed_step") and "kp" not in scenario.speed_loop:
-            raise SpecError(f"{key}.speed_loop", "a table with at least kp (A s/rad) for kind "
-                            f'"{scenario.kind}"', dict(scenario.speed_loop))
-        ts_speed = scenario.speed_loop.get("sample_time")
-        if ts_speed is not None:
-            ratio = ts_speed / drive.sample_time
-            if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
-                raise SpecError(f"{key}.speed_loop.sample_time", "a whole multiple of "
-                                f"drive.sample_time ({drive.sample_time:g} s)", ts_speed)
-        if scenario.inverter == "fcs_mpc" and method is not None and method != "fcs_mpc":
-            raise SpecError(f"{key}.inverter", '"average" or "svm"', "fcs_mpc",
-                            hint='predictive switching needs controller.method = "fcs_mpc"')
-        if scenario.duration > MAX_SCENARIO_DURATION:
-            raise SpecError(f"{key}.duration", f"at most {MAX_SCENARIO_DURATION:g} s",
-                            scenario.duration,
-                            hint="longer runs: call toolbox.sim.simulate directly")
-        out.append(scenario)
+        before = len(errors.errors)
+        item = convert_scenario(item, key, convention, errors)
+        if len(errors.errors) > before:
+            continue
+        with errors.check():
+            out.append(_scenario(item, key, drive, method))
     return tuple(out)
+
+
+def _scenario(item: Any, key: str, drive: Drive, method: str | None):
+    """One ``[[scenario]]`` table (its unit strings already in SI)."""
+    scenario = Scenario.from_dict(item, key=key, sample_time=drive.sample_time)
+    if scenario.kind in ("load_step", "speed_step") and "kp" not in scenario.speed_loop:
+        raise SpecError(f"{key}.speed_loop", "a table with at least kp (A s/rad) for kind "
+                        f'"{scenario.kind}"', dict(scenario.speed_loop))
+    ts_speed = scenario.speed_loop.get("sample_time")
+    if ts_speed is not None:
+        ratio = ts_speed / drive.sample_time
+        if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
+            raise SpecError(f"{key}.speed_loop.sample_time", "a whole multiple of "
+                            f"drive.sample_time ({drive.sample_time:g} s)", ts_speed)
+    if scenario.inverter == "fcs_mpc" and method is not None and method != "fcs_mpc":
+        raise SpecError(f"{key}.inverter", '"average" or "svm"', "fcs_mpc",
+                        hint='predictive switching needs controller.method = "fcs_mpc"')
+    if scenario.duration > MAX_SCENARIO_DURATION:
+        raise SpecError(f"{key}.duration", f"at most {MAX_SCENARIO_DURATION:g} s",
+                        scenario.duration,
+                        hint="longer runs: call toolbox.sim.simulate directly")
+    return scenario
 
 
 def _check_scenario_plants(scenarios: tuple, motor: Motor, drive: Drive,

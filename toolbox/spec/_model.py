@@ -21,7 +21,8 @@ __all__ = ["inverter_radii", "Motor", "Drive", "ControllerChoice", "Requirements
 MOTOR_PARAMETER_KEYS = ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction")
 
 #: Design methods the toolbox knows (toolbox/ARCHITECTURE.md "Spec file").
-METHODS = ("pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc", "robust_pi", "tune")
+METHODS = ("pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc", "robust_pi", "tune",
+           "cv")
 
 #: ``[requirements]`` keys: (stage, direction, quantity, unit). Stage
 #: ``margins`` bounds the worst axis of the loop analysis, ``sim`` every
@@ -332,7 +333,7 @@ class Spec:
     controller : ControllerChoice
     requirements : Requirements
     scenarios : tuple
-        Validated scenarios (see :mod:`toolbox.sim`).
+        Validated scenarios (:class:`toolbox.spec.Scenario`).
     raw : dict
         The resolved plain data (catalog defaults applied), for the artifact.
     source : str or None

@@ -18,6 +18,8 @@ import tomllib
 from typing import Any, Mapping, Sequence
 
 from ..errors import SpecError
+from ._fields import SpecErrors
+from ._model import METHODS
 
 __all__ = ["parse_override", "apply_overrides", "blame_overrides"]
 
@@ -58,7 +60,6 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[tuple[str, str]
         parts, value = parse_override(text, option)
         if option == "--method" and isinstance(out.get("controller"), dict):
             # another method: the parameter tables of the others no longer apply
-            from ._model import METHODS
 
             out["controller"] = {k: v for k, v in out["controller"].items()
                                  if k not in METHODS or k == value}
@@ -88,8 +89,6 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[tuple[str, str]
 
 def blame_overrides(err: SpecError, overrides: Sequence[tuple[str, str]]) -> SpecError:
     """``err`` with each error on an overridden key (or below it) naming the override."""
-    from ._fields import SpecErrors
-
     def one(e: SpecError) -> SpecError:
         for option, text in reversed(overrides):
             key = text.partition("=")[0].strip()
