@@ -1,5 +1,5 @@
-"""Saturated machine models (toolbox/plant/_saturation.py, _symbolic_flux.py;
-toolbox/ARCHITECTURE.md "Saturated motors").
+"""Saturated machine models (toolbox/spec/_magnetics.py, toolbox/plant/_saturation.py,
+toolbox/plant/_symbolic_flux.py; toolbox/ARCHITECTURE.md "Saturated motors").
 
 Reference values: the 5.5 kW PM-SyRM of motulator's example
 ``plot_flux_vector_pmsyrm_5kw.py`` (Lelli, Hinkkanen, Giulii Capponi, ICEM
@@ -14,11 +14,10 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from toolbox.plant import (AlgebraicSaturation, FluxMapData, MagneticModel, at_operating_point,
-                           derive_dq_model, derive_flux_linkage_model, dq_matrices,
-                           incremental_dq_matrices)
+from toolbox.plant import (at_operating_point, derive_dq_model, derive_flux_linkage_model,
+                           dq_matrices, incremental_dq_matrices)
 from toolbox.plant._symbolic_flux import psi_d, psi_q
-from toolbox.spec import Motor
+from toolbox.spec import AlgebraicSaturation, FluxMapData, MagneticModel, Motor
 
 PMSYRM = AlgebraicSaturation(a_d0=3.96, a_dd=28.46, S=4, a_q0=5.89, a_qq=2.672, T=6,
                              a_dq=41.52, U=1, V=1, a_b=81.75, a_bp=1, k_q=0.1, psi_n=0.804,

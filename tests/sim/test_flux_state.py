@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from toolbox.plant import AlgebraicSaturation, MagneticModel
+from toolbox.spec import AlgebraicSaturation, MagneticModel
 from toolbox.sim import _kernel_plant as kp
 from toolbox.sim import _kernel_steps as ks
 from toolbox.sim._kernel_layout import LAYOUTS
@@ -152,7 +152,7 @@ def test_flux_map_simulation_agrees_with_motulator(tmp_path):
 
 
 def _linear_map(Ld, Lq, flux):
-    from toolbox.plant import FluxMapData
+    from toolbox.spec import FluxMapData
     ids = np.linspace(-40, 40, 9)
     iqs = np.linspace(-40, 40, 9)
     D, Q = np.meshgrid(ids, iqs, indexing="ij")

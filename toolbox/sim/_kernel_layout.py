@@ -25,7 +25,7 @@ from ._metrics import METRIC_NAMES
 #: 0 radial, 1 d axis) and scenario ``SC``. The plant's ``magnetic`` slot is 0
 #: for constant parameters (state: currents) and 1 for a saturated motor
 #: (state: flux linkages), whose current-from-flux table
-#: (``toolbox.plant.MagneticModel.inverse_table``) follows the named slots
+#: (``toolbox.spec.MagneticModel.inverse_table``) follows the named slots
 #: in the same array (:data:`N_P` on). ``_simulate._pack*`` fill them by name
 #: through :func:`pack_indices`.
 LAYOUTS: dict[str, tuple[str, ...]] = {

@@ -87,7 +87,7 @@ def _rk4(i_d, i_q, om, th, vx, vy, frame, dt, pl, t_load, mech, acc):
 
 # ------------------------------------------------------- saturated motors
 # State (psi_d, psi_q, Omega, theta); the current is read from the inverse
-# table of ``toolbox.plant.MagneticModel.inverse_table`` packed after the
+# table of ``toolbox.spec.MagneticModel.inverse_table`` packed after the
 # named slots of ``P``: header psi_d0, 1/dpsi_d, n_d, psi_q0, 1/dpsi_q, n_q,
 # psi_d(i=0), psi_q(i=0), then i_d and i_q (n_d x n_q, row-major).
 _T_ID = N_P + 8

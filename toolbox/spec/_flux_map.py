@@ -22,6 +22,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import SpecError
+from ._magnetics import AlgebraicSaturation, FluxMapData, MagneticModel
 
 __all__ = ["read_flux_map", "read_saturation", "SATURATION_KEYS"]
 
@@ -31,7 +32,7 @@ _UNITS = {"i": {"a": 1.0, "ka": 1e3},
 _COLUMNS = ("i_d", "i_q", "psi_d", "psi_q")
 
 #: ``[motor.saturation]`` keys: the algebraic model's parameters
-#: (``toolbox.plant.AlgebraicSaturation``) and ``current_range`` (A), the
+#: (``toolbox.spec.AlgebraicSaturation``) and ``current_range`` (A), the
 #: current amplitude the simulator's flux table covers.
 SATURATION_KEYS = ("a_d0", "a_dd", "S", "a_q0", "a_qq", "T", "a_dq", "U", "V", "a_b",
                    "a_bp", "k_q", "psi_n", "W", "current_range", "source")
@@ -73,7 +74,7 @@ def read_flux_map(value: Any, base: Path | None, key: str = "motor.flux_map"):
 
     Returns
     -------
-    toolbox.plant.MagneticModel
+    toolbox.spec.MagneticModel
         ``kind="map"`` over the grid (SI).
 
     Raises
@@ -82,7 +83,6 @@ def read_flux_map(value: Any, base: Path | None, key: str = "motor.flux_map"):
         Unreadable file, bad header, a non-number (file, line and column),
         an incomplete grid, non-monotone flux; each naming the file and line.
     """
-    from ..plant import FluxMapData, MagneticModel
     if not isinstance(value, str) or not value:
         raise SpecError(key, "a path to a CSV file (string)", value)
     path = Path(value)
@@ -155,10 +155,9 @@ def read_saturation(value: Any, key: str = "motor.saturation"):
 
     Returns
     -------
-    toolbox.plant.MagneticModel
+    toolbox.spec.MagneticModel
         ``kind="algebraic"``.
     """
-    from ..plant import AlgebraicSaturation, MagneticModel
     if not isinstance(value, Mapping):
         raise SpecError(key, "a table of the saturation model's parameters", value)
     unknown = [k for k in value if k not in SATURATION_KEYS]

@@ -75,7 +75,7 @@ class Motor:
         Rated mechanical speed (rad/s).
     catalog : str or None
         Catalog entry the defaults came from.
-    magnetics : toolbox.plant.MagneticModel or None
+    magnetics : toolbox.spec.MagneticModel or None
         A saturated motor's magnetics (``[motor] flux_map`` or
         ``[motor.saturation]``): then ``Ld``, ``Lq`` and ``flux`` are its
         incremental inductances and d flux at ``i = 0``
