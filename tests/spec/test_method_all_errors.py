@@ -190,3 +190,12 @@ def test_a_valid_table_reads_as_before():
     spec = spec_from_dict(_data("pi", {"Kp": {"d": 10.0, "q": 20.0}, "Ki": 1e4}))
     assert spec.controller.cfg.Kp == (10.0, 20.0)
     assert spec.controller.cfg.Ki == (1e4, 1e4)
+
+
+def test_a_conflict_does_not_report_the_other_route_missing():
+    """Kp and Kp_normalised both given: the conflict is the error; Ki is not
+    then reported missing (it belongs to the route the user may not mean)."""
+    with pytest.raises(SpecError) as info:
+        spec_from_dict(_data("pi", {"Kp": 1.0, "Kp_normalised": 0.01}))
+    assert not isinstance(info.value, SpecErrors)
+    assert info.value.key == "controller.pi.Kp_normalised"

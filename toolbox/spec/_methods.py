@@ -19,7 +19,8 @@ key, so that the reader takes that key's default and goes on to the next
 mistake, until the table reads or no key is left to take out
 (:func:`read_collecting`). An error that may be a consequence of a key taken
 out (the key itself reported missing, an error on the table or a key above
-it, one naming a taken-out key, or one outside the table) is not reported.
+it, one naming a taken-out key, a key missing that a taken-out key's error
+names, or one outside the table) is not reported.
 """
 
 from __future__ import annotations
@@ -136,17 +137,20 @@ def read_collecting(read: Callable[[Table], Any], table: Table,
     data: Any = table.data  # taken apart by copies (_without), never changed
     found = Collector()
     removed: list[str] = []
+    named: set[str] = set()  # the names in the errors whose keys were taken out
     batch = first
     with warnings.catch_warnings():  # a re-reading's warnings are no news
         warnings.simplefilter("ignore")
         for _ in range(MAX_METHOD_ERRORS):
             progress = False
             before = list(removed)  # errors of one reading are independent of each other
+            named_before = set(named)
             for err in batch:
-                if not _consequence(err, prefix, before):
+                if not _consequence(err, prefix, before, named_before):
                     found.add(err)
                 path = _path_in(data, err.key, prefix)
                 if path:
+                    named.update(_WORD.findall(f"{err.expected} {err.hint or ''}"))
                     data = _without(data, path)
                     removed.append(".".join([prefix, *path]) if prefix else ".".join(path))
                     progress = True
@@ -172,12 +176,17 @@ def _errors_of(err: SpecError) -> list[SpecError]:
     return list(getattr(err, "errors", None) or [err])
 
 
-def _consequence(err: SpecError, prefix: str, removed: list[str]) -> bool:
-    """``err`` may follow from a key taken out (module docstring)."""
+def _consequence(err: SpecError, prefix: str, removed: list[str], named: set[str]) -> bool:
+    """``err`` may follow from a key taken out (module docstring): also a key
+    reported missing that the error of a key taken out names (``Kp`` and
+    ``Kp_normalised`` both given: with ``Kp_normalised`` out, ``Ki`` is not
+    reported missing)."""
     if not removed:
         return False
     key = str(err.key)
     if not (key == prefix or key.startswith(prefix + ".")):
+        return True
+    if str(err.expected).endswith("(missing)") and key.rsplit(".", 1)[-1] in named:
         return True
     for gone in removed:
         if key == gone or gone.startswith(key + ".") or gone.startswith(key + "["):
