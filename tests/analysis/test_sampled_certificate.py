@@ -245,6 +245,7 @@ def _reference_scale(art, motor, drive, tol: float, monkeypatch) -> float:
     return plain_bisection(ok, tol)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(DESIGNS))
 def test_same_scale_as_cvxpy_route(name, monkeypatch):
     """Direct Clarabel, constraint generation and warm starts give exactly the
@@ -287,6 +288,7 @@ def test_clarabel_rows_are_the_corner_matrices():
 CUT_SCALES = {"pi002": (0.0, 0.203125, 0.21875), "hinf003": (0.27, 0.28)}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(CUT_SCALES))
 def test_constraint_generation_gives_the_full_solve_verdict(name):
     """Constraint generation over the corners (a few, the violated ones added)

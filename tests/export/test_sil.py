@@ -95,6 +95,15 @@ VARIATIONS = {"003_azaiz2007_pi+complex_vector": ("003_azaiz2007_pi", _complex_v
               "000_lepioufle1992_tc+angle_none": ("000_lepioufle1992_tc",
                                                   _no_angle_compensation)}
 NAMES = DESIGNS + list(VARIATIONS)
+#: The tune design alone costs ~20 CPU-s (its optimisation over the model set
+#: and the 2,000-point dense check): its cases run with the slow tests
+#: (pytest -m slow; pyproject.toml's markers).
+SLOW_DESIGNS = ("003_azaiz2007_tune",)
+
+
+def marked(names) -> list:
+    """``names`` as parameters, those of SLOW_DESIGNS marked slow."""
+    return [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_DESIGNS else n for n in names]
 VARIANTS = {"float": None, "q31": "CCT_FIXED_POINT", "mcsdk": "CCT_MCSDK",
             "iqmath": "CCT_IQMATH"}
 #: the section of the header each variant lives in, and the macro it is switched on by
@@ -342,7 +351,7 @@ def table():
 
 
 @pytest.mark.parametrize("variant", list(VARIANTS))
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", marked(NAMES))
 def test_header_in_the_loop_matches_simulator(name, variant, tmp_path_factory):
     spec, art, header = _designed(name)
     why = _offered(header, variant)
