@@ -41,6 +41,7 @@ def _loaded_after(code: str) -> set[str]:
     "try:\n    main(['campaign', '--help'], prog_name='cct')\nexcept SystemExit:\n    pass",
     "import toolbox.campaign",
 ])
+@pytest.mark.slow
 def test_light_imports(code):
     """None of the heavy packages is imported by the entry points."""
     assert _loaded_after(code) == set()
@@ -65,6 +66,7 @@ def test_lazy_names_resolve():
         toolbox.nope  # noqa: B018
 
 
+@pytest.mark.slow
 def test_check_imports_only_the_named_method():
     """Reading a PI spec imports toolbox.design.pi, not the H-infinity module."""
     code = ("import sys, toolbox\n"

@@ -204,6 +204,7 @@ def test_warm_start_is_used_and_checked(pi):
     assert np.min(np.linalg.eigvalsh(P3)) > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["pi", "hinf"])
 def test_prescreen_rejects_only_what_the_solver_rejects(design, request, monkeypatch):
     """A box whose vertex set holds an unstable matrix is declared not certified
