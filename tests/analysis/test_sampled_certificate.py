@@ -105,6 +105,7 @@ def test_remainder_bounds_the_exact_discretisation(u):
     assert err <= lin.rho
 
 
+@pytest.mark.slow
 def test_certified_box_has_no_unstable_sweep_set(case):
     """(a) The robustness sweep restricted to the certified box (its R, Ld, Lq
     factors, speed-sensor gain and offset, the design delay, speeds up to the
@@ -382,6 +383,7 @@ def _box_loops(art, b: dict, u: np.ndarray):
                                ).spectral_radius()
 
 
+@pytest.mark.slow
 def test_placement_boxes_certified_and_stable(placement_case):
     """(a) With ``t_c = 0`` at speed or large speed-sensor errors the certified
     box's corners and random sets (uniform, 4000) are stable on

@@ -211,6 +211,7 @@ def test_cluster_without_usable_workers_exit_4(small_spec, tmp_path, monkeypatch
             _stop(p)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("code, words", [(errno.ENOSPC, "the disk is full"),
                                          (errno.EROFS, "the file system is read-only")])
 def test_disk_full_or_read_only_exit_4(designed, small_spec, tmp_path, monkeypatch, code, words):
