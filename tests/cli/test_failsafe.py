@@ -156,6 +156,7 @@ def test_internal_error_in_process_exits_3(tmp_path, monkeypatch):
     assert len(files) == 1 and "x" * 5000 in files[0].read_text()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, code, words", [
     ("SIGTERM", 143, "cct: terminated (no output half-written)"),
     ("SIGINT", 130, "cct: interrupted (no output half-written)"),
@@ -172,6 +173,7 @@ def test_signal_while_staging_cleans_the_stage(tmp_path, name, code, words):
     assert not any((tmp_path / "tmp").iterdir())
 
 
+@pytest.mark.slow
 def test_signal_while_replacing_an_existing_set_keeps_the_old_one(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
@@ -188,6 +190,7 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum, code, words, preexec", [
     (signal.SIGTERM, 143, "cct: terminated (no output half-written)", None),
     # a parent (nohup, a CI runner, `cmd &` in a script) that ignores SIGINT:

@@ -225,6 +225,7 @@ def test_unloaded_start_of_a_light_rotor_ends_below_the_voltage_limited_speed():
     assert outcome.passed
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", LINEAR_METHODS)
 @pytest.mark.parametrize("motor", list(MOTORS))
 def test_default_design_passes_default_checks(motor, method):

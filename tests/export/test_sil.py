@@ -350,7 +350,10 @@ def table():
     print("\n".join(lines))
 
 
-@pytest.mark.parametrize("variant", list(VARIANTS))
+#: the fixed-point variants (quantisation against the float simulator) run with
+#: the slow tests; the float header of every design stays in the everyday set
+@pytest.mark.parametrize("variant", [v if v == "float" else pytest.param(v, marks=pytest.mark.slow)
+                                     for v in VARIANTS])
 @pytest.mark.parametrize("name", marked(NAMES))
 def test_header_in_the_loop_matches_simulator(name, variant, tmp_path_factory):
     spec, art, header = _designed(name)

@@ -27,6 +27,7 @@ from toolbox.sim import DEFAULT_SPEEDS, DEFAULT_TORQUES, DriveParams, control_la
 ROOT = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("priority", ["radial", "d_axis"])
 @pytest.mark.parametrize("design", ["003_azaiz2007_pi.toml", "003_azaiz2007_hinf.toml"])
 def test_torque_speed_grid_paper003(design, priority):

@@ -406,6 +406,7 @@ def test_check_round_trips_every_reference_design():
 
 
 # ------------------------------------------------------------ the two motors
+@pytest.mark.slow
 @pytest.mark.parametrize("text", [GIMBAL, IPM], ids=["gimbal", "ipm"])
 def test_datasheet_motor_designs_with_pi(tmp_path, text):
     path = tmp_path / "s.toml"
