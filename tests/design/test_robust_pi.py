@@ -69,6 +69,7 @@ def pi_003():
 
 
 # ------------------------------------------------------------ (1) margins hold
+@pytest.mark.slow
 def test_margin_holds_on_every_model_of_the_set(robust):
     spec, art = robust
     cfg = spec.controller.cfg

@@ -95,10 +95,11 @@ VARIATIONS = {"003_azaiz2007_pi+complex_vector": ("003_azaiz2007_pi", _complex_v
               "000_lepioufle1992_tc+angle_none": ("000_lepioufle1992_tc",
                                                   _no_angle_compensation)}
 NAMES = DESIGNS + list(VARIATIONS)
-#: The tune design alone costs ~20 CPU-s (its optimisation over the model set
-#: and the 2,000-point dense check): its cases run with the slow tests
-#: (pytest -m slow; pyproject.toml's markers).
-SLOW_DESIGNS = ("003_azaiz2007_tune",)
+#: Designs whose making is itself a long optimisation: tune ~20 CPU-s (its
+#: optimisation over the model set and the 2,000-point dense check), robust_pi
+#: ~3 CPU-s (its search over the model set); their cases run with the slow
+#: tests (pytest -m slow; pyproject.toml's markers).
+SLOW_DESIGNS = ("003_azaiz2007_tune", "003_azaiz2007_robust_pi")
 
 
 def marked(names) -> list:
