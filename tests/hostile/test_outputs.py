@@ -78,6 +78,7 @@ def test_kill_9_mid_write_leaves_one_complete_set(tmp_path, extra_delay):
     assert sorted(p.name for p in out.iterdir()) == ["controller.json"]
 
 
+@pytest.mark.slow
 def test_sigint_mid_write_leaves_one_complete_set_and_no_temporaries(tmp_path):
     out = tmp_path / "out"
     proc = _start_writer(out)
