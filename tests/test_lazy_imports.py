@@ -120,7 +120,7 @@ DESIGNS = tuple(sorted(p.stem for p in
                        (Path(__file__).resolve().parents[1] / "designs").glob("*.toml")))
 
 
-#: Designs made here on a smaller model set: the tune design of designs/ costs
+#: Designs made by the test below on a smaller model set: the tune design of designs/ costs
 #: ~20 CPU-s (its optimisation over 41 models at 4 speeds, then a 2,000-point
 #: dense check), while the question here is which modules its code loads. The
 #: smaller set (R alone over a narrower box, one speed, no Latin-hypercube
@@ -156,8 +156,7 @@ def _cct_design(spec: str, out_dir) -> str:
 @pytest.mark.slow
 def test_designs_headers_and_cct_design_need_no_python_control(tmp_path):
     """None of NOT_ON_DESIGN_PATH is imported (issue 13) by: every design of
-    designs/ (those of SMALLER on their smaller model set) and its C header
-    (made with toolbox._lti), then ``cct design`` of
+    designs/ and its C header (made with toolbox._lti), then ``cct design`` of
     paper 003's PI and of its H-infinity design, every stage (analysis,
     verification, header, report). One interpreter runs the three steps in
     turn (a fresh one costs a second of imports); each step's modules are
