@@ -125,6 +125,7 @@ def test_certified_box_has_no_unstable_sweep_set(case):
     assert full.n_unstable > 0
 
 
+@pytest.mark.slow   # 60 random sets, on a certificate bisected first (~3.5 CPU-s)
 @PROFILE
 @given(st.lists(st.floats(0, 1), min_size=6, max_size=6))
 def test_random_sets_in_the_certified_box_are_stable(case, u):
@@ -401,6 +402,7 @@ def test_placement_boxes_certified_and_stable(placement_case):
     assert np.max(_box_loops(art, b, u)) < 1
 
 
+@pytest.mark.slow   # 60 random sets, on a certificate bisected first (~3.5 CPU-s)
 @PROFILE
 @given(st.lists(st.floats(0, 1), min_size=6, max_size=6))
 def test_random_sets_in_placement_boxes_are_stable(placement_case, u):
