@@ -351,11 +351,21 @@ def table():
     print("\n".join(lines))
 
 
-#: the fixed-point variants (quantisation against the float simulator) run with
-#: the slow tests; the float header of every design stays in the everyday set
-@pytest.mark.parametrize("variant", [v if v == "float" else pytest.param(v, marks=pytest.mark.slow)
-                                     for v in VARIANTS])
-@pytest.mark.parametrize("name", marked(NAMES))
+#: The everyday selection runs the float header of these designs (a PI, a
+#: static law, an H-infinity state space, the FCS-MPC law); every other case
+#: (the other designs, the fixed-point variants) runs with the slow tests.
+EVERYDAY = ("003_azaiz2007_pi", "000_lepioufle1992_tc", "003_azaiz2007_hinf",
+            "002_cormerais2002_fcs_mpc")
+
+
+def _cases() -> list:
+    """(name, variant) parameters, id ``name-variant``, marked as EVERYDAY says."""
+    return [pytest.param(n, v, id=f"{n}-{v}",
+                         marks=() if v == "float" and n in EVERYDAY else pytest.mark.slow)
+            for n in NAMES for v in VARIANTS]
+
+
+@pytest.mark.parametrize("name, variant", _cases())
 def test_header_in_the_loop_matches_simulator(name, variant, tmp_path_factory):
     spec, art, header = _designed(name)
     why = _offered(header, variant)
