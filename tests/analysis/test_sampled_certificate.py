@@ -140,6 +140,7 @@ def test_random_sets_in_the_certified_box_are_stable(case, u):
     assert loop.spectral_radius()[0] < 1
 
 
+@pytest.mark.slow   # the certificate bisected per design (~2 CPU-s for hinf003)
 def test_scale_reported_with_first_uncertified_corner(case):
     """(b) The result names the certified scale and box, and the first refused
     scale within one bisection tolerance (0.05) above it, with a corner inside

@@ -284,6 +284,7 @@ def test_bad_input(cfg, key):
     assert key in str(e.value)
 
 
+@pytest.mark.slow
 def test_infeasible_margin_says_the_best_found():
     spec = make_spec("robust_pi", {"disk_margin": 1.9, "samples": 0, "n_speeds": 2,
                                    "zero_ratios": []})
@@ -291,6 +292,7 @@ def test_infeasible_margin_says_the_best_found():
         design(spec)
 
 
+@pytest.mark.slow
 def test_infeasible_margin_says_what_limits_it():
     """A margin just above the largest the default set allows (0.505 at about
     1.3e3 rad/s): the refusal names the limiting model (the sensor corner) and
@@ -309,6 +311,7 @@ def test_infeasible_margin_says_what_limits_it():
     assert "at standstill" in msg and "on the nominal motor" in msg
 
 
+@pytest.mark.slow
 def test_infeasible_everywhere_unstable_says_where():
     """A small-inductance IPMSM up to 3300 rad/s electrical at 100 us: every
     bandwidth leaves some corner unstable at top speed; the refusal reports

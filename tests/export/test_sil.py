@@ -351,11 +351,17 @@ def table():
     print("\n".join(lines))
 
 
-#: The everyday selection runs the float header of these designs (a PI, a
-#: static law, an H-infinity state space, the FCS-MPC law); every other case
+#: The designs whose closed-loop header cases the everyday selection runs (a
+#: PI, a static law, an H-infinity state space, the FCS-MPC law): here their
+#: float header, in test_preset.py their preset and handover; every other case
 #: (the other designs, the fixed-point variants) runs with the slow tests.
 EVERYDAY = ("003_azaiz2007_pi", "000_lepioufle1992_tc", "003_azaiz2007_hinf",
             "002_cormerais2002_fcs_mpc")
+
+
+def everyday(names) -> list:
+    """``names`` as parameters, those not in EVERYDAY marked slow."""
+    return [n if n in EVERYDAY else pytest.param(n, marks=pytest.mark.slow) for n in names]
 
 
 def _cases() -> list:
