@@ -58,6 +58,7 @@ def test_cancellation_pi_passes_a_drift_around_nominal():
     assert check["pass"] is True and check["value"] == 0
 
 
+@pytest.mark.slow
 def test_robust_pi_passes_the_wide_drift():
     """The tuner's model set is this box at speeds up to 920 rad/s
     (toolbox/design/robust_pi.py); the check's 209 sets include sets it never saw."""
