@@ -65,6 +65,7 @@ def test_compare_fcs_mpc_row_is_what_it_executes(tmp_path):
     assert "*" in fcs_line
 
 
+@pytest.mark.slow   # five robust designs, tune and H-infinity at speed among them
 def test_compare_paper003_robust_designs(tmp_path):
     """The structured tuner, the direct discrete-time complex-vector law, the
     robust PI, the per-axis H-infinity design and H-infinity at speed side by

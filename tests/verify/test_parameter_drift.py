@@ -101,7 +101,7 @@ def test_cli_exit_1_and_round_trip_of_cct_check(tmp_path):
     out = tmp_path / "out"
     res = runner.invoke(main, ["design", str(spec), "--out", str(out)], catch_exceptions=False)
     assert res.exit_code == 1, res.output
-    assert "FAILED parameter_drift" in res.output
+    assert "requirements: FAILED 1 check:\n  - parameter_drift (" in res.output
     assert "no requirements given" not in res.output
     check = json.loads((out / "verify.json").read_text())["margin_requirements"][
         "parameter_drift"]
