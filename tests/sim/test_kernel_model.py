@@ -126,7 +126,8 @@ def test_predictive_model_is_the_plant_euler_step(convention):
     motor = MOTORS[convention]
     Ts = 1e-4
     LP = _packed("LP", R_c=motor.R, Ld_c=motor.Ld, Lq_c=motor.Lq, flux_c=motor.flux,
-                 cross=1.0, emf=1.0, alpha=1.0, beta=1.0, gamma=0.0)
+                 cross=1.0, emf=1.0, alpha=1.0, beta=1.0, gamma=0.0,
+                 cv=0.0, cv_pc=0.0, cv_pi=0.0, cv_pd=0.0, cv_d=0.0)
     for i_d, i_q, om, _, vd, vq, _ in _points(seed=3):
         w = motor.pole_pairs * om
         A, B = dq_matrices(motor.R, motor.Ld, motor.Lq, w)

@@ -28,6 +28,7 @@ from toolbox.verify import DEFAULT_SPEEDS, DEFAULT_TORQUES, torque_speed_grid
 ROOT = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("priority", ["radial", "d_axis"])
 @pytest.mark.parametrize("design", ["003_azaiz2007_pi.toml", "003_azaiz2007_hinf.toml"])
 def test_torque_speed_grid_paper003(design, priority):

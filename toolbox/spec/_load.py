@@ -426,9 +426,10 @@ def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
     # quantity strings ("2 kHz") -> SI before the method's reader sees them
     errors = Collector()
     table = convert_method_units(method, t.raw(method, {}), t.key(method), errors)
-    errors.raise_if_any()
-    # the design methods register their readers (spec/_methods.py): spec stays data
-    cfg = read_method_cfg(method, Table(table, t.key(method)), motor=motor, drive=drive)
+    # the design methods register their readers (spec/_methods.py): spec stays data;
+    # a unit that does not convert is reported with every other error of the table
+    cfg = read_method_cfg(method, Table(table, t.key(method)), motor=motor, drive=drive,
+                          prior=errors.errors)
     return ControllerChoice(method=method, cfg=cfg)
 
 
