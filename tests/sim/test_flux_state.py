@@ -122,6 +122,7 @@ def _motulator(vd, vq):
     return out
 
 
+@pytest.mark.slow  # ~10 s: motulator's right-hand side in Python over 2000 periods
 def test_flux_map_simulation_agrees_with_motulator(tmp_path):
     """Tolerance 0.05 A (0.2 % of the 25 A grid range). Budget: the flux map is
     the bilinear interpolant of the model on a 1.25 A grid and the simulator
