@@ -22,7 +22,9 @@ import sympy as sp
 
 from toolbox.plant import SYMBOLS as S
 from toolbox.plant import derive_dq_model, dq_matrices, numeric_plant
-from toolbox.sim import _kernel
+from toolbox.sim import _kernel, _kernel_layout
+from toolbox.sim._kernel_layout import LAYOUTS
+from toolbox.sim._metrics import METRIC_NAMES
 from toolbox.sim._simulate import _packed, _plant_array
 from toolbox.spec import Motor
 
@@ -48,13 +50,22 @@ def _close(a, b):
 
 
 # ----------------------------------------------------------------- layouts
-def test_generated_constants_follow_the_layout_declaration():
-    for prefix, names in _kernel.LAYOUTS.items():
+def test_slot_constants_follow_the_layout_declaration():
+    """The slot constants written out in ``_kernel_layout`` (for numba) are the
+    positions of LAYOUTS and METRIC_NAMES: one per slot, none stray."""
+    declared = {}
+    for prefix, names in LAYOUTS.items():
         assert len(set(names)) == len(names), f"duplicate slot in {prefix}"
-        for i, name in enumerate(names):
-            assert getattr(_kernel, f"{prefix}_{name.upper()}") == i
+        declared.update({f"{prefix}_{name.upper()}": i for i, name in enumerate(names)})
         assert _kernel.pack_indices(prefix) == {n: i for i, n in enumerate(names)}
-    assert _kernel.N_SC == len(_kernel.LAYOUTS["SC"])
+    declared.update({f"M_{name.upper()}": i for i, name in enumerate(METRIC_NAMES)})
+    for name, index in declared.items():
+        assert getattr(_kernel_layout, name, None) == index, name
+    prefixes = tuple(f"{p}_" for p in LAYOUTS) + ("M_",)
+    written = {n for n, v in vars(_kernel_layout).items()
+               if n.isupper() and n.startswith(prefixes) and type(v) is int}
+    assert written == set(declared)
+    assert _kernel.N_SC == len(LAYOUTS["SC"])
 
 
 def test_packed_fills_by_name_and_refuses_missing_or_unknown_slots():

@@ -85,24 +85,25 @@ from ._inverter import bit_changes, hexagon_scale, state_vector
 from ._kernel_layout import (LAYOUTS, N_METRICS, N_SC, N_TRACE, _A_CELLS, _A_OUT2, _A_OUT5, _A_SAT,
                              _A_T10, _A_T90, _A_YEXT, _SQ3_2, _jit, _jit_inline, _jit_no_rc,
                              pack_indices)
+from ._kernel_layout import (  # the slot constants (compile-time ints)
+    LP_R_C, LP_LD_C, LP_LQ_C, LP_FLUX_C, LP_CROSS, LP_EMF, LP_ALPHA, LP_BETA, LP_GAMMA,
+    LP_CV, LP_CV_PC, LP_CV_PI, LP_CV_PD, LP_CV_D, SP_ENABLED, SP_KP, SP_KI, SP_KD, SP_DECIM,
+    SP_IQ_LIMIT, DP_TS, DP_DELAY, DP_VLIM, DP_V_MAX, DP_R_HEX, DP_INVERTER, DP_HALF_PERIODS,
+    DP_HOLD, DP_T_COMP, DP_VPRIO, SC_DURATION, SC_MECH, SC_OMEGA0, SC_ACC, SC_ID0, SC_IQ0,
+    SC_ID1, SC_IQ1, SC_T_STEP, SC_SPEED0, SC_SPEED1, SC_LOAD, SC_LOAD_TIME, SC_IQ_AMP,
+    SC_F_SIN, SC_REF_MODE, SC_GAIN, SC_OFFSET, SC_SPEED_NOISE, SC_NOISE_KIND,
+    SC_CURRENT_NOISE, SC_CURRENT_QUANTUM, SC_SEED, SC_H, SC_TRACE_DECIM, SC_CURRENT_GAIN_D,
+    SC_CURRENT_GAIN_Q, SC_CURRENT_DELAY_D, SC_CURRENT_DELAY_Q)
 from ._kernel_plant import (_currents, _deriv, _initial_state, _plant, _to_ab,  # noqa: F401
                             _to_dq, _torque, _torque_of_state)
 from ._kernel_metrics import _finalise, _metric_setup, _overshoot  # noqa: F401 (tests)
 from ._kernel_steps import _advance_n, _split
 from ._kernel_pwm import _carrier_period, _svm_period
 from ._kernel_cv import _cv_linear, _cv_update
-from ._metrics import METRIC_NAMES
 
 __all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices",
            "KERNEL_SOURCES", "sources_digest"]
 
-# Generated module constants ``<PREFIX>_<NAME>`` and ``M_<NAME>`` (e.g. ``P_LD``,
-# ``M_OVERSHOOT_PCT``), the same generation from the same declarations as in
-# ``_kernel_layout`` (whose parts read them there): compile-time constants here.
-for _prefix, _names in LAYOUTS.items():
-    globals().update({f"{_prefix}_{_n.upper()}": _i for _i, _n in enumerate(_names)})
-del _prefix, _names
-globals().update({f"M_{_n.upper()}": _i for _i, _n in enumerate(METRIC_NAMES)})
 
 
 # --------------------------------------------------------------------------- RNG
