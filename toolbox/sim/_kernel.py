@@ -39,7 +39,8 @@ Everything is plain float arrays; :func:`run` simulates one closed loop, and
 :func:`run_rows` a thread's share of a batch (``_simulate.simulate_batch``
 runs one per core). The arrays' slots are declared once, by
 name, in :data:`LAYOUTS`; the index constants (``P_R``, ``DP_TS``,
-``SC_DURATION``, ...) are generated from that declaration and
+``SC_DURATION``, ...) are written out in ``_kernel_layout`` (checked against
+that declaration by tests/sim/test_kernel_model.py) and
 :func:`pack_indices` gives the same map to the Python side that fills the
 arrays (``_simulate._pack``). :func:`run` allocates the work
 arrays and :func:`_periods` runs the periods, a short loop over small
