@@ -65,9 +65,12 @@ def motors(draw):
     assume(5 * Ts <= Ld / R and tau <= 2.0)
     # rated current: what 10 % of the inverter's voltage drives through R
     rated = 0.1 * vdc / math.sqrt(3) / R
+    # inertia: the characteristic torque 1.5 p flux^2 / L over 1e4 rad/s^2, inside
+    # the spec's plausible torque-to-inertia range (toolbox.spec._bounds.check_inertia)
+    J = 1.5 * p * flux ** 2 / Lq / 1e4
     return {"R": R, "Ld": Ld, "Lq": Lq, "flux": flux, "pole_pairs": p,
-            "J": 1e-3, "friction": 0.0, "rated_current": rated}, {"vdc": vdc, "sample_time": Ts,
-                                           "delay_samples": 1}
+            "J": J, "friction": 0.0, "rated_current": rated}, {"vdc": vdc, "sample_time": Ts,
+                                         "delay_samples": 1}
 
 
 def _controller(method: str, motor: dict, Ts: float) -> dict:
