@@ -52,7 +52,7 @@ GRID_TOLERANCE = 0.02
 #: margin drives keep between the continuous limit and the trip.
 GRID_PEAK_LIMIT = 1.2
 #: Voltage fraction the envelope leaves to the loop's transients.
-GRID_HEADROOM = 0.05
+GRID_HEADROOM = OperatingEnvelope.HEADROOM
 #: Speeds of the limit curves drawn in the report.
 CURVE_POINTS = 41
 
