@@ -19,12 +19,23 @@ the names ``toolbox._lazy.lazy_attributes`` imports on first use and
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "toolbox"
+
+
+@functools.lru_cache(maxsize=None)
+def _parsed(path: Path, text: str) -> ast.Module:
+    """The parsed source (cached: the checks below walk every file several times)."""
+    return ast.parse(text, str(path))
+
+
+def _parse(path: Path) -> ast.Module:
+    return _parsed(path, path.read_text())
 
 
 def _module_name(path: Path, root: Path = PACKAGE) -> str:
@@ -39,7 +50,7 @@ def _imports(path: Path, root: Path = PACKAGE) -> list[tuple[int, str]]:
     is_pkg = path.name == "__init__.py"
     package = name if is_pkg else name.rpartition(".")[0]
     out = []
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    for node in ast.walk(_parse(path)):
         if isinstance(node, ast.Import):
             out += [(node.lineno, a.name) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -257,7 +268,7 @@ def _package_imports(path: Path, root: Path = PACKAGE) -> list[tuple[int, str]]:
     name = _module_name(path, root)
     me = _unit(name, root)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    tree = ast.parse(path.read_text(), str(path))
+    tree = _parse(path)
     # the lazy helper's own import_module is read at its call sites instead
     dynamic = [] if name == LAZY_HELPER else _dynamic_imports(tree, name, package)
     out = []

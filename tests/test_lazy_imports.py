@@ -41,6 +41,7 @@ def _loaded_after(code: str) -> set[str]:
     "try:\n    main(['campaign', '--help'], prog_name='cct')\nexcept SystemExit:\n    pass",
     "import toolbox.campaign",
 ])
+@pytest.mark.slow
 def test_light_imports(code):
     """None of the heavy packages is imported by the entry points."""
     assert _loaded_after(code) == set()
@@ -65,6 +66,7 @@ def test_lazy_names_resolve():
         toolbox.nope  # noqa: B018
 
 
+@pytest.mark.slow
 def test_check_imports_only_the_named_method():
     """Reading a PI spec imports toolbox.design.pi, not the H-infinity module."""
     code = ("import sys, toolbox\n"
@@ -75,6 +77,7 @@ def test_check_imports_only_the_named_method():
                    cwd=__import__("pathlib").Path(__file__).resolve().parents[1])
 
 
+@pytest.mark.slow
 def test_design_analysis_and_report_equations_need_no_sympy_or_cvxpy(tmp_path):
     """With the on-disk cache warm (toolbox/_cache.py), designing paper 003's
     H-infinity controller, its certificate (Clarabel called directly) and the
@@ -117,6 +120,17 @@ DESIGNS = tuple(sorted(p.stem for p in
                        (Path(__file__).resolve().parents[1] / "designs").glob("*.toml")))
 
 
+#: Designs made by the test below on a smaller model set: the tune design of designs/ costs
+#: ~20 CPU-s (its optimisation over 41 models at 4 speeds, then a 2,000-point
+#: dense check), while the question here is which modules its code loads. The
+#: smaller set (R alone over a narrower box, one speed, no Latin-hypercube
+#: sets, 10 dense points; both delays and the tuned decoupling kept) runs the
+#: same functions - optimisation, worst-case search, dense check, header - at
+#: about a fifth of the cost.
+SMALLER = {"003_azaiz2007_tune": {"parameter_box": {"R": [0.9, 1.1]}, "n_speeds": 1,
+                                  "samples": 0, "check_samples": 10}}
+
+
 def _heavy_after_each(steps: dict[str, str]) -> dict[str, list[str]]:
     """Modules of NOT_ON_DESIGN_PATH loaded after each step of ``steps`` (name ->
     code), run in this order in one fresh interpreter (repo root): a module a
@@ -139,6 +153,7 @@ def _cct_design(spec: str, out_dir) -> str:
             "except SystemExit as e:\n    assert e.code in (0, 1, None), e.code\n")
 
 
+@pytest.mark.slow
 def test_designs_headers_and_cct_design_need_no_python_control(tmp_path):
     """None of NOT_ON_DESIGN_PATH is imported (issue 13) by: every design of
     designs/ and its C header (made with toolbox.lti), then ``cct design`` of
@@ -146,11 +161,18 @@ def test_designs_headers_and_cct_design_need_no_python_control(tmp_path):
     verification, header, report). One interpreter runs the three steps in
     turn (a fresh one costs a second of imports); each step's modules are
     listed, so a failure names the step that first loaded one."""
-    designs = ("from toolbox.spec import load_spec\n"
+    designs = ("import tomllib\n"
+               "from toolbox.spec import load_spec, spec_from_dict\n"
                "from toolbox.pipeline import design_spec\n"
                "from toolbox.export import write_header\n"
                f"for name in {DESIGNS!r}:\n"
-               "    s = load_spec(f'designs/{name}.toml')\n"
+               f"    if name in {SMALLER!r}:\n"
+               "        with open(f'designs/{name}.toml', 'rb') as f:\n"
+               "            data = tomllib.load(f)\n"
+               f"        data['controller']['tune'].update({SMALLER!r}[name])\n"
+               "        s = spec_from_dict(data)\n"
+               "    else:\n"
+               "        s = load_spec(f'designs/{name}.toml')\n"
                "    write_header(design_spec(s), s.motor, s.drive)\n")
     steps = {"designs and headers": designs,
              "cct design 003 PI": _cct_design("003_azaiz2007_pi", tmp_path / "pi"),

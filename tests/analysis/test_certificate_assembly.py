@@ -62,6 +62,7 @@ def _reference_scale(art, motor, drive, monkeypatch, *, tol: float, alpha: float
         return plain_bisection(ok, tol)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["pi", "hinf"])
 @pytest.mark.parametrize("alpha", [0.0, 200.0])
 def test_same_scale_as_cvxpy_route(design, alpha, request, monkeypatch):
@@ -79,6 +80,7 @@ def _normalised_vertices(art, k: float, alpha: float = 0.0) -> np.ndarray:
     return As / np.max(np.abs(As))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["pi", "hinf"])
 @pytest.mark.parametrize("alpha", [0.0, 0.05])
 def test_data_equal_cvxpy_problem_data(design, alpha, request):
@@ -103,6 +105,7 @@ def test_data_equal_cvxpy_problem_data(design, alpha, request):
     np.testing.assert_array_equal(bvec, data["b"])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["pi", "hinf"])
 def test_same_solution_as_cvxpy(design, request):
     """On a certified box and on one that is not, the direct solve reports what
@@ -157,6 +160,7 @@ def _sweep():
             for k in np.linspace(0.0, 1.0, 9) for alpha in (0.0, 200.0)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["pi", "hinf"])
 def test_active_vertex_set_gives_the_full_solve_verdict(design, request, monkeypatch):
     """Constraint generation (a few vertices, the violated ones added) reaches
@@ -200,6 +204,7 @@ def test_warm_start_is_used_and_checked(pi):
     assert np.min(np.linalg.eigvalsh(P3)) > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["pi", "hinf"])
 def test_prescreen_rejects_only_what_the_solver_rejects(design, request, monkeypatch):
     """A box whose vertex set holds an unstable matrix is declared not certified

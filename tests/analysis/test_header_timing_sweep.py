@@ -98,6 +98,7 @@ def _radius(art, R, Ld, Lq, w, w_meas, d, hold):
     return np.max(np.abs(np.linalg.eigvals(M)), axis=-1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["003_azaiz2007_hinf", "003_azaiz2007_pi",
                                   "002_cormerais2002_svm_pi"])
 def test_sweep_counts_the_headers_loop(name):

@@ -43,6 +43,7 @@ def _pc_margins(L):
     return 20 * np.log10(gm), pm, wpc, wgc
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("axis", ["d", "q"])
 def test_continuous_margins_match_python_control(hinf, axis):
     """GM within 0.02 dB, PM within 0.02 deg, crossover frequencies within 0.1 %
@@ -83,6 +84,7 @@ def test_margin_naming_matches_design_md(hinf):
     assert list(m.to_json())[:9] == list(MARGIN_KEYS)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("axis", ["d", "q"])
 def test_discrete_margins_match_independent_sweep(hinf, pi, axis):
     """Sampled loop with one period of delay: our assembly (ZOH formula, law

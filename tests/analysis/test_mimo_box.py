@@ -55,6 +55,7 @@ def test_box_equals_the_one_plant_reference():
     assert res.worst_disk_margin < 0.4
 
 
+@pytest.mark.slow
 def test_compare_rows_carry_the_box_worst_case(pi_145):
     spec, art = pi_145
     # the tuner's R, Ld, Lq models made equal to the box's (nominal + corners, the same 5

@@ -105,6 +105,7 @@ def test_remainder_bounds_the_exact_discretisation(u):
     assert err <= lin.rho
 
 
+@pytest.mark.slow
 def test_certified_box_has_no_unstable_sweep_set(case):
     """(a) The robustness sweep restricted to the certified box (its R, Ld, Lq
     factors, speed-sensor gain and offset, the design delay, speeds up to the
@@ -124,6 +125,7 @@ def test_certified_box_has_no_unstable_sweep_set(case):
     assert full.n_unstable > 0
 
 
+@pytest.mark.slow   # 60 random sets, on a certificate bisected first (~3.5 CPU-s)
 @PROFILE
 @given(st.lists(st.floats(0, 1), min_size=6, max_size=6))
 def test_random_sets_in_the_certified_box_are_stable(case, u):
@@ -138,6 +140,7 @@ def test_random_sets_in_the_certified_box_are_stable(case, u):
     assert loop.spectral_radius()[0] < 1
 
 
+@pytest.mark.slow   # the certificate bisected per design (~2 CPU-s for hinf003)
 def test_scale_reported_with_first_uncertified_corner(case):
     """(b) The result names the certified scale and box, and the first refused
     scale within one bisection tolerance (0.05) above it, with a corner inside
@@ -245,6 +248,7 @@ def _reference_scale(art, motor, drive, tol: float, monkeypatch) -> float:
     return plain_bisection(ok, tol)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(DESIGNS))
 def test_same_scale_as_cvxpy_route(name, monkeypatch):
     """Direct Clarabel, constraint generation and warm starts give exactly the
@@ -287,6 +291,7 @@ def test_clarabel_rows_are_the_corner_matrices():
 CUT_SCALES = {"pi002": (0.0, 0.203125, 0.21875), "hinf003": (0.27, 0.28)}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(CUT_SCALES))
 def test_constraint_generation_gives_the_full_solve_verdict(name):
     """Constraint generation over the corners (a few, the violated ones added)
@@ -380,6 +385,7 @@ def _box_loops(art, b: dict, u: np.ndarray):
                                ).spectral_radius()
 
 
+@pytest.mark.slow
 def test_placement_boxes_certified_and_stable(placement_case):
     """(a) With ``t_c = 0`` at speed or large speed-sensor errors the certified
     box's corners and random sets (uniform, 4000) are stable on
@@ -397,6 +403,7 @@ def test_placement_boxes_certified_and_stable(placement_case):
     assert np.max(_box_loops(art, b, u)) < 1
 
 
+@pytest.mark.slow   # 60 random sets, on a certificate bisected first (~3.5 CPU-s)
 @PROFILE
 @given(st.lists(st.floats(0, 1), min_size=6, max_size=6))
 def test_random_sets_in_placement_boxes_are_stable(placement_case, u):

@@ -24,6 +24,9 @@ import pytest
 
 from toolbox.campaign import run_campaign
 
+#: slow: real Dask clusters
+pytestmark = pytest.mark.slow
+
 #: Seconds to wait for the scheduler file / the workers to register.
 START_TIMEOUT = 60
 

@@ -20,6 +20,9 @@ from toolbox.cli import main
 from toolbox.errors import SpecError
 from toolbox.spec import load_spec
 
+#: slow: campaigns end to end (the 400-sample reference run and more, each sample a design and simulations)
+pytestmark = pytest.mark.slow
+
 
 def test_draws_do_not_depend_on_chunking(designed):
     """Sample i draws from SeedSequence([seed, i]): any sub-range gives the same values, exactly."""

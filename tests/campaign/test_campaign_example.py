@@ -24,6 +24,8 @@ from toolbox.campaign._summary import stratified_subset
 from toolbox.cli import main
 from toolbox.spec import load_spec
 
+pytestmark = pytest.mark.slow   # the example campaign end to end
+
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "designs" / "campaigns" / "003_azaiz2007_hinf.toml"
 

@@ -37,6 +37,8 @@ from toolbox.campaign import CHUNK_ATTEMPTS, run_campaign, valid_chunks
 from toolbox.cli import main
 from toolbox.spec import load_spec
 
+pytestmark = pytest.mark.slow   # real Dask schedulers and workers, killed mid-run
+
 ROOT = Path(__file__).resolve().parents[2]
 START_TIMEOUT = 60
 

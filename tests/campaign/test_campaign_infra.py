@@ -102,6 +102,7 @@ def banner_server():
     ls.close()
 
 
+@pytest.mark.slow
 def test_http_server_on_scheduler_port_exit_4_within_30_s(small_spec, tmp_path, http_server):
     """The default deadlines are well under 30 s, and the run ends at the probe."""
     assert _cluster.PROBE_TIMEOUT + 1 < 30
@@ -147,6 +148,7 @@ def _stop(p) -> None:
     p.wait(timeout=30)
 
 
+@pytest.mark.slow
 def test_cluster_without_usable_workers_exit_4(small_spec, tmp_path, monkeypatch):
     """A real scheduler on 127.0.0.1: no worker, then a worker that cannot import
     the toolbox, then one of another build (a copy of the package with one
@@ -209,6 +211,7 @@ def test_cluster_without_usable_workers_exit_4(small_spec, tmp_path, monkeypatch
             _stop(p)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("code, words", [(errno.ENOSPC, "the disk is full"),
                                          (errno.EROFS, "the file system is read-only")])
 def test_disk_full_or_read_only_exit_4(designed, small_spec, tmp_path, monkeypatch, code, words):

@@ -3,6 +3,7 @@
 import json
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from toolbox.cli import main
@@ -10,6 +11,7 @@ from toolbox.cli import main
 DESIGNS = Path(__file__).parents[2] / "designs"
 
 
+@pytest.mark.slow
 def test_compare_paper000_motor(tmp_path):
     """PI, total compensation with integrators and H-infinity on paper 000's motor:
     one row each, with sampled-loop margins, robustness and the verdict;
@@ -63,6 +65,7 @@ def test_compare_fcs_mpc_row_is_what_it_executes(tmp_path):
     assert "*" in fcs_line
 
 
+@pytest.mark.slow   # five robust designs, tune and H-infinity at speed among them
 def test_compare_paper003_robust_designs(tmp_path):
     """The structured tuner, the direct discrete-time complex-vector law, the
     robust PI, the per-axis H-infinity design and H-infinity at speed side by

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from toolbox.cli import main
@@ -17,6 +18,7 @@ from toolbox.spec import METHODS
 SPEC = Path(__file__).parents[1] / "corpus" / "datasheets" / "nema23_teknic_hudson_2311.toml"
 
 
+@pytest.mark.slow   # every method on one motor, robust searches included
 def test_compare_all_methods_on_one_motor(tmp_path):
     out = tmp_path / "cmp.json"
     res = CliRunner().invoke(main, ["compare", str(SPEC), "--method", "all", "--json",

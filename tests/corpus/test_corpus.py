@@ -129,6 +129,7 @@ def _cases():
             yield pytest.param(motor, method, marks=marks, id=f"{motor}-{method}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motor, method", list(_cases()))
 def test_corpus_motor_designs_on_defaults(motor, method):
     spec = corpus_spec(motor, method)

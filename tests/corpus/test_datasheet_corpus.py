@@ -64,7 +64,9 @@ def _cases():
         for method in METHODS:
             if method == "tune" and "nema23" not in path.stem:
                 continue
-            yield pytest.param(path, method, id=f"{method}-{path.stem}")
+            # slow: the robust methods search over model sets (7-150 CPU-s per motor)
+            marks = pytest.mark.slow if method in ("tune", "robust_pi") else ()
+            yield pytest.param(path, method, id=f"{method}-{path.stem}", marks=marks)
 
 
 @pytest.mark.parametrize("path, method", list(_cases()))

@@ -34,7 +34,8 @@ import toolbox
 from toolbox.artifact import ControllerArtifact, CvLaw
 from toolbox.errors import ArtifactError
 from toolbox.design import cv_discrete as cvd
-from toolbox.sim import Scenario, control_law, drive_params, simulate
+from toolbox.sim import control_law, drive_params, simulate
+from toolbox.spec import Scenario
 from toolbox.sim import _kernel, _kernel_cv
 
 SPEC = Path(__file__).resolve().parents[2] / "designs" / "003_azaiz2007_cv.toml"

@@ -225,6 +225,7 @@ def test_unloaded_start_of_a_light_rotor_ends_below_the_voltage_limited_speed():
     assert outcome.passed
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", LINEAR_METHODS)
 @pytest.mark.parametrize("motor", list(MOTORS))
 def test_default_design_passes_default_checks(motor, method):
@@ -240,6 +241,7 @@ def test_default_design_passes_default_checks(motor, method):
     assert out.header is not None
 
 
+@pytest.mark.slow
 def test_cct_design_exit_0_on_the_issue_lq_case(tmp_path):
     """The issue's failing case: lq defaults on the 400 V IPMSM, through the CLI."""
     spec = tmp_path / "ipmsm_lq.toml"

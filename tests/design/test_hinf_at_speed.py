@@ -25,6 +25,8 @@ from toolbox.pipeline import design_spec
 from toolbox.plant import dq_matrices, max_electrical_speed
 from toolbox.spec import load_spec, spec_from_dict
 
+pytestmark = pytest.mark.slow   # the at-speed synthesis tunes over 116 models (about 17 CPU-s a design)
+
 NOMINAL = "designs/003_azaiz2007_hinf.toml"
 AT_SPEED = "designs/003_azaiz2007_hinf_at_speed.toml"
 #: paper 003 Fig. 8 / sect. 5: q-axis rise time (s) of the per-axis design

@@ -83,6 +83,7 @@ def test_inverse_lq_closed_form_and_care():
         np.sort_complex(ax.poles.astype(complex)), rel=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sigma", [1200.0, 1600.0, 2500.0, 10000.0])
 def test_inverse_lq_sdp_cross_check(sigma):
     """Independent route (cvxpy + CLARABEL): the best margin t of Q >= t S equals

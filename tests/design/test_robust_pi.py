@@ -56,6 +56,7 @@ def make_spec(method, cfg=None):
                            "controller": {"method": method, method: cfg or {}}})
 
 
+#: robust_pi designed (a search over its model set, ~3 CPU-s): the tests using it are slow
 @pytest.fixture(scope="module")
 def robust():
     spec = make_spec("robust_pi")
@@ -70,6 +71,7 @@ def pi_003():
 
 
 # ------------------------------------------------------------ (1) margins hold
+@pytest.mark.slow
 def test_margin_holds_on_every_model_of_the_set(robust):
     spec, art = robust
     cfg = spec.controller.cfg
@@ -88,6 +90,7 @@ def test_margin_holds_on_every_model_of_the_set(robust):
     assert M.min() < cfg.disk_margin * 1.1
 
 
+@pytest.mark.slow
 def test_margin_holds_at_negative_speeds_by_the_analysis_stage(robust):
     """mimo_disk_margins (9 speeds on -920..920 rad/s) at every corner of the box
     of R, Ld, Lq and the speed sensor (offset in electrical rad/s: 4 x 10)."""
@@ -108,6 +111,7 @@ def test_margin_holds_at_negative_speeds_by_the_analysis_stage(robust):
 SENSOR_CORNER = ({"R": 0.5, "Ld": 0.5, "Lq": 0.5}, 1.1, 40.0)   # offset +10 rad/s mech.
 
 
+@pytest.mark.slow
 def test_model_set_spans_the_sweeps_speed_sensor_errors(robust):
     """Defaults equal to the robustness sweep's ranges; every model carries
     its sensor, offsets in electrical rad/s (p = 4)."""
@@ -132,6 +136,7 @@ def test_model_set_spans_the_sweeps_speed_sensor_errors(robust):
     assert skew.speeds[0] == pytest.approx(-920.0) and skew.speeds.size == 7
 
 
+@pytest.mark.slow
 def test_design_without_the_sensor_errors_violates_the_margin_on_one(robust):
     """Tuned with an exact sensor (the set before the sensor errors), the PI
     reaches 1856 rad/s and keeps 0.46 at 920 rad/s with the speed measured
@@ -160,6 +165,7 @@ def test_design_without_the_sensor_errors_violates_the_margin_on_one(robust):
     assert rec["speed_gain"] == [0.9, 1.1] and rec["speed_offset_rad_s_mechanical"] == [-10, 10]
 
 
+@pytest.mark.slow
 def test_same_artifact_as_pi(robust):
     spec, art = robust
     assert art.method == "robust_pi"
@@ -178,6 +184,7 @@ def test_same_artifact_as_pi(robust):
 
 
 # --------------------------------------------- (2) cancellation PI fails, robust passes
+@pytest.mark.slow
 def test_cancellation_pi_unstable_at_speed_where_robust_pi_passes(robust, pi_003):
     spec, art = robust
     models = RP.model_set(spec.motor, spec.controller.cfg)
@@ -189,6 +196,7 @@ def test_cancellation_pi_unstable_at_speed_where_robust_pi_passes(robust, pi_003
     assert M_rob.min() >= 0.5 * (1 - RTOL)
 
 
+@pytest.mark.slow
 def test_default_cancellation_pi_misses_the_disk_margin(robust):
     """The pi method's default bandwidth (2909 rad/s) is stable over the box but
     keeps only ~0.31 of disk margin at the corner L x0.5 at speed."""
@@ -197,6 +205,7 @@ def test_default_cancellation_pi_misses_the_disk_margin(robust):
     assert 0 < M.min() < 0.4
 
 
+@pytest.mark.slow
 def test_sweep_unstable_count(robust, pi_003):
     """The analysis stage's sweep (R, Ld, Lq, flux, speed-sensor errors, delay +1)."""
     n_pi = robustness_sweep(pi_003[1], pi_003[0].motor, n=200, drive=pi_003[0].drive).n_unstable
@@ -215,6 +224,7 @@ def _step_at_speed(art, spec, scales, omega_e, speed_gain=1.0, speed_offset=0.0,
     return simulate(control_law(art), motor, sc, drive_params(spec.drive))
 
 
+@pytest.mark.slow
 def test_simulation_at_the_worst_model(robust):
     """i_q step 0 -> 10 A at the tuner's worst model and speed (R, Ld, Lq x0.5,
     920 rad/s; nonlinear kernel, average inverter). With the worst model's
@@ -245,6 +255,7 @@ def test_simulation_at_the_worst_model(robust):
     assert exact["overshoot_pct"] < 10.0, exact
 
 
+@pytest.mark.slow
 def test_cancellation_pi_diverges_in_simulation_where_robust_pi_does_not(robust, pi_003):
     """Corner R x0.5, Ld x0.5, Lq x2 at 920 rad/s: the 145 rad/s cancellation PI
     diverges (currents of hundreds of A, only the voltage limit bounds them),
@@ -274,6 +285,7 @@ def test_bad_input(cfg, key):
     assert key in str(e.value)
 
 
+@pytest.mark.slow
 def test_infeasible_margin_says_the_best_found():
     spec = make_spec("robust_pi", {"disk_margin": 1.9, "samples": 0, "n_speeds": 2,
                                    "zero_ratios": []})
@@ -281,6 +293,7 @@ def test_infeasible_margin_says_the_best_found():
         design(spec)
 
 
+@pytest.mark.slow
 def test_infeasible_margin_says_what_limits_it():
     """A margin just above the largest the default set allows (0.505 at about
     1.3e3 rad/s): the refusal names the limiting model (the sensor corner) and
@@ -299,6 +312,7 @@ def test_infeasible_margin_says_what_limits_it():
     assert "at standstill" in msg and "on the nominal motor" in msg
 
 
+@pytest.mark.slow
 def test_infeasible_everywhere_unstable_says_where():
     """A small-inductance IPMSM up to 3300 rad/s electrical at 100 us: every
     bandwidth leaves some corner unstable at top speed; the refusal reports

@@ -55,6 +55,7 @@ def _simulate(rhs, x0, t_end):
     return sol.y[:, -1]
 
 
+@pytest.mark.slow
 def test_pi_acceleration_against_time_integration(motor):
     """Closed loop (3) integrated over 60 ms with Omega = gamma t (the slowest
     closed-loop pole is ~-190 rad/s, so transients decay as exp(-11)
@@ -73,6 +74,7 @@ def test_pi_acceleration_against_time_integration(motor):
     assert x[:2] == pytest.approx(expected, abs=1e-4)
 
 
+@pytest.mark.slow
 def test_tc_speed_error_against_linear_solve(motor):
     """Constant speed: 0 = A(omega) i + B v(i) + e(omega) solved with numpy."""
     plant = numeric_plant(motor)
@@ -95,6 +97,7 @@ def test_tc_mismatch_reduces_to_nominal():
     assert all(sp.simplify(mis[k].subs(back) - nom[k]) == 0 for k in nom)
 
 
+@pytest.mark.slow
 def test_tci_acceleration_against_time_integration(motor):
     """Law (20) with Omega_m = 1.1 Omega + 5 (eq (28)), Omega = gamma t,
     integrated over 60 ms (slowest pole -199 rad/s): agrees with the derived

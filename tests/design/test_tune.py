@@ -45,6 +45,7 @@ def tuned():
     return spec, design(spec)
 
 
+@pytest.mark.slow
 def test_dense_check_holds_with_design_delay_and_one_more(tuned):
     spec, art = tuned
     tu = art.design_parameters["tune"]
@@ -56,6 +57,7 @@ def test_dense_check_holds_with_design_delay_and_one_more(tuned):
     assert tu["worst_disk_margin"] >= ALPHA
 
 
+@pytest.mark.slow
 def test_independent_recheck_other_samples_finer_grid(tuned):
     """Another Latin hypercube (seed 7, 600 points + corners) on a 2000-point grid."""
     spec, art = tuned
@@ -68,6 +70,7 @@ def test_independent_recheck_other_samples_finer_grid(tuned):
         assert float(np.min(v)) >= ALPHA * (1 - RTOL), d
 
 
+@pytest.mark.slow
 def test_q_response_no_slower_than_robust_pi(tuned):
     spec, art = tuned
     m = compute_margins(art, spec.motor)        # the analysis stage's own figures
@@ -78,6 +81,7 @@ def test_q_response_no_slower_than_robust_pi(tuned):
     assert rec["q"] == pytest.approx(t5["q"], abs=1e-5)
 
 
+@pytest.mark.slow
 def test_artifact_is_the_pi_methods(tuned):
     """Tustin PI per axis + decoupling, the cross-coupling inductances scaled by k."""
     spec, art = tuned
@@ -97,6 +101,7 @@ def test_artifact_is_the_pi_methods(tuned):
             assert np.allclose(getattr(art.axes[ax].law, name), getattr(ref[ax].law, name))
 
 
+@pytest.mark.slow
 def test_binding_goal_reported(tuned):
     _, art = tuned
     b = art.design_parameters["tune"]["binding"]
@@ -104,6 +109,7 @@ def test_binding_goal_reported(tuned):
     assert "5 % response" in b["soft"]
 
 
+@pytest.mark.slow
 def test_worst_case_search_finds_what_robust_pi_misses():
     """robust_pi's gains (1421 rad/s, w_z = wc/10, k = 1) keep 0.501 with the
     design delay but not with one period more: from an interior point

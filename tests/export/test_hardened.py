@@ -208,6 +208,7 @@ def _faults(exe, spec, omega_m, vdc, refs):
     return currents, int(f[1]), int(f[3])
 
 
+@pytest.mark.slow      # every gallery header in the SIL loop, twice (test_sil.py runs it once)
 @pytest.mark.parametrize("name", S.DESIGNS)
 def test_glitches_in_closed_loop(name, tmp_path_factory):
     """A 1e6 A sample and a 1e30 V bus reading, both refused with status 4;

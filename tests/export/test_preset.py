@@ -153,7 +153,7 @@ def _terms(law: Law, u, x) -> np.ndarray:
     return np.array(out)
 
 
-@pytest.mark.parametrize("name", LINEAR)
+@pytest.mark.parametrize("name", S.everyday(LINEAR))
 def test_preset_then_step_gives_the_voltage(name, tmp_path):
     law = Law(name, tmp_path)
     spec = law.spec
@@ -213,7 +213,7 @@ def _plant(spec, omega_m):
     return E[:2, :2], E[:2, 2:4], E[:2, 4]
 
 
-@pytest.mark.parametrize("name", LINEAR)
+@pytest.mark.parametrize("name", S.everyday(LINEAR))
 def test_handover_from_open_loop_is_bumpless(name, tmp_path):
     law = Law(name, tmp_path)
     spec, m = law.spec, law.spec.motor

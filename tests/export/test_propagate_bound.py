@@ -3,6 +3,7 @@ and costs O(N log N): at sample_time = 1e-7 the 20 ms horizon is 2e5 periods and
 the direct double sum made `cct design` run for hours (qa: sample_time 1e-7)."""
 
 import numpy as np
+import pytest
 
 from toolbox.export._fixed import propagate_bound
 
@@ -29,6 +30,7 @@ def test_bound_matches_the_direct_sum_from_above():
     assert np.max((fast - direct) / direct) < 1e-6
 
 
+@pytest.mark.slow
 def test_long_horizon_reaches_the_stationary_bound():
     """2e5 periods (the horizon that ran for hours): with unit local errors the
     bound tends to 1 + sum_j |C| |A^j| 1, summed here directly over 3000 terms

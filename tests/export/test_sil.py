@@ -117,6 +117,16 @@ VARIATIONS = {"003_azaiz2007_pi+complex_vector": ("003_azaiz2007_pi", _complex_v
               "003_azaiz2007_cv+delay0": ("003_azaiz2007_cv", _delay(0)),
               "003_azaiz2007_cv+delay2": ("003_azaiz2007_cv", _delay(2))}
 NAMES = DESIGNS + list(VARIATIONS)
+#: Designs whose making is itself a long optimisation: tune ~20 CPU-s (its
+#: optimisation over the model set and the 2,000-point dense check), robust_pi
+#: ~3 CPU-s (its search over the model set); their cases run with the slow
+#: tests (pytest -m slow; pyproject.toml's markers).
+SLOW_DESIGNS = ("003_azaiz2007_tune", "003_azaiz2007_robust_pi")
+
+
+def marked(names) -> list:
+    """``names`` as parameters, those of SLOW_DESIGNS marked slow."""
+    return [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_DESIGNS else n for n in names]
 VARIANTS = {"float": None, "q31": "CCT_FIXED_POINT", "mcsdk": "CCT_MCSDK",
             "iqmath": "CCT_IQMATH"}
 #: the section of the header each variant lives in, and the macro it is switched on by
@@ -364,8 +374,27 @@ def table():
     print("\n".join(lines))
 
 
-@pytest.mark.parametrize("variant", list(VARIANTS))
-@pytest.mark.parametrize("name", NAMES)
+#: The designs whose closed-loop header cases the everyday selection runs (a
+#: PI, a static law, an H-infinity state space, the FCS-MPC law): here their
+#: float header, in test_preset.py their preset and handover; every other case
+#: (the other designs, the fixed-point variants) runs with the slow tests.
+EVERYDAY = ("003_azaiz2007_pi", "000_lepioufle1992_tc", "003_azaiz2007_hinf",
+            "002_cormerais2002_fcs_mpc")
+
+
+def everyday(names) -> list:
+    """``names`` as parameters, those not in EVERYDAY marked slow."""
+    return [n if n in EVERYDAY else pytest.param(n, marks=pytest.mark.slow) for n in names]
+
+
+def _cases() -> list:
+    """(name, variant) parameters, id ``name-variant``, marked as EVERYDAY says."""
+    return [pytest.param(n, v, id=f"{n}-{v}",
+                         marks=() if v == "float" and n in EVERYDAY else pytest.mark.slow)
+            for n in NAMES for v in VARIANTS]
+
+
+@pytest.mark.parametrize("name, variant", _cases())
 def test_header_in_the_loop_matches_simulator(name, variant, tmp_path_factory):
     spec, art, header = _designed(name)
     why = _offered(header, variant)

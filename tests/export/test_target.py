@@ -69,6 +69,9 @@ import pytest
 import target_m4 as T
 import test_sil as S
 
+#: slow: cross-compiled headers on the emulated Cortex-M4F
+pytestmark = pytest.mark.slow
+
 CASES = ("30% base", "saturating")
 F_PWM = 20e3
 F_CPU = 170e6

@@ -113,10 +113,12 @@ def test_header_matches_reference_d_axis(name, limit, tmp_path):
 
 
 def _hexagon_inside(vd, vq, theta, apothem):
+    """Whether (vd, vq) lies in the hexagon (element-wise for arrays)."""
     va = vd * math.cos(theta) - vq * math.sin(theta)
     vb = vd * math.sin(theta) + vq * math.cos(theta)
     h = math.sqrt(3.0) / 2.0
-    return max(abs(h * va + 0.5 * vb), abs(vb), abs(-h * va + 0.5 * vb)) <= apothem * (1 + 1e-12)
+    return np.maximum(np.maximum(np.abs(h * va + 0.5 * vb), np.abs(vb)),
+                      np.abs(-h * va + 0.5 * vb)) <= apothem * (1 + 1e-12)
 
 
 def test_d_priority_limit_is_exact():
@@ -132,7 +134,8 @@ def test_d_priority_limit_is_exact():
         vd, vq = rng.uniform(-2 * vm, 2 * vm, 2)
         for limit in ("circle", "hexagon"):
             d, q = d_priority_limit(vd, vq, vm, limit, th)
-            inside = (lambda a, b: math.hypot(a, b) <= vm * (1 + 1e-12)) if limit == "circle" \
+            # element-wise for arrays: the chord below tests the whole grid at once
+            inside = (lambda a, b: np.hypot(a, b) <= vm * (1 + 1e-12)) if limit == "circle" \
                 else (lambda a, b: _hexagon_inside(a, b, th, vm))
             assert inside(d, q)
             # d extent by sampling the boundary
@@ -143,7 +146,7 @@ def test_d_priority_limit_is_exact():
                 r = vm / np.cos((np.mod(phi + th, math.pi / 3)) - math.pi / 6)  # edge radius
                 d_ext = np.max(r * np.cos(phi))
             assert abs(d - np.clip(vd, -d_ext, d_ext)) <= 1e-4 * vm
-            chord = grid[[inside(d, g) for g in grid]]
+            chord = grid[inside(d, grid)]
             if chord.size == 0:  # v_d on the vertex of the d extent: a one-point chord
                 assert abs(abs(d) - d_ext) <= 1e-4 * vm
                 continue

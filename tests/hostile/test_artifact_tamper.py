@@ -18,6 +18,7 @@ import pytest
 from toolbox.artifact import ControllerArtifact
 from toolbox.errors import ArtifactError
 from toolbox.pipeline import design_spec, load_analysis, spec_of_artifact
+from toolbox.spec import METHODS
 
 from hostile_helpers import ROOT, run_cli, spec_dict
 
@@ -83,8 +84,7 @@ def test_margins_as_written_are_accepted(pi_json):
 def test_unknown_method(pi_json):
     data = json.loads(pi_json)
     data["method"] = "magic"
-    _refused(data, 'method: expected one of pi, ip, pi_lag, tc, tci, ilq, lq, hinf, fcs_mpc, robust_pi, tune, '
-                   'got "magic"')
+    _refused(data, "method: expected one of " + ", ".join(METHODS) + ', got "magic"')
 
 
 def test_missing_law_matrix(pi_json):

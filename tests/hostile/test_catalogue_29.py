@@ -160,9 +160,11 @@ def test_cct_design_refuses_and_writes_nothing(write_spec, tmp_path, name):
 
 
 @pytest.mark.parametrize("sections", [
-    dict(motor={"R": 1e4}),              # L/R = 1.4e-3 sample times: in range
-    dict(drive={"sample_time": 1.0}),    # slow, but a drive
-], ids=["R_1e4", "sample_time_1"])
+    pytest.param(dict(motor={"R": 1e4}), id="R_1e4"),  # L/R = 1.4e-3 sample times: in range
+    # slow, but a drive; its full cct design (the scenarios' verification and
+    # the report over a 1 s sample time) costs ~10 CPU-s: marked slow
+    pytest.param(dict(drive={"sample_time": 1.0}), id="sample_time_1", marks=pytest.mark.slow),
+])
 def test_plausible_extremes_give_a_verdict_not_a_crash(write_spec, tmp_path, sections):
     """The exact ZOH of the coupled loop overflowed (0 x inf) at the box corners of
     the MIMO analysis and eigvals raised LinAlgError; now the design is made and

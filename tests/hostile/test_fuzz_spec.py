@@ -97,6 +97,7 @@ def mutated_specs(draw) -> dict:
     return data
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore::UserWarning")  # design advice on accepted specs
 @FUZZ
 @given(mutated_specs())

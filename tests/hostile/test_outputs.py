@@ -57,6 +57,7 @@ def _wait_generations(proc: subprocess.Popen, n: int) -> None:
         assert line, proc.stderr.read()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("extra_delay", [0.0, 0.013, 0.029, 0.047])
 def test_kill_9_mid_write_leaves_one_complete_set(tmp_path, extra_delay):
     out = tmp_path / "out"
@@ -77,6 +78,7 @@ def test_kill_9_mid_write_leaves_one_complete_set(tmp_path, extra_delay):
     assert sorted(p.name for p in out.iterdir()) == ["controller.json"]
 
 
+@pytest.mark.slow
 def test_sigint_mid_write_leaves_one_complete_set_and_no_temporaries(tmp_path):
     out = tmp_path / "out"
     proc = _start_writer(out)
@@ -194,6 +196,7 @@ def test_export_into_proc(design_dir):
             'creatable), got "/proc/controller.h"') in res.output
 
 
+@pytest.mark.slow
 def test_cct_design_sigint_exits_130_and_writes_nothing(tmp_path):
     """Ctrl-C during the design: exit 130, no output directory, no temporaries."""
     out = tmp_path / "out"

@@ -86,6 +86,7 @@ def _printed_eq6(g):
     return i_d_inf, i_q_inf
 
 
+@pytest.mark.slow
 def test_eq6_7_pi_under_constant_acceleration_symbolic():
     derived = SS.pi_acceleration_steady_state(CONVENTION)
     printed = _printed_eq6(gamma)
@@ -133,6 +134,7 @@ def test_eq15_closed_loop_matrices():
     assert is_zero(A_bf.det() - (K_1 * K_2 + p**2 * d**2))
 
 
+@pytest.mark.slow
 def test_eq17_speed_error_symbolic():
     derived = SS.tc_speed_error_steady_state(CONVENTION)
     d = Om_m - Om
@@ -174,6 +176,7 @@ def _printed_eq25(kI):
     return i_d_inf, i_q_inf
 
 
+@pytest.mark.slow
 def test_eq25_27_30_symbolic_with_equal_integral_voltage_gains():
     """Derived = printed (25)-(27) with sigma = -lambda gamma (eq (30)) when
     K12 L_d = K22 L_q = E k_i K_I (the printed single gain)."""

@@ -20,10 +20,19 @@ def fresh():
     return {c: _derive_dq_model(c) for c in _symbolic.CONVENTIONS}
 
 
+@pytest.fixture(scope="module")
+def models():
+    """The models as the toolbox gives them (read from the user's cache, or
+    derived and cached there): what the stand-in of ``derivations`` returns.
+    Equality with a derivation without any cache is asked of ``fresh``, by
+    the tests marked slow (a fresh derivation costs ~2.4 s of sympy each)."""
+    return {c: _symbolic.derive_dq_model(c) for c in _symbolic.CONVENTIONS}
+
+
 @pytest.fixture
-def derivations(fresh, tmp_path, monkeypatch):
+def derivations(models, tmp_path, monkeypatch):
     """A private cache directory, the lru_cache cleared, and the derivation
-    replaced by a counting stand-in returning the reference model (so that a
+    replaced by a counting stand-in returning the model of ``models`` (so that a
     test can tell a cache hit from a recomputation, at no sympy cost)."""
     monkeypatch.delenv("CCT_CACHE_DIR", raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
@@ -31,7 +40,7 @@ def derivations(fresh, tmp_path, monkeypatch):
 
     def derive(convention: str) -> DqModel:
         calls.append(convention)
-        return fresh[convention]
+        return models[convention]
 
     monkeypatch.setattr(_symbolic, "_derive_dq_model", derive)
     _symbolic.derive_dq_model.cache_clear()
@@ -43,6 +52,7 @@ def _fields(m: DqModel) -> tuple:
     return (m.convention, m.di_dt, m.voltage, m.torque, m.dOmega_dt, m.inductance_map)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("convention", _symbolic.CONVENTIONS)
 def test_cached_model_equals_fresh_derivation(derivations, fresh, convention):
     """Write, then read back from disk: structurally equal to the re-derivation."""
@@ -60,7 +70,7 @@ def test_cached_model_equals_fresh_derivation(derivations, fresh, convention):
 
 
 @pytest.mark.parametrize("damage", [b"", b"garbage", "truncate", "flip"])
-def test_corrupted_cache_is_ignored_and_rewritten(derivations, fresh, damage):
+def test_corrupted_cache_is_ignored_and_rewritten(derivations, models, damage):
     """A damaged entry is never unpickled as is: re-derived, then rewritten."""
     cache_home, calls = derivations
     _symbolic.derive_dq_model("amplitude")
@@ -76,7 +86,7 @@ def test_corrupted_cache_is_ignored_and_rewritten(derivations, fresh, damage):
     assert _cache._read(path, _cache.cache_key(_symbolic.__file__)) is None
     _symbolic.derive_dq_model.cache_clear()
     model = _symbolic.derive_dq_model("amplitude")
-    assert _fields(model) == _fields(fresh["amplitude"])
+    assert _fields(model) == _fields(models["amplitude"])
     assert calls == ["amplitude", "amplitude"]  # the damaged entry was not used
     assert path.read_bytes() == raw  # rewritten whole
 
@@ -171,6 +181,7 @@ def test_cached_numeric_model_equals_lambdify(derivations, tmp_path, monkeypatch
             assert np.array_equal(np.asarray(f_first(*point), float), want)
 
 
+@pytest.mark.slow
 def test_report_equations_cached_equal_derived(tmp_path, monkeypatch):
     """The report's equation rows read from the cache are those derived and
     typeset afresh (LaTeX, text and SVG strings identical)."""

@@ -135,6 +135,7 @@ def _slsqp_max_torque(env, speed, sign):
     return best
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motor_name", ["traction", "paper003"])
 def test_references_match_numeric_optimisation(motor_name):
     """0 / 25 / 50 / 75 / 100 % of the standstill torque limit, both signs, at

@@ -101,6 +101,7 @@ def test_paper002_eq4_to_eq8_after_change_of_variables(power):
     assert zero(power.torque.subs(to_paper) - torque_eq8)                          # eq (8)
 
 
+@pytest.mark.slow
 def test_park_q_row_sign_flips_rotation():
     """With paper 002's printed +sin q row, T dT^-1/dtheta has the opposite sign.
 

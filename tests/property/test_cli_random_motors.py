@@ -34,6 +34,9 @@ from toolbox.cli import main
 
 from test_random_motors import METHODS, _controller
 
+#: slow: a cct subprocess per random motor
+pytestmark = pytest.mark.slow
+
 HOSTILE = Path(__file__).parents[1] / "hostile"
 
 PROFILE = settings(max_examples=3, deadline=None, derandomize=True,

@@ -77,6 +77,9 @@ from test_random_motors import METHODS, WC_TS, _spec, motors
 sys.path.insert(0, str(Path(__file__).parents[1] / "export"))
 import export_c_helpers as C  # noqa: E402  (tests/export helper: gcc flags and driver)
 
+#: slow: compiled headers against long simulations, many random motors
+pytestmark = pytest.mark.slow
+
 EPS32 = 2.0 ** -24
 #: float32 df2T rounding through saturation, relative to V_max (module docstring)
 REL_TOL = 1e-3

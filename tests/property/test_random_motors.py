@@ -32,6 +32,9 @@ from toolbox.analysis import compute_margins
 from toolbox.pipeline import design_spec, run_verification
 from toolbox.spec import spec_from_dict
 
+#: slow: designs and simulations of many random motors
+pytestmark = pytest.mark.slow
+
 # Closed-loop bandwidth scaled to the sample time: with one period of
 # computation delay plus the ZOH half period, wc = 0.15/Ts costs
 # 1.5 * 0.15 rad = 13 deg of phase, a sound design point for every method.

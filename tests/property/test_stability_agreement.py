@@ -46,6 +46,9 @@ from toolbox.spec import spec_from_dict
 
 from test_random_motors import motors
 
+#: slow: analysis against simulation over many random motors
+pytestmark = pytest.mark.slow
+
 #: H-infinity is left out: its bandwidth comes from the weights and a
 #: controller pole beyond pi/Ts is refused by design (tests/design); the
 #: saturating property (test_random_motors) covers its executed loop

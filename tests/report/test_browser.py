@@ -19,8 +19,9 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-f
 # CI sets CCT_REQUIRE_BROWSER=1 (.ci/run installs Chromium): there a missing
 # browser is a failure, not a skip.
 REQUIRED = os.environ.get("CCT_REQUIRE_BROWSER") == "1"
-pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM) and not REQUIRED,
-                                reason=f"{CHROMIUM} absent (run .ci/browser-deps.sh as root)")
+pytestmark = [pytest.mark.skipif(not os.path.exists(CHROMIUM) and not REQUIRED,
+                                 reason=f"{CHROMIUM} absent (run .ci/browser-deps.sh as root)"),
+              pytest.mark.slow]   # a headless Chromium
 
 
 @pytest.fixture(scope="module")

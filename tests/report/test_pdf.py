@@ -11,6 +11,9 @@ import pytest
 from toolbox.report import write_pdf
 from toolbox.report.pdf import escape_markup, render_typst, typst_string
 
+#: slow: typesets PDFs
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def pdf_text(full_pdf):

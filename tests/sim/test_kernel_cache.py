@@ -8,6 +8,7 @@ import ast
 import inspect
 from pathlib import Path
 
+import pytest
 from numba.core.registry import CPUDispatcher
 
 from toolbox.sim import _kernel
@@ -86,6 +87,7 @@ def test_unusable_cache_directory_raises_nothing(tmp_path):
     assert (tmp_path / "file").is_file()
 
 
+@pytest.mark.slow
 def test_sim_imports_with_the_jit_disabled():
     """With NUMBA_DISABLE_JIT=1 (numba's own debugging switch) the kernel is
     plain Python: importing toolbox.sim must not reach for a dispatcher's cache."""

@@ -22,7 +22,9 @@ import sympy as sp
 
 from toolbox.plant import SYMBOLS as S
 from toolbox.plant import derive_dq_model, dq_matrices, numeric_plant
-from toolbox.sim import _kernel
+from toolbox.sim import _kernel, _kernel_layout
+from toolbox.sim._kernel_layout import LAYOUTS
+from toolbox.sim._metrics import METRIC_NAMES
 from toolbox.sim._simulate import _packed, _plant_array
 from toolbox.spec import Motor
 
@@ -48,13 +50,22 @@ def _close(a, b):
 
 
 # ----------------------------------------------------------------- layouts
-def test_generated_constants_follow_the_layout_declaration():
-    for prefix, names in _kernel.LAYOUTS.items():
+def test_slot_constants_follow_the_layout_declaration():
+    """The slot constants written out in ``_kernel_layout`` (for numba) are the
+    positions of LAYOUTS and METRIC_NAMES: one per slot, none stray."""
+    declared = {}
+    for prefix, names in LAYOUTS.items():
         assert len(set(names)) == len(names), f"duplicate slot in {prefix}"
-        for i, name in enumerate(names):
-            assert getattr(_kernel, f"{prefix}_{name.upper()}") == i
+        declared.update({f"{prefix}_{name.upper()}": i for i, name in enumerate(names)})
         assert _kernel.pack_indices(prefix) == {n: i for i, n in enumerate(names)}
-    assert _kernel.N_SC == len(_kernel.LAYOUTS["SC"])
+    declared.update({f"M_{name.upper()}": i for i, name in enumerate(METRIC_NAMES)})
+    for name, index in declared.items():
+        assert getattr(_kernel_layout, name, None) == index, name
+    prefixes = tuple(f"{p}_" for p in LAYOUTS) + ("M_",)
+    written = {n for n, v in vars(_kernel_layout).items()
+               if n.isupper() and n.startswith(prefixes) and type(v) is int}
+    assert written == set(declared)
+    assert _kernel.N_SC == len(LAYOUTS["SC"])
 
 
 def test_packed_fills_by_name_and_refuses_missing_or_unknown_slots():
@@ -126,7 +137,8 @@ def test_predictive_model_is_the_plant_euler_step(convention):
     motor = MOTORS[convention]
     Ts = 1e-4
     LP = _packed("LP", R_c=motor.R, Ld_c=motor.Ld, Lq_c=motor.Lq, flux_c=motor.flux,
-                 cross=1.0, emf=1.0, alpha=1.0, beta=1.0, gamma=0.0)
+                 cross=1.0, emf=1.0, alpha=1.0, beta=1.0, gamma=0.0,
+                 cv=0.0, cv_pc=0.0, cv_pi=0.0, cv_pd=0.0, cv_d=0.0)
     for i_d, i_q, om, _, vd, vq, _ in _points(seed=3):
         w = motor.pole_pairs * om
         A, B = dq_matrices(motor.R, motor.Ld, motor.Lq, w)

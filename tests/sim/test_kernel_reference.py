@@ -48,6 +48,7 @@ def test_kernel_matches_python_reference(case):
         assert res.metrics["saturation_time"] > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("inverter", ["svm", "fcs_mpc"])
 def test_compiled_kernel_equals_interpreted_kernel(inverter, monkeypatch):
     """The switching-level paths (SVM segments, predictive choice, seeded

@@ -203,7 +203,7 @@ def test_spec_hold_frame_is_validated():
     """``[drive] hold_frame`` accepts "rotor" (default) and "stationary" and
     refuses anything else naming the key."""
     base = {"motor": {"R": 1.0, "Ld": 5e-3, "Lq": 5e-3, "flux": 0.1, "pole_pairs": 4,
-                      "J": 1.0},
+                      "J": 0.01},
             "drive": {"vdc": 200, "sample_time": 1e-4},
             "controller": {"method": "pi"}}
     assert spec_from_dict(base).drive.hold_frame == "rotor"
@@ -224,7 +224,7 @@ def test_spec_drive_reaches_the_simulator(fsw):
     from toolbox.sim import drive_params
 
     spec = spec_from_dict({
-        "motor": {"R": 1.0, "Ld": 5e-3, "Lq": 5e-3, "flux": 0.1, "pole_pairs": 4, "J": 1.0},
+        "motor": {"R": 1.0, "Ld": 5e-3, "Lq": 5e-3, "flux": 0.1, "pole_pairs": 4, "J": 0.01},
         "drive": {"vdc": VDC, "sample_time": TS, "switching_frequency": fsw,
                   "hold_frame": "stationary", "delay_samples": 1,
                   "voltage_limit": "hexagon"},

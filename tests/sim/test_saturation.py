@@ -209,6 +209,7 @@ def _check_saturating_step(method: str, case: str, limit: str = "circle") -> Non
 GRID = [(m, c) for m in METHODS for c in CASES if not (m == "hinf_reduced" and c[0] == "A")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("method", "case"), GRID)
 def test_saturating_step_voltage_limited(method, case):
     """Every method rises at the rate the voltage allows and settles without
@@ -216,6 +217,7 @@ def test_saturating_step_voltage_limited(method, case):
     _check_saturating_step(method, case)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["pi", "tci", "hinf_reduced"])
 def test_saturating_step_hexagon_at_speed(method):
     """Hexagon limit at speed: both axes' laws get their own realised

@@ -57,6 +57,7 @@ def test_batch_refuses_empty_chunks_and_no_threads():
             simulate_batch(_pi(), [M], sc, DRIVE, **kw)
 
 
+@pytest.mark.slow
 def test_metrics_only_memory_is_flat():
     """A 20 s metrics-only run allocates no trace: peak RSS grows < 20 MB
     (a trace at every 1 us step would need 20e6 * 10 * 8 B = 1.6 GB)."""

@@ -114,11 +114,13 @@ def _peak(expr):
     return sp.simplify(sp.sqrt(a**2 + b**2))
 
 
+@pytest.mark.slow
 def test_sympy_line_to_line_emf_peak_is_sqrt3_p_omega_psi():
     e = _phase_emfs()
     assert sp.simplify(_peak(e[0] - e[1]) - sp.sqrt(3) * p * w * psi) == 0
 
 
+@pytest.mark.slow
 def test_sympy_torque_per_peak_current_is_three_halves_p_psi():
     # currents of peak I in phase with the EMFs (i_d = 0): power balance
     e = _phase_emfs()
@@ -140,6 +142,7 @@ def _hand_flux(key: str, value: float, pp: int) -> float:
     return float(solution)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key, value, pp", [("ke_ll_peak", 0.8, 4), ("ke_ll_rms", 0.343, 4),
                                             ("kt_peak", 0.42, 7), ("kt_rms", 0.08, 7)])
 def test_flux_from_each_constant_matches_sympy(key, value, pp):
@@ -161,6 +164,7 @@ def _dq_magnitude_per_rms(convention: str):
     return float(sp.simplify(magnitude / rms))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("convention", ["amplitude", "power"])
 def test_rms_currents_become_the_dq_magnitude_by_sympy(convention):
     """Datasheets print rms phase currents (QA finding: rated_current was read
@@ -403,6 +407,7 @@ def test_check_round_trips_every_reference_design():
 
 
 # ------------------------------------------------------------ the two motors
+@pytest.mark.slow
 @pytest.mark.parametrize("text", [GIMBAL, IPM], ids=["gimbal", "ipm"])
 def test_datasheet_motor_designs_with_pi(tmp_path, text):
     path = tmp_path / "s.toml"

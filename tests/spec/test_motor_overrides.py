@@ -32,7 +32,8 @@ def test_no_overrides_is_the_same_motor():
 
 def test_keys_are_the_physical_parameters():
     physical = {f.name for f in dataclasses.fields(Motor)} - {
-        "convention", "rated_current", "max_current", "rated_speed", "catalog"}
+        "convention", "rated_current", "max_current", "rated_speed", "catalog",
+        "magnetics"}  # a saturated motor's magnetic model, not an overridable number
     assert set(MOTOR_PARAMETER_KEYS) == physical
 
 

@@ -36,6 +36,7 @@ def _setup(design, priority="radial"):
     return spec, art, drive
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("priority", ["radial", "d_axis"])
 @pytest.mark.parametrize("design", ["003_azaiz2007_pi.toml", "003_azaiz2007_hinf.toml"])
 def test_torque_speed_grid_paper003(design, priority):

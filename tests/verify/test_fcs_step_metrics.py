@@ -40,6 +40,7 @@ def _lattice_radius(spec) -> float:
     return fcs_ripple(r_hex, spec.drive.sample_time, min(spec.motor.Ld, spec.motor.Lq), 1.0, 0.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motor", list(MOTORS))
 def test_fcs_defaults_pass_the_default_checks(motor):
     """Every default scenario whose step exceeds twice the lattice radius passes. A
@@ -68,6 +69,7 @@ def test_fcs_defaults_pass_the_default_checks(motor):
             assert "never" in s.checks["default.finite"]["reason"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motor", ["gimbal_24V", "ipmsm_400V"])
 @pytest.mark.parametrize("params", [{"beta": 0.0}, {"gamma": 1e6}],
                          ids=["id_unregulated", "absurd_gamma"])

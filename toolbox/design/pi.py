@@ -102,7 +102,7 @@ import numpy as np
 from ..lti import StateSpace, as_statespace
 from ..artifact import AxisController, ControllerArtifact
 from ..errors import SpecError
-from ..spec import Table, check_gain, check_rate, check_time_constant
+from ..spec import Collector, Table, check_gain, check_rate, check_time_constant
 from . import _defaults
 from ._common import decoupling_from_motor, make_artifact
 
@@ -441,11 +441,19 @@ def _explicit(t: Table, structure: str, drive) -> tuple[tuple, tuple, dict]:
     if has_plain and has_norm:
         raise SpecError(t.key("Kp_normalised"), "either Kp/Ki or Kp_normalised/Ki_normalised",
                         t.raw("Kp_normalised", t.raw("Ki_normalised")))
+    errors = Collector()  # the gains are read together: every bad one reported
     if has_norm:
-        Kp_n = t.per_axis("Kp_normalised", positive=True)
-        Ki_n = t.per_axis("Ki_normalised", positive=True)
-        E = t.number("voltage_gain", drive.vdc, positive=True, unit="V")
-        k_i = t.number("sensor_gain", positive=True, unit="1/A")
+        Kp_n = Ki_n = k_i = None
+        E = drive.vdc
+        with errors.check():
+            Kp_n = t.per_axis("Kp_normalised", positive=True)
+        with errors.check():
+            Ki_n = t.per_axis("Ki_normalised", positive=True)
+        with errors.check():
+            E = t.number("voltage_gain", drive.vdc, positive=True, unit="V")
+        with errors.check():
+            k_i = t.number("sensor_gain", positive=True, unit="1/A")
+        errors.raise_if_any()
         gains = [gains_from_normalised(Kp_n[k], Ki_n[k], E, k_i, structure) for k in (0, 1)]
         details = {"Kp_normalised": _axes(Kp_n), "Ki_normalised": _axes(Ki_n),
                    "voltage_gain": E, "sensor_gain": k_i}
@@ -454,8 +462,12 @@ def _explicit(t: Table, structure: str, drive) -> tuple[tuple, tuple, dict]:
         if t.has(name):
             raise SpecError(t.key(name), "Kp_normalised and Ki_normalised alongside it",
                             hint="voltage_gain and sensor_gain scale the normalised gains")
-    Kp = t.per_axis("Kp", positive=True, unit="V/A")
-    Ki = t.per_axis("Ki", positive=True, unit="V/(A s)")
+    Kp = Ki = None
+    with errors.check():
+        Kp = t.per_axis("Kp", positive=True, unit="V/A")
+    with errors.check():
+        Ki = t.per_axis("Ki", positive=True, unit="V/(A s)")
+    errors.raise_if_any()
     return Kp, Ki, {}
 
 

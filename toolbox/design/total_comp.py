@@ -41,7 +41,7 @@ import numpy as np
 from ..lti import StateSpace, static_gain
 from ..artifact import AxisController, ControllerArtifact, Decoupling
 from ..errors import SpecError
-from ..spec import Table, check_gain, check_time_constant
+from ..spec import Collector, Table, check_gain, check_time_constant
 from . import _defaults
 from ._common import make_artifact
 from .pi import DISCRETISATIONS, LN20, _check_gains, _explicit
@@ -274,6 +274,18 @@ def _positive_gain(t: Table, name: str, unit: str) -> float:
     return v
 
 
+def _gains_together(t: Table, names: tuple[tuple[str, str], ...]) -> tuple[float, ...]:
+    """:func:`_positive_gain` of each ``(name, unit)``, every bad one reported."""
+    errors = Collector()
+    out: list[Any] = []
+    for name, unit in names:
+        out.append(None)
+        with errors.check():
+            out[-1] = _positive_gain(t, name, unit)
+    errors.raise_if_any()
+    return tuple(out)
+
+
 def _read_model(t: Table, motor) -> dict:
     sub = t.table("model", _MODEL_KEYS)
     return {"R": sub.number("R", motor.R, positive=True, unit="ohm"),
@@ -331,7 +343,7 @@ def _check_design_rates(t: Table, group: str, K_prop: tuple, K_int: tuple | None
 def _read_tc(t: Table) -> tuple[tuple, None, dict]:
     group = _one_group(t, _TC_GROUPS)
     if group == "gains":
-        K = (_positive_gain(t, "K1", "1/s"), _positive_gain(t, "K2", "1/s"))
+        K = _gains_together(t, (("K1", "1/s"), ("K2", "1/s")))
         return K, None, {}
     if group == "response_time":
         t5 = t.per_axis("response_time", positive=True, unit="s")
@@ -348,16 +360,21 @@ def _read_tc(t: Table) -> tuple[tuple, None, dict]:
 def _read_tci(t: Table, model: dict, drive) -> tuple[tuple, tuple, dict]:
     group = _one_group(t, _TCI_GROUPS)
     if group == "gains":
-        K11, K12 = _positive_gain(t, "K11", "1/s"), _positive_gain(t, "K12", "1/s^2")
-        K21, K22 = _positive_gain(t, "K21", "1/s"), _positive_gain(t, "K22", "1/s^2")
+        K11, K12, K21, K22 = _gains_together(t, (("K11", "1/s"), ("K12", "1/s^2"),
+                                                 ("K21", "1/s"), ("K22", "1/s^2")))
         return (K11, K21), (K12, K22), {}
     if group == "natural_frequency":
-        wn = t.per_axis("natural_frequency", positive=True, unit="rad/s")
-        for value in set(wn):  # before wn^2 (1e300 overflowed)
-            check_gain(t.key("natural_frequency"), value, 1.0, drive, "rad/s")
-        if not t.has("damping"):
-            raise SpecError(t.key("damping"), "a number > 0 (missing)")
-        zeta = t.per_axis("damping", positive=True)
+        errors = Collector()  # natural_frequency and damping: both reported
+        wn = zeta = None
+        with errors.check():
+            wn = t.per_axis("natural_frequency", positive=True, unit="rad/s")
+            for value in set(wn):  # before wn^2 (1e300 overflowed)
+                check_gain(t.key("natural_frequency"), value, 1.0, drive, "rad/s")
+        with errors.check():
+            if not t.has("damping"):
+                raise SpecError(t.key("damping"), "a number > 0 (missing)")
+            zeta = t.per_axis("damping", positive=True)
+        errors.raise_if_any()
         return ((2 * zeta[0] * wn[0], 2 * zeta[1] * wn[1]), (wn[0] ** 2, wn[1] ** 2),
                 {"natural_frequency": {"d": wn[0], "q": wn[1]},
                  "damping": {"d": zeta[0], "q": zeta[1]}})

@@ -13,10 +13,13 @@ from ._limits import max_electrical_speed
 from ._linear import (axis_coefficients, dq_matrices, steady_state_voltage,
                       voltage_limited_speed, zoh_first_order)
 from ._numeric import ElectricalPlant, axis_plant_models, axis_plants, linearise, numeric_plant
+from ._saturation import at_operating_point, incremental_dq_matrices
 
 #: public name -> defining private module, imported on first use
 _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_symbolic",
          "derive_dq_model": "_symbolic", "park_matrix": "_symbolic",
+         "FluxLinkageModel": "_symbolic_flux",
+         "derive_flux_linkage_model": "_symbolic_flux",
          # the operating envelope imports scipy.optimize
          "OperatingEnvelope": "_envelope", "OperatingPoint": "_envelope",
          "mtpa_d_current": "_envelope"}
@@ -25,7 +28,8 @@ _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_sym
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
 
 
-__all__ = ["OperatingEnvelope", "OperatingPoint", "mtpa_d_current", "describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
+__all__ = ["at_operating_point", "incremental_dq_matrices", "OperatingEnvelope", "OperatingPoint", "mtpa_d_current", "describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
            "zoh_first_order", "steady_state_voltage", "voltage_limited_speed",
            "ElectricalPlant", "axis_plant_models", "axis_plants", "linearise", "numeric_plant",
-           "SYMBOLS", "DqModel", "derive_dq_model", "park_matrix"]
+           "SYMBOLS", "DqModel", "derive_dq_model", "park_matrix", "FluxLinkageModel",
+           "derive_flux_linkage_model"]

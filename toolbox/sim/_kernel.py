@@ -39,7 +39,8 @@ Everything is plain float arrays; :func:`run` simulates one closed loop, and
 :func:`run_rows` a thread's share of a batch (``_simulate.simulate_batch``
 runs one per core). The arrays' slots are declared once, by
 name, in :data:`LAYOUTS`; the index constants (``P_R``, ``DP_TS``,
-``SC_DURATION``, ...) are generated from that declaration and
+``SC_DURATION``, ...) are written out in ``_kernel_layout`` (checked against
+that declaration by tests/sim/test_kernel_model.py) and
 :func:`pack_indices` gives the same map to the Python side that fills the
 arrays (``_simulate._pack``). :func:`run` allocates the work
 arrays and :func:`_periods` runs the periods, a short loop over small
@@ -85,23 +86,25 @@ from ._inverter import bit_changes, hexagon_scale, state_vector
 from ._kernel_layout import (LAYOUTS, N_METRICS, N_SC, N_TRACE, _A_CELLS, _A_OUT2, _A_OUT5, _A_SAT,
                              _A_T10, _A_T90, _A_YEXT, _SQ3_2, _jit, _jit_inline, _jit_no_rc,
                              pack_indices)
-from ._kernel_plant import _deriv, _plant, _to_ab, _to_dq, _torque  # noqa: F401 (tests)
+from ._kernel_layout import (  # the slot constants (compile-time ints)
+    LP_R_C, LP_LD_C, LP_LQ_C, LP_FLUX_C, LP_CROSS, LP_EMF, LP_ALPHA, LP_BETA, LP_GAMMA,
+    LP_CV, LP_CV_PC, LP_CV_PI, LP_CV_PD, LP_CV_D, SP_ENABLED, SP_KP, SP_KI, SP_KD, SP_DECIM,
+    SP_IQ_LIMIT, DP_TS, DP_DELAY, DP_VLIM, DP_V_MAX, DP_R_HEX, DP_INVERTER, DP_HALF_PERIODS,
+    DP_HOLD, DP_T_COMP, DP_VPRIO, SC_DURATION, SC_MECH, SC_OMEGA0, SC_ACC, SC_ID0, SC_IQ0,
+    SC_ID1, SC_IQ1, SC_T_STEP, SC_SPEED0, SC_SPEED1, SC_LOAD, SC_LOAD_TIME, SC_IQ_AMP,
+    SC_F_SIN, SC_REF_MODE, SC_GAIN, SC_OFFSET, SC_SPEED_NOISE, SC_NOISE_KIND,
+    SC_CURRENT_NOISE, SC_CURRENT_QUANTUM, SC_SEED, SC_H, SC_TRACE_DECIM, SC_CURRENT_GAIN_D,
+    SC_CURRENT_GAIN_Q, SC_CURRENT_DELAY_D, SC_CURRENT_DELAY_Q)
+from ._kernel_plant import (_currents, _deriv, _initial_state, _plant, _to_ab,  # noqa: F401
+                            _to_dq, _torque, _torque_of_state)
 from ._kernel_metrics import _finalise, _metric_setup, _overshoot  # noqa: F401 (tests)
 from ._kernel_steps import _advance_n, _split
 from ._kernel_pwm import _carrier_period, _svm_period
 from ._kernel_cv import _cv_linear, _cv_update
-from ._metrics import METRIC_NAMES
 
 __all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices",
            "KERNEL_SOURCES", "sources_digest"]
 
-# Generated module constants ``<PREFIX>_<NAME>`` and ``M_<NAME>`` (e.g. ``P_LD``,
-# ``M_OVERSHOOT_PCT``), the same generation from the same declarations as in
-# ``_kernel_layout`` (whose parts read them there): compile-time constants here.
-for _prefix, _names in LAYOUTS.items():
-    globals().update({f"{_prefix}_{_n.upper()}": _i for _i, _n in enumerate(_names)})
-del _prefix, _names
-globals().update({f"M_{_n.upper()}": _i for _i, _n in enumerate(METRIC_NAMES)})
 
 
 # --------------------------------------------------------------------------- RNG
@@ -410,9 +413,11 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     Parameters (all float64 arrays, filled by ``_simulate._pack*``; slots in
     :data:`LAYOUTS`)
     ----------
-    P : (8,)
+    P : (9,) or longer
         Plant: R (ohm), Ld, Lq (H), flux (Wb), p, J (kg m^2), friction
-        (N m s/rad), torque_factor.
+        (N m s/rad), torque_factor, magnetic (0 constant parameters; 1
+        saturated, its current-from-flux table following, see
+        ``_kernel_plant._current_of_flux``).
     A, B, C, D, Baw : (2, n, n), (2, n, 2), (2, n), (2, 2), (2, n)
         Discrete d and q controllers (inputs [i_ref, i_meas], output V),
         back-calculation anti-windup gains.
@@ -486,7 +491,9 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     Ld_c = LP[LP_LD_C]
     Lq_c = LP[LP_LQ_C]
     flux_c = LP[LP_FLUX_C]
-    x = (0.0, 0.0, omega0, 0.0)  # plant state id, iq, Omega, theta
+    # plant state id, iq, Omega, theta (a saturated motor: psi_d, psi_q, Omega,
+    # theta; its currents are _currents(pl, x))
+    x = _initial_state(pl, omega0)
     n_ts, dt_ts = _split(Ts, h)  # the plant steps of a period held constant
     nbuf = vd_buf.shape[0]
     # speed loop state
@@ -509,7 +516,8 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     ph_app = 0.0
     for k in range(n_per):
         t = k * Ts
-        i_d_m, i_q_m, om_m = _sense(x, rng, SC)
+        xi = _currents(pl, x)
+        i_d_m, i_q_m, om_m = _sense(xi, rng, SC)
         i_d_m, i_q_m = _current_sensor(i_d_m, i_q_m, k, cs_d, cs_q, SC)
         w_m = p * om_m
         th_m = x[3]
@@ -565,12 +573,12 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
         if keep_traces and k % trdec == 0:
             row = k // trdec
             tr[row, 0] = t
-            tr[row, 1] = x[0]
-            tr[row, 2] = x[1]
+            tr[row, 1] = xi[0]
+            tr[row, 2] = xi[1]
             tr[row, 3] = vd_app
             tr[row, 4] = vq_app
             tr[row, 5] = x[2]
-            tr[row, 6] = _torque(pl, x[0], x[1])
+            tr[row, 6] = _torque_of_state(pl, x)
             tr[row, 7] = idr
             tr[row, 8] = iqr
             tr[row, 9] = om_m

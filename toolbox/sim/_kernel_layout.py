@@ -1,5 +1,5 @@
 """Packed-array layouts of the simulation kernel (the one declaration of every
-slot, the generated index constants, the accumulator slots) and the
+slot, the index constants written out, the accumulator slots) and the
 decorators its functions are compiled with.
 """
 
@@ -22,10 +22,15 @@ from ._metrics import METRIC_NAMES
 #: inverter, 0 = one centred pattern per sample; ``hold``: frame in which the
 #: average inverter holds the voltage, 0 rotor dq, 1 stationary; ``t_comp``: the
 #: voltage placement's compensation time, s; ``vprio``: voltage-limit priority,
-#: 0 radial, 1 d axis) and scenario ``SC``. ``_simulate._pack*`` fill them by name
+#: 0 radial, 1 d axis) and scenario ``SC``. The plant's ``magnetic`` slot is 0
+#: for constant parameters (state: currents) and 1 for a saturated motor
+#: (state: flux linkages), whose current-from-flux table
+#: (``toolbox.spec.MagneticModel.inverse_table``) follows the named slots
+#: in the same array (:data:`N_P` on). ``_simulate._pack*`` fill them by name
 #: through :func:`pack_indices`.
 LAYOUTS: dict[str, tuple[str, ...]] = {
-    "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor"),
+    "P": ("R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction", "torque_factor",
+          "magnetic"),
     "LP": ("R_c", "Ld_c", "Lq_c", "flux_c", "cross", "emf", "alpha", "beta", "gamma",
            "cv", "cv_pc", "cv_pi", "cv_pd", "cv_d"),
     "SP": ("enabled", "kp", "ki", "kd", "decim", "iq_limit"),
@@ -38,22 +43,111 @@ LAYOUTS: dict[str, tuple[str, ...]] = {
            "current_gain_d", "current_gain_q", "current_delay_d", "current_delay_q"),
 }
 
-# Generated module constants ``<PREFIX>_<NAME>`` (e.g. ``P_LD``, ``SC_T_STEP``):
-# numba reads module-level ints as compile-time constants, so named slots cost
-# nothing over literal positions.
-for _prefix, _names in LAYOUTS.items():
-    globals().update({f"{_prefix}_{_n.upper()}": _i for _i, _n in enumerate(_names)})
-del _prefix, _names
+# The slot constants ``<PREFIX>_<NAME>`` (e.g. ``P_LD``, ``SC_T_STEP``) and the
+# metric slots ``M_<NAME>`` (``_metrics.METRIC_NAMES``), written out: numba
+# reads module-level ints as compile-time constants, so named slots cost
+# nothing over literal positions. tests/sim/test_kernel_layout.py checks that
+# they are the positions in LAYOUTS and METRIC_NAMES, one constant per slot.
+P_R = 0
+P_LD = 1
+P_LQ = 2
+P_FLUX = 3
+P_POLE_PAIRS = 4
+P_J = 5
+P_FRICTION = 6
+P_TORQUE_FACTOR = 7
+P_MAGNETIC = 8
+
+LP_R_C = 0
+LP_LD_C = 1
+LP_LQ_C = 2
+LP_FLUX_C = 3
+LP_CROSS = 4
+LP_EMF = 5
+LP_ALPHA = 6
+LP_BETA = 7
+LP_GAMMA = 8
+LP_CV = 9
+LP_CV_PC = 10
+LP_CV_PI = 11
+LP_CV_PD = 12
+LP_CV_D = 13
+
+SP_ENABLED = 0
+SP_KP = 1
+SP_KI = 2
+SP_KD = 3
+SP_DECIM = 4
+SP_IQ_LIMIT = 5
+
+DP_TS = 0
+DP_DELAY = 1
+DP_VLIM = 2
+DP_V_MAX = 3
+DP_R_HEX = 4
+DP_INVERTER = 5
+DP_HALF_PERIODS = 6
+DP_HOLD = 7
+DP_T_COMP = 8
+DP_VPRIO = 9
+
+SC_DURATION = 0
+SC_MECH = 1
+SC_OMEGA0 = 2
+SC_ACC = 3
+SC_ID0 = 4
+SC_IQ0 = 5
+SC_ID1 = 6
+SC_IQ1 = 7
+SC_T_STEP = 8
+SC_SPEED0 = 9
+SC_SPEED1 = 10
+SC_LOAD = 11
+SC_LOAD_TIME = 12
+SC_IQ_AMP = 13
+SC_F_SIN = 14
+SC_REF_MODE = 15
+SC_SIGNAL = 16
+SC_GAIN = 17
+SC_OFFSET = 18
+SC_SPEED_NOISE = 19
+SC_NOISE_KIND = 20
+SC_CURRENT_NOISE = 21
+SC_CURRENT_QUANTUM = 22
+SC_SEED = 23
+SC_H = 24
+SC_TRACE_DECIM = 25
+SC_CURRENT_GAIN_D = 26
+SC_CURRENT_GAIN_Q = 27
+SC_CURRENT_DELAY_D = 28
+SC_CURRENT_DELAY_Q = 29
+
+M_RESPONSE_TIME_5PCT = 0
+M_RISE_TIME_10_90 = 1
+M_SETTLING_TIME_2PCT = 2
+M_OVERSHOOT_PCT = 3
+M_STATIC_ERROR = 4
+M_MSE_TORQUE = 5
+M_MSE_ID = 6
+M_COMMUTATIONS_PER_S = 7
+M_CELL_TRANSITIONS_PER_S = 8
+M_SATURATION_TIME = 9
+M_FINAL_VALUE = 10
+M_MSE_IQ = 11
+M_FINAL_SPEED = 12
 
 _SQ3_2 = math.sqrt(3.0) / 2.0
+
+#: Length of the named part of the plant array; a saturated motor's table
+#: starts here.
+N_P = len(LAYOUTS["P"])
 
 #: Length of the scenario array.
 N_SC = len(LAYOUTS["SC"])
 #: Metrics (raw kernel output order: ``_metrics.METRIC_NAMES``, the one
-#: declaration; written through the generated slots ``M_<NAME>``, e.g.
+#: declaration; written through the slot constants ``M_<NAME>``, e.g.
 #: ``M_OVERSHOOT_PCT``).
 N_METRICS = len(METRIC_NAMES)
-globals().update({f"M_{_n.upper()}": _i for _i, _n in enumerate(METRIC_NAMES)})
 #: Trace columns: t, id, iq, vd, vq, speed (mech rad/s), torque, id_ref,
 #: iq_ref, speed_measured.
 N_TRACE = 10

@@ -62,10 +62,16 @@ def _store_acc(acc_m, m):
 def _accumulate(m, i_d, i_q, om, t, dt, pl, refs, mset):
     """Online metrics at the start of a plant step of length dt (time-weighted):
     the accumulators ``m`` (:func:`_load_acc`) updated."""
+    return _accumulate_torque(m, i_d, i_q, om, _torque(pl, i_d, i_q), t, dt, refs, mset)
+
+
+@_jit_inline
+def _accumulate_torque(m, i_d, i_q, om, torque, t, dt, refs, mset):
+    """:func:`_accumulate` with the torque given (a saturated motor's, from its flux)."""
     out5, out2, t10, t90, yext, sqt, sqid, stat, statt, final, sqiq = m
     idr, iqr, sr, tref = refs
     sig, y0, yf, t_stat, t_step = mset
-    e_t = _torque(pl, i_d, i_q) - tref
+    e_t = torque - tref
     sqt += e_t * e_t * dt
     e_id = i_d - idr
     sqid += e_id * e_id * dt

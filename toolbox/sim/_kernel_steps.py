@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 
 from ._kernel_layout import _jit_inline, _jit_no_rc
-from ._kernel_plant import _rk4
-from ._kernel_metrics import _accumulate, _load_acc, _store_acc
+from ._kernel_plant import _current_of_flux, _rk4, _rk4_flux
+from ._kernel_metrics import _accumulate, _accumulate_torque, _load_acc, _store_acc
 
 
 @_jit_inline
@@ -42,7 +42,12 @@ def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
     itself). Inlined into its callers, so that the loop is one call away from
     the period loop, as it was when both loops were inlined here: numba
     copied the loop's inlined IR into each of them, ~1 s of cold compile
-    each."""
+    each. A saturated motor (``pl[11]``) integrates its flux linkages in a
+    loop of its own (:func:`_steps_flux`), so the constant-parameter loops
+    are unchanged."""
+    if pl[11]:
+        return _steps_flux(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, omega0,
+                           acc_m, refs, mset)
     if t_load == 0.0 or mech == 1:
         return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, False, mech, acc, omega0,
                       acc_m, refs, mset)
@@ -73,6 +78,27 @@ def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, loaded, mech, acc, omega0, ac
         x = x1
         t += dt
     if mech == 1:  # imposed speed: remove the round-off drift of the integral
+        x = (x[0], x[1], omega0 + acc * t, x[3])
+    _store_acc(acc_m, m)
+    return t, x
+
+
+@_jit_no_rc
+def _steps_flux(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, omega0, acc_m, refs,
+                mset):
+    """:func:`_steps` of a saturated motor: state (psi_d, psi_q, Omega, theta),
+    current from the inverse table (``_kernel_plant._current_of_flux``), torque
+    ``tf p (psi_d i_q - psi_q i_d)``."""
+    m = _load_acc(acc_m)
+    tfp = pl[7] * pl[4]
+    for _ in range(n):
+        x1 = _rk4_flux(x[0], x[1], x[2], x[3], vx, vy, frame, dt, pl, t_load, mech, acc)
+        i_d, i_q = _current_of_flux(pl[12], x[0], x[1])
+        m = _accumulate_torque(m, i_d, i_q, x[2], tfp * (x[0] * i_q - x[1] * i_d), t, dt,
+                               refs, mset)
+        x = x1
+        t += dt
+    if mech == 1:
         x = (x[0], x[1], omega0 + acc * t, x[3])
     _store_acc(acc_m, m)
     return t, x

@@ -455,9 +455,37 @@ def _plant_array(motor: Motor) -> np.ndarray:
     The only place a :class:`~toolbox.spec.Motor` is packed for the kernel;
     its dq convention enters as ``torque_factor`` (``Motor.torque_factor``).
     """
-    return _packed("P", R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
-                   pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
-                   torque_factor=motor.torque_factor)
+    P = _packed("P", R=motor.R, Ld=motor.Ld, Lq=motor.Lq, flux=motor.flux,
+                pole_pairs=motor.pole_pairs, J=motor.J, friction=motor.friction,
+                torque_factor=motor.torque_factor,
+                magnetic=0.0 if motor.magnetics is None else 1.0)
+    if motor.magnetics is None:
+        return P
+    # a saturated motor: its current-from-flux table follows the named slots
+    # (flux-linkage state, toolbox.sim._kernel_plant._current_of_flux); the
+    # map fixes Ld, Lq and flux, so a scenario may not replace them
+    Ld, Lq, flux = motor.magnetics.nominal()
+    for name, nominal in (("Ld", Ld), ("Lq", Lq), ("flux", flux)):
+        if not math.isclose(getattr(motor, name), nominal, rel_tol=1e-12, abs_tol=1e-15):
+            raise SpecError(f"plant.{name}", "the value of the motor's magnetic model "
+                            f"({nominal:.6g}): a saturated motor's {name} comes from its "
+                            "flux map or saturation model", getattr(motor, name))
+    return np.concatenate([P, _inverse_table(motor.magnetics)])
+
+
+def _inverse_table(magnetics) -> np.ndarray:
+    """The kernel's current-from-flux table of a magnetic model, computed once
+    per model object (``MagneticModel.inverse_table``)."""
+    table = _TABLES.get(id(magnetics))
+    if table is None or table[0] is not magnetics:
+        table = (magnetics, magnetics.inverse_table())
+        _TABLES[id(magnetics)] = table
+    return table[1]
+
+
+#: id(model) -> (model, table): a table per magnetic model object (a design's
+#: scenarios simulate the same motor many times).
+_TABLES: dict = {}
 
 
 def _check_plant(plant: Motor, key: str = "plant") -> None:
@@ -522,9 +550,10 @@ def _motors_from_columns(plants: Mapping[str, Sequence[float]]) -> list[Motor]:
     """N motors from parameter arrays (``simulate_batch``'s mapping form).
 
     Keys are the kernel's plant slots (``R`` ... ``friction``, and
-    ``torque_factor`` 1.5 or 1, which selects the dq convention; default 1.5).
+    ``torque_factor`` 1.5 or 1, which selects the dq convention; default 1.5),
+    not ``magnetic``: these are constant-parameter motors.
     """
-    names = _kernel.LAYOUTS["P"]
+    names = tuple(n for n in _kernel.LAYOUTS["P"] if n != "magnetic")
     unknown = set(plants) - set(names)
     if unknown:
         raise SpecError("plants", "parameter arrays named " + ", ".join(names),

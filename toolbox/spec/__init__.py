@@ -8,6 +8,7 @@ from ._catalog import CATALOG, CATALOG_NOTES
 from ._fields import Collector, SpecErrors, Table, check_keys, is_finite_number
 from ._load import drive_from_dict, load_spec, motor_from_dict, spec_from_dict
 from ._methods import read_method_cfg, register_method_reader, registered_methods
+from ._magnetics import AlgebraicSaturation, FluxMapData, MagneticModel
 from ._render import spec_to_toml
 from ._scenario import INVERTER_KINDS, SCENARIO_KINDS, Scenario
 from ._model import (METHODS, MOTOR_PARAMETER_KEYS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor, inverter_radii,
@@ -20,4 +21,5 @@ __all__ = ["CATALOG", "CATALOG_NOTES", "Collector", "SpecErrors", "Table", "chec
            "register_method_reader", "registered_methods", "spec_to_toml",
            "CAMPAIGN_PARAMETERS", "DISTRIBUTIONS", "OPERATING_POINT_KEYS", "CampaignCfg",
            "ParameterDist", "RATE_TS", "SCALE_RANGE", "check_gain", "check_rate", "check_scale",
-           "check_time_constant", "INVERTER_KINDS", "SCENARIO_KINDS", "Scenario"]
+           "check_time_constant", "INVERTER_KINDS", "SCENARIO_KINDS", "Scenario",
+           "AlgebraicSaturation", "FluxMapData", "MagneticModel"]

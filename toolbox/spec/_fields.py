@@ -235,7 +235,14 @@ class Table:
             return value
         if isinstance(value, Mapping):
             sub = Table(value, self.key(name), ("d", "q"))
-            return (sub.number("d", **bounds), sub.number("q", **bounds))
+            errors = Collector()  # a bad d and a bad q: both reported
+            d = q = None
+            with errors.check():
+                d = sub.number("d", **bounds)
+            with errors.check():
+                q = sub.number("q", **bounds)
+            errors.raise_if_any()
+            return (d, q)
         v = self.number(name, **bounds)
         return (v, v)
 

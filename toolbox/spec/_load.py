@@ -42,6 +42,8 @@ EXPORT_KEYS = ("prefix",)
 _C_PREFIX = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,30}")
 MOTOR_KEYS = ("catalog", "R", "Ld", "Lq", "flux", "pole_pairs", "J", "friction",
               "convention", "rated_current", "max_current", "rated_speed",
+              # saturated motors (toolbox/spec/_flux_map.py)
+              "flux_map", "saturation",
               # datasheet forms (toolbox/spec/_datasheet.py)
               "R_ll", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak", "kt_rms",
               "rated_current_rms", "max_current_rms")
@@ -133,7 +135,8 @@ def _spec(data: Mapping[str, Any], file: str | None) -> Spec:
     motor = motor_raw = drive = controller = None
     conversions: list = []
     with errors.check():
-        motor, motor_raw, motor_log = _motor_logged(top.raw("motor"))
+        motor, motor_raw, motor_log = _motor_logged(
+            top.raw("motor"), Path(file).parent if file else None)
         conversions += motor_log
     with errors.check():
         drive, drive_log = _drive_logged(top.raw("drive"))
@@ -245,12 +248,14 @@ def _motor(value: Any) -> tuple[Motor, dict]:
     return motor, raw
 
 
-def _motor_logged(value: Any) -> tuple[Motor, dict, list]:
+def _motor_logged(value: Any, base: Path | None = None) -> tuple[Motor, dict, list]:
     """The motor, the resolved table as given (catalog applied) and the
-    conversion log of the datasheet keys and unit strings."""
+    conversion log of the datasheet keys and unit strings. ``base``: the
+    spec file's folder, against which ``flux_map`` is resolved."""
     if value is None:
         raise SpecError("motor", "a [motor] table (missing)")
     errors = Collector()
+    magnetics, value = _magnetics(value, base, errors)
     t = _lenient_table(value, "motor", MOTOR_KEYS, errors)
     catalog: dict[str, Any] = {}
     if t.has("catalog"):
@@ -259,7 +264,11 @@ def _motor_logged(value: Any) -> tuple[Motor, dict, list]:
     # datasheet keys -> model keys; the raw table keeps what was written, so
     # reloading it (controller.json's spec) converts the same way again
     merged, log = resolve_motor(t.data, catalog, errors)
+    if magnetics is not None:
+        magnetics = _nominal(magnetics, merged, errors)
     raw = {**catalog_kept(catalog, t.data), **dict(t.data)}
+    if "flux_map" in raw or "saturation" in raw:  # Ld, Lq, flux derived, not given
+        raw = {k: v for k, v in raw.items() if k not in ("Ld", "Lq", "flux")}
     t = _Unreported(merged, "motor", reported_keys(errors, "motor"))
     fields = dict(
         R=_collect(errors, t.number, "R", positive=True, unit="ohm"),
@@ -280,8 +289,66 @@ def _motor_logged(value: Any) -> tuple[Motor, dict, list]:
     )
     if errors.failed:
         errors.raise_if_any()
-    motor = Motor(**fields, catalog=t.raw("catalog"))
+    motor = Motor(**fields, catalog=t.raw("catalog"), magnetics=magnetics)
     return motor, {k: v for k, v in raw.items() if v is not None}, log
+
+
+def _magnetics(value: Any, base: Path | None, errors: Collector) -> tuple[Any, Any]:
+    """A saturated motor's magnetic model (``flux_map`` or ``saturation``,
+    :mod:`toolbox.spec._flux_map`) and the ``[motor]`` table with the
+    flux-map path made absolute, so that controller.json's spec reloads
+    from anywhere (its nominal ``Ld``, ``Lq``, ``flux``: :func:`_nominal`).
+    Unchanged when neither key is given."""
+    if not isinstance(value, Mapping) or not ("flux_map" in value or "saturation" in value):
+        return None, value
+    from ._flux_map import read_flux_map, read_saturation
+    if "flux_map" in value and "saturation" in value:
+        errors.add(SpecError("motor.saturation", "flux_map or saturation, not both",
+                             "both given"))
+        return None, value
+    given = [k for k in ("Ld", "Lq", "flux", "L_ll", "ke_ll_peak", "ke_ll_rms", "kt_peak",
+                         "kt_rms", "catalog") if k in value]
+    if given:
+        errors.add(SpecError(f"motor.{given[0]}", "no value: a saturated motor's Ld, Lq and "
+                             "flux come from its flux map or saturation model", value[given[0]]))
+        return None, value
+    try:
+        if "flux_map" in value:
+            model = read_flux_map(value["flux_map"], base)
+        else:
+            model = read_saturation(value["saturation"])
+    except SpecError as err:
+        errors.add(err)
+        return None, value
+    table = dict(value)
+    if "flux_map" in value:
+        table["flux_map"] = model.data.source
+    return model, table
+
+
+def _nominal(model: Any, merged: dict, errors: Collector) -> Any:
+    """Fill ``merged`` (the converted ``[motor]`` table) with a saturated
+    motor's nominal ``Ld``, ``Lq``, ``flux``: ``MagneticModel.nominal`` at
+    the MTPA point of the rated current (else the maximum current; one of them
+    is required). Returns the model with that nominal current, or None after
+    an error."""
+    from dataclasses import replace
+    current = merged.get("rated_current", merged.get("max_current"))
+    if isinstance(current, bool) or not isinstance(current, (int, float)) or not current > 0:
+        if current is None:
+            errors.add(SpecError("motor.rated_current", "a number (A): a saturated motor's "
+                                 "nominal Ld, Lq are taken at the MTPA point of its rated "
+                                 "current (or max_current)", "missing"))
+        return None
+    model = replace(model, nominal_current=float(current))
+    try:
+        Ld, Lq, flux = model.nominal()
+    except ValueError as err:
+        errors.add(SpecError("motor.flux_map" if model.kind == "map" else "motor.saturation",
+                             "an invertible magnetic model", str(err)))
+        return None
+    merged.update(Ld=Ld, Lq=Lq, flux=flux)
+    return model
 
 
 def _drive(value: Any) -> Drive:
@@ -359,9 +426,10 @@ def _controller(value: Any, motor: Motor, drive: Drive) -> ControllerChoice:
     # quantity strings ("2 kHz") -> SI before the method's reader sees them
     errors = Collector()
     table = convert_method_units(method, t.raw(method, {}), t.key(method), errors)
-    errors.raise_if_any()
-    # the design methods register their readers (spec/_methods.py): spec stays data
-    cfg = read_method_cfg(method, Table(table, t.key(method)), motor=motor, drive=drive)
+    # the design methods register their readers (spec/_methods.py): spec stays data;
+    # a unit that does not convert is reported with every other error of the table
+    cfg = read_method_cfg(method, Table(table, t.key(method)), motor=motor, drive=drive,
+                          prior=errors.errors)
     return ControllerChoice(method=method, cfg=cfg)
 
 

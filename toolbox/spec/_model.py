@@ -75,6 +75,13 @@ class Motor:
         Rated mechanical speed (rad/s).
     catalog : str or None
         Catalog entry the defaults came from.
+    magnetics : toolbox.spec.MagneticModel or None
+        A saturated motor's magnetics (``[motor] flux_map`` or
+        ``[motor.saturation]``): then ``Ld``, ``Lq`` and ``flux`` are its
+        incremental inductances and d flux at ``i = 0``
+        (``MagneticModel.nominal``), the simulator integrates the flux
+        linkage through it, and ``None`` (default) is today's constant-parameter
+        motor.
     """
 
     R: float
@@ -89,6 +96,7 @@ class Motor:
     max_current: float | None = None
     rated_speed: float | None = None
     catalog: str | None = None
+    magnetics: Any = None
 
     @property
     def torque_factor(self) -> float:

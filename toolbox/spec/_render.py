@@ -148,9 +148,19 @@ def spec_to_toml(spec: Spec, source: str | None = None) -> str:
            f"# dq convention: {CONVENTION_TEXT[spec.motor.convention]}"]
     if spec.title:
         out.append(f"title = {toml_value(spec.title)}")
-    motor = asdict(spec.motor)
+    motor = {f.name: getattr(spec.motor, f.name) for f in fields(spec.motor)}
     motor = {"catalog": motor.pop("catalog"), **motor}
-    out += ["", "[motor]"] + list(_lines(motor, notes))
+    derived = []
+    if motor.pop("magnetics") is not None:
+        # a saturated motor: its magnetics as given; Ld, Lq, flux derive from
+        # them (toolbox/ARCHITECTURE.md "Saturated motors") and are refused
+        # next to them, so they are comments here
+        derived = [f"# {key} = {toml_value(motor.pop(key))}  (from the magnetic model)"
+                   for key in ("Ld", "Lq", "flux")]
+        for key in ("flux_map", "saturation"):
+            if key in spec.raw.get("motor", {}):
+                motor[key] = spec.raw["motor"][key]
+    out += ["", "[motor]"] + derived + list(_lines(motor, notes))
     drive = asdict(spec.drive)
     out += ["", "[drive]"] + list(_lines(drive, notes))
     out += _controller_lines(spec)

@@ -222,6 +222,22 @@ def reach_time_bound(facts: StepFacts, scenario, plant, v_max: float, delay_samp
     vd, vq = steady_state_voltage(plant.R, plant.Ld, plant.Lq, plant.flux, w_e,
                                   facts.id_f, facts.iq_f)
     v_own, v_other, L = (vq, vd, plant.Lq) if facts.axis == "q" else (vd, vq, plant.Ld)
+    if plant.magnetics is not None:
+        # a saturated plant: the same bound in flux linkage, exact for any
+        # magnetics (toolbox/ARCHITECTURE.md "Saturated motors"): the stepped
+        # axis' flux changes by psi(i_f) - psi(i_0) at no more than the
+        # headroom, with the steady state v_d = R i_d - w psi_q, v_q = R i_q +
+        # w psi_d; L below is the chord inductance of that flux change
+        mag = plant.magnetics
+        psd, psq = (float(x) for x in mag.flux(facts.id_f, facts.iq_f))
+        vd, vq = plant.R * facts.id_f - w_e * psq, plant.R * facts.iq_f + w_e * psd
+        if facts.axis == "q":
+            v_own, v_other = vq, vd
+            dpsi = psq - float(mag.flux(facts.id_f, facts.y0)[1])
+        else:
+            v_own, v_other = vd, vq
+            dpsi = psd - float(mag.flux(facts.y0, facts.iq_f)[0])
+        L = abs(dpsi) / max(abs(facts.yf - facts.y0), 1e-300)
     headroom = math.sqrt(max(v_max ** 2 - v_other ** 2, 0.0)) - abs(v_own)
     t_delay = (delay_samples + 1) * sample_time
     lin = [BANDWIDTH_FACTOR * math.log(20.0) / linear.bandwidth_rad_s

@@ -21,7 +21,7 @@ import pytest
 from toolbox.analysis.executed import HORIZON_TAUS, settling_horizon
 from toolbox.analysis.margins import make_axis_loop
 from toolbox.pipeline import design_spec
-from toolbox.sim import default_scenarios, verify
+from toolbox.verify import default_scenarios, verify
 from toolbox.spec import spec_from_dict
 
 DESIGNS = Path(__file__).parents[2] / "designs"
