@@ -69,7 +69,11 @@ def test_kernel_matches_reference_d_axis(name, limit):
     assert v[:, 2].sum() >= 5
     n_steps = round(0.02 / 1e-6)
     dtheta = n_steps * np.finfo(float).eps * p * speed * 0.02 if limit == "hexagon" else 0.0
-    assert err <= scale * (1e-12 + 2.0 * dtheta)
+    # the hexagon: the guard (d_priority_cap) binds v_d to the angle-dependent d
+    # extent in more periods, each passing the replayed angle's rounding on to v_d
+    # and, through the anti-windup, to later periods: measured 2.1 (pi), 4.8 (ip_tc)
+    # and 6.0 (hinf) dtheta; bound 10 dtheta (5e-10 relative)
+    assert err <= scale * (1e-12 + 10.0 * dtheta)
     # and it is not the radial limit
     rr = _kernel_run(art, limit, speed, "radial")
     assert np.abs(np.column_stack([rr.vd, rr.vq]) - np.column_stack([r.vd, r.vq])).max() > 1.0

@@ -200,3 +200,82 @@ def test_base_speed_and_limits():
                                 friction=0.0), TRACTION_DRIVE)
     with pytest.raises(SpecError, match="drive"):
         OperatingEnvelope(TRACTION)
+
+
+def _fw_quartic(env, T, speed):
+    """Field weakening in closed form (R = 0): the constant-torque curve
+    ``i_q = T / (k (psi + (Ld - Lq) i_d))`` on the voltage ellipse
+    ``(Ld i_d + psi)^2 + (Lq i_q)^2 = (V / w)^2`` is the quartic
+    ``(Ld i_d + psi)^2 (psi + a i_d)^2 + (Lq T / k)^2 - (V / w)^2 (psi + a i_d)^2 = 0``
+    (``a = Ld - Lq``); its real root of least current amplitude within the
+    current limit, roots by numpy (companion-matrix eigenvalues)."""
+    from numpy.polynomial import polynomial as P
+    a = env.Ld - env.Lq
+    p1, p2 = [env.flux, env.Ld], [env.flux, a]
+    rho = env.V / (env.p * speed)
+    poly = P.polysub(P.polyadd(P.polymul(P.polymul(p1, p1), P.polymul(p2, p2)),
+                               [(env.Lq * T / env.kt) ** 2]),
+                     P.polymul([rho ** 2], P.polymul(p2, p2)))
+    best = None
+    for r in P.polyroots(poly):
+        if abs(r.imag) > 1e-9 * env.I or env.flux + a * r.real <= 0:
+            continue
+        d = r.real
+        q = T / (env.kt * (env.flux + a * d))
+        if math.hypot(d, q) <= env.I * (1 + 1e-9) and (best is None
+                                                       or math.hypot(d, q) < math.hypot(*best)):
+            best = (d, q)
+    return best
+
+
+def _corner(env, speed):
+    """The current-and-voltage corner in closed form (R = 0): the circle
+    ``i_d^2 + i_q^2 = I^2`` on the ellipse gives
+    ``i_d = (psi Ld - sqrt((psi Ld)^2 + (Lq^2 - Ld^2)(psi^2 + Lq^2 I^2 - (V/w)^2))) / (Lq^2 - Ld^2)``
+    (the root of negative ``i_d``; Morimoto et al. 1990's corner of the
+    constant-power region)."""
+    rho = env.V / (env.p * speed)
+    den = env.Lq ** 2 - env.Ld ** 2
+    disc = (env.flux * env.Ld) ** 2 + den * (env.flux ** 2 + (env.Lq * env.I) ** 2 - rho ** 2)
+    i_d = (env.flux * env.Ld - math.sqrt(disc)) / den
+    return i_d, math.sqrt(env.I ** 2 - i_d ** 2)
+
+
+@pytest.mark.parametrize("motor_name", ["traction", "paper003"])
+def test_field_weakening_closed_form(motor_name):
+    """R neglected (``resistive=False``, the textbook ellipse): every
+    field-weakening reference of 10 .. 100 % of the standstill torque limit
+    at 1.05 .. 4 x base speed equals the closed-form intersection of the
+    torque curve with the voltage ellipse (quartic roots) to 1e-9 x I
+    (brentq's xtol 1e-13 A; numpy's roots ~1e-12 relative); every point
+    limited by both limits below MTPV equals the circle-ellipse corner to
+    1e-7 x I (the boundary search's argmax: bounded search to 1e-13 rad on a
+    flat maximum, ~sqrt(eps)). MTPA below base speed is the closed form
+    ``(psi - sqrt(psi^2 + 8 dL^2 i^2)) / (4 dL)`` (test_mtpa_closed_form)."""
+    if motor_name == "traction":
+        env = OperatingEnvelope(TRACTION, TRACTION_DRIVE, resistive=False)
+    else:
+        spec = toolbox.load_spec(ROOT / "designs" / "003_azaiz2007_pi.toml")
+        env = OperatingEnvelope(spec.motor, spec.drive, resistive=False)
+    base = env.base_speed()
+    t_max = env.max_torque_point(0.0).torque
+    n_fw = n_corner = 0
+    for sf in (1.05, 1.2, 1.5, 2.0, 3.0, 4.0):
+        for tf in (0.1, 0.25, 0.5, 0.75, 1.0):
+            try:
+                op = env.operating_point(tf * t_max, sf * base)
+            except toolbox.errors.SpecError:
+                continue
+            if op.region == "field_weakening":
+                ref = _fw_quartic(env, tf * t_max, sf * base)
+                assert ref is not None
+                assert math.hypot(op.i_d - ref[0], op.i_q - ref[1]) < 1e-9 * env.I, (sf, tf)
+                n_fw += 1
+            elif op.region == "current_and_voltage_limit":
+                mtpv = env.mtpv(sf * base)
+                if math.hypot(*mtpv) > env.I:   # the corner, not MTPV
+                    ref = _corner(env, sf * base)
+                    assert math.hypot(op.i_d - ref[0], op.i_q - ref[1]) < 1e-7 * env.I, (sf, tf)
+                    n_corner += 1
+    print(f"\n{motor_name}: {n_fw} field-weakening points, {n_corner} corners checked")
+    assert n_fw >= 5 and n_corner >= 2

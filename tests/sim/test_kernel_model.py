@@ -153,15 +153,15 @@ def test_circle_limit_keeps_direction_and_hexagon_scales_inside():
     names = _kernel.LAYOUTS["DP"]
     base = {n: 0.0 for n in names}
     circle = _packed("DP", **{**base, "Ts": 1e-4, "vlim": 1, "v_max": 100.0})
-    vd, vq = _kernel._voltage_limit(300.0, -400.0, 0.0, 0.0, circle)
+    vd, vq = _kernel._voltage_limit(300.0, -400.0, 0.0, 0.0, circle, 0.0)
     assert math.isclose(math.hypot(vd, vq), 100.0, rel_tol=1e-15)
     assert math.isclose(vd / vq, 300.0 / -400.0, rel_tol=1e-15)
-    assert _kernel._voltage_limit(30.0, -40.0, 0.0, 0.0, circle) == (30.0, -40.0)
+    assert _kernel._voltage_limit(30.0, -40.0, 0.0, 0.0, circle, 0.0) == (30.0, -40.0)
     hexagon = _packed("DP", **{**base, "Ts": 1e-4, "vlim": 2, "r_hex": 100.0})
-    vd, vq = _kernel._voltage_limit(300.0, 0.0, 0.0, 0.0, hexagon)
+    vd, vq = _kernel._voltage_limit(300.0, 0.0, 0.0, 0.0, hexagon, 0.0)
     assert math.isclose(vd, 100.0, rel_tol=1e-12) and vq == 0.0  # along a vertex
     none = _packed("DP", **{**base, "Ts": 1e-4, "vlim": 0})
-    assert _kernel._voltage_limit(1e6, 1e6, 0.0, 0.0, none) == (1e6, 1e6)
+    assert _kernel._voltage_limit(1e6, 1e6, 0.0, 0.0, none, 0.0) == (1e6, 1e6)
 
 
 def test_speed_pid_integrates_only_inside_the_limit():

@@ -31,6 +31,20 @@ def _robustness_line(result) -> None:
         click.echo(text)
 
 
+def _envelope_line(result) -> None:
+    """The torque-speed grid in one line (verify.json ``envelope.summary``)."""
+    env = getattr(result, "envelope", None)
+    if env:
+        text = env.get("summary") or f"torque-speed grid: skipped ({env.get('skipped')})"
+        click.echo(text + (": FAILED" if not env.get("passed", True) else ""))
+
+
+def _envelope_failures(result) -> list[str]:
+    """``envelope: <point>: <reason>`` for each failing grid point."""
+    env = getattr(result, "envelope", None) or {}
+    return [f"envelope: {f}" for f in env.get("failures", [])]
+
+
 def _echo_wrapped(head: str, text: str, width: int = 100, file_key: bool = False) -> None:
     """``head`` + ``text`` wrapped at ``width`` columns, continuation lines indented
     (a failure summary may run to a thousand characters); with ``file_key`` the

@@ -24,7 +24,8 @@ from ._campaign import campaign
 from ._compare import compare
 from ._conventions import (_QUIET, EXIT_OK, EXIT_REQUIREMENT, _spec_errors,
                            _write_file)
-from ._echo import _echo_wrapped, _fmt, _notices, _robustness_line
+from ._echo import (_echo_wrapped, _envelope_failures, _envelope_line, _fmt, _notices,
+                    _robustness_line)
 from ._failsafe import (EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED, Terminated,
                         internal_error_message, signal_handlers, where)
 from ._progress import StepBar, design_stages
@@ -219,6 +220,7 @@ def _summary(out) -> None:
                    f"Mm {_fmt(m.get('stability_margin'))}")
     if out.verification is not None:
         _robustness_line(out.verification)
+        _envelope_line(out.verification)
     failed = []
     if out.analysis is not None:
         failed += [k for k, c in out.analysis.get("requirements", {}).items() if not c["pass"]]
@@ -231,6 +233,7 @@ def _summary(out) -> None:
         for sc in out.verification.scenarios:
             failed += [f"{sc.name}: {k} ({c.get('reason')})" for k, c in sc.checks.items()
                        if not c["pass"]]
+        failed += _envelope_failures(out.verification)
     failed = list(dict.fromkeys(failed))
     if out.header_refused:
         failed.append("controller.h refused")
@@ -284,6 +287,9 @@ def verify(out_dir: str, as_json: bool, quiet: bool) -> None:
             verdict = {True: "stable", False: "UNSTABLE", None: "not analysed"}[s["stable"]]
             click.echo(f"{axis} axis: {verdict} ({s['basis']})")
         _robustness_line(result)
+        _envelope_line(result)
+        for f in _envelope_failures(result):
+            _echo_wrapped("FAIL  ", f)
         for sc in result.scenarios:
             status = "pass" if sc.passed else "FAIL"
             t5 = _fmt(sc.metrics.get('response_time_5pct'))

@@ -36,7 +36,8 @@ class ReferenceLaw:
       digital loop"); radial scaling onto its edge.
 
     Priority (``drive.voltage_priority``): ``"radial"`` as above; ``"d_axis"``
-    keeps ``v_d`` (clamped to the limit's d extent) and clips ``v_q`` into
+    keeps ``v_d`` (clamped to the limit's d extent and to the guard
+    :func:`d_priority_cap` of the speed voltage ``w (Ld_c i_d + psi_c)``) and clips ``v_q`` into
     what is left: ``|v_q| <= sqrt(v_max^2 - v_d^2)`` on the circle, the
     hexagon's chord at that ``v_d`` in the placement frame
     (:func:`d_priority_limit`).
@@ -109,7 +110,8 @@ class ReferenceLaw:
                 sat = 0
             elif self.priority == "d_axis":
                 vds, vqs = d_priority_limit(vd, vq, self.v_max, self.limit,
-                                            theta_e + w * self.t_comp)
+                                            theta_e + w * self.t_comp,
+                                            w * (dec.Ld_c * i_d + dec.flux_c))
                 sat = int(vds != vd or vqs != vq)
             else:
                 k = self._limit(vd, vq, w, theta_e)
@@ -125,11 +127,27 @@ class ReferenceLaw:
         return vds, vqs, sat
 
 
+def d_priority_cap(v_in: float, e_q: float) -> float:
+    """The d-axis priority guard, a fraction of the limit's d extent:
+    ``sqrt(1 - min(|e_q| / v_in, 1)^2)``; on the circle (``v_in`` its radius)
+    the largest ``|v_d|`` that leaves ``v_q`` the speed voltage ``e_q = w
+    (Ld_c i_d + psi_c)`` (the controller's model at the measured current and
+    speed); the hexagon (``v_in`` its apothem) scales its d extent alike. Without it the d loop's
+    ``-w Lq i_q`` takes the voltage in a flying start above base speed and
+    ``v_q`` falls below the back-EMF (toolbox/ARCHITECTURE.md "Operating
+    envelope"); the simulator's ``toolbox.sim._kernel.d_priority_cap`` is the
+    same formula."""
+    e = min(abs(e_q) / v_in, 1.0)
+    return math.sqrt(max(1.0 - e * e, 0.0))
+
+
 def d_priority_limit(vd: float, vq: float, v_max: float, limit: str = "circle",
-                     theta: float = 0.0) -> tuple[float, float]:
+                     theta: float = 0.0, e_q: float = 0.0) -> tuple[float, float]:
     """d-axis priority voltage limit (the limiter of field-weakening drives,
     Briz et al., IEEE Trans. Ind. Appl. 37(1) 2001): ``v_d`` clamped to the
-    limit's d extent, then ``v_q`` clipped into the chord at that ``v_d``.
+    limit's d extent times :func:`d_priority_cap` ``(v_max, e_q)`` (``e_q``
+    the speed voltage the guard keeps for ``v_q``; 0: no guard), then ``v_q``
+    clipped into the chord at that ``v_d``.
 
     Circle of radius ``v_max``: ``|v_d| <= v_max``, ``|v_q| <= sqrt(v_max^2 -
     v_d^2)``. Hexagon of apothem ``v_max`` (vertex radius ``r = 2 v_max /
@@ -138,14 +156,15 @@ def d_priority_limit(vd: float, vq: float, v_max: float, limit: str = "circle",
     edge pair bounds ``|c v_d + s v_q| <= v_max``; the d extent is the support
     function ``r max_j |cos(theta - 60 j deg)|``.
     """
+    cap = d_priority_cap(v_max, e_q)
     if limit == "circle":
-        vds = min(max(vd, -v_max), v_max)
+        vds = min(max(vd, -cap * v_max), cap * v_max)
         q = math.sqrt(max(v_max * v_max - vds * vds, 0.0))
         return vds, min(max(vq, -q), q)
     h = math.sqrt(3.0) / 2.0
     r_hex = v_max / h
     c0, s0 = math.cos(theta), math.sin(theta)
-    d_max = r_hex * max(abs(c0), abs(0.5 * c0 + h * s0), abs(-0.5 * c0 + h * s0))
+    d_max = cap * r_hex * max(abs(c0), abs(0.5 * c0 + h * s0), abs(-0.5 * c0 + h * s0))
     vds = min(max(vd, -d_max), d_max)
     lo, hi = -math.inf, math.inf
     for ca, sa in ((h, 0.5), (0.0, 1.0), (-h, 0.5)):

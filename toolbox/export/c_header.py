@@ -19,11 +19,15 @@ implements the whole current-control law of the artifact in one
    seen at the electrical angle ``theta_e + w_e Ts (delay + 1/2)`` (the header
    then takes the input ``theta_e``);
    With ``drive.voltage_priority = "d_axis"`` the limit keeps ``v_d``
-   (clamped to the limit's d extent) and gives ``v_q`` the rest instead
+   (clamped to the limit's d extent times the guard ``d_priority_cap`` that
+   leaves ``v_q`` the speed voltage ``w (Ld_c i_d + psi_c)``) and gives ``v_q`` the rest instead
    (``sign(v_q) sqrt(V_MAX^2 - v_d^2)`` on the circle, the hexagon's chord at
    that ``v_d``), as the simulator's ``_voltage_limit``;
 4. back-calculation anti-windup ``x += aw (v_sat - v_unsat)`` with the
-   artifact's vector mapped into the executed coordinates.
+   artifact's vector mapped into the executed coordinates;
+5. (beside the law) the operating envelope's current references as a table
+   over speed and torque and ``<p>envelope_ref``
+   (:mod:`toolbox.export._envelope_table`; 1 564 bytes of constants).
 
 Faults (float path): a non-finite input, or a non-finite result, repeats the
 last good output, leaves the state unchanged and sets ``out.status`` (1 and 2;
@@ -119,6 +123,7 @@ from ._vendor_section import _vendor_section, vendor_plan  # noqa: F401
 from ..spec import inverter_radii
 from .._cache import template_bytecode_cache
 from ._cv_section import write_cv_header
+from ._envelope_table import envelope_section, envelope_table
 
 __all__ = ["write_header", "check_exportable", "ExportCheck", "sanitise_comment",
            "realisations", "reference_law", "ReferenceLaw", "check_fixed", "INTEGRATOR_TOL", "RING_RADIUS",
@@ -437,6 +442,9 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     t("")
     _vendor_section(t, artifact, motor, drive, check, N, P)
     t("")
+    t.lines.extend(envelope_section(envelope_table(motor, drive) if motor is not None
+                                    and drive is not None else None, N, P,
+                                    "no motor and drive data"))
     if example:
         _example(t, N, P, hexagon=check.limit == "hexagon")
         t("")

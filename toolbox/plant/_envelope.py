@@ -93,6 +93,10 @@ class OperatingPoint:
 class OperatingEnvelope:
     """MTPA, field-weakening and MTPV references of a motor on a drive.
 
+    :attr:`HEADROOM` (5 %) is the voltage fraction the verification grid and
+    the exported reference table keep out of the envelope for the current
+    loop's transients (``v_max = (1 - HEADROOM)`` x the drive's circle).
+
     Parameters
     ----------
     motor : Motor
@@ -109,6 +113,9 @@ class OperatingEnvelope:
     resistive : bool
         Keep ``R`` in the voltage (default); False: the textbook ellipse.
     """
+
+    #: Voltage fraction kept for the loop's transients (verification grid, header table).
+    HEADROOM = 0.05
 
     def __init__(self, motor, drive=None, *, v_max: float | None = None,
                  i_max: float | None = None, resistive: bool = True) -> None:
@@ -212,8 +219,9 @@ class OperatingEnvelope:
         """The largest torque (``sign = 1``; the most negative with -1) the
         limits allow at a mechanical speed (rad/s), and its currents."""
         V2, I2 = self.V ** 2, self.I ** 2
-        on_v = self._boundary_max(lambda f: self._voltage_boundary(speed, f),
-                                  lambda d, q: d * d + q * q - I2, sign)
+        # without R at standstill no current reaches the voltage limit (Z = 0)
+        on_v = None if self.R == 0.0 and speed == 0.0 else self._boundary_max(
+            lambda f: self._voltage_boundary(speed, f), lambda d, q: d * d + q * q - I2, sign)
         on_i = self._boundary_max(lambda b: self._current_boundary(speed, b),
                                   lambda d, q: self._vmag(d, q, speed) ** 2 - V2, sign)
         pts = [p for p in (on_v, on_i) if p is not None]
@@ -249,17 +257,19 @@ class OperatingEnvelope:
         return brentq(lambda s: self._vmag(i_d, i_q, s) - self.V, 0.0, hi, xtol=1e-12)
 
     # --------------------------------------------------------- the reference
-    def operating_point(self, torque: float, speed: float) -> OperatingPoint:
+    def operating_point(self, torque: float, speed: float,
+                        limit: OperatingPoint | None = None) -> OperatingPoint:
         """Current reference of least amplitude for a torque (N m) at a
         mechanical speed (rad/s) within both limits: MTPA when it fits, else
         the field-weakening point of the torque curve on the voltage limit,
         else (torque beyond the limit at that speed) the largest torque point
-        of that sign."""
+        of that sign. ``limit``: :meth:`max_torque_point` of that speed and
+        sign when the caller has it (a table over torque at one speed)."""
         sign = 1.0 if torque >= 0 else -1.0
         d, q = self.mtpa(torque)
         if math.hypot(d, q) <= self.I and self._vmag(d, q, speed) <= self.V:
             return OperatingPoint(d, q, float(torque), "mtpa")
-        lim = self.max_torque_point(speed, sign)
+        lim = limit if limit is not None else self.max_torque_point(speed, sign)
         if sign * torque >= sign * lim.torque:
             return lim
         # along the torque curve i_q(i_d): the point of least |v| (feasible as

@@ -47,8 +47,8 @@ from ._data import ReportData
 from ._format import (NOT_COMPUTED, RESOLUTION, RESOLUTION_NOTE, SIM_METRIC_UNITS,  # noqa: F401
                       SPEED_KINDS, fmt, fmt_q, sim_metric_unit, zpk_text)
 from ._robustness import _robustness, _robustness_of
-from ._sections import (METHOD_NAMES, _controller, _provenance, _scenario_traces,  # noqa: F401
-                        _scenarios, _step_of)
+from ._sections import (METHOD_NAMES, _controller, _envelope, _provenance,  # noqa: F401
+                        _scenario_traces, _scenarios, _step_of)
 
 __all__ = ["ReportData", "build_context", "write_html", "write_pdf", "zpk_text", "fmt", "fmt_q", "NOT_COMPUTED",
            "METHOD_NAMES", "MARGIN_ROWS", "BASELINE_LABEL", "RESOLUTION", "sim_metric_unit"]
@@ -150,7 +150,8 @@ def build_context(data: ReportData) -> dict:
         firmware.json's target figures or why not measured), banner (the verdict banner:
         ``status`` pass/fail/none, ``headline``, ``count``, ``reason``),
         baseline (the label of informational margins, or None), certificate,
-        scenarios, provenance, margins_given, resolution_note``; the HTML and typst templates render it.
+        scenarios, envelope (the torque-speed grid: ``summary``, ``status``,
+        ``svg``, ``rows``; None without one), provenance, margins_given, resolution_note``; the HTML and typst templates render it.
         ``step`` holds the analysis' linear step figures per axis (numbers,
         s and %). SVG strings are generated here (trusted); every other
         string is user or derived text that the templates escape.
@@ -197,6 +198,7 @@ def build_context(data: ReportData) -> dict:
                         if certificate else None),
         "scenarios": (_scenarios(data.verification, traces)
                       if data.verification is not None else None),
+        "envelope": _envelope(data.verification),
         "provenance": _provenance(data),
         "not_computed": NOT_COMPUTED,
         "notice": [str(x) for x in ([data.notice] if data.notice else []) + list(data.warnings or [])],

@@ -107,6 +107,7 @@ class _Markers:
     filled: bool
     edge: str | None
     label: str | None
+    tips: tuple[str, ...] | None = None
 
 
 @dataclass
@@ -136,10 +137,13 @@ class Axes:
                                 color, width, dash, opacity, label))
 
     def markers(self, x, y, color: str, *, shape: str = "o", size: float = 5.0,
-                filled: bool = True, edge: str | None = None, label: str | None = None) -> None:
-        """Markers ``o`` (circle), ``x`` or ``+`` of diameter ``size`` pt."""
+                filled: bool = True, edge: str | None = None, label: str | None = None,
+                tips: Sequence[str] | None = None) -> None:
+        """Markers ``o`` (circle), ``x`` or ``+`` of diameter ``size`` pt;
+        ``tips`` (one per marker): an SVG ``<title>`` each, shown on hover."""
         self.items.append(_Markers(np.asarray(x, float).ravel(), np.asarray(y, float).ravel(),
-                                   shape, color, size, filled, edge, label))
+                                   shape, color, size, filled, edge, label,
+                                   None if tips is None else tuple(str(t) for t in tips)))
 
     def hline(self, y: float, color: str = "#000000", width: float = 0.8) -> None:
         """A horizontal line across the axes at ``y``."""
@@ -348,7 +352,10 @@ class Figure:
                     legend.append(("line", it.color, it.dash, it.width, it.label))
             elif isinstance(it, _Markers):
                 px, py = tx(it.x), ty(it.y)
-                o += [_marker(x, y, it) for x, y in zip(px, py)
+                tips = it.tips or (None,) * len(px)
+                o += [_marker(x, y, it) if tip is None else
+                      f"<g><title>{escape(tip)}</title>{_marker(x, y, it)}</g>"
+                      for x, y, tip in zip(px, py, tips)
                       if math.isfinite(x) and math.isfinite(y)]
                 if it.label:
                     legend.append(("marker", it, None, None, it.label))

@@ -125,6 +125,9 @@ def render_typst(context: dict) -> tuple[str, dict[str, str]]:
         ctx["robustness"] = {**ctx["robustness"], "key": "rob"}
     elif ctx.get("robustness"):
         ctx["robustness"] = {**ctx["robustness"], "key": None}
+    if ctx.get("envelope") and ctx["envelope"].get("svg"):
+        images["env"] = ctx["envelope"]["svg"]
+        ctx["envelope"] = {**ctx["envelope"], "key": "env"}
     source = _environment().get_template("report.typ.j2").render(**ctx)
     return source, images
 

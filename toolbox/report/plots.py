@@ -477,3 +477,55 @@ def robustness_svg(cases: Sequence[Mapping], worst: Sequence[str], prefix: str =
     axs[-1].xlabel = "case (row of the table below)"
     axs[0].title = "Robustness stress sweep"
     return fig.svg(prefix)
+
+
+#: Colours and markers of the torque-speed grid's point statuses.
+ENVELOPE_STYLE = {"pass": ("#2a7f3f", "o", "pass"), "fail": ("#c23b22", "o", "fail"),
+                  "unreachable": ("#8a8f98", "x", "unreachable (not simulated)")}
+
+
+def envelope_point_text(p: Mapping) -> str:
+    """The hover text (and table line) of a grid point of verify.json's ``envelope``."""
+    head = (f"{p['torque_fraction']:g} x torque limit at {p['speed_fraction']:g} x base speed "
+            f"({p['speed']:.4g} rad/s): {p['status']}")
+    if p.get("region") and p["region"] != "unreachable":
+        head += f", {p['region']}, {_num(p.get('torque')):.4g} N m"
+    return head + (f": {p['reason']}" if p.get("reason") else "")
+
+
+def envelope_svg(env: Mapping, prefix: str = "env") -> str:
+    """The operating envelope in the torque-speed plane (verify.json
+    ``envelope``): the torque limit of both limits, the current limit alone
+    and the voltage limit alone (MTPV) over speed, and the grid points
+    coloured by status, each with its reason as hover text."""
+    fig = Figure(7.2, 3.6)
+    ax = fig.axes[0]
+    c = env.get("curves") or {}
+    curve = lambda k: np.array([np.nan if v is None else float(v)  # noqa: E731
+                                for v in c.get(k, [])], float)
+    w = curve("speed_rad_s")
+    t_max = _num(env.get("torque_limit_nm")) or 1.0
+    if w.size:
+        ax.line(w, curve("torque_limit"), "#1f4e9c", width=2.0,
+                label="torque limit (current and voltage)")
+        ax.line(w, curve("current_limit"), "#7a5195", dash="5 3", width=1.0,
+                label="current limit alone")
+        ax.line(w, curve("voltage_limit"), "#ef8c1a", dash="2 2", width=1.0,
+                label="voltage limit alone (MTPV)")
+    base = _num(env.get("base_speed_rad_s"))
+    for status, (color, shape, label) in ENVELOPE_STYLE.items():
+        pts = [p for p in env.get("points", []) if p.get("status") == status]
+        if not pts:
+            continue
+        # an unreachable point sits at its requested torque
+        y = [(_num(p.get("torque")) if p.get("torque") is not None
+              else p["torque_fraction"] * t_max) for p in pts]
+        ax.markers([p["speed"] for p in pts], y, color, shape=shape,
+                   size=7 if status == "fail" else 6, label=label,
+                   tips=[envelope_point_text(p) for p in pts])
+    ax.ylim = (-0.1 * t_max, 1.7 * t_max)  # the legend above the points
+    ax.xlabel = "mechanical speed (rad/s)" + (f"; base speed {base:.4g} rad/s" if base else "")
+    ax.ylabel = "torque (N m)"
+    ax.title = "Operating envelope and torque-speed grid"
+    ax.legend_loc, ax.legend_size = "upper right", 7.0
+    return fig.svg(prefix)

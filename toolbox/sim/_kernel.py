@@ -232,10 +232,25 @@ def _update(A, B, Baw, ax, x, xn, r, y, dv):
 
 
 @_jit_inline
-def _d_priority_hexagon(vd_u, vq_u, c0, s0, r_hex):
+def d_priority_cap(v_in, e_q):
+    """The d-axis priority guard, as a fraction of the limit's d extent:
+    ``sqrt(1 - min(|e_q| / v_in, 1)^2)``, on the circle (``v_in`` its radius)
+    the largest ``|v_d|`` that leaves ``v_q`` the speed voltage ``e_q = w
+    (Ld_c i_d + psi_c)`` (the controller's model, at the measured current and
+    speed); the hexagon (``v_in`` its apothem) scales its d extent alike. Without it a flying start above base
+    speed runs away: the decoupling's ``-w Lq i_q`` takes the voltage as ``i_q``
+    brakes, ``v_q`` falls below the back-EMF, ``i_q`` brakes harder
+    (toolbox/ARCHITECTURE.md "Operating envelope")."""
+    e = min(abs(e_q) / v_in, 1.0)
+    return math.sqrt(max(1.0 - e * e, 0.0))
+
+
+@_jit_inline
+def _d_priority_hexagon(vd_u, vq_u, c0, s0, r_hex, d_cap):
     """d-axis priority inside the SVM hexagon of vertex radius ``r_hex`` seen
     in a dq frame at the angle whose cos, sin are ``c0``, ``s0``: ``v_d`` clamped
-    to the hexagon's d extent, then ``v_q`` clipped into the chord at that ``v_d``.
+    to ``d_cap`` (:func:`d_priority_cap`) times the hexagon's d extent, then
+    ``v_q`` clipped into the chord at that ``v_d``.
 
     The hexagon is ``|n_k . v_ab| <= a`` (apothem ``a = r_hex sqrt(3)/2``, edge
     normals at 30, 90, 150 deg); in dq the normal at ``alpha`` is
@@ -244,7 +259,8 @@ def _d_priority_hexagon(vd_u, vq_u, c0, s0, r_hex):
     """
     a = r_hex * _SQ3_2
     # d extent: vertices at 0, 60, 120 deg (and their opposites)
-    d_max = r_hex * max(abs(c0), abs(0.5 * c0 + _SQ3_2 * s0), abs(-0.5 * c0 + _SQ3_2 * s0))
+    d_max = d_cap * r_hex * max(abs(c0), abs(0.5 * c0 + _SQ3_2 * s0),
+                                abs(-0.5 * c0 + _SQ3_2 * s0))
     vd = min(max(vd_u, -d_max), d_max)
     lo = -1e300
     hi = 1e300
@@ -270,14 +286,15 @@ def _d_priority_hexagon(vd_u, vq_u, c0, s0, r_hex):
 
 
 @_jit_inline
-def _voltage_limit(vd_u, vq_u, th_m, w_m, DP):
+def _voltage_limit(vd_u, vq_u, th_m, w_m, DP, e_q):
     """Saturated dq voltage: circle of radius v_max, or the SVM hexagon at the
     angle where the voltage is placed (theta + t_comp w).
 
     ``vprio`` 0 (radial): ``v_dq`` scaled radially onto the limit. ``vprio`` 1
     (d-axis priority, the limiter of field-weakening drives, Briz et al.,
     IEEE Trans. Ind. Appl. 37(1) 2001): ``v_d`` kept (clamped to the limit's
-    d extent), ``v_q`` gets the rest, ``sign(v_q) sqrt(v_max^2 - v_d^2)`` on
+    d extent and to :func:`d_priority_cap` of the speed voltage ``e_q``, so
+    that ``v_q`` keeps the back-EMF), ``v_q`` gets the rest, ``sign(v_q) sqrt(v_max^2 - v_d^2)`` on
     the circle, the chord of the hexagon at that ``v_d`` otherwise.
     """
     vlim = int(DP[DP_VLIM])
@@ -285,7 +302,8 @@ def _voltage_limit(vd_u, vq_u, th_m, w_m, DP):
     if vlim == 1:
         v_max = DP[DP_V_MAX]
         if prio == 1:
-            vd = min(max(vd_u, -v_max), v_max)
+            d_max = d_priority_cap(v_max, e_q) * v_max
+            vd = min(max(vd_u, -d_max), d_max)
             q_max = math.sqrt(max(v_max * v_max - vd * vd, 0.0))
             return vd, min(max(vq_u, -q_max), q_max)
         mag = math.hypot(vd_u, vq_u)
@@ -295,7 +313,7 @@ def _voltage_limit(vd_u, vq_u, th_m, w_m, DP):
         thc = th_m + w_m * DP[DP_T_COMP]
         if prio == 1:
             return _d_priority_hexagon(vd_u, vq_u, math.cos(thc), math.sin(thc),
-                                       DP[DP_R_HEX])
+                                       DP[DP_R_HEX], d_priority_cap(DP[DP_R_HEX] * _SQ3_2, e_q))
         va, vb = _to_ab(vd_u, vq_u, math.cos(thc), math.sin(thc))
         sc = hexagon_scale(va, vb, DP[DP_R_HEX])
         return vd_u * sc, vq_u * sc
@@ -312,7 +330,8 @@ def _law_step(A, B, C, D, Baw, xd, xq, xn, idr, iqr, i_d_m, i_q_m, w_m, th_m, LP
     uq = _linear(C, D, 1, xq, iqr, i_q_m)
     vd_u = ud - cross * w_m * LP[LP_LQ_C] * i_q_m
     vq_u = uq + cross * w_m * LP[LP_LD_C] * i_d_m + LP[LP_EMF] * w_m * LP[LP_FLUX_C]
-    vd_s, vq_s = _voltage_limit(vd_u, vq_u, th_m, w_m, DP)
+    e_q = w_m * (LP[LP_LD_C] * i_d_m + LP[LP_FLUX_C])  # the d-priority guard's reserve
+    vd_s, vq_s = _voltage_limit(vd_u, vq_u, th_m, w_m, DP, e_q)
     _update(A, B, Baw, 0, xd, xn, idr, i_d_m, vd_s - vd_u)
     _update(A, B, Baw, 1, xq, xn, iqr, i_q_m, vq_s - vq_u)
     return vd_s, vq_s, (vd_s != vd_u or vq_s != vq_u)
@@ -331,7 +350,8 @@ def _cv_law_step(xd, xq, idr, iqr, i_d_m, i_q_m, w_m, th_m, LP, DP):
         LP[LP_LD_C], LP[LP_LQ_C], LP[LP_CV_PC], pi, LP[LP_CV_PD])
     ff = LP[LP_EMF] * w_m * LP[LP_FLUX_C]
     vq_u = vq + ff
-    vd_s, vq_s = _voltage_limit(vd, vq_u, th_m, w_m, DP)
+    e_q = w_m * (LP[LP_LD_C] * i_d_m + LP[LP_FLUX_C])  # the d-priority guard's reserve
+    vd_s, vq_s = _voltage_limit(vd, vq_u, th_m, w_m, DP, e_q)
     _cv_update(xd, xq, idr, iqr, i_d_m, i_q_m, d, pi, delta1, gi00, gi01, gi10, gi11,
                vd_s - vd, vq_s - vq_u, vd_s, vq_s - ff)
     return vd_s, vq_s, (vd_s != vd or vq_s != vq_u)

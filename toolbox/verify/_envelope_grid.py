@@ -1,53 +1,75 @@
-"""Torque-speed grid verification: the current loop at the envelope's
-references over a default grid of the operating range.
+"""Torque-speed grid verification: torque steps at the operating envelope's
+references over the operating range (toolbox/ARCHITECTURE.md "Operating
+envelope").
 
-Each grid point runs :func:`toolbox.sim.simulate` at an imposed constant speed
-(``kind = "current_step"``, mechanical state held) with the current
-references of :class:`toolbox.plant.OperatingEnvelope` applied from ``t = 0``
-to the motor at zero current, and checks that the loop settles on them (mean
-of the last quarter of the run). Above base speed this start is a flying
-start into field weakening (the back-EMF alone may exceed the voltage
-limit): the peak current of the transient is reported beside the settled
-error. Measured on paper 003's motor and H-infinity law at 1.5 x base
-speed: d-axis priority starves ``v_q`` while the d loop takes the voltage,
-the back-EMF drives ``|i|`` to 94 A (``i_q`` -65 A, ``i_d`` -55 A) before it
-settles (~0.1 s); the radial limit stays within 16.4 A (PI: 15.9 A either way). Torques are fractions of the standstill torque limit, clamped to the
-limit at each speed by the envelope; speeds are fractions of its base speed;
-a speed at which no current fits (the back-EMF beyond the voltage limit with
-the current limit reached) is reported, not simulated.
+The default grid (:data:`DEFAULT_TORQUES` x :data:`DEFAULT_SPEEDS`): 0, 50 and
+100 % of the standstill torque limit at 0, 50, 100, 150 and 200 % of base
+speed, the envelope (:class:`toolbox.plant.OperatingEnvelope`) with 5 % of the
+drive's voltage kept for the loop's transients. At each point the speed is
+imposed (``kind = "current_step"``, mechanical state held) and the current
+reference is the envelope's (MTPA below base speed, field weakening above,
+MTPV / the torque limit where the request exceeds what the limits allow). Each
+point is a torque step at that speed: the loop first settles at the reference
+of the step's start (a flying start from zero current, not judged), then the
+reference steps to the point's:
 
-Not wired into ``cct design`` yet: a function for scripts and tests.
+* 50 % and 100 % torque: from the zero-torque reference (0 A below base
+  speed, the field-weakening d current above) to the point's;
+* 0 % torque: down from the 100 % reference at that speed (a load dump).
+
+A point is judged after the step: the current settles within
+``tolerance`` x the current limit of the reference (mean of the last 10 % of
+the run) and its peak amplitude stays within ``peak_limit`` x the current
+limit (the drive's overcurrent margin). Status ``"pass"``, ``"fail"`` (with
+the reason), or ``"unreachable"``: a speed above ``drive.max_speed`` or one
+at which no current fits (the back-EMF beyond the voltage limit with the
+current limit reached); unreachable points are reported, not simulated, and
+do not fail the verdict: the drive cannot run there. A torque the limits cut
+at that speed runs at the limit, and the point says so.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import math
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from toolbox.errors import SpecError
 from toolbox.plant import OperatingEnvelope
-from toolbox.sim import ControlLaw, DriveParams, simulate
+from toolbox.sim import DriveParams, simulate
 from toolbox.spec import Scenario
 
-__all__ = ["GridPoint", "torque_speed_grid", "DEFAULT_TORQUES", "DEFAULT_SPEEDS"]
+__all__ = ["GridPoint", "EnvelopeGrid", "torque_speed_grid", "DEFAULT_TORQUES",
+           "DEFAULT_SPEEDS", "GRID_TOLERANCE", "GRID_PEAK_LIMIT", "GRID_HEADROOM"]
 
 #: Default grid: fractions of the standstill torque limit and of base speed.
 DEFAULT_TORQUES = (0.0, 0.5, 1.0)
 DEFAULT_SPEEDS = (0.0, 0.5, 1.0, 1.5, 2.0)
+#: Settled-error bound, fraction of the current limit (0.4 A of 20 A on paper 003's motor).
+GRID_TOLERANCE = 0.02
+#: Peak current after the step, multiple of the current limit: the overcurrent
+#: margin drives keep between the continuous limit and the trip.
+GRID_PEAK_LIMIT = 1.2
+#: Voltage fraction the envelope leaves to the loop's transients.
+GRID_HEADROOM = OperatingEnvelope.HEADROOM
+#: Speeds of the limit curves drawn in the report.
+CURVE_POINTS = 41
 
 
 @dataclass(frozen=True)
 class GridPoint:
     """One point of :func:`torque_speed_grid`.
 
-    ``torque`` is the torque the envelope gives (the request clamped to the
-    limit at that speed), ``region`` its :class:`OperatingPoint` region
-    (``"infeasible"`` when nothing fits: not simulated, ``error = nan``);
-    ``i_d``, ``i_q`` the mean simulated currents over the last quarter;
-    ``error`` their distance from the reference (A); ``ok`` whether it is
-    within the tolerance; ``saturation_time`` (s) from the simulator's metrics;
-    ``peak_current`` the largest ``|i|`` of the run (A).
+    ``speed`` (mechanical rad/s) and ``torque`` (N m, the request clamped to
+    the limit at that speed; NaN when unreachable); ``region`` the
+    :class:`~toolbox.plant.OperatingPoint` region (``"unreachable"`` when not
+    simulated); ``i_d_ref``, ``i_q_ref`` the reference after the step and
+    ``i_d0``, ``i_q0`` before it (A); ``i_d``, ``i_q`` the mean simulated
+    currents over the last 10 %; ``error`` their distance from the reference
+    (A); ``peak_current`` the largest ``|i|`` after the step (A);
+    ``status`` ``"pass"``, ``"fail"`` or ``"unreachable"`` and ``reason``
+    (None when passing without remark).
     """
 
     speed_fraction: float
@@ -55,21 +77,117 @@ class GridPoint:
     speed: float
     torque: float
     region: str
+    i_d0: float
+    i_q0: float
     i_d_ref: float
     i_q_ref: float
     i_d: float
     i_q: float
     error: float
-    saturation_time: float
-    ok: bool
     peak_current: float
+    status: str
+    reason: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "pass"
+
+    def to_json(self) -> dict:
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                for k, v in asdict(self).items()}
 
 
-def torque_speed_grid(law: ControlLaw, motor, drive: DriveParams, envelope=None, *,
-                      torques=DEFAULT_TORQUES, speeds=DEFAULT_SPEEDS,
-                      headroom: float = 0.05, duration: float = 0.2,
-                      tolerance: float = 0.02) -> list[GridPoint]:
-    """Run the current loop at the envelope's references on a torque-speed grid.
+@dataclass(frozen=True)
+class EnvelopeGrid:
+    """The grid's points and the numbers they were judged on.
+
+    ``base_speed`` (rad/s), ``torque_limit`` (N m at standstill), ``v_max``
+    (V, the envelope's voltage limit), ``i_max`` (A), ``voltage_priority``,
+    ``step_time`` and ``duration`` (s) of each run.
+    """
+
+    points: tuple[GridPoint, ...]
+    base_speed: float
+    torque_limit: float
+    v_max: float
+    i_max: float
+    voltage_priority: str
+    step_time: float
+    duration: float
+    tolerance: float = GRID_TOLERANCE
+    peak_limit: float = GRID_PEAK_LIMIT
+    curves: dict | None = None
+
+    @property
+    def passed(self) -> bool:
+        """No reachable point fails (unreachable points are not failures)."""
+        return all(p.status != "fail" for p in self.points)
+
+    def counts(self) -> dict[str, int]:
+        return {s: sum(p.status == s for p in self.points)
+                for s in ("pass", "fail", "unreachable")}
+
+    def summary(self) -> str:
+        """One line: the counts, the base speed, torque limit and priority."""
+        c = self.counts()
+        return (f"torque-speed grid: {c['pass']} pass, {c['fail']} fail, "
+                f"{c['unreachable']} unreachable of {len(self.points)} points "
+                f"(base speed {self.base_speed:.4g} rad/s, torque limit "
+                f"{self.torque_limit:.4g} N m, {self.voltage_priority} voltage priority)")
+
+    def failures(self) -> list[str]:
+        """Each failing point named with its reason."""
+        return [f"{p.torque_fraction:g} x torque limit at {p.speed_fraction:g} x base speed "
+                f"({p.speed:.4g} rad/s): {p.reason}" for p in self.points if p.status == "fail"]
+
+    def to_json(self) -> dict:
+        return {"passed": self.passed, "counts": self.counts(), "summary": self.summary(),
+                "failures": self.failures(),
+                "base_speed_rad_s": self.base_speed, "torque_limit_nm": self.torque_limit,
+                "v_max": self.v_max, "i_max": self.i_max,
+                "voltage_priority": self.voltage_priority,
+                "torque_fractions": sorted({p.torque_fraction for p in self.points}),
+                "speed_fractions": sorted({p.speed_fraction for p in self.points}),
+                "step_time_s": self.step_time, "duration_s": self.duration,
+                "tolerance_fraction": self.tolerance, "peak_limit_fraction": self.peak_limit,
+                "curves": self.curves,
+                "points": [p.to_json() for p in self.points]}
+
+
+def limit_curves(env: OperatingEnvelope, speed_max: float, n: int = CURVE_POINTS) -> dict:
+    """The envelope's limit curves for the report, ``n`` speeds from 0 to
+    ``speed_max`` (rad/s): ``torque_limit`` (N m, both limits; None where no
+    current fits), ``current_limit`` (the standstill torque limit, the
+    current circle alone) and ``voltage_limit`` (the MTPV torque, the voltage
+    limit alone; None beyond 10 x the standstill limit, near standstill)."""
+    speed = np.linspace(0.0, speed_max, n)
+    t_cur = env.max_torque_point(0.0).torque
+    both, volt = [], []
+    for w in speed:
+        try:
+            both.append(env.max_torque_point(float(w)).torque)
+        except SpecError:
+            both.append(None)
+        t_v = float(env.torque(*env.mtpv(float(w)))) if w > 0 else math.inf
+        volt.append(t_v if t_v <= 10.0 * t_cur else None)
+    return {"speed_rad_s": [float(w) for w in speed], "torque_limit": both,
+            "current_limit": [t_cur] * n, "voltage_limit": volt}
+
+
+def grid_envelope(motor, drive: DriveParams, headroom: float = GRID_HEADROOM) -> OperatingEnvelope:
+    """The grid's envelope: ``motor`` with ``(1 - headroom)`` of the drive's
+    voltage circle (SpecError when the motor has no current limit)."""
+    if not 0.0 <= headroom < 1.0:
+        raise SpecError("headroom", "a fraction in [0, 1)", headroom)
+    return OperatingEnvelope(motor, v_max=(1.0 - headroom) * drive.radii(motor.torque_factor)[1])
+
+
+def torque_speed_grid(law, motor, drive: DriveParams, envelope=None, *, span: float = 0.02,
+                      max_speed: float | None = None, torques=DEFAULT_TORQUES,
+                      speeds=DEFAULT_SPEEDS, tolerance: float = GRID_TOLERANCE,
+                      peak_limit: float = GRID_PEAK_LIMIT) -> EnvelopeGrid:
+    """Torque steps at the envelope's references over a torque-speed grid
+    (module docstring).
 
     Parameters
     ----------
@@ -78,51 +196,67 @@ def torque_speed_grid(law: ControlLaw, motor, drive: DriveParams, envelope=None,
     motor : Motor
         The plant (and the envelope's motor unless ``envelope`` is given).
     drive : DriveParams
-        The simulated drive; ``voltage_priority = "d_axis"`` is what
-        field-weakening drives use (with ``"radial"`` the limit drags ``i_d``).
+        The simulated drive (its ``voltage_priority`` is the firmware's).
     envelope : OperatingEnvelope, optional
-        Default: ``motor`` with ``v_max = (1 - headroom)`` times the drive's
-        circle radius (the loop keeps ``headroom`` for its transients).
+        Default :func:`grid_envelope` (5 % voltage headroom).
+    span : float
+        Time (s) before the step (the flying start settles) and after it.
+    max_speed : float, optional
+        Highest mechanical speed of the drive (rad/s, ``drive.max_speed``);
+        grid speeds above it are unreachable.
     torques, speeds : sequence of float
         Fractions of the standstill torque limit and of base speed.
-    headroom : float
-        Voltage fraction kept out of the envelope (default 5 %).
-    duration : float
-        Simulated time per point (s).
-    tolerance : float
-        Allowed steady-state current error, as a fraction of the current limit.
-
-    Returns
-    -------
-    list of GridPoint
-        Speeds outer, torques inner.
+    tolerance, peak_limit : float
+        Settled error and peak current after the step, fractions of the
+        current limit.
     """
-    if envelope is None:
-        if not 0.0 <= headroom < 1.0:
-            raise SpecError("headroom", "a fraction in [0, 1)", headroom)
-        v_max = drive.radii(motor.torque_factor)[1]
-        envelope = OperatingEnvelope(motor, v_max=(1.0 - headroom) * v_max)
-    base = envelope.base_speed()
-    t_max = envelope.max_torque_point(0.0).torque
-    out = []
+    env = envelope if envelope is not None else grid_envelope(motor, drive)
+    base = env.base_speed()
+    t_max = env.max_torque_point(0.0).torque
+    nan = float("nan")
+    pts = []
     for sf in speeds:
         speed = sf * base
         for tf in torques:
-            try:
-                op = envelope.operating_point(tf * t_max, speed)
-            except SpecError:
-                out.append(GridPoint(sf, tf, speed, float("nan"), "infeasible", *[float("nan")] * 5,
-                                     0.0, False, float("nan")))
+            def unreachable(reason):
+                pts.append(GridPoint(sf, tf, speed, nan, "unreachable", *[nan] * 8,
+                                     "unreachable", reason))
+            if max_speed is not None and speed > max_speed * (1 + 1e-12):
+                unreachable(f"{speed:.4g} rad/s is above drive.max_speed ({max_speed:.4g} rad/s)")
                 continue
-            scen = Scenario(kind="current_step", duration=duration, id_ref0=op.i_d,
-                            iq_ref0=op.i_q, id_ref=op.i_d, iq_ref=op.i_q,
+            try:
+                op = env.operating_point(tf * t_max, speed)
+                start = env.operating_point(t_max if tf == 0 else 0.0, speed)
+            except SpecError:
+                unreachable(f"no current fits at {speed:.4g} rad/s: the back-EMF exceeds the "
+                            f"voltage limit ({env.V:.4g} V) with the current limit "
+                            f"({env.I:.4g} A) reached")
+                continue
+            scen = Scenario(kind="current_step", duration=2.0 * span, step_time=span,
+                            id_ref0=start.i_d, iq_ref0=start.i_q, id_ref=op.i_d, iq_ref=op.i_q,
                             initial_speed=speed, keep_traces=True, trace_step=drive.sample_time)
             res = simulate(law, motor, scen, drive)
-            n = max(1, len(res.t) // 4)
+            after = res.t >= span
+            n = max(1, len(res.t) // 20)
             i_d, i_q = float(np.mean(res.id[-n:])), float(np.mean(res.iq[-n:]))
             err = float(np.hypot(i_d - op.i_d, i_q - op.i_q))
-            out.append(GridPoint(sf, tf, speed, op.torque, op.region, op.i_d, op.i_q, i_d, i_q,
-                                 err, float(res.metrics["saturation_time"]),
-                                 err <= tolerance * envelope.I,
-                                 float(np.hypot(res.id, res.iq).max())))
-    return out
+            peak = float(np.hypot(res.id[after], res.iq[after]).max())
+            reasons = []
+            if not err <= tolerance * env.I:
+                reasons.append(f"settled {err:.3g} A from the reference (bound "
+                               f"{tolerance * env.I:.3g} A)")
+            if not peak <= peak_limit * env.I:
+                reasons.append(f"peak current {peak:.4g} A after the step (bound "
+                               f"{peak_limit * env.I:.4g} A)")
+            if abs(op.torque - tf * t_max) > 1e-9 * max(t_max, 1e-12):
+                reasons.append(f"torque limited to {op.torque:.4g} N m ({op.region}) of "
+                               f"{tf * t_max:.4g} N m requested")
+            status = "pass" if err <= tolerance * env.I and peak <= peak_limit * env.I \
+                else "fail"
+            pts.append(GridPoint(sf, tf, speed, op.torque, op.region, start.i_d, start.i_q,
+                                 op.i_d, op.i_q, i_d, i_q, err, peak, status,
+                                 "; ".join(reasons) or None))
+    top = max(speeds) * base if speeds else base
+    return EnvelopeGrid(tuple(pts), base, t_max, env.V, env.I, drive.voltage_priority,
+                        span, 2.0 * span, tolerance, peak_limit,
+                        limit_curves(env, top if top > 0 else 1.0))

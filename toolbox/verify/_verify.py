@@ -20,11 +20,13 @@ from toolbox.analysis import compute_margins, drift_verdict
 from toolbox.analysis.executed import (INFORMATIONAL_METHODS, loop_stability,
                                        margin_disagreements, settling_horizon)
 from toolbox.design import default_bandwidth
+from toolbox.errors import SpecError
 from toolbox.sim import DriveParams, SimResult, scenario_setup, simulate
 from toolbox.spec import Motor, Scenario
 
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
 from ._default_scenarios import default_scenarios
+from ._envelope_grid import grid_envelope, torque_speed_grid
 from ._fcs_metrics import ripple_band_step_times
 
 __all__ = ["VERIFY_SCHEMA", "verify", "VerifyResult", "ScenarioOutcome", "NO_REQUIREMENTS",
@@ -74,6 +76,11 @@ class VerifyResult:
         margin checks, and the like.
     informational : dict
         Checks shown but not deciding (fcs_mpc's baseline PI margins).
+    envelope : dict or None
+        The torque-speed grid (:func:`toolbox.verify.torque_speed_grid` as
+        JSON, verify.json's ``envelope``): a reachable point that fails fails
+        the verdict, unreachable points do not; ``{"skipped": reason}`` when
+        the motor has no envelope (no current limit).
     header : dict or None
         ``cct verify`` only, when a controller.h lies next to controller.json:
         ``{"file", "law_sha256", "text_matches", "first_difference_line",
@@ -92,6 +99,7 @@ class VerifyResult:
     warnings: list[str] = field(default_factory=list)
     informational: dict = field(default_factory=dict)
     header: dict | None = None
+    envelope: dict | None = None
 
     @property
     def robustness(self) -> dict | None:
@@ -107,7 +115,8 @@ class VerifyResult:
     def passed(self) -> bool:
         return (all(s.passed for s in self.scenarios)
                 and all(c["pass"] for c in self.margin_checks.values())
-                and (self.header is None or self.header["matches"]))
+                and (self.header is None or self.header["matches"])
+                and (self.envelope is None or self.envelope.get("passed", True)))
 
     def to_json(self) -> dict:
         out = {"schema": VERIFY_SCHEMA, "method": self.method, "passed": self.passed,
@@ -121,6 +130,8 @@ class VerifyResult:
                 k: finalise_check(c) for k, c in self.informational.items()}
         if self.header is not None:
             out["header"] = dict(self.header)
+        if self.envelope is not None:
+            out["envelope"] = dict(self.envelope)
         return out
 
 
@@ -303,4 +314,24 @@ def verify(artifact, spec, progress: Callable[[int, int], None] | None = None,
                                              kept if keep_traces else None))
         if progress:
             progress(k + 1, len(scenarios))
+    out.envelope = envelope_grid(artifact, spec)
     return out
+
+
+def envelope_grid(artifact, spec) -> dict:
+    """The default torque-speed grid (:mod:`toolbox.verify._envelope_grid`)
+    as verify.json's ``envelope``: each run ``2 x span``, ``span`` the longest
+    span after the step of the default scenarios (so the settling checks of
+    the grid see as much of the loop as theirs); speeds above
+    ``drive.max_speed`` unreachable. ``{"skipped": reason}`` when the motor
+    has no current limit (the envelope needs one)."""
+    defaults = default_scenarios(spec.motor, spec.drive, settling_horizon(artifact, spec.motor))
+    span = max(sc.duration - (sc.step_time or 0.0) for sc in defaults)
+    law, drive = scenario_setup(artifact, defaults[0], spec.drive)
+    try:
+        env = grid_envelope(spec.motor, drive)
+    except SpecError as exc:
+        return {"passed": True, "skipped": f"no operating envelope: {exc}"}
+    grid = torque_speed_grid(law, spec.motor, drive, env, span=span,
+                             max_speed=spec.drive.max_speed)
+    return grid.to_json()
