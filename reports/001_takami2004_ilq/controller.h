@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: e12416654bb8d2779cec238e95e7e4817bccf286f8f37cacfe975ad0526baf41
  * law sha256:  ccb81623277729d23b0bc6ca2b3d40fb1baa37afa1509afd020b4788766e3176
- * created:     2026-11-27T19:06:19+00:00
+ * created:     2026-11-27T21:55:02+00:00
  * equations:   001 eq (1); 001 eq (2); 001 eq (3); 001 eq (4); 001 Fig. 2(a)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
@@ -784,6 +784,86 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
 #if defined(CCT_MCSDK) || defined(CCT_IQMATH)
 #error "MCSDK/IQmath variants not available: d axis: the MCSDK/IQmath variants run a one-degree-of-freedom PI (v from i_ref - i_meas); this law weights them differently"
 #endif
+
+/* Operating envelope (toolbox.plant.OperatingEnvelope, constant Ld, Lq, flux):
+ * current references for a torque at a speed: MTPA below base speed, field
+ * weakening above, the torque limit where the request exceeds it; voltage
+ * limit 109.697 V (the drive's circle less 5 % for the loop), current
+ * limit 30 A. Table of 17 speeds (0 .. 377.977 rad/s
+ * mechanical) x 11 torques (0 .. the limit at that speed), interpolated linearly
+ * in |speed| and in the torque's fraction of the limit; a negative torque mirrors
+ * i_q. Memory: (N_SPEED + 2 N_SPEED N_TORQUE) x 4 = 1564 bytes of constants. */
+#define CCT_ENV_N_SPEED 17
+#define CCT_ENV_N_TORQUE 11
+#define CCT_ENV_SPEED_STEP 2.362358284e+01f /* rad/s between rows */
+static const float cct_env_t_max[17] = {2.141279984e+01f, 2.141279984e+01f, 2.141279984e+01f, 2.141279984e+01f, 2.141279984e+01f, 2.141279984e+01f, 2.141279984e+01f, 2.141279984e+01f, 2.141279984e+01f, 2.044400024e+01f, 1.858712387e+01f, 1.649146461e+01f, 1.435364914e+01f, 1.222576714e+01f, 1.009858704e+01f, 7.921488285e+00f, 5.583492279e+00f};
+static const float cct_env_i_d[17][11] = {
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.836970094e-15f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.836970094e-15f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.836970094e-15f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.836970094e-15f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.836970094e-15f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.836970094e-15f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.836970094e-15f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.836970094e-15f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, -4.461056733e-07f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, -1.058497667e+00f, -2.719334602e+00f, -4.569975376e+00f, -6.629368305e+00f, -8.921700478e+00f},
+    {-1.607548952e+00f, -2.299392223e+00f, -3.112327337e+00f, -4.051363945e+00f, -5.122638226e+00f, -6.333649158e+00f, -7.693573952e+00f, -9.213705063e+00f, -1.090806484e+01f, -1.279428673e+01f, -1.489493179e+01f},
+    {-7.531638145e+00f, -8.146767616e+00f, -8.866260529e+00f, -9.694294930e+00f, -1.063596249e+01f, -1.169744873e+01f, -1.288627911e+01f, -1.421164799e+01f, -1.568488693e+01f, -1.732011795e+01f, -1.913521385e+01f},
+    {-1.248458767e+01f, -1.301944065e+01f, -1.364012623e+01f, -1.434986210e+01f, -1.515252495e+01f, -1.605277824e+01f, -1.705622864e+01f, -1.816965103e+01f, -1.940126801e+01f, -2.076117134e+01f, -2.226188469e+01f},
+    {-1.668332863e+01f, -1.713726425e+01f, -1.765832520e+01f, -1.824878502e+01f, -1.891134644e+01f, -1.964921188e+01f, -2.046617508e+01f, -2.136673927e+01f, -2.235627556e+01f, -2.344123268e+01f, -2.462941933e+01f},
+    {-2.028558731e+01f, -2.065829086e+01f, -2.108005333e+01f, -2.155231857e+01f, -2.207676125e+01f, -2.265533638e+01f, -2.329031563e+01f, -2.398433495e+01f, -2.474047279e+01f, -2.556233025e+01f, -2.645414543e+01f},
+    {-2.340852928e+01f, -2.369834137e+01f, -2.402031136e+01f, -2.437520027e+01f, -2.476388550e+01f, -2.518735695e+01f, -2.564673805e+01f, -2.614330673e+01f, -2.667851257e+01f, -2.725399971e+01f, -2.787164879e+01f},
+    {-2.614084625e+01f, -2.634262848e+01f, -2.656133461e+01f, -2.679725838e+01f, -2.705071640e+01f, -2.732206345e+01f, -2.761168861e+01f, -2.792001534e+01f, -2.824751663e+01f, -2.859470558e+01f, -2.896215057e+01f},
+};
+static const float cct_env_i_q[17][11] = {
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 3.000000000e+00f, 6.000000000e+00f, 9.000000000e+00f, 1.200000000e+01f, 1.500000000e+01f, 1.800000000e+01f, 2.100000000e+01f, 2.400000000e+01f, 2.700000000e+01f, 3.000000000e+01f},
+    {0.0f, 2.864268303e+00f, 5.728536606e+00f, 8.592804909e+00f, 1.145707321e+01f, 1.432134151e+01f, 1.718560982e+01f, 2.004987717e+01f, 2.291414642e+01f, 2.577841377e+01f, 2.864268303e+01f},
+    {0.0f, 2.604114056e+00f, 5.208228111e+00f, 7.812342167e+00f, 1.041645622e+01f, 1.302057076e+01f, 1.562468433e+01f, 1.822879791e+01f, 2.083291245e+01f, 2.343702698e+01f, 2.604114151e+01f},
+    {0.0f, 2.310505629e+00f, 4.621011257e+00f, 6.931517124e+00f, 9.242022514e+00f, 1.155252838e+01f, 1.386303425e+01f, 1.617354012e+01f, 1.848404503e+01f, 2.079454994e+01f, 2.310505676e+01f},
+    {0.0f, 2.010991096e+00f, 4.021982193e+00f, 6.032972813e+00f, 8.043964386e+00f, 1.005495453e+01f, 1.206594563e+01f, 1.407693672e+01f, 1.608792877e+01f, 1.809891891e+01f, 2.010990906e+01f},
+    {0.0f, 1.712867975e+00f, 3.425735950e+00f, 5.138604164e+00f, 6.851471901e+00f, 8.564340591e+00f, 1.027720833e+01f, 1.199007607e+01f, 1.370294380e+01f, 1.541581249e+01f, 1.712868118e+01f},
+    {0.0f, 1.414843559e+00f, 2.829687119e+00f, 4.244530678e+00f, 5.659374237e+00f, 7.074217796e+00f, 8.489061356e+00f, 9.903904915e+00f, 1.131874847e+01f, 1.273359203e+01f, 1.414843559e+01f},
+    {0.0f, 1.109825134e+00f, 2.219650269e+00f, 3.329475403e+00f, 4.439300537e+00f, 5.549125671e+00f, 6.658950806e+00f, 7.768776417e+00f, 8.878601074e+00f, 9.988426208e+00f, 1.109825134e+01f},
+    {0.0f, 7.822646499e-01f, 1.564529300e+00f, 2.346793890e+00f, 3.129058599e+00f, 3.911323309e+00f, 4.693587780e+00f, 5.475852489e+00f, 6.258117199e+00f, 7.040381908e+00f, 7.822646618e+00f},
+};
+/* torque (N m), omega_m (mechanical rad/s) -> *i_d_ref, *i_q_ref (A); returns 0,
+ * 1 (torque clamped to the limit at that speed) or 2 (|omega_m| beyond the
+ * table: its last row used). The Python mirror is
+ * toolbox.export._envelope_table.EnvelopeTable.reference. */
+static inline int cct_envelope_ref(float torque, float omega_m, float *i_d_ref, float *i_q_ref)
+{
+    int status = 0;
+    float s = (omega_m < 0.0f ? -omega_m : omega_m) / CCT_ENV_SPEED_STEP;
+    if (!(s <= (float)(CCT_ENV_N_SPEED - 1))) { s = (float)(CCT_ENV_N_SPEED - 1); status = 2; }
+    int k = (int)s;
+    if (k > CCT_ENV_N_SPEED - 2) { k = CCT_ENV_N_SPEED - 2; }
+    const float fs = s - (float)k;
+    const float t_lim = cct_env_t_max[k] + fs * (cct_env_t_max[k + 1] - cct_env_t_max[k]);
+    const float ta = torque < 0.0f ? -torque : torque;
+    float f = t_lim > 0.0f ? ta / t_lim : 0.0f;
+    if (f > 1.0f) { f = 1.0f; if (status == 0) { status = 1; } }
+    const float c = f * (float)(CCT_ENV_N_TORQUE - 1);
+    int j = (int)c;
+    if (j > CCT_ENV_N_TORQUE - 2) { j = CCT_ENV_N_TORQUE - 2; }
+    const float fc = c - (float)j;
+    const float d_lo = cct_env_i_d[k][j] + fc * (cct_env_i_d[k][j + 1] - cct_env_i_d[k][j]);
+    const float d_hi = cct_env_i_d[k + 1][j] + fc * (cct_env_i_d[k + 1][j + 1] - cct_env_i_d[k + 1][j]);
+    const float q_lo = cct_env_i_q[k][j] + fc * (cct_env_i_q[k][j + 1] - cct_env_i_q[k][j]);
+    const float q_hi = cct_env_i_q[k + 1][j] + fc * (cct_env_i_q[k + 1][j + 1] - cct_env_i_q[k + 1][j]);
+    const float iq = q_lo + fs * (q_hi - q_lo);
+    *i_d_ref = d_lo + fs * (d_hi - d_lo);
+    *i_q_ref = torque < 0.0f ? -iq : iq;
+    return status;
+}
 
 #if 0 /* usage example: copy the lines between BEGIN and END into main.c */
 // EXAMPLE main.c BEGIN

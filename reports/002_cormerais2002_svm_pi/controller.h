@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 63448721dc1b996ad9673edd2f7d8f63d5f662add7890a1068308cfa4e6a5529
  * law sha256:  3ee178d01754d3d92d2158aed6c68c397e43237bcab357f65d6657f481221a9a
- * created:     2026-11-27T19:06:29+00:00
+ * created:     2026-11-27T21:55:13+00:00
  * equations:   000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e); 002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation); Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
@@ -528,6 +528,86 @@ static inline void cct_place_q30(int64_t vd, int64_t vq, int64_t x, int64_t *pd,
 #if defined(CCT_MCSDK) || defined(CCT_IQMATH)
 #error "MCSDK/IQmath variants not available: voltage_limit = 'hexagon' is implemented in the float path only; the MCSDK/IQmath variants need voltage_limit = 'circle'"
 #endif
+
+/* Operating envelope (toolbox.plant.OperatingEnvelope, constant Ld, Lq, flux):
+ * current references for a torque at a speed: MTPA below base speed, field
+ * weakening above, the torque limit where the request exceeds it; voltage
+ * limit 8.06102 V (the drive's circle less 5 % for the loop), current
+ * limit 150 A. Table of 17 speeds (0 .. 27.2763 rad/s
+ * mechanical) x 11 torques (0 .. the limit at that speed), interpolated linearly
+ * in |speed| and in the torque's fraction of the limit; a negative torque mirrors
+ * i_q. Memory: (N_SPEED + 2 N_SPEED N_TORQUE) x 4 = 1564 bytes of constants. */
+#define CCT_ENV_N_SPEED 17
+#define CCT_ENV_N_TORQUE 11
+#define CCT_ENV_SPEED_STEP 1.704770088e+00f /* rad/s between rows */
+static const float cct_env_t_max[17] = {5.435100174e+01f, 5.435100174e+01f, 5.435100174e+01f, 5.435100174e+01f, 5.435100174e+01f, 5.435100174e+01f, 5.435100174e+01f, 5.435100174e+01f, 5.435100174e+01f, 4.905006409e+01f, 4.178019333e+01f, 3.474204636e+01f, 2.814409637e+01f, 2.194275093e+01f, 1.604047585e+01f, 1.032488346e+01f, 4.670722008e+00f};
+static const float cct_env_i_d[17][11] = {
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, -4.888180733e+00f, -6.461338806e+01f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, -3.566889524e+00f, -3.717758560e+01f, -9.593950653e+01f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, -1.181453609e+01f, -3.496638870e+01f, -6.493975830e+01f, -1.153540497e+02f},
+    {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, -1.198750401e+01f, -2.679880524e+01f, -4.375082397e+01f, -6.383325958e+01f, -8.926004028e+01f, -1.283233337e+02f},
+    {0.0f, -6.221554279e+00f, -1.508666992e+01f, -2.463652611e+01f, -3.499552917e+01f, -4.633546448e+01f, -5.890566635e+01f, -7.309362793e+01f, -8.956533813e+01f, -1.096702118e+02f, -1.372321930e+02f},
+    {-3.870724869e+01f, -4.562526321e+01f, -5.296881104e+01f, -6.080018234e+01f, -6.920002747e+01f, -7.827600098e+01f, -8.817757416e+01f, -9.912318420e+01f, -1.114557037e+02f, -1.257731400e+02f, -1.433186798e+02f},
+    {-7.870826721e+01f, -8.384729004e+01f, -8.923283386e+01f, -9.489454651e+01f, -1.008689804e+02f, -1.072020874e+02f, -1.139529800e+02f, -1.212000046e+02f, -1.290508118e+02f, -1.376606750e+02f, -1.472685852e+02f},
+    {-1.180811157e+02f, -1.208043823e+02f, -1.236016235e+02f, -1.264780502e+02f, -1.294394836e+02f, -1.324925842e+02f, -1.356449280e+02f, -1.389052734e+02f, -1.422837677e+02f, -1.457923279e+02f, -1.494450989e+02f},
+};
+static const float cct_env_i_q[17][11] = {
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.500000000e+01f, 3.000000000e+01f, 4.500000000e+01f, 6.000000000e+01f, 7.500000000e+01f, 9.000000000e+01f, 1.050000000e+02f, 1.200000000e+02f, 1.350000000e+02f, 1.500000000e+02f},
+    {0.0f, 1.353702736e+01f, 2.707405472e+01f, 4.061108017e+01f, 5.414810944e+01f, 6.768513489e+01f, 8.122216034e+01f, 9.475918579e+01f, 1.082962189e+02f, 1.218332443e+02f, 1.353702698e+02f},
+    {0.0f, 1.153065968e+01f, 2.306131935e+01f, 3.459197998e+01f, 4.612263870e+01f, 5.765329742e+01f, 6.918395996e+01f, 8.071461487e+01f, 9.224527740e+01f, 1.037759399e+02f, 1.153065948e+02f},
+    {0.0f, 9.588244438e+00f, 1.917648888e+01f, 2.876473427e+01f, 3.835297775e+01f, 4.794122314e+01f, 5.752946854e+01f, 6.711771393e+01f, 7.670595551e+01f, 8.629419708e+01f, 9.588244629e+01f},
+    {0.0f, 7.767316818e+00f, 1.553463364e+01f, 2.330195045e+01f, 3.106926727e+01f, 3.883658600e+01f, 4.660390091e+01f, 5.437121964e+01f, 6.213853455e+01f, 6.990585327e+01f, 7.767317200e+01f},
+    {0.0f, 6.055845737e+00f, 1.211169147e+01f, 1.816753578e+01f, 2.422338295e+01f, 3.027922821e+01f, 3.633507156e+01f, 4.239091873e+01f, 4.844676590e+01f, 5.450260925e+01f, 6.055845642e+01f},
+    {0.0f, 4.426912785e+00f, 8.853825569e+00f, 1.328073883e+01f, 1.770765114e+01f, 2.213456535e+01f, 2.656147766e+01f, 3.098838997e+01f, 3.541530228e+01f, 3.984221649e+01f, 4.426913071e+01f},
+    {0.0f, 2.849501371e+00f, 5.699002743e+00f, 8.548504829e+00f, 1.139800549e+01f, 1.424750710e+01f, 1.709700966e+01f, 1.994651031e+01f, 2.279601097e+01f, 2.564551353e+01f, 2.849501419e+01f},
+    {0.0f, 1.289043903e+00f, 2.578087807e+00f, 3.867131710e+00f, 5.156175613e+00f, 6.445219517e+00f, 7.734263420e+00f, 9.023307800e+00f, 1.031235123e+01f, 1.160139561e+01f, 1.289043903e+01f},
+};
+/* torque (N m), omega_m (mechanical rad/s) -> *i_d_ref, *i_q_ref (A); returns 0,
+ * 1 (torque clamped to the limit at that speed) or 2 (|omega_m| beyond the
+ * table: its last row used). The Python mirror is
+ * toolbox.export._envelope_table.EnvelopeTable.reference. */
+static inline int cct_envelope_ref(float torque, float omega_m, float *i_d_ref, float *i_q_ref)
+{
+    int status = 0;
+    float s = (omega_m < 0.0f ? -omega_m : omega_m) / CCT_ENV_SPEED_STEP;
+    if (!(s <= (float)(CCT_ENV_N_SPEED - 1))) { s = (float)(CCT_ENV_N_SPEED - 1); status = 2; }
+    int k = (int)s;
+    if (k > CCT_ENV_N_SPEED - 2) { k = CCT_ENV_N_SPEED - 2; }
+    const float fs = s - (float)k;
+    const float t_lim = cct_env_t_max[k] + fs * (cct_env_t_max[k + 1] - cct_env_t_max[k]);
+    const float ta = torque < 0.0f ? -torque : torque;
+    float f = t_lim > 0.0f ? ta / t_lim : 0.0f;
+    if (f > 1.0f) { f = 1.0f; if (status == 0) { status = 1; } }
+    const float c = f * (float)(CCT_ENV_N_TORQUE - 1);
+    int j = (int)c;
+    if (j > CCT_ENV_N_TORQUE - 2) { j = CCT_ENV_N_TORQUE - 2; }
+    const float fc = c - (float)j;
+    const float d_lo = cct_env_i_d[k][j] + fc * (cct_env_i_d[k][j + 1] - cct_env_i_d[k][j]);
+    const float d_hi = cct_env_i_d[k + 1][j] + fc * (cct_env_i_d[k + 1][j + 1] - cct_env_i_d[k + 1][j]);
+    const float q_lo = cct_env_i_q[k][j] + fc * (cct_env_i_q[k][j + 1] - cct_env_i_q[k][j]);
+    const float q_hi = cct_env_i_q[k + 1][j] + fc * (cct_env_i_q[k + 1][j + 1] - cct_env_i_q[k + 1][j]);
+    const float iq = q_lo + fs * (q_hi - q_lo);
+    *i_d_ref = d_lo + fs * (d_hi - d_lo);
+    *i_q_ref = torque < 0.0f ? -iq : iq;
+    return status;
+}
 
 #if 0 /* usage example: copy the lines between BEGIN and END into main.c */
 // EXAMPLE main.c BEGIN

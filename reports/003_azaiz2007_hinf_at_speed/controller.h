@@ -3,10 +3,10 @@
  * title:       Azaiz 2007 (paper 003): H-infinity current control synthesised against the coupled plant at speed
  * method:      hinf
  * version:     0.1.0
- * spec sha256: 3d54e1585f891859bcd0067354f5511ea79262f496eb1149a44680506a72995a
- * law sha256:  752644d99d675ee8e3b8802cb9ae06ceb0d98bab56bd7e7fc5123bfb3afb276f
- * created:     2026-11-27T19:06:32+00:00
- * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72); coupled dq plant at speed, 003 eq (3)-(4): small-gain S weight w1 + k sqrt(c_d c_q) G
+ * spec sha256: 2543261a0a76e6c16fc331777f1946f49735f06030e894512f8ea50f82f10eeb
+ * law sha256:  488ffcca2397dd565169ae898970c9c5768047b7cd4511bab2a33aa222d9c22c
+ * created:     2026-11-27T21:55:31+00:00
+ * equations:   003 eq (3)-(4); 003 eq (35)-(40); 003 eq (10)-(19); 003 eq (41)-(43); coupled 2x2 generalised plant at speed with the loop delay; structured multi-model H-infinity (toolbox.design._hinf_coupled)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
  * Call cct_init() once, then cct_set_vdc() with the measured bus voltage and
@@ -93,8 +93,10 @@
 #define CCT_PRED_FLUX 1.199999973e-01f /* Wb */
 #define CCT_DELAY_COMP_TIME 1.500000071e-04f /* s (1.5 Ts, drive.angle_compensation = "mid_period"): v_dq is placed at theta_e + CCT_DELAY_COMP_TIME * w_e (rad); applied inside cct_step, outputs v_d_comp, v_q_comp */
 
-#define CCT_Q_GAIN 8.533594012e-02f /* q axis SOS output gain, V/A */
-#define CCT_Q_NUM_STAGES 2
+#define CCT_D_GAIN 2.166670322e+00f /* d axis SOS output gain, V/A */
+#define CCT_D_NUM_STAGES 1
+#define CCT_Q_GAIN 2.006540537e+00f /* q axis SOS output gain, V/A */
+#define CCT_Q_NUM_STAGES 1
 
 /* inputs: currents in A, measured MECHANICAL speed in rad/s.
  * dq frame (amplitude-invariant Park transform: |i_dq| = peak phase current, |v_dq| = peak phase voltage):
@@ -137,11 +139,11 @@ typedef struct {
     int status;    /* CCT_STATUS_* */
 } cct_output_t;
 
-/* controller states (ss d axis: 3, sos q axis: 4; arrays have at least one element)
+/* controller states (sos d axis: 2, sos q axis: 2; arrays have at least one element)
  * and the last good output, held when a period fails */
 typedef struct {
-    float d[3];
-    float q[4];
+    float d[2];
+    float q[2];
     float v_d_hold; /* V */
     float v_q_hold; /* V */
     float v_d_comp_hold; /* V */
@@ -157,8 +159,8 @@ typedef struct {
 static inline void cct_reset(cct_state_t *s)
 {
     unsigned i;
-    for (i = 0u; i < 3u; ++i) { s->d[i] = 0.0f; }
-    for (i = 0u; i < 4u; ++i) { s->q[i] = 0.0f; }
+    for (i = 0u; i < 2u; ++i) { s->d[i] = 0.0f; }
+    for (i = 0u; i < 2u; ++i) { s->q[i] = 0.0f; }
     s->v_d_hold = 0.0f;
     s->v_q_hold = 0.0f;
     s->v_d_comp_hold = 0.0f;
@@ -228,8 +230,8 @@ static inline int cct_state_finite(const cct_state_t *s)
 {
     unsigned i;
     int ok = 1;
-    for (i = 0u; i < 3u; ++i) { ok &= cct_finite(s->d[i]); }
-    for (i = 0u; i < 4u; ++i) { ok &= cct_finite(s->q[i]); }
+    for (i = 0u; i < 2u; ++i) { ok &= cct_finite(s->d[i]); }
+    for (i = 0u; i < 2u; ++i) { ok &= cct_finite(s->q[i]); }
     return ok;
 }
 
@@ -248,37 +250,32 @@ static inline void cct_hold(const cct_state_t *s, cct_output_t *out, int status)
 /* d axis linear law: returns v (V); updates the state to A x + B u */
 static inline float cct_d_linear(float *x, float r, float y)
 {
-    static const float a[9] = { 6.352062523e-02f, -3.053568006e-01f, 0.0f, 4.356180429e-01f, 8.749258518e-01f, 0.0f, 6.969888927e-04f, 2.999881282e-03f, 1.000000000e+00f };
-    static const float b[6] = { 3.403265961e-03f, -3.403265961e-03f, 1.393977785e-03f, -1.393977785e-03f, 2.230364316e-06f, -2.230364316e-06f };
-    static const float c[3] = { 4.194243622e+01f, 1.255181427e+02f, 2.193607712e+01f };
-    float xn[3];
-    float v = 1.342158020e-01f * r + -1.342158020e-01f * y;
-    unsigned i, j;
-    for (i = 0u; i < 3u; ++i) {
-        float acc = b[2u * i] * r + b[2u * i + 1u] * y;
-        for (j = 0u; j < 3u; ++j) {
-            acc += a[3u * i + j] * x[j];
-        }
-        v += c[i] * x[i];
-        xn[i] = acc;
+    /* 1 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_D_GAIN */
+    static const float c[5] = {
+        1.000000000e+00f, 2.810427733e-02f, -9.718956947e-01f, 7.780137658e-01f, 2.219862044e-01f,
+    };
+    float in = r - y;
+    unsigned k;
+    for (k = 0u; k < 1u; ++k) {
+        const float *s = &c[5u * k];
+        const float out = s[0] * in + x[2u * k];
+        x[2u * k] = s[1] * in + s[3] * out + x[2u * k + 1u];
+        x[2u * k + 1u] = s[2] * in + s[4] * out;
+        in = out;
     }
-    for (i = 0u; i < 3u; ++i) {
-        x[i] = xn[i];
-    }
-    return v;
+    return CCT_D_GAIN * in;
 }
 
 /* q axis linear law: returns v (V); updates the state to A x + B u */
 static inline float cct_q_linear(float *x, float r, float y)
 {
-    /* 2 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_Q_GAIN */
-    static const float c[10] = {
-        1.000000000e+00f, 1.428571463e+00f, 4.285714328e-01f, 1.229228258e+00f, -3.819809258e-01f,
-        1.000000000e+00f, -9.986150861e-01f, 0.0f, 1.000000000e+00f, 0.0f,
+    /* 1 stage(s) {b0, b1, b2, a1, a2} (a1, a2 negated, CMSIS df2T), gain CCT_Q_GAIN */
+    static const float c[5] = {
+        1.000000000e+00f, 7.253512740e-02f, -9.274649024e-01f, 7.787889838e-01f, 2.212110162e-01f,
     };
     float in = r - y;
     unsigned k;
-    for (k = 0u; k < 2u; ++k) {
+    for (k = 0u; k < 1u; ++k) {
         const float *s = &c[5u * k];
         const float out = s[0] * in + x[2u * k];
         x[2u * k] = s[1] * in + s[3] * out + x[2u * k + 1u];
@@ -294,11 +291,11 @@ static inline float cct_q_linear(float *x, float r, float y)
  * state to it in least squares) */
 static inline void cct_d_preset(float *x, float v, float r, float y)
 {
-    static const float g[3] = { -8.595733155e-19f, 1.171742180e-18f, 4.558700323e-02f };
-    static const float h[6] = { 3.524745580e-07f, -3.524745580e-07f, 1.114347856e-02f, -1.114347856e-02f, -6.376361847e-02f, 6.376361847e-02f };
-    const float c = v - (1.342158020e-01f * r + -1.342158020e-01f * y);
+    static const float g[2] = { 4.615376592e-01f, 1.024549976e-01f };
+    static const float h[4] = { 0.0f, 0.0f, -7.780137658e-01f, 7.780137658e-01f };
+    const float c = v - (2.166670322e+00f * r + -2.166670322e+00f * y);
     unsigned i;
-    for (i = 0u; i < 3u; ++i) {
+    for (i = 0u; i < 2u; ++i) {
         x[i] = g[i] * c + h[2u * i] * r + h[2u * i + 1u] * y;
     }
 }
@@ -309,11 +306,11 @@ static inline void cct_d_preset(float *x, float v, float r, float y)
  * state to it in least squares) */
 static inline void cct_q_preset(float *x, float v, float r, float y)
 {
-    static const float g[4] = { 0.0f, 0.0f, 1.171839142e+01f, 0.0f };
-    static const float h[8] = { 1.770283508e+01f, -1.770283508e+01f, -6.715672493e+00f, 6.715672493e+00f, -1.770283508e+01f, 1.770283508e+01f, -1.295085251e-02f, 1.295085251e-02f };
-    const float c = v - (8.533594012e-02f * r + -8.533594012e-02f * y);
+    static const float g[2] = { 4.983701706e-01f, 1.102449745e-01f };
+    static const float h[4] = { 0.0f, 0.0f, -7.787889838e-01f, 7.787889838e-01f };
+    const float c = v - (2.006540537e+00f * r + -2.006540537e+00f * y);
     unsigned i;
-    for (i = 0u; i < 4u; ++i) {
+    for (i = 0u; i < 2u; ++i) {
         x[i] = g[i] * c + h[2u * i] * r + h[2u * i + 1u] * y;
     }
 }
@@ -360,7 +357,7 @@ static inline int cct_preset_at(cct_state_t *s, const cct_input_t *in, float v_d
 
 /* the linear laws' part only: the states where each axis law outputs v_d, v_q
  * (V) at zero error, i.e. with i_ref = i_meas for a one-degree-of-freedom law
- * (v = K (i_ref - i_meas)) and with zero currents otherwise;
+ * (v = K (i_ref - i_meas): every axis of this header) and with zero currents otherwise;
  * decoupling terms come on top at speed. Held output set to (v_d, v_q).
  * Use cct_preset_at for an exact handover at speed or with currents. */
 static inline void cct_preset(cct_state_t *s, float v_d, float v_q)
@@ -423,12 +420,10 @@ static inline void cct_step(cct_state_t *s, const cct_input_t *in, cct_output_t 
         saturated = 1;
     }
     /* back-calculation anti-windup */
-    nx.d[0] += -1.377760083e-03f * (vds - vd);
-    nx.d[1] += 7.884165272e-03f * (vds - vd);
-    nx.d[2] += 1.821898150e-05f * (vds - vd);
-    nx.q[0] += 1.432562065e+01f * (vqs - vq);
-    nx.q[1] += -4.476202488e+00f * (vqs - vq);
-    nx.q[2] += 1.622889377e-02f * (vqs - vq);
+    nx.d[0] += -8.948381245e-02f * (vds - vd);
+    nx.d[1] += 1.024549976e-01f * (vds - vd);
+    nx.q[0] += -7.409563661e-02f * (vqs - vq);
+    nx.q[1] += 1.102449745e-01f * (vqs - vq);
     if (!(cct_finite(vds) && cct_finite(vqs) && cct_state_finite(&nx))) {
         cct_hold(s, out, CCT_STATUS_BAD_STATE);
         return;
@@ -506,12 +501,12 @@ static inline void cct_place_q30(int64_t vd, int64_t vq, int64_t x, int64_t *pd,
  * clamps references and measurements beyond I_MAX / W_MAX (status CLAMPED)
  * and refuses measurements at or beyond the plausible ranges (status
  * IMPLAUSIBLE: the last plausible sample used, the state not updated).
- * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.000168 V over 20 ms from equal states.
- * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000276 V over 20 ms from equal states.
+ * Quantisation error bound, d axis: |v_q31 - v_exact| <= 0.00262 V over 20 ms from equal states.
+ * Quantisation error bound, q axis: |v_q31 - v_exact| <= 0.000961 V over 20 ms from equal states.
  */
 #include <stdint.h>
 #define CCT_Q31_I_BASE 6.400000000e+01f /* A at full scale */
-#define CCT_Q31_V_BASE 2.048000000e+03f /* V at full scale */
+#define CCT_Q31_V_BASE 1.638400000e+04f /* V at full scale */
 #define CCT_Q31_W_BASE 1.024000000e+03f /* mechanical rad/s at full scale */
 #define CCT_Q31_I_MAX 2.000000000e+01f /* A, current range (cct_step_q31 clamps beyond) */
 #define CCT_Q31_W_MAX 3.608439331e+02f /* rad/s, speed range (cct_step_q31 clamps beyond) */
@@ -522,21 +517,18 @@ static inline void cct_place_q30(int64_t vd, int64_t vq, int64_t x, int64_t *pd,
 #define CCT_Q31_W_MAX_W 756744544L
 #define CCT_Q31_I_PLAUSIBLE_W 1342177280L
 #define CCT_Q31_W_PLAUSIBLE_W 1513489089L
-#define CCT_Q31_V_MAX 90809345L /* V_MAX / V_BASE in Q31: the largest limit */
-#define CCT_Q31_VDC_BASE 3.547239990e+03f /* V of bus at full scale (cct_set_vdc_q31) */
-#define CCT_Q31_D_X0_BASE 2.000000000e+00f /* state 0 full scale */
-#define CCT_Q31_D_X1_BASE 4.000000000e+00f /* state 1 full scale */
-#define CCT_Q31_D_X2_BASE 8.000000000e+00f /* state 2 full scale */
-#define CCT_Q31_Q_X0_BASE 1.638400000e+04f /* state 0 full scale */
-#define CCT_Q31_Q_X1_BASE 4.096000000e+03f /* state 1 full scale */
-#define CCT_Q31_Q_X2_BASE 4.096000000e+03f /* state 2 full scale */
-#define CCT_Q31_Q_X3_BASE 1.000000000e+00f /* state 3 full scale */
-#define CCT_Q31_DEC_DD -769658139L /* decoupling coefficient -0.3584 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DD_SHIFT 31u
-#define CCT_Q31_DEC_DQ 769658139L /* decoupling coefficient 0.1792 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DQ_SHIFT 32u
-#define CCT_Q31_DEC_DE 1030792151L /* decoupling coefficient 0.24 p.u. = m / 2^shift */
-#define CCT_Q31_DEC_DE_SHIFT 32u
+#define CCT_Q31_V_MAX 11351168L /* V_MAX / V_BASE in Q31: the largest limit */
+#define CCT_Q31_VDC_BASE 2.837791992e+04f /* V of bus at full scale (cct_set_vdc_q31) */
+#define CCT_Q31_D_X0_BASE 4.096000000e+03f /* state 0 full scale */
+#define CCT_Q31_D_X1_BASE 6.400000000e+01f /* state 1 full scale */
+#define CCT_Q31_Q_X0_BASE 2.048000000e+03f /* state 0 full scale */
+#define CCT_Q31_Q_X1_BASE 1.280000000e+02f /* state 1 full scale */
+#define CCT_Q31_DEC_DD -769658139L /* decoupling coefficient -0.0448 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DD_SHIFT 34u
+#define CCT_Q31_DEC_DQ 769658139L /* decoupling coefficient 0.0224 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DQ_SHIFT 35u
+#define CCT_Q31_DEC_DE 1030792151L /* decoupling coefficient 0.03 p.u. = m / 2^shift */
+#define CCT_Q31_DEC_DE_SHIFT 35u
 
 typedef struct {
     int32_t i_d_ref; /* Q31 of Q31_I_BASE */
@@ -561,8 +553,8 @@ typedef struct {
 } cct_output_q31_t;
 
 typedef struct {
-    int32_t d[3];
-    int32_t q[4];
+    int32_t d[2];
+    int32_t q[2];
     int32_t v_max; /* voltage limit in use, Q31 of Q31_V_BASE (cct_set_vdc_q31) */
     int32_t i_d_good; /* last plausible measurements (0 after init), used in place */
     int32_t i_q_good; /* of an implausible one */
@@ -572,8 +564,8 @@ typedef struct {
 static inline void cct_init_q31(cct_state_q31_t *s)
 {
     unsigned i;
-    for (i = 0u; i < 3u; ++i) { s->d[i] = 0; }
-    for (i = 0u; i < 4u; ++i) { s->q[i] = 0; }
+    for (i = 0u; i < 2u; ++i) { s->d[i] = 0; }
+    for (i = 0u; i < 2u; ++i) { s->q[i] = 0; }
     s->v_max = CCT_Q31_V_MAX;
     s->i_d_good = 0;
     s->i_q_good = 0;
@@ -657,34 +649,33 @@ static inline uint32_t cct_isqrt64(uint64_t v)
 /* d axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_d_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[5] = { 43979834L, 263230628L, 92006577L, 4503535L, -4503535L };
-    static const int32_t ca[18] = {
-        8525594L, -81968594L, 0L, 14616916L, -14616916L, -189357899L,
-        7308458L, 29357640L, 0L, 748386L, -748386L, 135448932L,
-        23387L, 201319L, 134217728L, 2395L, -2395L, 625999L,
+    static const int32_t co[4] = { 145402791L, 0L, 2271919L, -2271919L };
+    static const int32_t ca[10] = {
+        208846486L, 4194304L, 3381104L, -3381104L, -96082514L,
+        119177940L, 0L, -6290697L, 6290697L, 220020430L,
     };
-    static const unsigned fa[3] = { 27u, 25u, 27u };
-    int32_t xn[3];
+    static const unsigned fa[2] = { 28u, 23u };
+    int32_t xn[2];
     unsigned i, j;
-    int64_t acc = (int64_t)co[3] * r + (int64_t)co[4] * y;
-    for (j = 0u; j < 3u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 30u);
-    for (i = 0u; i < 3u; ++i) {
-        const int32_t *m = &ca[6u * i];
-        int64_t a = (int64_t)m[3] * r + (int64_t)m[4] * y;
-        for (j = 0u; j < 3u; ++j) { a += (int64_t)m[j] * x[j]; }
+    int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
+    for (j = 0u; j < 2u; ++j) { acc += (int64_t)co[j] * x[j]; }
+    acc = cct_shr(acc, 28u);
+    for (i = 0u; i < 2u; ++i) {
+        const int32_t *m = &ca[5u * i];
+        int64_t a = (int64_t)m[2] * r + (int64_t)m[3] * y;
+        for (j = 0u; j < 2u; ++j) { a += (int64_t)m[j] * x[j]; }
         xn[i] = cct_sat32(cct_shr(a, fa[i]));
     }
-    for (i = 0u; i < 3u; ++i) { x[i] = xn[i]; }
+    for (i = 0u; i < 2u; ++i) { x[i] = xn[i]; }
     return acc;
 }
 
 static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[3] = { -189357899L, 135448932L, 625999L };
-    static const unsigned fa[3] = { 27u, 25u, 27u };
+    static const int32_t aw[2] = { -96082514L, 220020430L };
+    static const unsigned fa[2] = { 28u, 23u };
     unsigned i;
-    for (i = 0u; i < 3u; ++i) {
+    for (i = 0u; i < 2u; ++i) {
         x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));
     }
 }
@@ -692,35 +683,33 @@ static inline void cct_d_antiwindup_q31(int32_t *x, int64_t dv)
 /* q axis: v_lin (Q31, int64 before limiting) and x <- A x + B u */
 static inline int64_t cct_q_linear_q31(int32_t *x, int32_t r, int32_t y)
 {
-    static const int32_t co[6] = { 183257540L, 0L, 45814385L, 0L, 715850L, -715850L };
-    static const int32_t ca[28] = {
-        164984225L, 33554432L, 0L, 0L, 1393452L, -1393452L, 240344030L,
-        -102537228L, 0L, 0L, 0L, 48854L, -48854L, -150196426L,
-        743517L, 0L, 134217728L, 32768L, 2904L, -2904L, 1089103L,
-        0L, 0L, 0L, 0L, 0L, 0L, 0L,
+    static const int32_t co[4] = { 134656660L, 0L, 4208021L, -4208021L };
+    static const int32_t ca[10] = {
+        209054575L, 16777216L, 7141424L, -7141424L, -159119160L,
+        59380881L, 0L, -5924487L, 5924487L, 236749284L,
     };
-    static const unsigned fa[4] = { 27u, 26u, 27u, 31u };
-    int32_t xn[4];
+    static const unsigned fa[2] = { 28u, 24u };
+    int32_t xn[2];
     unsigned i, j;
-    int64_t acc = (int64_t)co[4] * r + (int64_t)co[5] * y;
-    for (j = 0u; j < 4u; ++j) { acc += (int64_t)co[j] * x[j]; }
-    acc = cct_shr(acc, 28u);
-    for (i = 0u; i < 4u; ++i) {
-        const int32_t *m = &ca[7u * i];
-        int64_t a = (int64_t)m[4] * r + (int64_t)m[5] * y;
-        for (j = 0u; j < 4u; ++j) { a += (int64_t)m[j] * x[j]; }
+    int64_t acc = (int64_t)co[2] * r + (int64_t)co[3] * y;
+    for (j = 0u; j < 2u; ++j) { acc += (int64_t)co[j] * x[j]; }
+    acc = cct_shr(acc, 29u);
+    for (i = 0u; i < 2u; ++i) {
+        const int32_t *m = &ca[5u * i];
+        int64_t a = (int64_t)m[2] * r + (int64_t)m[3] * y;
+        for (j = 0u; j < 2u; ++j) { a += (int64_t)m[j] * x[j]; }
         xn[i] = cct_sat32(cct_shr(a, fa[i]));
     }
-    for (i = 0u; i < 4u; ++i) { x[i] = xn[i]; }
+    for (i = 0u; i < 2u; ++i) { x[i] = xn[i]; }
     return acc;
 }
 
 static inline void cct_q_antiwindup_q31(int32_t *x, int64_t dv)
 {
-    static const int32_t aw[4] = { 240344030L, -150196426L, 1089103L, 0L };
-    static const unsigned fa[4] = { 27u, 26u, 27u, 31u };
+    static const int32_t aw[2] = { -159119160L, 236749284L };
+    static const unsigned fa[2] = { 28u, 24u };
     unsigned i;
-    for (i = 0u; i < 4u; ++i) {
+    for (i = 0u; i < 2u; ++i) {
         x[i] = cct_sat32((int64_t)x[i] + cct_shr((int64_t)aw[i] * dv, fa[i]));
     }
 }
@@ -794,8 +783,88 @@ static inline void cct_step_q31(cct_state_q31_t *s, const cct_input_q31_t *in, c
 #endif /* CCT_FIXED_POINT */
 
 #if defined(CCT_MCSDK) || defined(CCT_IQMATH)
-#error "MCSDK/IQmath variants not available: d axis: the MCSDK/IQmath variants run a PI (one integrator); this law has order 3"
+#error "MCSDK/IQmath variants not available: d axis: the MCSDK/IQmath variants run a PI (one integrator); this law has order 2"
 #endif
+
+/* Operating envelope (toolbox.plant.OperatingEnvelope, constant Ld, Lq, flux):
+ * current references for a torque at a speed: MTPA below base speed, field
+ * weakening above, the torque limit where the request exceeds it; voltage
+ * limit 82.2724 V (the drive's circle less 5 % for the loop), current
+ * limit 20 A. Table of 17 speeds (0 .. 221.169 rad/s
+ * mechanical) x 11 torques (0 .. the limit at that speed), interpolated linearly
+ * in |speed| and in the torque's fraction of the limit; a negative torque mirrors
+ * i_q. Memory: (N_SPEED + 2 N_SPEED N_TORQUE) x 4 = 1564 bytes of constants. */
+#define CCT_ENV_N_SPEED 17
+#define CCT_ENV_N_TORQUE 11
+#define CCT_ENV_SPEED_STEP 1.382306671e+01f /* rad/s between rows */
+static const float cct_env_t_max[17] = {1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.476881313e+01f, 1.377247047e+01f, 1.172482395e+01f, 9.330856323e+00f, 6.708024502e+00f, 3.760003090e+00f, 2.162053715e-03f};
+static const float cct_env_i_d[17][11] = {
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.900363460e-02f, -1.950167865e-01f, -4.351290762e-01f, -7.647510171e-01f, -1.177957416e+00f, -1.667886853e+00f, -2.227143049e+00f, -2.848156214e+00f, -3.523478031e+00f, -4.246001244e+00f},
+    {0.0f, -4.262435064e-02f, -1.697414517e-01f, -3.791383505e-01f, -6.673007011e-01f, -1.029645801e+00f, -1.460799098e+00f, -2.338956118e+00f, -4.888846874e+00f, -7.594146252e+00f, -1.045689869e+01f},
+    {0.0f, -3.090471588e-02f, -1.232204512e-01f, -8.624585271e-01f, -2.387325048e+00f, -4.050416470e+00f, -5.847460270e+00f, -7.775096893e+00f, -9.831268311e+00f, -1.201559353e+01f, -1.432977104e+01f},
+    {-3.993182898e+00f, -4.865157604e+00f, -5.830950260e+00f, -6.889496803e+00f, -8.039589882e+00f, -9.280014992e+00f, -1.060967922e+01f, -1.202775478e+01f, -1.353381634e+01f, -1.512798500e+01f, -1.681108284e+01f},
+    {-1.000037289e+01f, -1.063291454e+01f, -1.131334782e+01f, -1.204160023e+01f, -1.281757355e+01f, -1.364116859e+01f, -1.451230717e+01f, -1.543096066e+01f, -1.639717102e+01f, -1.741108322e+01f, -1.847297668e+01f},
+    {-1.530184746e+01f, -1.565806007e+01f, -1.602926445e+01f, -1.641549301e+01f, -1.681677818e+01f, -1.723315239e+01f, -1.766464806e+01f, -1.811130524e+01f, -1.857315826e+01f, -1.905025673e+01f, -1.954264832e+01f},
+    {-1.999795723e+01f, -1.999816132e+01f, -1.999836540e+01f, -1.999856949e+01f, -1.999877357e+01f, -1.999897766e+01f, -1.999918175e+01f, -1.999938583e+01f, -1.999959183e+01f, -1.999979591e+01f, -2.000000000e+01f},
+};
+static const float cct_env_i_q[17][11] = {
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 2.050051928e+00f, 4.093135357e+00f, 6.122590542e+00f, 8.132338524e+00f, 1.011708260e+01f, 1.207243061e+01f, 1.399493313e+01f, 1.588205528e+01f, 1.773209763e+01f, 1.954409027e+01f},
+    {0.0f, 1.911892414e+00f, 3.818125248e+00f, 5.713258266e+00f, 7.592265606e+00f, 9.450689316e+00f, 1.128473663e+01f, 1.303422642e+01f, 1.447702599e+01f, 1.581445312e+01f, 1.704855537e+01f},
+    {0.0f, 1.627860785e+00f, 3.252220154e+00f, 4.836676598e+00f, 6.337284088e+00f, 7.774839878e+00f, 9.146695137e+00f, 1.045111847e+01f, 1.168709373e+01f, 1.285411549e+01f, 1.395197678e+01f},
+    {0.0f, 1.226344705e+00f, 2.426813841e+00f, 3.598609686e+00f, 4.739286423e+00f, 5.846751690e+00f, 6.919251442e+00f, 7.955341816e+00f, 8.953853607e+00f, 9.913844109e+00f, 1.083454990e+01f},
+    {0.0f, 8.288505673e-01f, 1.646076083e+00f, 2.450720072e+00f, 3.241892815e+00f, 4.018774509e+00f, 4.780613422e+00f, 5.526725769e+00f, 6.256491661e+00f, 6.969351292e+00f, 7.664798260e+00f},
+    {0.0f, 4.415596724e-01f, 8.798973560e-01f, 1.314854741e+00f, 1.746278286e+00f, 2.174019098e+00f, 2.597934008e+00f, 3.017884016e+00f, 3.433735847e+00f, 3.845360994e+00f, 4.252635956e+00f},
+    {0.0f, 2.434787457e-04f, 4.869565309e-04f, 7.304333849e-04f, 9.739093366e-04f, 1.217384241e-03f, 1.460858388e-03f, 1.704331371e-03f, 1.947803539e-03f, 2.191274893e-03f, 2.434744965e-03f},
+};
+/* torque (N m), omega_m (mechanical rad/s) -> *i_d_ref, *i_q_ref (A); returns 0,
+ * 1 (torque clamped to the limit at that speed) or 2 (|omega_m| beyond the
+ * table: its last row used). The Python mirror is
+ * toolbox.export._envelope_table.EnvelopeTable.reference. */
+static inline int cct_envelope_ref(float torque, float omega_m, float *i_d_ref, float *i_q_ref)
+{
+    int status = 0;
+    float s = (omega_m < 0.0f ? -omega_m : omega_m) / CCT_ENV_SPEED_STEP;
+    if (!(s <= (float)(CCT_ENV_N_SPEED - 1))) { s = (float)(CCT_ENV_N_SPEED - 1); status = 2; }
+    int k = (int)s;
+    if (k > CCT_ENV_N_SPEED - 2) { k = CCT_ENV_N_SPEED - 2; }
+    const float fs = s - (float)k;
+    const float t_lim = cct_env_t_max[k] + fs * (cct_env_t_max[k + 1] - cct_env_t_max[k]);
+    const float ta = torque < 0.0f ? -torque : torque;
+    float f = t_lim > 0.0f ? ta / t_lim : 0.0f;
+    if (f > 1.0f) { f = 1.0f; if (status == 0) { status = 1; } }
+    const float c = f * (float)(CCT_ENV_N_TORQUE - 1);
+    int j = (int)c;
+    if (j > CCT_ENV_N_TORQUE - 2) { j = CCT_ENV_N_TORQUE - 2; }
+    const float fc = c - (float)j;
+    const float d_lo = cct_env_i_d[k][j] + fc * (cct_env_i_d[k][j + 1] - cct_env_i_d[k][j]);
+    const float d_hi = cct_env_i_d[k + 1][j] + fc * (cct_env_i_d[k + 1][j + 1] - cct_env_i_d[k + 1][j]);
+    const float q_lo = cct_env_i_q[k][j] + fc * (cct_env_i_q[k][j + 1] - cct_env_i_q[k][j]);
+    const float q_hi = cct_env_i_q[k + 1][j] + fc * (cct_env_i_q[k + 1][j + 1] - cct_env_i_q[k + 1][j]);
+    const float iq = q_lo + fs * (q_hi - q_lo);
+    *i_d_ref = d_lo + fs * (d_hi - d_lo);
+    *i_q_ref = torque < 0.0f ? -iq : iq;
+    return status;
+}
 
 #if 0 /* usage example: copy the lines between BEGIN and END into main.c */
 // EXAMPLE main.c BEGIN

@@ -112,3 +112,22 @@ def test_verify_json_envelope_and_verdict():
     assert res.passed
     failing = replace(res, envelope={**env, "passed": False})
     assert not failing.passed and failing.to_json()["passed"] is False
+
+
+@pytest.mark.slow
+def test_predictive_law_is_judged_with_its_design_band():
+    """fcs_mpc leaves the ripple band of paper 002's criterion (23) by design
+    (toolbox.verify.fcs_ripple: covering radius plus the switching-penalty dead
+    band); the grid allows it on top of 2 % of the current limit, as the
+    scenarios' checks do. On paper 002's design the half-torque standstill
+    point settles 3.7 A off its 75 A reference: more than 2 % of 150 A, inside
+    the band."""
+    from toolbox.pipeline import design_spec, run_verification
+    from toolbox.spec import load_spec
+
+    spec = load_spec(ROOT / "designs" / "002_cormerais2002_fcs_mpc.toml")
+    env = run_verification(design_spec(spec), spec).envelope
+    assert env["passed"], env["failures"]
+    assert env["design_band_a"] > 0.0
+    worst = max(p["error"] for p in env["points"] if p["status"] == "pass")
+    assert 0.02 * env["i_max"] < worst <= 0.02 * env["i_max"] + env["design_band_a"]

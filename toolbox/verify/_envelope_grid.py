@@ -103,7 +103,8 @@ class EnvelopeGrid:
 
     ``base_speed`` (rad/s), ``torque_limit`` (N m at standstill), ``v_max``
     (V, the envelope's voltage limit), ``i_max`` (A), ``voltage_priority``,
-    ``step_time`` and ``duration`` (s) of each run.
+    ``step_time`` and ``duration`` (s) of each run, ``band`` (A) the settled
+    error the law leaves by design, allowed on top of ``tolerance x i_max``.
     """
 
     points: tuple[GridPoint, ...]
@@ -117,6 +118,7 @@ class EnvelopeGrid:
     tolerance: float = GRID_TOLERANCE
     peak_limit: float = GRID_PEAK_LIMIT
     curves: dict | None = None
+    band: float = 0.0
 
     @property
     def passed(self) -> bool:
@@ -150,7 +152,7 @@ class EnvelopeGrid:
                 "speed_fractions": sorted({p.speed_fraction for p in self.points}),
                 "step_time_s": self.step_time, "duration_s": self.duration,
                 "tolerance_fraction": self.tolerance, "peak_limit_fraction": self.peak_limit,
-                "curves": self.curves,
+                "design_band_a": self.band, "curves": self.curves,
                 "points": [p.to_json() for p in self.points]}
 
 
@@ -185,7 +187,7 @@ def grid_envelope(motor, drive: DriveParams, headroom: float = GRID_HEADROOM) ->
 def torque_speed_grid(law, motor, drive: DriveParams, envelope=None, *, span: float = 0.02,
                       max_speed: float | None = None, torques=DEFAULT_TORQUES,
                       speeds=DEFAULT_SPEEDS, tolerance: float = GRID_TOLERANCE,
-                      peak_limit: float = GRID_PEAK_LIMIT) -> EnvelopeGrid:
+                      peak_limit: float = GRID_PEAK_LIMIT, band: float = 0.0) -> EnvelopeGrid:
     """Torque steps at the envelope's references over a torque-speed grid
     (module docstring).
 
@@ -209,8 +211,13 @@ def torque_speed_grid(law, motor, drive: DriveParams, envelope=None, *, span: fl
     tolerance, peak_limit : float
         Settled error and peak current after the step, fractions of the
         current limit.
+    band : float
+        Settled error (A) the law leaves by design, allowed on top of
+        ``tolerance`` (the predictive law's ripple band,
+        :func:`toolbox.verify.fcs_ripple`; 0 for linear laws).
     """
     env = envelope if envelope is not None else grid_envelope(motor, drive)
+    settle = tolerance * env.I + band
     base = env.base_speed()
     t_max = env.max_torque_point(0.0).torque
     nan = float("nan")
@@ -242,21 +249,20 @@ def torque_speed_grid(law, motor, drive: DriveParams, envelope=None, *, span: fl
             err = float(np.hypot(i_d - op.i_d, i_q - op.i_q))
             peak = float(np.hypot(res.id[after], res.iq[after]).max())
             reasons = []
-            if not err <= tolerance * env.I:
+            if not err <= settle:
                 reasons.append(f"settled {err:.3g} A from the reference (bound "
-                               f"{tolerance * env.I:.3g} A)")
+                               f"{settle:.3g} A)")
             if not peak <= peak_limit * env.I:
                 reasons.append(f"peak current {peak:.4g} A after the step (bound "
                                f"{peak_limit * env.I:.4g} A)")
             if abs(op.torque - tf * t_max) > 1e-9 * max(t_max, 1e-12):
                 reasons.append(f"torque limited to {op.torque:.4g} N m ({op.region}) of "
                                f"{tf * t_max:.4g} N m requested")
-            status = "pass" if err <= tolerance * env.I and peak <= peak_limit * env.I \
-                else "fail"
+            status = "pass" if err <= settle and peak <= peak_limit * env.I else "fail"
             pts.append(GridPoint(sf, tf, speed, op.torque, op.region, start.i_d, start.i_q,
                                  op.i_d, op.i_q, i_d, i_q, err, peak, status,
                                  "; ".join(reasons) or None))
     top = max(speeds) * base if speeds else base
     return EnvelopeGrid(tuple(pts), base, t_max, env.V, env.I, drive.voltage_priority,
                         span, 2.0 * span, tolerance, peak_limit,
-                        limit_curves(env, top if top > 0 else 1.0))
+                        limit_curves(env, top if top > 0 else 1.0), band)

@@ -332,6 +332,10 @@ def envelope_grid(artifact, spec) -> dict:
         env = grid_envelope(spec.motor, drive)
     except SpecError as exc:
         return {"passed": True, "skipped": f"no operating envelope: {exc}"}
+    # the predictive law leaves its design ripple band by construction (the
+    # scenarios' checks allow it too): the grid's settled error as well
+    ripple = _fcs_ripple(artifact, drive, spec.motor, drive.radii(spec.motor.torque_factor)[0])
+    band = math.hypot(ripple["d"], ripple["q"]) if ripple else 0.0
     grid = torque_speed_grid(law, spec.motor, drive, env, span=span,
-                             max_speed=spec.drive.max_speed)
+                             max_speed=spec.drive.max_speed, band=band)
     return grid.to_json()
