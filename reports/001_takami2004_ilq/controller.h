@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: e12416654bb8d2779cec238e95e7e4817bccf286f8f37cacfe975ad0526baf41
  * law sha256:  ccb81623277729d23b0bc6ca2b3d40fb1baa37afa1509afd020b4788766e3176
- * created:     2026-11-27T21:55:02+00:00
+ * created:     2026-11-27T21:56:42+00:00
  * equations:   001 eq (1); 001 eq (2); 001 eq (3); 001 eq (4); 001 Fig. 2(a)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

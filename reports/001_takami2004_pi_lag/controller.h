@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: c924a9280bf2ddac6bd85976cacff2c93467e25d061a5c2b9b96aa59ed079d9c
  * law sha256:  ad4d065f7611f6a84a8fafea0282c8d7db82398a201ebe545f1e44e72d344051
- * created:     2026-11-27T21:55:04+00:00
+ * created:     2026-11-27T21:56:44+00:00
  * equations:   001 Fig. 2b: PI with first-order lag 1/(1 + T_d s) on the measured currents; Kp = L wc, Ki = R wc (closed loop wc/(s + wc), wc = ln(20)/t5)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
