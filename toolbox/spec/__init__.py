@@ -1,5 +1,7 @@
 """Spec files: TOML -> validated frozen dataclasses."""
 
+from .._lazy import lazy_attributes
+
 from ._bounds import (RATE_TS, SCALE_RANGE, check_gain, check_rate, check_scale,
                       check_time_constant)
 from ._campaign import (CAMPAIGN_PARAMETERS, DISTRIBUTIONS, OPERATING_POINT_KEYS, CampaignCfg,
@@ -8,7 +10,6 @@ from ._catalog import CATALOG, CATALOG_NOTES
 from ._fields import Collector, SpecErrors, Table, check_keys, is_finite_number
 from ._load import drive_from_dict, load_spec, motor_from_dict, spec_from_dict
 from ._methods import read_method_cfg, register_method_reader, registered_methods
-from ._magnetics import AlgebraicSaturation, FluxMapData, MagneticModel
 from ._render import spec_to_toml
 from ._scenario import INVERTER_KINDS, SCENARIO_KINDS, Scenario
 from ._model import (METHODS, MOTOR_PARAMETER_KEYS, REQUIREMENT_KEYS, ControllerChoice, Drive, Motor, inverter_radii,
@@ -23,3 +24,10 @@ __all__ = ["CATALOG", "CATALOG_NOTES", "Collector", "SpecErrors", "Table", "chec
            "ParameterDist", "RATE_TS", "SCALE_RANGE", "check_gain", "check_rate", "check_scale",
            "check_time_constant", "INVERTER_KINDS", "SCENARIO_KINDS", "Scenario",
            "AlgebraicSaturation", "FluxMapData", "MagneticModel"]
+
+# lazy: the magnetic models compute with numpy, which `cct` must not load
+# before it has set the BLAS thread count (toolbox.cli); a constant-parameter
+# spec never needs them
+_LAZY = {"AlgebraicSaturation": "_magnetics", "FluxMapData": "_magnetics",
+         "MagneticModel": "_magnetics"}
+__getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
