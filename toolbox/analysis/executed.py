@@ -169,7 +169,9 @@ def settling_horizon(artifact, motor) -> float | None:
     ``sum_i r_i (1 - lambda_i^(k+1)) / (1 - lambda_i)`` with ``r_i = (C V)_i
     (V^-1 B)_i``; mode ``i`` has amplitude ``|r_i / (1 - lambda_i)|`` and time
     constant ``-Ts / ln |lambda_i|``. A pole almost cancelled by a zero (paper
-    003's near-integrator, eq 70) has a tiny amplitude and is ignored.
+    003's near-integrator, eq 70) has a tiny amplitude and is ignored. A
+    defective pole set (repeated placed poles: ``V`` singular) has no modal
+    split: every mode counts then.
     """
     if artifact.method in INFORMATIONAL_METHODS:
         return None
@@ -184,11 +186,14 @@ def settling_horizon(artifact, motor) -> float | None:
             lam, V = np.linalg.eig(A)
             if np.any(np.abs(lam) >= 1.0):
                 return None
-            r = (C @ V).ravel() * np.linalg.solve(V, B).ravel()
-            amp = np.abs(r / (1.0 - lam))
-            final = abs(float((C @ np.linalg.solve(np.eye(A.shape[0]) - A, B) + D)[0, 0]))
             tau = -ts / np.log(np.maximum(np.abs(lam), 1e-300))
-        shown = np.isfinite(amp) & (amp >= HORIZON_BAND * max(final, 1e-12))
+            final = abs(float((C @ np.linalg.solve(np.eye(A.shape[0]) - A, B) + D)[0, 0]))
+            if np.linalg.cond(V) < 1e12:
+                r = (C @ V).ravel() * np.linalg.solve(V, B).ravel()
+                amp = np.abs(r / (1.0 - lam))
+            else:  # repeated, defective poles (a placed law): no modal split, every mode counts
+                amp = np.full(lam.shape, np.inf)
+        shown = ~np.isnan(amp) & (amp >= HORIZON_BAND * max(final, 1e-12))
         if np.any(shown):
             slowest = max(slowest, float(np.max(tau[shown])))
     low, high = HORIZON_RANGE
