@@ -39,6 +39,10 @@ from toolbox.export.c_header import ReferenceLaw
 import export_artifacts as A
 import export_c_helpers as C
 
+#: slow: the vendor integer variants compiled and run per design (cross-checks of the
+#: float law the everyday set checks)
+pytestmark = pytest.mark.slow
+
 DRIVER = r"""
 #include <stdio.h>
 #include <stdint.h>

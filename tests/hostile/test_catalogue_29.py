@@ -160,7 +160,8 @@ def test_cct_design_refuses_and_writes_nothing(write_spec, tmp_path, name):
 
 
 @pytest.mark.parametrize("sections", [
-    pytest.param(dict(motor={"R": 1e4}), id="R_1e4"),  # L/R = 1.4e-3 sample times: in range
+    # L/R = 1.4e-3 sample times: in range; slow: its plant step is tiny (about 4 CPU-s)
+    pytest.param(dict(motor={"R": 1e4}), id="R_1e4", marks=pytest.mark.slow),
     # slow, but a drive; its full cct design (the scenarios' verification and
     # the report over a 1 s sample time) costs ~10 CPU-s: marked slow
     pytest.param(dict(drive={"sample_time": 1.0}), id="sample_time_1", marks=pytest.mark.slow),

@@ -26,6 +26,7 @@ SYRM = AlgebraicSaturation(a_d0=17.4, a_dd=373, S=5, a_q0=52.1, a_qq=658, T=1, a
                            U=1, V=0, current_range=40.0)
 
 
+@pytest.mark.slow   # two sympy derivations (about 4 CPU-s each)
 @pytest.mark.parametrize("convention", ["amplitude", "power"])
 def test_flux_linkage_form_reduces_to_the_dq_model(convention):
     """d psi/dt = v - R i - w J psi and T = k p (psi_d i_q - psi_q i_d), derived
