@@ -96,8 +96,10 @@ def measure_firmware(header: str, prefix: str = "cct_", *, f_cpu: float = F_CPU,
     # The figures depend only on the header, the clocks, this code and the
     # toolchain: a repeated design (same header) reads them from the on-disk
     # cache instead of paying the cross build and emulation again (~0.5-1.7 s).
+    # (the header's creation time stamp, a comment, is not part of the key)
+    code = re.sub(r"^ \* created: .*$", "", header, flags=re.M)
     key = hashlib.sha256(f"{prefix}\0{f_cpu!r}\0{f_pwm!r}\0{_m4.toolchain_version()}\0"
-                         f"{header}".encode()).hexdigest()[:16]
+                         f"{code}".encode()).hexdigest()[:16]
     return cached(f"firmware-{key}", [__file__, _m4.__file__],
                   lambda: _measure(header, prefix, base, f_cpu, f_pwm),
                   lambda v: isinstance(v, dict) and v.get("measured") is True,
