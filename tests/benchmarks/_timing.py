@@ -1,4 +1,4 @@
-"""Timing helpers shared by the benchmarks (issue 13).
+"""Timing helpers shared by the benchmarks.
 
 * :func:`pin_blas_threads` must run before numpy is first imported: the
   problems here are tiny (matrices of order <= 10), where a multi-threaded
@@ -11,7 +11,7 @@
 * The clock is the process's CPU time (``time.process_time``), not the wall
   clock: on a shared machine the wall time of a single-threaded route also
   counts the time the process waited for a core. That waiting is what made
-  the "slow spells" of issue 13 (the simulator at 70-85 ns per plant step for
+  the "slow spells" (docs/performance.md) (the simulator at 70-85 ns per plant step for
   tens of calls while its CPU time stayed at ~48 ns: the load average was 4-6
   on 2 cores, other processes held them; wall/CPU reached 2-3). Reproduced
   once the kernel ran at ~29 ns per step of CPU time: 60 consecutive 1 s
@@ -54,7 +54,7 @@ def interleaved(routes: Mapping[str, Callable[[], object]], rounds: int,
     the cyclic collector off through all of them (as ``timeit`` does for its
     run), so that a collection of what the other routes (or the harness:
     ``subprocess``) left behind is not charged to the route that happens to
-    trigger it. Measured (issue 13): in ``bench_sim`` a route calling
+    trigger it. Measured: in ``bench_sim`` a route calling
     ``simulate()`` after the C subprocesses took a median 0.3-0.4 ms more
     per call (1.5 % of a 1 s simulation) than the same kernel call without
     the collector. Once, not before every turn: a full collection (~17 ms

@@ -1,4 +1,4 @@
-"""Campaign throughput benchmark (issue 14): samples per second.
+"""Campaign throughput benchmark: samples per second.
 
 Campaign: the test campaign of tests/campaign (PI on paper 003's motor, one
 20 ms i_q step per sample, R, Ld, Lq, flux drawn, a grid of 8 operating

@@ -25,7 +25,7 @@ median of the per-round ratios with its interquartile range:
 Routes 1-4 are timed one call per route and round, so each call follows
 another route's work: that is how a design runs in ``cct`` (once, after
 reading the spec). A call of ~2 ms then finds the core's caches holding the
-previous route's code and data. Measured (issue 13, after the same ``mixsyn``
+previous route's code and data. Measured (after the same ``mixsyn``
 call): route 1 takes ~0.5-0.8 ms (30-50 %) more than when repeated, where a
 2-3 ms loop of small numpy operations or of pure Python pays 1-2 %; a 20 ms
 sleep costs route 1 as much as ``mixsyn`` does; re-running the twelve LAPACK

@@ -19,7 +19,7 @@ Routes:
    neither), which print the same final speed and mean-square torque error
    as ours bit for bit, so the two compute the same thing; and -O3
    -march=native of the model as written, dividing by Ld, Lq, J in every
-   stage (the issue 13 yardstick before the kernel took reciprocals; its
+   stage (the yardstick before the kernel took reciprocals; its
    currents differ from ours in the last bits, its final speed and torque
    error agree to the 17 digits printed, checked at every run). The
    ratio against the same-arithmetic -O3 build is the compiler comparison;
@@ -174,7 +174,7 @@ def compile_c(directory: str, flags=("-O2",)):
 #: The C builds timed against ours: the loop as the kernel computes (bit for
 #: bit the same results, gcc's ISO C mode not contracting FMAs, as ours does
 #: not) at -O2 and -O3 -march=native, and the model as written, dividing by
-#: Ld, Lq, J in every stage (the issue 13 yardstick before the kernel
+#: Ld, Lq, J in every stage (the yardstick before the kernel
 #: multiplied by reciprocals).
 C_BUILDS = (("C -O2", ("-O2",)), ("C -O3 -march=native", ("-O3", "-march=native")),
             ("C -O3 -march=native /L", ("-O3", "-march=native", "-DDIVIDE")))
@@ -361,7 +361,7 @@ def main():
     steps = DURATION / H
     print(f"ours per call, ns per plant step: CPU {fmt_time(ours_last['cpu'], 1e9 / steps, 'ns')}"
           f", wall {fmt_time(ours_last['wall'], 1e9 / steps, 'ns')} (wall above CPU: "
-          "waiting for a core, the slow spells of issue 13)")
+          "waiting for a core: the slow spells of docs/performance.md)")
     sp_rate, _ = bench_scipy()
     print(f"scipy solve_ivp/period: {sp_rate:10.4f} simulated s / CPU s (RK45, 50 ms run)")
     gem = bench_gem()
