@@ -324,11 +324,8 @@ def envelope_grid(artifact, spec) -> dict:
     span after the step of the default scenarios (so the settling checks of
     the grid see as much of the loop as theirs); speeds above
     ``drive.max_speed`` unreachable. ``{"skipped": reason}`` when the motor
-    has no current limit (the envelope needs one) or is saturated (its
-    references assume constant inductances)."""
-    if spec.motor.magnetics is not None:
-        return {"passed": True, "skipped": "the operating envelope's references assume constant "
-                "inductances; a saturated motor's grid is not judged on them"}
+    has no current limit (the envelope needs one). A saturated motor's
+    references come from its magnetic model (:func:`toolbox.plant.envelope_of`)."""
     defaults = default_scenarios(spec.motor, spec.drive, settling_horizon(artifact, spec.motor))
     span = max(sc.duration - (sc.step_time or 0.0) for sc in defaults)
     law, drive = scenario_setup(artifact, defaults[0], spec.drive)
