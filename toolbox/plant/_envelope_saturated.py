@@ -467,7 +467,8 @@ class SaturatedEnvelope:
         w = self.p * speed
         if math.hypot(d, q) <= self.I:
             ps_d, ps_q = self._flux_of[(d, q)]
-            if math.hypot(self.R * d - w * ps_q, self.R * q + w * ps_d) <= self.V:
+            # MTPA at base speed lies on the limit: round-off does not move it off
+            if math.hypot(self.R * d - w * ps_q, self.R * q + w * ps_d) <= self.V * (1 + 1e-9):
                 return OperatingPoint(d, q, float(torque), "mtpa")
         lim = limit if limit is not None else self.max_torque_point(speed, sign)
         if sign * torque >= sign * lim.torque:
