@@ -97,6 +97,7 @@ def test_saturated_interpolation_between_nodes():
             d, q, _ = tb.reference(t, w)
             t_err = max(t_err, abs(float(env.torque(d, q)) - t))
             i_rel = max(i_rel, float(np.hypot(d, q)) / env.I)
-    print(f"\ncell centres: torque error {t_err:.3g} N m of {tb.t_max[0]:.4g}, |i| <= {i_rel:.4f} I")
+    print(f"\ncell centres: torque error {t_err:.3g} N m of {tb.t_max[0]:.4g}, "
+          f"|i| <= {i_rel:.4f} I")
     assert t_err <= 1e-2 * tb.t_max[0]
     assert i_rel <= 1.001

@@ -109,7 +109,8 @@ def test_linear_magnetics_equal_the_constant_envelope(kind):
 def _pmsyrm():
     spec = toolbox.spec_from_dict(tomllib.loads(PMSYRM.read_text()))
     m = spec.motor
-    env = envelope_of(m, v_max=(1 - OperatingEnvelope.HEADROOM) * spec.drive.max_voltage(m.convention))
+    env = envelope_of(m, v_max=(1 - OperatingEnvelope.HEADROOM)
+                      * spec.drive.max_voltage(m.convention))
     return m, env
 
 

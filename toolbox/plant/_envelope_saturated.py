@@ -16,15 +16,26 @@ with ``R`` kept, the limits ``|v| <= V`` and ``|i| <= I`` of
 With linear flux (``psi = (Ld i_d + flux, Lq i_q)``) every problem below is
 the constant-parameter one (``tests/plant/test_envelope_saturated.py``).
 
-The references, each a constrained minimisation (scipy's SLSQP) over the
-operating point, seeded from a dense sample of the current disc:
+The references, each a constrained optimisation over the operating point,
+seeded from a 61 x 61 sample of the current disc and solved by Newton's
+method on its optimality conditions with the active constraints known (the
+Lagrange conditions with one, the two constraints themselves with two;
+gradients and Hessians by central differences of step 1e-4, normalised:
+exact for quadratic and bilinear functions, ~1e-8 of the model's scale
+otherwise), with scipy's SLSQP on the full inequality-constrained problem as
+the route when a Newton solve does not converge (a flux map's cell edges,
+where its derivatives jump):
 
 * **MTPA**: least ``|i|`` with ``T(i) = T`` (Morimoto et al. 1990's
   criterion, here with the saturated torque; no closed form).
 * **Field weakening**: least ``|i|`` with ``T(i) = T`` and ``|v| <= V``: the
   point of the torque curve nearest MTPA on the voltage limit.
 * **Maximum torque at a speed**: largest ``sign x T`` with ``|i| <= I`` and
-  ``|v| <= V``; without the current limit it is the MTPV point.
+  ``|v| <= V``: the current limit's MTPA point when it fits the voltage,
+  else the MTPV point (largest torque on ``|v| = V``) when within the
+  current limit, else the corner of both limits. MTPV beyond the model's
+  current range (the map's grid, the algebraic model's ``current_range``) is
+  NaN: the data end there.
 
 Coordinates: a flux map's model is cheap from current (bilinear), the
 algebraic model from flux (closed form ``i(psi)``, its inverse is Newton's
@@ -211,7 +222,8 @@ class SaturatedEnvelope:
         g = np.stack([(q[:, 1] - q[:, 2]) / (2 * h), (q[:, 3] - q[:, 4]) / (2 * h)], axis=1)
         hdd = (q[:, 1] - 2 * q[:, 0] + q[:, 2]) / h ** 2
         hqq = (q[:, 3] - 2 * q[:, 0] + q[:, 4]) / h ** 2
-        hdq = (q[:, 5] + q[:, 6] - q[:, 1] - q[:, 2] - q[:, 3] - q[:, 4] + 2 * q[:, 0]) / (2 * h * h)
+        hdq = ((q[:, 5] + q[:, 6] - q[:, 1] - q[:, 2] - q[:, 3] - q[:, 4] + 2 * q[:, 0])
+               / (2 * h * h))
         H = np.stack([np.stack([hdd, hdq], axis=1), np.stack([hdq, hqq], axis=1)], axis=1)
         return q[:, 0], g, H
 
