@@ -50,7 +50,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import minimize
+from scipy.optimize import brentq, minimize, minimize_scalar
 
 from ..errors import SpecError
 from ._envelope import OperatingEnvelope, OperatingPoint
@@ -61,8 +61,11 @@ __all__ = ["SaturatedEnvelope", "envelope_of"]
 _N_SAMPLE = 61
 #: Step of the central differences in normalised coordinates.
 _H = 1e-6
-#: Relative tolerance of "on a limit" (region labels) and of feasibility.
+#: Relative tolerance of "on a limit" (region labels) and of feasibility
+#: (|i|^2 / I^2, |v|^2 / V^2: 5e-7 of the amplitude); SLSQP's results to 1e-5
+#: (its constraint accuracy on a map's cell edges, 5e-6 of the amplitude).
 _TOL = 1e-6
+_TOL_SLSQP = 1e-5
 #: Step of the Newton stencil (normalised): its central differences are
 #: exact to ~h^2 x the third derivative, 1e-8 of the model's scale.
 _H_NEWTON = 1e-4
@@ -237,6 +240,7 @@ class SaturatedEnvelope:
         an iterate's ``|i|^2 / I^2`` exceeds ``bound``."""
         u = np.array(seed, float)
         lam = None
+        back = [None, None]   # the last two iterates: a 2-cycle is a cell edge's kink
         for _ in range(_N_NEWTON):
             val, g, H = self._stencil(u, speed)
             if bound is not None and val[1] > bound:
@@ -274,6 +278,9 @@ class SaturatedEnvelope:
             u = u + step
             if n < 1e-11 and np.all(np.abs(r) < 1e-9):
                 return u
+            if back[0] is not None and float(np.hypot(*(u - back[0]))) < 1e-9:
+                return None
+            back = [back[1], u.copy()]
         return None
 
     # constraint/objective pieces over (val, jac) of _quantities
@@ -329,11 +336,54 @@ class SaturatedEnvelope:
             t = torque / self._Tscale
             seed = self._seed(self._sample_c() + 100.0 * (self._sT / self._Tscale - t) ** 2)
             u = self._newton(0.0, seed, [(0, t)], obj=(1, 1.0))
+            if u is None and not self._by_flux:
+                u = self._map_mtpa(t, seed)
             if u is None:
                 u, _ = self._solve(0.0, lambda v, j: (v[1], j[1]),
                                    eq=lambda v, j: (v[0] - t, j[0]), seed=seed)
             self._mtpa_cache[torque] = self._point(u)
         return self._mtpa_cache[torque]
+
+    def _map_mtpa(self, t, seed):
+        """A map's MTPA point of the torque ``t`` (normalised) where Newton's
+        method stalls on a cell edge: along the torque curve by the current
+        angle ``b`` (the amplitude ``r(b)`` giving the torque, brentq), the
+        least ``r`` by a bounded scalar search within 0.3 rad of the seed's
+        angle; None when the torque curve leaves the model's range there."""
+        sg = math.copysign(1.0, t)
+        r_hi = self.model_range / self.I
+
+        def tq(r, b):
+            return sg * float(self._quantities(np.array([r * math.cos(b), r * math.sin(b)]),
+                                               0.0)[0]) - sg * t
+
+        def r_of(b):
+            if tq(r_hi, b) < 0:
+                return 10.0 * r_hi   # the torque is not reached within the range
+            return brentq(lambda r: tq(r, b), 0.0, r_hi, xtol=1e-13)
+
+        b0 = math.atan2(seed[1] * self._s[1], seed[0] * self._s[0])
+        res = minimize_scalar(r_of, bounds=(b0 - 0.3, b0 + 0.3), method="bounded",
+                              options={"xatol": 1e-12})
+        if not res.fun < r_hi or abs(res.x - b0) > 0.3 - 1e-6:
+            return None
+        return np.array([res.fun * math.cos(res.x), res.fun * math.sin(res.x)])
+
+    def _circle_max(self, radius, sign):
+        """A map's largest ``sign x T`` on the current circle ``|i| = radius``
+        (A) by its angle (361 samples, then a bounded scalar search):
+        ``(u, T / T scale)``."""
+        b = np.linspace(-math.pi, math.pi, 361)
+        rn = radius / self.I
+
+        def tq(a):
+            return self._quantities(np.array([rn * np.cos(a), rn * np.sin(a)]), 0.0)[0]
+
+        k = int(np.argmax(sign * tq(b)))
+        res = minimize_scalar(lambda a: -sign * float(tq(np.array([a]))[0]),
+                              bounds=(b[max(k - 1, 0)], b[min(k + 1, 360)]), method="bounded",
+                              options={"xatol": 1e-13})
+        return np.array([rn * math.cos(res.x), rn * math.sin(res.x)]), -sign * res.fun
 
     def _sample_c(self):
         return (self._si[0] ** 2 + self._si[1] ** 2) / self.I ** 2
@@ -357,8 +407,11 @@ class SaturatedEnvelope:
         consistent."""
         ck = ("mtpa_limit", float(sign))
         if ck not in self._limit_cache:
-            seed = self._seed(np.where(self._sample_c() >= 0.9, -sign * self._sT, np.inf))
-            self._limit_cache[ck] = self._newton(0.0, seed, [(1, 1.0)], obj=(0, -sign))
+            if self._by_flux:
+                seed = self._seed(np.where(self._sample_c() >= 0.9, -sign * self._sT, np.inf))
+                self._limit_cache[ck] = self._newton(0.0, seed, [(1, 1.0)], obj=(0, -sign))
+            else:   # a map's circle by its angle (its cell edges stall Newton's method)
+                self._limit_cache[ck] = self._circle_max(self.I, sign)[0]
         u = self._limit_cache[ck]
         if u is None:
             return None
@@ -405,13 +458,13 @@ class SaturatedEnvelope:
             seed = self._seed(v2)
             u, val = self._solve(speed, lambda v, j: (v[2], j[2]), ineq=[self._cur_le],
                                  seed=seed)
-            if val[2] > 1.0 + _TOL or val[1] > 1.0 + _TOL:
+            if val[2] > 1.0 + _TOL_SLSQP or val[1] > 1.0 + _TOL_SLSQP:
                 raise SpecError("drive.vdc", f"a voltage limit the back-EMF at {speed:g} rad/s "
                                 "leaves room for within the current limit", self.V)
             seed = u
         u, val = self._solve(speed, lambda v, j: (-sign * v[0], -sign * j[0]), ineq=ineq,
                              seed=seed)
-        if val[2] > 1.0 + _TOL or (current_limit and val[1] > 1.0 + _TOL):
+        if val[2] > 1.0 + _TOL_SLSQP or (current_limit and val[1] > 1.0 + _TOL_SLSQP):
             raise SpecError("drive.vdc", f"a voltage limit the back-EMF at {speed:g} rad/s "
                             "leaves room for within the current limit", self.V)
         d, q = self._point(u)
@@ -434,16 +487,14 @@ class SaturatedEnvelope:
         if ok.any():
             k = int(np.argmin(np.where(ok, -sign * T, np.inf)))
             r2 = (self.model_range / self.I) ** 2
-            if (i_d[k] ** 2 + i_q[k] ** 2) / self.I ** 2 >= 0.95 * r2:
+            if ok.sum() >= 50 and (i_d[k] ** 2 + i_q[k] ** 2) / self.I ** 2 >= 0.95 * r2:
                 return float("nan"), float("nan")   # the torque still rises at the data's end
             u = self._newton(speed, U[:, k], [(2, 1.0)], obj=(0, -sign), bound=4.0 * r2)
-            if u is not None and np.isnan(u[0]):
-                return float("nan"), float("nan")
-            if u is not None:
+            if u is not None and not np.isnan(u[0]):
                 val = self._quantities(u, speed)
-                if val[1] >= r2:
-                    return float("nan"), float("nan")
-                return self._point(u)
+                # a stationary point better than the best sample: MTPV (NaN beyond the data)
+                if sign * val[0] * self._Tscale >= sign * T[k] - 1e-9 * self._Tscale:
+                    return (float("nan"), float("nan")) if val[1] >= r2 else self._point(u)
         return self._max_torque(speed, sign, current_limit=False)
 
     @staticmethod
@@ -494,8 +545,8 @@ class SaturatedEnvelope:
         if val is None or val[1] > 1.0 + _TOL:
             u, val = self._solve(speed, lambda v, j: (v[1], j[1]), eq=lambda v, j: (v[0] - t, j[0]),
                                  ineq=[self._volt_le], seed=seed)
-        if (val[1] > 1.0 + _TOL or val[2] > 1.0 + _TOL
-                or abs(val[0] - t) > 1e-9 * max(abs(t), 1.0)):
+        if (val[1] > 1.0 + _TOL_SLSQP or val[2] > 1.0 + _TOL_SLSQP
+                or abs(val[0] - t) > _TOL_SLSQP * max(abs(t), 1.0)):
             return lim
         d, q = self._point(u)
         return OperatingPoint(d, q, float(torque), "field_weakening")
