@@ -225,3 +225,29 @@ def test_pmsyrm_envelope_against_nested_scalar_search(kind):
     assert all(math.isnan(x) for x in env.mtpv(2.0 * wb))   # beyond the model's data there
     print(f"\n{kind}: " + ", ".join(f"{k}: {v:.2g} A" for k, v in errs.items()))
     assert max(errs.values()) <= tol, errs
+
+
+@pytest.mark.parametrize("kind", ["algebraic", "map"])
+def test_slsqp_route_agrees_with_the_newton_routes(kind):
+    """The route a non-converging Newton solve falls back to (SLSQP on the
+    full inequality-constrained problem) gives the torque limit at 0, 1.5 and
+    2 x base speed and two field-weakening points within 1e-5 x I of the
+    Newton / scalar routes (measured 1.3e-6 x I: the map's current-limit
+    MTPA point on a cell edge, where SLSQP's constraint accuracy is 1e-5)."""
+    m, env = _pmsyrm(kind)
+    wb = env.base_speed()
+    t_lim = env.max_torque_point(0.0).torque
+    err = 0.0
+    for sf in (0.0, 1.5, 2.0):
+        a, b = env.max_torque_point(sf * wb), env._max_torque(sf * wb, 1.0, True)
+        assert a.region == b.region
+        err = max(err, _dist((a.i_d, a.i_q), (b.i_d, b.i_q)))
+    for sf, tf in ((1.5, 0.5), (2.0, 0.25)):
+        op = env.operating_point(tf * t_lim, sf * wb)
+        t = tf * t_lim / env._Tscale
+        seed = env._seed(env._sample_c() + 100.0 * (env._sT / env._Tscale - t) ** 2)
+        u, _ = env._solve(sf * wb, lambda v, j: (v[1], j[1]), eq=lambda v, j: (v[0] - t, j[0]),
+                          ineq=[env._volt_le], seed=seed)
+        err = max(err, _dist((op.i_d, op.i_q), env._point(u)))
+    print(f"\n{kind}: SLSQP vs Newton max |di| {err:.2g} A")
+    assert err <= 1e-5 * env.I
