@@ -19,12 +19,18 @@ weights) then reach the 5 % band after the ``default.reach`` bound; tc (no
 integrator) keeps a static error (0.48 A, 4.4 %) at speed; cv overshoots by
 16.5-18.7 % on all three steps (4.8 % on the constant-parameter motor
 tangent at the step's end, (0, 11 A), 0 % on the nominal one: the q
-inductance changes along the step, 33.7 mH near 0 A to 14.2 mH at 11 A); tune (its q loop at 45 deg phase margin,
-overshoot 67-70 % on the saturated plant) reaches the band 0.3 ms after the
-bound at standstill. pi, ip, tci, ilq, lq, robust_pi and fcs_mpc pass.
+inductance changes along the step, 33.7 mH near 0 A to 14.2 mH at 11 A);
+tune (its q loop at 45 deg phase margin, overshoot 67-70 % on the saturated
+plant) reaches the band 0.3 ms after the bound at standstill. pi, ip, tci, ilq, lq, robust_pi and fcs_mpc pass.
 
-Time: a design is 11-26 s on the shared 2-core machine (the first of a fresh
-cache compiles the flux kernel, minutes), tune about 100 s; hence ``slow``.
+On the Baldor PM-SyRM every method passes, on its algebraic model and on its
+measured map, except tune on the algebraic model: the same q loop at 45 deg
+(overshoot 45 %, the 5 % band at 8.4 ms against the 8.0 ms bound at
+standstill); on the measured map tune passes.
+
+Time: a design is 11-35 s on the shared 2-core machine (the first of a fresh
+cache compiles the flux kernel, minutes), tune 100-170 s; the THOR row took
+219 s under load; hence ``slow``.
 """
 
 from __future__ import annotations
@@ -41,9 +47,9 @@ from toolbox.spec import METHODS
 MOTOR_DIR = Path(__file__).parent / "motors"
 SATURATED = sorted(p.stem for p in MOTOR_DIR.glob("*.toml")
                    if "[motor.saturation]" in p.read_text() or "flux_map" in p.read_text())
-#: tune (an optimisation over the drift box, about 100 s a motor) runs on the new
-#: FEA-map motor only, as the datasheet corpus runs it on one motor
-TUNE_ON = ("syre_thor_5kw_pmsyrm",)
+#: tune (an optimisation over the drift box, 100-170 s a motor) runs on the two
+#: motors where it fails; on the Baldor measured map it passes (measured, 166 s)
+TUNE_ON = ("syre_thor_5kw_pmsyrm", "baldor_ecs101m0h7ef4_pmsyrm")
 
 _Q11_SPEED = "q step to 11 A at 133.2 rad/s (0.5 x speed scale)"
 #: (motor, method) -> {scenario: [failed checks]}, the reason in the module docstring
@@ -57,6 +63,8 @@ FAILS: dict[tuple[str, str], dict[str, list[str]]] = {
         _Q11_SPEED: ["default.reach"]},
     ("syre_thor_5kw_pmsyrm", "tune"): {                                   # 8.9 ms vs 8.6 ms
         "q step to 11 A (0.5 x current scale) at standstill": ["default.reach"]},
+    ("baldor_ecs101m0h7ef4_pmsyrm", "tune"): {                            # 8.4 ms vs 8.0 ms
+        "q step to 6.2 A (0.5 x current scale) at standstill": ["default.reach"]},
 }
 
 
