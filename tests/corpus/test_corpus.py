@@ -1,9 +1,11 @@
 """A corpus of real motors, each designed with every method on defaults (issue 12 item 4).
 
-``tests/corpus/motors/*.toml`` holds 36 motors in datasheet form (line-to-line
+``tests/corpus/motors/*.toml`` holds 38 motors in datasheet form (line-to-line
 R and L, V/krpm or N m/A, rpm, kHz strings), from a 10 W gimbal motor at 12 V
 to 150 kW traction machines at 800 V, surface and interior PM; each file
 cites its source and marks every value the source does not print as assumed.
+Three of them are saturated (a flux map or the algebraic saturation model):
+their grid over every method is tests/corpus/test_saturated_methods.py.
 
 Each case runs what ``cct design`` runs (design, analysis, verification on
 the default scenarios, header) through the Python API and asserts the
@@ -54,6 +56,10 @@ from toolbox.sim._simulate import DriveParams
 
 MOTOR_DIR = Path(__file__).parent / "motors"
 MOTORS = sorted(p.stem for p in MOTOR_DIR.glob("*.toml"))
+#: the saturated motors (a flux map or saturation model) have their own sweep over
+#: every method with their recorded outcomes: tests/corpus/test_saturated_methods.py
+SATURATED = tuple(m for m in MOTORS if any(k in (MOTOR_DIR / f"{m}.toml").read_text()
+                                           for k in ("[motor.saturation]", "flux_map")))
 METHODS = ("pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc")
 #: one motor per class: issue 12's IPM, axial flux, industrial servo, small BLDC,
 #: 48 V BLDC, hybrid traction IPM, traction IPM-SynRM judged up to its top speed
@@ -102,10 +108,12 @@ ENVELOPE_FAILS: dict[tuple[str, str], str] = {
 
 
 def corpus_spec(motor: str, method: str):
-    """The motor's spec with ``method`` and no method parameters."""
-    data = tomllib.loads((MOTOR_DIR / f"{motor}.toml").read_text())
+    """The motor's spec with ``method`` and no method parameters (``file``: a
+    ``flux_map`` path is relative to the spec's folder)."""
+    path = MOTOR_DIR / f"{motor}.toml"
+    data = tomllib.loads(path.read_text())
     data["controller"] = {"method": method}
-    return toolbox.spec_from_dict(data)
+    return toolbox.spec_from_dict(data, file=str(path))
 
 
 def fcs_ripple_ratio(spec) -> float:
@@ -135,6 +143,8 @@ def test_corpus_size_and_range():
 
 def _cases():
     for motor in (MOTORS if FULL else DEFAULT_MOTORS):
+        if motor in SATURATED:
+            continue
         for method in METHODS:
             marks = []
             if (motor, method) in KNOWN:

@@ -205,7 +205,7 @@ def test_corpus_inertia_slip_is_caught(path):
         assert ratio > 1e6
         return
     with pytest.raises(SpecError) as info:
-        spec_from_dict(data)
+        spec_from_dict(data, file=str(path))   # a flux_map path is relative to the file
     assert "kg·cm² written as kg·m²?" in str(info.value)
 
 
