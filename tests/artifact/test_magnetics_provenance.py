@@ -51,6 +51,15 @@ def test_flux_map_file_hash(tmp_path):
     assert other.provenance["magnetics_sha256"] != file_hash
 
 
+def test_corpus_flux_map_hash():
+    """The SyR-e THOR map of the corpus (tests/corpus/motors/flux_maps)."""
+    path = ROOT / "tests" / "corpus" / "motors" / "syre_thor_5kw_pmsyrm.toml"
+    spec = toolbox.spec_from_dict(tomllib.loads(path.read_text()), file=str(path))
+    art = toolbox.design_spec(spec)
+    csv = path.parent / "flux_maps" / "syre_thor_5kw.csv"
+    assert art.provenance["magnetics_sha256"] == hashlib.sha256(csv.read_bytes()).hexdigest()
+
+
 def test_algebraic_parameters_hash():
     data = tomllib.loads(PMSYRM.read_text())
     spec = toolbox.spec_from_dict(data)
