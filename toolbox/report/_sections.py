@@ -124,8 +124,10 @@ def _provenance(data: ReportData) -> list[tuple[str, str]]:
 def _envelope(verification) -> dict | None:
     """The torque-speed grid section (verify.json ``envelope``): its one-line
     summary, the envelope figure (:func:`toolbox.report.plots.envelope_svg`,
-    each point's reason as hover text) and one row per point with its status
-    and reason (the figure's hover text does not print). None without a grid."""
+    each point's reason as hover text) and one row per point with its status,
+    reason and tangent loop (the executed loop linearised at the point,
+    :func:`toolbox.report.plots.envelope_linear_text`; the figure's hover text
+    does not print). None without a grid."""
     env = (verification or {}).get("envelope")
     if not env:
         return None
@@ -134,7 +136,8 @@ def _envelope(verification) -> dict | None:
                 "svg": None, "rows": [], "key": None}
     rows = [(f"{p['torque_fraction']:g} x at {p['speed_fraction']:g} x base",
              fmt(p["speed"]), fmt(p.get("torque")), str(p.get("region")), str(p["status"]),
-             str(p.get("reason") or "")) for p in env.get("points", [])]
+             str(p.get("reason") or ""), plots.envelope_linear_text(p.get("linear")))
+            for p in env.get("points", [])]
     return {"summary": str(env.get("summary", "")),
             "status": "pass" if env.get("passed") else "fail",
             "svg": plots.envelope_svg(env), "rows": rows, "key": None}

@@ -26,7 +26,7 @@ from toolbox.spec import Motor, Scenario
 
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
 from ._default_scenarios import default_scenarios
-from ._envelope_grid import grid_envelope, torque_speed_grid
+from ._envelope_grid import grid_envelope, torque_speed_grid, with_tangent_loops
 from ._fcs_metrics import ripple_band_step_times
 
 __all__ = ["VERIFY_SCHEMA", "verify", "VerifyResult", "ScenarioOutcome", "NO_REQUIREMENTS",
@@ -342,4 +342,6 @@ def envelope_grid(artifact, spec) -> dict:
     band = math.hypot(ripple["d"], ripple["q"]) if ripple else 0.0
     grid = torque_speed_grid(law, spec.motor, drive, env, span=span,
                              max_speed=spec.drive.max_speed, band=band)
-    return grid.to_json()
+    # the linear proof at each point's tangent plant (toolbox/ARCHITECTURE.md
+    # "One controller, proved per point")
+    return with_tangent_loops(grid, artifact, spec.motor, spec.requirements).to_json()
