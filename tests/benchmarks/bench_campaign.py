@@ -27,7 +27,8 @@ directory, the design made once beforehand:
    the growth must not follow N once the chunk size and the subsample reach
    their caps (10,000 and 10^5 rows: from 10^5 samples on 2 workers).
    Default N: 10^4, 10^5 and 2 x 10^5 (about 10 min on 2 idle cores, 35 on
-   a loaded machine); ``--memory 1000000`` runs 10^6.
+   a loaded machine); ``--memory 1000000`` runs 10^6 (37 min on 2 loaded
+   cores: client peak 361 MB, README.md "Benchmarks").
 
 Run: ``python tests/benchmarks/bench_campaign.py [samples] [--memory N ...]``
 from the repository root (default 2000 samples). The machine is shared:

@@ -75,7 +75,7 @@ def _plant_array(model):
 def _ours(model, vd, vq):
     """Currents at the start of each period from the kernel's flux-state loop."""
     pl = kp._plant(_plant_array(model))
-    x = kp._initial_state(pl, OMEGA)
+    x = kp._initial_state(pl, OMEGA, True)
     acc_m = np.zeros(13)
     refs = (0.0, 0.0, 0.0, 0.0)
     mset = (0, 0.0, 0.0, 1e9, 1e9)
@@ -174,7 +174,7 @@ def test_linear_flux_map_reduces_to_constant_parameters():
     vals = dict(R=R, Ld=Ld, Lq=Lq, flux=flux, pole_pairs=NP, J=1.0, friction=0.0,
                 torque_factor=1.5, magnetic=0.0)
     pl = kp._plant(np.array([vals[k] for k in names]))
-    x = kp._initial_state(pl, OMEGA)
+    x = kp._initial_state(pl, OMEGA, None)
     acc_m = np.zeros(13)
     t = 0.0
     ref = np.empty((n, 2))

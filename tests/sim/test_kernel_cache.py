@@ -32,7 +32,7 @@ def test_kernel_sources_cover_what_it_compiles_in():
     compiled = {Path(inspect.getsourcefile(f.py_func)).name
                 for f in vars(_kernel).values() if isinstance(f, CPUDispatcher)}
     parts = {"_kernel_layout.py", "_kernel_plant.py", "_kernel_metrics.py",
-             "_kernel_steps.py", "_kernel_pwm.py", "_kernel_cv.py"}
+             "_kernel_steps.py", "_kernel_pwm.py", "_kernel_cv.py", "_kernel_sense.py"}
     assert imported == {"_inverter.py", "_metrics.py"} | parts
     assert compiled == {"_kernel.py", "_inverter.py"} | parts - {"_kernel_layout.py"}
     assert set(_kernel.KERNEL_SOURCES) == imported | compiled
@@ -99,3 +99,66 @@ def test_sim_imports_with_the_jit_disabled():
     out = subprocess.run([sys.executable, "-c", "import toolbox.sim"], env=env,
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
+
+
+_VARIANT_PROBE = r"""
+import json, math
+from toolbox.artifact import Decoupling
+from toolbox.sim import _kernel, _kernel_pwm, _kernel_steps
+from toolbox.sim._simulate import ControlLaw, DriveParams, discrete_pi, simulate
+from toolbox.spec import Motor, Scenario
+
+M = Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4, J=1.11e-3)
+TS = 1e-4
+law = ControlLaw(d=discrete_pi(M.Ld * 2000.0, M.R * 2000.0, TS),
+                 q=discrete_pi(M.Lq * 2000.0, M.R * 2000.0, TS), sample_time=TS,
+                 decoupling=Decoupling.from_motor(M))
+drive = DriveParams(vdc=150.0, sample_time=TS, delay_samples=1, v_limit="circle",
+                    v_max=150.0 / math.sqrt(2.0))
+res = simulate(law, M, Scenario(kind="unloaded_start", duration=2e-3, iq_ref=10.0), drive)
+(sig,) = _kernel._periods.signatures
+print(json.dumps({
+    "final": res.metrics["final_value"],
+    "entries": {repr(v): [len(e[0].signatures), len(e[1].signatures)]
+                for v, e in _kernel.ENTRIES.items()},
+    "run": [str(s[-4:]) for s in _kernel._run.signatures],
+    "frames": sorted({str(s[6]) for s in _kernel_steps._steps.signatures}),
+    "helpers": {f.__name__: len(f.signatures) for f in (
+        _kernel_steps._steps, _kernel_steps._steps_flux, _kernel_pwm._svm_period,
+        _kernel_pwm._carrier_period, _kernel_pwm._carrier_half, _kernel._fcs_choice)},
+    "expm1": "@expm1" in _kernel._periods.inspect_llvm(sig),
+}))
+"""
+
+
+@pytest.mark.slow
+def test_average_constant_run_compiles_no_other_variant(tmp_path):
+    """In a fresh interpreter with an empty numba cache (``NUMBA_CACHE_DIR``: every
+    function is compiled, none loaded), a constant-parameter, linear-law,
+    average-inverter simulation compiles its own variant only: the other
+    entries of ``_kernel.ENTRIES`` (complex-vector law, flux-state plant,
+    switching inverters, stationary-frame hold) have no signature, nor have
+    the flux-state plant loop, the switching inverters' period functions and
+    the predictive choice; the plant loop is compiled for the rotor-frame
+    hold only; the period loop is compiled once, without the complex-vector
+    law (inlined, it would bring its ``expm1``)."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    out = subprocess.run([sys.executable, "-c", _VARIANT_PROBE], env=env, cwd=SIM.parents[1],
+                         capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout.splitlines()[-1])
+    assert 9.0 < got["final"] < 11.0           # the 10 A step ran
+    default = repr((None, None, None, None))
+    assert got["entries"].pop(default) == [1, 0]
+    assert len(got["entries"]) == 11 and all(n == [0, 0] for n in got["entries"].values())
+    assert got["run"] == ["(none, none, none, none)"]
+    assert got["frames"] == ["Literal[int](0)"]  # the rotor-frame hold only
+    assert got["helpers"].pop("_steps") == 2     # with and without a load torque
+    assert got["helpers"] == {"_steps_flux": 0, "_svm_period": 0, "_carrier_period": 0,
+                              "_carrier_half": 0, "_fcs_choice": 0}
+    assert not got["expm1"]

@@ -53,8 +53,8 @@ def test_kernel_matches_python_reference(case):
 def test_compiled_kernel_equals_interpreted_kernel(inverter, monkeypatch):
     """The switching-level paths (SVM segments, predictive choice, seeded
     sensor noise, hexagon limit) compiled by numba equal the same source run
-    by the Python interpreter (``run.py_func`` and its period loop
-    ``_periods.py_func``) to 1e-9 relative: no numba-specific semantics
+    by the Python interpreter (``_run.py_func`` of the switching variant and
+    its period loop ``_periods.py_func``) to 1e-9 relative: no numba-specific semantics
     (integer division, wrap-around, casts) leak in."""
     from toolbox.sim import _kernel
     from toolbox.sim._simulate import FcsWeights, _pack, _pack_law, _plant_array
@@ -71,7 +71,7 @@ def test_compiled_kernel_equals_interpreted_kernel(inverter, monkeypatch):
     args = (_plant_array(M), A, B, C, D, W, LP, SP, DP, SC, True)
     m1, t1 = _kernel.run(*args)
     monkeypatch.setattr(_kernel, "_periods", _kernel._periods.py_func)
-    m2, t2 = _kernel.run.py_func(*args)
+    m2, t2 = _kernel._run.py_func(*args, None, None, True, None)
     assert _close(t1, t2)
     both = np.isfinite(m1)
     assert np.array_equal(both, np.isfinite(m2))

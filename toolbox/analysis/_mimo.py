@@ -192,18 +192,24 @@ def _controllers(artifact, x: np.ndarray, discrete: bool) -> np.ndarray:
 
 
 def _loop_response(artifact, motor, omega: float, w: np.ndarray, x: np.ndarray,
-                   C: np.ndarray, discrete: bool, omega_meas: float | None) -> np.ndarray:
+                   C: np.ndarray, discrete: bool, omega_meas: float | None,
+                   zoh: tuple | None = None) -> np.ndarray:
     """:func:`mimo_loop_response` with the grid points ``x`` (:func:`_grid_point`)
-    and the controllers ``C`` (:func:`_controllers`) given."""
+    and the controllers ``C`` (:func:`_controllers`) given; ``zoh`` (discrete
+    only) the plant's ZOH ``(Phi, Gamma)`` (1, 2, 2) each at ``omega`` instead
+    of the one of ``motor``'s constant parameters (the tangent plant of a
+    saturated motor, cross inductance included:
+    :mod:`toolbox.analysis.envelope_points`)."""
     Ts, d = artifact.sample_time, artifact.delay_samples
     om_meas = omega if omega_meas is None else omega_meas
-    Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
     Rot = rotation(placement_error(artifact.decoupling, Ts, d, omega, om_meas))[0]
     if discrete:
-        Phi, Gam = zoh_coupled(Ac, Bc, Ts)
+        Phi, Gam = zoh if zoh is not None else zoh_coupled(
+            *coupled_plant(motor.R, motor.Ld, motor.Lq, omega), Ts)
         P = inv_2x2(x[:, None, None] * np.eye(2) - Phi[0]) @ Gam[0]
         P = P * (x ** (-d))[:, None, None]
     else:
+        Ac, Bc = coupled_plant(motor.R, motor.Ld, motor.Lq, omega)
         P = inv_2x2(x[:, None, None] * np.eye(2) - Ac[0]) @ Bc[0]
         P = P * np.exp(-1j * w * (d + 0.5) * Ts)[:, None, None]
     if artifact.cv is not None:

@@ -54,5 +54,9 @@ def make_artifact(spec, axes: dict[str, AxisController], decoupling: Decoupling,
             "spec_sha256": spec_sha256(spec.raw),
             "created": datetime.now(timezone.utc).replace(microsecond=0).isoformat(),
             "equations": list(equations),
+            # the magnetic data of a saturated motor (its flux-map file or saturation
+            # parameters): toolbox/ARCHITECTURE.md "controller.json"
+            **({"magnetics_sha256": spec.motor.magnetics.data_sha256()}
+               if spec.motor.magnetics is not None else {}),
         },
     )

@@ -145,6 +145,8 @@ def _provenance(artifact, title: str) -> dict:
     return {"title": sanitise_comment(title), "method": sanitise_comment(artifact.method),
             **{k: sanitise_comment(prov.get(k, "unknown"))
                for k in ("version", "spec_sha256", "created")},
+            "magnetics_sha256": (sanitise_comment(prov["magnetics_sha256"])
+                                 if prov.get("magnetics_sha256") else None),
             "law_sha256": artifact.law_sha256()}
 
 

@@ -490,7 +490,40 @@ def envelope_point_text(p: Mapping) -> str:
             f"({p['speed']:.4g} rad/s): {p['status']}")
     if p.get("region") and p["region"] != "unreachable":
         head += f", {p['region']}, {_num(p.get('torque')):.4g} N m"
-    return head + (f": {p['reason']}" if p.get("reason") else "")
+    linear = envelope_linear_text(p.get("linear"))
+    return (head + (f": {p['reason']}" if p.get("reason") else "")
+            + (f" (tangent loop: {linear})" if linear else ""))
+
+
+def envelope_linear_text(linear: Mapping | None) -> str:
+    """A grid point's linear result (verify.json ``envelope.points[].linear``,
+    :class:`toolbox.analysis.envelope_points.TangentLoop`) in one line: stable
+    or not with the spectral radius, the worst per-axis gain and phase
+    margins when computed, the multiloop disk margin and the phase it
+    guarantees; empty without one."""
+    if not linear:
+        return ""
+    if not linear.get("analysed"):
+        return "not analysed (no linear loop)"
+
+    def fmt(v: Any, spec: str) -> str:
+        x = _num(v)
+        return "inf" if x is None and v in ("inf", float("inf")) else (
+            "-" if x is None else format(x, spec))
+
+    text = (f"{'stable' if linear.get('stable') else 'UNSTABLE'}, spectral radius "
+            f"{fmt(linear.get('spectral_radius'), '.4f')}")
+    margins = linear.get("margins") or {}
+    if margins:
+        def worst(key):
+            vals = [v for v in (_num(m.get(key)) for m in margins.values()) if v is not None]
+            return min(vals) if vals else None
+        text += (f"; axis GM {fmt(worst('gain_margin_db'), '.3g')} dB, "
+                 f"PM {fmt(worst('phase_margin_deg'), '.3g')} deg")
+    if linear.get("stable"):
+        text += (f"; MIMO disk margin {fmt(linear.get('mimo_disk_margin'), '.3g')} "
+                 f"(+-{fmt(linear.get('mimo_phase_margin_deg'), '.3g')} deg)")
+    return text
 
 
 def envelope_svg(env: Mapping, prefix: str = "env") -> str:

@@ -42,12 +42,29 @@ name, in :data:`LAYOUTS`; the index constants (``P_R``, ``DP_TS``,
 ``SC_DURATION``, ...) are written out in ``_kernel_layout`` (checked against
 that declaration by tests/sim/test_kernel_model.py) and
 :func:`pack_indices` gives the same map to the Python side that fills the
-arrays (``_simulate._pack``). :func:`run` allocates the work
+arrays (``_simulate._pack``). :func:`_run` allocates the work
 arrays and :func:`_periods` runs the periods, a short loop over small
 ``@njit`` helpers (sensors, references, speed loop, law step with
 anti-windup and voltage limit, predictive choice, inverter and plant RK4);
 the plant state lives in local scalars, not in an array, so that LLVM keeps
 it in registers across the RK4 stages.
+
+Variants. Four paths are compiled only into the runs that take them: the
+complex-vector law of method ``cv``, the flux-state plant of a saturated
+motor, the switching inverters (svm, carrier, fcs_mpc) and the average
+inverter's stationary-frame hold (a spec holds in one frame).
+:func:`variant` names the one a run needs, ``(cv, flux, switching,
+stationary)``, each flag None or True; :data:`ENTRIES` holds a compiled ``(run, run_rows)``
+pair per variant (:func:`_entries`), which passes the flags to :func:`_run`
+as compile-time constants, and :func:`run`, :func:`run_rows` (plain Python)
+call the pair of their inputs. The one period loop :func:`_periods` and the
+plant helpers branch on ``flag is None``, a test numba resolves, and
+prunes, before typing: a branch not taken is never typed, so its callees
+(``_kernel_cv``, ``_kernel_steps._steps_flux``, ``_kernel_pwm``,
+:func:`_fcs_choice`) are not compiled either. A constant-parameter,
+linear-law, average-inverter run (every ``cct design`` of a linear method)
+thus compiles none of them; each other variant compiles on its first use
+and is cached on disk apart (``docs/performance.md``, "Cold compile").
 
 Loop structure in brief (gcc -O3's plain C loop of the same arithmetic,
 ``tests/benchmarks/bench_sim.py``, is the yardstick): the period loop and the
@@ -61,8 +78,9 @@ the measured timings, the cold compile and the experiments tried:
 ``docs/performance.md``.
 
 The plant (``_kernel_plant``), the online metrics (``_kernel_metrics``), the
-plant steps (``_kernel_steps``), the switching inverters (``_kernel_pwm``) and
-the complex-vector law of method ``cv`` (``_kernel_cv``)
+plant steps (``_kernel_steps``), the switching inverters (``_kernel_pwm``),
+the complex-vector law of method ``cv`` (``_kernel_cv``) and the sensors,
+references and speed loop (``_kernel_sense``)
 live in sibling modules compiled with the same decorators; the layouts, slot
 constants and decorators are declared in ``_kernel_layout``. All of them are
 in :data:`KERNEL_SOURCES`.
@@ -88,127 +106,24 @@ from ._kernel_layout import (LAYOUTS, N_METRICS, N_SC, N_TRACE, _A_CELLS, _A_OUT
                              pack_indices)
 from ._kernel_layout import (  # the slot constants (compile-time ints)
     LP_R_C, LP_LD_C, LP_LQ_C, LP_FLUX_C, LP_CROSS, LP_EMF, LP_ALPHA, LP_BETA, LP_GAMMA,
-    LP_CV, LP_CV_PC, LP_CV_PI, LP_CV_PD, LP_CV_D, SP_ENABLED, SP_KP, SP_KI, SP_KD, SP_DECIM,
-    SP_IQ_LIMIT, DP_TS, DP_DELAY, DP_VLIM, DP_V_MAX, DP_R_HEX, DP_INVERTER, DP_HALF_PERIODS,
-    DP_HOLD, DP_T_COMP, DP_VPRIO, SC_DURATION, SC_MECH, SC_OMEGA0, SC_ACC, SC_ID0, SC_IQ0,
-    SC_ID1, SC_IQ1, SC_T_STEP, SC_SPEED0, SC_SPEED1, SC_LOAD, SC_LOAD_TIME, SC_IQ_AMP,
-    SC_F_SIN, SC_REF_MODE, SC_GAIN, SC_OFFSET, SC_SPEED_NOISE, SC_NOISE_KIND,
-    SC_CURRENT_NOISE, SC_CURRENT_QUANTUM, SC_SEED, SC_H, SC_TRACE_DECIM, SC_CURRENT_GAIN_D,
-    SC_CURRENT_GAIN_Q, SC_CURRENT_DELAY_D, SC_CURRENT_DELAY_Q)
+    LP_CV, LP_CV_PC, LP_CV_PI, LP_CV_PD, LP_CV_D, P_MAGNETIC, SP_ENABLED, SP_DECIM, DP_TS,
+    DP_DELAY, DP_VLIM, DP_V_MAX, DP_R_HEX, DP_INVERTER, DP_HALF_PERIODS, DP_HOLD, DP_T_COMP,
+    DP_VPRIO, SC_DURATION, SC_MECH, SC_OMEGA0, SC_ACC, SC_ID1, SC_T_STEP, SC_LOAD, SC_LOAD_TIME,
+    SC_SEED, SC_H, SC_TRACE_DECIM, SC_CURRENT_DELAY_D, SC_CURRENT_DELAY_Q)
 from ._kernel_plant import (_currents, _deriv, _initial_state, _plant, _to_ab,  # noqa: F401
                             _to_dq, _torque, _torque_of_state)
 from ._kernel_metrics import _finalise, _metric_setup, _overshoot  # noqa: F401 (tests)
 from ._kernel_steps import _advance_n, _split
 from ._kernel_pwm import _carrier_period, _svm_period
 from ._kernel_cv import _cv_linear, _cv_update
+from ._kernel_sense import _current_sensor, _references, _sense, _speed_pid
 
-__all__ = ["run", "run_rows", "N_METRICS", "N_TRACE", "N_SC", "LAYOUTS", "pack_indices",
-           "KERNEL_SOURCES", "sources_digest"]
-
-
-
-# --------------------------------------------------------------------------- RNG
-@_jit_inline
-def _splitmix(st):
-    """splitmix64 step on the 1-element uint64 state array; returns a float in [0, 1)."""
-    z = st[0] + np.uint64(0x9E3779B97F4A7C15)
-    st[0] = z
-    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    z = z ^ (z >> np.uint64(31))
-    return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
-
-
-@_jit_inline
-def _noise(st, amp, kind):
-    """Uniform noise in [-amp, amp] (kind 0) or Gaussian of std amp (kind 1, Box-Muller)."""
-    if amp == 0.0:
-        return 0.0
-    if kind == 0:
-        return amp * (2.0 * _splitmix(st) - 1.0)
-    u1 = _splitmix(st)
-    u2 = _splitmix(st)
-    if u1 < 1e-300:
-        u1 = 1e-300
-    return amp * math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+__all__ = ["run", "run_rows", "variant", "ENTRIES", "N_METRICS", "N_TRACE", "N_SC",
+           "LAYOUTS", "pack_indices", "KERNEL_SOURCES", "sources_digest"]
 
 
 
 # ------------------------------------------------------------------- controller
-@_jit_inline
-def _sense(x, rng, SC):
-    """Sampled sensors (paper 000: gain/offset/noise on the speed; noise and
-    quantisation on the currents); returns (id_m, iq_m, Omega_m)."""
-    kind = int(SC[SC_NOISE_KIND])
-    i_d_m = x[0] + _noise(rng, SC[SC_CURRENT_NOISE], kind)
-    i_q_m = x[1] + _noise(rng, SC[SC_CURRENT_NOISE], kind)
-    q = SC[SC_CURRENT_QUANTUM]
-    if q > 0.0:
-        i_d_m = q * math.floor(i_d_m / q + 0.5)
-        i_q_m = q * math.floor(i_q_m / q + 0.5)
-    om_m = (1.0 + SC[SC_GAIN]) * x[2] + SC[SC_OFFSET] \
-        + _noise(rng, SC[SC_SPEED_NOISE], kind)
-    return i_d_m, i_q_m, om_m
-
-
-@_jit_inline
-def _delayed(v, k, nd, buf):
-    """``v`` measured ``nd`` periods ago (ring buffer ``buf`` of ``nd + 1``
-    samples); 0 before the first one exists (the currents start at 0)."""
-    if nd == 0:
-        return v
-    nb = nd + 1
-    buf[k % nb] = v
-    if k < nd:
-        return 0.0
-    return buf[(k - nd) % nb]
-
-
-@_jit_inline
-def _current_sensor(i_d_m, i_q_m, k, buf_d, buf_q, SC):
-    """Gain and measurement delay (whole periods) on each measured current
-    (paper 002 sect. 5: a gain and a time delay on the state variables
-    Phi_d, Phi_q that the predictive law reads)."""
-    return (_delayed(i_d_m * SC[SC_CURRENT_GAIN_D], k, int(SC[SC_CURRENT_DELAY_D]), buf_d),
-            _delayed(i_q_m * SC[SC_CURRENT_GAIN_Q], k, int(SC[SC_CURRENT_DELAY_Q]), buf_q))
-
-
-@_jit_inline
-def _references(t, SC):
-    """Current and speed references at sample time t: (id_ref, iq_ref, speed_ref)."""
-    before = t < SC[SC_T_STEP]
-    sr = SC[SC_SPEED0] if before else SC[SC_SPEED1]
-    if before:
-        idr = SC[SC_ID0]
-        iqr = SC[SC_IQ0]
-    else:
-        idr = SC[SC_ID1]
-        iqr = SC[SC_IQ1]
-    if int(SC[SC_REF_MODE]) == 1:  # sinusoidal torque
-        idr = SC[SC_ID1]
-        iqr = SC[SC_IQ_AMP] * math.sin(2.0 * math.pi * SC[SC_F_SIN] * t)
-    return idr, iqr, sr
-
-
-@_jit_inline
-def _speed_pid(e, e_prev, integ, Tsp, SP):
-    """One step of the speed PID with conditional integration (anti-windup).
-
-    Returns (i_q reference, new integral): the integral only moves while the
-    output is inside +/- iq_limit.
-    """
-    integ_new = integ + SP[SP_KI] * e * Tsp
-    u = SP[SP_KP] * e + integ_new + SP[SP_KD] * (e - e_prev) / Tsp
-    lim = SP[SP_IQ_LIMIT]
-    if u > lim:
-        u = lim
-    elif u < -lim:
-        u = -lim
-    else:
-        integ = integ_new
-    return u, integ
-
-
 @_jit_inline
 def _linear(C, D, ax, x, r, y):
     """Output (without anti-windup) of the axis ``ax`` controller (0 d, 1 q)."""
@@ -406,9 +321,9 @@ def _fcs_choice(i_d_m, i_q_m, w_m, th_m, idr, iqr, conf_prev, predict, Ts, r_hex
 
 
 # ------------------------------------------------------------------ simulation
-@njit(cache=True, nogil=True, error_model="numpy")
 def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
-    """One closed-loop simulation (releases the GIL, as :func:`run_rows`).
+    """One closed-loop simulation (compiled code that releases the GIL, as
+    :func:`run_rows`), by the compiled variant of its inputs (:func:`variant`).
 
     Parameters (all float64 arrays, filled by ``_simulate._pack*``; slots in
     :data:`LAYOUTS`)
@@ -427,11 +342,11 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
         then hold the integrator and the delayed voltages, ``A`` sized for them).
     SP : (6,)
         Speed loop: enabled, kp, ki, kd, period in current periods, iq limit.
-    DP : (8,)
+    DP : (10,)
         Ts (s), delay (periods), limit kind, circle radius (V), hexagon
         vertex radius (V), inverter kind, carrier half periods per sample
         (0: one centred SVM pattern per sample), hold frame of the average
-        inverter (0 rotor, 1 stationary).
+        inverter (0 rotor, 1 stationary), compensation time (s), limit priority.
     SC : (N_SC,)
         Scenario (slots ``SC_*``; see :func:`pack_indices`).
     keep_traces : bool
@@ -444,6 +359,83 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     traces : (n_rows, N_TRACE)
         t, id, iq, vd, vq, speed, torque, id_ref, iq_ref, speed_measured.
     """
+    return ENTRIES[variant(P[P_MAGNETIC], LP, DP)][0](P, A, B, C, D, Baw, LP, SP, DP, SC,
+                                                     keep_traces)
+
+
+def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
+    """Metrics of the simulations of the plants ``P[start:stop:step]`` into the
+    same rows of ``out`` (N, N_METRICS): one thread's share of a batch
+    (``_simulate.simulate_batch`` runs one per core), compiled code that
+    releases the GIL.
+
+    One call per share, not one per simulation: each return to Python hands
+    the GIL between the threads, ~5 % of a batch of 20 ms simulations.
+    Parameters as for :func:`run`, ``P`` (N, 9 or longer) one plant per row,
+    all of one kind (constant parameters or saturated: one variant).
+    """
+    magnetic = P[:, P_MAGNETIC] > 0.5
+    if magnetic.any() != magnetic.all():
+        raise ValueError("run_rows: constant-parameter and saturated plants in one batch")
+    ENTRIES[variant(P[0, P_MAGNETIC] if len(P) else 0.0, LP, DP)][1](
+        P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out)
+
+
+def variant(magnetic, LP, DP):
+    """The kernel variant ``(cv, flux, switching, stationary)`` that runs
+    these inputs: each flag None (the path is not compiled in) or True:
+    ``cv`` the complex-vector law (``LP`` slot ``cv``), ``flux`` a saturated
+    plant (plant slot ``magnetic``), ``switching`` an inverter other than the
+    average model (``DP`` slot ``inverter``: svm, carrier, fcs_mpc),
+    ``stationary`` the average inverter's hold in the stationary frame
+    (``DP`` slot ``hold`` 1; None with a switching inverter)."""
+    switching = int(DP[DP_INVERTER]) != 0
+    return (True if LP[LP_CV] > 0.5 else None, True if magnetic > 0.5 else None,
+            True if switching else None,
+            True if not switching and int(DP[DP_HOLD]) == 1 else None)
+
+
+def _entries(cv, flux, switching, stationary):
+    """The compiled entry points ``(run, run_rows)`` of one variant: thin
+    wrappers that call :func:`_run` with the flags as compile-time constants
+    (closure variables), so that numba types, and prunes, every branch on
+    them before compiling anything below (module docstring, "Variants").
+    numba's disk cache keys each on its closure variables: one cache entry
+    per variant."""
+
+    @njit(cache=True, nogil=True, error_model="numpy")
+    def run_variant(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
+        return _run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, cv, flux, switching,
+                    stationary)
+
+    @njit(cache=True, nogil=True, error_model="numpy")
+    def rows_variant(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
+        for i in range(start, stop, step):
+            # np.bool_, not the literal False: the same _run as run_variant's
+            # (a literal compiled run and its helpers a second time, ~3 s)
+            M, _ = _run(P[i], A, B, C, D, Baw, LP, SP, DP, SC, np.bool_(False), cv, flux,
+                        switching, stationary)
+            # element by element: ``out[i] = M`` compiled numba's shape check and
+            # its error message formatting (~1.2 s of cold compile)
+            for j in range(N_METRICS):
+                out[i, j] = M[j]
+
+    return run_variant, rows_variant
+
+
+#: The compiled entry points ``(run, run_rows)`` of each variant
+#: ``(cv, flux, switching, stationary)`` (:func:`variant`); each compiles on
+#: its first call.
+ENTRIES = {(cv, flux, sw, st): _entries(cv, flux, sw, st)
+           for cv in (None, True) for flux in (None, True)
+           for sw, st in ((None, None), (None, True), (True, None))}
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, cv, flux, switching, stationary):
+    """:func:`run` of the variant ``(cv, flux, switching, stationary)`` (:func:`variant`;
+    the flags None or True, constants of the caller): allocates the work
+    arrays, runs :func:`_periods`, returns (metrics, traces)."""
     Ts = DP[DP_TS]
     n_per = int(round(SC[SC_DURATION] / Ts))
     mset = _metric_setup(SC)
@@ -463,18 +455,25 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
                         np.zeros(n), np.zeros(n), np.zeros(n), acc_m, rng, np.zeros(nbuf),
                         np.zeros(nbuf), np.zeros(nbuf),
                         np.zeros(int(SC[SC_CURRENT_DELAY_D]) + 1),
-                        np.zeros(int(SC[SC_CURRENT_DELAY_Q]) + 1), tr)
+                        np.zeros(int(SC[SC_CURRENT_DELAY_Q]) + 1), tr, cv, flux, switching,
+                        stationary)
     return _finalise(acc_m, n_per, Ts, om_final, SC[SC_T_STEP], mset), tr
 
 
 @_jit_no_rc
 def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec, xd, xq,
-             xn, acc_m, rng, vd_buf, vq_buf, ph_buf, cs_d, cs_q, tr):
+             xn, acc_m, rng, vd_buf, vq_buf, ph_buf, cs_d, cs_q, tr, cv, flux, switching,
+             stationary):
     """The ``n_per`` controller periods of :func:`run` (metric set-up ``mset``,
     a trace row every ``trdec`` periods) over its work arrays (law states
     ``xd``, ``xq``, scratch ``xn``; metric accumulators; RNG state; delay ring
     buffers of the voltage and its placement angle; current-sensor delay
-    lines; traces); returns the final mechanical speed."""
+    lines; traces); returns the final mechanical speed.
+
+    One loop for every variant: ``cv``, ``flux``, ``switching``,
+    ``stationary`` (None or the constant True, :func:`variant`) select the
+    law, the plant state, the inverter and the average inverter's hold frame
+    in branches ``is None`` that numba prunes before typing."""
     pl = _plant(P)
     p = pl[4]
     Ts = DP[DP_TS]
@@ -482,7 +481,6 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     r_hex = DP[DP_R_HEX]
     inverter = int(DP[DP_INVERTER])
     carrier = DP[DP_HALF_PERIODS] > 0.5
-    hold = int(DP[DP_HOLD])
     h = SC[SC_H]
     mech = int(SC[SC_MECH])
     acc = SC[SC_ACC]
@@ -492,8 +490,8 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     Lq_c = LP[LP_LQ_C]
     flux_c = LP[LP_FLUX_C]
     # plant state id, iq, Omega, theta (a saturated motor: psi_d, psi_q, Omega,
-    # theta; its currents are _currents(pl, x))
-    x = _initial_state(pl, omega0)
+    # theta; its currents are _currents(pl, x, flux))
+    x = _initial_state(pl, omega0, flux)
     n_ts, dt_ts = _split(Ts, h)  # the plant steps of a period held constant
     nbuf = vd_buf.shape[0]
     # speed loop state
@@ -510,13 +508,12 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
     conf_next = np.int64(0)  # fcs with delay: state chosen last period, applied now
     conf_now = np.int64(0)
     t_comp = DP[DP_T_COMP]
-    cv = LP[LP_CV] > 0.5  # the complex-vector law of method cv instead of the axes' laws
     vd_app = 0.0
     vq_app = 0.0
     ph_app = 0.0
     for k in range(n_per):
         t = k * Ts
-        xi = _currents(pl, x)
+        xi = _currents(pl, x, flux)
         i_d_m, i_q_m, om_m = _sense(xi, rng, SC)
         i_d_m, i_q_m = _current_sensor(i_d_m, i_q_m, k, cs_d, cs_q, SC)
         w_m = p * om_m
@@ -534,7 +531,9 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
             idr = SC[SC_ID1]
         refs = (idr, iqr, sr, tf_p * (flux_c * iqr + (Ld_c - Lq_c) * idr * iqr))
         t_load = SC[SC_LOAD] if t >= SC[SC_LOAD_TIME] else 0.0
-        if inverter == 2:
+        fcs = False
+        if switching is not None and inverter == 2:
+            fcs = True
             # one call with a run-time flag, not two with the literals True and
             # False: each literal compiled a version of its own (cold compile)
             predict = delay >= 1
@@ -548,13 +547,13 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
                 conf_now = choice
             va, vb = state_vector(conf_now, r_hex)
             vd_app, vq_app = _to_dq(va, vb, math.cos(th_m), math.sin(th_m))
-        else:
-            if cv:
-                vd_s, vq_s, saturated = _cv_law_step(xd, xq, idr, iqr, i_d_m, i_q_m, w_m,
-                                                     th_m, LP, DP)
-            else:
+        if not fcs:
+            if cv is None:
                 vd_s, vq_s, saturated = _law_step(A, B, C, D, Baw, xd, xq, xn, idr, iqr,
                                                   i_d_m, i_q_m, w_m, th_m, LP, DP)
+            else:
+                vd_s, vq_s, saturated = _cv_law_step(xd, xq, idr, iqr, i_d_m, i_q_m, w_m,
+                                                     th_m, LP, DP)
             if saturated:
                 acc_m[_A_SAT] += Ts
             slot = k % nbuf
@@ -578,56 +577,37 @@ def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec
             tr[row, 3] = vd_app
             tr[row, 4] = vq_app
             tr[row, 5] = x[2]
-            tr[row, 6] = _torque_of_state(pl, x)
+            tr[row, 6] = _torque_of_state(pl, x, flux)
             tr[row, 7] = idr
             tr[row, 8] = iqr
             tr[row, 9] = om_m
         # ---- plant over one period
-        if inverter == 0 and hold == 0:
-            # rotor-frame hold: the placement's error from the true mid-period angle
-            err = ph_app - (x[3] + p * x[2] * Ts * 0.5)
-            vx, vy = _to_ab(vd_app, vq_app, math.cos(err), math.sin(err))
-            t, x = _advance_n(x, t, vx, vy, 0, n_ts, dt_ts, pl, t_load, mech, acc,
-                              omega0, acc_m, refs, mset)
-        elif inverter == 0:  # held in the stationary frame at the placement angle
-            vx, vy = _to_ab(vd_app, vq_app, math.cos(ph_app), math.sin(ph_app))
-            t, x = _advance_n(x, t, vx, vy, 1, n_ts, dt_ts, pl, t_load, mech, acc, omega0,
-                              acc_m, refs, mset)
+        if switching is None:
+            if stationary is None:
+                # rotor-frame hold: the placement's error from the true mid-period angle
+                err = ph_app - (x[3] + p * x[2] * Ts * 0.5)
+                vx, vy = _to_ab(vd_app, vq_app, math.cos(err), math.sin(err))
+                t, x = _advance_n(x, t, vx, vy, 0, n_ts, dt_ts, pl, t_load, mech, acc,
+                                  omega0, acc_m, refs, mset, flux)
+            else:  # held in the stationary frame at the placement angle
+                vx, vy = _to_ab(vd_app, vq_app, math.cos(ph_app), math.sin(ph_app))
+                t, x = _advance_n(x, t, vx, vy, 1, n_ts, dt_ts, pl, t_load, mech, acc,
+                                  omega0, acc_m, refs, mset, flux)
         elif inverter == 1 and carrier:
             t, x, conf_applied = _carrier_period(x, t, k, vd_app, vq_app, ph_app,
                                                  conf_applied, h, pl, t_load, mech, acc,
-                                                 omega0, acc_m, refs, mset, DP)
+                                                 omega0, acc_m, refs, mset, DP, flux)
         elif inverter == 1:
-            t, x, conf_applied = _svm_period(x, t, vd_app, vq_app, ph_app, conf_applied,
-                                             h, pl, t_load, mech, acc, omega0, acc_m,
-                                             refs, mset, DP)
+            t, x, conf_applied = _svm_period(x, t, vd_app, vq_app, ph_app, conf_applied, h,
+                                             pl, t_load, mech, acc, omega0, acc_m, refs,
+                                             mset, DP, flux)
         else:
             acc_m[_A_CELLS] += bit_changes(conf_applied, conf_now)
             conf_applied = conf_now
             vx, vy = state_vector(conf_now, r_hex)
             t, x = _advance_n(x, t, vx, vy, 1, n_ts, dt_ts, pl, t_load, mech, acc, omega0,
-                              acc_m, refs, mset)
+                              acc_m, refs, mset, flux)
     return x[2]
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
-    """Metrics of the simulations of the plants ``P[start:stop:step]`` into the
-    same rows of ``out`` (N, N_METRICS): one thread's share of a batch
-    (``_simulate.simulate_batch`` runs one per core).
-
-    One call per share, not one per simulation: each return to Python hands
-    the GIL between the threads, ~5 % of a batch of 20 ms simulations.
-    Parameters as for :func:`run`, ``P`` (N, 8) one plant per row.
-    """
-    for i in range(start, stop, step):
-        # np.bool_, not the literal False: a literal compiled run and its
-        # helpers a second time (~3 s of cold compile)
-        M, _ = run(P[i], A, B, C, D, Baw, LP, SP, DP, SC, np.bool_(False))
-        # element by element: ``out[i] = M`` compiled numba's shape check and
-        # its error message formatting (~1.2 s of cold compile)
-        for j in range(N_METRICS):
-            out[i, j] = M[j]
 
 
 
@@ -644,11 +624,11 @@ def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
 #: their cache indexes are dropped with this module's (:data:`_KERNEL_PARTS`).
 KERNEL_SOURCES = ("_kernel.py", "_inverter.py", "_metrics.py", "_kernel_layout.py",
                   "_kernel_plant.py", "_kernel_metrics.py", "_kernel_steps.py",
-                  "_kernel_pwm.py", "_kernel_cv.py")
+                  "_kernel_pwm.py", "_kernel_cv.py", "_kernel_sense.py")
 #: Modules whose numba cache indexes depend on :data:`KERNEL_SOURCES` beyond
 #: their own file (``_inverter`` is self-contained).
 _KERNEL_PARTS = ("_kernel", "_kernel_plant", "_kernel_metrics", "_kernel_steps",
-                 "_kernel_pwm", "_kernel_cv")
+                 "_kernel_pwm", "_kernel_cv", "_kernel_sense")
 
 
 def sources_digest() -> str:
@@ -683,6 +663,6 @@ def _drop_stale_cache(cache_dir: Path) -> None:
         pass
 
 
-if hasattr(run, "stats"):        # a numba dispatcher (not a plain function: NUMBA_DISABLE_JIT=1)
-    _drop_stale_cache(Path(run.stats.cache_path))
+if hasattr(_run, "stats"):        # a numba dispatcher (not a plain function: NUMBA_DISABLE_JIT=1)
+    _drop_stale_cache(Path(_run.stats.cache_path))
 

@@ -124,33 +124,37 @@ def _current_of_flux(P, psd, psq):
 
 
 @_jit_inline
-def _currents(pl, x):
+def _currents(pl, x, flux):
     """The state with its first two entries as currents: ``x`` itself for a
-    constant-parameter motor, ``i(psi)`` for a saturated one."""
-    if pl[11]:
-        i_d, i_q = _current_of_flux(pl[12], x[0], x[1])
-        return i_d, i_q, x[2], x[3]
-    return x
+    constant-parameter motor (``flux`` None), ``i(psi)`` for a saturated one.
+
+    ``flux`` is the kernel's variant flag (``_kernel``, "Variants"): None or
+    the constant True, so that numba prunes the other branch unseen."""
+    if flux is None:
+        return x
+    i_d, i_q = _current_of_flux(pl[12], x[0], x[1])
+    return i_d, i_q, x[2], x[3]
 
 
 @_jit_inline
-def _initial_state(pl, omega0):
+def _initial_state(pl, omega0, flux):
     """Zero current at speed ``omega0``: ``(0, 0, omega0, 0)``, or the flux at
-    zero current of a saturated motor."""
-    if pl[11]:
-        P = pl[12]
-        return P[N_P + 6], P[N_P + 7], omega0, 0.0
-    return 0.0, 0.0, omega0, 0.0
+    zero current of a saturated motor (``flux`` as for :func:`_currents`)."""
+    if flux is None:
+        return 0.0, 0.0, omega0, 0.0
+    P = pl[12]
+    return P[N_P + 6], P[N_P + 7], omega0, 0.0
 
 
 @_jit_inline
-def _torque_of_state(pl, x):
+def _torque_of_state(pl, x, flux):
     """Electromagnetic torque of the plant state (N m): :func:`_torque` of the
-    currents, or ``tf p (psi_d i_q - psi_q i_d)`` of a saturated motor."""
-    if pl[11]:
-        i_d, i_q = _current_of_flux(pl[12], x[0], x[1])
-        return pl[7] * pl[4] * (x[0] * i_q - x[1] * i_d)
-    return _torque(pl, x[0], x[1])
+    currents, or ``tf p (psi_d i_q - psi_q i_d)`` of a saturated motor
+    (``flux`` as for :func:`_currents`)."""
+    if flux is None:
+        return _torque(pl, x[0], x[1])
+    i_d, i_q = _current_of_flux(pl[12], x[0], x[1])
+    return pl[7] * pl[4] * (x[0] * i_q - x[1] * i_d)
 
 
 @_jit_inline

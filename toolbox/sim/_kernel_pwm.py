@@ -17,11 +17,12 @@ from ._kernel_steps import _advance
 
 @_jit
 def _svm_period(x, t, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0, acc_m,
-                refs, mset, DP):
+                refs, mset, DP, flux):
     """One period of space-vector modulation, paper 002 eq (21)-(22): the symmetric
     centred pattern 0-k-l-7-l-k-0 (six cell commutations) of ``v_dq`` placed at
     the angle ``phi``, the plant integrated segment by segment. Returns (time,
-    state, inverter state at the end)."""
+    state, inverter state at the end). ``flux``: the kernel's variant flag
+    of a saturated motor (``_kernel_steps._advance_n``)."""
     Ts = DP[DP_TS]
     r_hex = DP[DP_R_HEX]
     va, vb = _to_ab(vd, vq, math.cos(phi), math.sin(phi))
@@ -34,7 +35,7 @@ def _svm_period(x, t, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0, acc_m
         conf = stj
         vx, vy = state_vector(stj, r_hex)
         t, x = _advance(x, t, vx, vy, 1, seq_t[j], h, pl, t_load, mech, acc, omega0,
-                        acc_m, refs, mset)
+                        acc_m, refs, mset, flux)
     return t, x, conf
 
 
@@ -54,7 +55,7 @@ def _duties(va, vb, r_hex):
 
 @_jit
 def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, omega0,
-                  acc_m, refs, mset, r_hex):
+                  acc_m, refs, mset, r_hex, flux):
     """One half period ``th_dur`` of the symmetric triangle carrier.
 
     A leg is on while its duty exceeds the carrier. Falling half (carrier
@@ -94,19 +95,19 @@ def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, ome
             continue
         vx, vy = state_vector(conf, r_hex)
         t, x = _advance(x, t, vx, vy, 1, tj - t_prev, h, pl, t_load, mech, acc, omega0,
-                        acc_m, refs, mset)
+                        acc_m, refs, mset, flux)
         t_prev = tj
         conf ^= 4 >> leg
         acc_m[_A_CELLS] += 1
     vx, vy = state_vector(conf, r_hex)
     t, x = _advance(x, t, vx, vy, 1, th_dur - t_prev, h, pl, t_load, mech, acc, omega0,
-                    acc_m, refs, mset)
+                    acc_m, refs, mset, flux)
     return t, x, conf
 
 
 @_jit
 def _carrier_period(x, t, k, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0,
-                    acc_m, refs, mset, DP):
+                    acc_m, refs, mset, DP, flux):
     """One controller period of carrier-based PWM at ``drive.switching_frequency``:
     ``half_periods`` half periods of a symmetric triangle carrier whose peak
     falls on the first sampling instant (regular sampling, duties loaded at
@@ -124,6 +125,6 @@ def _carrier_period(x, t, k, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0
     for i in range(n):
         rising = (k * n + i) % 2 == 1
         t, x, conf = _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech,
-                                   acc, omega0, acc_m, refs, mset, r_hex)
+                                   acc, omega0, acc_m, refs, mset, r_hex, flux)
     return t, x, conf
 

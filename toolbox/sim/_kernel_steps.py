@@ -13,14 +13,14 @@ from ._kernel_metrics import _accumulate, _accumulate_torque, _load_acc, _store_
 
 @_jit_inline
 def _advance(x, t, vx, vy, frame, dur, h, pl, t_load, mech, acc, omega0, acc_m, refs,
-             mset):
+             mset, flux):
     """Integrate the state x = (id, iq, Omega, theta) over ``dur`` with ceil(dur/h)
     equal RK4 steps; returns (new time, new state)."""
     if dur <= 0.0:
         return t, x
     n, dt = _split(dur, h)
     return _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
-                      refs, mset)
+                      refs, mset, flux)
 
 
 @_jit_inline
@@ -34,7 +34,7 @@ def _split(dur, h):
 
 @_jit_inline
 def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m, refs,
-               mset):
+               mset, flux):
     """:func:`_advance` over ``n`` steps of length ``dt`` (:func:`_split`).
 
     Two compiled loops (:func:`_steps`): with and without a load torque, the
@@ -42,17 +42,19 @@ def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
     itself). Inlined into its callers, so that the loop is one call away from
     the period loop, as it was when both loops were inlined here: numba
     copied the loop's inlined IR into each of them, ~1 s of cold compile
-    each. A saturated motor (``pl[11]``) integrates its flux linkages in a
-    loop of its own (:func:`_steps_flux`), so the constant-parameter loops
-    are unchanged."""
-    if pl[11]:
-        return _steps_flux(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, omega0,
-                           acc_m, refs, mset)
-    if t_load == 0.0 or mech == 1:
-        return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, False, mech, acc, omega0,
+    each. A saturated motor (``flux`` the constant True, the kernel's variant
+    flag: ``_kernel``, "Variants") integrates its flux linkages in a loop of
+    its own (:func:`_steps_flux`), so the constant-parameter loops are
+    unchanged; with ``flux`` None numba prunes that branch and never
+    compiles it."""
+    if flux is None:
+        if t_load == 0.0 or mech == 1:
+            return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, False, mech, acc, omega0,
+                          acc_m, refs, mset)
+        return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, True, mech, acc, omega0,
                       acc_m, refs, mset)
-    return _steps(x, t, n, dt, vx, vy, frame, pl, t_load, True, mech, acc, omega0, acc_m,
-                  refs, mset)
+    return _steps_flux(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, omega0, acc_m,
+                       refs, mset)
 
 
 @_jit_no_rc

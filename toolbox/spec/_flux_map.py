@@ -15,6 +15,7 @@ starting with ``#`` are comments. The path is relative to the spec file.
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
 from pathlib import Path
 from typing import Any, Mapping
@@ -90,7 +91,8 @@ def read_flux_map(value: Any, base: Path | None, key: str = "motor.flux_map"):
         path = (base or Path.cwd()) / path
     where = f"{key} ({path})"
     try:
-        text = path.read_text(encoding="utf-8")
+        raw = path.read_bytes()
+        text = raw.decode("utf-8")
     except (OSError, UnicodeError) as err:
         raise SpecError(key, "a readable UTF-8 CSV file", f"{path}: {err}") from None
     rows = [(n, r) for n, r in enumerate(csv.reader(text.splitlines()), 1)
@@ -147,7 +149,8 @@ def read_flux_map(value: Any, base: Path | None, key: str = "motor.flux_map"):
         raise SpecError(where, "a grid that contains i = 0 (the nominal point)",
                         f"i_d {i_d[0]:g}..{i_d[-1]:g} A, i_q {i_q[0]:g}..{i_q[-1]:g} A")
     return MagneticModel("map", FluxMapData(i_d=i_d, i_q=i_q, psi_d=psi_d, psi_q=psi_q,
-                                            source=str(path)))
+                                            source=str(path),
+                                            sha256=hashlib.sha256(raw).hexdigest()))
 
 
 def read_saturation(value: Any, key: str = "motor.saturation"):

@@ -72,6 +72,9 @@ class FluxMapData:
         Flux linkages (V s) at ``(i_d[j], i_q[k])``.
     source : str
         The file the map was read from.
+    sha256 : str
+        SHA-256 of the file's bytes (``sha256sum file.csv``), recorded in the
+        controller's provenance (:meth:`MagneticModel.data_sha256`).
     """
 
     i_d: np.ndarray
@@ -79,6 +82,7 @@ class FluxMapData:
     psi_d: np.ndarray
     psi_q: np.ndarray
     source: str = ""
+    sha256: str = ""
 
 
 @dataclass(frozen=True, eq=False)
@@ -267,6 +271,25 @@ class MagneticModel:
         i_d, i_q = self.mtpa(self.nominal_current if current is None else current)
         L = self.incremental_inductance(i_d, i_q)
         return float(L[0, 0]), float(L[1, 1]), float(self._psi0()[0])
+
+    def data_sha256(self) -> str:
+        """SHA-256 identifying the magnetic data a design used (the artifact's
+        ``provenance.magnetics_sha256``): of a map, the file's bytes as read
+        (:attr:`FluxMapData.sha256`; of the table's numbers when built in
+        memory); of the algebraic model, the canonical JSON of its parameters
+        (sorted keys, floats at ``repr`` precision)."""
+        import hashlib
+        import json
+        d = self.data
+        if self.kind == "map":
+            if d.sha256:
+                return d.sha256
+            text = json.dumps({k: np.asarray(getattr(d, k), float).ravel().tolist()
+                               for k in ("i_d", "i_q", "psi_d", "psi_q")}, sort_keys=True)
+        else:
+            text = json.dumps({k: float(getattr(d, k)) for k in d.__dataclass_fields__},
+                              sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()
 
     # ------------------------------------------------------------- kernel table
     def current_box(self) -> tuple[float, float, float, float]:

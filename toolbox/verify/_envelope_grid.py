@@ -31,10 +31,11 @@ at that speed runs at the limit, and the point says so.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
+from toolbox.analysis.envelope_points import tangent_loops
 from toolbox.errors import SpecError
 from toolbox.plant import OperatingEnvelope, envelope_of
 from toolbox.sim import DriveParams, simulate
@@ -87,6 +88,7 @@ class GridPoint:
     peak_current: float
     status: str
     reason: str | None = None
+    linear: dict | None = None
 
     @property
     def ok(self) -> bool:
@@ -119,6 +121,7 @@ class EnvelopeGrid:
     peak_limit: float = GRID_PEAK_LIMIT
     curves: dict | None = None
     band: float = 0.0
+    linear_summary: str | None = None
 
     @property
     def passed(self) -> bool:
@@ -135,7 +138,8 @@ class EnvelopeGrid:
         return (f"torque-speed grid: {c['pass']} pass, {c['fail']} fail, "
                 f"{c['unreachable']} unreachable of {len(self.points)} points "
                 f"(base speed {self.base_speed:.4g} rad/s, torque limit "
-                f"{self.torque_limit:.4g} N m, {self.voltage_priority} voltage priority)")
+                f"{self.torque_limit:.4g} N m, {self.voltage_priority} voltage priority)"
+                + (f"; {self.linear_summary}" if self.linear_summary else ""))
 
     def failures(self) -> list[str]:
         """Each failing point named with its reason."""
@@ -267,3 +271,37 @@ def torque_speed_grid(law, motor, drive: DriveParams, envelope=None, *, span: fl
     return EnvelopeGrid(tuple(pts), base, t_max, env.V, env.I, drive.voltage_priority,
                         span, 2.0 * span, tolerance, peak_limit,
                         limit_curves(env, top if top > 0 else 1.0), band)
+
+
+# ---------------------------------------------------------------------------
+# The linear proof at each point (toolbox/ARCHITECTURE.md "Operating envelope",
+# "One controller, proved per point"): the executed loop at the tangent plant of
+# each reachable point, :func:`toolbox.analysis.envelope_points.tangent_loops`.
+# Kept apart from the simulation above: it reads the artifact, not the ControlLaw.
+
+def with_tangent_loops(grid: EnvelopeGrid, artifact, motor, requirements=None) -> EnvelopeGrid:
+    """``grid`` with each reachable point's linear result (``linear``): the
+    executed sampled loop at the tangent plant of its speed and reference
+    currents (after the step). A point whose tangent loop is unstable or below
+    a margin requirement fails, the reason appended to the simulation's."""
+    reach = [p for p in grid.points if p.status != "unreachable"]
+    loops = iter(tangent_loops(artifact, motor, [(p.speed, p.i_d_ref, p.i_q_ref) for p in reach],
+                               requirements=requirements))
+    points, n_stable, worst = [], 0, math.inf
+    for p in grid.points:
+        if p.status == "unreachable":
+            points.append(p)
+            continue
+        lin = next(loops)
+        if lin.analysed:
+            n_stable += bool(lin.stable)
+            worst = min(worst, lin.mimo_disk_margin)
+        reason = "; ".join(r for r in (p.reason, lin.reason) if r) or None
+        status = "fail" if p.status == "fail" or not lin.passed else p.status
+        points.append(replace(p, status=status, reason=reason, linear=lin.to_json()))
+    analysed = sum(bool(p.linear and p.linear["analysed"]) for p in points)
+    text = (None if not reach else
+            "tangent loops: not analysed (the law has no linear loop)" if not analysed else
+            f"tangent loops: {n_stable} stable of {analysed}, worst multiloop disk "
+            f"margin {worst:.3g}")
+    return replace(grid, points=tuple(points), linear_summary=text)

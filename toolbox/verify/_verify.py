@@ -26,7 +26,8 @@ from toolbox.spec import Motor, Scenario
 
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
 from ._default_scenarios import default_scenarios
-from ._envelope_grid import GRID_PEAK_LIMIT, GRID_TOLERANCE, grid_envelope, torque_speed_grid
+from ._envelope_grid import (GRID_PEAK_LIMIT, GRID_TOLERANCE, grid_envelope, torque_speed_grid,
+                             with_tangent_loops)
 from ._envelope_ramp import speed_ramp
 from ._fcs_metrics import ripple_band_step_times
 
@@ -342,6 +343,9 @@ def envelope_grid(artifact, spec) -> dict:
     band = math.hypot(ripple["d"], ripple["q"]) if ripple else 0.0
     grid = torque_speed_grid(law, spec.motor, drive, env, span=span,
                              max_speed=spec.drive.max_speed, band=band)
+    # the linear proof at each point's tangent plant (toolbox/ARCHITECTURE.md
+    # "One controller, proved per point")
+    grid = with_tangent_loops(grid, artifact, spec.motor, spec.requirements)
     ramp = speed_ramp(law, spec.motor, drive, env, span=span, max_speed=spec.drive.max_speed,
                       tolerance=GRID_TOLERANCE, peak_limit=GRID_PEAK_LIMIT, band=band)
     out = grid.to_json()
