@@ -32,11 +32,17 @@ def _robustness_line(result) -> None:
 
 
 def _envelope_line(result) -> None:
-    """The torque-speed grid in one line (verify.json ``envelope.summary``)."""
+    """The torque-speed grid in one line (verify.json ``envelope.summary``)
+    and the speed ramp through base speed in another (``envelope.speed_ramp``)."""
     env = getattr(result, "envelope", None)
     if env:
         text = env.get("summary") or f"torque-speed grid: skipped ({env.get('skipped')})"
-        click.echo(text + (": FAILED" if not env.get("passed", True) else ""))
+        ramp = env.get("speed_ramp") or {}
+        grid_failed = (env["counts"].get("fail", 0) > 0 if "counts" in env
+                       else not env.get("passed", True))
+        click.echo(text + (": FAILED" if grid_failed else ""))
+        if ramp:
+            click.echo(ramp["summary"] + (": FAILED" if not ramp.get("passed", True) else ""))
 
 
 def _envelope_failures(result) -> list[str]:

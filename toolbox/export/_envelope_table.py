@@ -4,7 +4,8 @@ speed and torque, its Python mirror, and its C text.
 The table (:func:`envelope_table`) holds the references of
 :class:`toolbox.plant.OperatingEnvelope` (MTPA below base speed, field
 weakening above, the torque limit where a request exceeds it; constant
-``Ld``, ``Lq``, ``flux``; ``OperatingEnvelope.HEADROOM`` of the voltage kept
+``Ld``, ``Lq``, ``flux``, or :class:`toolbox.plant.SaturatedEnvelope` from a saturated
+motor's magnetic model; ``OperatingEnvelope.HEADROOM`` of the voltage kept
 for the loop, as the verification grid) at :data:`N_SPEED` speeds from 0 to
 the table's top speed (``drive.max_speed``, else 2 x base speed, lowered to
 the highest speed at which a zero-torque current still fits) and
@@ -45,7 +46,8 @@ class EnvelopeTable:
     """Reference table: ``speed_step`` (mechanical rad/s between rows),
     ``t_max[N_SPEED]`` (N m, the torque limit per row), ``i_d``, ``i_q``
     ``[N_SPEED, N_TORQUE]`` (A) at the torques ``t_max[k] j / (N_TORQUE - 1)``;
-    ``v_max`` (V) and ``i_max`` (A) of the envelope."""
+    ``v_max`` (V) and ``i_max`` (A) of the envelope; ``source`` the model
+    the references come from (the header's comment)."""
 
     speed_step: float
     t_max: np.ndarray
@@ -53,6 +55,7 @@ class EnvelopeTable:
     i_q: np.ndarray
     v_max: float
     i_max: float
+    source: str = "toolbox.plant.OperatingEnvelope, constant Ld, Lq, flux"
 
     @property
     def top_speed(self) -> float:
@@ -90,11 +93,13 @@ def envelope_table(motor, drive, n_speed: int = N_SPEED, n_torque: int = N_TORQU
     """The reference table of ``motor`` on ``drive`` (module docstring); None
     when the motor has no current limit (no envelope). Rows are computed in
     float64 and rounded to float32, as the header stores them."""
-    from ..plant import OperatingEnvelope  # lazy: scipy.optimize (the header without a table)
+    # lazy: scipy.optimize (the header without a table); the saturated envelope
+    # for a saturated motor
+    from ..plant import OperatingEnvelope, envelope_of
 
     v_circle = drive.max_voltage(motor.convention)
     try:
-        env = OperatingEnvelope(motor, v_max=(1.0 - OperatingEnvelope.HEADROOM) * v_circle)
+        env = envelope_of(motor, v_max=(1.0 - OperatingEnvelope.HEADROOM) * v_circle)
     except SpecError:
         return None
     top = drive.max_speed if drive.max_speed else 2.0 * env.base_speed()
@@ -123,7 +128,9 @@ def envelope_table(motor, drive, n_speed: int = N_SPEED, n_torque: int = N_TORQU
             op = env.operating_point(t_max[k] * j / (n_torque - 1), w, lim)
             i_d[k, j], i_q[k, j] = op.i_d, op.i_q
     f32 = lambda a: a.astype(np.float32).astype(float)  # noqa: E731
-    return EnvelopeTable(step, f32(t_max), f32(i_d), f32(i_q), env.V, env.I)
+    src = ({} if motor.magnetics is None else
+           {"source": "toolbox.plant.SaturatedEnvelope, the motor's magnetic model"})
+    return EnvelopeTable(step, f32(t_max), f32(i_d), f32(i_q), env.V, env.I, **src)
 
 
 def envelope_section(table: EnvelopeTable | None, N: str, P: str, why: str = "") -> list[str]:
@@ -132,7 +139,7 @@ def envelope_section(table: EnvelopeTable | None, N: str, P: str, why: str = "")
         return [f"/* Operating envelope: not exported ({why or 'no current limit'}). */", ""]
     ns, nt = table.i_d.shape
     key = "motor"
-    L = [f"/* Operating envelope (toolbox.plant.OperatingEnvelope, constant Ld, Lq, flux):",
+    L = [f"/* Operating envelope ({table.source}):",
          " * current references for a torque at a speed: MTPA below base speed, field",
          " * weakening above, the torque limit where the request exceeds it; voltage",
          f" * limit {table.v_max:.6g} V (the drive's circle less 5 % for the loop), current",

@@ -22,13 +22,15 @@ _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_sym
          "derive_flux_linkage_model": "_symbolic_flux",
          # the operating envelope imports scipy.optimize
          "OperatingEnvelope": "_envelope", "OperatingPoint": "_envelope",
-         "mtpa_d_current": "_envelope"}
+         "mtpa_d_current": "_envelope", "SaturatedEnvelope": "_envelope_saturated",
+         "envelope_of": "_envelope_saturated"}
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())
 
 
-__all__ = ["at_operating_point", "incremental_dq_matrices", "OperatingEnvelope", "OperatingPoint", "mtpa_d_current", "describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
+__all__ = ["at_operating_point", "incremental_dq_matrices", "OperatingEnvelope", "OperatingPoint", "mtpa_d_current",
+           "SaturatedEnvelope", "envelope_of", "describe_model", "max_electrical_speed", "axis_coefficients", "dq_matrices",
            "zoh_first_order", "steady_state_voltage", "voltage_limited_speed",
            "ElectricalPlant", "axis_plant_models", "axis_plants", "linearise", "numeric_plant",
            "SYMBOLS", "DqModel", "derive_dq_model", "park_matrix", "FluxLinkageModel",

@@ -127,7 +127,8 @@ def _envelope(verification) -> dict | None:
     each point's reason as hover text) and one row per point with its status,
     reason and tangent loop (the executed loop linearised at the point,
     :func:`toolbox.report.plots.envelope_linear_text`; the figure's hover text
-    does not print). None without a grid."""
+    does not print), the speed ramp through base speed (``speed_ramp``) as the
+    last row. None without a grid."""
     env = (verification or {}).get("envelope")
     if not env:
         return None
@@ -138,6 +139,13 @@ def _envelope(verification) -> dict | None:
              fmt(p["speed"]), fmt(p.get("torque")), str(p.get("region")), str(p["status"]),
              str(p.get("reason") or ""), plots.envelope_linear_text(p.get("linear")))
             for p in env.get("points", [])]
-    return {"summary": str(env.get("summary", "")),
+    ramp = env.get("speed_ramp")
+    if ramp:   # the speed ramp through base speed: one more row, its line in the summary
+        rows.append((f"speed ramp to {fmt(ramp.get('speed_end'))} rad/s",
+                     f"{fmt(ramp.get('speed_start'))} .. {fmt(ramp.get('speed_end'))}",
+                     fmt(ramp.get("torque")), str(ramp.get("region") or ""),
+                     str(ramp["status"]), str(ramp.get("reason") or ramp.get("summary", "")),
+                     "-"))
+    return {"summary": str(env.get("summary", "")) + (f"; {ramp['summary']}" if ramp else ""),
             "status": "pass" if env.get("passed") else "fail",
             "svg": plots.envelope_svg(env), "rows": rows, "key": None}

@@ -37,7 +37,7 @@ import numpy as np
 
 from toolbox.analysis.envelope_points import tangent_loops
 from toolbox.errors import SpecError
-from toolbox.plant import OperatingEnvelope
+from toolbox.plant import OperatingEnvelope, envelope_of
 from toolbox.sim import DriveParams, simulate
 from toolbox.spec import Scenario
 
@@ -181,11 +181,12 @@ def limit_curves(env: OperatingEnvelope, speed_max: float, n: int = CURVE_POINTS
 
 
 def grid_envelope(motor, drive: DriveParams, headroom: float = GRID_HEADROOM) -> OperatingEnvelope:
-    """The grid's envelope: ``motor`` with ``(1 - headroom)`` of the drive's
-    voltage circle (SpecError when the motor has no current limit)."""
+    """The grid's envelope (:func:`toolbox.plant.envelope_of`: the saturated
+    one for a saturated motor): ``motor`` with ``(1 - headroom)`` of the
+    drive's voltage circle (SpecError when the motor has no current limit)."""
     if not 0.0 <= headroom < 1.0:
         raise SpecError("headroom", "a fraction in [0, 1)", headroom)
-    return OperatingEnvelope(motor, v_max=(1.0 - headroom) * drive.radii(motor.torque_factor)[1])
+    return envelope_of(motor, v_max=(1.0 - headroom) * drive.radii(motor.torque_factor)[1])
 
 
 def torque_speed_grid(law, motor, drive: DriveParams, envelope=None, *, span: float = 0.02,

@@ -26,7 +26,9 @@ from toolbox.spec import Motor, Scenario
 
 from ._checks import LinearFigures, default_checks, fcs_ripple, finalise_check, step_facts
 from ._default_scenarios import default_scenarios
-from ._envelope_grid import grid_envelope, torque_speed_grid, with_tangent_loops
+from ._envelope_grid import (GRID_PEAK_LIMIT, GRID_TOLERANCE, grid_envelope, torque_speed_grid,
+                             with_tangent_loops)
+from ._envelope_ramp import speed_ramp
 from ._fcs_metrics import ripple_band_step_times
 
 __all__ = ["VERIFY_SCHEMA", "verify", "VerifyResult", "ScenarioOutcome", "NO_REQUIREMENTS",
@@ -323,12 +325,11 @@ def envelope_grid(artifact, spec) -> dict:
     as verify.json's ``envelope``: each run ``2 x span``, ``span`` the longest
     span after the step of the default scenarios (so the settling checks of
     the grid see as much of the loop as theirs); speeds above
-    ``drive.max_speed`` unreachable. ``{"skipped": reason}`` when the motor
-    has no current limit (the envelope needs one) or is saturated (its
-    references assume constant inductances)."""
-    if spec.motor.magnetics is not None:
-        return {"passed": True, "skipped": "the operating envelope's references assume constant "
-                "inductances; a saturated motor's grid is not judged on them"}
+    ``drive.max_speed`` unreachable. Beside the grid, ``speed_ramp`` (:func:`toolbox.verify._envelope_ramp.speed_ramp`,
+    the ramp through base speed; a failing ramp fails ``passed`` and is in
+    ``failures``). ``{"skipped": reason}`` when the motor
+    has no current limit (the envelope needs one). A saturated motor's
+    references come from its magnetic model (:func:`toolbox.plant.envelope_of`)."""
     defaults = default_scenarios(spec.motor, spec.drive, settling_horizon(artifact, spec.motor))
     span = max(sc.duration - (sc.step_time or 0.0) for sc in defaults)
     law, drive = scenario_setup(artifact, defaults[0], spec.drive)
@@ -344,4 +345,11 @@ def envelope_grid(artifact, spec) -> dict:
                              max_speed=spec.drive.max_speed, band=band)
     # the linear proof at each point's tangent plant (toolbox/ARCHITECTURE.md
     # "One controller, proved per point")
-    return with_tangent_loops(grid, artifact, spec.motor, spec.requirements).to_json()
+    grid = with_tangent_loops(grid, artifact, spec.motor, spec.requirements)
+    ramp = speed_ramp(law, spec.motor, drive, env, span=span, max_speed=spec.drive.max_speed,
+                      tolerance=GRID_TOLERANCE, peak_limit=GRID_PEAK_LIMIT, band=band)
+    out = grid.to_json()
+    out["speed_ramp"] = ramp.to_json()
+    out["passed"] = grid.passed and ramp.passed
+    out["failures"] = out["failures"] + ramp.failures()
+    return out
