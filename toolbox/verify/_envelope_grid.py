@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -96,8 +96,10 @@ class GridPoint:
         return self.status == "pass"
 
     def to_json(self) -> dict:
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                for k, v in asdict(self).items()}
+        # the fields as they are (``linear`` is JSON data already): asdict's
+        # deep copy of it cost more than the rest of the point
+        return {f.name: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                for f in fields(self) for v in (getattr(self, f.name),)}
 
 
 @dataclass(frozen=True)
