@@ -59,7 +59,7 @@ from ..errors import SpecError
 __all__ = ["OperatingEnvelope", "OperatingPoint", "mtpa_d_current"]
 
 
-def _poly_roots(coef) -> list:
+def _poly_roots(coef) -> list[complex]:
     """Roots of the polynomial ``coef`` (highest power first, real or complex;
     leading zeros dropped): the eigenvalues of its companion matrix (as
     ``numpy.roots``, without its per-call overhead)."""
@@ -74,7 +74,7 @@ def _poly_roots(coef) -> list:
     return np.linalg.eigvals(C).tolist()
 
 
-def _trig2_roots(c0, c1, s1, c2, s2) -> list[float]:
+def _trig2_roots(c0: float, c1: float, s1: float, c2: float, s2: float) -> list[float]:
     """Angles ``f`` (rad) where ``g(f) = c0 + c1 cos f + s1 sin f + c2 cos 2f +
     s2 sin 2f = 0``: with ``z = exp(i f)``, ``z^2 g`` is the quartic
     ``(c2 - i s2)/2 z^4 + (c1 - i s1)/2 z^3 + c0 z^2 + (c1 + i s1)/2 z +
@@ -237,7 +237,7 @@ class OperatingEnvelope:
         vd, vq = self.R * d - w * self.Lq * q, self.R * q + w * (self.Ld * d + self.flux)
         return vd * vd + vq * vq
 
-    def _voltage_boundary(self, w):
+    def _voltage_boundary(self, w: float) -> tuple[float, ...] | None:
         """``(al, be, d0, ga, de, q0)``: the currents on ``|v| = V`` at the
         voltage angle ``f`` are ``(al cos f + be sin f + d0, ga cos f + de sin f
         + q0)`` (module docstring, ``i = Z^{-1} (V (cos f, sin f) - e)``),
@@ -251,12 +251,12 @@ class OperatingEnvelope:
                 -V * w * Ld / det, V * R / det, -R * w * self.flux / det)
 
     @staticmethod
-    def _on_curve(cv, fs) -> list[tuple[float, float]]:
+    def _on_curve(cv: tuple[float, ...], fs: list[float]) -> list[tuple[float, float]]:
         al, be, d0, ga, de, q0 = cv
         return [(al * math.cos(f) + be * math.sin(f) + d0, ga * math.cos(f) + de * math.sin(f)
                  + q0) for f in fs]
 
-    def _voltage_stationary(self, cv):
+    def _voltage_stationary(self, cv: tuple[float, ...]) -> list[tuple[float, float]]:
         """The stationary points of the torque on the voltage boundary ``cv``:
         with ``i(f)`` affine in ``(cos f, sin f)`` the bilinear torque is a
         trigonometric polynomial of degree 2 in ``f``, ``T / k p = const + c1
@@ -270,7 +270,7 @@ class OperatingEnvelope:
         s2 = 0.5 * a * (al * de + be * ga)
         return self._on_curve(cv, _trig2_roots(0.0, s1, -c1, 2.0 * s2, -2.0 * c2))
 
-    def _corners(self, cv):
+    def _corners(self, cv: tuple[float, ...]) -> list[tuple[float, float]]:
         """Where the voltage boundary ``cv`` crosses the current circle:
         ``|i(f)|^2 - I^2`` is a trigonometric polynomial of degree 2."""
         al, be, d0, ga, de, q0 = cv
@@ -279,7 +279,7 @@ class OperatingEnvelope:
             2.0 * (al * d0 + ga * q0), 2.0 * (be * d0 + de * q0),
             0.5 * (al * al + ga * ga - be * be - de * de), al * be + ga * de))
 
-    def _circle_stationary(self):
+    def _circle_stationary(self) -> list[tuple[float, float]]:
         """The stationary points of the torque on the current circle:
         ``dT/db = 0`` is ``2 a I c^2 + psi c - a I = 0`` in ``c = cos b``
         (``a = Ld - Lq``); its root of the MTPA (:func:`mtpa_d_current` / I)
@@ -383,7 +383,7 @@ class OperatingEnvelope:
             return lim
         return OperatingPoint(fw[0], fw[1], float(torque), "field_weakening")
 
-    def _field_weakening(self, torque, speed):
+    def _field_weakening(self, torque: float, speed: float) -> tuple[float, float] | None:
         """The least-``|i|`` real root of the field-weakening quartic
         (:meth:`operating_point`; ``P1 = R i_d D - w Lq tau``, ``P2 = R tau +
         w (Ld i_d + psi) D``, quadratics in ``i_d``, squared by hand), each
