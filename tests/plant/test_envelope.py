@@ -336,7 +336,8 @@ def test_torque_limit_and_field_weakening_with_r(motor_name):
     the torque to 1e-12 and is brentq's first root of ``|v| = V`` along the
     torque curve from the MTPA point (a scan of 4000 steps towards
     negative i_d, then brentq, xtol 1e-13 A) to 1e-9 x I; a request of the
-    limit's own torque returns the limit's point."""
+    limit's own torque gets the limit's currents (to 1e-9 x I: below base
+    speed as the MTPA point of the current limit)."""
     from scipy.optimize import brentq
     speeds = (0.0, 0.5, 1.0, 1.05, 1.2, 1.4, 1.5)
     if motor_name == "traction":
@@ -358,7 +359,9 @@ def test_torque_limit_and_field_weakening_with_r(motor_name):
             ref = _dense_max_torque(env, w, sign)
             assert abs(lim.torque - float(env.torque(*ref))) <= 1e-12 * t0, (sf, sign)
             assert math.hypot(lim.i_d - ref[0], lim.i_q - ref[1]) <= 1e-6 * env.I, (sf, sign)
-            assert env.operating_point(lim.torque, w) == lim
+            op = env.operating_point(lim.torque, w)   # the limit's own torque: its point
+            assert op.torque == lim.torque
+            assert math.hypot(op.i_d - lim.i_d, op.i_q - lim.i_q) <= 1e-9 * env.I, (sf, sign)
             n_lim += 1
             for tf in (0.1, 0.3, 0.5, 0.7, 0.9):
                 T = sign * tf * abs(lim.torque)

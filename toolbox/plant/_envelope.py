@@ -368,14 +368,13 @@ class OperatingEnvelope:
         sign = 1.0 if torque >= 0 else -1.0
         d, q = self.mtpa(torque)
         i_s, v = math.hypot(d, q), math.sqrt(self._v2(d, q, self.p * speed))
-        if i_s <= self.I * (1 - 1e-9) and v <= self.V * (1 - 1e-9):
+        # the MTPA point of the limit's torque lies on the current limit (at base
+        # speed on both): round-off does not move it off (as SaturatedEnvelope)
+        if i_s <= self.I * (1 + 1e-12) and v <= self.V * (1 + 1e-9):
             return OperatingPoint(d, q, float(torque), "mtpa")
-        # near a limit: a request of the limit's torque (to 1e-12) is the limit's point
         lim = limit if limit is not None else self.max_torque_point(speed, sign)
-        if sign * torque >= sign * lim.torque - 1e-12 * abs(lim.torque):
+        if sign * torque >= sign * lim.torque:
             return lim
-        if i_s <= self.I and v <= self.V:
-            return OperatingPoint(d, q, float(torque), "mtpa")
         if v <= self.V:   # MTPA within the voltage limit, beyond I
             return lim
         fw = self._field_weakening(torque, speed)
