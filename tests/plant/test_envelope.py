@@ -279,3 +279,105 @@ def test_field_weakening_closed_form(motor_name):
                     n_corner += 1
     print(f"\n{motor_name}: {n_fw} field-weakening points, {n_corner} corners checked")
     assert n_fw >= 5 and n_corner >= 2
+
+
+def _dense_max_torque(env, speed, sign, n=20000):
+    """Independent route for the torque limit with ``R``: both boundaries
+    (the current circle, the voltage boundary ``i = Z^{-1} (V e^{jf} - e)``)
+    sampled at ``n`` angles, the feasible samples' best refined by scipy's
+    bounded scalar search within one sample, a feasibility end by brentq."""
+    from scipy.optimize import brentq
+    w = env.p * speed
+    Z = np.array([[env.R, -w * env.Lq], [w * env.Ld, env.R]])
+    curves = [(lambda t: (env.I * np.cos(t), env.I * np.sin(t)),
+               lambda d, q: env._vmag(d, q, speed) ** 2 - env.V ** 2)]
+    if abs(np.linalg.det(Z)) > 0:
+        def vb(t):
+            i = np.linalg.solve(Z, np.vstack([env.V * np.cos(t), env.V * np.sin(t)
+                                              - w * env.flux]))
+            return i[0], i[1]
+        curves.append((vb, lambda d, q: d * d + q * q - env.I ** 2))
+    best = None
+    t = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+    dt = t[1]
+    for curve, g in curves:
+        d, q = curve(t)
+        f = np.where(g(d, q) <= 0, sign * env.torque(d, q), -np.inf)
+        k = int(np.argmax(f))
+        if not np.isfinite(f[k]):
+            continue
+        fun = lambda s: -sign * float(env.torque(*curve(np.array([s])))[0])  # noqa: E731
+        gs = lambda s: float(g(*curve(np.array([s])))[0])  # noqa: E731
+        cands = [t[k]]
+        r = minimize_scalar(fun, bounds=(t[k] - dt, t[k] + dt), method="bounded",
+                            options={"xatol": 1e-13})
+        if gs(r.x) <= 0:
+            cands.append(r.x)
+        for nb in (t[k] - dt, t[k] + dt):
+            if gs(nb) > 0:
+                cands.append(brentq(gs, min(nb, t[k]), max(nb, t[k]), xtol=1e-15))
+        for c in cands:
+            if gs(c) <= 1e-9 * max(env.V, env.I) ** 2 and (best is None or fun(c) < best[0]):
+                best = (fun(c), c, curve)
+    if best is None:
+        return None
+    d, q = best[2](np.array([best[1]]))
+    return float(d[0]), float(q[0])
+
+
+@pytest.mark.parametrize("motor_name", ["traction", "paper003", "non_salient", "ld_above_lq"])
+def test_torque_limit_and_field_weakening_with_r(motor_name):
+    """``R`` kept: the torque limit (stationary points of the torque on both
+    boundaries and their crossings, roots of degree-2 trigonometric
+    polynomials) equals a dense search of both boundaries refined by scipy
+    to 1e-12 of the standstill limit in torque and 1e-6 x I in current (the
+    search's argmax on a flat maximum: ~sqrt(eps)); every field-weakening
+    reference (the quartic's root) is on the voltage limit to 1e-12, gives
+    the torque to 1e-12 and is brentq's first root of ``|v| = V`` along the
+    torque curve from the MTPA point (a scan of 4000 steps towards
+    negative i_d, then brentq, xtol 1e-13 A) to 1e-9 x I; a request of the
+    limit's own torque gets the limit's currents (to 1e-9 x I: below base
+    speed as the MTPA point of the current limit)."""
+    from scipy.optimize import brentq
+    speeds = (0.0, 0.5, 1.0, 1.05, 1.2, 1.4, 1.5)
+    if motor_name == "traction":
+        env = OperatingEnvelope(TRACTION, TRACTION_DRIVE)
+        speeds = (0.0, 0.5, 1.0, 1.05, 1.5, 2.0, 3.0, 4.0)
+    elif motor_name == "paper003":
+        spec = toolbox.load_spec(ROOT / "designs" / "003_azaiz2007_pi.toml")
+        env = OperatingEnvelope(spec.motor, spec.drive)
+    else:   # Ld = Lq (the torque linear in i_q: degree-1 polynomials), Ld > Lq
+        env = OperatingEnvelope(_motors()[3 if motor_name == "non_salient" else 2],
+                                v_max=150.0)
+    base = env.base_speed()
+    t0 = env.max_torque_point(0.0).torque
+    n_lim = n_fw = 0
+    for sf in speeds:
+        w = sf * base
+        for sign in (1.0, -1.0):
+            lim = env.max_torque_point(w, sign)
+            ref = _dense_max_torque(env, w, sign)
+            assert abs(lim.torque - float(env.torque(*ref))) <= 1e-12 * t0, (sf, sign)
+            assert math.hypot(lim.i_d - ref[0], lim.i_q - ref[1]) <= 1e-6 * env.I, (sf, sign)
+            op = env.operating_point(lim.torque, w)   # the limit's own torque: its point
+            assert op.torque == lim.torque
+            assert math.hypot(op.i_d - lim.i_d, op.i_q - lim.i_q) <= 1e-9 * env.I, (sf, sign)
+            n_lim += 1
+            for tf in (0.1, 0.3, 0.5, 0.7, 0.9):
+                T = sign * tf * abs(lim.torque)
+                op = env.operating_point(T, w)
+                if op.region != "field_weakening":
+                    continue
+                assert abs(env._vmag(op.i_d, op.i_q, w) - env.V) <= 1e-12 * env.V
+                assert abs(float(env.torque(op.i_d, op.i_q)) - T) <= 1e-12 * t0
+                d0, _ = env.mtpa(T)
+                a = env.Ld - env.Lq
+                iq = lambda d: T / (env.kt * (env.flux + a * d))  # noqa: E731
+                vex = lambda d: float(env._vmag(d, iq(d), w)) - env.V  # noqa: E731
+                grid = np.linspace(d0, -env.I, 4001)
+                k = next(j for j in range(1, len(grid)) if vex(grid[j]) <= 0)
+                d = brentq(vex, grid[k], grid[k - 1], xtol=1e-13, rtol=1e-15)
+                assert math.hypot(op.i_d - d, op.i_q - iq(d)) <= 1e-9 * env.I, (sf, tf)
+                n_fw += 1
+    print(f"\n{motor_name}: {n_lim} torque limits, {n_fw} field-weakening references checked")
+    assert n_fw >= 10

@@ -20,7 +20,7 @@ _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_sym
          "derive_dq_model": "_symbolic", "park_matrix": "_symbolic",
          "FluxLinkageModel": "_symbolic_flux",
          "derive_flux_linkage_model": "_symbolic_flux",
-         # the operating envelope imports scipy.optimize
+         # the operating envelopes (the saturated one imports scipy.optimize)
          "OperatingEnvelope": "_envelope", "OperatingPoint": "_envelope",
          "mtpa_d_current": "_envelope", "SaturatedEnvelope": "_envelope_saturated",
          "envelope_of": "_envelope_saturated"}

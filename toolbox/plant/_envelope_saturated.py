@@ -528,9 +528,10 @@ class SaturatedEnvelope:
         sign = 1.0 if torque >= 0 else -1.0
         d, q = self.mtpa(torque)
         w = self.p * speed
-        if math.hypot(d, q) <= self.I:
+        if math.hypot(d, q) <= self.I * (1 + 1e-12):
             ps_d, ps_q = self._flux_of[(d, q)]
-            # MTPA at base speed lies on the limit: round-off does not move it off
+            # MTPA of the limit's torque lies on the current limit, at base speed
+            # on the voltage limit too: round-off does not move it off
             if math.hypot(self.R * d - w * ps_q, self.R * q + w * ps_d) <= self.V * (1 + 1e-9):
                 return OperatingPoint(d, q, float(torque), "mtpa")
         lim = limit if limit is not None else self.max_torque_point(speed, sign)

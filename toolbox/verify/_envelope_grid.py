@@ -31,7 +31,8 @@ at that speed runs at the limit, and the point says so.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -95,8 +96,10 @@ class GridPoint:
         return self.status == "pass"
 
     def to_json(self) -> dict:
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                for k, v in asdict(self).items()}
+        # the fields as they are (``linear`` is JSON data already): asdict's
+        # deep copy of it cost more than the rest of the point
+        return {f.name: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                for f in fields(self) for v in (getattr(self, f.name),)}
 
 
 @dataclass(frozen=True)
@@ -180,6 +183,19 @@ def limit_curves(env: OperatingEnvelope, speed_max: float, n: int = CURVE_POINTS
             "current_limit": [t_cur] * n, "voltage_limit": volt}
 
 
+def _simulate_all(law, motor, drive: DriveParams, scenarios):
+    """:func:`toolbox.sim.simulate` of each scenario, in order, on one thread
+    per core (``numba.config.NUMBA_NUM_THREADS``, as ``simulate_batch``): the
+    compiled kernel releases the GIL and the runs are independent, so the
+    results are the sequential ones, bit for bit. ``simulate_batch`` itself
+    does not apply: it runs one scenario, without traces, over many plants."""
+    if len(scenarios) < 2:
+        return [simulate(law, motor, sc, drive) for sc in scenarios]
+    import numba  # loaded with toolbox.sim
+    with ThreadPoolExecutor(min(len(scenarios), numba.config.NUMBA_NUM_THREADS)) as pool:
+        return list(pool.map(lambda sc: simulate(law, motor, sc, drive), scenarios))
+
+
 def grid_envelope(motor, drive: DriveParams, headroom: float = GRID_HEADROOM) -> OperatingEnvelope:
     """The grid's envelope (:func:`toolbox.plant.envelope_of`: the saturated
     one for a saturated motor): ``motor`` with ``(1 - headroom)`` of the
@@ -226,7 +242,7 @@ def torque_speed_grid(law, motor, drive: DriveParams, envelope=None, *, span: fl
     base = env.base_speed()
     t_max = env.max_torque_point(0.0).torque
     nan = float("nan")
-    pts = []
+    pts: list = []          # GridPoint, or (sf, tf, speed, op, start, scenario) to simulate
     for sf in speeds:
         speed = sf * base
         for tf in torques:
@@ -247,26 +263,32 @@ def torque_speed_grid(law, motor, drive: DriveParams, envelope=None, *, span: fl
             scen = Scenario(kind="current_step", duration=2.0 * span, step_time=span,
                             id_ref0=start.i_d, iq_ref0=start.i_q, id_ref=op.i_d, iq_ref=op.i_q,
                             initial_speed=speed, keep_traces=True, trace_step=drive.sample_time)
-            res = simulate(law, motor, scen, drive)
-            after = res.t >= span
-            n = max(1, len(res.t) // 20)
-            i_d, i_q = float(np.mean(res.id[-n:])), float(np.mean(res.iq[-n:]))
-            err = float(np.hypot(i_d - op.i_d, i_q - op.i_q))
-            peak = float(np.hypot(res.id[after], res.iq[after]).max())
-            reasons = []
-            if not err <= settle:
-                reasons.append(f"settled {err:.3g} A from the reference (bound "
-                               f"{settle:.3g} A)")
-            if not peak <= peak_limit * env.I:
-                reasons.append(f"peak current {peak:.4g} A after the step (bound "
-                               f"{peak_limit * env.I:.4g} A)")
-            if abs(op.torque - tf * t_max) > 1e-9 * max(t_max, 1e-12):
-                reasons.append(f"torque limited to {op.torque:.4g} N m ({op.region}) of "
-                               f"{tf * t_max:.4g} N m requested")
-            status = "pass" if err <= settle and peak <= peak_limit * env.I else "fail"
-            pts.append(GridPoint(sf, tf, speed, op.torque, op.region, start.i_d, start.i_q,
-                                 op.i_d, op.i_q, i_d, i_q, err, peak, status,
-                                 "; ".join(reasons) or None))
+            pts.append((sf, tf, speed, op, start, scen))
+    runs = iter(_simulate_all(law, motor, drive, [p[5] for p in pts if isinstance(p, tuple)]))
+    for k, p in enumerate(pts):
+        if not isinstance(p, tuple):
+            continue
+        sf, tf, speed, op, start, _scen = p
+        res = next(runs)
+        after = res.t >= span
+        n = max(1, len(res.t) // 20)
+        i_d, i_q = float(np.mean(res.id[-n:])), float(np.mean(res.iq[-n:]))
+        err = float(np.hypot(i_d - op.i_d, i_q - op.i_q))
+        peak = float(np.hypot(res.id[after], res.iq[after]).max())
+        reasons = []
+        if not err <= settle:
+            reasons.append(f"settled {err:.3g} A from the reference (bound "
+                           f"{settle:.3g} A)")
+        if not peak <= peak_limit * env.I:
+            reasons.append(f"peak current {peak:.4g} A after the step (bound "
+                           f"{peak_limit * env.I:.4g} A)")
+        if abs(op.torque - tf * t_max) > 1e-9 * max(t_max, 1e-12):
+            reasons.append(f"torque limited to {op.torque:.4g} N m ({op.region}) of "
+                           f"{tf * t_max:.4g} N m requested")
+        status = "pass" if err <= settle and peak <= peak_limit * env.I else "fail"
+        pts[k] = GridPoint(sf, tf, speed, op.torque, op.region, start.i_d, start.i_q,
+                           op.i_d, op.i_q, i_d, i_q, err, peak, status,
+                           "; ".join(reasons) or None)
     top = max(speeds) * base if speeds else base
     return EnvelopeGrid(tuple(pts), base, t_max, env.V, env.I, drive.voltage_priority,
                         span, 2.0 * span, tolerance, peak_limit,
