@@ -38,6 +38,13 @@ def _parse(path: Path) -> ast.Module:
     return _parsed(path, path.read_text())
 
 
+@functools.lru_cache(maxsize=None)
+def _walk(tree: ast.AST) -> tuple[ast.AST, ...]:
+    """Every node of a (cached) parsed tree, as ``ast.walk`` yields them; cached
+    with the parse: walking was most of these checks' cost."""
+    return tuple(ast.walk(tree))
+
+
 def _module_name(path: Path, root: Path = PACKAGE) -> str:
     parts = path.relative_to(root.parent).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
@@ -50,7 +57,7 @@ def _imports(path: Path, root: Path = PACKAGE) -> list[tuple[int, str]]:
     is_pkg = path.name == "__init__.py"
     package = name if is_pkg else name.rpartition(".")[0]
     out = []
-    for node in ast.walk(_parse(path)):
+    for node in _walk(_parse(path)):
         if isinstance(node, ast.Import):
             out += [(node.lineno, a.name) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -231,10 +238,10 @@ def _dynamic_imports(tree: ast.AST, name: str, package: str) -> list[tuple[int, 
     ``lazy_attributes(__name__, MAPPING, globals())`` (submodules of the
     package) and ``importlib.import_module("literal")``; a call whose target
     cannot be read off the source yields ``"?"`` (reported, never ignored)."""
-    assigns = {t.id: node.value for node in ast.walk(tree) if isinstance(node, ast.Assign)
+    assigns = {t.id: node.value for node in _walk(tree) if isinstance(node, ast.Assign)
                for t in node.targets if isinstance(t, ast.Name)}
     out = []
-    for node in ast.walk(tree):
+    for node in _walk(tree):
         if not isinstance(node, ast.Call):
             continue
         func = node.func

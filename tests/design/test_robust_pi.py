@@ -328,6 +328,11 @@ def test_infeasible_everywhere_unstable_says_where():
     assert "at standstill" in msg
 
 
+# slow (pyproject.toml's markers): three robust_pi designs of the maxon EC 22 (4 CPU-s)
+# re-checking the advice from outside. On every edit the toolbox re-runs the advice
+# before printing it, the refusal messages are checked above, and every corpus
+# refusal's hint is checked to offer a passing value (tests/corpus/test_datasheet_corpus.py)
+@pytest.mark.slow
 def test_refusal_advice_is_checked_by_rerunning():
     """The disk margin a refusal offers passes when the spec is designed with
     it (the advice is re-run before it is printed), and the max_speed it

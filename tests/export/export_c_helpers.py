@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import ctypes
+import hashlib
+import os
 import shutil
 import subprocess
 from pathlib import Path
@@ -79,6 +81,41 @@ def require_gcc() -> str:
     return GCC
 
 
+#: Directory shared by the session's processes (all pytest-xdist workers of one
+#: run) holding each clean gcc build once, keyed by its inputs; set by
+#: tests/export/conftest.py, None (no sharing) outside a session.
+BUILD_CACHE: Path | None = None
+
+
+def _gcc(cmd: list[str], inputs: tuple[str, ...], out: Path) -> subprocess.CompletedProcess:
+    """Run the gcc command ``cmd`` writing ``out``, once per session for equal inputs.
+
+    The key is gcc's path, every argument that is not a path of the test's
+    directory and the text of every compiled file (``inputs``): equal keys
+    are the same translation unit with the same options, so the binary is
+    the same and is copied (a copy, not a link: ctypes would share one
+    loaded library, and its static state, between tests). Only a build with
+    exit 0 and no diagnostics is shared; any other is run every time."""
+    if BUILD_CACHE is None:
+        return subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    flags = [a for a in cmd if not a.startswith(str(out.parent))]
+    h = hashlib.sha256("\0".join(flags).encode())
+    for text in inputs:
+        h.update(b"\0" + hashlib.sha256(text.encode()).digest())
+    cached = BUILD_CACHE / h.hexdigest()[:32]
+    if cached.is_file():
+        shutil.copyfile(cached, out)
+        out.chmod(0o755)
+        return subprocess.CompletedProcess(cmd, 0, "", "")
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    if res.returncode == 0 and not res.stdout and not res.stderr:
+        BUILD_CACHE.mkdir(parents=True, exist_ok=True)
+        part = cached.with_name(f"{cached.name}.{os.getpid()}")
+        shutil.copyfile(out, part)
+        os.replace(part, cached)            # atomic: another worker may write it too
+    return res
+
+
 def compile_driver(header: str, tmp: Path, fixed: bool = False, source: str = DRIVER,
                    hexagon: bool = False) -> subprocess.CompletedProcess:
     require_gcc()
@@ -89,7 +126,7 @@ def compile_driver(header: str, tmp: Path, fixed: bool = False, source: str = DR
     cmd = [GCC, *CFLAGS, *(["-DCCT_FIXED_POINT"] if fixed else []),
            *(["-DCCT_HEX"] if hexagon else []), "-I", str(tmp),
            str(tmp / "driver.c"), "-o", str(exe), "-lm"]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    return _gcc(cmd, (header, source), exe)
 
 
 def run_float(header: str, tmp: Path, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -122,7 +159,7 @@ def build_sil(header: str, tmp: Path) -> ctypes.CDLL:
     lib = tmp / "libsil.so"
     cmd = [GCC, *CFLAGS, "-shared", "-fPIC", "-I", str(tmp), str(tmp / "sil.c"), "-o",
            str(lib), "-lm"]
-    res = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    res = _gcc(cmd, (header, SIL), lib)
     assert res.returncode == 0, res.stderr
     dll = ctypes.CDLL(str(lib))
     dll.sil_step.argtypes = [ctypes.POINTER(ctypes.c_float), ctypes.POINTER(ctypes.c_float)]

@@ -346,13 +346,14 @@ def report(out_dir: str, quiet: bool) -> None:
     artifact = load_artifact(out_dir)
     spec = spec_of_artifact(artifact, file=file)
     check_integrity(artifact, spec, file=file)
+    # read (and validated) before anything is simulated: a malformed file is refused at once
+    analysis = load_analysis(out_dir, artifact)
     with StepBar(["verification", "analysis", "report"], quiet=quiet, desc="report") as bar:
         # verified first, on the artifact as stored: its margins are compared, not trusted
         bar("verification")
         verification = run_verification(artifact, spec, file=file)
         files = {}
         bar("analysis")
-        analysis = load_analysis(out_dir, artifact)
         if analysis is None:
             artifact, analysis = analyse(artifact, spec)
             files["analysis.json"] = json.dumps(analysis, indent=1, allow_nan=False) + "\n"

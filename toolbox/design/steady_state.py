@@ -24,10 +24,12 @@ a :class:`~toolbox.spec.Motor` (A).
 
 from __future__ import annotations
 
+import hashlib
 from functools import lru_cache
 
 import sympy as sp
 
+from .._cache import cached
 from ..plant import SYMBOLS as S
 from ..plant import derive_dq_model
 
@@ -89,6 +91,15 @@ def _time_derivative(f: sp.Matrix, rates: dict) -> sp.Matrix:
 
 
 def _solve_currents(eqs: sp.Matrix) -> dict:
+    """``{i_d: expr, i_q: expr}`` solving ``eqs = 0``, simplified. Cached on disk
+    like the dq model the equations start from (``toolbox/_cache.py``): keyed by
+    the equations (their ``srepr``), this module's source and sympy's version."""
+    digest = hashlib.sha256(sp.srepr(eqs).encode()).hexdigest()[:16]
+    return cached(f"steady_state-{digest}", __file__, lambda: _solve(eqs),
+                  lambda v: isinstance(v, dict) and set(v) == set(_i))
+
+
+def _solve(eqs: sp.Matrix) -> dict:
     sol = sp.solve(list(eqs), list(_i), dict=True)
     if len(sol) != 1:
         raise ArithmeticError("steady state: expected one solution for (i_d, i_q)")
