@@ -101,7 +101,6 @@ from __future__ import annotations
 
 import math
 import re
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -398,24 +397,6 @@ def prefix_name(prefix: Any, key: str = "export.prefix") -> str:
     return stem
 
 
-@lru_cache(maxsize=16)
-def _envelope_memo(motor, drive):
-    return envelope_table(motor, drive)
-
-
-def _envelope(motor, drive):
-    """:func:`~toolbox.export._envelope_table.envelope_table` of ``(motor, drive)``,
-    computed once per process for equal (hashable) motor and drive data: the
-    table is a pure function of them (frozen dataclasses), and one ``cct
-    design`` writes the header and then regenerates it to verify it
-    (``toolbox/pipeline.py``). The shared table is only read (``envelope_section``)."""
-    try:
-        hash((motor, drive))
-    except TypeError:  # unhashable data (e.g. arrays in the motor): computed each time
-        return envelope_table(motor, drive)
-    return _envelope_memo(motor, drive)
-
-
 def _write_header(artifact, motor, drive, name: str, title: str | None,
                   example: bool = True) -> str:
     if not isinstance(name, str) or not _IDENT.fullmatch(name):
@@ -463,7 +444,7 @@ def _write_header(artifact, motor, drive, name: str, title: str | None,
     t("")
     _vendor_section(t, artifact, motor, drive, check, N, P)
     t("")
-    t.lines.extend(envelope_section(_envelope(motor, drive) if motor is not None
+    t.lines.extend(envelope_section(envelope_table(motor, drive) if motor is not None
                                     and drive is not None else None, N, P,
                                     "no motor and drive data"))
     if example:
