@@ -79,7 +79,16 @@ def envelope_of(motor, drive=None, *, v_max: float | None = None,
     """The operating envelope of ``motor`` on ``drive``: a
     :class:`SaturatedEnvelope` for a saturated motor (``motor.magnetics``),
     else the constant-parameter :class:`~toolbox.plant.OperatingEnvelope`
-    (same arguments)."""
+    (same arguments).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor; ``motor.magnetics`` selects the class.
+    drive, v_max, i_max, resistive
+        As :class:`~toolbox.plant.OperatingEnvelope` (the drive's voltage
+        and current limits, their overrides, ``R`` kept in the steady state).
+    """
     cls = OperatingEnvelope if motor.magnetics is None else SaturatedEnvelope
     return cls(motor, drive, v_max=v_max, i_max=i_max, resistive=resistive)
 
