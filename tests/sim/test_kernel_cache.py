@@ -162,3 +162,40 @@ def test_average_constant_run_compiles_no_other_variant(tmp_path):
     assert got["helpers"] == {"_steps_flux": 0, "_svm_period": 0, "_carrier_period": 0,
                               "_carrier_half": 0, "_fcs_choice": 0}
     assert not got["expm1"]
+
+
+def _lock_is_held(path) -> bool:
+    """Whether another open file description holds ``flock`` on ``path``."""
+    import fcntl
+    import os
+
+    fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return False
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+
+
+def test_an_entry_first_call_holds_the_cache_directory_lock():
+    """An entry point's first call in a process (numba loads or compiles the
+    kernel then, and writes its cache index) holds the ``flock`` on the
+    numba cache directory, so that processes compiling different variants
+    at once (xdist or Dask workers on a cold cache) never number two cache
+    entries alike (``_kernel._first_call_locked``: one index then pointed
+    at the other variant's machine code); a compiled entry's call takes no
+    lock (the simulations of a batch run in parallel)."""
+    cache = _kernel._run.stats.cache_path
+
+    class Entry:
+        def __init__(self, signatures):
+            self.signatures = signatures
+
+        def __call__(self, x):
+            return x, _lock_is_held(cache)
+
+    assert _kernel._first_call_locked(Entry([]), 3) == (3, True)
+    assert _kernel._first_call_locked(Entry(["compiled"]), 4) == (4, False)
+    assert not _lock_is_held(cache)   # released after the call

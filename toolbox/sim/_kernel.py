@@ -92,7 +92,10 @@ simulated duration when only metrics are requested.
 
 from __future__ import annotations
 
+import fcntl
 import math
+import os
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -359,8 +362,8 @@ def run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
     traces : (n_rows, N_TRACE)
         t, id, iq, vd, vq, speed, torque, id_ref, iq_ref, speed_measured.
     """
-    return ENTRIES[variant(P[P_MAGNETIC], LP, DP)][0](P, A, B, C, D, Baw, LP, SP, DP, SC,
-                                                     keep_traces)
+    return _first_call_locked(ENTRIES[variant(P[P_MAGNETIC], LP, DP)][0],
+                              P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces)
 
 
 def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
@@ -377,8 +380,35 @@ def run_rows(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
     magnetic = P[:, P_MAGNETIC] > 0.5
     if magnetic.any() != magnetic.all():
         raise ValueError("run_rows: constant-parameter and saturated plants in one batch")
-    ENTRIES[variant(P[0, P_MAGNETIC] if len(P) else 0.0, LP, DP)][1](
-        P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out)
+    _first_call_locked(ENTRIES[variant(P[0, P_MAGNETIC] if len(P) else 0.0, LP, DP)][1],
+                       P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out)
+
+
+#: Serialises an entry's first call between a process's threads (a batch's).
+_FIRST_CALL = threading.Lock()
+
+
+def _first_call_locked(entry, *args):
+    """``entry(*args)``; its first call in a process (numba loads or compiles
+    it and the kernel functions under it) holds a lock (``flock``) on the
+    numba cache directory, shared by every process, released if its holder
+    dies. numba names a new cache entry's data file after the count of its
+    index's entries: two processes compiling *different* signatures of one
+    function at once (xdist or Dask workers on a cold cache; the variants
+    share ``_run`` and its parts) both wrote file 1, and one index then
+    pointed at the other's machine code ("descr is NULL", or a wrong kernel)."""
+    if entry.signatures:
+        return entry(*args)
+    with _FIRST_CALL:
+        try:
+            fd = os.open(_run.stats.cache_path, os.O_RDONLY | os.O_DIRECTORY)
+        except (OSError, AttributeError):  # no cache directory; NUMBA_DISABLE_JIT=1
+            return entry(*args)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+            return entry(*args)
+        finally:
+            os.close(fd)
 
 
 def variant(magnetic, LP, DP):
