@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 896f40f9f1f00250e5b0e90b0c443f9b5de36c81eb978506b0cbaeb2dfcdcdea
  * law sha256:  81f3d9ba2f8e11911e02ecc0936e7dedcf7dca0357ce646ad3078e9c8a7d2c88
- * created:     2026-11-27T21:56:37+00:00
+ * created:     2026-11-28T00:23:15+00:00
  * equations:   000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e); 002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation); Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: bfbd2612ef9951308507a3387cd59aa74050331f6eaa224654826036fce3a2dc
  * law sha256:  e0de0e86ef8529e1328c0ac0e874b3dac5877c06b55787abe59e08517cdf142e
- * created:     2026-11-27T21:56:39+00:00
+ * created:     2026-11-28T00:23:17+00:00
  * equations:   000 eq (8): de/dt = -K e; 000 eq (9)-(11): total compensation law; 000 eq (12): controller-side parameters R_c, L_dc, L_qc, psi_fc
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

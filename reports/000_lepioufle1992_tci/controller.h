@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 9e6cb4b92141432f59e1d7413c810901151cf0d51431f1522b402acd653e204e
  * law sha256:  90c4e7796dd79efda679655c0965ba833435312321211368983ea39f1a158566
- * created:     2026-11-27T21:56:40+00:00
+ * created:     2026-11-28T00:23:18+00:00
  * equations:   000 eq (18) (sign corrected): de/dt = -K11 e - K12 int e; 000 eq (19)-(20): total compensation with integrators; 000 eq (21): s^2 + K11 s + K12 = 0; 000 eq (22)-(24): K21 = E k_i Kp/Lq, K22 = E k_i KI/Lq, K11 = K21, K12 = K22
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 600c2c7e54f2d6f6e865680421b0620963b931525a29cc6dcbde689c5dbfef36
  * law sha256:  7eb7eb09cc055079980ece9e31d17b2583a9e3efb2cee518b12af18fc369f046
- * created:     2026-11-27T21:56:52+00:00
+ * created:     2026-11-28T00:23:30+00:00
  *
  * C99, header-only, no dynamic memory; libm: sinf, cosf. Float only (no
  * fixed-point variant: CCT_FIXED_POINT, CCT_MCSDK and CCT_IQMATH are errors).

@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 63448721dc1b996ad9673edd2f7d8f63d5f662add7890a1068308cfa4e6a5529
  * law sha256:  3ee178d01754d3d92d2158aed6c68c397e43237bcab357f65d6657f481221a9a
- * created:     2026-11-27T21:56:53+00:00
+ * created:     2026-11-28T00:23:50+00:00
  * equations:   000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e); 002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation); Kp = E k_i Kp_n, Ki = E k_i Ki_n (000 appendix: E = 150 V, k_i = 256/50)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

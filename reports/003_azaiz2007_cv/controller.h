@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: a9f8aec8d5e9e1a399111942f235c54b3cd088fa80e01537474797a5841ede56
  * law sha256:  270d14572051e839e1c286c27b7e8b9848bee503e822a8ac5b366addb504d824
- * created:     2026-11-27T21:56:55+00:00
+ * created:     2026-11-28T00:23:51+00:00
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, expm1f, expf, coshf,
  * sinhf, cosf, sinf. Float only (the integer variants CCT_FIXED_POINT,

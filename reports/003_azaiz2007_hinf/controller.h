@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 725ca7e47e8fb783e32a98f3530d9f7f87e8372a8e40b66b26c2473ca062b79f
  * law sha256:  3fd34f5eae3504ee7842af2ec0f4f1ab42773c17bf5c3dbd34e979f6348922b2
- * created:     2026-11-27T21:56:56+00:00
+ * created:     2026-11-28T00:24:06+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 2543261a0a76e6c16fc331777f1946f49735f06030e894512f8ea50f82f10eeb
  * law sha256:  488ffcca2397dd565169ae898970c9c5768047b7cd4511bab2a33aa222d9c22c
- * created:     2026-11-27T21:57:14+00:00
+ * created:     2026-11-28T00:24:26+00:00
  * equations:   003 eq (3)-(4); 003 eq (35)-(40); 003 eq (10)-(19); 003 eq (41)-(43); coupled 2x2 generalised plant at speed with the loop delay; structured multi-model H-infinity (toolbox.design._hinf_coupled)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

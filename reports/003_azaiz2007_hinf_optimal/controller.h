@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: fe6722ab3d8aaf89f7f3af7cde13d4df131e24c702653ac07366c33f1f6f30b5
  * law sha256:  c8c7077440b966316f27cb7d4f0e18204c564c8941e6e7f92d9a6e5a94943397
- * created:     2026-11-27T21:57:16+00:00
+ * created:     2026-11-28T00:24:29+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: f2d5685ae25647222d5d14f8e22c2ae2e7ba3436f8b20ded87fe03b7fb2388f2
  * law sha256:  a7165ea69facf421b9187ab487a391b802e8f3b0265841a098cb8f2da1f3f883
- * created:     2026-11-27T21:57:20+00:00
+ * created:     2026-11-28T00:24:32+00:00
  * equations:   000 sect. 2, Fig. 2a and eq (3): v = E k_i (Kp e + KI int e); 002 eq (19)-(20): K = 10 R, Ti = L/R (pole-zero cancellation); Kp = L wc, Ki = R wc (closed loop wc/(s + wc), wc = ln(20)/t5)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

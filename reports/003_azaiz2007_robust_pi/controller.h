@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 0aaa94e6a8433162f7974bec2c27db518a788af11bb94ad075bffba910b39bd0
  * law sha256:  f5051738b1f9ab8c44f2b74e25a4e2d8c0f4c79d8900d328247d76792858fb68
- * created:     2026-11-27T21:57:23+00:00
+ * created:     2026-11-28T00:24:34+00:00
  * equations:   Kp = L wc, Ki = Kp w_z (robust PI: max wc s.t. multiloop disk margin >= alpha on every model of the set, sampled coupled loop with delay, decoupling and voltage placement from the measured speed g w + o)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

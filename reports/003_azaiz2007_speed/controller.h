@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 747396a89fb975a521b077045b7c6079d73a6a80fb9d03ccee863d6436413214
  * law sha256:  f2da073bc618737135bc76267a7b0111c793427d27a688fddca43036fe598f96
- * created:     2026-11-27T21:57:25+00:00
+ * created:     2026-11-28T00:24:36+00:00
  * equations:   003 eq (33)-(34); 003 eq (35)-(40); 003 eq (10)-(32); 003 eq (65)-(67); 003 eq (41)-(43); 003 eq (71)-(72)
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).

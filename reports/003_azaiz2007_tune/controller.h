@@ -5,7 +5,7 @@
  * version:     0.1.0
  * spec sha256: 02480abeeda782370b097f3b15bb037166aab2d66a90454d9bcecda075fe11b2
  * law sha256:  33f23fd436f4fd5a387f4548e5143536c9f15b6b30fe38f478bc916f50ae21be
- * created:     2026-11-27T21:57:49+00:00
+ * created:     2026-11-28T00:24:57+00:00
  * equations:   structured tuning of Kp_d, Ki_d, Kp_q, Ki_q and the cross-coupling feedforward scale: min max(t5_d, t5_q) s.t. multiloop disk margin >= alpha on every model (delay d and d + 1), worst-case search over the box
  *
  * C99, header-only, no dynamic memory; libm: sqrtf, sinf, cosf (float path).
