@@ -79,11 +79,21 @@ def test_header_references_equal_python(tmp_path):
     h = write_header(art, spec.motor, spec.drive)
     assert f"= {TABLE_BYTES} bytes of constants" in h
     tb = envelope_table(spec.motor, spec.drive)
-    rng = np.random.default_rng(5)
-    n = 400
+    header_equals_python(h, tb, tmp_path, seed=5, n=400,
+                         fixed=[[0.0, 0.0], [tb.t_max[0], 0.0], [-tb.t_max[0], 50.0],
+                                [3.0, 1e4], [1.0, 140.0]])
+
+
+def header_equals_python(h: str, tb, tmp_path, *, seed: int, n: int, fixed) -> None:
+    """The compiled ``cct_envelope_ref`` of header ``h`` against the Python
+    mirror ``tb.reference`` at ``n`` random requests (torque to 1.3 x the
+    standstill limit, speed to 1.1 x the table's top, both signs), the first
+    ones ``fixed`` (``[torque N m, speed rad/s]``): currents to 2e-5 x I,
+    statuses equal, all three statuses met."""
+    rng = np.random.default_rng(seed)
     req = np.column_stack([rng.uniform(-1.3, 1.3, n) * tb.t_max[0],
                            rng.uniform(-1.1, 1.1, n) * tb.top_speed])
-    req[:5] = [[0.0, 0.0], [tb.t_max[0], 0.0], [-tb.t_max[0], 50.0], [3.0, 1e4], [1.0, 140.0]]
+    req[:len(fixed)] = fixed
     req = req.astype(np.float32).astype(float)
     res = C.compile_driver(h, tmp_path, source=DRIVER)
     assert res.returncode == 0, res.stderr

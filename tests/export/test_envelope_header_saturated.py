@@ -12,7 +12,6 @@ than the constant ones; measured 0.71 %, 0.50 N m of 71.0 N m).
 
 from __future__ import annotations
 
-import subprocess
 import tomllib
 from pathlib import Path
 
@@ -23,8 +22,7 @@ from toolbox.export import write_header
 from toolbox.export._envelope_table import N_SPEED, N_TORQUE, envelope_table
 from toolbox.plant import OperatingEnvelope, SaturatedEnvelope, envelope_of
 
-import export_c_helpers as C
-from test_envelope_header import DRIVER
+from test_envelope_header import header_equals_python
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -64,24 +62,9 @@ def test_saturated_header_references_equal_python(tmp_path):
     h = write_header(art, spec.motor, spec.drive)
     assert "toolbox.plant.SaturatedEnvelope, the motor's magnetic model" in h
     tb = envelope_table(spec.motor, spec.drive)
-    rng = np.random.default_rng(7)
-    n = 300
-    req = np.column_stack([rng.uniform(-1.3, 1.3, n) * tb.t_max[0],
-                           rng.uniform(-1.1, 1.1, n) * tb.top_speed])
-    req[:3] = [[0.0, 0.0], [tb.t_max[0], 0.0], [-tb.t_max[0], 0.7 * tb.top_speed]]
-    req = req.astype(np.float32).astype(float)
-    res = C.compile_driver(h, tmp_path, source=DRIVER)
-    assert res.returncode == 0, res.stderr
-    text = "\n".join(f"{t:.9e} {w:.9e}" for t, w in req) + "\n"
-    out = subprocess.run([str(tmp_path / "drv")], input=text, capture_output=True, text=True,
-                         timeout=60, check=True).stdout
-    got = np.array([[float(x) for x in ln.split()] for ln in out.strip().splitlines()])
-    ref = np.array([tb.reference(t, w) for t, w in req])
-    err = np.abs(got[:, :2] - ref[:, :2]).max()
-    print(f"\nsaturated header vs Python: max|di| {err:.3g} A")
-    assert err <= 2e-5 * tb.i_max
-    assert (got[:, 2] == ref[:, 2]).all()
-    assert set(ref[:, 2].astype(int)) == {0, 1, 2}
+    header_equals_python(h, tb, tmp_path, seed=7, n=300,
+                         fixed=[[0.0, 0.0], [tb.t_max[0], 0.0],
+                                [-tb.t_max[0], 0.7 * tb.top_speed]])
 
 
 def test_saturated_interpolation_between_nodes():
