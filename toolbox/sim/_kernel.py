@@ -64,7 +64,8 @@ prunes, before typing: a branch not taken is never typed, so its callees
 :func:`_fcs_choice`) are not compiled either. A constant-parameter,
 linear-law, average-inverter run (every ``cct design`` of a linear method)
 thus compiles none of them; each other variant compiles on its first use
-and is cached on disk apart (``docs/performance.md``, "Cold compile").
+and is cached on disk apart (``docs/performance.md``, "Cold compile"), an
+entry's first call holding a lock between processes (:func:`_first_call_locked`).
 
 Loop structure in brief (gcc -O3's plain C loop of the same arithmetic,
 ``tests/benchmarks/bench_sim.py``, is the yardstick): the period loop and the
