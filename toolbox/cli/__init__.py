@@ -10,6 +10,7 @@ import os
 # user exported wins.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+from ._exit import run  # noqa: E402
 from ._main import main  # noqa: E402
 
-__all__ = ["main"]
+__all__ = ["main", "run"]

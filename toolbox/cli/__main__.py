@@ -1,6 +1,6 @@
 """``python -m toolbox.cli``: the ``cct`` command without the console script."""
 
-from ._main import main
+from . import run
 
 if __name__ == "__main__":
-    main(prog_name="cct")
+    run()
