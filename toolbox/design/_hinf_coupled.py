@@ -139,7 +139,6 @@ def coupled_plant(model: Model, weights: dict, Ld_c: float, Lq_c: float,
     W = append(*[_ss(weights[ax][nm]) for nm in names for ax in "dq"])
     zc = StateSpace(core.A, core.B, core.C[:2 * len(names)], core.D[:2 * len(names)])
     Zs = series(zc, W)
-    nz = Zs.noutputs
     Ce = np.hstack([core.C[:2], np.zeros((2, Zs.nstates - core.nstates))])
     return PartitionedPlant(A=Zs.A, B1=Zs.B[:, :2], B2=Zs.B[:, 2:], C1=Zs.C, C2=Ce,
                             D11=Zs.D[:, :2], D12=Zs.D[:, 2:], D21=core.D[:2, :2],

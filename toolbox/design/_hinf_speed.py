@@ -14,8 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from ..lti import TransferFunction, feedback
-
 from ..analysis.robustness import DEFAULT_BOX, DEFAULT_RANGES
 from ..errors import SpecError, DesignInfeasible
 from ..spec import Table

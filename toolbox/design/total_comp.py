@@ -50,7 +50,6 @@ __all__ = ["TotalCompCfg", "read_cfg", "design", "design_total_compensation",
            "total_comp_law", "gains_from_poles", "gains_from_response_time",
            "gains_match_pi", "designed_poles"]
 
-LN20 = math.log(20.0)
 _MODEL_KEYS = ("R", "Ld", "Lq", "flux")
 _TC_KEYS = ("K1", "K2", "response_time", "poles", "model", "discretisation")
 _TCI_KEYS = ("K11", "K12", "K21", "K22", "natural_frequency", "damping", "poles",

@@ -159,7 +159,7 @@ def envelope_section(table: EnvelopeTable | None, N: str, P: str, why: str = "")
         for k in range(ns):
             L.append("    {" + ", ".join(_f(v, key, f"envelope {name}") for v in arr[k]) + "},")
         L.append("};")
-    L += [f"/* torque (N m), omega_m (mechanical rad/s) -> *i_d_ref, *i_q_ref (A); returns 0,",
+    L += ["/* torque (N m), omega_m (mechanical rad/s) -> *i_d_ref, *i_q_ref (A); returns 0,",
           " * 1 (torque clamped to the limit at that speed) or 2 (|omega_m| beyond the",
           " * table: its last row used). The Python mirror is",
           " * toolbox.export._envelope_table.EnvelopeTable.reference. */",
