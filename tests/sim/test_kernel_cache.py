@@ -187,9 +187,11 @@ def test_an_entry_first_call_holds_the_cache_directory_lock():
     entries alike (``_kernel._first_call_locked``: one index then pointed
     at the other variant's machine code); a compiled entry's call takes no
     lock (the simulations of a batch run in parallel)."""
-    cache = _kernel._run.stats.cache_path
+    cache = _kernel._ENTRY.stats.cache_path
 
     class Entry:
+        stats = _kernel._ENTRY.stats
+
         def __init__(self, signatures):
             self.signatures = signatures
 

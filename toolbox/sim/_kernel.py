@@ -106,7 +106,7 @@ from .._cache import cache_key
 from .._io import write_atomic
 from ._inverter import bit_changes, hexagon_scale, state_vector
 from ._kernel_layout import (LAYOUTS, N_METRICS, N_SC, N_TRACE, _A_CELLS, _A_OUT2, _A_OUT5, _A_SAT,
-                             _A_T10, _A_T90, _A_YEXT, _SQ3_2, _jit, _jit_inline, _jit_no_rc,
+                             _A_T10, _A_T90, _A_YEXT, _SQ3_2, _jit, _jit_inline, _jit_no_rc_variant,
                              pack_indices)
 from ._kernel_layout import (  # the slot constants (compile-time ints)
     LP_R_C, LP_LD_C, LP_LQ_C, LP_FLUX_C, LP_CROSS, LP_EMF, LP_ALPHA, LP_BETA, LP_GAMMA,
@@ -391,18 +391,14 @@ _FIRST_CALL = threading.Lock()
 
 def _first_call_locked(entry, *args):
     """``entry(*args)``; its first call in a process (numba loads or compiles
-    it and the kernel functions under it) holds a lock (``flock``) on the
-    numba cache directory, shared by every process, released if its holder
-    dies. numba names a new cache entry's data file after the count of its
-    index's entries: two processes compiling *different* signatures of one
-    function at once (xdist or Dask workers on a cold cache; the variants
-    share ``_run`` and its parts) both wrote file 1, and one index then
-    pointed at the other's machine code ("descr is NULL", or a wrong kernel)."""
+    it) holds a lock (``flock``) on the numba cache directory, shared by every
+    process and released if its holder dies: numba's read-modify-write of a
+    cache index is not safe between processes (``_kernel_layout._jit_variant``)."""
     if entry.signatures:
         return entry(*args)
     with _FIRST_CALL:
         try:
-            fd = os.open(_run.stats.cache_path, os.O_RDONLY | os.O_DIRECTORY)
+            fd = os.open(entry.stats.cache_path, os.O_RDONLY | os.O_DIRECTORY)
         except (OSError, AttributeError):  # no cache directory; NUMBA_DISABLE_JIT=1
             return entry(*args)
         try:
@@ -431,15 +427,15 @@ def _entries(cv, flux, switching, stationary):
     wrappers that call :func:`_run` with the flags as compile-time constants
     (closure variables), so that numba types, and prunes, every branch on
     them before compiling anything below (module docstring, "Variants").
-    numba's disk cache keys each on its closure variables: one cache entry
-    per variant."""
+    Each is cached on disk under a name of its own (``run_cv0_flux0_sw0_st1``,
+    ...): closures of one code object share numba's symbol and cache names."""
+    tag = "_".join(f"{k}{int(bool(v))}" for k, v in
+                   (("cv", cv), ("flux", flux), ("sw", switching), ("st", stationary)))
 
-    @njit(cache=True, nogil=True, error_model="numpy")
     def run_variant(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces):
         return _run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, cv, flux, switching,
                     stationary)
 
-    @njit(cache=True, nogil=True, error_model="numpy")
     def rows_variant(P, start, stop, step, A, B, C, D, Baw, LP, SP, DP, SC, out):
         for i in range(start, stop, step):
             # np.bool_, not the literal False: the same _run as run_variant's
@@ -451,7 +447,10 @@ def _entries(cv, flux, switching, stationary):
             for j in range(N_METRICS):
                 out[i, j] = M[j]
 
-    return run_variant, rows_variant
+    entry = njit(cache=True, nogil=True, error_model="numpy")
+    run_variant.__name__ = run_variant.__qualname__ = f"run_{tag}"
+    rows_variant.__name__ = rows_variant.__qualname__ = f"rows_{tag}"
+    return entry(run_variant), entry(rows_variant)
 
 
 #: The compiled entry points ``(run, run_rows)`` of each variant
@@ -462,7 +461,7 @@ ENTRIES = {(cv, flux, sw, st): _entries(cv, flux, sw, st)
            for sw, st in ((None, None), (None, True), (True, None))}
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=False, nogil=True, error_model="numpy")  # variant-dependent: _jit_variant
 def _run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, cv, flux, switching, stationary):
     """:func:`run` of the variant ``(cv, flux, switching, stationary)`` (:func:`variant`;
     the flags None or True, constants of the caller): allocates the work
@@ -491,7 +490,7 @@ def _run(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, cv, flux, switching, s
     return _finalise(acc_m, n_per, Ts, om_final, SC[SC_T_STEP], mset), tr
 
 
-@_jit_no_rc
+@_jit_no_rc_variant
 def _periods(P, A, B, C, D, Baw, LP, SP, DP, SC, keep_traces, n_per, mset, trdec, xd, xq,
              xn, acc_m, rng, vd_buf, vq_buf, ph_buf, cs_d, cs_q, tr, cv, flux, switching,
              stationary):
@@ -694,6 +693,7 @@ def _drop_stale_cache(cache_dir: Path) -> None:
         pass
 
 
-if hasattr(_run, "stats"):        # a numba dispatcher (not a plain function: NUMBA_DISABLE_JIT=1)
-    _drop_stale_cache(Path(_run.stats.cache_path))
+_ENTRY = ENTRIES[(None, None, None, None)][0]
+if hasattr(_ENTRY, "stats"):        # a numba dispatcher (not a plain function: NUMBA_DISABLE_JIT=1)
+    _drop_stale_cache(Path(_ENTRY.stats.cache_path))
 

@@ -193,3 +193,13 @@ _jit_inline = njit(cache=True, error_model="numpy", inline="always")
 #: retired: ~60-80 ns per period, 0.6-0.8 ns per plant step at 100 steps per
 #: period.
 _jit_no_rc = njit(cache=True, error_model="numpy", _nrt=False)
+#: :data:`_jit` and :data:`_jit_no_rc` without the disk cache, for the functions
+#: whose signatures depend on the kernel's variant (flags, hold frame). numba
+#: numbers a cache entry's data file by the count of entries in the index it
+#: read: processes compiling different signatures of one function at once
+#: (xdist or Dask workers; two ``cct design`` runs of different methods)
+#: wrote the same file, and an index then named another signature's machine
+#: code (numba's "descr is NULL" on return, or a wrong kernel). Each variant's
+#: entry point (``_kernel.ENTRIES``) is cached whole, under a name of its own.
+_jit_variant = njit(cache=False, error_model="numpy")
+_jit_no_rc_variant = njit(cache=False, error_model="numpy", _nrt=False)

@@ -10,12 +10,12 @@ import math
 import numpy as np
 
 from ._inverter import bit_changes, state_vector, svm_times
-from ._kernel_layout import DP_HALF_PERIODS, DP_R_HEX, DP_TS, _A_CELLS, _SQ3_2, _jit
+from ._kernel_layout import DP_HALF_PERIODS, DP_R_HEX, DP_TS, _A_CELLS, _SQ3_2, _jit, _jit_variant
 from ._kernel_plant import _to_ab
 from ._kernel_steps import _advance
 
 
-@_jit
+@_jit_variant
 def _svm_period(x, t, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0, acc_m,
                 refs, mset, DP, flux):
     """One period of space-vector modulation, paper 002 eq (21)-(22): the symmetric
@@ -53,7 +53,7 @@ def _duties(va, vb, r_hex):
             min(max(xc + off, 0.0), 1.0))
 
 
-@_jit
+@_jit_variant
 def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, omega0,
                   acc_m, refs, mset, r_hex, flux):
     """One half period ``th_dur`` of the symmetric triangle carrier.
@@ -105,7 +105,7 @@ def _carrier_half(x, t, dts, rising, conf, th_dur, h, pl, t_load, mech, acc, ome
     return t, x, conf
 
 
-@_jit
+@_jit_variant
 def _carrier_period(x, t, k, vd, vq, phi, conf, h, pl, t_load, mech, acc, omega0,
                     acc_m, refs, mset, DP, flux):
     """One controller period of carrier-based PWM at ``drive.switching_frequency``:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from ._kernel_layout import _jit_inline, _jit_no_rc
+from ._kernel_layout import _jit_inline, _jit_no_rc_variant
 from ._kernel_plant import _current_of_flux, _rk4, _rk4_flux
 from ._kernel_metrics import _accumulate, _accumulate_torque, _load_acc, _store_acc
 
@@ -57,7 +57,7 @@ def _advance_n(x, t, vx, vy, frame, n, dt, pl, t_load, mech, acc, omega0, acc_m,
                        refs, mset)
 
 
-@_jit_no_rc
+@_jit_no_rc_variant
 def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, loaded, mech, acc, omega0, acc_m, refs,
            mset):
     """``n`` RK4 steps of length dt with the metrics accumulated at the start of
@@ -85,7 +85,7 @@ def _steps(x, t, n, dt, vx, vy, frame, pl, t_load, loaded, mech, acc, omega0, ac
     return t, x
 
 
-@_jit_no_rc
+@_jit_no_rc_variant
 def _steps_flux(x, t, n, dt, vx, vy, frame, pl, t_load, mech, acc, omega0, acc_m, refs,
                 mset):
     """:func:`_steps` of a saturated motor: state (psi_d, psi_q, Omega, theta),
