@@ -109,6 +109,19 @@ def header_equals_python(h: str, tb, tmp_path, *, seed: int, n: int, fixed) -> N
     assert set(ref[:, 2].astype(int)) == {0, 1, 2}
 
 
+def cell_centres(tb):
+    """``(speed, torque, i_d, i_q)`` at the centre of every cell of the table
+    ``tb`` (the torque a fraction of the mean of the cell's two speed rows'
+    limits), with the table's interpolated reference there."""
+    for k in range(N_SPEED - 1):
+        w = (k + 0.5) * tb.speed_step
+        t_lim = 0.5 * (tb.t_max[k] + tb.t_max[k + 1])
+        for j in range(N_TORQUE - 1):
+            t = t_lim * (j + 0.5) / (N_TORQUE - 1)
+            d, q, _ = tb.reference(t, w)
+            yield w, t, d, q
+
+
 def test_interpolation_between_nodes():
     """At the 160 cell centres the interpolated reference gives the requested
     torque within 0.5 % of the standstill limit (0.15 % measured), needs at
@@ -122,17 +135,12 @@ def test_interpolation_between_nodes():
     tb = envelope_table(spec.motor, spec.drive)
     env = OperatingEnvelope(spec.motor, v_max=tb.v_max)
     t_err = v_rel = i_rel = di = 0.0
-    for k in range(N_SPEED - 1):
-        w = (k + 0.5) * tb.speed_step
-        t_lim = 0.5 * (tb.t_max[k] + tb.t_max[k + 1])
-        for j in range(N_TORQUE - 1):
-            t = t_lim * (j + 0.5) / (N_TORQUE - 1)
-            d, q, _ = tb.reference(t, w)
-            op = env.operating_point(t, w)
-            t_err = max(t_err, abs(float(env.torque(d, q)) - t))
-            v_rel = max(v_rel, float(np.hypot(*env.voltage(d, q, w))) / env.V)
-            i_rel = max(i_rel, float(np.hypot(d, q)) / env.I)
-            di = max(di, float(np.hypot(d - op.i_d, q - op.i_q)))
+    for w, t, d, q in cell_centres(tb):
+        op = env.operating_point(t, w)
+        t_err = max(t_err, abs(float(env.torque(d, q)) - t))
+        v_rel = max(v_rel, float(np.hypot(*env.voltage(d, q, w))) / env.V)
+        i_rel = max(i_rel, float(np.hypot(d, q)) / env.I)
+        di = max(di, float(np.hypot(d - op.i_d, q - op.i_q)))
     print(f"\ncell centres: torque error {t_err:.3g} N m of {tb.t_max[0]:.4g}, |v| <= "
           f"{v_rel:.4f} V_env, |i| <= {i_rel:.4f} I, |di| <= {di:.3g} A")
     assert t_err <= 5e-3 * tb.t_max[0]

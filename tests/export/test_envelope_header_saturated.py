@@ -22,7 +22,7 @@ from toolbox.export import write_header
 from toolbox.export._envelope_table import N_SPEED, N_TORQUE, envelope_table
 from toolbox.plant import OperatingEnvelope, SaturatedEnvelope, envelope_of
 
-from test_envelope_header import header_equals_python
+from test_envelope_header import cell_centres, header_equals_python
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -72,14 +72,9 @@ def test_saturated_interpolation_between_nodes():
     tb = envelope_table(spec.motor, spec.drive)
     env = envelope_of(spec.motor, v_max=tb.v_max)
     t_err = i_rel = 0.0
-    for k in range(N_SPEED - 1):
-        w = (k + 0.5) * tb.speed_step
-        t_lim = 0.5 * (tb.t_max[k] + tb.t_max[k + 1])
-        for j in range(N_TORQUE - 1):
-            t = t_lim * (j + 0.5) / (N_TORQUE - 1)
-            d, q, _ = tb.reference(t, w)
-            t_err = max(t_err, abs(float(env.torque(d, q)) - t))
-            i_rel = max(i_rel, float(np.hypot(d, q)) / env.I)
+    for _w, t, d, q in cell_centres(tb):
+        t_err = max(t_err, abs(float(env.torque(d, q)) - t))
+        i_rel = max(i_rel, float(np.hypot(d, q)) / env.I)
     print(f"\ncell centres: torque error {t_err:.3g} N m of {tb.t_max[0]:.4g}, "
           f"|i| <= {i_rel:.4f} I")
     assert t_err <= 1e-2 * tb.t_max[0]
