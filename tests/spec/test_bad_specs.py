@@ -4,11 +4,14 @@ The messages are part of the user interface: a change here is a change users
 see, so the full text is pinned.
 """
 
+import difflib
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from toolbox.errors import SpecError
+from toolbox.spec._fields import did_you_mean
 from toolbox.spec import load_spec
 
 BAD = Path(__file__).parent / "bad"
@@ -88,3 +91,19 @@ def test_values_are_never_evaluated(tmp_path, capsys):
     with pytest.raises(SpecError):
         load_spec(BAD / "code_injection.toml")
     assert "pwned" not in capsys.readouterr().out
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(word=st.text("abcdeh_", max_size=40),
+       choices=st.lists(st.text("abcdeh_", min_size=1, max_size=12), min_size=1, max_size=5))
+def test_did_you_mean_is_difflibs_suggestion(word, choices):
+    """The did-you-mean of every message is difflib's (cutoff 0.6) exactly:
+    the length bound that spares difflib a long word never drops a match
+    (words up to 40 characters against choices up to 12, so past the 7/3 bound)."""
+    close = difflib.get_close_matches(word, choices, n=1, cutoff=0.6)
+    assert did_you_mean(word, choices) == (f'did you mean "{close[0]}"?' if close else None)
+
+
+def test_did_you_mean_of_a_huge_value_is_none():
+    assert did_you_mean("current_step" * 50_000, ["current_step"]) is None
+    assert did_you_mean("current_stepp", ["current_step"]) == 'did you mean "current_step"?'

@@ -56,16 +56,16 @@ MOTOR_RANGES = {
 #: Torque-to-inertia ratio of a motor (rad/s^2): ``T_char / J`` with the
 #: characteristic torque ``T_char = 1.5 p flux^2 / max(Ld, Lq)`` (the torque
 #: at the characteristic current flux / L, a current scale every PMSM has
-#: whether or not its rated current is given). Over the 38 corpus motors
+#: whether or not its rated current is given). Over the 39 corpus motors
 #: (tests/corpus/motors: a 10 W gimbal to 150 kW traction) and the four
 #: papers it spans 291 rad/s^2 (paper 002, J = 1 kg m^2) to 3.4e6 rad/s^2
-#: (the issue-12 gimbal motor). The low bound, 100 rad/s^2, is a factor 2.9
+#: (the corpus's 24 V, 7 pole-pair gimbal motor). The low bound, 100 rad/s^2, is a factor 2.9
 #: under the slowest of them (a large industrial motor with a heavy load
 #: coupled belongs in ``J``, and still clears it when its rotor alone does
 #: by that factor); the high bound leaves a decade over the fastest. A
 #: datasheet inertia in kg cm^2 written as a bare number (read as kg m^2,
 #: 1e4 x too large) is refused for every motor whose ratio is below 1e6
-#: rad/s^2 (37 of the 38 corpus motors and all the papers':
+#: rad/s^2 (38 of the 39 corpus motors and all the papers':
 #: tests/spec/test_units_everywhere.py); in g cm^2 (1e7 x) for all of them.
 INERTIA_ACCELERATION = (100.0, 3e7)
 

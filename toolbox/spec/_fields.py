@@ -19,6 +19,7 @@ from ._units import kind_for_unit, looks_like_quantity, parse_quantity
 __all__ = [
     "Table",
     "check_keys",
+    "did_you_mean",
     "as_table",
     "SpecErrors",
     "Collector",
@@ -31,6 +32,22 @@ _MISSING = object()
 
 def _path(prefix: str, name: str) -> str:
     return f"{prefix}.{name}" if prefix else name
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str | None:
+    """``'did you mean "x"?'`` for the choice closest to ``word`` (difflib's
+    similarity ratio >= 0.6), else None.
+
+    A word more than 7/3 times longer than every choice is refused before
+    difflib sees it: the ratio ``2 M / (len(a) + len(b))`` with ``M <= len(b)``
+    is then below 0.6, and difflib's set-up on the word costs time linear
+    in its length (tens of ms on a 500 k-character value)."""
+    choices = [str(c) for c in choices]
+    word = str(word)
+    if not choices or 3 * len(word) > 7 * max(len(c) for c in choices):
+        return None
+    close = difflib.get_close_matches(word, choices, n=1, cutoff=0.6)
+    return f'did you mean "{close[0]}"?' if close else None
 
 
 def check_keys(table: Mapping, allowed: Iterable[str], prefix: str) -> None:
@@ -48,9 +65,8 @@ def check_keys(table: Mapping, allowed: Iterable[str], prefix: str) -> None:
     allowed = list(allowed)
     for name in table:
         if name not in allowed:
-            close = difflib.get_close_matches(str(name), allowed, n=1, cutoff=0.6)
-            hint = (f'did you mean "{close[0]}"?' if close
-                    else f"allowed keys: {', '.join(sorted(allowed))}")
+            hint = (did_you_mean(str(name), allowed)
+                    or f"allowed keys: {', '.join(sorted(allowed))}")
             where = f"a known key of [{prefix}]" if prefix else "a known top-level key"
             raise SpecError(_path(prefix, str(name)), where, hint=hint)
 
@@ -197,10 +213,7 @@ class Table:
         if value is default and name not in self.data:
             return value
         if not isinstance(value, str) or (choices is not None and value not in choices):
-            hint = None
-            if isinstance(value, str) and choices:
-                close = difflib.get_close_matches(value, list(choices), n=1, cutoff=0.6)
-                hint = f'did you mean "{close[0]}"?' if close else None
+            hint = did_you_mean(value, choices) if isinstance(value, str) and choices else None
             raise SpecError(self.key(name), expected, value, hint=hint)
         return value
 

@@ -8,7 +8,6 @@ path, what was expected and what was found.
 from __future__ import annotations
 
 import copy
-import difflib
 import math
 import re
 import tomllib
@@ -23,7 +22,7 @@ from ._datasheet import (catalog_kept, convert_scenario, relocate, reported_keys
                          resolve_drive, resolve_motor)
 from ._bounds import (check_drive, check_motor, check_motor_drive, check_plant_variant,
                       check_requirement, check_scenario_count, check_speed, check_work)
-from ._fields import Collector, Table, check_keys
+from ._fields import Collector, Table, check_keys, did_you_mean
 from ._method_units import convert_method_units
 from ._methods import read_method_cfg
 from ._scenario import Scenario
@@ -192,10 +191,9 @@ def _check_campaign_scenarios(campaign, scenarios: tuple) -> None:
     names = [s.name or s.kind for s in scenarios]
     for name in campaign.scenarios:
         if name not in names:
-            close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
             raise SpecError("campaign.scenarios", "names of [[scenario]] tables ("
                             + (", ".join(f'"{n}"' for n in names) or "none given") + ")",
-                            name, hint=f'did you mean "{close[0]}"?' if close else None)
+                            name, hint=did_you_mean(name, names))
 
 
 def _collect(errors: Collector, read: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:

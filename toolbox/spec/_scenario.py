@@ -33,12 +33,11 @@ Speed handling by ``kind``:
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
 from ..errors import SpecError
-from ._fields import is_finite_number
+from ._fields import did_you_mean, is_finite_number
 from ._model import MOTOR_PARAMETER_KEYS
 
 __all__ = ["Scenario", "SCENARIO_KINDS", "INVERTER_KINDS", "PLANT_KEYS"]
@@ -174,7 +173,7 @@ class Scenario:
 
         if self.kind not in SCENARIO_KINDS:
             raise err("kind", "one of " + ", ".join(SCENARIO_KINDS), self.kind,
-                      _did_you_mean(self.kind, SCENARIO_KINDS))
+                      did_you_mean(self.kind, SCENARIO_KINDS))
         for f in fields(self):
             v = getattr(self, f.name)
             if isinstance(v, bool) or v is None or isinstance(v, (str, Mapping)):
@@ -205,17 +204,17 @@ class Scenario:
                 raise err(name, "an integer from 0 to 10 (periods)", v)
         if self.noise not in NOISE_KINDS:
             raise err("noise", '"uniform" or "gaussian"', self.noise,
-                      _did_you_mean(self.noise, NOISE_KINDS))
+                      did_you_mean(self.noise, NOISE_KINDS))
         if self.inverter is not None and self.inverter not in INVERTER_KINDS:
             raise err("inverter", "one of " + ", ".join(INVERTER_KINDS), self.inverter,
-                      _did_you_mean(self.inverter, INVERTER_KINDS))
+                      did_you_mean(self.inverter, INVERTER_KINDS))
         if self.acceleration != 0 and self.kind != "constant_acceleration":
             raise err("acceleration", 'no acceleration unless kind = "constant_acceleration"',
                       self.acceleration, "the speed follows the mechanics for this kind")
         for name, v in self.speed_loop.items():
             if name not in SPEED_LOOP_KEYS:
                 raise err(f"speed_loop.{name}", "one of " + ", ".join(SPEED_LOOP_KEYS), name,
-                          _did_you_mean(name, SPEED_LOOP_KEYS))
+                          did_you_mean(name, SPEED_LOOP_KEYS))
             if not is_finite_number(v) or v < 0:
                 raise err(f"speed_loop.{name}", "a finite number >= 0", v)
         for table in ("plant_values", "plant_scale"):
@@ -223,7 +222,7 @@ class Scenario:
                 if name not in PLANT_KEYS:
                     raise err(f"{table}.{name}", "a plant parameter ("
                               + ", ".join(PLANT_KEYS) + ")", name,
-                              _did_you_mean(name, PLANT_KEYS))
+                              did_you_mean(name, PLANT_KEYS))
                 if not is_finite_number(v) or v < 0 \
                         or (v == 0 and name not in ("friction",)):
                     raise err(f"{table}.{name}", "a finite number > 0", v)
@@ -258,7 +257,7 @@ class Scenario:
         for k, v in d.items():
             if k not in names:
                 raise SpecError(f"{key}.{k}", "a known scenario key", k,
-                                hint=_did_you_mean(k, names) or "known keys: "
+                                hint=did_you_mean(k, names) or "known keys: "
                                 + ", ".join(names))
             kw[k] = _check_type(f"{key}.{k}", k, v)
         if "plant_step" not in kw and sample_time is not None and sample_time > 0:
@@ -311,11 +310,6 @@ def _check_type(path: str, name: str, v: Any) -> Any:
     if not is_finite_number(v):
         raise SpecError(path, "a finite number", v)
     return v
-
-
-def _did_you_mean(word: str, choices) -> str | None:
-    close = difflib.get_close_matches(str(word), list(choices), n=1)
-    return f'did you mean "{close[0]}"?' if close else None
 
 
 class _Frozen(dict):
