@@ -14,7 +14,7 @@ Then the objects alive at that point (every module imported by the
 collection and by that import: python-control, matplotlib, scipy, sympy,
 numba, the toolbox) are frozen out of the cyclic garbage collector (``gc.freeze``):
 they live as long as the process anyway, and each full collection walked
-all of them again (issue 13: 2.3 s of a 32 s serial run of tests/analysis,
+all of them again (measured: 2.3 s of a 32 s serial run of tests/analysis,
 22 full collections of ~0.1 s; 1.0 s with the freeze). Garbage made by the
 tests is collected as before: only the objects alive at the freeze are
 exempt, and reference counting still frees any of them that is dropped
@@ -31,14 +31,14 @@ import sys
 
 # The same BLAS regime as the cct command (toolbox/cli/__init__.py): the
 # toolbox's matrices are small, and OpenBLAS threads in each of the suite's
-# pytest-xdist workers oversubscribe the cores (issue 13: one in-process
+# pytest-xdist workers oversubscribe the cores (measured: one in-process
 # analysis of paper 003 took 0.45 s with the default threads on a busy
 # 2-core machine, 0.26 s with one). Read when numpy first loads OpenBLAS,
 # which no pytest plugin does before this file.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 # Bytecode is cached even where PYTHONDONTWRITEBYTECODE is set (the shared
-# machine's environment sets it, issue 13): without the cache each
+# machine's environment sets it): without the cache each
 # pytest-xdist worker compiles and assertion-rewrites every test module and
 # compiles the toolbox again (collection 5.1 s of CPU instead of 2.9 s per
 # process), and so does every interpreter a test starts (cct, the import

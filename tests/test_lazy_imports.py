@@ -1,4 +1,5 @@
-"""``import toolbox`` and ``cct --help`` stay light (issue 13).
+"""``import toolbox`` and ``cct --help`` stay light (toolbox/ARCHITECTURE.md
+"Caches and lazy imports").
 
 python-control imports matplotlib.pyplot and scipy.signal (about 1 s on the
 reference machine); sympy, cvxpy and numba cost as much again. They must be
@@ -18,7 +19,7 @@ from pathlib import Path
 import pytest
 
 HEAVY = ("control", "matplotlib", "sympy", "cvxpy", "numba", "scipy", "slycot",
-         "dask", "distributed", "pyarrow")  # the last three: cct campaign (issue 14)
+         "dask", "distributed", "pyarrow")  # the last three: cct campaign
 
 
 def _loaded_after(code: str) -> set[str]:
@@ -81,7 +82,7 @@ def test_check_imports_only_the_named_method():
 def test_design_analysis_and_report_equations_need_no_sympy_or_cvxpy(tmp_path):
     """With the on-disk cache warm (toolbox/_cache.py), designing paper 003's
     H-infinity controller, its certificate (Clarabel called directly) and the
-    report's typeset equations import neither sympy nor cvxpy (issue 13); the
+    report's typeset equations import neither sympy nor cvxpy; the
     first process, on an empty cache, fills it. matplotlib is not checked here
     (the report's equations typeset with it on a cold cache); the tests below
     check the whole ``cct design``."""
@@ -110,7 +111,7 @@ def test_design_analysis_and_report_equations_need_no_sympy_or_cvxpy(tmp_path):
     assert loaded() == []
 
 
-#: Not on the path of ``cct design`` (issue 13): python-control and what it
+#: Not on the path of ``cct design``: python-control and what it
 #: pulls in (scipy.signal, matplotlib.pyplot), and cvxpy. slycot is: the
 #: H-infinity design computes its norms with SLICOT ab13dd (~15 ms to import
 #: after numpy and scipy, toolbox/ARCHITECTURE.md "H-infinity numerics").
@@ -155,7 +156,7 @@ def _cct_design(spec: str, out_dir) -> str:
 
 @pytest.mark.slow
 def test_designs_headers_and_cct_design_need_no_python_control(tmp_path):
-    """None of NOT_ON_DESIGN_PATH is imported (issue 13) by: every design of
+    """None of NOT_ON_DESIGN_PATH is imported by: every design of
     designs/ and its C header (made with toolbox.lti), then ``cct design`` of
     paper 003's PI and of its H-infinity design, every stage (analysis,
     verification, header, report). One interpreter runs the three steps in

@@ -1,5 +1,6 @@
 """The analysis stage imports neither python-control nor scipy.signal nor
-scipy.stats (issue 13: together 1 to 2 s of every ``cct`` process).
+scipy.stats (together 1 to 2 s of every ``cct`` process; toolbox/ARCHITECTURE.md
+"Caches and lazy imports").
 
 Its linear systems come from ``toolbox.lti``, its Latin hypercube from
 ``toolbox.analysis._sampling``; python-control stays the independent route of

@@ -1,6 +1,7 @@
-"""The certificate's LMIs handed to Clarabel directly, with a warm-started bisection (issue 13).
+"""The certificate's LMIs handed to Clarabel directly, with a warm-started bisection
+(toolbox/ARCHITECTURE.md "Caches and lazy imports": no cvxpy on the design path).
 
-The reference is the route of before issue 13: the same vertex LMIs written in
+The reference is the former cvxpy route: the same vertex LMIs written in
 cvxpy (constant data, a fresh problem per scale, all vertices) and solved by
 cvxpy's Clarabel interface, with a plain cold bisection. The bisection grid is dyadic
 (scales k/2^m), so the certified scales are compared *exactly*: any change in
@@ -20,7 +21,7 @@ from toolbox.plant import max_electrical_speed
 
 
 def _cvxpy_solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
-    """The vertex LMIs as the certificate wrote them in cvxpy before issue 13."""
+    """The vertex LMIs as the certificate wrote them in cvxpy (the former route)."""
     import cvxpy as cp
 
     n = As.shape[1]
@@ -42,7 +43,7 @@ def _cvxpy_solve(As: np.ndarray, alpha: float, eps: float = 1e-6):
 
 
 def _full_cvxpy_solve(As: np.ndarray, alpha: float, guess=None):
-    """All vertex LMIs at once through cvxpy, normalised as before issue 13
+    """All vertex LMIs at once through cvxpy, normalised as the former cvxpy route did
     (``guess``, the active set's seed, is not used)."""
     norm = max(1.0, float(np.max(np.abs(As))))
     return _cvxpy_solve(As / norm, alpha / norm)

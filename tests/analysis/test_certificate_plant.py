@@ -1,5 +1,6 @@
-"""The certificate's parameter-affine model is the plant's model (issue 11
-item 6): its coordinates ``theta`` are the entries of the sympy-derived
+"""The certificate's parameter-affine model is the plant's model (one dq model,
+toolbox/ARCHITECTURE.md "Parameters and models"): its coordinates ``theta``
+are the entries of the sympy-derived
 :class:`toolbox.plant.ElectricalPlant` ``A(omega)``, ``B`` with the artifact's
 decoupling ``W = g omega [[0, -Lq_c], [Ld_c, 0]]`` folded in, not a second
 hand-typed dq model.

@@ -1,4 +1,5 @@
-"""Vectorised frequency response (toolbox.analysis.FreqResponse, issue 13).
+"""Vectorised frequency response (toolbox.analysis.FreqResponse; toolbox/ARCHITECTURE.md
+"The linear-system layer").
 
 Every path is compared with the per-point LU solve of ``freqresp`` (what the
 H-infinity weight check and the loop margins used before): the modal sum for

@@ -249,8 +249,9 @@ def test_mu_and_sigma_at_a_nearly_repeated_singular_value(eps):
 @pytest.mark.parametrize("grid", [(49, 40), (25, 12)])
 def test_mu_bound_equals_the_explicitly_scaled_matrices(grid):
     """mu_upper_2x2 is the closed-form minimum over d of sigma_max(D M D^-1)
-    (issue 13). The reference rebuilds D M D^-1 at every d of a logarithmic grid
-    and refines by ternary search (the implementation before issue 13, with its
+    (a closed form instead of a search: one per speed and corner of the box). The
+    reference rebuilds D M D^-1 at every d of a logarithmic grid and refines by
+    ternary search (the former implementation, with its
     two grid sizes): the closed form is never above it (it is the infimum) and,
     against the fine search, equal to 1e-12 relative where the optimum lies
     inside the grid (observed 1e-15); the coarse search stops up to 0.25 %
@@ -361,7 +362,7 @@ def test_law_to_continuous_inverts_discretisation(method):
 
 def test_continuous_law_and_margins_computed_once_per_controller(hinf):
     """The continuous law of an AxisController and its margins per loop are kept
-    while the controller lives (issue 13): a second call returns the same
+    while the controller lives (computed once, not per caller): a second call returns the same
     objects, equal to a fresh computation (a copy of the controller, hashed
     apart, recomputes them)."""
     import copy

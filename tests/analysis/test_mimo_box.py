@@ -1,4 +1,5 @@
-"""MIMO disk margins over the parameter box and the speed range (issue 17 item 2).
+"""MIMO disk margins over the parameter box and the speed range (toolbox/ARCHITECTURE.md
+"analysis.json", ``mimo_over_box``).
 
 ``mimo_over_box`` (in analysis.json as ``mimo_over_box`` and in the rows of
 ``cct compare`` as ``mimo_box``) evaluates the executed coupled loop on the

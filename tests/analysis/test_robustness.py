@@ -198,8 +198,9 @@ def test_latin_hypercube_equals_scipy_qmc(n, d, seed):
 
 def test_batch_axis_margins_rows_equal_their_own_loops(pi):
     """batch_axis_margins evaluates each distinct (R, L, delay) once, grouped by
-    delay (issue 13): every row, duplicated or not, in any order, gets bit for
-    bit the grid margins of its own loop ``K z^-d b/(z - a)`` evaluated alone."""
+    delay (work saved, not a change of result): every row, duplicated or not,
+    in any order, gets bit for bit the grid margins of its own loop
+    ``K z^-d b/(z - a)`` evaluated alone."""
     import math
 
     from toolbox.analysis._statespace import FreqResponse
@@ -225,7 +226,7 @@ def test_batch_axis_margins_rows_equal_their_own_loops(pi):
 
 
 def test_spectral_radii_of_repeated_sets_equal_the_full_stack(pi):
-    """The sweep analyses each distinct coupled-loop matrix once (issue 13): the
+    """The sweep analyses each distinct coupled-loop matrix once (work saved): the
     radii equal those of the whole stack, sets repeated (flux and, at zero
     speed, the speed-sensor gain do not enter the state matrix) or not."""
     from toolbox.analysis.robustness import _spectral_radii

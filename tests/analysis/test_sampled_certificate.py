@@ -1,4 +1,5 @@
-"""Certificate of the sampled coupled dq loop as executed (issue 17 item 1).
+"""Certificate of the sampled coupled dq loop as executed (toolbox/ARCHITECTURE.md
+"Sampled-loop certificate").
 
 toolbox.analysis._sampled_certificate: a common quadratic Lyapunov function
 per speed cell over a polytope that contains the exact ZOH loop. What must
@@ -199,10 +200,10 @@ def test_warm_start_and_fresh_solve_agree_on_nominal_point():
     assert math.isfinite(out[0].condition_P)
 
 
-# --- the corner LMIs handed to Clarabel directly (issue 13) -----------------------------
+# --- the corner LMIs handed to Clarabel directly (ARCHITECTURE.md "Caches and lazy imports") ---
 
 def _cvxpy_solve_lmi(A, G, U, order=None, step=None):
-    """Step 4's corner LMIs as the certificate wrote them in cvxpy before issue 13
+    """Step 4's corner LMIs as the certificate wrote them in cvxpy (the former route)
     (every corner at once; ``order`` and ``step`` are not used)."""
     import warnings
 

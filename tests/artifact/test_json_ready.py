@@ -10,7 +10,7 @@ from toolbox.artifact import json_ready
 
 
 def test_plain_and_numpy_values_convert_by_the_same_rules():
-    """The exact-type fast path of plain values (issue 13) and the general
+    """The exact-type fast path of plain values (a speed-up) and the general
     rules for everything else give one result: plain JSON types only, bools
     kept bools, non-finite floats as strings, in lists, tuples and mappings."""
     doc = {"f": [1.5, math.inf, -math.inf, math.nan, -0.0],

@@ -1,4 +1,5 @@
-"""Campaigns on Dask: LocalCluster, and a real cluster that loses a worker (issue 14).
+"""Campaigns on Dask: LocalCluster, and a real cluster that loses a worker
+(toolbox/ARCHITECTURE.md "Campaigns": no lost work, same table on any cluster).
 
 A ``dask scheduler`` and two ``dask worker`` processes (no nanny, so a killed
 worker stays dead) are started on 127.0.0.1 only; the first finished chunk

@@ -1,4 +1,5 @@
-"""The campaign engine without Dask: draws, judging, resume, outputs, CLI (issue 14).
+"""The campaign engine without Dask: draws, judging, resume, outputs, CLI
+(toolbox/ARCHITECTURE.md "Campaigns").
 
 The Dask runs (LocalCluster, a real scheduler with a killed worker) are in
 test_campaign_dask.py and are compared with the serial table made here.

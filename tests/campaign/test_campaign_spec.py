@@ -1,4 +1,5 @@
-"""``[campaign]`` validation follows the spec conventions (issue 14).
+"""``[campaign]`` validation follows the spec conventions (toolbox/ARCHITECTURE.md
+"Campaigns", "Spec file").
 
 Unknown keys are errors naming the file and the dotted key path with a
 did-you-mean; values are range-checked; the CLI turns them into exit 2 and

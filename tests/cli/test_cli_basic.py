@@ -62,7 +62,7 @@ def test_missing_design_dir_exits_2(tmp_path):
 @pytest.mark.parametrize("preset", [None, "3"])
 def test_cli_runs_single_threaded_blas_unless_told(preset):
     """``import toolbox.cli`` (the cct entry point) sets OPENBLAS_NUM_THREADS=1
-    before numpy loads (issue 13: small matrices, threads only cost); a value
+    before numpy loads (small matrices: threads only cost); a value
     the user exported is kept."""
     import os
     import subprocess

@@ -1,4 +1,4 @@
-"""`cct compare`: several methods for one motor, side by side (issue: analysis)."""
+"""`cct compare`: several methods for one motor, side by side (analysis of each)."""
 
 import json
 from pathlib import Path
@@ -22,7 +22,7 @@ def test_compare_paper000_motor(tmp_path):
     res = CliRunner().invoke(main, ["compare", *map(str, specs), "--json", str(out),
                                     "--sampled-certificate"], catch_exceptions=False)
     # paper 000's PI misses its own GM >= 6 dB / PM >= 45 deg requirements: since
-    # issue 10 compare exits 1 when any design fails (the table is still written)
+    # compare exits 1 when any design fails (the table is still written)
     assert res.exit_code == 1, res.output
     rows = json.loads(out.read_text())
     assert [r["method"] for r in rows] == ["pi", "tci", "hinf"]
@@ -31,7 +31,8 @@ def test_compare_paper000_motor(tmp_path):
     for row in rows:
         assert set(row["margins"]) == {"d", "q"}
         assert "n_unstable" in row
-        # issue 17: the sampled-loop certificate's scale, next to the continuous one
+        # the sampled-loop certificate's scale, next to the continuous one
+        # (toolbox/ARCHITECTURE.md "Sampled-loop certificate")
         assert 0 <= row["sampled_certificate"]["certified_scale"] <= 1
     assert "sampled cert." in res.output
     # the paper 000 PI (no decoupling, Kp = 10.5 V/A at 100 us with one period of

@@ -4,7 +4,7 @@ determinism, hostile strings, and `cct verify/report/export` on the result.
 Paper 000's total compensation *with integrators* is the reference design here:
 the plain total compensation (``000_lepioufle1992_tc``) keeps the static current
 error of eq (17) under its +10 % speed-measurement scenario, which the default
-reach check (issue 10) reports honestly as a failure (exit 1)."""
+reach check (`default.reach`, README.md "Commands") reports honestly as a failure (exit 1)."""
 
 import json
 import re

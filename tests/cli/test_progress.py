@@ -1,4 +1,5 @@
-"""Progress bars on stderr; ``-q`` silences the bar, never the result summary (issue 13).
+"""Progress bars on stderr; ``-q`` silences the bar, never the result summary
+(README.md "Commands").
 
 Under the test runner stderr is not a terminal, so the bar is one line per
 step (``  - [k/N] step ...``), recognised by its counter; the redrawn tqdm

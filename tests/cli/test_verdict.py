@@ -1,4 +1,5 @@
-"""Verdicts you can trust (issue 10, "a pass must mean something"): default
+"""Verdicts you can trust, a pass must mean something (toolbox/ARCHITECTURE.md
+"verify.json", "Errors and exit codes"): default
 checks without requirements, numbers recomputed from the executed law, an
 unstable loop is exit 1 with every output but controller.h, NaN metrics are
 failures with reasons, compare exits 1 when a design fails."""
@@ -104,7 +105,7 @@ def test_no_requirements_notice_in_verify(tmp_path):
 
 
 def test_tampered_controller_json_fails_verify(tmp_path):
-    """law.A diagonal set to 1.2 (issue 10: it passed with "PM 47.31" while the
+    """law.A diagonal set to 1.2 (it once passed with "PM 47.31" while the
     simulated error was 182 A). Verify recomputes from the executed law: the
     loop is unstable, exit 1, and the stored margins are called out."""
     out = design_dir(tmp_path, BASE + "bandwidth = 1000.0\n" + STEP.format(duration=0.02))

@@ -1,4 +1,5 @@
-"""A corpus of real motors, each designed with every method on defaults (issue 12 item 4).
+"""A corpus of real motors, each designed with every method on defaults (README.md
+"Defaults (no method parameters)").
 
 ``tests/corpus/motors/*.toml`` holds 38 motors in datasheet form (line-to-line
 R and L, V/krpm or N m/A, rpm, kHz strings), from a 10 W gimbal motor at 12 V
@@ -61,9 +62,9 @@ MOTORS = sorted(p.stem for p in MOTOR_DIR.glob("*.toml"))
 SATURATED = tuple(m for m in MOTORS if any(k in (MOTOR_DIR / f"{m}.toml").read_text()
                                            for k in ("[motor.saturation]", "flux_map")))
 METHODS = ("pi", "ip", "pi_lag", "tc", "tci", "ilq", "lq", "hinf", "fcs_mpc")
-#: one motor per class: issue 12's IPM, axial flux, industrial servo, small BLDC,
+#: one motor per class: the 400 V automotive IPM, axial flux, industrial servo, small BLDC,
 #: 48 V BLDC, hybrid traction IPM, traction IPM-SynRM judged up to its top speed
-DEFAULT_MOTORS = ("issue12_ipmsm", "emrax_228", "kollmorgen_akm42g", "maxon_ec45flat_50w",
+DEFAULT_MOTORS = ("automotive_ipmsm_400v", "emrax_228", "kollmorgen_akm42g", "maxon_ec45flat_50w",
                   "nanotec_db57m012", "toyota_prius2004_mg2", "tesla_model3_rear")
 FULL = os.environ.get("CCT_CORPUS") == "full"
 
@@ -72,7 +73,7 @@ _EMF_RAMP = ("unloaded start: the back-EMF ramps with the speed and the type-1 l
 #: (motor, method) -> reason (found by running the full grid)
 KNOWN: dict[tuple[str, str], str] = {
     ("ipower_gm2804", "tc"): _EMF_RAMP + " (6.3 %: J = 1.2e-6 kg m^2, 2800 V/s per A)",
-    ("issue12_gimbal", "tc"): _EMF_RAMP + " (0.56 A step, J = 3e-6 kg m^2)",
+    ("gimbal_24v_7pp", "tc"): _EMF_RAMP + " (0.56 A step, J = 3e-6 kg m^2)",
     ("siemens_1fk7042", "pi_lag"): ("reach at half speed 4.0 ms against a bound of 3.5 ms: "
                                     "the 8 kHz lag of pi_lag on a 10 mH servo; marginal"),
 }
@@ -156,7 +157,7 @@ def _cases():
 @pytest.mark.parametrize("motor, method", list(_cases()))
 def test_corpus_motor_designs_on_defaults(motor, method):
     spec = corpus_spec(motor, method)
-    report = (motor, method) == ("issue12_ipmsm", "pi")
+    report = (motor, method) == ("automotive_ipmsm_400v", "pi")
     out = build_outputs(spec, analysis=True, verification=True, report=report, header=True)
     failed = {s.name: {k: c.get("reason") for k, c in s.checks.items() if not c["pass"]}
               for s in out.verification.scenarios if not s.passed}

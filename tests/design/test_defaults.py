@@ -1,10 +1,11 @@
-"""Every method designs a sound controller from the motor and the drive alone (issue 12 item 2).
+"""Every method designs a sound controller from the motor and the drive alone (README.md
+"Defaults (no method parameters)").
 
-Motors: the issue's 24 V gimbal motor (0.1 ohm, 30 uH, 7 pole pairs, 40 kHz)
-and 400 V automotive IPMSM (20 mohm, Ld 0.2 mH, Lq 0.5 mH, 0.07 Wb, 4 pole
+Motors: two a new user brings, first try: a 24 V gimbal motor (0.1 ohm, 30 uH, 7 pole pairs,
+40 kHz) and a 400 V automotive IPMSM (20 mohm, Ld 0.2 mH, Lq 0.5 mH, 0.07 Wb, 4 pole
 pairs, 10 kHz), neither with a rated current or speed, and paper 003's motor
 (catalog "azaiz2007"). The gimbal's flux (5 mWb) and both inertias are our
-assumptions (the issue gives none); the defaults do not depend on them except
+assumptions (their data gives none); the defaults do not depend on them except
 through the speed scale of the default scenarios.
 
 Tolerances
@@ -155,7 +156,7 @@ def test_hinf_weights_from_requirements():
 
 
 def test_hinf_w2_left_out_gets_the_default():
-    """Issue 12: the README implies w2 is optional; it is (the default w2 is used)."""
+    """README.md "[controller.hinf]" implies w2 is optional; it is (the default w2 is used)."""
     w1 = {"dc_gain": 1000, "crossover": 500, "crossover_gain": 1, "hf_gain": 0.5}
     spec = spec_for("paper003", "hinf", {"gamma": "optimal",
                                          "weights": {"d": {"w1": w1}, "q": {"w1": w1}}})
@@ -242,8 +243,9 @@ def test_default_design_passes_default_checks(motor, method):
 
 
 @pytest.mark.slow
-def test_cct_design_exit_0_on_the_issue_lq_case(tmp_path):
-    """The issue's failing case: lq defaults on the 400 V IPMSM, through the CLI."""
+def test_cct_design_exit_0_on_the_ipmsm_lq_defaults(tmp_path):
+    """lq defaults on the 400 V IPMSM through the CLI (it once failed with an error
+    naming `axes.d.law`, a key not in the spec, and a leaked scipy warning)."""
     spec = tmp_path / "ipmsm_lq.toml"
     spec.write_text('title = "400 V IPMSM, lq defaults"\n[motor]\nR = 0.02\nLd = 0.2e-3\n'
                     'Lq = 0.5e-3\nflux = 0.07\npole_pairs = 4\nJ = 0.05\n[drive]\nvdc = 400\n'
@@ -258,7 +260,7 @@ def test_cct_design_exit_0_on_the_issue_lq_case(tmp_path):
 
 
 def test_hinf_optimal_gamma_unrealisable_does_not_say_raise_gamma():
-    """Issue 12: with gamma already "optimal" the refusal told the user to raise gamma or
+    """With gamma already "optimal" the refusal once told the user to raise gamma or
     use gamma = "optimal"; it now names what to change (w1's crossover, w2's roll-off)."""
     from toolbox.errors import DesignInfeasible
     w1 = {"dc_gain": 1000, "crossover": 2e4, "crossover_gain": 1, "hf_gain": 0.5}

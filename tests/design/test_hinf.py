@@ -108,8 +108,9 @@ def test_augment_without_w2_w3():
 
 
 def test_weight_realisation_is_minimal_and_exact():
-    """Realisation of a SISO weight without python-control or SLICOT (issue 13:
-    cancellation, tf2ss, power-of-two scaling): a common factor is removed
+    """Realisation of a SISO weight without python-control or SLICOT
+    (toolbox/ARCHITECTURE.md "Caches and lazy imports": cancellation, tf2ss,
+    power-of-two scaling): a common factor is removed
     (minimal, like python-control's ss), the response equals
     num/den to rounding (1e-13 relative), a constant has no state and an
     improper weight is refused with its degrees."""
@@ -217,10 +218,11 @@ def test_riccati_residual(Pq):
 @pytest.mark.parametrize("seed", range(6))
 def test_hamiltonian_schur_route_matches_scipy_care(seed):
     """The Riccati solver's first route (one ordered-Schur dgees call on the
-    Hamiltonian, issue 13) gives scipy's solve_continuous_are solution: indefinite
-    r as in eq (14), random stabilisable data of order 2..7; agreement 1e-8
-    relative to max|X| (both backward stable; the Hamiltonian route loses
-    cond(Z11) * eps, kept below 1e14 by the route itself)."""
+    Hamiltonian, toolbox/ARCHITECTURE.md "H-infinity numerics") gives scipy's
+    solve_continuous_are solution: indefinite r as in eq (14), random
+    stabilisable data of order 2..7; agreement 1e-8 relative to max|X| (both
+    backward stable; the Hamiltonian route loses cond(Z11) * eps, kept below
+    1e14 by the route itself)."""
     rng = np.random.default_rng(seed)
     n, m1, m2 = 2 + seed, 1 + seed % 2, 1
     a = rng.standard_normal((n, n)) - 3.0 * np.eye(n)          # stable: stabilisable

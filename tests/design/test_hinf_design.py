@@ -149,7 +149,8 @@ def test_bad_hinf_input():
         spec(gamma=-1.0)
     with pytest.raises(SpecError, match=r"controller\.hinf\.weights\.q\.w1: expected one of the forms"):
         spec(weights={"d": WEIGHTS["d"], "q": {"w1": {"numer": [1]}}})
-    # issue 12: a missing axis table or w1 is no longer an error, the weights are
+    # defaults for every method (README.md "Defaults (no method parameters)"): a missing
+    # axis table or w1 is not an error, the weights are
     # defaulted (toolbox.design._hinf_defaults): w2 at read time, w1 at design time
     cfg = spec(weights={"q": WEIGHTS["q"]}).controller.cfg
     assert cfg.weights["d"]["w1"] is None and "w2" in cfg.stated["d"]

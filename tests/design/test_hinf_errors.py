@@ -1,6 +1,6 @@
-"""H-infinity refusals are typed (issue 11 item 10): infeasibility is a
-DesignInfeasible, and the caller branches on the class and its data, never
-on message text."""
+"""H-infinity refusals are typed (toolbox/ARCHITECTURE.md "Errors and exit
+codes"): infeasibility is a DesignInfeasible, and the caller branches on the
+class and its data, never on message text."""
 
 import tomllib
 from pathlib import Path

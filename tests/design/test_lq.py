@@ -99,8 +99,9 @@ def test_continuous_artifact_tustin_and_error_controller():
 
 def test_bryson_defaults():
     """i_max = rated 20 A, w_b = wc/4 and per axis v_max = min(vdc/sqrt(3), wc L i_max),
-    wc = (90 - 65 - atan(1/4)) deg / ((delay + 0.5) Ts) (exact formulas; issue 12:
-    the drive's whole voltage as v_max crossed over too fast for the delay)."""
+    wc = (90 - 65 - atan(1/4)) deg / ((delay + 0.5) Ts) (exact formulas; README.md
+    "Defaults (no method parameters)": the drive's whole voltage as v_max
+    crossed over too fast for the delay)."""
     sp = spec()
     cfg = sp.controller.cfg
     wc = math.radians(90 - 65 - math.degrees(math.atan(0.25))) / (

@@ -1,4 +1,5 @@
-"""The ``complex_vector`` PI rule against motulator itself (issue 16 d).
+"""The ``complex_vector`` PI rule against motulator itself (motulator's current controller
+exactly, an independent implementation installed as a test dependency).
 
 motulator 0.5 (``motulator.drive.control.sm.CurrentController``, a
 ``ComplexPIController`` with ``k_p = 2 alpha_c``, ``k_i = alpha_c^2``,

@@ -49,8 +49,9 @@ def test_lq_with_extreme_weights_is_refused(R):
 
 def test_unstable_sampled_loop_is_analysed_not_refused():
     """A PI at 1e6 rad/s bandwidth with Ts = 100 us is unstable once sampled.
-    Issue 10 changed this from bad input (exit 2, nothing written) to a design
-    that exists but fails: the analysis records the unstable axes (so
+    It is not bad input (exit 2, nothing written) but a design that exists
+    and fails (toolbox/ARCHITECTURE.md "Errors and exit codes": exit 1,
+    outputs written): the analysis records the unstable axes (so
     `cct design` exits 1 and writes the report, see tests/cli/test_verdict.py)
     and only the firmware export is refused, naming the law's key."""
     from toolbox.errors import ExportRefused

@@ -1,4 +1,4 @@
-"""Tests of the robust PI tuner (``method = "robust_pi"``, issue 17 item 3).
+"""Tests of the robust PI tuner (``method = "robust_pi"``, README.md "[controller.robust_pi]").
 
 Paper 003's motor (catalog ``azaiz2007``, Ts = 100 us, one period of
 computation delay, max speed 230 rad/s mechanical = 920 rad/s electrical,

@@ -86,7 +86,8 @@ def test_pi_gains_and_delay_compensation():
     from the executed law (informational design parameters are not read: the
     header is the same without them), exact within printing (9 digits: 1e-6);
     the delay compensation from the typed decoupling.delay_compensation_time.
-    Gains honesty (issue 15): the law runs from its coefficients, so the gains
+    Gains honesty (toolbox/ARCHITECTURE.md "controller.h"): the law runs from
+    its coefficients, so the gains
     are printed in a comment marked FOR INFORMATION ONLY, never as macros a
     reader could edit to no effect."""
     art = A.pi_artifact()

@@ -1,4 +1,5 @@
-"""The header's second-order sections run by the real CMSIS-DSP (issue 15).
+"""The header's second-order sections run by the real CMSIS-DSP (toolbox/ARCHITECTURE.md
+"controller.h").
 
 The coefficients are read back from the controller.h TEXT (the
 ``static const float c[]`` of each one-degree-of-freedom axis and its

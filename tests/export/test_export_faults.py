@@ -3,8 +3,8 @@
 * Every constant the header emits is checked before the text exists: floats
   within float32 (no ``inff``, no ``nan``, no subnormal), integers within the
   C range they are used in. A value out of range is refused with
-  :class:`toolbox.errors.ExportRefused` naming the spec key (issue 10: vdc =
-  1e39 gave a header with ``inff`` that did not compile).
+  :class:`toolbox.errors.ExportRefused` naming the spec key (vdc =
+  1e39 once gave a header with ``inff`` that did not compile).
 * The float step function rejects non-finite inputs, holds the last good
   output, leaves its state unchanged and reports ``out.status`` (1 bad input,
   2 non-finite result); valid samples afterwards continue as if the bad one
@@ -91,7 +91,7 @@ def test_out_of_range_constant_is_refused(change, value, key, words):
 
 
 def test_vdc_1e39_through_the_cli(tmp_path):
-    """The issue's case end to end: cct design with vdc = 1e39 never leaves a
+    """The vdc = 1e39 case end to end: cct design with vdc = 1e39 never leaves a
     header with inff behind. Either the design stage refuses it first or the
     export does; exit 2 and no controller.h in both cases."""
     from click.testing import CliRunner

@@ -1,6 +1,7 @@
 """The executed law three times: simulator kernel, Python reference, C header.
 
-issue 11 item 7: the numba kernel (toolbox/sim/_kernel.py), the export's
+One law, three executors (toolbox/ARCHITECTURE.md "controller.h"): the numba
+kernel (toolbox/sim/_kernel.py), the export's
 Python reference law (:class:`toolbox.export.c_header.ReferenceLaw`) and the C
 text must execute the same law, including the voltage limit (circle and the
 SVM hexagon, ``voltage_limit = "hexagon"``) and back-calculation anti-windup.

@@ -1,4 +1,5 @@
-"""The FCS-MPC law of paper 002 exported to C (issue 15), checked against the
+"""The FCS-MPC law of paper 002 exported to C (toolbox/ARCHITECTURE.md "controller.h",
+method ``fcs_mpc``), checked against the
 simulator's switching decisions.
 
 The design is the reference design ``designs/002_cormerais2002_fcs_mpc.toml``

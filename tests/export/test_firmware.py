@@ -1,4 +1,4 @@
-"""Firmware-grade headers (issue 15): prefix, run-time bus voltage, delay
+"""Firmware-grade headers: prefix, run-time bus voltage, delay
 compensation, usage example. toolbox/ARCHITECTURE.md "controller.h".
 
 Every header is compiled with gcc -std=c99 -Wall -Wextra -Werror -pedantic
@@ -424,7 +424,7 @@ def test_cli_prefix_option_and_spec(tmp_path):
 
 
 def test_q31_input_conversion_clamps_and_flags(tmp_path):
-    """issue 15: a 100 A input overflowed a Q31 range sized to 2 x rated
+    """A 100 A input once overflowed a Q31 range sized to 2 x rated
     current. The Q31 variant's <p>to_q31() clamps to the stated range
     (Q31_I_MAX = motor.max_current = 20 A here) and flags it; in range it is
     exact to float32 (24-bit) rounding of the word: |word - exact| <= 2^31 x

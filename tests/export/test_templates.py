@@ -1,4 +1,5 @@
-"""The C text comes from jinja2 templates shipped with the package (issue 11 item 9)."""
+"""The C text comes from jinja2 templates shipped with the package (toolbox/ARCHITECTURE.md
+"controller.h", Text)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""STM32 MCSDK-style and TI IQmath-style integer variants of the PI law (issue 15).
+"""STM32 MCSDK-style and TI IQmath-style integer variants of the PI law
+(toolbox/ARCHITECTURE.md "controller.h", integer variants).
 
 The PI artifact (tests/export/export_artifacts.pi_artifact: Kp = L wc,
 Ki = R wc, Tustin, back-calculation anti-windup) is exported once; the same

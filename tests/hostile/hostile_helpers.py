@@ -1,4 +1,5 @@
-"""Shared helpers of the hostile-input tests (issue 10, "found by fuzzing").
+"""Shared helpers of the hostile-input tests (bad input found by fuzzing;
+toolbox/ARCHITECTURE.md "Reliability rules").
 
 A module of its own name, not conftest.py: ``from conftest import ...``
 resolves to whichever conftest module was imported first (tests/analysis,

@@ -125,7 +125,7 @@ def test_svm_1khz_sim1():
     7 % of the paper's; E_Id is 20 % above it. Both depend on the run length
     the paper does not give (E_Gamma falls and E_Id rises with it: 3.09 /
     2.90 at 0.3 s, 2.28 / 5.64 at 0.45 s, 2.08 / 6.91 at 0.5 s, the figure
-    the issue quotes): no single length gives both, see README "Paper 002".
+    first measured, against 3.82 printed): no single length gives both, see README "Paper 002".
     Asserted: our numbers within 3 % (simulator changes), E_Gamma within
     10 % of the printed one, Nb_c = 12 F_ech exactly."""
     m = svm(1000.0).metrics

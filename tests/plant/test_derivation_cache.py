@@ -1,4 +1,5 @@
-"""On-disk cache of the symbolic derivation (toolbox/_cache.py, issue 13).
+"""On-disk cache of the symbolic derivation (toolbox/_cache.py; toolbox/ARCHITECTURE.md
+"Caches and lazy imports").
 
 The cached model must be *identical* to a fresh derivation: sympy
 expressions are compared structurally (``==``, no simplification, no

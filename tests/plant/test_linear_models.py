@@ -1,6 +1,6 @@
 """The closed-form linear dq models of toolbox.plant equal the sympy-derived
-ElectricalPlant and the textbook ZOH (issue 11 item 6: the model is written
-once, everything else calls it)."""
+ElectricalPlant and the textbook ZOH (toolbox/ARCHITECTURE.md "Parameters and
+models": the model is written once, everything else calls it)."""
 
 import math
 

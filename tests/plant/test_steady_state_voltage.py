@@ -1,5 +1,6 @@
 """``steady_state_voltage`` is the derived voltage equation with di/dt = 0
-(issue 11 item 6: the simulator's reach check no longer types the model).
+(toolbox/ARCHITECTURE.md "Parameters and models": the simulator's reach check does not
+type the model again).
 
 Tolerance 1e-12 relative to the largest term: the closed form and the
 lambdified sympy expression differ only in operation order (a few ulps); a

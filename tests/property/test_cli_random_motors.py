@@ -1,4 +1,5 @@
-"""No traceback on hostile random motors through ``cct design`` (issue 10).
+"""No traceback on hostile random motors through ``cct design``
+(toolbox/ARCHITECTURE.md "Errors and exit codes": no traceback reaches a user).
 
 Motors and drives drawn far outside the plausible range (zero, negative,
 tiny, huge and non-finite numbers mixed with plausible ones) with every

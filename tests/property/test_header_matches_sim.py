@@ -1,4 +1,5 @@
-"""The exported C header replays the simulator through saturation (issue 10, "Done when").
+"""The exported C header replays the simulator through saturation (toolbox/ARCHITECTURE.md
+"controller.h": one law in every executor).
 
 For every linear method and random plausible motors (the draws of
 :mod:`test_random_motors`), a saturating q-current step is simulated by the

@@ -1,4 +1,4 @@
-"""Analysis and simulation agree on stability (issue 10, "Done when").
+"""Analysis and simulation agree on stability (a verdict is trusted only if both routes give it).
 
 Random plausible motors (the draws of :mod:`test_random_motors`) get a
 bandwidth anywhere from sound to far too fast for the sample time,

@@ -1,4 +1,5 @@
-"""The report draws only what analysis.json and verify.json hold (issue 11 items 1-2).
+"""The report draws only what analysis.json and verify.json hold (toolbox/ARCHITECTURE.md
+"Layers": report reads the stored results, never re-runs analysis).
 
 * the report package imports neither python-control nor toolbox.analysis;
 * changing a number of analysis.json changes the report, figure by figure;

@@ -1,4 +1,5 @@
-"""The report's SVG plotter (toolbox/report/_svgplot.py, issue 13).
+"""The report's SVG plotter (toolbox/report/_svgplot.py, no matplotlib: toolbox/ARCHITECTURE.md
+"Caches and lazy imports").
 
 Checks are on the SVG written: tick values and positions, the path data of
 lines with NaN/inf, escaping, byte-for-byte determinism, and that every

@@ -1,4 +1,4 @@
-"""The simulator's inputs after issue 11 item 6: the true plant is a
+"""The simulator's inputs (toolbox/ARCHITECTURE.md "Parameters and models"): the true plant is a
 ``toolbox.spec.Motor`` and the law carries the artifact's ``Decoupling`` (what
 the controller believes), not copies of their numbers."""
 

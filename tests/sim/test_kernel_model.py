@@ -1,4 +1,5 @@
-"""The numba kernel's pieces against their single sources (issue 11 items 6 and 9).
+"""The numba kernel's pieces against their single sources (toolbox/ARCHITECTURE.md
+"Parameters and models").
 
 * its packed-array slots are the ones declared in ``_kernel.LAYOUTS``;
 * its plant right-hand side and its predictive-control model are the dq model

@@ -1,5 +1,5 @@
 """Carrier-based PWM at ``drive.switching_frequency`` and the stationary-frame
-hold of the average inverter (issue 16, "simulation fidelity").
+hold of the average inverter (toolbox/ARCHITECTURE.md "The digital loop").
 
 Test motor: R = 1 ohm, L = 5 mH (tau = 5 ms, fifty sample periods), so the
 ripple is a few percent of the current and the closed forms below are exact
@@ -100,7 +100,8 @@ def test_one_pattern_per_sample_has_half_the_ripple_of_the_carrier():
     (mean square within 1e-4: the two split the period into differently
     sized RK4 steps, 3e-5 apart in the rectangle-rule metric), and at a
     double-update carrier (f_sw = 1/(2 Ts)) the true ripple
-    is twice as high (mean square x4 within 2 %): what issue 16 reported."""
+    is twice as high (mean square x4 within 2 %): the one-pattern-per-sample SVM model
+    showed half the ripple of a carrier-based model."""
     one = _tail_mse(DRIVE, 30.0)
     assert _tail_mse(replace(DRIVE, switching_frequency=1.0 / TS), 30.0) == \
         pytest.approx(one, rel=1e-4)
@@ -263,7 +264,8 @@ def test_hold_frames_differ_at_rated_speed_in_saturation():
     are the closed forms to 1e-4 A: the rotor hold's ``Z(w)^-1 (v - emf)``
     and the stationary hold's periodic expm solution. The two holds end
     25 mA apart on i_q (sampled; 27 mA on the mean of the last 10 %) and
-    22 mA on i_d: the order of the 45 mA issue 16 reports, which no loop
+    22 mA on i_d: the order of the 45 mA difference measured at rated speed in
+    saturation between the two holds, which no loop
     action removes in saturation."""
     from toolbox.design import design
     from toolbox.sim import control_law, drive_params

@@ -1,4 +1,5 @@
-"""Large-signal behaviour: saturating current steps for every linear method (issue 10).
+"""Large-signal behaviour: saturating current steps for every linear method
+(toolbox/ARCHITECTURE.md "The digital loop": saturation and anti-windup).
 
 The anti-windup of every executed law is Hanus's conditioning on the
 reference channel (Hanus, Kinnaert, Henrotte 1987, Automatica 23(6);
@@ -49,7 +50,8 @@ from toolbox.pipeline import design_spec, run_verification
 from toolbox.spec import spec_from_dict
 from toolbox.spec._model import inverter_radii
 
-# Issue 10's motor and drive (amplitude-invariant dq): L = 0.1 H, tau = 0.39 s
+# The large-inductance reproduction case's motor and drive (amplitude-invariant dq):
+# L = 0.1 H, tau = 0.39 s
 MOTOR_A = {"R": 0.2558, "Ld": 0.0798, "Lq": 0.1, "flux": 0.161, "pole_pairs": 3,
            "J": 1e-3, "rated_current": 30.0}
 DRIVE_A = {"vdc": 376.0, "sample_time": 223.3e-6, "delay_samples": 1}
@@ -226,14 +228,15 @@ def test_saturating_step_hexagon_at_speed(method):
     _check_saturating_step(method, "B at speed", "hexagon")
 
 
-def test_issue_10_reproduction():
-    """Issue 10 verbatim: PI bandwidth 895.6 rad/s, 27.5 A q step. Before the
-    fix v_q settled at R i_ref = 7.03 V with 24 A of error and i_q was
-    12.4 A after 0.2 s. Now the 5 % time is 12.5 ms: t_min(0.95) = 12.22 ms
-    (standstill, exact with R) plus the one-period delay (0.22 ms), and below
-    t_min + (delay + 1) Ts + 1/wc = 13.8 ms."""
+def test_saturated_q_step_no_windup_on_large_inductance():
+    """The windup reproduction case: PI bandwidth 895.6 rad/s, 27.5 A q step on
+    MOTOR_A. Before Hanus conditioning v_q settled at R i_ref = 7.03 V with
+    24 A of error and i_q was 12.4 A after 0.2 s. Now the 5 % time is
+    12.5 ms: t_min(0.95) = 12.22 ms (standstill, exact with R) plus the
+    one-period delay (0.22 ms), and below t_min + (delay + 1) Ts + 1/wc =
+    13.8 ms."""
     spec = spec_from_dict({
-        "title": "issue 10", "motor": MOTOR_A, "drive": DRIVE_A,
+        "title": "saturated q step, L = 0.1 H", "motor": MOTOR_A, "drive": DRIVE_A,
         "controller": {"method": "pi", "pi": {"bandwidth": 895.6}},
         "scenario": [{"name": "q step", "kind": "current_step", "duration": 0.2,
                       "iq_ref": 27.5, "step_time": 0.0, "keep_traces": True}]})

@@ -1,4 +1,5 @@
-"""`cct check` prints every method parameter with its default filled in (issue 12 item 3).
+"""`cct check` prints every method parameter with its default filled in, as valid TOML
+(README.md "Defaults (no method parameters)").
 
 For every method with no parameters, the printed TOML, parsed by tomllib and
 loaded again, designs the same controller: the executed law matrices agree to

@@ -1,4 +1,5 @@
-"""Datasheet inputs in ``[motor]`` and ``[drive]`` (issue 12, items 1 and 3).
+"""Datasheet inputs in ``[motor]`` and ``[drive]``, and errors that name the key
+(README.md "Datasheet values").
 
 Every conversion of toolbox/spec/_datasheet.py is checked against an
 independent derivation: sympy works from the three phase waveforms of a
@@ -34,10 +35,11 @@ KRPM = 2 * math.pi * 1000 / 60  # rad/s per krpm, by hand
 DRIVE = {"vdc": 400, "sample_time": 1e-4}
 PI = {"method": "pi", "pi": {"bandwidth": 1000}}
 
-# The issue's two motors in datasheet form. The per-phase values of the issue
-# are 0.1 ohm / 30 uH / 7 pole pairs / 40 kHz (gimbal) and 20 mohm / Ld 0.2 mH /
-# Lq 0.5 mH / 0.07 Wb / 4 pole pairs / 10 kHz (IPM). The gimbal's torque
-# constant, inertia and limits are not in the issue: 0.08 N m/A rms, 30 g cm^2,
+# The two first-try motors of tests/design/test_defaults.py in datasheet form
+# (also tests/corpus/motors/gimbal_24v_7pp.toml and automotive_ipmsm_400v.toml).
+# Their per-phase values are 0.1 ohm / 30 uH / 7 pole pairs / 40 kHz (gimbal)
+# and 20 mohm / Ld 0.2 mH / Lq 0.5 mH / 0.07 Wb / 4 pole pairs / 10 kHz (IPM).
+# The gimbal's torque constant, inertia and limits are not given: 0.08 N m/A rms, 30 g cm^2,
 # 5 A and 2000 rpm are typical of a 24 V, 5208-size gimbal motor (assumed).
 # The IPM's 35.91 V/krpm (line-to-line rms) is 0.07 Wb written as a datasheet
 # prints it: sqrt(3) p 0.07 / sqrt(2) V s/rad = 35.912 V/krpm, to 4 digits.

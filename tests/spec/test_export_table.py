@@ -1,4 +1,5 @@
-"""``[export]`` table of the spec (issue 15): the C prefix of controller.h."""
+"""``[export]`` table of the spec: the C prefix of controller.h (toolbox/ARCHITECTURE.md
+"controller.h", Names)."""
 
 import pytest
 

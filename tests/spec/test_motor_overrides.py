@@ -1,5 +1,5 @@
 """``Motor.with_overrides``: the one parameter type makes the simulator's
-true plants and robustness sets (issue 11 item 6)."""
+true plants and robustness sets (toolbox/ARCHITECTURE.md "Parameters and models")."""
 
 import dataclasses
 

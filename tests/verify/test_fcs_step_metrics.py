@@ -1,12 +1,14 @@
-"""Step metrics of the predictive switching law (issue 12: fcs_mpc on defaults).
+"""Step metrics of the predictive switching law (fcs_mpc on defaults, README.md
+"Defaults (no method parameters)").
 
 The 2 % / 5 % times of paper 002's Boolean law are measured in the band
 ``max(b |delta|, fcs_ripple)`` (toolbox/verify/_fcs_metrics.py): the law holds one
 of eight vectors for a period, so it cannot stay within 2 % of a step smaller
 than 50 x its ripple, and the metric used to be NaN (``default.finite`` failed
 every such design). These tests check that the defaults now pass on the
-issue's motors, that genuinely bad weightings still fail, and that the linear
-methods keep the kernel's plain bands.
+first-try motors of tests/design/test_defaults.py, that genuinely bad
+weightings still fail, and that the linear methods keep the kernel's plain
+bands.
 """
 
 from __future__ import annotations

@@ -37,8 +37,8 @@ def test_plant_scale_equals_explicit_values():
 
 def test_margin_requirements_use_recomputed_not_stored_margins():
     """Margin bounds are checked on margins recomputed from the executed law
-    (issue 10): stored numbers that disagree are named in a warning and
-    ignored. (Before issue 10 the stored, fake 60 deg decided.)"""
+    (toolbox/ARCHITECTURE.md "verify.json"): stored numbers that disagree are named
+    in a warning and ignored. (Once the stored, fake 60 deg decided.)"""
     spec = _spec([{"kind": "current_step", "duration": 0.005, "iq_ref": 1.0}],
                  {"min_phase_margin_deg": 179.0})
     art = design(spec).with_margins({"d": {"phase_margin_deg": 60.0},

@@ -1,7 +1,8 @@
-"""Issue 10's fuzzing list through the CLI: every case a clear exit 2.
+"""The fuzzing list of bad inputs through the CLI: every case a clear exit 2
+(toolbox/ARCHITECTURE.md "Reliability rules", "Errors and exit codes").
 
-Audit of the issue's section "Bad input, every one a clear exit 2" against
-tests/hostile and tests/export (the lead can trace each case):
+Audit of each fuzzed bad input against tests/hostile and tests/export (each
+case traced to the CLI test that asserts it):
 
 ==============================  =============================================
 case                            CLI test asserting exit 2 and the message
