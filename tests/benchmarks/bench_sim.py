@@ -46,7 +46,13 @@ Routes:
    otherwise landed in ours' calls, 0.3-0.4 ms of a 26 ms call; a
    collection before every turn cost ours 3-4 % instead, see ``_timing``); each
    ratio is the median of the per-round ratios with its interquartile range.
-   MEASURED
+   Measured on the shared 2-core machine (load average 3.3 at the start,
+   3.7 at the end of the run; gcc 12): ours 40.0 ns CPU per plant step
+   (IQR 38.9-41.5), ours / C -O2 = 1.95 [IQR 1.87..1.96], ours / C -O3
+   -march=native = 0.925 [0.900..0.931], ours / dividing -O3 -march=native
+   = 1.35 [1.28..1.37]; all ten runs of each build the same bits as ours
+   (the dividing build too, this run); placement and rotation cost the C
+   loop nothing measurable (one cos and sin per 100 plant steps);
 3. scipy.integrate.solve_ivp (RK45, rtol 1e-8, atol 1e-10) once per control
    period (the same law, placement and hold), run on a shorter horizon and
    reported per simulated second;
