@@ -1,27 +1,39 @@
 """Closed-loop simulation benchmark (toolbox.sim) against the peers a user would pick.
 
-Scenario (identical for every route): 1 s of an i_q step to 10 A at t = 0 with
-free acceleration (unloaded start) of the Le Pioufle 1992 motor (paper 000),
-dq PI current controllers (Kp = L wc, Ki = R wc, wc = 2000 rad/s, forward-Euler
-integrator, Hanus anti-windup aw = Ts/Kp as toolbox.sim.discrete_pi) with decoupling, Ts = 100 us, one
-period of computation delay, circle voltage limit vdc/sqrt(2) (vdc = 150 V),
-plant integrated by RK4 at 1 us.
+Scenario (identical for every route; ``sim_c_loop``): 1 s of an i_q step to
+10 A at t = 0 with free acceleration (unloaded start) of the Le Pioufle 1992
+motor (paper 000), dq PI current controllers (Kp = L wc, Ki = R wc, wc =
+2000 rad/s, forward-Euler integrator, Hanus anti-windup aw = Ts/Kp as
+toolbox.sim.discrete_pi) with decoupling, Ts = 100 us, one period of
+computation delay, the voltage placed at (d + 1/2) Ts (``drive.angle_compensation
+= "mid_period"``, the default of every design; toolbox/ARCHITECTURE.md "The
+digital loop") and held in the rotor frame, circle voltage limit vdc/sqrt(2)
+(vdc = 150 V), plant integrated by RK4 at 1 us.
 
 Routes:
 1. ours: toolbox.sim.simulate (numba kernel, metrics only);
-2. a plain C loop of the same model, integrator and step, written to a
-   temporary directory and compiled here, with the motor's numbers as
-   compile-time constants (ours reads them at run time and also accumulates
-   the id/iq errors, step metrics and a load torque, which the C loop does
-   not). Three builds (:data:`C_BUILDS`): -O2 and -O3 -march=native of the
-   loop with ours' arithmetic (the derivatives times 1/Ld, 1/Lq, 1/J, no FMA
-   contraction: gcc's -std=c99 does not contract, numba without fastmath
-   neither), which print the same final speed and mean-square torque error
-   as ours bit for bit, so the two compute the same thing; and -O3
-   -march=native of the model as written, dividing by Ld, Lq, J in every
-   stage (the yardstick before the kernel took reciprocals; its
-   currents differ from ours in the last bits, its final speed and torque
-   error agree to the 17 digits printed, checked at every run). The
+2. a plain C loop of the same closed loop, operation for operation in the
+   kernel's order (``sim_c_loop.C_SOURCE``: the axis laws in their
+   state-space form, the decoupling, the radial limit, the delay line of the
+   voltage and of its placement angle, the rotation of the held voltage by
+   its placement error, RK4, the torque error), written to a temporary
+   directory and compiled here, with the motor's numbers as compile-time
+   constants (ours reads them at run time and also accumulates the id/iq
+   errors, step metrics, the saturation time and a load torque, which the C
+   loop does not). Three builds (``sim_c_loop.C_BUILDS``): -O2 and -O3
+   -march=native of the loop with ours' arithmetic (the derivatives times
+   1/Ld, 1/Lq, 1/J, no FMA contraction: gcc's -std=c99 does not contract,
+   numba without fastmath neither; glibc's hypot, cos, sin as ours), which
+   must print ours' final speed and mean-square torque error bit for bit;
+   and -O3 -march=native of the model as written, dividing by Ld, Lq, J in
+   every stage (the yardstick before the kernel took reciprocals), which
+   must agree within ``sim_c_loop.DIVIDE_RTOL`` = 1e-13 relative (its
+   derivatives round differently: the same bits or 1-2 ulp measured).
+   Checked on a run of each before the timing and on every timed run: a
+   build that computes another closed loop raises
+   ``sim_c_loop.YardstickMismatch`` (the benchmark stops, exit status 1)
+   instead of printing a ratio against something else;
+   ``tests/sim/test_bench_c_loop.py`` checks the same on 60 ms. The
    ratio against the same-arithmetic -O3 build is the compiler comparison;
    the one against the dividing build includes the reciprocals' gain, which
    a C author can have as well. Ours and the C builds are run alternately
@@ -33,9 +45,17 @@ Routes:
    collections of what the C routes' ``subprocess`` calls left behind
    otherwise landed in ours' calls, 0.3-0.4 ms of a 26 ms call; a
    collection before every turn cost ours 3-4 % instead, see ``_timing``); each
-   ratio is the median of the per-round ratios with its interquartile range;
+   ratio is the median of the per-round ratios with its interquartile range.
+   Measured on the shared 2-core machine (load average 3.3 at the start,
+   3.7 at the end of the run; gcc 12): ours 40.0 ns CPU per plant step
+   (IQR 38.9-41.5), ours / C -O2 = 1.95 [IQR 1.87..1.96], ours / C -O3
+   -march=native = 0.925 [0.900..0.931], ours / dividing -O3 -march=native
+   = 1.35 [1.28..1.37]; all ten runs of each build the same bits as ours
+   (the dividing build too, this run); placement and rotation cost the C
+   loop nothing measurable (one cos and sin per 100 plant steps);
 3. scipy.integrate.solve_ivp (RK45, rtol 1e-8, atol 1e-10) once per control
-   period, run on a shorter horizon and reported per simulated second;
+   period (the same law, placement and hold), run on a shorter horizon and
+   reported per simulated second;
 4. gym-electric-motor, if installed (skipped with a message otherwise): its
    ``Cont-CC-PMSM-v0`` environment at default settings (its own motor and
    random references, so only the rate compares), 1 s of its 100 us steps
@@ -50,8 +70,6 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -66,25 +84,16 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 
+from toolbox.sim import simulate, simulate_batch  # noqa: E402
 from toolbox.spec import Scenario  # noqa: E402
-from toolbox.spec import Motor  # noqa: E402
-from toolbox.artifact import Decoupling  # noqa: E402
-from toolbox.sim._simulate import (ControlLaw, DriveParams,  # noqa: E402
-                                   discrete_pi, simulate, simulate_batch)
-
-M = Motor(R=0.6, Ld=1.4e-3, Lq=2.8e-3, flux=0.12, pole_pairs=4,
-          J=1.11e-3, friction=1.4e-3, convention="power")
-TS, H, WC, VDC, IQ_REF, DURATION = 1e-4, 1e-6, 2000.0, 150.0, 10.0, 1.0
-V_MAX = VDC / math.sqrt(2.0)
-LAW = ControlLaw(d=discrete_pi(M.Ld * WC, M.R * WC, TS), q=discrete_pi(M.Lq * WC, M.R * WC, TS),
-                 sample_time=TS, decoupling=Decoupling.from_motor(M))
-DRIVE = DriveParams(vdc=VDC, sample_time=TS, delay_samples=1, v_limit="circle", v_max=V_MAX)
+from sim_c_loop import (C_BUILDS, DELAY, DRIVE, DURATION, H, IQ_REF, LAW, M, T_COMP,  # noqa: E402
+                        TS, V_MAX, WC, check_agreement, compile_c, run_c, scenario)
 
 
 def ours_route():
     """Warm the kernel; return a route timing one 1 s simulation and its result holder."""
-    sc = Scenario(kind="unloaded_start", duration=DURATION, iq_ref=IQ_REF, plant_step=H)
-    simulate(LAW, M, Scenario(kind="unloaded_start", duration=1e-3, iq_ref=IQ_REF), DRIVE)
+    sc = scenario(DURATION)
+    simulate(LAW, M, scenario(1e-3), DRIVE)
     last = {"cpu": [], "wall": []}
 
     def run():
@@ -96,107 +105,14 @@ def ours_route():
     return run, last
 
 
-C_SOURCE = r"""
-#define _POSIX_C_SOURCE 199309L
-#include <math.h>
-#include <stdio.h>
-#include <time.h>
-static const double R=%(R)r, Ld=%(Ld)r, Lq=%(Lq)r, FL=%(flux)r, P=%(p)r, J=%(J)r, FR=%(fr)r, TF=%(tf)r;
-#ifdef DIVIDE  /* the model as written: one division per equation and stage */
-#define OVER(l, v) (v) / (l)
-#else          /* as toolbox.sim's kernel: times the reciprocal, computed once */
-#define OVER(l, v) (v) * (1.0 / (l))
-#endif
-static void f(const double *x, double vd, double vq, double *dx) {
-  double w = P * x[2];
-  dx[0] = OVER(Ld, vd - R * x[0] + w * Lq * x[1]);
-  dx[1] = OVER(Lq, vq - R * x[1] - w * Ld * x[0] - w * FL);
-  dx[2] = OVER(J, TF * P * (FL * x[1] + (Ld - Lq) * x[0] * x[1]) - FR * x[2]);
-  dx[3] = w;
-}
-int main(void) {
-  const double Ts = %(Ts)r, h = %(h)r, vmax = %(vmax)r, iqr = %(iqr)r, idr = 0.0;
-  const double kpd = %(kpd)r, kid = %(kid)r, kpq = %(kpq)r, kiq = %(kiq)r;
-  const long nper = %(nper)d; const int nsub = %(nsub)d;
-  double x[4] = {0, 0, 0, 0}, k1[4], k2[4], k3[4], k4[4], xt[4];
-  double xd = 0, xq = 0, vd_app = 0, vq_app = 0, sq = 0;
-  struct timespec t0, t1; clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
-  for (long k = 0; k < nper; ++k) {
-    double idm = x[0], iqm = x[1], wm = P * x[2];
-    double ed = idr - idm, eq = iqr - iqm;
-    double vd = kpd * ed + kid * xd - wm * Lq * iqm;
-    double vq = kpq * eq + kiq * xq + wm * Ld * idm + wm * FL;
-    double mag = hypot(vd, vq), s = mag > vmax ? vmax / mag : 1.0;
-    double vds = vd * s, vqs = vq * s;
-    xd += Ts * ed + (vds - vd) * Ts / kpd;   /* Hanus: aw = Ts / Kp */
-    xq += Ts * eq + (vqs - vq) * Ts / kpq;
-    double vda = vd_app, vqa = vq_app;      /* one-period delay */
-    vd_app = vds; vq_app = vqs;
-    for (int j = 0; j < nsub; ++j) {
-      double T = TF * P * (FL * x[1] + (Ld - Lq) * x[0] * x[1]);
-      double e = T - TF * P * FL * iqr; sq += e * e * h;
-      f(x, vda, vqa, k1);
-      for (int i = 0; i < 4; ++i) xt[i] = x[i] + 0.5 * h * k1[i];
-      f(xt, vda, vqa, k2);
-      for (int i = 0; i < 4; ++i) xt[i] = x[i] + 0.5 * h * k2[i];
-      f(xt, vda, vqa, k3);
-      for (int i = 0; i < 4; ++i) xt[i] = x[i] + h * k3[i];
-      f(xt, vda, vqa, k4);
-      for (int i = 0; i < 4; ++i) x[i] += h / 6.0 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-    }
-  }
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
-  double el = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
-  printf("%%.17g %%.17g %%.17g %%.17g %%.17g\n", el, x[0], x[1], x[2], sq / (nper * Ts));
-  return 0;
-}
-"""
-
-
-def compile_c(directory: str, flags=("-O2",)):
-    """Compile the C loop with ``flags`` into ``directory``; (exe, None) or (None, reason)."""
-    gcc = shutil.which("gcc")
-    if gcc is None:
-        return None, "gcc not found"
-    src = C_SOURCE % dict(R=M.R, Ld=M.Ld, Lq=M.Lq, flux=M.flux, p=float(M.pole_pairs),
-                          J=M.J, fr=M.friction, tf=M.torque_factor, Ts=TS, h=H, vmax=V_MAX,
-                          iqr=IQ_REF, kpd=M.Ld * WC, kid=M.R * WC, kpq=M.Lq * WC,
-                          kiq=M.R * WC, nper=int(round(DURATION / TS)),
-                          nsub=int(round(TS / H)))
-    tag = "".join(c for c in "".join(flags) if c.isalnum())
-    c_path, exe = os.path.join(directory, f"loop{tag}.c"), os.path.join(directory, f"loop{tag}")
-    with open(c_path, "w") as fh:
-        fh.write(src)
-    subprocess.run([gcc, *flags, "-std=c99", "-o", exe, c_path, "-lm"], check=True)
-    return exe, None
-
-
-#: The C builds timed against ours: the loop as the kernel computes (bit for
-#: bit the same results, gcc's ISO C mode not contracting FMAs, as ours does
-#: not) at -O2 and -O3 -march=native, and the model as written, dividing by
-#: Ld, Lq, J in every stage (the yardstick before the kernel
-#: multiplied by reciprocals).
-C_BUILDS = (("C -O2", ("-O2",)), ("C -O3 -march=native", ("-O3", "-march=native")),
-            ("C -O3 -march=native /L", ("-O3", "-march=native", "-DDIVIDE")))
-
-
-def agreement(ours: tuple[float, float], other: tuple[float, float]) -> str:
-    """'same bits' or the largest relative difference of (final speed, mse_torque)."""
-    if ours == other:
-        return "same bits as ours"
-    rel = max(abs(a - b) / max(abs(a), abs(b)) for a, b in zip(ours, other))
-    return f"differs from ours by {rel:.1e} relative"
-
-
 def c_route(exe: str):
     """A route running the compiled loop; it returns the loop's own elapsed time
-    (process start-up excluded) and keeps its printed state in ``last``."""
-    last = {}
+    (process start-up excluded) and keeps every run's printed state in ``last["outs"]``."""
+    last = {"outs": []}
 
     def run() -> float:
-        vals = [float(v) for v in subprocess.run([exe], check=True, capture_output=True,
-                                                 text=True).stdout.split()]
-        last["out"] = vals
+        vals = run_c(exe)
+        last["outs"].append(vals)
         return vals[0]
 
     return run, last
@@ -217,11 +133,11 @@ def bench_scipy(horizon=0.05):
     kpd, kid, kpq, kiq = M.Ld * WC, M.R * WC, M.Lq * WC, M.R * WC
     x = np.zeros(4)
     xd = xq = 0.0
-    v_app = (0.0, 0.0)
+    v_app, ph_app = (0.0, 0.0), 0.0
     n = int(round(horizon / TS))
     t0 = time.process_time()
     for k in range(n):
-        idm, iqm, wm = x[0], x[1], p * x[2]
+        idm, iqm, thm, wm = x[0], x[1], x[3], p * x[2]
         ed, eq = -idm, IQ_REF - iqm
         vd = kpd * ed + kid * xd - wm * Lq * iqm
         vq = kpq * eq + kiq * xq + wm * Ld * idm + wm * fl
@@ -229,9 +145,14 @@ def bench_scipy(horizon=0.05):
         s = V_MAX / mag if mag > V_MAX else 1.0
         xd += TS * ed + (vd * s - vd) * TS / kpd
         xq += TS * eq + (vq * s - vq) * TS / kpq
-        sol = solve_ivp(rhs, (k * TS, (k + 1) * TS), x, args=v_app, rtol=1e-8, atol=1e-10)
+        # the delayed voltage, placed at its sample's angle + T_COMP w and held
+        # in the rotor frame: rotated by its error from the mid-period angle
+        err = ph_app - (thm + wm * TS * 0.5)
+        c, sn = math.cos(err), math.sin(err)
+        v_rot = (v_app[0] * c - v_app[1] * sn, v_app[0] * sn + v_app[1] * c)
+        sol = solve_ivp(rhs, (k * TS, (k + 1) * TS), x, args=v_rot, rtol=1e-8, atol=1e-10)
         x = sol.y[:, -1]
-        v_app = (vd * s, vq * s)
+        v_app, ph_app = (vd * s, vq * s), thm + T_COMP * wm
     el = time.process_time() - t0
     return horizon / el, x
 
@@ -335,29 +256,47 @@ def main():
           f"batch threads {numba.config.NUMBA_NUM_THREADS}, load average {os.getloadavg()[0]:.2f} "
           "(other processes on the machine lower every rate, the parallel batch most)")
     print(f"scenario: {DURATION} s unloaded start, iq_ref {IQ_REF} A, PI wc {WC} rad/s, "
-          f"Ts {TS} s, delay 1, plant RK4 at {H} s\n")
+          f"Ts {TS} s, delay {DELAY}, voltage placed at (d + 1/2) Ts = {T_COMP} s, "
+          f"rotor-frame hold, plant RK4 at {H} s\n")
     ours_run, ours_last = ours_route()
     routes = {"ours": ours_run}
-    c_last = {}
+    c_last, c_tol = {}, {}
     with tempfile.TemporaryDirectory() as d:
-        for label, flags in C_BUILDS:
+        for label, flags, rtol in C_BUILDS:
             exe, why = compile_c(d, flags)
             if exe is None:
                 print(f"plain C loop ({label}): skipped ({why})")
                 continue
             routes[label], c_last[label] = c_route(exe)
+            c_tol[label] = rtol
+        # one run of each before the timing: a yardstick that computes another
+        # closed loop fails here, before its ratio is timed (YardstickMismatch)
+        for route in routes.values():
+            route()
+        m = ours_last["metrics"]
+        ours_end = (m["final_speed"], m["mse_torque"])
+        for label, last in c_last.items():
+            out = last["outs"][0]
+            check_agreement(label, ours_end, (out[3], out[4]), c_tol[label])
+        ours_last["cpu"].clear()
+        ours_last["wall"].clear()
         times = interleaved(routes, rounds=9, quiet_gc=True)
     rate = {k: DURATION / quartiles(v)[1] for k, v in times.items()}
+    # every timed run checked too: ours' last, each C run
     m = ours_last["metrics"]
-    ours_end = (m["final_speed"], m["mse_torque"])
+    if (m["final_speed"], m["mse_torque"]) != ours_end:
+        raise RuntimeError(f"ours is not deterministic: {(m['final_speed'], m['mse_torque'])!r}"
+                           f" after {ours_end!r}")
     print(f"ours (numba)          : {rate['ours']:10.2f} simulated s / CPU s, median of "
           f"{len(times['ours'])} (final speed {ours_end[0]:.6f} rad/s, "
           f"mse_torque {ours_end[1]:.6g})")
     for label, last in c_last.items():
-        out = last["out"]
+        said = {check_agreement(label, ours_end, (o[3], o[4]), c_tol[label])
+                for o in last["outs"]}
+        out = last["outs"][-1]
         print(f"{label:22s}: {rate[label]:10.2f} simulated s / CPU s "
               f"(final speed {out[3]:.6f} rad/s, mse_torque {out[4]:.6g}; "
-              f"{agreement(ours_end, (out[3], out[4]))})")
+              f"{'; '.join(sorted(said))}, all {len(last['outs'])} runs)")
     steps = DURATION / H
     print(f"ours per call, ns per plant step: CPU {fmt_time(ours_last['cpu'], 1e9 / steps, 'ns')}"
           f", wall {fmt_time(ours_last['wall'], 1e9 / steps, 'ns')} (wall above CPU: "
