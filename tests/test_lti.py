@@ -378,10 +378,26 @@ def test_transfer_function_minreal_cancels_like_control():
     assert w1.minreal() is w1
 
 
-def _grid_peak(g, w=np.logspace(-3, 5, 100001)) -> float:
-    """Largest singular value on a dense grid (a lower bound of the norm)."""
-    G = L.as_statespace(g).freqresp(w)
-    return float(np.linalg.svd(np.moveaxis(G, -1, 0), compute_uv=False)[:, 0].max())
+def _grid_peak(g) -> float:
+    """Largest singular value on a grid (a lower bound of the norm): 4001
+    points over 1e-3 .. 1e5 rad/s (0.46 % apart, ten points across the
+    lightly damped case's resonance), then 2001 points between the
+    neighbours of each of the five largest local maxima (as dense as 1.1e6
+    log-spaced points there)."""
+    ss = L.as_statespace(g)
+
+    def sigma(w):
+        G = ss.freqresp(w)
+        return np.linalg.svd(np.moveaxis(G, -1, 0), compute_uv=False)[:, 0]
+
+    w = np.logspace(-3, 5, 4001)
+    s = sigma(w)
+    peaks = [k for k in range(len(w)) if s[k] >= s[max(k - 1, 0)] and s[k] >= s[min(k + 1, len(w) - 1)]]
+    best = float(s.max())
+    for k in sorted(peaks, key=lambda k: -s[k])[:5]:
+        fine = np.linspace(w[max(k - 1, 0)], w[min(k + 1, len(w) - 1)], 2001)
+        best = max(best, float(sigma(fine).max()))
+    return best
 
 
 def _below_level(g, level: float) -> bool:

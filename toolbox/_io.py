@@ -130,7 +130,8 @@ def _check_regular(info: os.stat_result, name: str, error: type[CctError], what:
 
 # One token of TOML or JSON text. Strings and comments are skipped whole so
 # that brackets and dots inside them do not count; key-like runs (bare keys,
-# numbers) continue a dotted chain, anything else ends it.
+# numbers, with the blanks between them) continue a dotted chain, a run of
+# anything else ends it (one token per run: the scan's cost is per token).
 # An unterminated string runs to the end of its line (or of the text for a
 # multi-line one, or a lone backslash at the very end): every string alternative
 # always matches, so the scan never backtracks and stays linear (a failed match
@@ -142,9 +143,8 @@ _TOKEN = re.compile(r'''
   | (?P<open>[\[{])
   | (?P<close>[\]}])
   | (?P<dot>\.)
-  | (?P<space>[ \t]+)
-  | (?P<word>[A-Za-z0-9_+\-:]+)
-  | (?P<other>.)
+  | (?P<word>[A-Za-z0-9_+\-: \t]+)
+  | (?P<other>[^"\'\#\[\]{}.A-Za-z0-9_+\-: \t]+)
 ''', re.S | re.X)
 
 
@@ -173,7 +173,7 @@ def check_text_depth(text: str, error: type[CctError], *, limit: int = MAX_DEPTH
             chain = 0
         elif kind == "dot":
             chain += 1
-        elif kind in ("space", "word", "string"):
+        elif kind in ("word", "string"):
             pass  # a dotted key may have spaces and quoted parts: a . "b" . c
         else:
             chain = 0

@@ -550,11 +550,14 @@ def test_no_placement_error_keeps_128_corners():
     np.testing.assert_allclose(A, np.broadcast_to(exact, A.shape), rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("case", ["pi002"], indirect=True)
 def test_speed_range_stated_in_mechanical_and_electrical(case):
     """The certificate's JSON states the covered speed range in mechanical rad/s
     (as the spec's ``max_speed``) beside the electrical one, and the report
     renders the speeds as mechanical with electrical in brackets (electrical
-    alone for a JSON without ``pole_pairs``)."""
+    alone for a JSON without ``pole_pairs``). On paper 002's design (6 pole
+    pairs) only: the units do not depend on the law, and 003's bisection
+    (~2 s) is the slow tests' fixture."""
     from toolbox.report import _sampled_certificate_of
 
     spec, art, cert = case

@@ -46,7 +46,8 @@ import pytest
 from scipy.integrate import quad
 
 from toolbox.artifact._artifact import AxisController, _antiwindup_gain
-from toolbox.pipeline import design_spec, run_verification
+from toolbox.pipeline import design_spec
+from toolbox.sim import scenario_setup, simulate
 from toolbox.spec import spec_from_dict
 from toolbox.spec._model import inverter_radii
 
@@ -129,11 +130,15 @@ def _spec(method: str, motor: dict, drive: dict, i_step: float, speed: float,
 
 
 def _run(spec, artifact=None):
+    """(artifact, SimResult) of the spec's one scenario, simulated as the
+    verify stage does (``scenario_setup``, ``simulate``) without the stage's
+    other checks (grid, drift box), which these tests do not read."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # design advice (IP, ILQ)
         artifact = artifact or design_spec(spec)
-    (outcome,) = run_verification(artifact, spec).scenarios
-    return artifact, outcome.result
+    (scenario,) = spec.scenarios
+    law, drive = scenario_setup(artifact, scenario, spec.drive)
+    return artifact, simulate(law, spec.motor, scenario, drive)
 
 
 def _times(t: np.ndarray, iq: np.ndarray, i_step: float) -> tuple[float, float, float]:

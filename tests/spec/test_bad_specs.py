@@ -93,7 +93,7 @@ def test_values_are_never_evaluated(tmp_path, capsys):
     assert "pwned" not in capsys.readouterr().out
 
 
-@settings(max_examples=300, deadline=None, derandomize=True)
+@settings(max_examples=100, deadline=None, derandomize=True)
 @given(word=st.text("abcdeh_", max_size=40),
        choices=st.lists(st.text("abcdeh_", min_size=1, max_size=12), min_size=1, max_size=5))
 def test_did_you_mean_is_difflibs_suggestion(word, choices):

@@ -59,7 +59,7 @@ MOTOR_RANGES = {
 #: whether or not its rated current is given). Over the 39 corpus motors
 #: (tests/corpus/motors: a 10 W gimbal to 150 kW traction) and the four
 #: papers it spans 291 rad/s^2 (paper 002, J = 1 kg m^2) to 3.4e6 rad/s^2
-#: (the corpus's 24 V, 7 pole-pair gimbal motor). The low bound, 100 rad/s^2, is a factor 2.9
+#: (tests/corpus/motors/gimbal_24v_7pp.toml). The low bound, 100 rad/s^2, is a factor 2.9
 #: under the slowest of them (a large industrial motor with a heavy load
 #: coupled belongs in ``J``, and still clears it when its rotor alone does
 #: by that factor); the high bound leaves a decade over the fastest. A

@@ -331,9 +331,7 @@ class MagneticModel:
     # --------------------------------------------------------------- internals
     def _bilinear(self, i_d, i_q):
         m = self.data
-        fd = _bilinear_grid(m.i_d, m.i_q, m.psi_d, i_d, i_q)
-        fq = _bilinear_grid(m.i_d, m.i_q, m.psi_q, i_d, i_q)
-        return fd, fq
+        return _bilinear_grid(m.i_d, m.i_q, (m.psi_d, m.psi_q), i_d, i_q)
 
     def _psi0(self) -> tuple[float, float]:
         """Flux at zero current (V s)."""
@@ -368,15 +366,16 @@ class MagneticModel:
         return 1.0 / float(Gd), 1.0 / float(Gq)
 
 
-def _bilinear_grid(x, y, Z, xi, yi):
-    """Bilinear interpolation of ``Z[j, k]`` on the rectangular grid x, y at
-    (xi, yi), linear extrapolation outside (the edge cells extended)."""
+def _bilinear_grid(x, y, Zs, xi, yi):
+    """Bilinear interpolation of each ``Z[j, k]`` of ``Zs`` on the rectangular
+    grid x, y at (xi, yi), linear extrapolation outside (the edge cells
+    extended); the cells and weights are found once for all of them."""
     xi = np.asarray(xi, dtype=float)
     yi = np.asarray(yi, dtype=float)
     j = np.clip(np.searchsorted(x, xi, side="right") - 1, 0, len(x) - 2)
     k = np.clip(np.searchsorted(y, yi, side="right") - 1, 0, len(y) - 2)
     u = (xi - x[j]) / (x[j + 1] - x[j])
     v = (yi - y[k]) / (y[k + 1] - y[k])
-    return ((1 - u) * ((1 - v) * Z[j, k] + v * Z[j, k + 1])
-            + u * ((1 - v) * Z[j + 1, k] + v * Z[j + 1, k + 1]))
+    return tuple((1 - u) * ((1 - v) * Z[j, k] + v * Z[j, k + 1])
+                 + u * ((1 - v) * Z[j + 1, k] + v * Z[j + 1, k + 1]) for Z in Zs)
 
