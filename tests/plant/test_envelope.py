@@ -325,7 +325,10 @@ def _dense_max_torque(env, speed, sign, n=20000):
     return float(d[0]), float(q[0])
 
 
-@pytest.mark.parametrize("motor_name", ["traction", "paper003", "non_salient", "ld_above_lq"])
+#: The traction motor (the widest speed range, 4 x base speed) on every edit;
+#: the dense-search cross-check of the other shapes with the slow tests.
+@pytest.mark.parametrize("motor_name", ["traction"] + [
+    pytest.param(m, marks=pytest.mark.slow) for m in ("paper003", "non_salient", "ld_above_lq")])
 def test_torque_limit_and_field_weakening_with_r(motor_name):
     """``R`` kept: the torque limit (stationary points of the torque on both
     boundaries and their crossings, roots of degree-2 trigonometric

@@ -187,7 +187,10 @@ def _ref_mtpv(m, env, speed):
     return on_boundary(res.x)
 
 
-@pytest.mark.parametrize("kind", ["algebraic", "map"])
+#: The algebraic model's search inverts the model by Newton at every sample
+#: (~1.7 s): a cross-check run with the slow tests; the route itself runs on
+#: every edit in tests/corpus/test_saturated_corpus.py (the corpus PM-SyRM).
+@pytest.mark.parametrize("kind", [pytest.param("algebraic", marks=pytest.mark.slow), "map"])
 def test_pmsyrm_envelope_against_nested_scalar_search(kind):
     m, env = _pmsyrm(kind)
     I = env.I
