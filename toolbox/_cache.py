@@ -12,6 +12,10 @@ is cached on disk under a key hashing both:
 the directory, ``CCT_CACHE_DIR=off`` disables the cache).
 
 Any edit of the derivation changes the key, so a stale result is never read.
+A family of entries (the name up to its first ``-``: ``firmware``,
+``steady_state``, ...) keeps at most :data:`MAX_ENTRIES` files, the least
+recently used going first: the families keyed by content (the firmware
+figures of each distinct header) would otherwise grow with every design.
 A file is written atomically (temporary file, fsync, rename), starts with a
 header carrying the key and the SHA-256 of the payload, and is unpickled only
 when both match: a truncated or corrupted file is ignored (and rewritten),
@@ -28,10 +32,12 @@ from pathlib import Path
 from typing import Any, Callable, Sequence, Union
 from ._io import write_atomic
 
-__all__ = ["cache_dir", "cache_key", "cached", "template_bytecode_cache"]
+__all__ = ["MAX_ENTRIES", "cache_dir", "cache_key", "cached", "template_bytecode_cache"]
 
 _MAGIC = b"cct-cache v1"
 _APP = "current-control-toolbox"
+#: Files kept per family (module docstring): a few hundred kB to ~10 MB each.
+MAX_ENTRIES = 256
 
 
 def cache_dir() -> Path | None:
@@ -120,10 +126,37 @@ def cached(name: str, sources: Sources, compute: Callable[[], Any],
     path = directory / f"{name}-{key}.pickle"
     value = _read(path, key)
     if value is not None and check(value):
+        _touch(path)
         return value
     value = compute()
     _write(path, key, value)
+    _prune(directory, name.split("-", 1)[0])
     return value
+
+
+def _touch(path: Path) -> None:
+    """Mark an entry as used now (its modification time orders the pruning)."""
+    try:
+        os.utime(path)
+    except OSError:
+        pass  # a read-only cache is still read
+
+
+def _prune(directory: Path, family: str) -> None:
+    """Remove the least recently used files of ``family`` beyond :data:`MAX_ENTRIES`.
+    A file another process removes first, or reads while it goes, is not an
+    error: a reader that misses an entry recomputes it."""
+    def used(p: Path) -> float:
+        try:
+            return p.stat().st_mtime
+        except OSError:
+            return -1.0
+    files = sorted(directory.glob(f"{family}-*.pickle"), key=used)
+    for p in files[:max(len(files) - MAX_ENTRIES, 0)]:
+        try:
+            p.unlink()
+        except OSError:
+            pass
 
 
 def template_bytecode_cache(owner: str | Path):
