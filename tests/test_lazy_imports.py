@@ -179,3 +179,17 @@ def test_designs_headers_and_cct_design_need_no_python_control(tmp_path):
              "cct design 003 PI": _cct_design("003_azaiz2007_pi", tmp_path / "pi"),
              "cct design 003 H-infinity": _cct_design("003_azaiz2007_hinf", tmp_path / "hinf")}
     assert _heavy_after_each(steps) == {name: [] for name in steps}
+
+
+@pytest.mark.slow
+def test_cct_design_of_a_constant_motor_needs_no_scipy_optimize(tmp_path):
+    """``cct design`` of paper 003's H-infinity design (constant parameters),
+    every stage, in a fresh interpreter: scipy.optimize (0.25 s of start-up)
+    is not imported; a saturated motor's envelope imports it
+    (``plant.envelope_of``)."""
+    code = (_cct_design("003_azaiz2007_hinf", tmp_path / "hinf")
+            + "import sys\nprint('scipy.optimize' in sys.modules)\n")
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=600, cwd=root)
+    assert out.stdout.strip().splitlines()[-1] == "False"

@@ -1,6 +1,7 @@
 """The analysis stage imports neither python-control nor scipy.signal nor
-scipy.stats (together 1 to 2 s of every ``cct`` process; toolbox/ARCHITECTURE.md
-"Caches and lazy imports").
+scipy.stats (together 1 to 2 s of every ``cct`` process) nor scipy.optimize
+(0.25 s; its Brent root and minimum are ``analysis._scalar``'s):
+toolbox/ARCHITECTURE.md "Caches and lazy imports".
 
 Its linear systems come from ``toolbox.lti``, its Latin hypercube from
 ``toolbox.analysis._sampling``; python-control stays the independent route of
@@ -16,7 +17,7 @@ from pathlib import Path
 import pytest
 
 ANALYSIS = Path(__file__).resolve().parents[2] / "toolbox" / "analysis"
-FORBIDDEN = ("control", "scipy.signal", "scipy.stats")
+FORBIDDEN = ("control", "scipy.signal", "scipy.stats", "scipy.optimize")
 
 
 def _imported(path: Path) -> set[str]:

@@ -29,11 +29,11 @@ from dataclasses import dataclass, field, fields
 from functools import cached_property
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..plant import axis_coefficients
 from ..artifact import AxisController, json_ready
 from ._laws import Law, axis_law
+from ._scalar import brentq
 from ._siso import MARGIN_KEYS, frequency_margins, log_grid
 from ._statespace import (FreqResponse, closed_loop, is_stable, pade, plant_chain, series,
                           zoh_axis)

@@ -40,9 +40,9 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from ..lti import as_statespace
+from ._scalar import bounded_minimum, brentq
 from ._statespace import FreqResponse
 
 __all__ = ["MARGIN_KEYS", "FrequencyMargins", "disk_variations", "log_grid",
@@ -165,10 +165,9 @@ def _peak(fun: Callable[[float], float], w: np.ndarray, vals: np.ndarray) -> tup
     lo, hi = math.log(w[max(i - 1, 0)]), math.log(w[min(i + 1, len(w) - 1)])
     best_w, best = float(w[i]), float(vals[i])
     if hi > lo:
-        res = minimize_scalar(lambda lw: -fun(math.exp(lw)), bounds=(lo, hi),
-                              method="bounded", options={"xatol": 1e-10})
-        if -res.fun > best:
-            best_w, best = math.exp(res.x), float(-res.fun)
+        lw, neg = bounded_minimum(lambda lw: -fun(math.exp(lw)), lo, hi, xatol=1e-10)
+        if -neg > best:
+            best_w, best = math.exp(lw), float(-neg)
     return best, best_w
 
 

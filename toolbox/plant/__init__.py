@@ -23,7 +23,7 @@ _LAZY = {"describe_model": "_describe", "SYMBOLS": "_symbolic", "DqModel": "_sym
          # the operating envelopes (the saturated one imports scipy.optimize)
          "OperatingEnvelope": "_envelope", "OperatingPoint": "_envelope",
          "mtpa_d_current": "_envelope", "SaturatedEnvelope": "_envelope_saturated",
-         "envelope_of": "_envelope_saturated"}
+         "envelope_of": "_envelope"}
 
 
 __getattr__, __dir__ = lazy_attributes(__name__, _LAZY, globals())

@@ -56,7 +56,7 @@ import numpy as np
 
 from ..errors import SpecError
 
-__all__ = ["OperatingEnvelope", "OperatingPoint", "mtpa_d_current"]
+__all__ = ["OperatingEnvelope", "OperatingPoint", "envelope_of", "mtpa_d_current"]
 
 
 def _poly_roots(coef) -> list[complex]:
@@ -422,3 +422,25 @@ class OperatingEnvelope:
         """``(i_d, i_q)`` (A) of :meth:`operating_point`."""
         op = self.operating_point(torque, speed)
         return op.i_d, op.i_q
+
+
+def envelope_of(motor, drive=None, *, v_max: float | None = None,
+                i_max: float | None = None, resistive: bool = True):
+    """The operating envelope of ``motor`` on ``drive``: a
+    :class:`~toolbox.plant.SaturatedEnvelope` for a saturated motor (``motor.magnetics``),
+    else the constant-parameter :class:`OperatingEnvelope`
+    (same arguments).
+
+    Parameters
+    ----------
+    motor : Motor
+        The motor; ``motor.magnetics`` selects the class.
+    drive, v_max, i_max, resistive
+        As :class:`~toolbox.plant.OperatingEnvelope` (the drive's voltage
+        and current limits, their overrides, ``R`` kept in the steady state).
+    """
+    if motor.magnetics is None:
+        return OperatingEnvelope(motor, drive, v_max=v_max, i_max=i_max, resistive=resistive)
+    # lazy: its fallbacks' scipy.optimize, 0.25 s of start-up a constant motor does not need
+    from ._envelope_saturated import SaturatedEnvelope
+    return SaturatedEnvelope(motor, drive, v_max=v_max, i_max=i_max, resistive=resistive)

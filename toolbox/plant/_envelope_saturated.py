@@ -55,7 +55,7 @@ from scipy.optimize import brentq, minimize, minimize_scalar
 from ..errors import SpecError
 from ._envelope import OperatingEnvelope, OperatingPoint
 
-__all__ = ["SaturatedEnvelope", "envelope_of"]
+__all__ = ["SaturatedEnvelope"]
 
 #: Samples per axis of the seed grid over the current disc.
 _N_SAMPLE = 61
@@ -72,25 +72,6 @@ _H_NEWTON = 1e-4
 #: Newton iterations before the SLSQP route takes over; the largest step.
 _N_NEWTON = 30
 _MAX_STEP = 0.2
-
-
-def envelope_of(motor, drive=None, *, v_max: float | None = None,
-                i_max: float | None = None, resistive: bool = True):
-    """The operating envelope of ``motor`` on ``drive``: a
-    :class:`SaturatedEnvelope` for a saturated motor (``motor.magnetics``),
-    else the constant-parameter :class:`~toolbox.plant.OperatingEnvelope`
-    (same arguments).
-
-    Parameters
-    ----------
-    motor : Motor
-        The motor; ``motor.magnetics`` selects the class.
-    drive, v_max, i_max, resistive
-        As :class:`~toolbox.plant.OperatingEnvelope` (the drive's voltage
-        and current limits, their overrides, ``R`` kept in the steady state).
-    """
-    cls = OperatingEnvelope if motor.magnetics is None else SaturatedEnvelope
-    return cls(motor, drive, v_max=v_max, i_max=i_max, resistive=resistive)
 
 
 class SaturatedEnvelope:
