@@ -44,12 +44,12 @@ def brentq(f: Callable[[float], float], a: float, b: float, *, xtol: float = 2e-
     xpre, xcur = float(a), float(b)
     xblk = fblk = spre = scur = 0.0
     fpre, fcur = float(f(xpre)), float(f(xcur))
-    if fpre * fcur > 0:
-        raise ValueError("f(a) and f(b) must have different signs")
     if fpre == 0:
         return xpre
     if fcur == 0:
         return xcur
+    if math.copysign(1.0, fpre) == math.copysign(1.0, fcur):
+        raise ValueError("f(a) and f(b) must have different signs")
     for _ in range(maxiter):
         if fpre != 0 and fcur != 0 and (math.copysign(1.0, fpre) != math.copysign(1.0, fcur)):
             xblk, fblk = xpre, fpre
@@ -82,9 +82,9 @@ def brentq(f: Callable[[float], float], a: float, b: float, *, xtol: float = 2e-
 
 def bounded_minimum(f: Callable[[float], float], lo: float, hi: float, *,
                     xatol: float = 1e-5, maxiter: int = 500) -> tuple[float, float]:
-    """``(x, f(x))`` of a local minimum of ``f`` on ``[lo, hi]`` (Brent's
-    bounded method: golden sections and parabolic steps, never evaluating
-    within ``xatol / 3`` of the bounds' outside)."""
+    """``(x, f(x))`` of a local minimum of ``f`` on ``[lo, hi]``, ``x`` to
+    about ``xatol`` (Brent's bounded method: golden sections and parabolic
+    steps; at most ``maxiter`` evaluations)."""
     sqrt_eps = math.sqrt(2.2e-16)
     golden_mean = 0.5 * (3.0 - math.sqrt(5.0))
     a, b = float(lo), float(hi)
@@ -150,6 +150,6 @@ def bounded_minimum(f: Callable[[float], float], lo: float, hi: float, *,
     return xf, fx
 
 
-def _sign(v: float) -> float:
+def _sign(v: float) -> int:
     """numpy's ``sign`` of a float: -1, 0 or 1."""
     return (v > 0) - (v < 0)
